@@ -1,0 +1,475 @@
+"""Compiled inner loops of the grasp policy: signed distances, approach and finger closing.
+
+Why our own kernels: the approach is a translational sweep and the closing a rotational one;
+python-fcl's continuous collision is wrong (it snaps to coarse steps and misses contacts) and
+mujoco collides meshes as convex hulls. Instead every hand link is a union of sphere-swept
+boxes/cylinders with an exact signed distance, the object is a dense surface sample, and each
+sample point is *sphere-traced* along its relative motion: a step never exceeds the distance
+to the link divided by the point's largest speed, so no sample can jump over a link, however
+thin the object part. Points are traced in order of their lower bound on the hit time and
+dropped once that bound passes the best hit found, so typically only the few points near the
+first contact are traced to the end.
+
+All positions are in the hand frame (palm face z = 0, approach +z), metres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# Shape kinds (see affordgrasp.hands.model).
+BOX = 0
+CYLINDER = 1
+REVOLUTE = 0
+PRISMATIC = 1
+MAX_STEPS = 2000
+
+
+@njit(cache=True, fastmath=False)
+def sdf_local(x, y, z, kind, hx, hy, hz, r):
+    """Signed distance of a point in a shape's frame to the rounded core (m)."""
+    if kind == BOX:
+        qx = abs(x) - hx
+        qy = abs(y) - hy
+        qz = abs(z) - hz
+        ox = max(qx, 0.0)
+        oy = max(qy, 0.0)
+        oz = max(qz, 0.0)
+        outside = np.sqrt(ox * ox + oy * oy + oz * oz)
+        inside = min(max(qx, max(qy, qz)), 0.0)
+        return outside + inside - r
+    rho = np.sqrt(x * x + y * y)
+    dr = rho - hx
+    dz = abs(z) - hz
+    ox = max(dr, 0.0)
+    oz = max(dz, 0.0)
+    return np.sqrt(ox * ox + oz * oz) + min(max(dr, dz), 0.0) - r
+
+
+@njit(cache=True)
+def sdf_world(px, py, pz, pose, kind, half, r):
+    """Signed distance of a hand-frame point to a shape with hand-frame ``pose`` (4, 4)."""
+    dx = px - pose[0, 3]
+    dy = py - pose[1, 3]
+    dz = pz - pose[2, 3]
+    x = pose[0, 0] * dx + pose[1, 0] * dy + pose[2, 0] * dz
+    y = pose[0, 1] * dx + pose[1, 1] * dy + pose[2, 1] * dz
+    z = pose[0, 2] * dx + pose[1, 2] * dy + pose[2, 2] * dz
+    return sdf_local(x, y, z, kind, half[0], half[1], half[2], r)
+
+
+@njit(cache=True)
+def outward_normal_world(px, py, pz, pose, kind, half, r):
+    """Unit normal of the shape surface closest to the point, pointing out of the shape."""
+    dx = px - pose[0, 3]
+    dy = py - pose[1, 3]
+    dz = pz - pose[2, 3]
+    x = pose[0, 0] * dx + pose[1, 0] * dy + pose[2, 0] * dz
+    y = pose[0, 1] * dx + pose[1, 1] * dy + pose[2, 1] * dz
+    z = pose[0, 2] * dx + pose[1, 2] * dy + pose[2, 2] * dz
+    if kind == BOX:
+        cx = min(max(x, -half[0]), half[0])
+        cy = min(max(y, -half[1]), half[1])
+        cz = min(max(z, -half[2]), half[2])
+    else:
+        rho = np.sqrt(x * x + y * y)
+        scale = 1.0
+        if rho > half[0]:
+            scale = half[0] / rho
+        cx = x * scale
+        cy = y * scale
+        cz = min(max(z, -half[2]), half[2])
+    nx = x - cx
+    ny = y - cy
+    nz = z - cz
+    n = np.sqrt(nx * nx + ny * ny + nz * nz)
+    if n < 1e-12:
+        # The point is inside the core (deep penetration): use the nearest box face.
+        nx, ny, nz = 0.0, 0.0, 1.0 if z >= 0 else -1.0
+        n = 1.0
+    nx /= n
+    ny /= n
+    nz /= n
+    return (
+        pose[0, 0] * nx + pose[0, 1] * ny + pose[0, 2] * nz,
+        pose[1, 0] * nx + pose[1, 1] * ny + pose[1, 2] * nz,
+        pose[2, 0] * nx + pose[2, 1] * ny + pose[2, 2] * nz,
+    )
+
+
+@njit(cache=True)
+def _to_hand(p, rot, trans, out):
+    """out = (p - trans) @ rot: an object-frame point in the hand frame."""
+    dx = p[0] - trans[0]
+    dy = p[1] - trans[1]
+    dz = p[2] - trans[2]
+    out[0] = dx * rot[0, 0] + dy * rot[1, 0] + dz * rot[2, 0]
+    out[1] = dx * rot[0, 1] + dy * rot[1, 1] + dz * rot[2, 1]
+    out[2] = dx * rot[0, 2] + dy * rot[1, 2] + dz * rot[2, 2]
+
+
+@njit(cache=True)
+def _mul4_into(a, b, out):
+    for i in range(4):
+        for j in range(4):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
+
+
+@njit(cache=True)
+def _bounding_radius(kind, half, r):
+    if kind == BOX:
+        return np.sqrt(half[0] ** 2 + half[1] ** 2 + half[2] ** 2) + r
+    return np.sqrt(half[0] ** 2 + half[2] ** 2) + r
+
+
+@njit(cache=True)
+def approach_until_contact(
+    points, cell_start, cell_center, cell_radius, rot, trans, poses, kinds, halves, radii,
+    t_max, hit_eps,
+):
+    """Distance the hand can travel along its +z before a link touches a sample point.
+
+    points : (n, 3) object samples in the object frame, grouped by cell
+    cell_start : (c + 1,) offsets of each cell's points; cell_center (c, 3), cell_radius (c,)
+        a bounding sphere per cell
+    rot, trans : the start pose of the hand (object frame = rot @ hand + trans)
+    poses : (s, 4, 4) shape poses in the hand frame; kinds (s,), halves (s, 3), radii (s,)
+    returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
+
+    Cells are traced first as spheres (a conservative bound for all their points); a cell
+    whose sphere touches a shape is refined point by point from that time on.
+    """
+    nc = cell_center.shape[0]
+    ns = poses.shape[0]
+    rho = np.empty(ns)
+    for s in range(ns):
+        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s])
+    cap = nc * ns
+    lower = np.empty(cap)
+    upper = np.empty(cap)
+    cidx = np.empty(cap, dtype=np.int64)
+    sidx = np.empty(cap, dtype=np.int64)
+    ch = np.empty((nc, 3))
+    tmp = np.empty(3)
+    m = 0
+    for c in range(nc):
+        _to_hand(cell_center[c], rot, trans, tmp)
+        ch[c, 0] = tmp[0]
+        ch[c, 1] = tmp[1]
+        ch[c, 2] = tmp[2]
+        for s in range(ns):
+            rr = rho[s] + cell_radius[c]
+            dx = tmp[0] - poses[s, 0, 3]
+            dy = tmp[1] - poses[s, 1, 3]
+            d2 = dx * dx + dy * dy
+            if d2 > rr * rr:
+                continue
+            half_chord = np.sqrt(rr * rr - d2)
+            t_out = tmp[2] - poses[s, 2, 3] + half_chord
+            if t_out < 0.0:
+                continue
+            t_in = max(tmp[2] - poses[s, 2, 3] - half_chord, 0.0)
+            if t_in > t_max:
+                continue
+            lower[m] = t_in
+            upper[m] = t_out
+            cidx[m] = c
+            sidx[m] = s
+            m += 1
+    order = np.argsort(lower[:m])
+    best = t_max
+    best_p = -1
+    best_s = -1
+    ph = np.empty(3)
+    for k in range(m):
+        j = order[k]
+        t = lower[j]
+        if t >= best:
+            break
+        c = cidx[j]
+        s = sidx[j]
+        stop = min(upper[j], best)
+        touched = False
+        for _ in range(MAX_STEPS):
+            d = sdf_world(ch[c, 0], ch[c, 1], ch[c, 2] - t, poses[s], kinds[s], halves[s], radii[s])
+            d -= cell_radius[c]
+            if d <= hit_eps:
+                touched = True
+                break
+            t += d
+            if t >= stop:
+                break
+        if not touched:
+            continue
+        t_cell = t
+        for i in range(cell_start[c], cell_start[c + 1]):
+            _to_hand(points[i], rot, trans, ph)
+            t = t_cell
+            stop = min(upper[j], best)
+            for _ in range(MAX_STEPS):
+                if t >= stop:
+                    break
+                d = sdf_world(ph[0], ph[1], ph[2] - t, poses[s], kinds[s], halves[s], radii[s])
+                if d <= hit_eps:
+                    best = t
+                    best_p = i
+                    best_s = s
+                    break
+                t += d
+    if best_p < 0:
+        return np.inf, -1, -1
+    return best, best_p, best_s
+
+
+@njit(cache=True)
+def _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
+                      link_buf, shape_buf, tmp_a, tmp_b):
+    """Fill link_buf (m, 4, 4) and shape_buf (k, 4, 4) with the chain's poses at ``s``."""
+    m = origins.shape[0]
+    tmp_a[:, :] = base
+    mot = np.empty((4, 4))
+    for j in range(m):
+        _mul4_into(tmp_a, origins[j], tmp_b)
+        q = q0[j] + speeds[j] * s
+        if kinds[j] == REVOLUTE:
+            c = np.cos(q)
+            sn = np.sin(q)
+            C = 1.0 - c
+            ax = axes[j, 0]
+            ay = axes[j, 1]
+            az = axes[j, 2]
+            mot[0, 0] = c + ax * ax * C
+            mot[0, 1] = ax * ay * C - az * sn
+            mot[0, 2] = ax * az * C + ay * sn
+            mot[1, 0] = ay * ax * C + az * sn
+            mot[1, 1] = c + ay * ay * C
+            mot[1, 2] = ay * az * C - ax * sn
+            mot[2, 0] = az * ax * C - ay * sn
+            mot[2, 1] = az * ay * C + ax * sn
+            mot[2, 2] = c + az * az * C
+            mot[0, 3] = 0.0
+            mot[1, 3] = 0.0
+            mot[2, 3] = 0.0
+        else:
+            for a in range(3):
+                for b in range(3):
+                    mot[a, b] = 1.0 if a == b else 0.0
+                mot[a, 3] = axes[j, a] * q
+        mot[3, 0] = 0.0
+        mot[3, 1] = 0.0
+        mot[3, 2] = 0.0
+        mot[3, 3] = 1.0
+        _mul4_into(tmp_b, mot, tmp_a)
+        link_buf[j, :, :] = tmp_a
+    for q in range(shape_joint.shape[0]):
+        _mul4_into(link_buf[shape_joint[q]], shape_local[q], shape_buf[q])
+
+
+@njit(cache=True)
+def _min_sdf(px, py, pz, shape_buf, kinds, halves, radii):
+    d = np.inf
+    dq = -1
+    for q in range(shape_buf.shape[0]):
+        dd = sdf_world(px, py, pz, shape_buf[q], kinds[q], halves[q], radii[q])
+        if dd < d:
+            d = dd
+            dq = q
+    return d, dq
+
+
+@njit(cache=True)
+def close_chain_until_contact(
+    points, cell_start, cell_center, cell_radius, rot, trans,
+    base, origins, kinds, axes, q0, speeds,
+    shape_joint, shape_local, shape_kinds, shape_halves, shape_radii,
+    s_max, hit_eps,
+):
+    """Closing parameter at which a moving link of a finger first touches a sample point.
+
+    The chain's joints move as q_j = q0_j + speeds_j * s (joint frames: ``origins`` in their
+    parent link, the first one's parent at ``base`` in the hand frame). shape_joint (k,) is
+    the chain link carrying each moving shape, shape_local (k, 4, 4) its pose in that link.
+    A point's speed relative to the links is bounded by
+    sum_j |speed_j| * (|p - o_0| + chain length to joint j) over revolute joints plus
+    |speed_j| over prismatic ones (o_0, the first joint's origin, does not move), and every
+    step is the distance over that bound, so no point can pass through a link.
+    returns : (s, point index, shape index); (inf, -1, -1) when nothing is touched by s_max.
+    """
+    m = origins.shape[0]
+    k = shape_joint.shape[0]
+    link_buf = np.empty((m, 4, 4))
+    shape_buf = np.empty((k, 4, 4))
+    tmp_a = np.empty((4, 4))
+    tmp_b = np.empty((4, 4))
+    _chain_poses_into(0.0, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
+                      link_buf, shape_buf, tmp_a, tmp_b)
+    _mul4_into(base, origins[0], tmp_a)
+    o0 = tmp_a[:3, 3].copy()
+    chain_len = np.zeros(m)
+    for j in range(1, m):
+        chain_len[j] = chain_len[j - 1] + np.sqrt(
+            origins[j, 0, 3] ** 2 + origins[j, 1, 3] ** 2 + origins[j, 2, 3] ** 2
+        )
+    reach = 0.0
+    for q in range(k):
+        j = shape_joint[q]
+        dx = shape_buf[q, 0, 3] - link_buf[j, 0, 3]
+        dy = shape_buf[q, 1, 3] - link_buf[j, 1, 3]
+        dz = shape_buf[q, 2, 3] - link_buf[j, 2, 3]
+        ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
+        reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
+    for j in range(m):
+        if kinds[j] == PRISMATIC:
+            reach += abs(speeds[j]) * s_max
+    nc = cell_center.shape[0]
+    cand = np.empty(nc, dtype=np.int64)
+    lower = np.empty(nc)
+    ch = np.empty((nc, 3))
+    tmp = np.empty(3)
+    ncand = 0
+    for c in range(nc):
+        _to_hand(cell_center[c], rot, trans, tmp)
+        dx = tmp[0] - o0[0]
+        dy = tmp[1] - o0[1]
+        dz = tmp[2] - o0[2]
+        r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if r0 - cell_radius[c] > reach:
+            continue
+        ch[c, 0] = tmp[0]
+        ch[c, 1] = tmp[1]
+        ch[c, 2] = tmp[2]
+        d, _ = _min_sdf(tmp[0], tmp[1], tmp[2], shape_buf, shape_kinds, shape_halves, shape_radii)
+        bound = _speed_bound(r0 + cell_radius[c], kinds, speeds, chain_len)
+        if bound <= 0.0:
+            continue
+        cand[ncand] = c
+        lower[ncand] = max(d - cell_radius[c], 0.0) / bound
+        ncand += 1
+    order = np.argsort(lower[:ncand])
+    best = s_max
+    best_p = -1
+    best_q = -1
+    ph = np.empty(3)
+    for kk in range(ncand):
+        c = cand[order[kk]]
+        s = lower[order[kk]]
+        if s >= best:
+            break
+        dx = ch[c, 0] - o0[0]
+        dy = ch[c, 1] - o0[1]
+        dz = ch[c, 2] - o0[2]
+        bound = _speed_bound(np.sqrt(dx * dx + dy * dy + dz * dz) + cell_radius[c],
+                             kinds, speeds, chain_len)
+        touched = False
+        for _ in range(MAX_STEPS):
+            _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
+                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)
+            d, _ = _min_sdf(ch[c, 0], ch[c, 1], ch[c, 2], shape_buf, shape_kinds,
+                            shape_halves, shape_radii)
+            d -= cell_radius[c]
+            if d <= hit_eps:
+                touched = True
+                break
+            s += d / bound
+            if s >= best:
+                break
+        if not touched:
+            continue
+        s_cell = s
+        for i in range(cell_start[c], cell_start[c + 1]):
+            _to_hand(points[i], rot, trans, ph)
+            dx = ph[0] - o0[0]
+            dy = ph[1] - o0[1]
+            dz = ph[2] - o0[2]
+            pb = _speed_bound(np.sqrt(dx * dx + dy * dy + dz * dz), kinds, speeds, chain_len)
+            s = s_cell
+            for _ in range(MAX_STEPS):
+                if s >= best:
+                    break
+                _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
+                                  shape_local, link_buf, shape_buf, tmp_a, tmp_b)
+                d, dq = _min_sdf(ph[0], ph[1], ph[2], shape_buf, shape_kinds, shape_halves,
+                                 shape_radii)
+                if d <= hit_eps:
+                    best = s
+                    best_p = i
+                    best_q = dq
+                    break
+                s += d / pb
+    if best_p < 0:
+        return np.inf, -1, -1
+    return best, best_p, best_q
+
+
+@njit(cache=True)
+def _speed_bound(r, kinds, speeds, chain_len):
+    bound = 0.0
+    for j in range(kinds.shape[0]):
+        if kinds[j] == REVOLUTE:
+            bound += abs(speeds[j]) * (r + chain_len[j])
+        else:
+            bound += abs(speeds[j])
+    return bound
+
+
+@njit(cache=True)
+def touching_points(points, cell_start, cell_center, cell_radius, rot, trans, poses, kinds,
+                    halves, radii, tol):
+    """Samples within ``tol`` of any shape at a fixed hand configuration.
+
+    returns : point indices (k,), shape indices (k,), signed distances (k,) and the shape's
+        outward unit normal at its closest point (k, 3) in the hand frame (it points from the
+        link towards the sample).
+    """
+    ns = poses.shape[0]
+    nc = cell_center.shape[0]
+    cap = 64
+    pi = np.empty(cap, dtype=np.int64)
+    si = np.empty(cap, dtype=np.int64)
+    dist = np.empty(cap)
+    nrm = np.empty((cap, 3))
+    m = 0
+    rho = np.empty(ns)
+    for s in range(ns):
+        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + tol
+    tmp = np.empty(3)
+    ph = np.empty(3)
+    for c in range(nc):
+        _to_hand(cell_center[c], rot, trans, tmp)
+        for s in range(ns):
+            dx = tmp[0] - poses[s, 0, 3]
+            dy = tmp[1] - poses[s, 1, 3]
+            dz = tmp[2] - poses[s, 2, 3]
+            rr = rho[s] + cell_radius[c]
+            if dx * dx + dy * dy + dz * dz > rr * rr:
+                continue
+            dc = sdf_world(tmp[0], tmp[1], tmp[2], poses[s], kinds[s], halves[s], radii[s])
+            if dc - cell_radius[c] > tol:
+                continue
+            for i in range(cell_start[c], cell_start[c + 1]):
+                _to_hand(points[i], rot, trans, ph)
+                d = sdf_world(ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s])
+                if d > tol:
+                    continue
+                if m == cap:
+                    cap *= 2
+                    pi2 = np.empty(cap, dtype=np.int64)
+                    si2 = np.empty(cap, dtype=np.int64)
+                    dist2 = np.empty(cap)
+                    nrm2 = np.empty((cap, 3))
+                    pi2[:m] = pi
+                    si2[:m] = si
+                    dist2[:m] = dist
+                    nrm2[:m] = nrm
+                    pi, si, dist, nrm = pi2, si2, dist2, nrm2
+                nx, ny, nz = outward_normal_world(ph[0], ph[1], ph[2], poses[s], kinds[s],
+                                                  halves[s], radii[s])
+                pi[m] = i
+                si[m] = s
+                dist[m] = d
+                nrm[m, 0] = nx
+                nrm[m, 1] = ny
+                nrm[m, 2] = nz
+                m += 1
+    return pi[:m], si[:m], dist[:m], nrm[:m]

@@ -1,0 +1,429 @@
+"""The grasp policy GP(p0, O) (SPEC §2.3, paper §III-A): approach, then close every finger.
+
+1. The hand starts outside the object, open at its pregrasp spread, and moves along its
+   approach direction until the first contact (sample points traced exactly against the
+   rounded links; the hand stops with a gap of at most ``HIT_EPS``).
+2. Every finger then closes independently with the breakaway behaviour of its hand model:
+   its still-active joints turn together at their speeds; a contact on a link stops the joints
+   up to that link and the ones beyond keep closing; a joint at its limit stops.
+3. Contacts are every link within ``CONTACT_TOL`` of the object, palm included, merged per
+   link (see ``merge_link_contacts``), with μ from the friction table.
+
+Statuses, per sample:
+
+* ``missed``: the approach passed the object without touching it (no contacts);
+* ``touched``: contact made, but after closing fewer than two links touch the object;
+* ``grasped``: two or more links touch the object after closing. Whether the grasp holds is
+  for the metrics to say (ε > 0 is force closure).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from ..errors import InputError
+from ..hands import Hand, get_hand
+from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
+from . import kernels
+from .contacts import ContactSet
+from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
+from .surface import SurfaceSample, sample_surface
+
+log = logging.getLogger(__name__)
+
+HIT_EPS = 5e-5  # m: a link stops within 0.05 mm of the surface
+CONTACT_TOL = 2e-4  # m: links within 0.2 mm touch (SPEC: about 0.1-0.2 mm)
+MERGE_RADIUS = 3e-3  # m: contacts of one link closer than this are merged (as GraspIt!)
+PATCH_ANGLE = np.deg2rad(10.0)
+
+STATUSES = ("missed", "touched", "grasped")
+
+
+@dataclass(frozen=True)
+class HandArrays:
+    """A hand flattened for the kernels."""
+
+    hand: Hand
+    shape_link: np.ndarray  # (s,) link index of each shape
+    shape_local: np.ndarray  # (s, 4, 4) shape pose in its link
+    kinds: np.ndarray  # (s,)
+    halves: np.ndarray  # (s, 3)
+    radii: np.ndarray  # (s,)
+    link_dof: np.ndarray  # (l,) DOF index driving each link's joint, -1 for the root
+    mu_material: tuple[str, ...]  # per link
+
+
+_HAND_CACHE: dict[str, HandArrays] = {}
+
+
+def hand_arrays(hand: Hand) -> HandArrays:
+    cached = _HAND_CACHE.get(hand.name)
+    if cached is not None and cached.hand is hand:
+        return cached
+    shape_link, local, kinds, halves, radii = [], [], [], [], []
+    for i, link in enumerate(hand.links):
+        for s in link.shapes:
+            shape_link.append(i)
+            local.append(s.pose)
+            kinds.append(kernels.BOX if s.kind == "box" else kernels.CYLINDER)
+            halves.append(s.half_extents)
+            radii.append(s.radius)
+    link_dof = np.array(
+        [-1 if link.joint is None else hand.dof_index(link.joint.dof) for link in hand.links]
+    )
+    arrays = HandArrays(
+        hand,
+        np.array(shape_link, dtype=np.int64),
+        np.array(local, dtype=np.float64).reshape(-1, 4, 4),
+        np.array(kinds, dtype=np.int64),
+        np.array(halves, dtype=np.float64).reshape(-1, 3),
+        np.array(radii, dtype=np.float64),
+        link_dof,
+        tuple(link.material for link in hand.links),
+    )
+    _HAND_CACHE[hand.name] = arrays
+    return arrays
+
+
+@dataclass(frozen=True)
+class ObjectGeometry:
+    """What the simulator needs of an object, computed once per object."""
+
+    samples: SurfaceSample
+    hull_vertices: np.ndarray
+
+
+_GEOMETRY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def object_geometry(obj) -> ObjectGeometry:
+    """Surface samples and hull of ``obj`` (a GraspObject), cached for the object's lifetime."""
+    geom = _GEOMETRY.get(obj)
+    if geom is None:
+        mesh = obj.mesh
+        geom = ObjectGeometry(sample_surface(mesh), np.asarray(mesh.convex_hull.vertices))
+        _GEOMETRY[obj] = geom
+    return geom
+
+
+@dataclass(frozen=True)
+class GraspResult:
+    """The outcome of the policy for one pregrasp, in the object frame.
+
+    status : str, one of STATUSES
+    hand_pose : (4, 4) final hand → object transform (palm centre at the origin)
+    joints : (n_dofs,) final DOF values (rad / m), in the hand's DOF order
+    contacts : ContactSet
+    """
+
+    status: str
+    hand_pose: np.ndarray
+    joints: np.ndarray
+    contacts: ContactSet
+
+
+@dataclass(frozen=True)
+class SimulationBatch:
+    """Simulated grasps of one object: struct of arrays, one row per sample.
+
+    p0 (n, 6), use_dir (n, 2), status (n,) str, hand_pose (n, 4, 4), joints (n, n_dofs),
+    contacts list of n ContactSet, use_point (n, 3), use_normal (n, 3) outward,
+    use_triangle (n,) int64 (-1: no hit), wrist_point (n, 3) palm centre, wrist_axis (n, 3)
+    approach direction; seconds: wall time spent simulating.
+    """
+
+    p0: np.ndarray
+    use_dir: np.ndarray
+    status: np.ndarray
+    hand_pose: np.ndarray
+    joints: np.ndarray
+    contacts: list
+    use_point: np.ndarray
+    use_normal: np.ndarray
+    use_triangle: np.ndarray
+    wrist_point: np.ndarray
+    wrist_axis: np.ndarray
+    seconds: float
+
+    def __len__(self) -> int:
+        return len(self.p0)
+
+
+def hand_reach(hand: Hand, dofs: np.ndarray) -> float:
+    """How far in front of the palm face (z) the hand reaches at ``dofs``, m."""
+    arrays = hand_arrays(hand)
+    poses = hand.shape_poses(dofs)
+    reach = 0.0
+    for pose, h, r in zip(poses, arrays.halves, arrays.radii, strict=True):
+        reach = max(reach, pose[2, 3] + np.linalg.norm(h) + r)
+    return reach
+
+
+def _finger_chain(hand: Hand, arrays: HandArrays, finger, link_poses, dofs, active):
+    """Kernel arguments for closing the active joints ``active`` (chain indices) of a finger."""
+    link_of = {}
+    for i, link in enumerate(hand.links):
+        if link.joint is not None:
+            link_of[link.joint.dof] = i
+    chain_links = [link_of[d] for d in finger.dofs]
+    parent = hand.link_names.index(hand.links[chain_links[0]].parent)
+    base = link_poses[parent]
+    m = len(chain_links)
+    origins = np.zeros((m, 4, 4))
+    kinds = np.zeros(m, dtype=np.int64)
+    axes = np.zeros((m, 3))
+    q0 = np.zeros(m)
+    speeds = np.zeros(m)
+    for j, li in enumerate(chain_links):
+        joint = hand.links[li].joint
+        origins[j] = joint.origin
+        kinds[j] = kernels.REVOLUTE if joint.kind == "revolute" else kernels.PRISMATIC
+        axes[j] = joint.axis
+        q0[j] = joint.ratio * dofs[hand.dof_index(joint.dof)]
+        if j in active:
+            speeds[j] = joint.ratio * finger.speeds[j]
+    # Shapes carried by chain links that move (a link moves if any joint up to it moves).
+    first_active = min(active)
+    sj, sl, sk, sh, sr, sid = [], [], [], [], [], []
+    for s, li in enumerate(arrays.shape_link):
+        if li in chain_links:
+            j = chain_links.index(li)
+            if j >= first_active:
+                sj.append(j)
+                sl.append(arrays.shape_local[s])
+                sk.append(arrays.kinds[s])
+                sh.append(arrays.halves[s])
+                sr.append(arrays.radii[s])
+                sid.append(s)
+    return (
+        base,
+        origins,
+        kinds,
+        axes,
+        q0,
+        speeds,
+        np.array(sj, dtype=np.int64),
+        np.array(sl).reshape(-1, 4, 4),
+        np.array(sk, dtype=np.int64),
+        np.array(sh).reshape(-1, 3),
+        np.array(sr),
+        np.array(sid, dtype=np.int64),
+        chain_links,
+    )
+
+
+def close_fingers(
+    hand: Hand, samples: SurfaceSample, pose: np.ndarray, dofs: np.ndarray
+) -> np.ndarray:
+    """Close every finger with breakaway until it touches or reaches its limits.
+
+    samples : the object's surface samples; pose : (4, 4) hand → object;
+    dofs : (n_dofs,) start values. returns : final DOF values (n_dofs,)
+    """
+    rot = np.ascontiguousarray(pose[:3, :3])
+    trans = np.ascontiguousarray(pose[:3, 3])
+    arrays = hand_arrays(hand)
+    dofs = dofs.copy()
+    for finger in hand.fingers:
+        idx = [hand.dof_index(d) for d in finger.dofs]
+        active = [j for j in range(len(idx)) if dofs[idx[j]] < hand.dofs[idx[j]].upper]
+        while active:
+            link_poses = hand.forward_kinematics(dofs)
+            (base, origins, kinds, axes, q0, speeds, sj, sl, sk, sh, sr, sid, chain_links) = (
+                _finger_chain(hand, arrays, finger, link_poses, dofs, active)
+            )
+            # Largest s before an active DOF reaches its upper limit.
+            room = [
+                (hand.dofs[idx[j]].upper - dofs[idx[j]]) / finger.speeds[j] for j in active
+            ]
+            s_max = max(min(room), 0.0)
+            s_hit, _, q_hit = kernels.close_chain_until_contact(
+                samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
+                rot, trans, base, origins, kinds, axes, q0, speeds, sj, sl, sk, sh, sr,
+                s_max, HIT_EPS,
+            )
+            s = min(s_hit, s_max)
+            for j in active:
+                d = hand.dofs[idx[j]]
+                dofs[idx[j]] = min(dofs[idx[j]] + finger.speeds[j] * s, d.upper)
+            if np.isfinite(s_hit) and s_hit <= s_max:
+                # Breakaway: the joints up to the blocked link stop, those beyond go on.
+                blocked = int(sj[q_hit])
+                active = [j for j in active if j > blocked]
+            else:
+                # A joint reached its limit: it stops, the others go on.
+                active = [
+                    j for j in active if dofs[idx[j]] < hand.dofs[idx[j]].upper - 1e-12
+                ]
+    return dofs
+
+
+def merge_link_contacts(points, normals, dist, radius=MERGE_RADIUS):
+    """Reduce the touching samples of one link to its contacts (indices into the inputs).
+
+    A flat patch (samples whose normals agree within 10°) carries exactly the wrenches of its
+    2-D convex hull, so only the hull's vertices are kept; then, closest first, samples
+    within ``radius`` of a kept one are merged into it (as GraspIt! does within 3 mm).
+    """
+    order = np.argsort(dist, kind="stable")
+    groups: list[list[int]] = []
+    for i in order:
+        for g in groups:
+            if normals[g[0]] @ normals[i] > np.cos(PATCH_ANGLE):
+                g.append(i)
+                break
+        else:
+            groups.append([i])
+    keep_candidates = []
+    for g in groups:
+        if len(g) >= 4:
+            n = normals[g[0]]
+            u = np.cross(n, [1.0, 0.0, 0.0])
+            if np.linalg.norm(u) < 1e-6:
+                u = np.cross(n, [0.0, 1.0, 0.0])
+            u /= np.linalg.norm(u)
+            v = np.cross(n, u)
+            flat = np.stack([points[g] @ u, points[g] @ v], axis=1)
+            try:
+                hull = ConvexHull(flat)
+                g = [g[k] for k in sorted(hull.vertices)]
+            except QhullError:
+                # Collinear patch: its two extreme points carry the same wrenches.
+                span = flat[:, np.ptp(flat, axis=0).argmax()]
+                g = sorted({g[int(span.argmin())], g[int(span.argmax())]})
+        keep_candidates.extend(g)
+    keep_candidates.sort(key=lambda i: (dist[i], i))
+    kept: list[int] = []
+    for i in keep_candidates:
+        if all(np.sum((points[i] - points[k]) ** 2) >= radius * radius for k in kept):
+            kept.append(i)
+    return np.array(kept, dtype=np.int64)
+
+
+def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
+    shape_poses = hand.shape_poses(dofs)
+    samples = geom.samples
+    rot = np.ascontiguousarray(pose[:3, :3])
+    pi, si, dist, link_normal = kernels.touching_points(
+        samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
+        rot, np.ascontiguousarray(pose[:3, 3]), shape_poses, arrays.kinds, arrays.halves,
+        arrays.radii, CONTACT_TOL,
+    )
+    if len(pi) == 0:
+        return ContactSet.empty()
+    # Object outward normal: the surface normal on smooth samples; on sharp features (where
+    # the object has no normal) the normal of the touching link surface, reversed.
+    n_link_obj = -(link_normal @ rot.T)
+    n_obj = np.where(samples.sharp[pi, None], n_link_obj, samples.normals[pi])
+    # A sample facing away from the link lies on the far side of a part thinner than the
+    # tolerance; it is not in contact.
+    facing = np.einsum("ij,ij->i", n_obj, n_link_obj) > 0.0
+    link_idx = arrays.shape_link[si]
+    pts, nrm, mus, links = [], [], [], []
+    for li in np.unique(link_idx[facing]):
+        sel = np.nonzero(facing & (link_idx == li))[0]
+        keep = sel[merge_link_contacts(samples.points[pi[sel]], n_obj[sel], dist[sel])]
+        pts.append(samples.points[pi[keep]])
+        nrm.append(n_obj[keep])
+        mu = friction_coefficient(arrays.mu_material[li], object_material)
+        mus.append(np.full(len(keep), mu))
+        links.extend([hand.links[li].name] * len(keep))
+    return ContactSet(
+        np.concatenate(pts), np.concatenate(nrm), np.concatenate(mus), np.array(links, dtype=object)
+    )
+
+
+def grasp_once(
+    hand: Hand,
+    geom: ObjectGeometry,
+    start_pose: np.ndarray,
+    travel: float,
+    s: float,
+    object_material: str = DEFAULT_OBJECT_MATERIAL,
+) -> GraspResult:
+    """Run the policy for one start pose (hand → object, (4, 4)) and pregrasp DOF value s."""
+    arrays = hand_arrays(hand)
+    dofs = hand.open_dofs(s)
+    rot = np.ascontiguousarray(start_pose[:3, :3])
+    samples = geom.samples
+    shape_poses = hand.shape_poses(dofs)
+    t, _, _ = kernels.approach_until_contact(
+        samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
+        rot, np.ascontiguousarray(start_pose[:3, 3]), shape_poses, arrays.kinds,
+        arrays.halves, arrays.radii, travel, HIT_EPS,
+    )
+    if not np.isfinite(t):
+        return GraspResult("missed", start_pose.copy(), dofs, ContactSet.empty())
+    pose = start_pose.copy()
+    pose[:3, 3] += t * rot[:, 2]
+    dofs = close_fingers(hand, samples, pose, dofs)
+    contacts = _contacts(hand, arrays, geom, dofs, pose, object_material)
+    n_links = len(set(contacts.link.tolist()))
+    status = "grasped" if n_links >= 2 else "touched"
+    return GraspResult(status, pose, dofs, contacts)
+
+
+def simulate(
+    obj,
+    p0,
+    use_dir=None,
+    *,
+    hand: Hand | str = "barrett",
+    object_material: str = DEFAULT_OBJECT_MATERIAL,
+) -> SimulationBatch:
+    """Simulate the policy for a batch of pregrasps on one object.
+
+    obj : GraspObject (see ``affordgrasp.objects.resolve_object``)
+    p0 : (n, 6) pregrasps in [-1, 1]^5 x [0, 1]
+    use_dir : (n, 2) use directions in [-1, 1]^2, or None (then no use point: NaN)
+    """
+    hand = get_hand(hand) if isinstance(hand, str) else hand
+    p0 = validate_pregrasps(p0)
+    n = len(p0)
+    if use_dir is None:
+        use_dir = np.full((n, 2), np.nan)
+        upts = np.full((n, 3), np.nan)
+        unrm = np.full((n, 3), np.nan)
+        utri = np.full(n, -1, dtype=np.int64)
+    else:
+        use_dir = validate_use_directions(use_dir)
+        if len(use_dir) != n:
+            raise InputError(f"need one use direction per pregrasp ({n}), got {len(use_dir)}")
+        upts, unrm, utri = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
+    started = time.perf_counter()
+    geom = object_geometry(obj)
+    hand_arrays(hand)
+    status = np.empty(n, dtype=object)
+    poses = np.zeros((n, 4, 4))
+    joints = np.zeros((n, len(hand.dofs)))
+    contacts = []
+    # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all.
+    reach = max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
+    starts, travel = start_poses(p0, geom.hull_vertices, reach)
+    for i in range(n):
+        r = grasp_once(hand, geom, starts[i], travel[i], p0[i, 5], object_material)
+        status[i] = r.status
+        poses[i] = r.hand_pose
+        joints[i] = r.joints
+        contacts.append(r.contacts)
+    seconds = time.perf_counter() - started
+    return SimulationBatch(
+        p0,
+        use_dir,
+        status,
+        poses,
+        joints,
+        contacts,
+        upts,
+        unrm,
+        utri,
+        poses[:, :3, 3].copy(),
+        poses[:, :3, 2].copy(),
+        seconds,
+    )

@@ -1,0 +1,145 @@
+"""Decoding the pregrasp p0 and the use direction d (SPEC §2.3, paper §IV-B).
+
+Spherical coding shared by p0 and d: azimuth = π·u1, cos(polar) = u2, so uniform (u1, u2) in
+[-1, 1]^2 gives directions uniform on the sphere::
+
+    direction = (sin θ cos φ, sin θ sin φ, cos θ),  φ = π u1,  cos θ = u2
+
+Hand frame from p0 = (u1, u2, u3, u4, u5, s):
+
+* z (approach) = direction(u1, u2);
+* reference x0 = normalise(e × z) with e = +Z of the object frame, or +X when |z·Z| > 0.99;
+  y0 = z × x0; then x, y = x0, y0 turned by the roll π·u3 about z (right-hand rule);
+* the approach line passes through the point whose x/y coordinates are the centre of the
+  object's extent seen along z (its vertices projected on x and y) plus (u4, u5) times the
+  half-extents of that projection;
+* the palm starts on that line so that the whole open hand lies behind the plane tangent to
+  the object's bounding sphere (centre: bounding-box centre), i.e. outside the object;
+* s ∈ [0, 1] sets the hand's pregrasp DOF (Barrett: spread = 180°·s).
+
+The use point U = DM(d, O) is the farthest intersection of the ray from the centre of mass
+along direction(d) with the surface, with the outward normal of the triangle hit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from ..errors import InputError
+
+
+def spherical_direction(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Unit directions (n, 3) from normalised spherical coordinates u1, u2 ∈ [-1, 1]."""
+    phi = np.pi * np.asarray(u1, dtype=np.float64)
+    cos_t = np.clip(np.asarray(u2, dtype=np.float64), -1.0, 1.0)
+    sin_t = np.sqrt(1.0 - cos_t**2)
+    return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), cos_t], axis=-1)
+
+
+def validate_pregrasps(p0) -> np.ndarray:
+    """p0 as an (n, 6) float64 array inside [-1, 1]^5 × [0, 1], or a clear InputError."""
+    p0 = np.atleast_2d(np.asarray(p0, dtype=np.float64))
+    if p0.ndim != 2 or p0.shape[1] != 6:
+        raise InputError(f"pregrasps must have shape (n, 6), got {p0.shape}")
+    if not np.all(np.isfinite(p0)):
+        raise InputError("pregrasps contain NaN or inf")
+    if np.any(np.abs(p0[:, :5]) > 1.0) or np.any((p0[:, 5] < 0) | (p0[:, 5] > 1)):
+        raise InputError("pregrasp parameters must lie in [-1, 1]^5 x [0, 1]")
+    return p0
+
+
+def validate_use_directions(d) -> np.ndarray:
+    d = np.atleast_2d(np.asarray(d, dtype=np.float64))
+    if d.ndim != 2 or d.shape[1] != 2:
+        raise InputError(f"use directions must have shape (n, 2), got {d.shape}")
+    if not np.all(np.isfinite(d)) or np.any(np.abs(d) > 1.0):
+        raise InputError("use directions must be finite and lie in [-1, 1]^2")
+    return d
+
+
+def hand_rotations(p0: np.ndarray) -> np.ndarray:
+    """Hand orientations (n, 3, 3), columns x, y, z (approach) in the object frame."""
+    z = spherical_direction(p0[:, 0], p0[:, 1])
+    ref = np.where(np.abs(z[:, 2:3]) > 0.99, [[1.0, 0.0, 0.0]], [[0.0, 0.0, 1.0]])
+    x0 = np.cross(ref, z)
+    x0 /= np.linalg.norm(x0, axis=1, keepdims=True)
+    y0 = np.cross(z, x0)
+    roll = np.pi * p0[:, 2:3]
+    x = np.cos(roll) * x0 + np.sin(roll) * y0
+    y = np.cross(z, x)
+    return np.stack([x, y, z], axis=-1)
+
+
+def start_poses(
+    p0: np.ndarray, hull_vertices: np.ndarray, hand_reach: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Start poses (n, 4, 4) of the hand (hand → object) and the approach length to try (n,).
+
+    hull_vertices : (v, 3) the object's convex-hull vertices (the extent seen along any
+        direction is that of its hull)
+    hand_reach : float, m, how far the open hand extends in front of the palm face
+    """
+    rot = hand_rotations(p0)
+    lo = hull_vertices.min(axis=0)
+    hi = hull_vertices.max(axis=0)
+    centre = (lo + hi) / 2
+    radius = float(np.max(np.linalg.norm(hull_vertices - centre, axis=1)))
+    proj = np.einsum("vk,nkj->nvj", hull_vertices, rot)  # (n, v, 3) coordinates in x, y, z
+    pmin = proj.min(axis=1)
+    pmax = proj.max(axis=1)
+    mid = (pmin + pmax) / 2
+    half = (pmax - pmin) / 2
+    x = mid[:, 0] + p0[:, 3] * half[:, 0]
+    y = mid[:, 1] + p0[:, 4] * half[:, 1]
+    z = rot[:, :, 2] @ centre - radius - hand_reach
+    origin = rot[:, :, 0] * x[:, None] + rot[:, :, 1] * y[:, None] + rot[:, :, 2] * z[:, None]
+    poses = np.zeros((len(p0), 4, 4))
+    poses[:, :3, :3] = rot
+    poses[:, :3, 3] = origin
+    poses[:, 3, 3] = 1.0
+    travel = np.full(len(p0), 2 * radius + hand_reach + 1e-3)
+    return poses, travel
+
+
+def use_points(
+    mesh: trimesh.Trimesh, center: np.ndarray, use_dir: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """DM(d, O): farthest surface hit along each use direction from the centre of mass.
+
+    use_dir : (n, 2) in [-1, 1]^2
+    returns : points (n, 3), outward normals (n, 3), triangle indices (n,) int64; rows whose
+        ray leaves the object without a hit (possible from a hollow object's cavity) are NaN
+        with triangle -1.
+    """
+    d = spherical_direction(use_dir[:, 0], use_dir[:, 1])
+    n = len(d)
+    points = np.full((n, 3), np.nan)
+    normals = np.full((n, 3), np.nan)
+    tris = np.full(n, -1, dtype=np.int64)
+    if n == 0:
+        return points, normals, tris
+    origins = np.repeat(np.asarray(center, dtype=np.float64)[None], n, axis=0)
+    _, ray_idx, tri_idx = mesh.ray.intersects_location(origins, d, multiple_hits=True)
+    if len(tri_idx) == 0:
+        return points, normals, tris
+    # Exact float64 intersection with the triangles the (float32) ray engine reported.
+    tri = np.asarray(mesh.triangles, dtype=np.float64)[tri_idx]
+    e1 = tri[:, 1] - tri[:, 0]
+    e2 = tri[:, 2] - tri[:, 0]
+    nrm = np.cross(e1, e2)
+    o = origins[ray_idx]
+    dirs = d[ray_idx]
+    denom = np.einsum("ij,ij->i", nrm, dirs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.einsum("ij,ij->i", nrm, tri[:, 0] - o) / denom
+    t = np.where(np.isfinite(t), t, -np.inf)
+    order = np.lexsort((-t, ray_idx))  # per ray, farthest first
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = ray_idx[order][1:] != ray_idx[order][:-1]
+    keep = order[first]
+    r = ray_idx[keep]
+    points[r] = o[keep] + t[keep, None] * dirs[keep]
+    normals[r] = np.asarray(mesh.face_normals)[tri_idx[keep]]
+    tris[r] = tri_idx[keep]
+    return points, normals, tris

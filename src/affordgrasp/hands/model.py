@@ -1,0 +1,240 @@
+"""A hand is data: links with collision shapes, a kinematic tree, DOFs and a closing behaviour.
+
+Conventions (SPEC §2.2):
+
+* The hand frame is the palm frame: the palm face lies in the plane z = 0, its centre is the
+  origin, and the hand approaches along +z.
+* Every link's collision geometry is a union of *sphere-swept convex cores*: a box or a
+  capped cylinder grown by a ball of radius ``radius`` (a rounded box / rounded cylinder).
+  Their signed distance is exact and cheap, and because every edge is rounded a dense sample
+  of the object surface cannot pass between samples into a link by more than about
+  ``spacing**2 / (8 * radius)`` (see ``affordgrasp.grasp.policy``).
+* A joint moves its child link relative to its parent: ``T_child = T_parent @ origin @ M(q)``
+  with ``M`` a rotation about ``axis`` by ``q`` (revolute) or a translation along it
+  (prismatic), and ``q = ratio * dof_value`` (couplings and mirrored DOFs).
+* A finger is a chain of closing DOFs (proximal first) with closing speeds. Closing moves all
+  still-active DOFs of the finger together at their speeds; when a link is blocked the DOFs up
+  to and including the one that drives it stop and the ones beyond keep closing
+  (breakaway, as the Barrett TorqueSwitch). A finger stops when every DOF is stopped by a
+  contact or its limit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import HandError
+from ..materials import MATERIALS
+
+BOX = 0
+CYLINDER = 1
+
+
+@dataclass(frozen=True)
+class Shape:
+    """A sphere-swept convex core in its link's frame.
+
+    kind : "box" (core half extents hx, hy, hz) or "cylinder" (core radius hx, half height hz,
+        axis along the shape's z)
+    half_extents : (3,) float, m, the core (before rounding)
+    radius : float, m, rounding radius
+    pose : (4, 4) float, the shape frame in the link frame
+    """
+
+    kind: str
+    half_extents: tuple[float, float, float]
+    radius: float
+    pose: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+
+@dataclass(frozen=True)
+class Joint:
+    """The joint that connects a link to its parent.
+
+    kind : "revolute" or "prismatic"
+    origin : (4, 4) float, joint frame in the parent link frame at q = 0
+    axis : (3,) float, unit axis in the joint frame
+    dof : str, the DOF that drives it
+    ratio : float, q = ratio * dof_value
+    """
+
+    kind: str
+    origin: np.ndarray
+    axis: np.ndarray
+    dof: str
+    ratio: float = 1.0
+
+
+@dataclass(frozen=True)
+class Link:
+    name: str
+    parent: str | None
+    joint: Joint | None
+    shapes: tuple[Shape, ...]
+    material: str
+
+
+@dataclass(frozen=True)
+class Dof:
+    """One degree of freedom: rad for revolute, m for prismatic."""
+
+    name: str
+    lower: float
+    upper: float
+    role: str  # "pregrasp" (set before the approach, e.g. the spread) or "close"
+
+
+@dataclass(frozen=True)
+class Finger:
+    """A chain of closing DOFs (proximal first) and the speed of each while closing."""
+
+    name: str
+    dofs: tuple[str, ...]
+    speeds: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Hand:
+    """A hand: links in topological order (the root, the palm, first), DOFs and fingers.
+
+    ``pregrasp_dof`` names the DOF set from the pregrasp's last parameter s ∈ [0, 1]
+    (linearly between its limits), or None when the hand has none.
+    """
+
+    name: str
+    links: tuple[Link, ...]
+    dofs: tuple[Dof, ...]
+    fingers: tuple[Finger, ...]
+    pregrasp_dof: str | None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        validate_hand(self)
+
+    @property
+    def dof_names(self) -> list[str]:
+        return [d.name for d in self.dofs]
+
+    @property
+    def link_names(self) -> list[str]:
+        return [link.name for link in self.links]
+
+    def dof_index(self, name: str) -> int:
+        return self.dof_names.index(name)
+
+    def open_dofs(self, s: float = 0.0) -> np.ndarray:
+        """DOF values at the pregrasp: closing DOFs at their lower limit, the pregrasp DOF at s."""
+        q = np.array([d.lower for d in self.dofs], dtype=np.float64)
+        if self.pregrasp_dof is not None:
+            d = self.dofs[self.dof_index(self.pregrasp_dof)]
+            q[self.dof_index(d.name)] = d.lower + float(s) * (d.upper - d.lower)
+        return q
+
+    def forward_kinematics(self, dof_values: np.ndarray) -> np.ndarray:
+        """Pose of every link in the hand frame.
+
+        dof_values : (n_dofs,) float
+        returns : (n_links, 4, 4) float
+        """
+        q = np.asarray(dof_values, dtype=np.float64)
+        if q.shape != (len(self.dofs),):
+            raise HandError(f"hand {self.name!r} needs {len(self.dofs)} DOF values, got {q.shape}")
+        poses = np.zeros((len(self.links), 4, 4))
+        index = {}
+        for i, link in enumerate(self.links):
+            index[link.name] = i
+            if link.joint is None:
+                poses[i] = np.eye(4)
+                continue
+            j = link.joint
+            value = j.ratio * q[self.dof_index(j.dof)]
+            poses[i] = poses[index[link.parent]] @ j.origin @ joint_motion(j.kind, j.axis, value)
+        return poses
+
+    def shape_poses(self, dof_values: np.ndarray) -> np.ndarray:
+        """Pose of every collision shape in the hand frame, (n_shapes, 4, 4)."""
+        link_poses = self.forward_kinematics(dof_values)
+        out = [link_poses[i] @ s.pose for i, link in enumerate(self.links) for s in link.shapes]
+        return np.array(out)
+
+
+def joint_motion(kind: str, axis: np.ndarray, value: float) -> np.ndarray:
+    """The (4, 4) motion of a joint at ``value`` (rad or m)."""
+    m = np.eye(4)
+    if kind == "revolute":
+        m[:3, :3] = axis_angle(axis, value)
+    else:
+        m[:3, 3] = np.asarray(axis) * value
+    return m
+
+
+def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix (3, 3) of ``angle`` rad about the unit ``axis`` (right-hand rule)."""
+    x, y, z = np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis)
+    c, s = np.cos(angle), np.sin(angle)
+    C = 1.0 - c
+    return np.array(
+        [
+            [c + x * x * C, x * y * C - z * s, x * z * C + y * s],
+            [y * x * C + z * s, c + y * y * C, y * z * C - x * s],
+            [z * x * C - y * s, z * y * C + x * s, c + z * z * C],
+        ]
+    )
+
+
+def transform(rotation: np.ndarray | None = None, translation=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """A (4, 4) rigid transform from a rotation (3, 3) and a translation (3,)."""
+    m = np.eye(4)
+    if rotation is not None:
+        m[:3, :3] = rotation
+    m[:3, 3] = translation
+    return m
+
+
+def validate_hand(hand: Hand) -> None:
+    """Check a hand description once, with messages that name the problem."""
+    names = [link.name for link in hand.links]
+    if len(set(names)) != len(names):
+        raise HandError(f"hand {hand.name!r}: link names must be unique, got {names}")
+    dof_names = [d.name for d in hand.dofs]
+    seen: set[str] = set()
+    for i, link in enumerate(hand.links):
+        if link.material not in MATERIALS:
+            raise HandError(
+                f"link {link.name!r}: unknown material {link.material!r} (known: {MATERIALS})"
+            )
+        for s in link.shapes:
+            if s.kind not in ("box", "cylinder"):
+                raise HandError(f"link {link.name!r}: shape kind must be 'box' or 'cylinder'")
+            if s.radius <= 0 or min(s.half_extents) < 0:
+                raise HandError(
+                    f"link {link.name!r}: shapes need a rounding radius > 0 and half extents >= 0"
+                )
+        if i == 0:
+            if link.parent is not None or link.joint is not None:
+                raise HandError("the first link must be the root (no parent, no joint)")
+        else:
+            if link.parent not in seen:
+                raise HandError(
+                    f"link {link.name!r}: parent {link.parent!r} must be listed before it"
+                )
+            if link.joint is None or link.joint.dof not in dof_names:
+                raise HandError(f"link {link.name!r}: needs a joint driven by a known DOF")
+            if link.joint.kind not in ("revolute", "prismatic"):
+                raise HandError(f"link {link.name!r}: joint kind must be revolute or prismatic")
+        seen.add(link.name)
+    for d in hand.dofs:
+        if not d.lower <= d.upper:
+            raise HandError(f"DOF {d.name!r}: lower limit {d.lower} > upper limit {d.upper}")
+    for f in hand.fingers:
+        if len(f.dofs) != len(f.speeds) or not f.dofs:
+            raise HandError(f"finger {f.name!r}: needs one speed per closing DOF")
+        for name in f.dofs:
+            if name not in dof_names:
+                raise HandError(f"finger {f.name!r}: unknown DOF {name!r}")
+        if any(v <= 0 for v in f.speeds):
+            raise HandError(f"finger {f.name!r}: closing speeds must be > 0")
+    if hand.pregrasp_dof is not None and hand.pregrasp_dof not in dof_names:
+        raise HandError(f"pregrasp DOF {hand.pregrasp_dof!r} is not a DOF of the hand")
