@@ -29,9 +29,7 @@ class ContactSet:
 
     @classmethod
     def empty(cls) -> ContactSet:
-        return cls(
-            np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=object)
-        )
+        return cls(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=object))
 
     @classmethod
     def from_arrays(cls, points, normals, mu, link=None) -> ContactSet:

@@ -24,6 +24,7 @@ CYLINDER = 1
 REVOLUTE = 0
 PRISMATIC = 1
 MAX_STEPS = 2000
+BISECTIONS = 48
 
 
 @njit(cache=True, fastmath=False)
@@ -113,7 +114,9 @@ def _to_hand(p, rot, trans, out):
 def _mul4_into(a, b, out):
     for i in range(4):
         for j in range(4):
-            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
+            out[i, j] = (
+                a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
+            )
 
 
 @njit(cache=True)
@@ -125,8 +128,18 @@ def _bounding_radius(kind, half, r):
 
 @njit(cache=True)
 def approach_until_contact(
-    points, cell_start, cell_center, cell_radius, rot, trans, poses, kinds, halves, radii,
-    t_max, hit_eps,
+    points,
+    cell_start,
+    cell_center,
+    cell_radius,
+    rot,
+    trans,
+    poses,
+    kinds,
+    halves,
+    radii,
+    t_max,
+    hit_eps,
 ):
     """Distance the hand can travel along its +z before a link touches a sample point.
 
@@ -144,7 +157,9 @@ def approach_until_contact(
     ns = poses.shape[0]
     rho = np.empty(ns)
     for s in range(ns):
-        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s])
+        # Grown by the hit level: a point can come within hit_eps of a rounded corner while
+        # still outside the exact bounding sphere.
+        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + 2.0 * hit_eps
     cap = nc * ns
     lower = np.empty(cap)
     upper = np.empty(cap)
@@ -191,12 +206,14 @@ def approach_until_contact(
         s = sidx[j]
         stop = min(upper[j], best)
         touched = False
+        t_cell_prev = t
         for _ in range(MAX_STEPS):
             d = sdf_world(ch[c, 0], ch[c, 1], ch[c, 2] - t, poses[s], kinds[s], halves[s], radii[s])
             d -= cell_radius[c]
             if d <= hit_eps:
                 touched = True
                 break
+            t_cell_prev = t
             t += d
             if t >= stop:
                 break
@@ -206,16 +223,34 @@ def approach_until_contact(
         for i in range(cell_start[c], cell_start[c + 1]):
             _to_hand(points[i], rot, trans, ph)
             t = t_cell
+            t_prev = t_cell_prev
             stop = min(upper[j], best)
             for _ in range(MAX_STEPS):
                 if t >= stop:
                     break
                 d = sdf_world(ph[0], ph[1], ph[2] - t, poses[s], kinds[s], halves[s], radii[s])
                 if d <= hit_eps:
-                    best = t
-                    best_p = i
-                    best_s = s
+                    # The first crossing of the hit level, whatever the steps that found it:
+                    # the result does not depend on where tracing started.
+                    lo = t_prev
+                    hi = t
+                    for _ in range(BISECTIONS):
+                        if hi - lo <= 1e-13:
+                            break
+                        mid = 0.5 * (lo + hi)
+                        dm = sdf_world(
+                            ph[0], ph[1], ph[2] - mid, poses[s], kinds[s], halves[s], radii[s]
+                        )
+                        if dm <= hit_eps:
+                            hi = mid
+                        else:
+                            lo = mid
+                    if hi < best:
+                        best = hi
+                        best_p = i
+                        best_s = s
                     break
+                t_prev = t
                 t += d
     if best_p < 0:
         return np.inf, -1, -1
@@ -223,8 +258,21 @@ def approach_until_contact(
 
 
 @njit(cache=True)
-def _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
-                      link_buf, shape_buf, tmp_a, tmp_b):
+def _chain_poses_into(
+    s,
+    base,
+    origins,
+    kinds,
+    axes,
+    q0,
+    speeds,
+    shape_joint,
+    shape_local,
+    link_buf,
+    shape_buf,
+    tmp_a,
+    tmp_b,
+):
     """Fill link_buf (m, 4, 4) and shape_buf (k, 4, 4) with the chain's poses at ``s``."""
     m = origins.shape[0]
     tmp_a[:, :] = base
@@ -280,10 +328,25 @@ def _min_sdf(px, py, pz, shape_buf, kinds, halves, radii):
 
 @njit(cache=True)
 def close_chain_until_contact(
-    points, cell_start, cell_center, cell_radius, rot, trans,
-    base, origins, kinds, axes, q0, speeds,
-    shape_joint, shape_local, shape_kinds, shape_halves, shape_radii,
-    s_max, hit_eps,
+    points,
+    cell_start,
+    cell_center,
+    cell_radius,
+    rot,
+    trans,
+    base,
+    origins,
+    kinds,
+    axes,
+    q0,
+    speeds,
+    shape_joint,
+    shape_local,
+    shape_kinds,
+    shape_halves,
+    shape_radii,
+    s_max,
+    hit_eps,
 ):
     """Closing parameter at which a moving link of a finger first touches a sample point.
 
@@ -302,8 +365,21 @@ def close_chain_until_contact(
     shape_buf = np.empty((k, 4, 4))
     tmp_a = np.empty((4, 4))
     tmp_b = np.empty((4, 4))
-    _chain_poses_into(0.0, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
-                      link_buf, shape_buf, tmp_a, tmp_b)
+    _chain_poses_into(
+        0.0,
+        base,
+        origins,
+        kinds,
+        axes,
+        q0,
+        speeds,
+        shape_joint,
+        shape_local,
+        link_buf,
+        shape_buf,
+        tmp_a,
+        tmp_b,
+    )
     _mul4_into(base, origins[0], tmp_a)
     o0 = tmp_a[:3, 3].copy()
     chain_len = np.zeros(m)
@@ -318,7 +394,7 @@ def close_chain_until_contact(
         dy = shape_buf[q, 1, 3] - link_buf[j, 1, 3]
         dz = shape_buf[q, 2, 3] - link_buf[j, 2, 3]
         ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
-        reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
+        reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext + 2 * hit_eps)
     for j in range(m):
         if kinds[j] == PRISMATIC:
             reach += abs(speeds[j]) * s_max
@@ -359,18 +435,35 @@ def close_chain_until_contact(
         dx = ch[c, 0] - o0[0]
         dy = ch[c, 1] - o0[1]
         dz = ch[c, 2] - o0[2]
-        bound = _speed_bound(np.sqrt(dx * dx + dy * dy + dz * dz) + cell_radius[c],
-                             kinds, speeds, chain_len)
+        bound = _speed_bound(
+            np.sqrt(dx * dx + dy * dy + dz * dz) + cell_radius[c], kinds, speeds, chain_len
+        )
         touched = False
+        s_cell_prev = s
         for _ in range(MAX_STEPS):
-            _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
-                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)
-            d, _ = _min_sdf(ch[c, 0], ch[c, 1], ch[c, 2], shape_buf, shape_kinds,
-                            shape_halves, shape_radii)
+            _chain_poses_into(
+                s,
+                base,
+                origins,
+                kinds,
+                axes,
+                q0,
+                speeds,
+                shape_joint,
+                shape_local,
+                link_buf,
+                shape_buf,
+                tmp_a,
+                tmp_b,
+            )
+            d, _ = _min_sdf(
+                ch[c, 0], ch[c, 1], ch[c, 2], shape_buf, shape_kinds, shape_halves, shape_radii
+            )
             d -= cell_radius[c]
             if d <= hit_eps:
                 touched = True
                 break
+            s_cell_prev = s
             s += d / bound
             if s >= best:
                 break
@@ -384,18 +477,65 @@ def close_chain_until_contact(
             dz = ph[2] - o0[2]
             pb = _speed_bound(np.sqrt(dx * dx + dy * dy + dz * dz), kinds, speeds, chain_len)
             s = s_cell
+            s_prev = s_cell_prev
             for _ in range(MAX_STEPS):
                 if s >= best:
                     break
-                _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
-                                  shape_local, link_buf, shape_buf, tmp_a, tmp_b)
-                d, dq = _min_sdf(ph[0], ph[1], ph[2], shape_buf, shape_kinds, shape_halves,
-                                 shape_radii)
+                _chain_poses_into(
+                    s,
+                    base,
+                    origins,
+                    kinds,
+                    axes,
+                    q0,
+                    speeds,
+                    shape_joint,
+                    shape_local,
+                    link_buf,
+                    shape_buf,
+                    tmp_a,
+                    tmp_b,
+                )
+                d, dq = _min_sdf(
+                    ph[0], ph[1], ph[2], shape_buf, shape_kinds, shape_halves, shape_radii
+                )
                 if d <= hit_eps:
-                    best = s
-                    best_p = i
-                    best_q = dq
+                    # First crossing of the hit level inside [s_prev, s] (see the approach).
+                    lo = s_prev
+                    hi = s
+                    for _ in range(BISECTIONS):
+                        if hi - lo <= 1e-13:
+                            break
+                        mid = 0.5 * (lo + hi)
+                        _chain_poses_into(
+                            mid,
+                            base,
+                            origins,
+                            kinds,
+                            axes,
+                            q0,
+                            speeds,
+                            shape_joint,
+                            shape_local,
+                            link_buf,
+                            shape_buf,
+                            tmp_a,
+                            tmp_b,
+                        )
+                        dm, qm = _min_sdf(
+                            ph[0], ph[1], ph[2], shape_buf, shape_kinds, shape_halves, shape_radii
+                        )
+                        if dm <= hit_eps:
+                            hi = mid
+                            dq = qm
+                        else:
+                            lo = mid
+                    if hi < best:
+                        best = hi
+                        best_p = i
+                        best_q = dq
                     break
+                s_prev = s
                 s += d / pb
     if best_p < 0:
         return np.inf, -1, -1
@@ -414,8 +554,9 @@ def _speed_bound(r, kinds, speeds, chain_len):
 
 
 @njit(cache=True)
-def touching_points(points, cell_start, cell_center, cell_radius, rot, trans, poses, kinds,
-                    halves, radii, tol):
+def touching_points(
+    points, cell_start, cell_center, cell_radius, rot, trans, poses, kinds, halves, radii, tol
+):
     """Samples within ``tol`` of any shape at a fixed hand configuration.
 
     returns : point indices (k,), shape indices (k,), signed distances (k,) and the shape's
@@ -463,8 +604,9 @@ def touching_points(points, cell_start, cell_center, cell_radius, rot, trans, po
                     dist2[:m] = dist
                     nrm2[:m] = nrm
                     pi, si, dist, nrm = pi2, si2, dist2, nrm2
-                nx, ny, nz = outward_normal_world(ph[0], ph[1], ph[2], poses[s], kinds[s],
-                                                  halves[s], radii[s])
+                nx, ny, nz = outward_normal_world(
+                    ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s]
+                )
                 pi[m] = i
                 si[m] = s
                 dist[m] = d

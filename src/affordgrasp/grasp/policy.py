@@ -239,14 +239,28 @@ def close_fingers(
                 _finger_chain(hand, arrays, finger, link_poses, dofs, active)
             )
             # Largest s before an active DOF reaches its upper limit.
-            room = [
-                (hand.dofs[idx[j]].upper - dofs[idx[j]]) / finger.speeds[j] for j in active
-            ]
+            room = [(hand.dofs[idx[j]].upper - dofs[idx[j]]) / finger.speeds[j] for j in active]
             s_max = max(min(room), 0.0)
             s_hit, _, q_hit = kernels.close_chain_until_contact(
-                samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
-                rot, trans, base, origins, kinds, axes, q0, speeds, sj, sl, sk, sh, sr,
-                s_max, HIT_EPS,
+                samples.points,
+                samples.cell_start,
+                samples.cell_center,
+                samples.cell_radius,
+                rot,
+                trans,
+                base,
+                origins,
+                kinds,
+                axes,
+                q0,
+                speeds,
+                sj,
+                sl,
+                sk,
+                sh,
+                sr,
+                s_max,
+                HIT_EPS,
             )
             s = min(s_hit, s_max)
             for j in active:
@@ -258,9 +272,7 @@ def close_fingers(
                 active = [j for j in active if j > blocked]
             else:
                 # A joint reached its limit: it stops, the others go on.
-                active = [
-                    j for j in active if dofs[idx[j]] < hand.dofs[idx[j]].upper - 1e-12
-                ]
+                active = [j for j in active if dofs[idx[j]] < hand.dofs[idx[j]].upper - 1e-12]
     return dofs
 
 
@@ -311,9 +323,17 @@ def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
     samples = geom.samples
     rot = np.ascontiguousarray(pose[:3, :3])
     pi, si, dist, link_normal = kernels.touching_points(
-        samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
-        rot, np.ascontiguousarray(pose[:3, 3]), shape_poses, arrays.kinds, arrays.halves,
-        arrays.radii, CONTACT_TOL,
+        samples.points,
+        samples.cell_start,
+        samples.cell_center,
+        samples.cell_radius,
+        rot,
+        np.ascontiguousarray(pose[:3, 3]),
+        shape_poses,
+        arrays.kinds,
+        arrays.halves,
+        arrays.radii,
+        CONTACT_TOL,
     )
     if len(pi) == 0:
         return ContactSet.empty()
@@ -354,9 +374,18 @@ def grasp_once(
     samples = geom.samples
     shape_poses = hand.shape_poses(dofs)
     t, _, _ = kernels.approach_until_contact(
-        samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
-        rot, np.ascontiguousarray(start_pose[:3, 3]), shape_poses, arrays.kinds,
-        arrays.halves, arrays.radii, travel, HIT_EPS,
+        samples.points,
+        samples.cell_start,
+        samples.cell_center,
+        samples.cell_radius,
+        rot,
+        np.ascontiguousarray(start_pose[:3, 3]),
+        shape_poses,
+        arrays.kinds,
+        arrays.halves,
+        arrays.radii,
+        travel,
+        HIT_EPS,
     )
     if not np.isfinite(t):
         return GraspResult("missed", start_pose.copy(), dofs, ContactSet.empty())

@@ -143,3 +143,32 @@ def use_points(
     normals[r] = np.asarray(mesh.face_normals)[tri_idx[keep]]
     tris[r] = tri_idx[keep]
     return points, normals, tris
+
+
+SAMPLE_BLOCK = 1024
+
+
+def sample_inputs(seed: int, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+    """Uniform pregrasps (n, 6) and use directions (n, 2) for samples start..stop-1.
+
+    Sample i depends only on (seed, i): draws come in fixed blocks of SAMPLE_BLOCK samples,
+    each block from its own ``SeedSequence([seed, block])``, so any split of a run into
+    shards or workers produces the same samples. Every object of a run shares the sequence.
+    """
+    if seed < 0:
+        raise InputError(f"seed must be a non-negative integer, got {seed}")
+    if not 0 <= start <= stop:
+        raise InputError(f"bad sample range [{start}, {stop})")
+    p0 = np.empty((stop - start, 6))
+    d = np.empty((stop - start, 2))
+    first, last = start // SAMPLE_BLOCK, (stop - 1) // SAMPLE_BLOCK if stop > start else -1
+    for block in range(first, last + 1):
+        rng = np.random.default_rng(np.random.SeedSequence([seed, block]))
+        u = rng.random((SAMPLE_BLOCK, 8))
+        lo = max(start, block * SAMPLE_BLOCK)
+        hi = min(stop, (block + 1) * SAMPLE_BLOCK)
+        rows = u[lo - block * SAMPLE_BLOCK : hi - block * SAMPLE_BLOCK]
+        p0[lo - start : hi - start, :5] = 2.0 * rows[:, :5] - 1.0
+        p0[lo - start : hi - start, 5] = rows[:, 5]
+        d[lo - start : hi - start] = 2.0 * rows[:, 6:8] - 1.0
+    return p0, d

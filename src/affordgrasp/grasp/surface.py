@@ -7,19 +7,23 @@ defined there, so a contact on them takes the link's normal instead (see ``polic
 
 Because every hand link is rounded by a radius r, a link touching the surface between
 samples can sink into the true mesh by at most about spacing**2 / (8 r): 0.06 mm for the
-default 1.5 mm spacing and the Barrett palm rim (r = 5 mm).
+default 1.4 mm spacing and the Barrett palm rim (r = 5 mm). Beyond ``MAX_POINTS`` samples
+(a surface of several m²) the spacing grows and a warning says the tolerance is not met.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 
+log = logging.getLogger(__name__)
+
 SHARP_ANGLE = np.deg2rad(20.0)
-DEFAULT_SPACING = 1.5e-3
-MAX_POINTS = 60_000
+DEFAULT_SPACING = 1.4e-3
+MAX_POINTS = 1_000_000
 
 
 CELL_SIZE = 8e-3
@@ -106,6 +110,14 @@ def sample_surface(
         if len(vertices) + n_edge + n_face <= max_points:
             break
         spacing *= 1.25
+        log.warning(
+            "surface of %.3g m² needs more than %d samples: spacing raised to %.2f mm, so a "
+            "link may sink up to about %.2f mm into the mesh",
+            mesh.area,
+            max_points,
+            spacing * 1e3,
+            spacing**2 / 8 / 5e-3 * 1e3,
+        )
 
     pts = [vertices]
     nrm = [vertex_normals]

@@ -33,7 +33,9 @@ _CLOSE_AXIS = np.array([-1.0, 0.0, 0.0])
 
 def _rounded_box(size_mm, center_mm, radius=ROUNDING) -> Shape:
     size = np.asarray(size_mm) * MM
-    return Shape("box", tuple(size / 2 - radius), radius, transform(None, np.asarray(center_mm) * MM))
+    return Shape(
+        "box", tuple(size / 2 - radius), radius, transform(None, np.asarray(center_mm) * MM)
+    )
 
 
 def _finger(prefix: str, parent: str, origin: np.ndarray) -> tuple[Link, Link]:

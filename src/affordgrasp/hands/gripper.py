@@ -22,8 +22,14 @@ def parallel_jaw() -> Hand:
         "palm",
         None,
         None,
-        (Shape("box", (0.060 - RADIUS, 0.020 - RADIUS, 0.030 - RADIUS), RADIUS,
-               transform(None, (0, 0, -0.030))),),
+        (
+            Shape(
+                "box",
+                (0.060 - RADIUS, 0.020 - RADIUS, 0.030 - RADIUS),
+                RADIUS,
+                transform(None, (0, 0, -0.030)),
+            ),
+        ),
         "plastic",
     )
     half = np.asarray(JAW) / 2 - RADIUS

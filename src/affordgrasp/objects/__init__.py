@@ -1,0 +1,42 @@
+"""Objects: load, repair and scale meshes, mass properties, built-in families (SPEC §2.1).
+
+The entry point is :func:`resolve_object`, which turns ``"knife"``, ``"knife:7"`` or a
+mesh path into a :class:`GraspObject`. The procedural families (:func:`make_family`,
+``FAMILIES``) are imported on first use.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from affordgrasp.objects.loading import load_mesh, prepare_mesh
+from affordgrasp.objects.mass import MassProperties, mass_properties, mass_properties_parts
+from affordgrasp.objects.off import read_off
+from affordgrasp.objects.resolve import GraspObject, family_names, mesh_hash, resolve_object
+
+__all__ = [
+    "FAMILIES",
+    "GraspObject",
+    "MassProperties",
+    "family_names",
+    "load_mesh",
+    "make_family",
+    "mass_properties",
+    "mass_properties_parts",
+    "mesh_hash",
+    "prepare_mesh",
+    "read_off",
+    "resolve_object",
+]
+
+# Served from objects.families on first access: building the family table is not needed
+# to load a mesh file.
+_FROM_FAMILIES = ("FAMILIES", "make_family")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _FROM_FAMILIES:
+        from affordgrasp.objects import families
+
+        return getattr(families, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,0 +1,92 @@
+"""The ``affordgrasp`` command: a thin shell over the Python API.
+
+Each subcommand lives in ``affordgrasp.commands.<name>`` with ``add_arguments(parser)`` and
+``run(args, out)``; ``out`` (an ``Output``) prints either a readable table or, with
+``--json``, one JSON document on stdout. Exit codes: 0 success, 2 bad input (a one-line
+reason on stderr), 1 internal failure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+
+from . import __version__
+from .errors import InputError
+
+COMMANDS = {
+    "objects": "list the built-in object families, or export one as a mesh",
+    "simulate": "simulate the grasp policy on an object and summarise the outcomes",
+    "evaluate": "simulate, compute the metric vector and score tasks on an object",
+    "tasks": "list the affordance functions (tasks) and their thresholds",
+    "generate": "generate a sharded Parquet dataset of evaluated grasps (resumable)",
+    "best": "brute-force argmax of a task over a dataset",
+    "optimize": "optimise a task directly in simulation (cross-entropy method)",
+    "show": "render the best grasps of a task as PNG grids and an interactive HTML page",
+    "plots": "plot metric distributions, status counts and affordances of a dataset",
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="affordgrasp",
+        description="Task-oriented grasp quality: simulate, score, generate, learn, show.",
+    )
+    parser.add_argument("--version", action="version", version=f"affordgrasp {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, help_text in COMMANDS.items():
+        try:
+            module = importlib.import_module(f"affordgrasp.commands.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"affordgrasp.commands.{name}":
+                continue
+            raise
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+        module.add_arguments(p)
+        p.set_defaults(_module=module)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    from .commands.output import Output
+
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse exits 2 on bad usage, 0 on --help
+        return int(exc.code or 0)
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING,
+        format="%(levelname)s %(name)s: %(message)s",
+    )
+    if args.command is None:
+        parser.print_help()
+        return 2
+    out = Output(json_mode=args.json)
+    try:
+        args._module.run(args, out)
+    except InputError as exc:
+        print(f"affordgrasp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"affordgrasp {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 - the CLI's last line of defence
+        logging.getLogger("affordgrasp").debug("internal failure", exc_info=True)
+        print(
+            f"affordgrasp {args.command}: internal error: {type(exc).__name__}: {exc} "
+            "(run with -v for details; please report it)",
+            file=sys.stderr,
+        )
+        if args.verbose:
+            raise
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

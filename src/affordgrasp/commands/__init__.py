@@ -1,0 +1,1 @@
+"""Subcommands of the ``affordgrasp`` CLI, one module each (see ``affordgrasp.cli``)."""

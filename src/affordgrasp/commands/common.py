@@ -1,0 +1,86 @@
+"""Arguments and summaries shared by the simulate and evaluate commands."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import InputError
+
+
+def add_sampling_arguments(p) -> None:
+    p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
+    p.add_argument("--samples", type=int, default=1000, help="number of grasps (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    p.add_argument("--hand", default="barrett", help="barrett (default) or parallel_jaw")
+    p.add_argument(
+        "--size", type=float, default=None, help="rescale a mesh file: longest extent, m"
+    )
+    p.add_argument("--units", default=None, help="units of a mesh file: m, cm, mm, in, ft")
+    p.add_argument("--out", default=None, help="write one row per sample to this Parquet file")
+    p.add_argument("--batch", type=int, default=250, help=argparse_suppress())
+
+
+def argparse_suppress():
+    import argparse
+
+    return argparse.SUPPRESS
+
+
+def check_counts(args) -> None:
+    if args.samples <= 0:
+        raise InputError(f"--samples must be a positive integer, got {args.samples}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
+
+
+def run_batches(args, out, obj, metrics: bool):
+    """Evaluate in batches with a progress bar; returns (table, seconds per stage, wall)."""
+    import pyarrow as pa
+
+    from ..evaluate import evaluate_samples
+
+    tables = []
+    spent = {"simulate": 0.0, "metrics": 0.0, "table": 0.0}
+    started = time.perf_counter()
+    with out.progress(f"{obj.name}", args.samples) as advance:
+        for start in range(0, args.samples, args.batch):
+            n = min(args.batch, args.samples - start)
+            table, timing = evaluate_samples(
+                obj, n, seed=args.seed, start=start, hand=args.hand, metrics=metrics
+            )
+            for k, v in timing.items():
+                spent[k] += v
+            tables.append(table)
+            advance(n)
+    wall = time.perf_counter() - started
+    return pa.concat_tables(tables), spent, wall
+
+
+def status_summary(table) -> tuple[list[list], dict]:
+    from ..grasp.policy import STATUSES
+
+    status = np.asarray(table.column("status").to_pylist(), dtype=object)
+    n_contacts = table.column("n_contacts").to_numpy()
+    rows, doc = [], {}
+    for s in STATUSES:
+        sel = status == s
+        k = int(sel.sum())
+        mean_c = float(n_contacts[sel].mean()) if k else 0.0
+        rows.append([s, k, f"{100.0 * k / max(len(status), 1):.1f}%", mean_c])
+        doc[s] = {"count": k, "mean_contacts": mean_c}
+    return rows, doc
+
+
+def write_table(table, path: str | None, out) -> None:
+    if not path:
+        return
+    import os
+
+    import pyarrow.parquet as pq
+
+    tmp = f"{path}.partial"
+    pq.write_table(table, tmp)
+    os.replace(tmp, path)
+    out.text(f"wrote {table.num_rows} rows to {path}")

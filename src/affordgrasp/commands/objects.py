@@ -1,0 +1,59 @@
+"""``affordgrasp objects``: list the built-in families, or export one as a mesh file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import InputError
+
+
+def add_arguments(p) -> None:
+    sub = p.add_subparsers(dest="action", metavar="ACTION")
+    sub.add_parser("list", help="list the families (the default)")
+    e = sub.add_parser("export", help="write one object as a mesh file (OBJ, STL, PLY, GLB, OFF)")
+    e.add_argument("object", help="family, family:seed, or a mesh path")
+    e.add_argument("--seed", type=int, default=None, help="family seed (same as family:SEED)")
+    e.add_argument("-o", "--out", required=True, help="output file; the extension sets the format")
+    # --json also after the action (the parent parser has it too).
+    e.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+
+
+def run(args, out) -> None:
+    from ..objects import FAMILIES, resolve_object
+
+    if getattr(args, "action", None) == "export":
+        spec = args.object
+        if args.seed is not None:
+            if ":" in spec:
+                raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
+            spec = f"{spec}:{args.seed}"
+        obj = resolve_object(spec)
+        path = Path(args.out)
+        ext = path.suffix.lower().lstrip(".")
+        if ext not in ("obj", "stl", "ply", "glb", "off"):
+            raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        obj.mesh.export(path)
+        m = obj.mass
+        ext_m = m.bounds[1] - m.bounds[0]
+        out.text(
+            f"wrote {path} ({obj.name}, {len(obj.mesh.faces)} triangles, "
+            f"{ext_m[0]:.3f} x {ext_m[1]:.3f} x {ext_m[2]:.3f} m)"
+        )
+        out.result(
+            {
+                "object": obj.name,
+                "category": obj.category,
+                "path": str(path),
+                "triangles": len(obj.mesh.faces),
+                "extent_m": ext_m,
+                "volume_m3": m.volume,
+                "mesh_hash": obj.mesh_hash,
+            }
+        )
+        return
+    rows = [[f.name, f.category, f.description] for f in FAMILIES.values()]
+    out.table("built-in object families", ["name", "category", "description"], rows)
+    out.text("name an object as FAMILY (seed 0), FAMILY:SEED, or a mesh path")
+    out.result({"families": [dict(name=r[0], category=r[1], description=r[2]) for r in rows]})

@@ -1,0 +1,107 @@
+"""Printing results: readable tables for people, one JSON document for scripts."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from contextlib import contextmanager
+
+import numpy as np
+
+
+def to_jsonable(value):
+    """Numbers, arrays and nested containers as JSON; inf/NaN as the strings JSON lacks."""
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isnan(v):
+            return None
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return v
+    return value
+
+
+def fmt(value) -> str:
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isinf(v) or math.isnan(v):
+            return str(v)
+        if v != 0 and (abs(v) < 1e-3 or abs(v) >= 1e5):
+            return f"{v:.3e}"
+        return f"{v:.4g}"
+    return str(value)
+
+
+class Output:
+    """Collects what a command reports and prints it the way the user asked."""
+
+    def __init__(self, json_mode: bool = False):
+        self.json_mode = json_mode
+        from rich.console import Console
+
+        # Tables go to stdout; progress bars to stderr so stdout stays parseable.
+        self.console = Console(file=sys.stdout)
+        self.err = Console(file=sys.stderr)
+
+    def table(self, title: str, columns: list[str], rows: list[list]) -> None:
+        if self.json_mode:
+            return
+        from rich.table import Table
+
+        t = Table(title=title, title_justify="left")
+        for c in columns:
+            t.add_column(c, justify="right" if c not in ("status", "task", "name") else "left")
+        for r in rows:
+            t.add_row(*[fmt(v) for v in r])
+        self.console.print(t)
+
+    def text(self, message: str) -> None:
+        if not self.json_mode:
+            self.console.print(message)
+
+    def result(self, document: dict) -> None:
+        """The command's result; printed only in JSON mode (the tables already said it)."""
+        if self.json_mode:
+            print(json.dumps(to_jsonable(document), indent=2, allow_nan=False))
+
+    @contextmanager
+    def progress(self, description: str, total: int):
+        """A progress bar with rate and ETA on stderr; yields advance(n)."""
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeRemainingColumn,
+        )
+
+        columns = [
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("{task.fields[rate]}"),
+            TimeRemainingColumn(),
+        ]
+        with Progress(*columns, console=self.err, transient=True, disable=self.json_mode) as p:
+            task = p.add_task(description, total=total, rate="")
+            import time
+
+            started = time.perf_counter()
+
+            def advance(n: int = 1) -> None:
+                p.advance(task, n)
+                done = p.tasks[0].completed
+                elapsed = time.perf_counter() - started
+                if elapsed > 0:
+                    p.update(task, rate=f"{done / elapsed:,.0f} grasps/s")
+
+            yield advance

@@ -1,0 +1,39 @@
+"""``affordgrasp simulate``: run the grasp policy and summarise statuses and contacts."""
+
+from __future__ import annotations
+
+from .common import add_sampling_arguments, check_counts, run_batches, status_summary, write_table
+
+
+def add_arguments(p) -> None:
+    add_sampling_arguments(p)
+
+
+def run(args, out) -> None:
+    from ..objects import resolve_object
+
+    check_counts(args)
+    obj = resolve_object(args.object, size_m=args.size, units=args.units)
+    table, spent, wall = run_batches(args, out, obj, metrics=False)
+    rows, doc = status_summary(table)
+    rate = args.samples / spent["simulate"] if spent["simulate"] > 0 else float("inf")
+    out.table(
+        f"{obj.name}: {args.samples} grasps, hand {args.hand}, seed {args.seed}",
+        ["status", "count", "share", "contacts/grasp"],
+        rows,
+    )
+    out.text(f"simulation: {rate:,.0f} grasps/s on one core ({wall:.2f} s wall)")
+    write_table(table, args.out, out)
+    out.result(
+        {
+            "object": obj.name,
+            "object_hash": obj.mesh_hash,
+            "hand": args.hand,
+            "samples": args.samples,
+            "seed": args.seed,
+            "status": doc,
+            "grasps_per_second_per_core": rate,
+            "seconds": wall,
+            "out": args.out,
+        }
+    )

@@ -1,0 +1,142 @@
+"""The per-sample table (SPEC §2.9): column names, types and conversion to Arrow.
+
+Every simulated sample is one row, stable or not. Points and normals are in the object's
+mesh frame, metres; the outward normal of the object is stored. +inf is stored as IEEE inf.
+Rows without a use point (a use ray that leaves a hollow object through its opening without
+a hit) have NaN use point/normal and NaN use metrics.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+
+from .. import __version__
+
+METRIC_COLUMNS = (
+    "epsilon",
+    "gws_volume",
+    "epsilon_reason",
+    "inertia",
+    "hold_effort_px",
+    "hold_effort_nx",
+    "hold_effort_py",
+    "hold_effort_ny",
+    "hold_effort_pz",
+    "hold_effort_nz",
+    "impact_effort",
+    "discharge",
+    "use_force",
+    "use_edge",
+    "use_edge_angle",
+)
+
+HOLD_EFFORT_COLUMNS = METRIC_COLUMNS[4:10]
+
+_f64 = pa.float64()
+_vec3 = pa.list_(_f64, 3)
+
+SAMPLE_FIELDS = [
+    pa.field("object", pa.string()),
+    pa.field("object_hash", pa.string()),
+    pa.field("hand", pa.string()),
+    pa.field("sample", pa.int64()),
+    pa.field("seed", pa.int64()),
+    pa.field("p0", pa.list_(_f64, 6)),
+    pa.field("use_dir", pa.list_(_f64, 2)),
+    pa.field("status", pa.string()),
+    pa.field("hand_pose", pa.list_(_f64, 16)),
+    pa.field("joints", pa.list_(_f64)),
+    pa.field("contact_points", pa.list_(_vec3)),
+    pa.field("contact_normals", pa.list_(_vec3)),
+    pa.field("contact_mu", pa.list_(_f64)),
+    pa.field("contact_link", pa.list_(pa.string())),
+    pa.field("n_contacts", pa.int32()),
+    pa.field("use_point", _vec3),
+    pa.field("use_normal", _vec3),
+    pa.field("use_triangle", pa.int64()),
+    pa.field("wrist_point", _vec3),
+    pa.field("wrist_axis", _vec3),
+]
+METRIC_FIELDS = [
+    pa.field(name, pa.string() if name == "epsilon_reason" else _f64) for name in METRIC_COLUMNS
+]
+SCHEMA = pa.schema(SAMPLE_FIELDS + METRIC_FIELDS, metadata={"affordgrasp_version": __version__})
+SIMULATION_SCHEMA = pa.schema(SAMPLE_FIELDS, metadata={"affordgrasp_version": __version__})
+
+
+def _fixed(values: np.ndarray, width: int) -> pa.Array:
+    flat = pa.array(np.ascontiguousarray(values, dtype=np.float64).reshape(-1))
+    return pa.FixedSizeListArray.from_arrays(flat, width)
+
+
+def _ragged_vec3(chunks: list[np.ndarray]) -> pa.Array:
+    counts = np.array([len(c) for c in chunks], dtype=np.int32)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    flat = np.concatenate([np.asarray(c, dtype=np.float64).reshape(-1, 3) for c in chunks])
+    inner = pa.FixedSizeListArray.from_arrays(pa.array(flat.reshape(-1)), 3)
+    return pa.ListArray.from_arrays(pa.array(offsets), inner)
+
+
+def _ragged(chunks: list[np.ndarray], typ: pa.DataType) -> pa.Array:
+    counts = np.array([len(c) for c in chunks], dtype=np.int32)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    flat = np.concatenate([np.asarray(c).reshape(-1) for c in chunks]) if chunks else []
+    return pa.ListArray.from_arrays(pa.array(offsets), pa.array(list(flat), type=typ))
+
+
+def batch_to_table(
+    obj, batch, *, hand: str, seed: int, sample_start: int = 0, metrics: dict | None = None
+) -> pa.Table:
+    """Rows of a SimulationBatch (and its metrics, a dict of column → (n,) array) as a Table."""
+    n = len(batch)
+    contacts = batch.contacts
+    cols = {
+        "object": pa.array([obj.name] * n, pa.string()),
+        "object_hash": pa.array([obj.mesh_hash] * n, pa.string()),
+        "hand": pa.array([hand] * n, pa.string()),
+        "sample": pa.array(np.arange(sample_start, sample_start + n, dtype=np.int64)),
+        "seed": pa.array(np.full(n, seed, dtype=np.int64)),
+        "p0": _fixed(batch.p0, 6),
+        "use_dir": _fixed(batch.use_dir, 2),
+        "status": pa.array(list(batch.status), pa.string()),
+        "hand_pose": _fixed(batch.hand_pose.reshape(n, 16), 16),
+        "joints": pa.ListArray.from_arrays(
+            pa.array(np.arange(0, n + 1, dtype=np.int32) * batch.joints.shape[1]),
+            pa.array(batch.joints.reshape(-1)),
+        ),
+        "contact_points": _ragged_vec3([c.points for c in contacts]),
+        "contact_normals": _ragged_vec3([c.normals for c in contacts]),
+        "contact_mu": _ragged([c.mu for c in contacts], _f64),
+        "contact_link": _ragged([c.link for c in contacts], pa.string()),
+        "n_contacts": pa.array(np.array([len(c) for c in contacts], dtype=np.int32)),
+        "use_point": _fixed(batch.use_point, 3),
+        "use_normal": _fixed(batch.use_normal, 3),
+        "use_triangle": pa.array(batch.use_triangle.astype(np.int64)),
+        "wrist_point": _fixed(batch.wrist_point, 3),
+        "wrist_axis": _fixed(batch.wrist_axis, 3),
+    }
+    schema = SIMULATION_SCHEMA
+    if metrics is not None:
+        for name in METRIC_COLUMNS:
+            values = metrics[name]
+            if name == "epsilon_reason":
+                cols[name] = pa.array([str(v) for v in values], pa.string())
+            else:
+                cols[name] = pa.array(np.asarray(values, dtype=np.float64))
+        schema = SCHEMA
+    return pa.Table.from_pydict(cols, schema=schema)
+
+
+def metric_arrays(table: pa.Table) -> dict[str, np.ndarray]:
+    """The metric columns of a table as numpy arrays (for tasks and summaries)."""
+    out = {}
+    for name in METRIC_COLUMNS:
+        if name in table.column_names:
+            col = table.column(name)
+            out[name] = (
+                np.array(col.to_pylist(), dtype=object)
+                if name == "epsilon_reason"
+                else col.to_numpy(zero_copy_only=False).astype(np.float64)
+            )
+    return out

@@ -1,0 +1,504 @@
+"""Load mesh files and turn any mesh into a usable solid (SPEC §2.1).
+
+:func:`load_mesh` reads OBJ, STL (ASCII and binary), PLY, GLB/GLTF (every geometry of the
+scene, with its transform) and OFF (our own reader, :mod:`affordgrasp.objects.off`).
+:func:`prepare_mesh` is the one place where meshes from files and procedural meshes become
+what the rest of the pipeline assumes: a closed, outward-oriented volume in metres.
+
+Repair order, cheapest and least invasive first:
+
+1. merge duplicate vertices, drop faces that repeat a vertex and duplicate faces;
+2. a closed mesh made of several bodies: overlapping bodies are unioned (manifold3d) so
+   that no volume is counted twice, bodies turned inside out are flipped, a body inside
+   another and facing inwards is kept as a cavity;
+3. an open mesh: fix the winding, cap each hole with a polygon triangulated in its plane,
+   and close each connected part separately (parts touching along an edge are a soup of
+   closed parts: step 2 then unions them);
+4. still open: let manifold3d merge nearly coincident vertices along open edges.
+
+Whatever is still not a closed volume, or encloses no volume, is refused with a
+:class:`~affordgrasp.errors.MeshError` that says what to do.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from affordgrasp.errors import InputError, MeshError
+from affordgrasp.objects.off import read_off, triangulate_polygon
+
+__all__ = [
+    "SUPPORTED_EXTENSIONS",
+    "UNITS_TO_M",
+    "load_mesh",
+    "prepare_mesh",
+]
+
+log = logging.getLogger(__name__)
+
+SUPPORTED_EXTENSIONS: tuple[str, ...] = (".glb", ".gltf", ".obj", ".off", ".ply", ".stl")
+
+UNITS_TO_M: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
+
+# Outside this range of the longest extent, metres are probably not the file's unit.
+PLAUSIBLE_SIZE_M: tuple[float, float] = (0.005, 5.0)
+
+# A solid whose volume is below this fraction of its bounding cube encloses nothing: it is
+# a flat sheet closed onto itself (a knife blade is ~1e-4, far above).
+_MIN_RELATIVE_VOLUME = 1e-9
+
+# Relative volume mismatch below which a union of bodies equals their sum (no overlap).
+_UNION_RTOL = 1e-9
+
+
+def load_mesh(
+    path: str | os.PathLike,
+    *,
+    size_m: float | None = None,
+    units: str | None = None,
+) -> trimesh.Trimesh:
+    """Read a mesh file and return it as a closed, outward-oriented solid in metres.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.obj``, ``.stl``, ``.ply``, ``.glb``, ``.gltf`` or ``.off`` file.
+    size_m : float, optional
+        Rescale uniformly so that the longest bounding-box extent is this many metres.
+    units : str, optional
+        The file's length unit, one of ``m``, ``cm``, ``mm``, ``in``, ``ft``. Without
+        ``size_m`` or ``units`` the file is taken to be in metres.
+
+    Returns
+    -------
+    mesh : trimesh.Trimesh
+        See :func:`prepare_mesh`.
+    """
+    _scale_request(size_m, units)  # fail on bad options before a slow read
+    file = Path(path).expanduser()
+    if not file.exists():
+        raise MeshError(f"mesh file {str(file)!r} does not exist; check the path")
+    if not file.is_file():
+        raise MeshError(f"mesh path {str(file)!r} is not a file; pass a mesh file")
+    ext = file.suffix.lower()
+    if ext not in SUPPORTED_EXTENSIONS:
+        raise MeshError(
+            f"unsupported mesh format {ext or '(no extension)'!r} for {file.name!r}; "
+            f"supported formats: {', '.join(SUPPORTED_EXTENSIONS)}"
+        )
+    if ext == ".off":
+        vertices, faces = read_off(file)
+    else:
+        vertices, faces = _read_with_trimesh(file, ext)
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    return prepare_mesh(mesh, size_m=size_m, units=units, source=file.name)
+
+
+def prepare_mesh(
+    mesh: trimesh.Trimesh,
+    *,
+    size_m: float | None = None,
+    units: str | None = None,
+    source: str = "mesh",
+) -> trimesh.Trimesh:
+    """Clean, repair, orient and scale a mesh into a closed solid in metres.
+
+    The input is not modified.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Any triangle mesh: vertices (n, 3) float, faces (m, 3) int.
+    size_m : float, optional
+        Rescale uniformly (about the origin) so that the longest bounding-box extent is
+        this many metres.
+    units : str, optional
+        The mesh's length unit (``m``, ``cm``, ``mm``, ``in``, ``ft``); coordinates are
+        multiplied into metres. Give ``size_m`` or ``units``, not both.
+    source : str
+        Name of the mesh used in messages (a file name, a family id).
+
+    Returns
+    -------
+    mesh : trimesh.Trimesh
+        A new mesh, watertight with consistent outward winding (positive volume), no
+        unreferenced vertices, no duplicate vertices (except where separate bodies only
+        touch, each keeps its own); vertices (n, 3) float64 in metres, faces (m, 3) int64.
+        ``metadata["source"]`` is ``source``.
+
+    Raises
+    ------
+    MeshError
+        Empty, non-finite, fully degenerate, open beyond repair, or enclosing no volume.
+    InputError
+        Bad ``size_m`` / ``units``.
+    """
+    scale_kind, scale_value = _scale_request(size_m, units)
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces)
+    _validate_arrays(vertices, faces, source)
+
+    work = _clean(vertices, faces.astype(np.int64), source)
+    work = _closed_volume(work, source)
+
+    extent = float(work.extents.max())
+    volume = _signed_volume(work)
+    if not volume > _MIN_RELATIVE_VOLUME * extent**3:
+        raise MeshError(
+            f"{source} encloses no volume (volume {volume:.3g} for a longest extent of "
+            f"{extent:.3g}): it is a flat or open surface; close it in a mesh editor, or "
+            "pass a watertight mesh"
+        )
+
+    if scale_kind == "size_m":
+        factor = scale_value / extent
+    else:
+        factor = scale_value
+        _warn_if_implausible_size(extent * factor, units or "m", source)
+    vertices = np.ascontiguousarray(work.vertices, dtype=np.float64) * factor
+    faces = np.ascontiguousarray(work.faces, dtype=np.int64)
+    out = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    out.metadata["source"] = source
+    return out
+
+
+def _scale_request(size_m: float | None, units: str | None) -> tuple[str | None, float]:
+    """Validate the scaling options; return ('size_m' | 'units' | None, value)."""
+    if size_m is not None and units is not None:
+        raise InputError(
+            f"got both size_m={size_m!r} and units={units!r}; pass one: units converts the "
+            "file's coordinates, size_m sets the real size"
+        )
+    if size_m is not None:
+        try:
+            value = float(size_m)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"size_m must be a positive number of metres, got {size_m!r}")
+        return "size_m", value
+    if units is not None:
+        key = str(units).strip().lower()
+        if key not in UNITS_TO_M:
+            raise InputError(f"unknown length unit {units!r}; use one of {', '.join(UNITS_TO_M)}")
+        return "units", UNITS_TO_M[key]
+    return None, 1.0
+
+
+def _warn_if_implausible_size(extent_m: float, units: str, source: str) -> None:
+    """Warn (and change nothing) when the size in metres is implausible for an object."""
+    low, high = PLAUSIBLE_SIZE_M
+    if extent_m > high:
+        hint = "did you mean --units mm (or cm, in)?" if units == "m" else "check --units;"
+        log.warning(
+            "%s is %.3g m long with units '%s'; %s Pass --size-m to set its real size.",
+            source,
+            extent_m,
+            units,
+            hint,
+        )
+    elif extent_m < low:
+        log.warning(
+            "%s is only %.3g m long with units '%s'; pass --size-m to set its real size, "
+            "or --units with the file's unit.",
+            source,
+            extent_m,
+            units,
+        )
+
+
+def _validate_arrays(vertices: np.ndarray, faces: np.ndarray, source: str) -> None:
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise MeshError(f"{source}: vertices must be (n, 3), got shape {vertices.shape}")
+    if len(vertices) == 0 or faces.size == 0:
+        raise MeshError(
+            f"{source} is empty ({len(vertices)} vertices, {len(faces)} faces); pass a "
+            "mesh with triangles"
+        )
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise MeshError(f"{source}: faces must be (m, 3) triangles, got shape {faces.shape}")
+    if not np.issubdtype(faces.dtype, np.integer):
+        raise MeshError(f"{source}: faces must be integer indices, got dtype {faces.dtype}")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise MeshError(
+            f"{source}: a face index ({int(faces.min())}..{int(faces.max())}) is out of "
+            f"range for {len(vertices)} vertices"
+        )
+    finite = np.isfinite(vertices).all(axis=1)
+    if not finite.all():
+        bad = np.flatnonzero(~finite)
+        raise MeshError(
+            f"{source} has {len(bad)} vertices with NaN or infinite coordinates (first: "
+            f"vertex {int(bad[0])} = {vertices[bad[0]].tolist()}); fix or remove them in "
+            "a mesh editor"
+        )
+
+
+def _clean(vertices: np.ndarray, faces: np.ndarray, source: str) -> trimesh.Trimesh:
+    """Merge duplicate vertices, drop faces repeating a vertex and duplicate faces."""
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    mesh.merge_vertices()
+    f = mesh.faces
+    mesh.update_faces((f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2]))
+    if len(mesh.faces):
+        mesh.update_faces(mesh.unique_faces())
+    mesh.remove_unreferenced_vertices()
+    extent = float(np.ptp(vertices, axis=0).max())
+    # Area is compared with the bounding box so that the test does not depend on units.
+    if len(mesh.faces) == 0 or not mesh.area > 1e-12 * extent**2:
+        raise MeshError(
+            f"{source} is degenerate: all {len(faces)} faces have zero area; pass a mesh "
+            "that encloses a volume"
+        )
+    return mesh
+
+
+def _is_closed(mesh: trimesh.Trimesh) -> bool:
+    return bool(mesh.is_watertight and mesh.is_winding_consistent)
+
+
+def _closed_volume(mesh: trimesh.Trimesh, source: str) -> trimesh.Trimesh:
+    """Return a closed, outward-oriented mesh equal to ``mesh`` where it was already one."""
+    if _is_closed(mesh):
+        if mesh.body_count == 1:
+            return _oriented(mesh)
+        return _combine_bodies(mesh.split(only_watertight=False, repair=False), mesh, source)
+
+    work = mesh.copy()
+    work.update_faces(work.nondegenerate_faces())
+    work.remove_unreferenced_vertices()
+    _fix_normals(work)
+    # Split first: at an edge shared by more than two faces (closed parts touching) the
+    # face adjacency stops, so each part is closed on its own and then unioned.
+    bodies = list(work.split(only_watertight=False, repair=False)) or [work]
+    holes = 0
+    for body in bodies:
+        if not _is_closed(body):
+            holes += _fill_holes(body)
+            _fix_normals(body)
+    if all(_is_closed(body) for body in bodies):
+        if holes:
+            log.warning(
+                "%s was open: closed %d hole(s) with flat caps; check that the result is "
+                "the solid you meant",
+                source,
+                holes,
+            )
+        return _combine_bodies(bodies, None, source)
+
+    merged = _manifold_repair(mesh)
+    if merged is not None:
+        log.warning("%s was open: closed it by merging nearly coincident vertices", source)
+        return _oriented(merged)
+
+    open_edges = _boundary_edge_count(work)
+    raise MeshError(
+        f"{source} is not a closed volume: {open_edges} edge(s) are open or shared by more "
+        "than two faces after repair; close it in a mesh editor, or pass a watertight mesh"
+    )
+
+
+def _fix_normals(mesh: trimesh.Trimesh) -> None:
+    """Consistent, outward winding per body, in place."""
+    # trimesh divides by the volume on its way; a flat part has none, and is refused later.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        trimesh.repair.fix_normals(mesh, multibody=True)
+
+
+def _signed_volume(mesh: trimesh.Trimesh) -> float:
+    """Enclosed volume, negative for an inside-out mesh (divergence theorem)."""
+    # About the box centre: far from the origin the triple products would cancel badly.
+    vertices = mesh.vertices - mesh.bounds.mean(axis=0)
+    a, b, c = (vertices[mesh.faces[:, i]] for i in range(3))
+    return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
+
+
+def _oriented(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    if _signed_volume(mesh) < 0:
+        mesh = mesh.copy()
+        mesh.invert()
+    return mesh
+
+
+def _combine_bodies(
+    bodies: list[trimesh.Trimesh], whole: trimesh.Trimesh | None, source: str
+) -> trimesh.Trimesh:
+    """One solid from closed bodies: union overlaps, flip inverted bodies, keep cavities.
+
+    ``whole`` is the unchanged input when the bodies are just its split; it is returned as
+    it is when nothing overlaps, so a clean mesh keeps its vertex order.
+    """
+    scale = max(float(np.ptp(b.bounds, axis=0).max()) for b in bodies)
+    solid_bodies = [b for b in bodies if abs(_signed_volume(b)) > _MIN_RELATIVE_VOLUME * scale**3]
+    if len(solid_bodies) < len(bodies):
+        # Flat parts (a fin, a label) closed onto themselves add nothing to the solid.
+        log.info("%s: dropped %d flat part(s)", source, len(bodies) - len(solid_bodies))
+        bodies, whole = solid_bodies or bodies, None
+    if len(bodies) == 1:
+        return _oriented(bodies[0])
+    volumes = np.array([_signed_volume(b) for b in bodies])
+    outer = [b for b, v in zip(bodies, volumes, strict=True) if v > 0]
+    cavities = []
+    flipped = False
+    for body, volume in zip(bodies, volumes, strict=True):
+        if volume > 0:
+            continue
+        point = body.vertices[:1]
+        if any(bool(o.contains(point)[0]) for o in outer):
+            cavities.append(body)
+        else:
+            # A body facing inwards but inside nothing is an inverted part, not a hole.
+            inverted = body.copy()
+            inverted.invert()
+            outer.append(inverted)
+            flipped = True
+    if flipped:
+        log.info("%s: flipped bodies that were inside out", source)
+
+    import manifold3d
+
+    solid = manifold3d.Manifold.batch_boolean([_to_manifold(b) for b in outer], _op("Add"))
+    if cavities:
+        flipped_cavities = []
+        for cavity in cavities:
+            c = cavity.copy()
+            c.invert()
+            flipped_cavities.append(_to_manifold(c))
+        holes = manifold3d.Manifold.batch_boolean(flipped_cavities, _op("Add"))
+        solid = manifold3d.Manifold.batch_boolean([solid, holes], _op("Subtract"))
+    expected = sum(_signed_volume(b) for b in [*outer, *cavities])
+    if solid.status() != manifold3d.Error.NoError or solid.is_empty():
+        log.warning(
+            "%s: could not union its %d bodies (%s); using them as they are, overlaps "
+            "would be counted twice in the mass properties",
+            source,
+            len(bodies),
+            solid.status(),
+        )
+        return _oriented(trimesh.util.concatenate([*outer, *cavities]))
+    if abs(solid.volume() - expected) <= _UNION_RTOL * abs(expected):
+        # Disjoint bodies: keep the input's own vertices and faces.
+        if whole is not None and not flipped:
+            return _oriented(whole)
+        return _oriented(trimesh.util.concatenate([*outer, *cavities]))
+    log.info("%s: unioned %d overlapping bodies", source, len(bodies))
+    return _oriented(_from_manifold(solid))
+
+
+def _fill_holes(mesh: trimesh.Trimesh) -> int:
+    """Cap every boundary loop of a consistently wound mesh in place; return the count.
+
+    Each cap is the loop triangulated in its best-fit plane, wound against the boundary
+    edges so that the result stays consistently wound. Loops that cannot be traced (a
+    vertex where the boundary branches oddly) are left open.
+    """
+    faces = mesh.faces
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    undirected = np.sort(directed, axis=1)
+    _, inverse, counts = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
+    boundary = directed[counts[inverse.ravel()] == 1]
+    if len(boundary) == 0:
+        return 0
+    # The cap runs each boundary edge backwards.
+    successors: dict[int, list[int]] = defaultdict(list)
+    for a, b in boundary[:, ::-1].tolist():
+        successors[a].append(b)
+    loops = []
+    for start in sorted(successors):
+        while successors[start]:
+            loop = [start]
+            current = successors[start].pop()
+            while current != start and successors[current] and len(loop) <= len(boundary):
+                loop.append(current)
+                current = successors[current].pop()
+            if current == start and len(loop) >= 3:
+                loops.append(np.array(loop, dtype=np.int64))
+    if not loops:
+        return 0
+    caps = [loop[triangulate_polygon(mesh.vertices[loop])] for loop in loops]
+    mesh.faces = np.vstack([faces, *caps])
+    return len(loops)
+
+
+def _boundary_edge_count(mesh: trimesh.Trimesh) -> int:
+    edges = np.sort(mesh.edges, axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int((counts != 2).sum())
+
+
+def _op(name: str):
+    import manifold3d
+
+    return getattr(manifold3d.OpType, name)
+
+
+def _to_manifold(mesh: trimesh.Trimesh, merge: bool = False):
+    """A manifold3d.Manifold of a mesh, in float64 where this manifold3d has it."""
+    import manifold3d
+
+    mesh64 = getattr(manifold3d, "Mesh64", None)
+    if mesh64 is not None:
+        data = mesh64(
+            vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float64),
+            tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint64),
+        )
+    else:  # pragma: no cover - older manifold3d
+        data = manifold3d.Mesh(
+            vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
+            tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint32),
+        )
+    if merge:
+        data.merge()
+    return manifold3d.Manifold(data)
+
+
+def _from_manifold(solid) -> trimesh.Trimesh:
+    data = solid.to_mesh64() if hasattr(solid, "to_mesh64") else solid.to_mesh()
+    vertices = np.asarray(data.vert_properties, dtype=np.float64)[:, :3]
+    faces = np.asarray(data.tri_verts, dtype=np.int64)
+    return trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+
+
+def _manifold_repair(mesh: trimesh.Trimesh) -> trimesh.Trimesh | None:
+    """Let manifold3d merge nearly coincident open-edge vertices; None when that fails."""
+    import manifold3d
+
+    solid = _to_manifold(mesh, merge=True)
+    if solid.status() != manifold3d.Error.NoError or solid.is_empty():
+        return None
+    out = _from_manifold(solid)
+    return out if _is_closed(out) else None
+
+
+def _read_with_trimesh(file: Path, ext: str) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 3) float64 and faces (m, 3) int64 of every mesh in a file's scene."""
+    try:
+        scene = trimesh.load_scene(file, file_type=ext[1:], process=False)
+    except Exception as exc:  # trimesh raises many types on malformed files
+        raise MeshError(
+            f"cannot read {file.name!r} as {ext[1:].upper()}: {exc}; check that the file is "
+            "complete and really in that format"
+        ) from exc
+    vertices, faces = [], []
+    offset = 0
+    for node in scene.graph.nodes_geometry:
+        transform, geometry_name = scene.graph[node]
+        geometry = scene.geometry.get(geometry_name)
+        if not isinstance(geometry, trimesh.Trimesh) or len(geometry.faces) == 0:
+            continue
+        vertices.append(trimesh.transform_points(geometry.vertices, transform))
+        faces.append(np.asarray(geometry.faces, dtype=np.int64) + offset)
+        offset += len(geometry.vertices)
+    if not faces:
+        raise MeshError(
+            f"{file.name!r} has no faces; affordgrasp needs a surface mesh (is it a point "
+            "cloud or a line drawing?)"
+        )
+    return np.concatenate(vertices).astype(np.float64), np.concatenate(faces)

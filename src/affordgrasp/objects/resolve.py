@@ -1,0 +1,248 @@
+"""Turn an object spec into a ready object: mesh, mass properties, identity (SPEC §2.9).
+
+Spec grammar, as on the command line:
+
+* ``knife`` — a built-in family, seed 0 (the same as ``knife:0``);
+* ``knife:7`` — a family variant, the seed a non-negative integer;
+* ``path/to/mesh.off`` — a mesh file (see :func:`affordgrasp.objects.load_mesh`).
+
+Family names win over a file of the same name in the working directory; write
+``./knife`` for the file.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from affordgrasp.errors import InputError
+from affordgrasp.objects.loading import load_mesh, prepare_mesh
+from affordgrasp.objects.mass import MassProperties, mass_properties
+
+__all__ = ["GraspObject", "family_names", "mesh_hash", "resolve_object"]
+
+# Family objects are cached: building and repairing one can take a while, and the pipeline
+# asks for the same object again and again.
+_FAMILY_CACHE_SIZE = 64
+
+
+@dataclass(frozen=True, eq=False)
+class GraspObject:
+    """An object ready to be grasped.
+
+    name : str
+        Canonical id: ``"knife:3"`` for a family variant, the file name for a mesh file.
+    category : str
+        The family's category label, or ``"mesh"`` for a file.
+    mesh : trimesh.Trimesh
+        Watertight, outward-oriented, metres, in the object's mesh frame. Shared between
+        callers (family objects are cached): treat it as read-only, ``copy()`` it to edit.
+    mass : MassProperties
+        At the density the object was resolved with.
+    mesh_hash : str
+        :func:`mesh_hash` of ``mesh``: stable across runs and machines.
+    source : str
+        ``"family"``, or the absolute path of the mesh file.
+    """
+
+    name: str
+    category: str
+    mesh: trimesh.Trimesh
+    mass: MassProperties
+    mesh_hash: str
+    source: str
+
+
+def mesh_hash(mesh: trimesh.Trimesh) -> str:
+    """SHA-256 hex digest of a mesh's geometry.
+
+    The bytes hashed are the vertices as little-endian float64 (n, 3), C order, followed by
+    the faces as little-endian int64 (m, 3), C order; anyone can recompute it.
+    """
+    vertices = np.ascontiguousarray(mesh.vertices, dtype="<f8")
+    faces = np.ascontiguousarray(mesh.faces, dtype="<i8")
+    digest = hashlib.sha256()
+    digest.update(vertices.tobytes())
+    digest.update(faces.tobytes())
+    return digest.hexdigest()
+
+
+def family_names() -> list[str]:
+    """Names of the built-in procedural families, sorted."""
+    return sorted(_families().FAMILIES)
+
+
+def resolve_object(
+    spec: str | os.PathLike | GraspObject,
+    *,
+    size_m: float | None = None,
+    units: str | None = None,
+    density: float | None = None,
+) -> GraspObject:
+    """Resolve a family name, ``family:seed`` or mesh path into a :class:`GraspObject`.
+
+    Parameters
+    ----------
+    spec : str, os.PathLike or GraspObject
+        See the module docstring for the grammar. A GraspObject is returned as it is, or
+        with its mass recomputed when another ``density`` is asked for.
+    size_m : float, optional
+        Rescale so that the longest bounding-box extent is this many metres.
+    units : str, optional
+        Length unit of a mesh file (``m``, ``cm``, ``mm``, ``in``, ``ft``).
+    density : float, optional
+        kg/m^3 for the mass properties; 1.0 (the paper's unit density) when not given.
+
+    Raises
+    ------
+    InputError
+        Unknown family or missing file (the message lists the families), a bad seed, or
+        bad options; :class:`~affordgrasp.errors.MeshError` for an unusable mesh.
+    """
+    if isinstance(spec, GraspObject):
+        return _reuse(spec, size_m=size_m, units=units, density=density)
+    density = 1.0 if density is None else _check_density(density)
+    if isinstance(spec, os.PathLike):
+        return _resolve_file(Path(spec), size_m=size_m, units=units, density=density)
+    if not isinstance(spec, str):
+        raise InputError(
+            f"an object spec must be a family name, 'family:seed' or a mesh path, got "
+            f"{type(spec).__name__} {spec!r}"
+        )
+    text = spec.strip()
+    if not text:
+        raise InputError(
+            "the object spec is empty; give a family name (e.g. 'knife', 'knife:7') or a mesh path"
+        )
+    family, seed_text = _split_family(text)
+    if family is not None:
+        seed = _parse_seed(seed_text, family, text)
+        return _resolve_family(family, seed, density, size_m, units)
+    path = Path(text).expanduser()
+    if path.exists():
+        return _resolve_file(path, size_m=size_m, units=units, density=density)
+    raise InputError(_unknown_spec_message(text))
+
+
+def _check_density(density: float) -> float:
+    try:
+        value = float(density)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"density must be a finite number > 0 (kg/m^3), got {density!r}")
+    return value
+
+
+def _families():
+    from affordgrasp.objects import families
+
+    return families
+
+
+def _available_families() -> dict | None:
+    try:
+        return dict(_families().FAMILIES)
+    except (ImportError, AttributeError):
+        # Without the procedural families every spec is a path.
+        return None
+
+
+def _normalise(name: str) -> str:
+    return name.strip().lower().replace("-", "_").replace(" ", "_")
+
+
+def _split_family(text: str) -> tuple[str | None, str | None]:
+    """(family name, seed text or None) when ``text`` names a family, else (None, None)."""
+    families = _available_families()
+    if not families:
+        return None, None
+    by_key = {_normalise(name): name for name in families}
+    head, sep, tail = text.partition(":")
+    name = by_key.get(_normalise(head))
+    if name is None:
+        return None, None
+    return name, (tail if sep else None)
+
+
+def _parse_seed(seed_text: str | None, family: str, spec: str) -> int:
+    if seed_text is None:
+        return 0
+    seed_text = seed_text.strip()
+    if not (seed_text.isascii() and seed_text.isdigit()):
+        raise InputError(
+            f"bad object spec {spec!r}: the seed after ':' must be a non-negative integer "
+            f"(e.g. '{family}:7'), got {seed_text!r}"
+        )
+    return int(seed_text)
+
+
+def _unknown_spec_message(text: str) -> str:
+    families = _available_families()
+    listed = ", ".join(sorted(families)) if families else "(none installed)"
+    return (
+        f"unknown object {text!r}: it is not a built-in family and no file exists at that "
+        f"path. Families: {listed}. Use 'family' or 'family:seed', or the path of an "
+        "existing mesh file (.obj, .stl, .ply, .glb, .gltf, .off)"
+    )
+
+
+def _resolve_file(
+    path: Path, *, size_m: float | None, units: str | None, density: float
+) -> GraspObject:
+    if not path.exists():
+        raise InputError(_unknown_spec_message(str(path)))
+    mesh = load_mesh(path, size_m=size_m, units=units)
+    return _build(path.name, "mesh", mesh, density, str(path.resolve()))
+
+
+@functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
+def _resolve_family(
+    family: str, seed: int, density: float, size_m: float | None, units: str | None
+) -> GraspObject:
+    families = _families()
+    name = f"{family}:{seed}"
+    raw = families.make_family(family, seed=seed)
+    mesh = prepare_mesh(raw, size_m=size_m, units=units, source=name)
+    return _build(name, families.FAMILIES[family].category, mesh, density, "family")
+
+
+def _build(
+    name: str, category: str, mesh: trimesh.Trimesh, density: float, source: str
+) -> GraspObject:
+    mass = mass_properties(mesh, density=density)
+    return GraspObject(
+        name=name,
+        category=category,
+        mesh=mesh,
+        mass=mass,
+        mesh_hash=mesh_hash(mesh),
+        source=source,
+    )
+
+
+def _reuse(
+    obj: GraspObject, *, size_m: float | None, units: str | None, density: float | None
+) -> GraspObject:
+    if size_m is not None or units is not None:
+        raise InputError(
+            f"object {obj.name!r} is already resolved, so size_m/units cannot apply; pass "
+            "its spec (family or path) with size_m/units instead"
+        )
+    if density is None or _check_density(density) == obj.mass.density:
+        return obj
+    return GraspObject(
+        name=obj.name,
+        category=obj.category,
+        mesh=obj.mesh,
+        mass=mass_properties(obj.mesh, density=density),
+        mesh_hash=obj.mesh_hash,
+        source=obj.source,
+    )

@@ -1,0 +1,224 @@
+"""The grasp policy: no interpenetration, contact tolerance, thin parts, invariance, determinism."""
+
+import numpy as np
+import pytest
+import trimesh
+from grasp_support import as_object, shape_sdf
+
+from affordgrasp.grasp import kernels
+from affordgrasp.grasp.policy import (
+    CONTACT_TOL,
+    HIT_EPS,
+    grasp_once,
+    hand_arrays,
+    object_geometry,
+    simulate,
+)
+from affordgrasp.hands import get_hand
+
+PENETRATION_TOL = 1e-4  # m
+
+
+def hand_surface_points(hand, dofs, per_shape=3000, seed=0):
+    """Points on the rounded links' surfaces (hand frame): closest core point + radius."""
+    rng = np.random.default_rng(seed)
+    arrays = hand_arrays(hand)
+    out = []
+    for pose, kind, half, r in zip(
+        hand.shape_poses(dofs), arrays.kinds, arrays.halves, arrays.radii, strict=True
+    ):
+        box = np.array([half[0], half[0] if kind == kernels.CYLINDER else half[1], half[2]]) + r
+        q = rng.uniform(-box, box, (per_shape, 3))
+        if kind == kernels.BOX:
+            c = np.clip(q, -half, half)
+        else:
+            rho = np.linalg.norm(q[:, :2], axis=1, keepdims=True)
+            c = np.concatenate(
+                [
+                    q[:, :2] * np.minimum(1.0, half[0] / np.maximum(rho, 1e-12)),
+                    np.clip(q[:, 2:], -half[2], half[2]),
+                ],
+                axis=1,
+            )
+        v = q - c
+        n = np.linalg.norm(v, axis=1)
+        keep = n > 1e-9
+        s = c[keep] + r * v[keep] / n[keep, None]
+        out.append(s @ pose[:3, :3].T + pose[:3, 3])
+    return np.concatenate(out)
+
+
+def check_grasp(obj, hand, status, pose, joints, contacts, probe):
+    """No link inside the object, no object inside a link, contacts within the tolerance."""
+    if status == "missed":
+        return
+    arrays = hand_arrays(hand)
+    shape_poses = hand.shape_poses(joints)
+    probe_h = (probe - pose[:3, 3]) @ pose[:3, :3]
+    for sp, kind, half, r in zip(
+        shape_poses, arrays.kinds, arrays.halves, arrays.radii, strict=True
+    ):
+        assert shape_sdf(probe_h, sp, kind, half, r).min() > -PENETRATION_TOL
+    hs = hand_surface_points(hand, joints)
+    hs_obj = hs @ pose[:3, :3].T + pose[:3, 3]
+    inside = obj.mesh.contains(hs_obj)
+    if inside.any():
+        depth = trimesh.proximity.signed_distance(obj.mesh, hs_obj[inside])
+        assert depth.max() < PENETRATION_TOL
+    names = hand.link_names
+    for p, n, link in zip(contacts.points, contacts.normals, contacts.link, strict=True):
+        li = names.index(link)
+        sel = np.nonzero(arrays.shape_link == li)[0]
+        ph = ((p - pose[:3, 3]) @ pose[:3, :3])[None]
+        d = min(
+            shape_sdf(ph, shape_poses[s], arrays.kinds[s], arrays.halves[s], arrays.radii[s])[0]
+            for s in sel
+        )
+        assert -PENETRATION_TOL < d <= CONTACT_TOL + 1e-12
+        assert np.linalg.norm(n) == pytest.approx(1.0)
+
+
+def random_pregrasps(n, seed):
+    rng = np.random.default_rng(seed)
+    return np.c_[rng.uniform(-1, 1, (n, 5)), rng.uniform(0, 1, n)]
+
+
+@pytest.mark.parametrize("hand_name", ["barrett", "parallel_jaw"])
+def test_no_interpenetration_and_contacts_within_tolerance(box_object, hand_name):
+    hand = get_hand(hand_name)
+    probe = np.vstack(
+        [
+            box_object.mesh.vertices,
+            trimesh.sample.sample_surface_even(box_object.mesh, 20000, seed=1)[0],
+        ]
+    )
+    batch = simulate(box_object, random_pregrasps(25, 3), hand=hand)
+    assert set(batch.status) <= {"missed", "touched", "grasped"}
+    assert (batch.status != "missed").sum() > 10
+    for i in range(len(batch)):
+        check_grasp(
+            box_object,
+            hand,
+            batch.status[i],
+            batch.hand_pose[i],
+            batch.joints[i],
+            batch.contacts[i],
+            probe,
+        )
+
+
+def test_fingertips_meet_a_wall_head_on_at_the_reach_computed_by_hand():
+    # A large slab whose top face is z = 0.01; the hand comes down along -z, centred.
+    obj = as_object(trimesh.creation.box((0.2, 0.2, 0.02)), "slab")
+    hand = get_hand("barrett")
+    p0 = np.array([[0.0, -1.0, 0.0, 0.0, 0.0, 0.0]])
+    batch = simulate(obj, p0, hand=hand)
+    # Open Barrett: distal joint 85 mm above the palm; the distal core (half length 26,
+    # half thickness 3.5 mm, centred 23 mm out) tilted by the 42° bend, rounded by 8 mm.
+    bend = np.deg2rad(42)
+    reach = 85 + 23 * np.cos(bend) + 26 * np.cos(bend) + 3.5 * np.sin(bend) + 8
+    palm_height = batch.hand_pose[0][2, 3] - 0.01
+    assert palm_height * 1e3 == pytest.approx(reach, abs=HIT_EPS * 1e3 + 1e-6)
+    # All three fingertips touch together; nothing else moves.
+    assert batch.status[0] == "grasped"
+    assert set(batch.contacts[0].link) == {"f1_dist", "f2_dist", "f3_dist"}
+    np.testing.assert_allclose(
+        batch.contacts[0].normals, np.tile([0, 0, 1.0], (len(batch.contacts[0]), 1)), atol=1e-9
+    )
+    np.testing.assert_allclose(batch.joints[0], 0.0)
+
+
+def test_a_thin_blade_is_touched_never_passed_through():
+    # A 1 mm plate, approached face-on and edge-on at several offsets and rolls.
+    blade = as_object(trimesh.creation.box((0.2, 0.04, 0.001)), "blade")
+    probe = np.vstack(
+        [blade.mesh.vertices, trimesh.sample.sample_surface_even(blade.mesh, 20000, seed=2)[0]]
+    )
+    hand = get_hand("barrett")
+    rows = []
+    for u2 in (-1.0, 1.0):  # through the faces
+        for u4 in (-0.5, 0.0, 0.5):
+            rows.append([0.0, u2, 0.25, u4, 0.0, 0.5])
+    for u1 in (0.5, -0.5):  # edge-on, along ±y
+        for u3 in (0.0, 0.5):
+            rows.append([u1, 0.0, u3, 0.0, 0.0, 0.3])
+    batch = simulate(blade, np.array(rows), hand=hand)
+    assert (batch.status != "missed").all()
+    for i in range(len(batch)):
+        check_grasp(
+            blade,
+            hand,
+            batch.status[i],
+            batch.hand_pose[i],
+            batch.joints[i],
+            batch.contacts[i],
+            probe,
+        )
+        # The palm stays on its own side of the blade.
+        palm_z = batch.hand_pose[i][:3, 3] @ batch.wrist_axis[i]
+        far = (blade.mesh.vertices @ batch.wrist_axis[i]).max()
+        assert palm_z < far
+
+
+def test_rigid_motion_of_object_and_hand_moves_the_contacts_with_them(box_object):
+    hand = get_hand("barrett")
+    rng = np.random.default_rng(5)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    q *= np.sign(np.linalg.det(q))
+    motion = np.eye(4)
+    motion[:3, :3] = q
+    motion[:3, 3] = [0.3, -0.2, 0.1]
+    moved = as_object(box_object.mesh.copy().apply_transform(motion), "moved")
+    batch = simulate(box_object, random_pregrasps(8, 9), hand=hand)
+    geom_a = object_geometry(box_object)
+    geom_b = object_geometry(moved)
+    for i in range(len(batch)):
+        if batch.status[i] == "missed":
+            continue
+        # Replay from the same start pose, moved.
+        start = batch.hand_pose[i].copy()
+        start[:3, 3] -= 0.05 * start[:3, 2]
+        a = grasp_once(hand, geom_a, start, 0.2, batch.p0[i, 5])
+        b = grasp_once(hand, geom_b, motion @ start, 0.2, batch.p0[i, 5])
+        assert a.status == b.status
+        # Equal up to the hit level: sphere tracing decides a first touch within HIT_EPS
+        # (a sample grazing a link within 0.05 mm may or may not count), so poses agree to
+        # micrometres and joints to well under a milliradian, not to the last bit.
+        np.testing.assert_allclose(b.joints, a.joints, atol=5e-4)
+        np.testing.assert_allclose(b.hand_pose, motion @ a.hand_pose, atol=2e-5)
+        assert set(a.contacts.link) == set(b.contacts.link)
+        moved_points = a.contacts.points @ q.T + motion[:3, 3]
+        moved_normals = a.contacts.normals @ q.T
+        for p, n, link in zip(moved_points, moved_normals, a.contacts.link, strict=True):
+            same = b.contacts.link == link
+            d = np.linalg.norm(b.contacts.points[same] - p, axis=1)
+            k = np.argmin(d)
+            assert d[k] < 3.5e-3
+            assert b.contacts.normals[same][k] @ n > np.cos(np.deg2rad(10))
+
+
+def test_same_inputs_same_bytes(box_object):
+    p0 = random_pregrasps(20, 11)
+    a = simulate(box_object, p0)
+    b = simulate(box_object, p0)
+    assert a.hand_pose.tobytes() == b.hand_pose.tobytes()
+    assert a.joints.tobytes() == b.joints.tobytes()
+    for ca, cb in zip(a.contacts, b.contacts, strict=True):
+        assert ca.points.tobytes() == cb.points.tobytes()
+        assert list(ca.link) == list(cb.link)
+
+
+def test_friction_comes_from_the_material_pair(box_object):
+    batch = simulate(box_object, random_pregrasps(30, 4))
+    for c in batch.contacts:
+        for link, mu in zip(c.link, c.mu, strict=True):
+            assert mu == (0.3 if link == "palm" else 0.4)  # plastic-plastic, wood-plastic
+
+
+def test_contacts_on_one_link_are_at_least_3_mm_apart(box_object):
+    batch = simulate(box_object, random_pregrasps(40, 6))
+    for c in batch.contacts:
+        for link in set(c.link):
+            p = c.points[c.link == link]
+            d = np.linalg.norm(p[:, None] - p[None], axis=2) + np.eye(len(p))
+            assert d.min() >= 3e-3 - 1e-12

@@ -1,0 +1,106 @@
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from affordgrasp.errors import InputError
+from affordgrasp.grasp.pregrasp import (
+    hand_rotations,
+    sample_inputs,
+    spherical_direction,
+    start_poses,
+    use_points,
+    validate_pregrasps,
+)
+
+unit = st.floats(-1, 1, allow_nan=False)
+
+
+def test_spherical_coding_matches_the_spec():
+    np.testing.assert_allclose(spherical_direction([0.0], [1.0]), [[0, 0, 1]], atol=1e-15)
+    np.testing.assert_allclose(spherical_direction([0.0], [0.0]), [[1, 0, 0]], atol=1e-15)
+    np.testing.assert_allclose(spherical_direction([0.5], [0.0]), [[0, 1, 0]], atol=1e-15)
+    np.testing.assert_allclose(spherical_direction([1.0], [-1.0]), [[0, 0, -1]], atol=1e-15)
+
+
+def test_uniform_codes_give_uniform_directions():
+    rng = np.random.default_rng(0)
+    d = spherical_direction(rng.uniform(-1, 1, 200_000), rng.uniform(-1, 1, 200_000))
+    # Uniform on the sphere: every coordinate has mean 0 and variance 1/3.
+    np.testing.assert_allclose(d.mean(axis=0), 0, atol=5e-3)
+    np.testing.assert_allclose((d**2).mean(axis=0), 1 / 3, atol=5e-3)
+
+
+@settings(max_examples=60, deadline=None)
+@given(unit, unit, unit)
+def test_hand_frames_are_right_handed_and_approach_along_z(u1, u2, u3):
+    p0 = np.array([[u1, u2, u3, 0, 0, 0.5]])
+    r = hand_rotations(p0)[0]
+    np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-12)
+    assert np.linalg.det(r) == pytest.approx(1.0)
+    np.testing.assert_allclose(r[:, 2], spherical_direction([u1], [u2])[0], atol=1e-12)
+
+
+def test_roll_turns_the_hand_about_the_approach():
+    a = hand_rotations(np.array([[0.3, 0.2, 0.0, 0, 0, 0]]))[0]
+    b = hand_rotations(np.array([[0.3, 0.2, 0.5, 0, 0, 0]]))[0]
+    assert a[:, 0] @ b[:, 0] == pytest.approx(0.0, abs=1e-12)  # 90° of roll
+    np.testing.assert_allclose(np.cross(a[:, 0], b[:, 0]), a[:, 2], atol=1e-12)
+
+
+def test_start_pose_is_outside_and_offsets_span_the_extent():
+    mesh = trimesh.creation.box((0.1, 0.2, 0.3))
+    hull = np.asarray(mesh.vertices)
+    # Approach along +z: x/y offsets of ±1 reach the box's half extents along the hand axes.
+    p0 = np.array([[0.0, 1.0, 0.0, 1.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0, 0.0, 0.0]])
+    poses, travel = start_poses(p0, hull, hand_reach=0.2)
+    x, y, z = poses[0][:3, 0], poses[0][:3, 1], poses[0][:3, 2]
+    origin = poses[0][:3, 3]
+    assert origin @ x == pytest.approx(np.abs(hull @ x).max())
+    assert origin @ y == pytest.approx(-np.abs(hull @ y).max())
+    radius = np.linalg.norm(hull, axis=1).max()
+    assert origin @ z == pytest.approx(-radius - 0.2)
+    assert travel[0] > 2 * radius + 0.2
+    np.testing.assert_allclose(poses[1][:3, 3], [0, 0, -radius - 0.2], atol=1e-12)
+
+
+def test_use_point_is_the_farthest_hit():
+    # A hollow box (outer 10 cm, walls 1 cm): the ray from the centre crosses the inner wall
+    # first; U is on the outer face.
+    outer = trimesh.creation.box((0.1, 0.1, 0.1))
+    inner = trimesh.creation.box((0.08, 0.08, 0.08))
+    shell = outer.difference(inner)
+    pts, nrm, tri = use_points(shell, np.zeros(3), np.array([[0.0, 0.0], [0.0, 1.0]]))
+    np.testing.assert_allclose(pts[0], [0.05, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(nrm[0], [1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(pts[1], [0, 0, 0.05], atol=1e-12)
+    assert (tri >= 0).all()
+
+
+def test_use_ray_through_an_opening_has_no_use_point():
+    cup = trimesh.creation.box((0.1, 0.1, 0.1)).difference(
+        trimesh.creation.box(
+            (0.08, 0.08, 0.2), transform=trimesh.transformations.translation_matrix([0, 0, 0.05])
+        )
+    )
+    pts, _, tri = use_points(cup, np.array([0, 0, 0.0]), np.array([[0.0, 1.0]]))
+    assert tri[0] == -1 and np.isnan(pts[0]).all()
+
+
+def test_samples_do_not_depend_on_how_a_run_is_split():
+    p_all, d_all = sample_inputs(7, 0, 3000)
+    parts = [sample_inputs(7, a, b) for a, b in ((0, 5), (5, 1500), (1500, 2999), (2999, 3000))]
+    np.testing.assert_array_equal(np.concatenate([p for p, _ in parts]), p_all)
+    np.testing.assert_array_equal(np.concatenate([d for _, d in parts]), d_all)
+    assert not np.array_equal(sample_inputs(8, 0, 10)[0], p_all[:10])
+    assert (np.abs(p_all[:, :5]) <= 1).all() and ((p_all[:, 5] >= 0) & (p_all[:, 5] <= 1)).all()
+
+
+def test_bad_pregrasps_are_refused():
+    with pytest.raises(InputError, match="shape"):
+        validate_pregrasps(np.zeros((3, 5)))
+    with pytest.raises(InputError, match=r"\[-1, 1\]"):
+        validate_pregrasps(np.full((1, 6), 2.0))
+    with pytest.raises(InputError, match="NaN"):
+        validate_pregrasps(np.full((1, 6), np.nan))

@@ -1,0 +1,116 @@
+"""Forward kinematics of the built-in hands against poses computed by hand from the SPEC."""
+
+import numpy as np
+import pytest
+
+from affordgrasp.errors import HandError
+from affordgrasp.hands import Hand, Link, Shape, get_hand, hand_names
+from affordgrasp.hands.model import axis_angle
+
+MM = 1e-3
+
+
+def pose_of(hand, dofs, name):
+    return hand.forward_kinematics(dofs)[hand.link_names.index(name)]
+
+
+def barrett_dofs(spread=0.0, **joints):
+    hand = get_hand("barrett")
+    q = np.zeros(len(hand.dofs))
+    q[hand.dof_index("spread")] = spread
+    for k, v in joints.items():
+        q[hand.dof_index(k)] = v
+    return hand, q
+
+
+@pytest.mark.parametrize(
+    "spread, f1, f2",
+    [
+        (0.0, (25, 50), (-25, 50)),  # side by side, opposite F3
+        (np.pi / 2, (75, 0), (-75, 0)),  # facing each other
+        (np.pi, (25, -50), (-25, -50)),  # all on the F3 side
+        (np.pi / 3, (25 + 50 * np.sin(np.pi / 3), 25), (-25 - 50 * np.sin(np.pi / 3), 25)),
+    ],
+)
+def test_barrett_spread_places_the_proximal_joints(spread, f1, f2):
+    hand, q = barrett_dofs(spread)
+    for name, xy in (("f1_prox", f1), ("f2_prox", f2), ("f3_prox", (0, -50))):
+        np.testing.assert_allclose(
+            pose_of(hand, q, name)[:3, 3], [*np.array(xy) * MM, 15 * MM], atol=1e-12
+        )
+
+
+def test_barrett_open_fingers_point_along_the_approach():
+    hand, q = barrett_dofs(0.0)
+    for f in ("f1", "f2", "f3"):
+        np.testing.assert_allclose(pose_of(hand, q, f"{f}_prox")[:3, 2], [0, 0, 1], atol=1e-12)
+        # Distal joint 70 mm further along +z.
+        np.testing.assert_allclose(
+            pose_of(hand, q, f"{f}_dist")[:3, 3] - pose_of(hand, q, f"{f}_prox")[:3, 3],
+            [0, 0, 70 * MM],
+            atol=1e-12,
+        )
+    # The fixed 42° bend tilts the distal links towards the palm centre.
+    d3 = pose_of(hand, q, "f3_dist")[:3, 2]
+    np.testing.assert_allclose(d3, [0, np.sin(np.deg2rad(42)), np.cos(np.deg2rad(42))], atol=1e-12)
+    d1 = pose_of(hand, q, "f1_dist")[:3, 2]
+    np.testing.assert_allclose(d1, [0, -np.sin(np.deg2rad(42)), np.cos(np.deg2rad(42))], atol=1e-12)
+
+
+def test_barrett_closing_f3_by_90_degrees():
+    # Proximal at 90°: the proximal link lies along +y (towards the centre) at knuckle height,
+    # the distal joint 70 mm from the proximal joint; distal at 30° beyond the bend.
+    hand, q = barrett_dofs(0.0, f3_prox=np.pi / 2, f3_dist=np.deg2rad(30))
+    np.testing.assert_allclose(pose_of(hand, q, "f3_prox")[:3, 2], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(
+        pose_of(hand, q, "f3_dist")[:3, 3], [0, 20 * MM, 15 * MM], atol=1e-12
+    )
+    total = np.pi / 2 + np.deg2rad(42 + 30)
+    np.testing.assert_allclose(
+        pose_of(hand, q, "f3_dist")[:3, 2], [0, np.sin(total), np.cos(total)], atol=1e-12
+    )
+
+
+def test_barrett_limits_and_couplings_follow_the_spec():
+    hand = get_hand("barrett")
+    lim = {d.name: (d.lower, d.upper) for d in hand.dofs}
+    assert lim["spread"] == (0.0, np.pi)
+    assert np.isclose(lim["f1_prox"][1], np.deg2rad(140))
+    assert np.isclose(lim["f1_dist"][1], np.deg2rad(48))
+    for f in hand.fingers:
+        assert f.speeds == (1.0, 1.0 / 3.0)
+    materials = {link.name: link.material for link in hand.links if link.shapes}
+    assert materials["palm"] == "plastic"
+    assert all(m == "wood" for n, m in materials.items() if n != "palm")
+
+
+def test_gripper_jaws_close_towards_each_other():
+    hand = get_hand("parallel_jaw")
+    q = np.zeros(len(hand.dofs))
+    left = pose_of(hand, q, "jaw_l")[:3, 3]
+    right = pose_of(hand, q, "jaw_r")[:3, 3]
+    assert left[0] - right[0] == pytest.approx(0.085 + 0.020)
+    q[:] = 0.01
+    assert pose_of(hand, q, "jaw_l")[0, 3] == pytest.approx(left[0] - 0.01)
+    assert pose_of(hand, q, "jaw_r")[0, 3] == pytest.approx(right[0] + 0.01)
+    assert hand.pregrasp_dof is None
+
+
+def test_forward_kinematics_checks_the_dof_count():
+    with pytest.raises(HandError, match="DOF values"):
+        get_hand("barrett").forward_kinematics(np.zeros(3))
+
+
+def test_hand_validation_names_the_problem():
+    palm = Link("palm", None, None, (Shape("box", (0.01, 0.01, 0.01), 0.001),), "plastic")
+    with pytest.raises(HandError, match="unknown material"):
+        Hand("h", (Link("palm", None, None, palm.shapes, "cheese"),), (), (), None)
+    with pytest.raises(HandError, match="unknown hand"):
+        get_hand("shadow")
+    assert set(hand_names()) == {"barrett", "parallel_jaw"}
+
+
+def test_axis_angle_is_a_right_handed_rotation():
+    r = axis_angle([0, 0, 1], np.pi / 2)
+    np.testing.assert_allclose(r @ [1, 0, 0], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-12)

@@ -1,0 +1,266 @@
+"""Tests for mesh loading, repair, orientation and scaling."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+import trimesh
+
+from affordgrasp.errors import InputError, MeshError
+from affordgrasp.objects import load_mesh, prepare_mesh
+
+
+def box(extents=(0.1, 0.2, 0.3), offset=(0.0, 0.0, 0.0)) -> trimesh.Trimesh:
+    mesh = trimesh.creation.box(extents=extents)
+    mesh.apply_translation(offset)
+    return mesh
+
+
+def assert_solid(mesh: trimesh.Trimesh, volume: float) -> None:
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume == pytest.approx(volume, rel=1e-6)  # STL is float32
+    assert mesh.vertices.dtype == np.float64 and mesh.faces.dtype == np.int64
+
+
+@pytest.mark.parametrize(
+    ("suffix", "kwargs"),
+    [
+        (".obj", {}),
+        (".stl", {}),
+        (".stl", {"file_type": "stl_ascii"}),
+        (".ply", {}),
+        (".ply", {"encoding": "ascii"}),
+        (".glb", {}),
+        (".off", {}),
+    ],
+)
+def test_round_trip_through_each_format(tmp_path, suffix, kwargs):
+    original = box()
+    path = tmp_path / f"box{suffix}"
+    original.export(path, **kwargs)
+    mesh = load_mesh(path)
+    assert_solid(mesh, 0.1 * 0.2 * 0.3)
+    np.testing.assert_allclose(mesh.bounds, original.bounds, atol=1e-6)
+    assert len(mesh.vertices) == 8  # STL's unshared corners were merged
+
+
+def test_upper_case_extension(tmp_path):
+    path = tmp_path / "BOX.STL"
+    box().export(path, file_type="stl")
+    assert_solid(load_mesh(path), 0.006)
+
+
+def test_glb_scene_geometry_is_placed_by_its_transforms(tmp_path):
+    scene = trimesh.Scene()
+    part = box((0.1, 0.1, 0.1))
+    scene.add_geometry(part, node_name="a", geom_name="cube")
+    # The same geometry instanced a second time, moved by a node transform.
+    scene.add_geometry(
+        part,
+        node_name="b",
+        geom_name="cube",
+        transform=trimesh.transformations.translation_matrix([1, 0, 0]),
+    )
+    path = tmp_path / "scene.glb"
+    scene.export(path)
+    mesh = load_mesh(path)
+    assert_solid(mesh, 2e-3)
+    np.testing.assert_allclose(mesh.bounds, [[-0.05, -0.05, -0.05], [1.05, 0.05, 0.05]], atol=1e-6)
+
+
+def test_gltf_with_external_buffers(tmp_path):
+    files = trimesh.Scene([box()]).export(file_type="gltf")
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    assert_solid(load_mesh(tmp_path / "model.gltf"), 0.006)
+
+
+def test_unknown_extension_and_missing_file(tmp_path):
+    path = tmp_path / "box.xyz"
+    path.write_text("1 2 3\n")
+    with pytest.raises(MeshError, match=r"unsupported mesh format '\.xyz'.*\.obj.*\.off"):
+        load_mesh(path)
+    with pytest.raises(MeshError, match="does not exist"):
+        load_mesh(tmp_path / "missing.obj")
+    with pytest.raises(MeshError, match="not a file"):
+        load_mesh(tmp_path)
+
+
+def test_corrupt_file_and_point_cloud_are_refused(tmp_path):
+    path = tmp_path / "bad.glb"
+    path.write_bytes(b"not a glb at all")
+    with pytest.raises(MeshError, match="cannot read 'bad.glb' as GLB"):
+        load_mesh(path)
+    cloud = tmp_path / "cloud.ply"
+    trimesh.PointCloud(np.random.default_rng(0).random((20, 3))).export(cloud)
+    with pytest.raises(MeshError, match="has no faces"):
+        load_mesh(cloud)
+
+
+def test_off_file_with_quads_loads(tmp_path):
+    path = tmp_path / "cube.off"
+    path.write_text(
+        "OFF 8 6 0 # counts on the header line\n"
+        "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+        "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n"
+    )
+    assert_solid(load_mesh(path), 1.0)
+
+
+def test_empty_nan_and_degenerate_meshes_are_refused():
+    with pytest.raises(MeshError, match="empty"):
+        prepare_mesh(trimesh.Trimesh())
+    bad = box()
+    vertices = bad.vertices.copy()
+    vertices[3, 1] = np.nan
+    with pytest.raises(MeshError, match="NaN or infinite.*vertex 3"):
+        prepare_mesh(trimesh.Trimesh(vertices, bad.faces, process=False))
+    vertices[3, 1] = np.inf
+    with pytest.raises(MeshError, match="NaN or infinite"):
+        prepare_mesh(trimesh.Trimesh(vertices, bad.faces, process=False))
+    line = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 1, 2], [0, 2, 1]], process=False)
+    with pytest.raises(MeshError, match="degenerate"):
+        prepare_mesh(line)
+
+
+def test_prepare_does_not_modify_its_input_and_merges_vertices():
+    original = box()
+    soup = trimesh.Trimesh(
+        original.triangles.reshape(-1, 3), np.arange(36).reshape(-1, 3), process=False
+    )
+    before = soup.vertices.copy()
+    mesh = prepare_mesh(soup)
+    np.testing.assert_array_equal(soup.vertices, before)
+    assert len(mesh.vertices) == 8
+    assert_solid(mesh, 0.006)
+
+
+def test_inside_out_mesh_is_turned_outward():
+    mesh = box()
+    mesh.invert()
+    assert mesh.volume < 0
+    assert_solid(prepare_mesh(mesh), 0.006)
+
+
+def test_cube_missing_a_face_is_repaired(caplog):
+    mesh = box()
+    mesh.update_faces(np.arange(10))
+    mesh.remove_unreferenced_vertices()
+    assert not mesh.is_watertight
+    with caplog.at_level(logging.WARNING):
+        repaired = prepare_mesh(mesh, source="open.obj")
+    assert_solid(repaired, 0.006)
+    assert "open.obj was open" in caplog.text
+
+
+def test_big_non_convex_hole_is_capped_in_its_plane():
+    # An L-shaped prism without its top: the cap must be the L, not a fan across the notch.
+    outline = np.array([[2, 1], [1, 1], [1, 2], [0, 2], [0, 0], [2, 0]], dtype=float)
+    bottom = np.column_stack([outline, np.zeros(6)])
+    top = np.column_stack([outline, np.ones(6)])
+    vertices = np.vstack([bottom, top])
+    faces = [[1, 3, 2], [1, 4, 3], [1, 5, 4], [1, 0, 5]]  # bottom, facing down
+    for i in range(6):
+        j = (i + 1) % 6
+        faces += [[i, j, j + 6], [i, j + 6, i + 6]]
+    open_mesh = trimesh.Trimesh(vertices, faces, process=False)
+    assert not open_mesh.is_watertight
+    assert open_mesh.area == pytest.approx(3.0 + 8.0)
+    repaired = prepare_mesh(open_mesh)
+    assert_solid(repaired, 3.0)
+    assert repaired.area == pytest.approx(3.0 + 3.0 + 8.0)
+
+
+def test_flat_patch_cannot_be_a_solid():
+    disc = trimesh.creation.cylinder(radius=0.05, height=0.01, sections=24)
+    disc.update_faces(disc.face_normals[:, 2] > 0.99)  # only the top cap
+    disc.remove_unreferenced_vertices()
+    with pytest.raises(MeshError, match="encloses no volume.*close it in a mesh editor"):
+        prepare_mesh(disc, source="disc.stl")
+    triangle = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], process=False)
+    with pytest.raises(MeshError, match="no volume"):
+        prepare_mesh(triangle)
+
+
+def test_non_manifold_surface_that_cannot_be_closed():
+    # Three fins sharing one edge: each edge is used by 1 or 3 faces, nothing encloses space.
+    vertices = [[0, 0, 0], [0, 0, 1], [1, 0, 0], [-1, 1, 0], [-1, -1, 0]]
+    fins = trimesh.Trimesh(vertices, [[0, 1, 2], [0, 1, 3], [0, 1, 4]], process=False)
+    with pytest.raises(MeshError, match="(not a closed volume|no volume)"):
+        prepare_mesh(fins)
+
+
+def test_overlapping_parts_are_unioned_and_disjoint_parts_kept():
+    overlapping = trimesh.util.concatenate([box((1, 1, 1)), box((1, 1, 1), (0.5, 0, 0))])
+    assert_solid(prepare_mesh(overlapping), 1.5)
+    disjoint = trimesh.util.concatenate([box((1, 1, 1)), box((1, 1, 1), (3, 0, 0))])
+    kept = prepare_mesh(disjoint)
+    assert_solid(kept, 2.0)
+    np.testing.assert_array_equal(kept.faces, disjoint.faces)
+    touching = trimesh.util.concatenate([box((1, 1, 1)), box((1, 1, 1), (1, 1, 0))])
+    assert_solid(prepare_mesh(touching), 2.0)
+
+
+def test_cavity_is_kept_and_inverted_part_is_flipped():
+    inner = box((1, 1, 1))
+    inner.invert()
+    hollow = trimesh.util.concatenate([box((2, 2, 2)), inner])
+    assert_solid(prepare_mesh(hollow), 7.0)
+    flipped = box((1, 1, 1), (3, 0, 0))
+    flipped.invert()
+    assert_solid(prepare_mesh(trimesh.util.concatenate([box((1, 1, 1)), flipped])), 2.0)
+
+
+def test_size_m_and_units():
+    mesh = box((10.0, 20.0, 40.0), (5.0, 0.0, 0.0))
+    sized = prepare_mesh(mesh, size_m=0.2)
+    assert sized.extents.max() == pytest.approx(0.2)
+    np.testing.assert_allclose(sized.extents, [0.05, 0.1, 0.2])
+    # Uniform scaling about the origin of the mesh frame.
+    np.testing.assert_allclose(sized.bounds.mean(axis=0), [0.025, 0.0, 0.0])
+    in_mm = prepare_mesh(mesh, units="mm")
+    np.testing.assert_allclose(in_mm.extents, [0.01, 0.02, 0.04])
+    np.testing.assert_allclose(prepare_mesh(mesh, units="in").extents, [0.254, 0.508, 1.016])
+    np.testing.assert_allclose(prepare_mesh(mesh, units="CM").extents, [0.1, 0.2, 0.4])
+
+
+def test_scaling_options_are_validated(tmp_path):
+    mesh = box()
+    with pytest.raises(InputError, match="pass one"):
+        prepare_mesh(mesh, size_m=0.1, units="mm")
+    with pytest.raises(InputError, match="unknown length unit 'furlong'.*mm"):
+        prepare_mesh(mesh, units="furlong")
+    for bad in (0.0, -1.0, float("nan"), float("inf"), "big"):
+        with pytest.raises(InputError, match="size_m must be a positive number"):
+            prepare_mesh(mesh, size_m=bad)
+    # Options are checked before the file is read.
+    with pytest.raises(InputError, match="pass one"):
+        load_mesh(tmp_path / "missing.obj", size_m=1.0, units="m")
+
+
+def test_implausible_size_warns_but_keeps_the_mesh(caplog):
+    with caplog.at_level(logging.WARNING):
+        mesh = prepare_mesh(box((120.0, 30.0, 20.0)), source="mug.stl")
+    assert mesh.extents.max() == pytest.approx(120.0)
+    assert "did you mean --units mm" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        prepare_mesh(box((0.001, 0.001, 0.002)))
+    assert "--size-m" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        prepare_mesh(box((120.0, 30.0, 20.0)), units="mm")
+        prepare_mesh(box())
+        prepare_mesh(box((120.0, 30.0, 20.0)), size_m=0.0001)
+    assert caplog.text == ""
+    with caplog.at_level(logging.WARNING):
+        prepare_mesh(box((0.12, 0.03, 0.02)), units="mm")  # the file was in metres
+    assert "0.00012 m long with units 'mm'" in caplog.text
+
+
+def test_thin_solid_is_kept():
+    # A 0.5 mm thick blade is a real solid, not a flat patch.
+    blade = box((0.2, 0.03, 0.0005))
+    assert_solid(prepare_mesh(blade), 0.2 * 0.03 * 0.0005)
