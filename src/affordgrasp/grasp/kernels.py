@@ -315,48 +315,52 @@ def _chain_poses_into(
 
 
 @njit(cache=True)
-def _min_sdf(px, py, pz, shape_buf, kinds, halves, radii):
-    d = np.inf
-    dq = -1
+def _time_to_touch(px, py, pz, r, shape_buf, shape_joint, kinds_q, halves, radii, joint_kinds,
+                   speeds, chain_len, margin):  # fmt: skip
+    """Smallest distance to the moving shapes, its shape, and a safe step in s.
+
+    The step is min over shapes of (distance - margin) / (speed bound of the point relative
+    to that shape's link); r is the point's distance from the first joint origin (plus the
+    radius of a cell when tracing a cell). With a margin below the hit level the steps reach
+    the hit level in finitely many steps.
+    """
+    d_min = np.inf
+    q_min = -1
+    step = np.inf
     for q in range(shape_buf.shape[0]):
-        dd = sdf_world(px, py, pz, shape_buf[q], kinds[q], halves[q], radii[q])
-        if dd < d:
-            d = dd
-            dq = q
-    return d, dq
+        d = sdf_world(px, py, pz, shape_buf[q], kinds_q[q], halves[q], radii[q])
+        if d < d_min:
+            d_min = d
+            q_min = q
+        bound = 0.0
+        for j in range(shape_joint[q] + 1):
+            if joint_kinds[j] == REVOLUTE:
+                bound += abs(speeds[j]) * (r + chain_len[j])
+            else:
+                bound += abs(speeds[j])
+        if bound > 0.0:
+            step = min(step, max(d - margin, 0.0) / bound)
+    return d_min, q_min, step
 
 
 @njit(cache=True)
 def close_chain_until_contact(
-    points,
-    cell_start,
-    cell_center,
-    cell_radius,
-    rot,
-    trans,
-    base,
-    origins,
-    kinds,
-    axes,
-    q0,
-    speeds,
-    shape_joint,
-    shape_local,
-    shape_kinds,
-    shape_halves,
-    shape_radii,
-    s_max,
-    hit_eps,
-):
+    points, cell_start, cell_center, cell_radius, rot, trans,
+    base, origins, kinds, axes, q0, speeds,
+    shape_joint, shape_local, shape_kinds, shape_halves, shape_radii,
+    s_max, hit_eps,
+):  # fmt: skip
     """Closing parameter at which a moving link of a finger first touches a sample point.
 
     The chain's joints move as q_j = q0_j + speeds_j * s (joint frames: ``origins`` in their
     parent link, the first one's parent at ``base`` in the hand frame). shape_joint (k,) is
     the chain link carrying each moving shape, shape_local (k, 4, 4) its pose in that link.
-    A point's speed relative to the links is bounded by
-    sum_j |speed_j| * (|p - o_0| + chain length to joint j) over revolute joints plus
-    |speed_j| over prismatic ones (o_0, the first joint's origin, does not move), and every
-    step is the distance over that bound, so no point can pass through a link.
+    A point's speed relative to link j is bounded by sum over joints i <= j of
+    |speed_i| * (|p - o_0| + chain length to joint i) for revolute joints and |speed_i| for
+    prismatic ones (o_0, the first joint's origin, does not move while the finger closes);
+    every step is a distance over that bound, so no point can pass through a link. Cells are
+    traced first as spheres, then the points of the cells that touch; the first crossing of
+    the hit level is refined by bisection for the candidates that can still be first.
     returns : (s, point index, shape index); (inf, -1, -1) when nothing is touched by s_max.
     """
     m = origins.shape[0]
@@ -365,21 +369,8 @@ def close_chain_until_contact(
     shape_buf = np.empty((k, 4, 4))
     tmp_a = np.empty((4, 4))
     tmp_b = np.empty((4, 4))
-    _chain_poses_into(
-        0.0,
-        base,
-        origins,
-        kinds,
-        axes,
-        q0,
-        speeds,
-        shape_joint,
-        shape_local,
-        link_buf,
-        shape_buf,
-        tmp_a,
-        tmp_b,
-    )
+    _chain_poses_into(0.0, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
+                      link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
     _mul4_into(base, origins[0], tmp_a)
     o0 = tmp_a[:3, 3].copy()
     chain_len = np.zeros(m)
@@ -394,7 +385,8 @@ def close_chain_until_contact(
         dy = shape_buf[q, 1, 3] - link_buf[j, 1, 3]
         dz = shape_buf[q, 2, 3] - link_buf[j, 2, 3]
         ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
-        reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext + 2 * hit_eps)
+        reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
+    reach += 2.0 * hit_eps
     for j in range(m):
         if kinds[j] == PRISMATIC:
             reach += abs(speeds[j]) * s_max
@@ -402,6 +394,7 @@ def close_chain_until_contact(
     cand = np.empty(nc, dtype=np.int64)
     lower = np.empty(nc)
     ch = np.empty((nc, 3))
+    cr = np.empty(nc)
     tmp = np.empty(3)
     ncand = 0
     for c in range(nc):
@@ -415,56 +408,40 @@ def close_chain_until_contact(
         ch[c, 0] = tmp[0]
         ch[c, 1] = tmp[1]
         ch[c, 2] = tmp[2]
-        d, _ = _min_sdf(tmp[0], tmp[1], tmp[2], shape_buf, shape_kinds, shape_halves, shape_radii)
-        bound = _speed_bound(r0 + cell_radius[c], kinds, speeds, chain_len)
-        if bound <= 0.0:
-            continue
+        cr[c] = r0 + cell_radius[c]
+        d, _, step = _time_to_touch(tmp[0], tmp[1], tmp[2], cr[c], shape_buf, shape_joint,
+                                    shape_kinds, shape_halves, shape_radii, kinds, speeds,
+                                    chain_len, 0.5 * hit_eps + cell_radius[c])  # fmt: skip
         cand[ncand] = c
-        lower[ncand] = max(d - cell_radius[c], 0.0) / bound
+        lower[ncand] = step
         ncand += 1
     order = np.argsort(lower[:ncand])
-    best = s_max
-    best_p = -1
-    best_q = -1
+    best = s_max  # an upper bound on the first crossing, lowered by every hit
+    # Hits to refine: point, bracket [lo, hi] of its first crossing of the hit level.
+    hp = np.empty(64, dtype=np.int64)
+    hlo = np.empty(64)
+    hhi = np.empty(64)
+    nh = 0
     ph = np.empty(3)
     for kk in range(ncand):
         c = cand[order[kk]]
         s = lower[order[kk]]
         if s >= best:
             break
-        dx = ch[c, 0] - o0[0]
-        dy = ch[c, 1] - o0[1]
-        dz = ch[c, 2] - o0[2]
-        bound = _speed_bound(
-            np.sqrt(dx * dx + dy * dy + dz * dz) + cell_radius[c], kinds, speeds, chain_len
-        )
         touched = False
         s_cell_prev = s
         for _ in range(MAX_STEPS):
-            _chain_poses_into(
-                s,
-                base,
-                origins,
-                kinds,
-                axes,
-                q0,
-                speeds,
-                shape_joint,
-                shape_local,
-                link_buf,
-                shape_buf,
-                tmp_a,
-                tmp_b,
-            )
-            d, _ = _min_sdf(
-                ch[c, 0], ch[c, 1], ch[c, 2], shape_buf, shape_kinds, shape_halves, shape_radii
-            )
-            d -= cell_radius[c]
-            if d <= hit_eps:
+            _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
+                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
+            d, _, step = _time_to_touch(ch[c, 0], ch[c, 1], ch[c, 2], cr[c], shape_buf,
+                                        shape_joint, shape_kinds, shape_halves, shape_radii,
+                                        kinds, speeds, chain_len,
+                                        0.5 * hit_eps + cell_radius[c])  # fmt: skip
+            if d - cell_radius[c] <= hit_eps:
                 touched = True
                 break
             s_cell_prev = s
-            s += d / bound
+            s += step
             if s >= best:
                 break
         if not touched:
@@ -475,82 +452,68 @@ def close_chain_until_contact(
             dx = ph[0] - o0[0]
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
-            pb = _speed_bound(np.sqrt(dx * dx + dy * dy + dz * dz), kinds, speeds, chain_len)
+            r = np.sqrt(dx * dx + dy * dy + dz * dz)
             s = s_cell
             s_prev = s_cell_prev
             for _ in range(MAX_STEPS):
                 if s >= best:
                     break
-                _chain_poses_into(
-                    s,
-                    base,
-                    origins,
-                    kinds,
-                    axes,
-                    q0,
-                    speeds,
-                    shape_joint,
-                    shape_local,
-                    link_buf,
-                    shape_buf,
-                    tmp_a,
-                    tmp_b,
-                )
-                d, dq = _min_sdf(
-                    ph[0], ph[1], ph[2], shape_buf, shape_kinds, shape_halves, shape_radii
-                )
+                _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
+                                  shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
+                d, _, step = _time_to_touch(ph[0], ph[1], ph[2], r, shape_buf, shape_joint,
+                                            shape_kinds, shape_halves, shape_radii, kinds,
+                                            speeds, chain_len, 0.5 * hit_eps)  # fmt: skip
                 if d <= hit_eps:
-                    # First crossing of the hit level inside [s_prev, s] (see the approach).
-                    lo = s_prev
-                    hi = s
-                    for _ in range(BISECTIONS):
-                        if hi - lo <= 1e-13:
-                            break
-                        mid = 0.5 * (lo + hi)
-                        _chain_poses_into(
-                            mid,
-                            base,
-                            origins,
-                            kinds,
-                            axes,
-                            q0,
-                            speeds,
-                            shape_joint,
-                            shape_local,
-                            link_buf,
-                            shape_buf,
-                            tmp_a,
-                            tmp_b,
-                        )
-                        dm, qm = _min_sdf(
-                            ph[0], ph[1], ph[2], shape_buf, shape_kinds, shape_halves, shape_radii
-                        )
-                        if dm <= hit_eps:
-                            hi = mid
-                            dq = qm
-                        else:
-                            lo = mid
-                    if hi < best:
-                        best = hi
-                        best_p = i
-                        best_q = dq
+                    if nh == hp.shape[0]:
+                        hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
+                        hlo = np.concatenate((hlo, np.empty(nh)))
+                        hhi = np.concatenate((hhi, np.empty(nh)))
+                    hp[nh] = i
+                    hlo[nh] = s_prev
+                    hhi[nh] = s
+                    nh += 1
+                    best = s
                     break
                 s_prev = s
-                s += d / pb
-    if best_p < 0:
+                # A step of at least a nanoradian keeps grazing points from stalling; it
+                # cannot carry a point through a link (links are millimetres thick).
+                s += max(step, 1e-9)
+    # The first crossing among the candidates whose bracket starts before the best hit.
+    first = np.inf
+    first_p = -1
+    first_q = -1
+    for h in range(nh):
+        if hlo[h] > best:
+            continue
+        i = hp[h]
+        _to_hand(points[i], rot, trans, ph)
+        lo = hlo[h]
+        hi = hhi[h]
+        for _ in range(BISECTIONS):
+            if hi - lo <= 1e-13:
+                break
+            mid = 0.5 * (lo + hi)
+            _chain_poses_into(mid, base, origins, kinds, axes, q0, speeds, shape_joint,
+                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
+            dm, _, _ = _time_to_touch(ph[0], ph[1], ph[2], 0.0, shape_buf, shape_joint,
+                                      shape_kinds, shape_halves, shape_radii, kinds, speeds,
+                                      chain_len, hit_eps)  # fmt: skip
+            if dm <= hit_eps:
+                hi = mid
+            else:
+                lo = mid
+        if hi < first:
+            _chain_poses_into(hi, base, origins, kinds, axes, q0, speeds, shape_joint,
+                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
+            _, q_hi, _ = _time_to_touch(ph[0], ph[1], ph[2], 0.0, shape_buf, shape_joint,
+                                        shape_kinds, shape_halves, shape_radii, kinds, speeds,
+                                        chain_len, hit_eps)  # fmt: skip
+            first = hi
+            first_p = i
+            first_q = q_hi
+    if first_p < 0:
         return np.inf, -1, -1
-    return best, best_p, best_q
-
-
-@njit(cache=True)
-def _speed_bound(r, kinds, speeds, chain_len):
-    bound = 0.0
-    for j in range(kinds.shape[0]):
-        if kinds[j] == REVOLUTE:
-            bound += abs(speeds[j]) * (r + chain_len[j])
-        else:
-            bound += abs(speeds[j])
-    return bound
+    return first, first_p, first_q
 
 
 @njit(cache=True)

@@ -64,10 +64,35 @@ def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     return order, start.astype(np.int64), center, radius
 
 
-def _lattice(n: int) -> np.ndarray:
-    """Barycentric (i/n, j/n) strictly inside a triangle, as (k, 2)."""
-    ij = [(i, j) for i in range(1, n) for j in range(1, n - i)]
-    return np.array(ij, dtype=np.float64).reshape(-1, 2) / n
+def _face_lattice(tri: np.ndarray, spacing: float):
+    """Points strictly inside each triangle on a grid along its two shorter edges.
+
+    tri : (m, 3, 3). From the corner opposite the longest edge, steps of at most
+    ``spacing`` along each of the two other edges, so a long thin triangle gets as many points
+    as its area needs, not as many as its longest side squared.
+    returns : points (k, 3), face index of each (k,)
+    """
+    side = np.linalg.norm(tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]], axis=2)  # side opposite corner
+    corner = np.argmax(side, axis=1)
+    m = len(tri)
+    rows = np.arange(m)
+    v0 = tri[rows, corner]
+    e1 = tri[rows, (corner + 1) % 3] - v0
+    e2 = tri[rows, (corner + 2) % 3] - v0
+    n1 = np.maximum(np.ceil(np.linalg.norm(e1, axis=1) / spacing).astype(np.int64), 1)
+    n2 = np.maximum(np.ceil(np.linalg.norm(e2, axis=1) / spacing).astype(np.int64), 1)
+    # Pairs (face, i) for i = 1..n1-1, then j = 1..J(i) with i/n1 + j/n2 < 1.
+    fi = np.repeat(rows, n1 - 1)
+    start = np.cumsum(n1 - 1) - (n1 - 1)
+    i = np.arange(len(fi)) - np.repeat(start, n1 - 1) + 1
+    jmax = np.ceil(n2[fi] * (1.0 - i / n1[fi])).astype(np.int64) - 1
+    jmax = np.maximum(jmax, 0)
+    f = np.repeat(fi, jmax)
+    ii = np.repeat(i, jmax)
+    jstart = np.cumsum(jmax) - jmax
+    j = np.arange(len(f)) - np.repeat(jstart, jmax) + 1
+    pts = v0[f] + (ii / n1[f])[:, None] * e1[f] + (j / n2[f])[:, None] * e2[f]
+    return pts, f
 
 
 def sample_surface(
@@ -80,9 +105,6 @@ def sample_surface(
     edges = np.asarray(mesh.edges_unique, dtype=np.int64)
     edge_len = np.linalg.norm(vertices[edges[:, 1]] - vertices[edges[:, 0]], axis=1)
     tri = vertices[faces]
-    longest = np.max(
-        np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1
-    )  # (m,) longest side of each face
 
     # Edge normal and sharpness from the two faces sharing it.
     adj_edges = np.asarray(mesh.face_adjacency_edges, dtype=np.int64)
@@ -104,10 +126,8 @@ def sample_surface(
 
     while True:
         seg = np.maximum(np.ceil(edge_len / spacing).astype(np.int64), 1)
-        per_face = np.maximum(np.ceil(longest / spacing).astype(np.int64), 1)
-        n_edge = int((seg - 1).sum())
-        n_face = int(((per_face - 1) * (per_face - 2) // 2).sum())
-        if len(vertices) + n_edge + n_face <= max_points:
+        face_pts, face_of = _face_lattice(tri, spacing)
+        if len(vertices) + int((seg - 1).sum()) + len(face_pts) <= max_points:
             break
         spacing *= 1.25
         log.warning(
@@ -133,18 +153,9 @@ def sample_surface(
         nrm.append(np.repeat(edge_normal[sel], n - 1, axis=0))
         shp.append(np.repeat(edge_sharp[sel], n - 1))
     # Triangle interiors.
-    for n in np.unique(per_face[per_face > 2]):
-        sel = np.nonzero(per_face == n)[0]
-        bary = _lattice(int(n))
-        t = tri[sel]
-        p = (
-            t[:, None, 0, :]
-            + bary[None, :, 0, None] * (t[:, None, 1, :] - t[:, None, 0, :])
-            + bary[None, :, 1, None] * (t[:, None, 2, :] - t[:, None, 0, :])
-        )
-        pts.append(p.reshape(-1, 3))
-        nrm.append(np.repeat(face_normals[sel], len(bary), axis=0))
-        shp.append(np.zeros(len(sel) * len(bary), dtype=bool))
+    pts.append(face_pts)
+    nrm.append(face_normals[face_of])
+    shp.append(np.zeros(len(face_pts), dtype=bool))
     points = np.concatenate(pts)
     normals = np.concatenate(nrm)
     length = np.linalg.norm(normals, axis=1, keepdims=True)
