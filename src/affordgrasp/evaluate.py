@@ -20,19 +20,35 @@ from .metrics.phi import compute_phi_batch
 from .objects import GraspObject, resolve_object
 
 
+USE_METRICS = ("impact_effort", "discharge", "use_force", "use_edge", "use_edge_angle")
+
+
 def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False) -> dict:
-    """Φ for every row of a simulation batch: column name → (n,) array."""
-    return compute_phi_batch(
+    """Φ for every row of a simulation batch: column name → (n,) array.
+
+    A row whose use ray left the object without a hit (from the cavity of a hollow object
+    through its opening) has no use point: its use metrics are NaN (undefined), the others
+    are computed as usual.
+    """
+    no_use = batch.use_triangle < 0
+    use_point = np.where(no_use[:, None], obj.mass.center_of_mass, batch.use_point)
+    use_normal = np.where(no_use[:, None], [1.0, 0.0, 0.0], batch.use_normal)
+    use_triangle = np.where(no_use, 0, batch.use_triangle)
+    phi = compute_phi_batch(
         obj.mass,
         obj.mesh,
         batch.contacts,
-        batch.use_point,
-        batch.use_normal,
-        batch.use_triangle,
+        use_point,
+        use_normal,
+        use_triangle,
         batch.wrist_point,
         batch.wrist_axis,
         soft=soft,
     )
+    if no_use.any():
+        for name in USE_METRICS:
+            phi[name] = np.where(no_use, np.nan, phi[name])
+    return phi
 
 
 def evaluate(

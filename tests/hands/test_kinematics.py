@@ -40,35 +40,36 @@ def test_barrett_spread_places_the_proximal_joints(spread, f1, f2):
         )
 
 
-def test_barrett_open_fingers_point_along_the_approach():
+def test_barrett_open_fingers_lie_flat_and_point_outward():
     hand, q = barrett_dofs(0.0)
-    for f in ("f1", "f2", "f3"):
-        np.testing.assert_allclose(pose_of(hand, q, f"{f}_prox")[:3, 2], [0, 0, 1], atol=1e-12)
-        # Distal joint 70 mm further along +z.
+    out = {"f1": [0, 1, 0], "f2": [0, 1, 0], "f3": [0, -1, 0]}
+    for f, e in out.items():
+        np.testing.assert_allclose(pose_of(hand, q, f"{f}_prox")[:3, 2], e, atol=1e-12)
+        # Distal joint 70 mm further out, at knuckle height.
         np.testing.assert_allclose(
             pose_of(hand, q, f"{f}_dist")[:3, 3] - pose_of(hand, q, f"{f}_prox")[:3, 3],
-            [0, 0, 70 * MM],
+            np.array(e) * 70 * MM,
             atol=1e-12,
         )
-    # The fixed 42° bend tilts the distal links towards the palm centre.
-    d3 = pose_of(hand, q, "f3_dist")[:3, 2]
-    np.testing.assert_allclose(d3, [0, np.sin(np.deg2rad(42)), np.cos(np.deg2rad(42))], atol=1e-12)
-    d1 = pose_of(hand, q, "f1_dist")[:3, 2]
-    np.testing.assert_allclose(d1, [0, -np.sin(np.deg2rad(42)), np.cos(np.deg2rad(42))], atol=1e-12)
+    # The fixed 42° bend turns the distal links up, towards the approach.
+    c, s = np.cos(np.deg2rad(42)), np.sin(np.deg2rad(42))
+    np.testing.assert_allclose(pose_of(hand, q, "f3_dist")[:3, 2], [0, -c, s], atol=1e-12)
+    np.testing.assert_allclose(pose_of(hand, q, "f1_dist")[:3, 2], [0, c, s], atol=1e-12)
 
 
-def test_barrett_closing_f3_by_90_degrees():
-    # Proximal at 90°: the proximal link lies along +y (towards the centre) at knuckle height,
-    # the distal joint 70 mm from the proximal joint; distal at 30° beyond the bend.
+def test_barrett_closing_f3():
+    # Proximal at 90°: the proximal link points along the approach, its distal joint 70 mm
+    # above the knuckle; at 140° it leans 50° past that towards the palm axis.
     hand, q = barrett_dofs(0.0, f3_prox=np.pi / 2, f3_dist=np.deg2rad(30))
-    np.testing.assert_allclose(pose_of(hand, q, "f3_prox")[:3, 2], [0, 1, 0], atol=1e-12)
-    np.testing.assert_allclose(
-        pose_of(hand, q, "f3_dist")[:3, 3], [0, 20 * MM, 15 * MM], atol=1e-12
-    )
-    total = np.pi / 2 + np.deg2rad(42 + 30)
-    np.testing.assert_allclose(
-        pose_of(hand, q, "f3_dist")[:3, 2], [0, np.sin(total), np.cos(total)], atol=1e-12
-    )
+    np.testing.assert_allclose(pose_of(hand, q, "f3_prox")[:3, 2], [0, 0, 1], atol=1e-12)
+    np.testing.assert_allclose(pose_of(hand, q, "f3_dist")[:3, 3], [0, -50 * MM, 85 * MM],
+                               atol=1e-12)
+    total = np.pi / 2 + np.deg2rad(42 + 30)  # from the outward direction towards +y
+    np.testing.assert_allclose(pose_of(hand, q, "f3_dist")[:3, 2],
+                               [0, -np.cos(total), np.sin(total)], atol=1e-12)
+    hand, q = barrett_dofs(0.0, f3_prox=np.deg2rad(140))
+    d = pose_of(hand, q, "f3_prox")[:3, 2]
+    np.testing.assert_allclose(d, [0, np.sin(np.deg2rad(50)), np.cos(np.deg2rad(50))], atol=1e-12)
 
 
 def test_barrett_limits_and_couplings_follow_the_spec():

@@ -344,6 +344,49 @@ def _time_to_touch(px, py, pz, r, shape_buf, shape_joint, kinds_q, halves, radii
 
 
 @njit(cache=True)
+def _heap_push(key, ident, prev, size, k, i, p):
+    j = size
+    key[j] = k
+    ident[j] = i
+    prev[j] = p
+    while j > 0:
+        parent = (j - 1) // 2
+        if key[parent] <= key[j]:
+            break
+        key[parent], key[j] = key[j], key[parent]
+        ident[parent], ident[j] = ident[j], ident[parent]
+        prev[parent], prev[j] = prev[j], prev[parent]
+        j = parent
+    return size + 1
+
+
+@njit(cache=True)
+def _heap_pop(key, ident, prev, size):
+    k = key[0]
+    i = ident[0]
+    p = prev[0]
+    size -= 1
+    key[0] = key[size]
+    ident[0] = ident[size]
+    prev[0] = prev[size]
+    j = 0
+    while True:
+        left = 2 * j + 1
+        if left >= size:
+            break
+        child = left
+        if left + 1 < size and key[left + 1] < key[left]:
+            child = left + 1
+        if key[j] <= key[child]:
+            break
+        key[child], key[j] = key[j], key[child]
+        ident[child], ident[j] = ident[j], ident[child]
+        prev[child], prev[j] = prev[j], prev[child]
+        j = child
+    return k, i, p, size
+
+
+@njit(cache=True)
 def close_chain_until_contact(
     points, cell_start, cell_center, cell_radius, rot, trans,
     base, origins, kinds, axes, q0, speeds,
@@ -358,9 +401,13 @@ def close_chain_until_contact(
     A point's speed relative to link j is bounded by sum over joints i <= j of
     |speed_i| * (|p - o_0| + chain length to joint i) for revolute joints and |speed_i| for
     prismatic ones (o_0, the first joint's origin, does not move while the finger closes);
-    every step is a distance over that bound, so no point can pass through a link. Cells are
-    traced first as spheres, then the points of the cells that touch; the first crossing of
-    the hit level is refined by bisection for the candidates that can still be first.
+    every step is a distance over that bound, so no point can pass through a link.
+
+    Cells (as bounding spheres) and points sit in one priority queue keyed by a lower bound
+    on when they can first touch; the smallest is advanced by one step at a time, a touching
+    cell releases its points, and the search stops once no entry can beat the best hit. The
+    first crossing of the hit level is then refined by bisection among the hits that can
+    still be first.
     returns : (s, point index, shape index); (inf, -1, -1) when nothing is touched by s_max.
     """
     m = origins.shape[0]
@@ -391,94 +438,93 @@ def close_chain_until_contact(
         if kinds[j] == PRISMATIC:
             reach += abs(speeds[j]) * s_max
     nc = cell_center.shape[0]
-    cand = np.empty(nc, dtype=np.int64)
-    lower = np.empty(nc)
     ch = np.empty((nc, 3))
     cr = np.empty(nc)
     tmp = np.empty(3)
-    ncand = 0
+    # Heap entries: id >= 0 a point, id < 0 the cell -id - 1; prev is the last key at which
+    # the entry was known not to touch (the low end of a crossing's bracket).
+    cap = nc + 1
+    n_points = 0
     for c in range(nc):
         _to_hand(cell_center[c], rot, trans, tmp)
         dx = tmp[0] - o0[0]
         dy = tmp[1] - o0[1]
         dz = tmp[2] - o0[2]
         r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
-        if r0 - cell_radius[c] > reach:
-            continue
         ch[c, 0] = tmp[0]
         ch[c, 1] = tmp[1]
         ch[c, 2] = tmp[2]
+        cr[c] = -1.0
+        if r0 - cell_radius[c] > reach:
+            continue
         cr[c] = r0 + cell_radius[c]
-        d, _, step = _time_to_touch(tmp[0], tmp[1], tmp[2], cr[c], shape_buf, shape_joint,
+        n_points += cell_start[c + 1] - cell_start[c]
+    cap += n_points
+    key = np.empty(cap)
+    ident = np.empty(cap, dtype=np.int64)
+    prev = np.empty(cap)
+    size = 0
+    for c in range(nc):
+        if cr[c] < 0.0:
+            continue
+        d, _, step = _time_to_touch(ch[c, 0], ch[c, 1], ch[c, 2], cr[c], shape_buf, shape_joint,
                                     shape_kinds, shape_halves, shape_radii, kinds, speeds,
                                     chain_len, 0.5 * hit_eps + cell_radius[c])  # fmt: skip
-        cand[ncand] = c
-        lower[ncand] = step
-        ncand += 1
-    order = np.argsort(lower[:ncand])
+        if step < s_max:
+            size = _heap_push(key, ident, prev, size, step, -c - 1, 0.0)
     best = s_max  # an upper bound on the first crossing, lowered by every hit
-    # Hits to refine: point, bracket [lo, hi] of its first crossing of the hit level.
     hp = np.empty(64, dtype=np.int64)
     hlo = np.empty(64)
     hhi = np.empty(64)
     nh = 0
     ph = np.empty(3)
-    for kk in range(ncand):
-        c = cand[order[kk]]
-        s = lower[order[kk]]
+    for _ in range(1_000_000):
+        if size == 0:
+            break
+        s, e, s_prev = _heap_pop(key, ident, prev, size)[:3]
+        size -= 1
         if s >= best:
             break
-        touched = False
-        s_cell_prev = s
-        for _ in range(MAX_STEPS):
-            _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
-                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
+        _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
+                          link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
+        if e < 0:
+            c = -e - 1
             d, _, step = _time_to_touch(ch[c, 0], ch[c, 1], ch[c, 2], cr[c], shape_buf,
                                         shape_joint, shape_kinds, shape_halves, shape_radii,
                                         kinds, speeds, chain_len,
                                         0.5 * hit_eps + cell_radius[c])  # fmt: skip
             if d - cell_radius[c] <= hit_eps:
-                touched = True
-                break
-            s_cell_prev = s
-            s += step
-            if s >= best:
-                break
-        if not touched:
+                # Every point of the cell is still clear at s_prev; they go on from s.
+                for i in range(cell_start[c], cell_start[c + 1]):
+                    size = _heap_push(key, ident, prev, size, s, i, s_prev)
+            elif s + step < best:
+                size = _heap_push(key, ident, prev, size, s + step, e, s)
             continue
-        s_cell = s
-        for i in range(cell_start[c], cell_start[c + 1]):
-            _to_hand(points[i], rot, trans, ph)
-            dx = ph[0] - o0[0]
-            dy = ph[1] - o0[1]
-            dz = ph[2] - o0[2]
-            r = np.sqrt(dx * dx + dy * dy + dz * dz)
-            s = s_cell
-            s_prev = s_cell_prev
-            for _ in range(MAX_STEPS):
-                if s >= best:
-                    break
-                _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint,
-                                  shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
-                d, _, step = _time_to_touch(ph[0], ph[1], ph[2], r, shape_buf, shape_joint,
-                                            shape_kinds, shape_halves, shape_radii, kinds,
-                                            speeds, chain_len, 0.5 * hit_eps)  # fmt: skip
-                if d <= hit_eps:
-                    if nh == hp.shape[0]:
-                        hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
-                        hlo = np.concatenate((hlo, np.empty(nh)))
-                        hhi = np.concatenate((hhi, np.empty(nh)))
-                    hp[nh] = i
-                    hlo[nh] = s_prev
-                    hhi[nh] = s
-                    nh += 1
-                    best = s
-                    break
-                s_prev = s
-                # A step of at least a nanoradian keeps grazing points from stalling; it
-                # cannot carry a point through a link (links are millimetres thick).
-                s += max(step, 1e-9)
-    # The first crossing among the candidates whose bracket starts before the best hit.
+        _to_hand(points[e], rot, trans, ph)
+        dx = ph[0] - o0[0]
+        dy = ph[1] - o0[1]
+        dz = ph[2] - o0[2]
+        r = np.sqrt(dx * dx + dy * dy + dz * dz)
+        d, _, step = _time_to_touch(ph[0], ph[1], ph[2], r, shape_buf, shape_joint, shape_kinds,
+                                    shape_halves, shape_radii, kinds, speeds, chain_len,
+                                    0.5 * hit_eps)  # fmt: skip
+        if d <= hit_eps:
+            if nh == hp.shape[0]:
+                hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
+                hlo = np.concatenate((hlo, np.empty(nh)))
+                hhi = np.concatenate((hhi, np.empty(nh)))
+            hp[nh] = e
+            hlo[nh] = s_prev
+            hhi[nh] = s
+            nh += 1
+            best = min(best, s)
+        else:
+            # At least a nanoradian, so grazing points do not stall; it cannot carry a point
+            # through a link millimetres thick.
+            nxt = s + max(step, 1e-9)
+            if nxt < best:
+                size = _heap_push(key, ident, prev, size, nxt, e, s)
+    # The first crossing among the hits whose bracket starts before the best hit.
     first = np.inf
     first_p = -1
     first_q = -1

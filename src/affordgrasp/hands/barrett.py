@@ -5,8 +5,11 @@ x = ±25 mm (F1 at +x); F3 is fixed with its proximal joint at (0, -50 mm). At s
 arms of F1/F2 point along +y (side by side, opposite F3); F1 turns towards +x and F2 towards
 -x as the spread grows (90°: F1 and F2 face each other; 180°: all fingers on the -y side).
 
-Joint values (rad): ``spread``; per finger ``fK_prox`` (0 = straight along +z, 140° = closed)
-and ``fK_dist``, the distal joint *beyond* its fixed 42° bend, limited to 48°. While closing
+Joint values (rad): ``spread``; per finger ``fK_prox`` and ``fK_dist``. At ``fK_prox`` = 0 the
+proximal link points radially outward, parallel to the palm (the fully open, flat hand, as
+GraspIt!'s model); 90° points it along the approach (+z) and 140° (closed) bends it 50° past
+that towards the palm axis. ``fK_dist`` is the distal joint *beyond* its fixed 42° bend
+(towards the closing side), limited to 48°. While closing
 the distal turns at 1/3 of the proximal speed; after a proximal contact it keeps closing alone
 (TorqueSwitch breakaway). No third-party mesh is used: the links are rounded boxes and the
 palm a rounded cylinder with the dimensions below.
@@ -70,7 +73,11 @@ def barrett_bh8_282() -> Hand:
         "plastic",
     )
     links = [palm]
-    flip = axis_angle([0.0, 0.0, 1.0], np.pi)  # F1/F2 fingers face -y of their arm at spread 0
+    # Proximal link frame: z along the link, y its inner (closing) face, x the joint axis
+    # reversed. Open, F3's link points along -y with its inner face up (+z).
+    up = axis_angle([1.0, 0.0, 0.0], np.pi / 2)
+    # F1/F2 arms point along +y of their base frame at spread 0: turned half a turn.
+    flip = axis_angle([0.0, 0.0, 1.0], np.pi) @ up
     for prefix, x, ratio in (("f1", 25 * MM, -1.0), ("f2", -25 * MM, 1.0)):
         base = Link(
             f"{prefix}_base",
@@ -81,7 +88,7 @@ def barrett_bh8_282() -> Hand:
         )
         links.append(base)
         links.extend(_finger(prefix, base.name, transform(flip, (0, SPREAD_ARM, KNUCKLE_HEIGHT))))
-    links.extend(_finger("f3", "palm", transform(None, (0, -SPREAD_ARM, KNUCKLE_HEIGHT))))
+    links.extend(_finger("f3", "palm", transform(up, (0, -SPREAD_ARM, KNUCKLE_HEIGHT))))
     dofs = [Dof("spread", 0.0, np.pi, "pregrasp")]
     fingers = []
     for prefix in ("f1", "f2", "f3"):

@@ -3,9 +3,10 @@
 A link shape is a sphere-swept convex core (see :mod:`affordgrasp.hands.model`): a box or a
 capped cylinder grown by a ball of radius ``radius``. Such a solid is convex, so its surface is
 the convex hull of balls placed on the core's corners (box) or around its two rims (cylinder);
-the mesh is that hull over sampled balls. Every vertex lies on the exact surface (within the
-sampling of the balls, under 3 % of ``radius`` of chord error), so the drawing matches the
-geometry the grasp policy collides with.
+the mesh is that hull over sampled balls. Every vertex lies on the exact surface of a box
+shape; a cylinder's rim is sampled with 48 points, so its vertices may lie inside the exact
+surface by the chord error (0.12 mm for the Barrett palm), never outside. The drawing thus
+matches the geometry the grasp policy collides with.
 
 Frames: :func:`shape_mesh` is in the shape's frame, :func:`link_meshes` in the link frames,
 :func:`posed_hand_mesh` in the hand frame or, given ``hand_pose`` (hand → object), in the
