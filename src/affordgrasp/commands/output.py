@@ -59,7 +59,8 @@ class Output:
 
         t = Table(title=title, title_justify="left")
         for c in columns:
-            t.add_column(c, justify="right" if c not in ("status", "task", "name") else "left")
+            left = c in ("status", "task", "name", "quantity", "category", "description")
+            t.add_column(c, justify="left" if left else "right", overflow="fold")
         for r in rows:
             t.add_row(*[fmt(v) for v in r])
         self.console.print(t)

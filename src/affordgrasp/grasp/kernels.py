@@ -437,6 +437,33 @@ def close_chain_until_contact(
     for j in range(m):
         if kinds[j] == PRISMATIC:
             reach += abs(speeds[j]) * s_max
+    # When every joint is revolute about parallel axes (a planar finger, like the Barrett's),
+    # the links sweep a slab across that axis: nothing outside it can be touched.
+    _mul4_into(base, origins[0], tmp_a)
+    a0 = tmp_a[:3, :3] @ axes[0]
+    planar = True
+    for j in range(m):
+        if kinds[j] != REVOLUTE:
+            planar = False
+            break
+        if j > 0:
+            _mul4_into(link_buf[j - 1], origins[j], tmp_b)
+            aj = tmp_b[:3, :3] @ axes[j]
+            if abs(aj[0] * a0[0] + aj[1] * a0[1] + aj[2] * a0[2]) < 1.0 - 1e-9:
+                planar = False
+                break
+    slab = np.inf
+    if planar:
+        slab = 0.0
+        for q in range(k):
+            along = (
+                (shape_buf[q, 0, 3] - o0[0]) * a0[0]
+                + (shape_buf[q, 1, 3] - o0[1]) * a0[1]
+                + (shape_buf[q, 2, 3] - o0[2]) * a0[2]
+            )
+            ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
+            slab = max(slab, abs(along) + ext)
+        slab += 2.0 * hit_eps
     nc = cell_center.shape[0]
     ch = np.empty((nc, 3))
     cr = np.empty(nc)
@@ -456,6 +483,8 @@ def close_chain_until_contact(
         ch[c, 2] = tmp[2]
         cr[c] = -1.0
         if r0 - cell_radius[c] > reach:
+            continue
+        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - cell_radius[c] > slab:
             continue
         cr[c] = r0 + cell_radius[c]
         n_points += cell_start[c + 1] - cell_start[c]
@@ -624,3 +653,64 @@ def touching_points(
                 nrm[m, 2] = nz
                 m += 1
     return pi[:m], si[:m], dist[:m], nrm[:m]
+
+
+@njit(cache=True)
+def link_poses(q, parent, origin, axis, kind, dof, ratio):
+    """Forward kinematics: pose (l, 4, 4) of every link in the hand frame.
+
+    q (n_dofs,); per link: parent (l,) index (-1 for the root), origin (l, 4, 4) joint frame
+    in the parent link, axis (l, 3), kind (l,) REVOLUTE/PRISMATIC, dof (l,) index, ratio (l,).
+    Links are in topological order.
+    """
+    n = parent.shape[0]
+    out = np.empty((n, 4, 4))
+    mot = np.empty((4, 4))
+    tmp = np.empty((4, 4))
+    for i in range(n):
+        if parent[i] < 0:
+            for a in range(4):
+                for b in range(4):
+                    out[i, a, b] = 1.0 if a == b else 0.0
+            continue
+        v = ratio[i] * q[dof[i]]
+        if kind[i] == REVOLUTE:
+            c = np.cos(v)
+            sn = np.sin(v)
+            C = 1.0 - c
+            ax = axis[i, 0]
+            ay = axis[i, 1]
+            az = axis[i, 2]
+            mot[0, 0] = c + ax * ax * C
+            mot[0, 1] = ax * ay * C - az * sn
+            mot[0, 2] = ax * az * C + ay * sn
+            mot[1, 0] = ay * ax * C + az * sn
+            mot[1, 1] = c + ay * ay * C
+            mot[1, 2] = ay * az * C - ax * sn
+            mot[2, 0] = az * ax * C - ay * sn
+            mot[2, 1] = az * ay * C + ax * sn
+            mot[2, 2] = c + az * az * C
+            mot[0, 3] = 0.0
+            mot[1, 3] = 0.0
+            mot[2, 3] = 0.0
+        else:
+            for a in range(3):
+                for b in range(3):
+                    mot[a, b] = 1.0 if a == b else 0.0
+                mot[a, 3] = axis[i, a] * v
+        mot[3, 0] = 0.0
+        mot[3, 1] = 0.0
+        mot[3, 2] = 0.0
+        mot[3, 3] = 1.0
+        _mul4_into(out[parent[i]], origin[i], tmp)
+        _mul4_into(tmp, mot, out[i])
+    return out
+
+
+@njit(cache=True)
+def shape_poses(links, shape_link, shape_local):
+    """Pose (s, 4, 4) of every shape from the link poses (l, 4, 4)."""
+    out = np.empty((shape_link.shape[0], 4, 4))
+    for s in range(shape_link.shape[0]):
+        _mul4_into(links[shape_link[s]], shape_local[s], out[s])
+    return out

@@ -46,6 +46,21 @@ STATUSES = ("missed", "touched", "grasped")
 
 
 @dataclass(frozen=True)
+class FingerArrays:
+    """One finger's closing chain, flattened for the closing kernel."""
+
+    dofs: np.ndarray  # (m,) DOF index of each chain joint, proximal first
+    speeds: np.ndarray  # (m,) closing speed of each DOF
+    upper: np.ndarray  # (m,) upper limit of each DOF
+    parent: int  # link index of the chain's parent (does not move while the finger closes)
+    origins: np.ndarray  # (m, 4, 4)
+    kinds: np.ndarray  # (m,)
+    axes: np.ndarray  # (m, 3)
+    ratios: np.ndarray  # (m,)
+    shapes: tuple  # per first active joint j0: (shape ids, chain index of each) of links >= j0
+
+
+@dataclass(frozen=True)
 class HandArrays:
     """A hand flattened for the kernels."""
 
@@ -55,8 +70,23 @@ class HandArrays:
     kinds: np.ndarray  # (s,)
     halves: np.ndarray  # (s, 3)
     radii: np.ndarray  # (s,)
+    link_parent: np.ndarray  # (l,) parent link index, -1 for the root
+    link_origin: np.ndarray  # (l, 4, 4)
+    link_axis: np.ndarray  # (l, 3)
+    link_kind: np.ndarray  # (l,)
     link_dof: np.ndarray  # (l,) DOF index driving each link's joint, -1 for the root
-    mu_material: tuple[str, ...]  # per link
+    link_ratio: np.ndarray  # (l,)
+    materials: tuple[str, ...]  # per link
+    fingers: tuple[FingerArrays, ...]
+
+    def link_poses(self, dofs: np.ndarray) -> np.ndarray:
+        return kernels.link_poses(
+            np.asarray(dofs, dtype=np.float64), self.link_parent, self.link_origin,
+            self.link_axis, self.link_kind, self.link_dof, self.link_ratio,
+        )
+
+    def shape_poses(self, dofs: np.ndarray) -> np.ndarray:
+        return kernels.shape_poses(self.link_poses(dofs), self.shape_link, self.shape_local)
 
 
 _HAND_CACHE: dict[str, HandArrays] = {}
@@ -74,18 +104,65 @@ def hand_arrays(hand: Hand) -> HandArrays:
             kinds.append(kernels.BOX if s.kind == "box" else kernels.CYLINDER)
             halves.append(s.half_extents)
             radii.append(s.radius)
-    link_dof = np.array(
-        [-1 if link.joint is None else hand.dof_index(link.joint.dof) for link in hand.links]
-    )
+    names = hand.link_names
+    n = len(hand.links)
+    parent = np.full(n, -1, dtype=np.int64)
+    origin = np.tile(np.eye(4), (n, 1, 1))
+    axis = np.zeros((n, 3))
+    kind = np.zeros(n, dtype=np.int64)
+    dof = np.zeros(n, dtype=np.int64)
+    ratio = np.zeros(n)
+    link_of_dof = {}
+    for i, link in enumerate(hand.links):
+        if link.joint is None:
+            continue
+        j = link.joint
+        parent[i] = names.index(link.parent)
+        origin[i] = j.origin
+        axis[i] = j.axis
+        kind[i] = kernels.REVOLUTE if j.kind == "revolute" else kernels.PRISMATIC
+        dof[i] = hand.dof_index(j.dof)
+        ratio[i] = j.ratio
+        link_of_dof.setdefault(j.dof, i)
+    shape_link = np.array(shape_link, dtype=np.int64)
+    fingers = []
+    for finger in hand.fingers:
+        chain = [link_of_dof[d] for d in finger.dofs]
+        subsets = []
+        for j0 in range(len(chain)):
+            ids = [s for s, li in enumerate(shape_link) if li in chain[j0:]]
+            subsets.append(
+                (np.array(ids, dtype=np.int64),
+                 np.array([chain.index(shape_link[s]) for s in ids], dtype=np.int64))
+            )
+        fingers.append(
+            FingerArrays(
+                np.array([hand.dof_index(d) for d in finger.dofs], dtype=np.int64),
+                np.array(finger.speeds, dtype=np.float64),
+                np.array([hand.dofs[hand.dof_index(d)].upper for d in finger.dofs]),
+                int(parent[chain[0]]),
+                origin[chain].copy(),
+                kind[chain].copy(),
+                axis[chain].copy(),
+                ratio[chain].copy(),
+                tuple(subsets),
+            )
+        )
     arrays = HandArrays(
         hand,
-        np.array(shape_link, dtype=np.int64),
+        shape_link,
         np.array(local, dtype=np.float64).reshape(-1, 4, 4),
         np.array(kinds, dtype=np.int64),
         np.array(halves, dtype=np.float64).reshape(-1, 3),
         np.array(radii, dtype=np.float64),
-        link_dof,
+        parent,
+        origin,
+        axis,
+        kind,
+        np.where(parent < 0, -1, dof),
+        ratio,
         tuple(link.material for link in hand.links),
+        tuple(fingers),
     )
     _HAND_CACHE[hand.name] = arrays
     return arrays
@@ -158,64 +235,11 @@ class SimulationBatch:
 def hand_reach(hand: Hand, dofs: np.ndarray) -> float:
     """How far in front of the palm face (z) the hand reaches at ``dofs``, m."""
     arrays = hand_arrays(hand)
-    poses = hand.shape_poses(dofs)
+    poses = arrays.shape_poses(dofs)
     reach = 0.0
     for pose, h, r in zip(poses, arrays.halves, arrays.radii, strict=True):
         reach = max(reach, pose[2, 3] + np.linalg.norm(h) + r)
     return reach
-
-
-def _finger_chain(hand: Hand, arrays: HandArrays, finger, link_poses, dofs, active):
-    """Kernel arguments for closing the active joints ``active`` (chain indices) of a finger."""
-    link_of = {}
-    for i, link in enumerate(hand.links):
-        if link.joint is not None:
-            link_of[link.joint.dof] = i
-    chain_links = [link_of[d] for d in finger.dofs]
-    parent = hand.link_names.index(hand.links[chain_links[0]].parent)
-    base = link_poses[parent]
-    m = len(chain_links)
-    origins = np.zeros((m, 4, 4))
-    kinds = np.zeros(m, dtype=np.int64)
-    axes = np.zeros((m, 3))
-    q0 = np.zeros(m)
-    speeds = np.zeros(m)
-    for j, li in enumerate(chain_links):
-        joint = hand.links[li].joint
-        origins[j] = joint.origin
-        kinds[j] = kernels.REVOLUTE if joint.kind == "revolute" else kernels.PRISMATIC
-        axes[j] = joint.axis
-        q0[j] = joint.ratio * dofs[hand.dof_index(joint.dof)]
-        if j in active:
-            speeds[j] = joint.ratio * finger.speeds[j]
-    # Shapes carried by chain links that move (a link moves if any joint up to it moves).
-    first_active = min(active)
-    sj, sl, sk, sh, sr, sid = [], [], [], [], [], []
-    for s, li in enumerate(arrays.shape_link):
-        if li in chain_links:
-            j = chain_links.index(li)
-            if j >= first_active:
-                sj.append(j)
-                sl.append(arrays.shape_local[s])
-                sk.append(arrays.kinds[s])
-                sh.append(arrays.halves[s])
-                sr.append(arrays.radii[s])
-                sid.append(s)
-    return (
-        base,
-        origins,
-        kinds,
-        axes,
-        q0,
-        speeds,
-        np.array(sj, dtype=np.int64),
-        np.array(sl).reshape(-1, 4, 4),
-        np.array(sk, dtype=np.int64),
-        np.array(sh).reshape(-1, 3),
-        np.array(sr),
-        np.array(sid, dtype=np.int64),
-        chain_links,
-    )
 
 
 def close_fingers(
@@ -230,49 +254,34 @@ def close_fingers(
     trans = np.ascontiguousarray(pose[:3, 3])
     arrays = hand_arrays(hand)
     dofs = dofs.copy()
-    for finger in hand.fingers:
-        idx = [hand.dof_index(d) for d in finger.dofs]
-        active = [j for j in range(len(idx)) if dofs[idx[j]] < hand.dofs[idx[j]].upper]
+    # A finger's chain hangs from a link that no closing DOF moves (the palm, or a Barrett
+    # knuckle turned by the spread), so its pose is fixed while the fingers close.
+    links = arrays.link_poses(dofs)
+    for f in arrays.fingers:
+        active = [j for j in range(len(f.dofs)) if dofs[f.dofs[j]] < f.upper[j]]
         while active:
-            link_poses = hand.forward_kinematics(dofs)
-            (base, origins, kinds, axes, q0, speeds, sj, sl, sk, sh, sr, sid, chain_links) = (
-                _finger_chain(hand, arrays, finger, link_poses, dofs, active)
-            )
+            q0 = f.ratios * dofs[f.dofs]
+            speeds = np.zeros(len(f.dofs))
+            speeds[active] = f.ratios[active] * f.speeds[active]
+            ids, chain_index = f.shapes[min(active)]
             # Largest s before an active DOF reaches its upper limit.
-            room = [(hand.dofs[idx[j]].upper - dofs[idx[j]]) / finger.speeds[j] for j in active]
-            s_max = max(min(room), 0.0)
+            s_max = max(min((f.upper[j] - dofs[f.dofs[j]]) / f.speeds[j] for j in active), 0.0)
             s_hit, _, q_hit = kernels.close_chain_until_contact(
-                samples.points,
-                samples.cell_start,
-                samples.cell_center,
-                samples.cell_radius,
-                rot,
-                trans,
-                base,
-                origins,
-                kinds,
-                axes,
-                q0,
-                speeds,
-                sj,
-                sl,
-                sk,
-                sh,
-                sr,
-                s_max,
-                HIT_EPS,
-            )
+                samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
+                rot, trans, links[f.parent], f.origins, f.kinds, f.axes, q0, speeds,
+                chain_index, arrays.shape_local[ids], arrays.kinds[ids], arrays.halves[ids],
+                arrays.radii[ids], s_max, HIT_EPS,
+            )  # fmt: skip
             s = min(s_hit, s_max)
             for j in active:
-                d = hand.dofs[idx[j]]
-                dofs[idx[j]] = min(dofs[idx[j]] + finger.speeds[j] * s, d.upper)
+                dofs[f.dofs[j]] = min(dofs[f.dofs[j]] + f.speeds[j] * s, f.upper[j])
             if np.isfinite(s_hit) and s_hit <= s_max:
                 # Breakaway: the joints up to the blocked link stop, those beyond go on.
-                blocked = int(sj[q_hit])
+                blocked = int(chain_index[q_hit])
                 active = [j for j in active if j > blocked]
             else:
                 # A joint reached its limit: it stops, the others go on.
-                active = [j for j in active if dofs[idx[j]] < hand.dofs[idx[j]].upper - 1e-12]
+                active = [j for j in active if dofs[f.dofs[j]] < f.upper[j] - 1e-12]
     return dofs
 
 
@@ -319,7 +328,7 @@ def merge_link_contacts(points, normals, dist, radius=MERGE_RADIUS):
 
 
 def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
-    shape_poses = hand.shape_poses(dofs)
+    shape_poses = arrays.shape_poses(dofs)
     samples = geom.samples
     rot = np.ascontiguousarray(pose[:3, :3])
     pi, si, dist, link_normal = kernels.touching_points(
@@ -351,7 +360,7 @@ def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
         keep = sel[merge_link_contacts(samples.points[pi[sel]], n_obj[sel], dist[sel])]
         pts.append(samples.points[pi[keep]])
         nrm.append(n_obj[keep])
-        mu = friction_coefficient(arrays.mu_material[li], object_material)
+        mu = friction_coefficient(arrays.materials[li], object_material)
         mus.append(np.full(len(keep), mu))
         links.extend([hand.links[li].name] * len(keep))
     return ContactSet(
@@ -372,7 +381,7 @@ def grasp_once(
     dofs = hand.open_dofs(s)
     rot = np.ascontiguousarray(start_pose[:3, :3])
     samples = geom.samples
-    shape_poses = hand.shape_poses(dofs)
+    shape_poses = arrays.shape_poses(dofs)
     t, _, _ = kernels.approach_until_contact(
         samples.points,
         samples.cell_start,

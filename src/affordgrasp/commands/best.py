@@ -1,0 +1,124 @@
+"""``affordgrasp best``: brute-force argmax of a task over a dataset (paper §IV-C)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InputError
+
+METRICS_SHOWN = (
+    ("ε", "epsilon"),
+    ("ΣE_h", "hold_effort_sum"),
+    ("E_i", "impact_effort"),
+    ("I", "inertia"),
+    ("δ", "discharge"),
+    ("U_τ", "use_force"),
+    ("U_g", "use_edge"),
+)
+
+
+def add_task_arguments(p) -> None:
+    p.add_argument("--task", required=True, help="task name (see 'affordgrasp tasks')")
+    p.add_argument(
+        "--mode",
+        default="default",
+        help="threshold mode: default, no-robustness, extra-robustness",
+    )
+    p.add_argument(
+        "--threshold",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override one threshold of the task, e.g. tau_eps=0.1 (repeatable)",
+    )
+
+
+def parse_thresholds(items: list[str]) -> dict[str, float]:
+    """``["tau_eps=0.1", ...]`` as a dict; bad items raise an InputError naming them."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name.strip() or math.isnan(number):
+            raise InputError(
+                f"--threshold {item!r} must be NAME=VALUE with a number, e.g. tau_eps=0.1"
+            )
+        out[name.strip()] = number
+    return out
+
+
+def add_arguments(p) -> None:
+    p.add_argument("directory", metavar="DIR", help="a dataset written by 'affordgrasp generate'")
+    add_task_arguments(p)
+    p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
+    p.add_argument("--top", type=int, default=5, help="how many grasps to show (default 5)")
+    p.add_argument("--out", default=None, help="write the top rows to this .parquet file")
+
+
+def shown_metrics(task_name: str) -> list[tuple[str, str]]:
+    """(label, column) of the metrics a task reads, ε first; all of them if it does not say."""
+    from ..dataset.best import resolve_task
+    from ..dataset.schema import HOLD_EFFORT_COLUMNS
+
+    requires = set(getattr(resolve_task(task_name), "requires", ()) or ())
+    if not requires:
+        return list(METRICS_SHOWN)
+    if requires & set(HOLD_EFFORT_COLUMNS):
+        requires.add("hold_effort_sum")
+    requires.add("epsilon")
+    return [(label, name) for label, name in METRICS_SHOWN if name in requires]
+
+
+def metric_cells(row: dict, shown=METRICS_SHOWN) -> list:
+    from ..dataset.schema import HOLD_EFFORT_COLUMNS
+
+    cells = []
+    for _, name in shown:
+        if name == "hold_effort_sum":
+            cells.append(float(np.sum([row[c] for c in HOLD_EFFORT_COLUMNS])))
+        else:
+            cells.append(row.get(name, math.nan))
+    return cells
+
+
+def run(args, out) -> None:
+    from ..dataset.best import best_grasps, write_best
+
+    result = best_grasps(
+        args.directory,
+        args.task,
+        mode=args.mode,
+        objects=args.object,
+        top=args.top,
+        thresholds=parse_thresholds(args.threshold),
+    )
+    shown = shown_metrics(args.task)
+    rows = [
+        [r["rank"], r["object"], r["sample"], r["affordance"], r["status"], *metric_cells(r, shown)]
+        for r in result.table.to_pylist()
+    ]
+    out.table(
+        f"Best {len(rows)} for task {result.task} ({result.mode}) in {args.directory}",
+        ["rank", "object", "sample", "F_T", "status", *[s for s, _ in shown]],
+        rows,
+    )
+    out.text(
+        f"scanned {result.rows_scanned:,} samples of {', '.join(result.objects)}; "
+        f"{result.finite:,} have a finite F_T"
+    )
+    if result.finite == 0:
+        out.text(
+            "no sample passes the task's thresholds; try --mode no-robustness or a lower "
+            "--threshold, or generate more samples"
+        )
+    document = result.to_dict()
+    if args.out:
+        path = write_best(result, args.out)
+        out.text(f"wrote the top {result.table.num_rows} rows to {path}")
+        document["out"] = str(path)
+    out.result(document)

@@ -1,0 +1,113 @@
+"""``affordgrasp evaluate``: simulate, compute Φ, score the tasks and show the best grasps."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .common import add_sampling_arguments, check_counts, run_batches, status_summary, write_table
+
+SHOWN_METRICS = (
+    "epsilon",
+    "inertia",
+    "hold_effort_sum",
+    "impact_effort",
+    "discharge",
+    "use_force",
+    "use_edge",
+    "use_edge_angle",
+)
+
+
+def add_arguments(p) -> None:
+    add_sampling_arguments(p)
+    p.add_argument("--task", action="append", default=None,
+                   help="task to rank by (repeatable; default: every registered task)")
+    p.add_argument("--mode", default="default",
+                   help="threshold mode: default, no-robustness, extra-robustness")
+    p.add_argument("--tasks-file", default=None, help="TOML file declaring more tasks")
+
+
+def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict]:
+    """The best sample of every task, as table rows and a JSON-ready dict."""
+    from ..dataset.schema import metric_arrays
+    from ..tasks import MetricColumns, get_task
+
+    metrics = MetricColumns(metric_arrays(table))
+    rows, doc = [], {}
+    for name in task_names:
+        values = get_task(name).evaluate(metrics, mode)
+        finite = np.isfinite(values)
+        if not finite.any():
+            rows.append([name, "-", "-inf", *["-"] * len(SHOWN_METRICS)])
+            doc[name] = None
+            continue
+        i = int(np.argmax(np.where(finite, values, -np.inf)))
+        shown = [float(metrics[m][i]) for m in SHOWN_METRICS]
+        rows.append([name, int(table.column("sample")[i].as_py()), float(values[i]), *shown])
+        doc[name] = {
+            "sample": int(table.column("sample")[i].as_py()),
+            "value": float(values[i]),
+            "feasible": int(finite.sum()),
+            "p0": table.column("p0")[i].as_py(),
+            "use_dir": table.column("use_dir")[i].as_py(),
+            "metrics": dict(zip(SHOWN_METRICS, shown, strict=True)),
+        }
+    return rows, doc
+
+
+def run(args, out) -> None:
+    from ..objects import resolve_object
+    from ..tasks import MetricColumns, get_task, is_viable, list_tasks, load_task_file
+
+    check_counts(args)
+    if args.tasks_file:
+        load_task_file(args.tasks_file)
+    names = args.task or [t for t in list_tasks() if t != "viable"]
+    for name in names:
+        get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
+    obj = resolve_object(args.object, size_m=args.size, units=args.units)
+    table, spent, wall = run_batches(args, out, obj, metrics=True)
+    from ..dataset.schema import metric_arrays
+
+    rows, status_doc = status_summary(table)
+    metrics = MetricColumns(metric_arrays(table))
+    closure = float(np.mean(metrics["epsilon"] > 0))
+    viable = float(np.mean(is_viable(metrics)))
+    busy = spent["simulate"] + spent["metrics"]
+    rate = args.samples / busy if busy > 0 else float("inf")
+    out.table(
+        f"{obj.name}: {args.samples} grasps, hand {args.hand}, seed {args.seed}",
+        ["status", "count", "share", "contacts/grasp"],
+        rows,
+    )
+    out.text(
+        f"force closure (ε > 0): {100 * closure:.1f}%   viable: {100 * viable:.1f}%   "
+        f"{rate:,.0f} grasps/s on one core (simulation {spent['simulate']:.2f} s, "
+        f"metrics {spent['metrics']:.2f} s)"
+    )
+    best, best_doc = best_rows(table, names, args.mode)
+    # One column per task, one row per quantity: fits a terminal for any number of metrics.
+    labels = ["sample", "value", *SHOWN_METRICS]
+    out.table(
+        f"best grasp per task (mode {args.mode}; '-' when no sample passes the thresholds)",
+        ["quantity", *[r[0] for r in best]],
+        [[label, *[r[k + 1] for r in best]] for k, label in enumerate(labels)],
+    )
+    write_table(table, args.out, out)
+    out.result(
+        {
+            "object": obj.name,
+            "object_hash": obj.mesh_hash,
+            "hand": args.hand,
+            "samples": args.samples,
+            "seed": args.seed,
+            "mode": args.mode,
+            "status": status_doc,
+            "force_closure_fraction": closure,
+            "viable_fraction": viable,
+            "best": best_doc,
+            "grasps_per_second_per_core": rate,
+            "seconds": wall,
+            "out": args.out,
+        }
+    )

@@ -1,0 +1,92 @@
+"""``affordgrasp optimize``: maximise a task's F_T in simulation (cross-entropy method)."""
+
+from __future__ import annotations
+
+from .best import add_task_arguments, metric_cells, parse_thresholds, shown_metrics
+
+
+def add_arguments(p) -> None:
+    p.add_argument("object", metavar="OBJECT", help="knife, knife:7 or a mesh path")
+    add_task_arguments(p)
+    p.add_argument("--budget", type=int, default=20000, help="simulations (default 20000)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--hand", default="barrett", help="hand model (default barrett)")
+    p.add_argument(
+        "--population", type=int, default=None, help="samples per generation (default budget/20)"
+    )
+    p.add_argument(
+        "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
+    )
+    p.add_argument("--engine", choices=("local", "ray"), default="local")
+    p.add_argument("--address", default=None, help="an existing Ray cluster (--engine ray)")
+    p.add_argument(
+        "--no-baseline",
+        action="store_true",
+        help="skip uniform random sampling with the same budget",
+    )
+
+
+def run(args, out) -> None:
+    from ..optimize import optimize
+
+    result = optimize(
+        args.object,
+        args.task,
+        mode=args.mode,
+        budget=args.budget,
+        seed=args.seed,
+        thresholds=parse_thresholds(args.threshold),
+        hand=args.hand,
+        workers=args.workers,
+        engine=args.engine,
+        address=args.address,
+        population=args.population,
+        baseline=not args.no_baseline,
+        progress=lambda total: out.progress("optimising", total),
+    )
+    shown = shown_metrics(args.task)
+    rows = []
+    for label, found in (("cross-entropy", result.cem), ("uniform random", result.random)):
+        if found is None:
+            if label == "uniform random" and args.no_baseline:
+                continue
+            rows.append([label, "-inf", "", "", *[""] * len(shown)])
+            continue
+        row = found.row
+        rows.append(
+            [
+                label,
+                found.value,
+                found.evaluations,
+                row["status"],
+                *metric_cells(row, shown),
+            ]
+        )
+    out.table(
+        f"{result.object}: task {result.task} ({result.mode}), {result.budget:,} simulations "
+        f"each, seed {result.seed}",
+        [
+            "method",
+            "F_T",
+            "found after",
+            "status",
+            *[s for s, _ in shown],
+        ],
+        rows,
+    )
+    match = result.cem_evaluations_to_match_random
+    if result.random is not None and result.cem is not None:
+        out.text(
+            f"cross-entropy reached random sampling's best after {match:,} simulations"
+            if match
+            else "cross-entropy did not reach random sampling's best"
+        )
+        share = result.random_fraction_at_least_cem
+        out.text(f"{100 * share:.3g}% of the random samples are as good as the cross-entropy best")
+    elif result.cem is None:
+        out.text(
+            "no simulation passed the task's thresholds (every F_T = -inf); try --mode "
+            "no-robustness, a lower --threshold or a larger --budget"
+        )
+    out.text(f"{result.elapsed_s:.1f} s")
+    out.result(result.to_dict())

@@ -1,0 +1,334 @@
+"""``affordgrasp show``: the best grasps of tasks as a PNG grid and an interactive HTML page.
+
+SOURCE is a dataset directory (every ``*.parquet`` under it) or an object (``knife``,
+``knife:7``, a mesh path), in which case ``--samples`` grasps are drawn with ``--seed`` and
+evaluated first. Several sources and several tasks (``--task beat,cut,pick``) may be given.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from ..errors import InputError
+
+DEFAULT_SAMPLES = 1000
+
+
+def add_source_arguments(p) -> None:
+    p.add_argument(
+        "source",
+        nargs="+",
+        metavar="SOURCE",
+        help="a dataset directory, or an object: family (knife), family:seed (knife:7) or a "
+        "mesh path",
+    )
+    p.add_argument(
+        "--samples",
+        type=int,
+        default=DEFAULT_SAMPLES,
+        help=f"grasps to evaluate for an object SOURCE (default {DEFAULT_SAMPLES})",
+    )
+    p.add_argument(
+        "--seed", type=int, default=0, help="sampling seed for an object SOURCE (default 0)"
+    )
+    p.add_argument(
+        "--hand",
+        default="barrett",
+        help="hand for an object SOURCE: barrett (default) or parallel_jaw",
+    )
+    p.add_argument(
+        "--mesh",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="mesh file of a dataset object that is not a built-in family (repeatable)",
+    )
+    p.add_argument("-o", "--out", required=True, metavar="OUTDIR", help="directory to write into")
+
+
+def add_task_arguments(p, *, required: bool = True) -> None:
+    p.add_argument(
+        "--task",
+        action="append",
+        required=required,
+        default=None,
+        metavar="TASK[,TASK...]",
+        help="task(s) to rank by, e.g. cut or beat,cut,pick (see 'affordgrasp tasks')",
+    )
+    p.add_argument(
+        "--mode",
+        default="default",
+        help="threshold mode: default, no-robustness or extra-robustness (default: default)",
+    )
+    p.add_argument(
+        "--threshold",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a threshold of the tasks that have it, e.g. tau_eps=0.1 (repeatable)",
+    )
+
+
+def add_arguments(p) -> None:
+    add_source_arguments(p)
+    add_task_arguments(p)
+    p.add_argument("--top", type=int, default=4, help="grasps per object and task (default 4)")
+    p.add_argument(
+        "--cell", type=int, default=320, help="size of a grid cell, pixels (default 320)"
+    )
+    p.add_argument("--cones", action="store_true", help="draw the friction cones of the contacts")
+    p.add_argument(
+        "--each",
+        action="store_true",
+        help="also write one PNG per grasp under OUTDIR/grasps/",
+    )
+    p.add_argument(
+        "--grasp-size", type=int, default=512, help="size of the --each PNGs, pixels (default 512)"
+    )
+    p.add_argument("--no-html", action="store_true", help="skip the interactive HTML page")
+    p.add_argument(
+        "--name", default="best_grasps", help="base name of the grid and page (default best_grasps)"
+    )
+    p.add_argument("--title", default="", help="title of the grid and page")
+
+
+# --------------------------------------------------------------------------- shared helpers
+
+
+def parse_tasks(values: list[str] | None, mode: str, threshold_items: list[str]):
+    """Task objects, and per-task threshold overrides, from the command line."""
+    from ..tasks import get_task
+
+    names: list[str] = []
+    for value in values or []:
+        names.extend(n.strip() for n in value.split(",") if n.strip())
+    if not names:
+        raise InputError(
+            "--task needs at least one task name, e.g. --task cut (see 'affordgrasp tasks')"
+        )
+    tasks = [get_task(n) for n in dict.fromkeys(names)]
+    overrides = parse_thresholds(threshold_items)
+    per_task: dict[str, dict[str, float]] = {}
+    for name, value in overrides.items():
+        having = [t for t in tasks if name in t.thresholds_for(mode)]
+        if not having:
+            raise InputError(
+                f"--threshold {name}: none of the tasks {', '.join(t.name for t in tasks)} has a "
+                "threshold of that name (see 'affordgrasp tasks')"
+            )
+        for t in having:
+            per_task.setdefault(t.name, {})[name] = value
+    for t in tasks:
+        t.thresholds_for(mode, **per_task.get(t.name, {}))  # checks the mode now
+    return tasks, per_task
+
+
+def parse_thresholds(items: list[str]) -> dict[str, float]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name.strip() or math.isnan(number):
+            raise InputError(
+                f"--threshold {item!r} must be NAME=VALUE with a number, e.g. tau_eps=0.1"
+            )
+        out[name.strip()] = number
+    return out
+
+
+def check_counts(args) -> None:
+    if args.samples <= 0:
+        raise InputError(f"--samples must be a positive integer, got {args.samples}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
+
+
+def open_sources(args, out) -> list:
+    """One GraspSource per SOURCE: datasets as they are, objects evaluated now."""
+    from ..evaluate import evaluate_samples
+    from ..objects import resolve_object
+    from ..viz.sources import DatasetSource, TableSource, is_dataset_path
+
+    sources = []
+    for spec in args.source:
+        if is_dataset_path(spec):
+            sources.append(DatasetSource(Path(spec).expanduser()))
+            continue
+        obj = resolve_object(spec)
+        tables = []
+        batch = 250
+        with out.progress(f"evaluating {obj.name}", args.samples) as advance:
+            for start in range(0, args.samples, batch):
+                n = min(batch, args.samples - start)
+                table, _ = evaluate_samples(obj, n, seed=args.seed, start=start, hand=args.hand)
+                tables.append(table)
+                advance(n)
+        import pyarrow as pa
+
+        sources.append(
+            TableSource(pa.concat_tables(tables), name=obj.name, objects={obj.name: obj})
+        )
+    return sources
+
+
+def resolve_dataset_object(name: str, object_hash: str | None, source, meshes: list[str], out):
+    """The GraspObject a dataset's rows were simulated on, found by name (and checked by hash)."""
+    from ..objects import resolve_object
+
+    candidates: list[str] = []
+    for m in meshes:
+        if os.path.basename(m) == name or Path(m).stem == Path(name).stem:
+            candidates.append(m)
+    directory = getattr(source, "directory", None)
+    if directory is not None:
+        candidates.extend(str(p) for p in sorted(Path(directory).rglob(name)) if p.is_file())
+    candidates.append(name)
+    last_error = None
+    for spec in candidates:
+        try:
+            obj = resolve_object(spec)
+        except InputError as exc:
+            last_error = exc
+            continue
+        if object_hash and obj.mesh_hash != object_hash:
+            if obj.source == "family":
+                out.text(
+                    f"[yellow]warning:[/] object {name!r}: the family now builds a different mesh "
+                    "than the dataset's (another affordgrasp version?); drawing it anyway"
+                )
+                return obj
+            last_error = InputError(
+                f"object {name!r}: the mesh at {spec!r} is not the one the dataset was generated "
+                "on (its hash differs); pass the exact mesh with --mesh PATH"
+            )
+            continue
+        return obj
+    raise InputError(
+        f"cannot find the mesh of dataset object {name!r}: it is not a built-in family and no "
+        f"file of that name was found; pass it with --mesh PATH ({last_error})"
+    )
+
+
+def objects_of(rankings, sources_by_object, args, out) -> dict:
+    objects = {}
+    for r in rankings:
+        if r.object in objects:
+            continue
+        source = sources_by_object[r.object]
+        known = getattr(source, "objects", None) or {}
+        if r.object in known:
+            objects[r.object] = known[r.object]
+            continue
+        row = r.best[0].row if r.best else {}
+        objects[r.object] = resolve_dataset_object(
+            r.object, row.get("object_hash"), source, args.mesh, out
+        )
+    return objects
+
+
+# --------------------------------------------------------------------------- the command
+
+
+def run(args, out) -> None:
+    from ..viz.showcase import draw_best
+    from ..viz.sources import top_grasps
+
+    check_counts(args)
+    if args.top < 1:
+        raise InputError(f"--top must be at least 1, got {args.top}")
+    for flag, value in (("--cell", args.cell), ("--grasp-size", args.grasp_size)):
+        if not 64 <= value <= 2048:
+            raise InputError(f"{flag} must be between 64 and 2048 pixels, got {value}")
+    tasks, thresholds = parse_tasks(args.task, args.mode, args.threshold)
+    sources = open_sources(args, out)
+    rankings = []
+    sources_by_object = {}
+    for source in sources:
+        found = top_grasps(source, tasks, mode=args.mode, top=args.top, thresholds=thresholds)
+        for (obj_name, _), ranking in found.items():
+            sources_by_object.setdefault(obj_name, source)
+            rankings.append(ranking)
+    if not rankings:
+        raise InputError("the sources hold no rows; nothing to show")
+    # Objects in the order they were met, tasks in the order asked.
+    order = {t.name: i for i, t in enumerate(tasks)}
+    first = {}
+    for r in rankings:
+        first.setdefault(r.object, len(first))
+    rankings.sort(key=lambda r: (first[r.object], order[r.task]))
+    objects = objects_of(rankings, sources_by_object, args, out)
+    n_draw = sum(len(r.best) for r in rankings)
+    with out.progress("drawing", max(n_draw, 1)) as advance:
+        result = draw_best(
+            rankings,
+            objects,
+            args.out,
+            mode=args.mode,
+            top=args.top,
+            cell_px=args.cell,
+            grasp_px=args.grasp_size,
+            each=args.each,
+            html=not args.no_html,
+            cones=args.cones,
+            name=args.name,
+            title=args.title,
+            progress=advance,
+        )
+    out.table(
+        f"best grasps ({args.mode})",
+        ["object", "task", "rank", "score", "sample", "seed", "status", "contacts", "ε"],
+        [
+            [
+                b["object"],
+                b["task"],
+                b["rank"],
+                b["score"],
+                b["sample"],
+                b["seed"],
+                b["status"],
+                b["n_contacts"],
+                b.get("epsilon", math.nan),
+            ]
+            for b in result.best
+        ],
+    )
+    empty = [r for r in rankings if not r.best]
+    for r in empty:
+        out.text(
+            f"{r.object}: no grasp scores above −∞ for {r.task} in mode {args.mode} "
+            f"({r.feasible} of {r.scored} rows); "
+            + (
+                "try more --samples"
+                if args.mode == "no-robustness"
+                else "try --mode no-robustness or more --samples"
+            )
+        )
+    out.text(f"wrote {result.grid}")
+    if result.html:
+        out.text(f"wrote {result.html}")
+    elif not args.no_html:
+        out.text("no grasp to show in 3D: the HTML page was not written")
+    for p in result.grasps:
+        out.text(f"wrote {p}")
+    out.result(
+        {
+            "files": {
+                "grid": str(result.grid),
+                "html": str(result.html) if result.html else None,
+                "grasps": [str(p) for p in result.grasps],
+            },
+            "tasks": [t.name for t in tasks],
+            "mode": args.mode,
+            "top": args.top,
+            "rankings": [
+                {"object": r.object, "task": r.task, "scored": r.scored, "feasible": r.feasible}
+                for r in rankings
+            ],
+            "best": result.best,
+        }
+    )
