@@ -388,7 +388,8 @@ def _heap_pop(key, ident, prev, size):
 
 @njit(cache=True)
 def close_chain_until_contact(
-    points, cell_start, cell_center, cell_radius, rot, trans,
+    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
+    rot, trans,
     base, origins, kinds, axes, q0, speeds,
     shape_joint, shape_local, shape_kinds, shape_halves, shape_radii,
     s_max, hit_eps,
@@ -464,43 +465,45 @@ def close_chain_until_contact(
             ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
             slab = max(slab, abs(along) + ext)
         slab += 2.0 * hit_eps
-    nc = cell_center.shape[0]
-    ch = np.empty((nc, 3))
-    cr = np.empty(nc)
+    # Heap entries: id >= 0 a point, -1 - f the fine cell f, -1 - nf - k the coarse cell k;
+    # prev is the last key at which the entry was known not to touch (the low end of the
+    # bracket of a crossing).
+    nf = cell_center.shape[0]
+    nk = coarse_center.shape[0]
+    kc = np.empty((nk, 3))
+    kr = np.empty(nk)
     tmp = np.empty(3)
-    # Heap entries: id >= 0 a point, id < 0 the cell -id - 1; prev is the last key at which
-    # the entry was known not to touch (the low end of a crossing's bracket).
-    cap = nc + 1
-    n_points = 0
-    for c in range(nc):
-        _to_hand(cell_center[c], rot, trans, tmp)
+    cap = nk + 1
+    for c in range(nk):
+        _to_hand(coarse_center[c], rot, trans, tmp)
         dx = tmp[0] - o0[0]
         dy = tmp[1] - o0[1]
         dz = tmp[2] - o0[2]
         r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
-        ch[c, 0] = tmp[0]
-        ch[c, 1] = tmp[1]
-        ch[c, 2] = tmp[2]
-        cr[c] = -1.0
-        if r0 - cell_radius[c] > reach:
+        kc[c, 0] = tmp[0]
+        kc[c, 1] = tmp[1]
+        kc[c, 2] = tmp[2]
+        kr[c] = -1.0
+        if r0 - coarse_radius[c] > reach:
             continue
-        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - cell_radius[c] > slab:
+        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - coarse_radius[c] > slab:
             continue
-        cr[c] = r0 + cell_radius[c]
-        n_points += cell_start[c + 1] - cell_start[c]
-    cap += n_points
+        kr[c] = r0 + coarse_radius[c]
+        f0 = coarse_start[c]
+        f1 = coarse_start[c + 1]
+        cap += f1 - f0 + cell_start[f1] - cell_start[f0]
     key = np.empty(cap)
     ident = np.empty(cap, dtype=np.int64)
     prev = np.empty(cap)
     size = 0
-    for c in range(nc):
-        if cr[c] < 0.0:
+    for c in range(nk):
+        if kr[c] < 0.0:
             continue
-        d, _, step = _time_to_touch(ch[c, 0], ch[c, 1], ch[c, 2], cr[c], shape_buf, shape_joint,
+        d, _, step = _time_to_touch(kc[c, 0], kc[c, 1], kc[c, 2], kr[c], shape_buf, shape_joint,
                                     shape_kinds, shape_halves, shape_radii, kinds, speeds,
-                                    chain_len, 0.5 * hit_eps + cell_radius[c])  # fmt: skip
+                                    chain_len, 0.5 * hit_eps + coarse_radius[c])  # fmt: skip
         if step < s_max:
-            size = _heap_push(key, ident, prev, size, step, -c - 1, 0.0)
+            size = _heap_push(key, ident, prev, size, step, -1 - nf - c, 0.0)
     best = s_max  # an upper bound on the first crossing, lowered by every hit
     hp = np.empty(64, dtype=np.int64)
     hlo = np.empty(64)
@@ -517,15 +520,27 @@ def close_chain_until_contact(
         _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
                           link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
         if e < 0:
-            c = -e - 1
-            d, _, step = _time_to_touch(ch[c, 0], ch[c, 1], ch[c, 2], cr[c], shape_buf,
-                                        shape_joint, shape_kinds, shape_halves, shape_radii,
-                                        kinds, speeds, chain_len,
-                                        0.5 * hit_eps + cell_radius[c])  # fmt: skip
-            if d - cell_radius[c] <= hit_eps:
-                # Every point of the cell is still clear at s_prev; they go on from s.
-                for i in range(cell_start[c], cell_start[c + 1]):
-                    size = _heap_push(key, ident, prev, size, s, i, s_prev)
+            coarse = -1 - e >= nf
+            c = -1 - e - nf if coarse else -1 - e
+            radius = coarse_radius[c] if coarse else cell_radius[c]
+            center = coarse_center[c] if coarse else cell_center[c]
+            _to_hand(center, rot, trans, ph)
+            dx = ph[0] - o0[0]
+            dy = ph[1] - o0[1]
+            dz = ph[2] - o0[2]
+            r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
+            d, _, step = _time_to_touch(ph[0], ph[1], ph[2], r, shape_buf, shape_joint,
+                                        shape_kinds, shape_halves, shape_radii, kinds, speeds,
+                                        chain_len, 0.5 * hit_eps + radius)  # fmt: skip
+            if d - radius <= hit_eps:
+                # Everything inside is still clear at s_prev and goes on from s, one level
+                # down: fine cells of a coarse cell, points of a fine cell.
+                if coarse:
+                    for f in range(coarse_start[c], coarse_start[c + 1]):
+                        size = _heap_push(key, ident, prev, size, s, -1 - f, s_prev)
+                else:
+                    for i in range(cell_start[c], cell_start[c + 1]):
+                        size = _heap_push(key, ident, prev, size, s, i, s_prev)
             elif s + step < best:
                 size = _heap_push(key, ident, prev, size, s + step, e, s)
             continue

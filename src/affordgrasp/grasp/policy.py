@@ -268,6 +268,7 @@ def close_fingers(
             s_max = max(min((f.upper[j] - dofs[f.dofs[j]]) / f.speeds[j] for j in active), 0.0)
             s_hit, _, q_hit = kernels.close_chain_until_contact(
                 samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
+                samples.coarse_start, samples.coarse_center, samples.coarse_radius,
                 rot, trans, links[f.parent], f.origins, f.kinds, f.axes, q0, speeds,
                 chain_index, arrays.shape_local[ids], arrays.kinds[ids], arrays.halves[ids],
                 arrays.radii[ids], s_max, HIT_EPS,

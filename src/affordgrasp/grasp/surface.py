@@ -26,16 +26,18 @@ DEFAULT_SPACING = 1.4e-3
 MAX_POINTS = 1_000_000
 
 
-CELL_SIZE = 8e-3
+CELL_SIZE = 6e-3  # fine cells; coarse cells are 3 x 3 x 3 of them
 
 
 @dataclass(frozen=True)
 class SurfaceSample:
-    """Surface samples grouped into cells of a uniform grid.
+    """Surface samples grouped into a two-level grid of cells.
 
-    points (n, 3) m, normals (n, 3) outward unit, sharp (n,) bool, spacing m;
-    cell_start (c + 1,) offsets of each cell's points, cell_center (c, 3) and
-    cell_radius (c,) a bounding sphere of each cell's points.
+    points (n, 3) m, normals (n, 3) outward unit, sharp (n,) bool, spacing m.
+    Fine cells: cell_start (c + 1,) offsets of each cell's points, cell_center (c, 3) and
+    cell_radius (c,) a bounding sphere of its points. Coarse cells (3 x 3 x 3 fine cells):
+    coarse_start (k + 1,) offsets of each one's fine cells, coarse_center (k, 3),
+    coarse_radius (k,).
     """
 
     points: np.ndarray
@@ -45,23 +47,47 @@ class SurfaceSample:
     cell_start: np.ndarray
     cell_center: np.ndarray
     cell_radius: np.ndarray
+    coarse_start: np.ndarray
+    coarse_center: np.ndarray
+    coarse_radius: np.ndarray
+
+
+def _runs(keys: np.ndarray) -> np.ndarray:
+    """Start offsets (+ the end) of the runs of equal rows in sorted keys (n, d)."""
+    new = np.ones(len(keys), dtype=bool)
+    new[1:] = np.any(keys[1:] != keys[:-1], axis=1)
+    return np.append(np.nonzero(new)[0], len(keys)).astype(np.int64)
+
+
+def _spheres(p: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    counts = np.diff(start)
+    owner = np.repeat(np.arange(len(counts)), counts)
+    center = np.add.reduceat(p, start[:-1], axis=0) / counts[:, None]
+    dist = np.linalg.norm(p - center[owner], axis=1)
+    return center, np.maximum.reduceat(dist, start[:-1]) + 1e-9
 
 
 def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
-    """Order (n,) that groups points by grid cell, with cell offsets, centres and radii."""
-    key = np.floor((points - points.min(axis=0)) / size).astype(np.int64)
-    order = np.lexsort((key[:, 2], key[:, 1], key[:, 0]))
-    k = key[order]
-    new = np.ones(len(k), dtype=bool)
-    new[1:] = np.any(k[1:] != k[:-1], axis=1)
-    start = np.append(np.nonzero(new)[0], len(k))
+    """Order of the points by coarse then fine cell, and both levels' offsets and spheres.
+
+    returns : order (n,), fine (start, center, radius), coarse (start into the fine cells,
+        center, radius)
+    """
+    fine = np.floor((points - points.min(axis=0)) / size).astype(np.int64)
+    coarse = fine // 3
+    order = np.lexsort((fine[:, 2], fine[:, 1], fine[:, 0], coarse[:, 2], coarse[:, 1],
+                        coarse[:, 0]))  # fmt: skip
     p = points[order]
-    counts = np.diff(start)
-    cell_of = np.repeat(np.arange(len(counts)), counts)
-    center = np.add.reduceat(p, start[:-1], axis=0) / counts[:, None]
-    dist = np.linalg.norm(p - center[cell_of], axis=1)
-    radius = np.maximum.reduceat(dist, start[:-1]) + 1e-9
-    return order, start.astype(np.int64), center, radius
+    fine_start = _runs(np.concatenate([coarse[order], fine[order]], axis=1))
+    fine_center, fine_radius = _spheres(p, fine_start)
+    coarse_of_fine = coarse[order][fine_start[:-1]]
+    coarse_runs = _runs(coarse_of_fine)
+    coarse_center, coarse_radius = _spheres(p, fine_start[coarse_runs])
+    return (
+        order,
+        (fine_start, fine_center, fine_radius),
+        (coarse_runs, coarse_center, coarse_radius),
+    )
 
 
 def _face_lattice(tri: np.ndarray, spacing: float):
@@ -160,13 +186,12 @@ def sample_surface(
     normals = np.concatenate(nrm)
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = normals / np.where(length > 0, length, 1.0)
-    order, start, center, radius = group_into_cells(points)
+    order, fine, coarse = group_into_cells(points)
     return SurfaceSample(
         np.ascontiguousarray(points[order]),
         np.ascontiguousarray(normals[order]),
         np.concatenate(shp)[order],
         spacing,
-        start,
-        center,
-        radius,
+        *fine,
+        *coarse,
     )
