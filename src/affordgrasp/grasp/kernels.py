@@ -729,3 +729,111 @@ def shape_poses(links, shape_link, shape_local):
     for s in range(shape_link.shape[0]):
         _mul4_into(links[shape_link[s]], shape_local[s], out[s])
     return out
+
+
+@njit(cache=True)
+def _hull_2d(u, v, idx):
+    """Indices (into idx) of the 2-D convex hull vertices of points (u, v)[idx] (monotone
+    chain; collinear points reduce to the two ends)."""
+    n = idx.shape[0]
+    order = np.argsort(v[idx], kind="mergesort")
+    order = order[np.argsort(u[idx][order], kind="mergesort")]
+    pts = idx[order]
+    hull = np.empty(2 * n + 1, dtype=np.int64)
+    k = 0
+    for t in range(2):
+        start = k
+        rng = range(n) if t == 0 else range(n - 1, -1, -1)
+        for j in rng:
+            p = pts[j]
+            while k >= start + 2:
+                a = hull[k - 2]
+                b = hull[k - 1]
+                cross = (u[b] - u[a]) * (v[p] - v[a]) - (v[b] - v[a]) * (u[p] - u[a])
+                if cross > 1e-18:
+                    break
+                k -= 1
+            hull[k] = p
+            k += 1
+        k -= 1  # the last point of each chain starts the other
+    out = hull[: max(k, 1)]
+    return np.unique(out)
+
+
+@njit(cache=True)
+def merge_contacts(points, normals, dist, link, radius, cos_patch):
+    """Reduce touching samples to contacts: indices of the samples kept.
+
+    Per link, samples whose normals agree within the patch angle form a patch; a flat patch
+    carries exactly the wrenches of its 2-D convex hull, so only the hull's vertices stay.
+    Then, closest first, a sample within ``radius`` of a kept one of the same link is merged
+    into it (as GraspIt! merges contacts within 3 mm).
+    points (k, 3), normals (k, 3) unit, dist (k,), link (k,) int
+    """
+    k = points.shape[0]
+    order = np.argsort(dist, kind="mergesort")
+    group = np.full(k, -1, dtype=np.int64)
+    leader = np.empty(k, dtype=np.int64)
+    ng = 0
+    for oi in range(k):
+        i = order[oi]
+        for g in range(ng):
+            j = leader[g]
+            if link[j] == link[i] and (
+                normals[j, 0] * normals[i, 0]
+                + normals[j, 1] * normals[i, 1]
+                + normals[j, 2] * normals[i, 2]
+            ) > cos_patch:
+                group[i] = g
+                break
+        if group[i] < 0:
+            leader[ng] = i
+            group[i] = ng
+            ng += 1
+    candidate = np.zeros(k, dtype=np.bool_)
+    u = np.empty(k)
+    v = np.empty(k)
+    for g in range(ng):
+        members = np.nonzero(group == g)[0]
+        if members.shape[0] < 4:
+            candidate[members] = True
+            continue
+        n = normals[leader[g]]
+        # Two tangents of the patch plane.
+        if abs(n[0]) < 0.9:
+            tx, ty, tz = 0.0, n[2], -n[1]
+        else:
+            tx, ty, tz = -n[2], 0.0, n[0]
+        tn = np.sqrt(tx * tx + ty * ty + tz * tz)
+        tx /= tn
+        ty /= tn
+        tz /= tn
+        bx = n[1] * tz - n[2] * ty
+        by = n[2] * tx - n[0] * tz
+        bz = n[0] * ty - n[1] * tx
+        for i in members:
+            u[i] = points[i, 0] * tx + points[i, 1] * ty + points[i, 2] * tz
+            v[i] = points[i, 0] * bx + points[i, 1] * by + points[i, 2] * bz
+        candidate[_hull_2d(u, v, members)] = True
+    kept = np.empty(k, dtype=np.int64)
+    nk = 0
+    r2 = radius * radius
+    for oi in range(k):
+        i = order[oi]
+        if not candidate[i]:
+            continue
+        close = False
+        for t in range(nk):
+            j = kept[t]
+            if link[j] != link[i]:
+                continue
+            dx = points[i, 0] - points[j, 0]
+            dy = points[i, 1] - points[j, 1]
+            dz = points[i, 2] - points[j, 2]
+            if dx * dx + dy * dy + dz * dz < r2:
+                close = True
+                break
+        if not close:
+            kept[nk] = i
+            nk += 1
+    return np.sort(kept[:nk])

@@ -25,7 +25,6 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import InputError
 from ..hands import Hand, get_hand
@@ -286,48 +285,6 @@ def close_fingers(
     return dofs
 
 
-def merge_link_contacts(points, normals, dist, radius=MERGE_RADIUS):
-    """Reduce the touching samples of one link to its contacts (indices into the inputs).
-
-    A flat patch (samples whose normals agree within 10°) carries exactly the wrenches of its
-    2-D convex hull, so only the hull's vertices are kept; then, closest first, samples
-    within ``radius`` of a kept one are merged into it (as GraspIt! does within 3 mm).
-    """
-    order = np.argsort(dist, kind="stable")
-    groups: list[list[int]] = []
-    for i in order:
-        for g in groups:
-            if normals[g[0]] @ normals[i] > np.cos(PATCH_ANGLE):
-                g.append(i)
-                break
-        else:
-            groups.append([i])
-    keep_candidates = []
-    for g in groups:
-        if len(g) >= 4:
-            n = normals[g[0]]
-            u = np.cross(n, [1.0, 0.0, 0.0])
-            if np.linalg.norm(u) < 1e-6:
-                u = np.cross(n, [0.0, 1.0, 0.0])
-            u /= np.linalg.norm(u)
-            v = np.cross(n, u)
-            flat = np.stack([points[g] @ u, points[g] @ v], axis=1)
-            try:
-                hull = ConvexHull(flat)
-                g = [g[k] for k in sorted(hull.vertices)]
-            except QhullError:
-                # Collinear patch: its two extreme points carry the same wrenches.
-                span = flat[:, np.ptp(flat, axis=0).argmax()]
-                g = sorted({g[int(span.argmin())], g[int(span.argmax())]})
-        keep_candidates.extend(g)
-    keep_candidates.sort(key=lambda i: (dist[i], i))
-    kept: list[int] = []
-    for i in keep_candidates:
-        if all(np.sum((points[i] - points[k]) ** 2) >= radius * radius for k in kept):
-            kept.append(i)
-    return np.array(kept, dtype=np.int64)
-
-
 def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
     shape_poses = arrays.shape_poses(dofs)
     samples = geom.samples
@@ -354,18 +311,21 @@ def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
     # A sample facing away from the link lies on the far side of a part thinner than the
     # tolerance; it is not in contact.
     facing = np.einsum("ij,ij->i", n_obj, n_link_obj) > 0.0
-    link_idx = arrays.shape_link[si]
-    pts, nrm, mus, links = [], [], [], []
-    for li in np.unique(link_idx[facing]):
-        sel = np.nonzero(facing & (link_idx == li))[0]
-        keep = sel[merge_link_contacts(samples.points[pi[sel]], n_obj[sel], dist[sel])]
-        pts.append(samples.points[pi[keep]])
-        nrm.append(n_obj[keep])
-        mu = friction_coefficient(arrays.materials[li], object_material)
-        mus.append(np.full(len(keep), mu))
-        links.extend([hand.links[li].name] * len(keep))
+    sel = np.nonzero(facing)[0]
+    link_idx = arrays.shape_link[si[sel]]
+    keep = sel[
+        kernels.merge_contacts(
+            samples.points[pi[sel]], n_obj[sel], dist[sel], link_idx, MERGE_RADIUS,
+            np.cos(PATCH_ANGLE),
+        )
+    ]  # fmt: skip
+    link_idx = arrays.shape_link[si[keep]]
+    mu = np.array([friction_coefficient(m, object_material) for m in arrays.materials])
     return ContactSet(
-        np.concatenate(pts), np.concatenate(nrm), np.concatenate(mus), np.array(links, dtype=object)
+        samples.points[pi[keep]],
+        n_obj[keep],
+        mu[link_idx],
+        np.array(hand.link_names, dtype=object)[link_idx],
     )
 
 
