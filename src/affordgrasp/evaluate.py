@@ -19,7 +19,6 @@ from .hands import Hand, get_hand
 from .metrics.phi import compute_phi_batch
 from .objects import GraspObject, resolve_object
 
-
 USE_METRICS = ("impact_effort", "discharge", "use_force", "use_edge", "use_edge_angle")
 
 

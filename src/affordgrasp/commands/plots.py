@@ -7,9 +7,6 @@ for the tasks asked (default beat, cut, pick), ``affordances.png`` into OUTDIR.
 
 from __future__ import annotations
 
-import numpy as np
-import pyarrow as pa
-
 from .show import add_source_arguments, add_task_arguments, check_counts, open_sources, parse_tasks
 
 DEFAULT_TASKS = "beat,cut,pick"
@@ -24,6 +21,9 @@ def add_arguments(p) -> None:
 
 def _combined(sources):
     """One schema and one scan over several sources (columns a source lacks are NaN)."""
+    import numpy as np
+    import pyarrow as pa
+
     schema = pa.unify_schemas([s.schema() for s in sources], promote_options="permissive")
 
     def scan(columns):
@@ -109,5 +109,5 @@ def run(args, out) -> None:
     )
 
 
-def _has_metrics(schema: pa.Schema) -> bool:
+def _has_metrics(schema) -> bool:
     return "epsilon" in schema.names

@@ -301,7 +301,7 @@ def run(args, out) -> None:
     for r in empty:
         out.text(
             f"{r.object}: no grasp scores above −∞ for {r.task} in mode {args.mode} "
-            f"({r.feasible} of {r.scored} rows); "
+            f"({r.accepted} of {r.scored} samples accepted); "
             + (
                 "try more --samples"
                 if args.mode == "no-robustness"
@@ -326,7 +326,7 @@ def run(args, out) -> None:
             "mode": args.mode,
             "top": args.top,
             "rankings": [
-                {"object": r.object, "task": r.task, "scored": r.scored, "feasible": r.feasible}
+                {"object": r.object, "task": r.task, "scored": r.scored, "accepted": r.accepted}
                 for r in rankings
             ],
             "best": result.best,

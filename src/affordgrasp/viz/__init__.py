@@ -1,0 +1,57 @@
+"""Seeing results (SPEC §2.8): grasp renders, grids, dataset plots and an offline 3D viewer.
+
+Everything runs headless: images are ray cast (embree through ``embreex``), drawn with
+matplotlib's Agg canvas and written as PNG; the viewer is one self-contained HTML file.
+
+* :func:`grasp_scene` turns a sample row (SPEC §2.9 columns) into a :class:`GraspScene`;
+  :func:`save_grasp_png` / :func:`grasp_image` draw it (camera: :func:`auto_camera`, or your
+  own :class:`Camera`).
+* :func:`top_grasps` ranks a dataset or table by tasks; :func:`draw_best` writes the grid,
+  the per-grasp PNGs and the HTML page (``affordgrasp show``).
+* :func:`summarize` and :func:`save_plots` plot a dataset (``affordgrasp plots``).
+"""
+
+from __future__ import annotations
+
+from .grid import grid_image, save_grid
+from .html import ViewerEntry, write_viewer
+from .plots import save_plots, summarize
+from .render import (
+    Camera,
+    GraspScene,
+    OverlayStyle,
+    Render,
+    auto_camera,
+    draw_grasp,
+    framed_camera,
+    grasp_image,
+    grasp_scene,
+    render_image,
+    save_grasp_png,
+)
+from .showcase import draw_best
+from .sources import DatasetSource, TableSource, top_grasps
+
+__all__ = [
+    "Camera",
+    "DatasetSource",
+    "GraspScene",
+    "OverlayStyle",
+    "Render",
+    "TableSource",
+    "ViewerEntry",
+    "auto_camera",
+    "draw_best",
+    "draw_grasp",
+    "framed_camera",
+    "grasp_image",
+    "grasp_scene",
+    "grid_image",
+    "render_image",
+    "save_grasp_png",
+    "save_grid",
+    "save_plots",
+    "summarize",
+    "top_grasps",
+    "write_viewer",
+]

@@ -1,0 +1,74 @@
+"""Matplotlib figures without a display: the Agg canvas, exact pixel sizes, stable PNG bytes."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+DPI = 100
+
+
+def new_figure(width_px: int, height_px: int, *, axes: bool = True):
+    """A figure of exactly ``width_px`` x ``height_px`` pixels (and one full-size axes)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width_px / DPI, height_px / DPI), dpi=DPI)
+    fig.patch.set_facecolor("white")
+    if not axes:
+        return fig
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_axis_off()
+    return fig, ax
+
+
+def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
+    """Write a figure as PNG with no time stamp in it (the same inputs give the same bytes)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    kwargs = {"bbox_inches": "tight", "pad_inches": 0.1} if tight else {}
+    fig.savefig(path, format="png", dpi=DPI, metadata={"Software": None}, **kwargs)
+    return path
+
+
+def figure_pixels(fig) -> np.ndarray:
+    """The figure drawn on the Agg canvas, as an (h, w, 3) uint8 array."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+def save_image(rgb: np.ndarray, path: str | os.PathLike, *, colors: int | None = None) -> Path:
+    """Write an (h, w, 3) uint8 image as PNG, optionally reduced to a palette of ``colors``
+    (smaller files; the reduction is deterministic)."""
+    from PIL import Image
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    image = Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8), "RGB")
+    if colors:
+        image = image.quantize(
+            colors=int(colors), method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+        )
+    image.save(path, format="PNG", optimize=True)
+    return path
+
+
+def png_bytes(rgb: np.ndarray, *, max_px: int | None = None) -> bytes:
+    """PNG bytes of an (h, w, 3) uint8 image, downscaled to fit ``max_px`` if given."""
+    import io
+
+    from PIL import Image
+
+    image = Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8), "RGB")
+    if max_px and max(image.size) > max_px:
+        image.thumbnail((max_px, max_px), Image.Resampling.LANCZOS)
+    buffer = io.BytesIO()
+    image.save(buffer, format="PNG", optimize=True)
+    return buffer.getvalue()

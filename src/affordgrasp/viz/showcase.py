@@ -1,0 +1,224 @@
+"""The best grasps of tasks, drawn: a PNG grid, one PNG per grasp, an interactive HTML page.
+
+This is the library side of ``affordgrasp show``: :func:`draw_best` takes rankings (see
+:func:`affordgrasp.viz.sources.top_grasps`) and the objects they refer to, renders every
+grasp once, and writes the files.
+
+Grid layout: with one grasp per task (``top == 1``) the rows are the objects and the columns
+the tasks; otherwise each row is one (object, task) pair and the columns are the ranks.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .figure import png_bytes, save_image
+from .grid import save_grid
+from .html import ViewerEntry, fmt_value, write_viewer
+from .render import OverlayStyle, grasp_image, grasp_scene
+from .sources import RankedGrasp, TaskRanking
+
+# Facts listed beside each grasp in the viewer: (label, column).
+METRIC_FACTS = (
+    ("ε", "epsilon"),
+    ("GWS volume", "gws_volume"),
+    ("I (kg m²)", "inertia"),
+    ("ΣE_h (N)", None),
+    ("E_i", "impact_effort"),
+    ("δ", "discharge"),
+    ("U_τ (N)", "use_force"),
+    ("U_g (m⁻²)", "use_edge"),
+    ("edge angle (°)", "use_edge_angle"),
+)
+HOLD_COLUMNS = tuple(f"hold_effort_{s}" for s in ("px", "nx", "py", "ny", "pz", "nz"))
+
+
+@dataclass
+class ShowResult:
+    """What :func:`draw_best` wrote."""
+
+    grid: Path | None = None
+    html: Path | None = None
+    grasps: list[Path] = field(default_factory=list)
+    best: list[dict] = field(default_factory=list)
+
+
+def safe_name(text: str) -> str:
+    """A file-name-safe version of an object or task name (``knife:3`` → ``knife-3``)."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "-", text).strip("-") or "object"
+
+
+def hold_effort_sum(row: dict) -> float:
+    values = [row.get(c) for c in HOLD_COLUMNS]
+    if any(v is None for v in values):
+        return math.nan
+    return float(np.sum(np.asarray(values, dtype=np.float64)))
+
+
+def grasp_facts(g: RankedGrasp, mode: str) -> list[tuple[str, str]]:
+    row = g.row
+    facts = [
+        ("object", g.object),
+        ("task", f"{g.task} ({mode})"),
+        ("rank", str(g.rank)),
+        ("score F", fmt_value(g.score)),
+        ("seed · sample", f"{g.seed} · {g.sample}"),
+        ("status", str(row.get("status", ""))),
+        ("contacts", str(len(row.get("contact_points") or []))),
+    ]
+    for label, column in METRIC_FACTS:
+        if column is None:
+            value = hold_effort_sum(row)
+        elif column == "use_edge_angle" and row.get(column) is not None:
+            value = math.degrees(float(row[column]))
+        else:
+            value = row.get(column)
+        if value is not None:
+            facts.append((label, fmt_value(value)))
+    reason = row.get("epsilon_reason")
+    if reason:
+        facts.append(("why ε = 0", str(reason)))
+    links = row.get("contact_link") or []
+    if links:
+        facts.append(("links touching", ", ".join(sorted(set(map(str, links))))))
+    return facts
+
+
+def best_record(g: RankedGrasp, mode: str) -> dict:
+    """One best grasp for JSON output."""
+    row = g.row
+    rec = {
+        "object": g.object,
+        "task": g.task,
+        "mode": mode,
+        "rank": g.rank,
+        "score": g.score,
+        "seed": g.seed,
+        "sample": g.sample,
+        "status": row.get("status"),
+        "n_contacts": len(row.get("contact_points") or []),
+        "hold_effort_sum": hold_effort_sum(row),
+    }
+    for _, column in METRIC_FACTS:
+        if column is not None and column in row:
+            rec[column] = row[column]
+    return rec
+
+
+def draw_best(
+    rankings: Sequence[TaskRanking],
+    objects: dict,
+    out_dir: str | os.PathLike,
+    *,
+    mode: str = "default",
+    top: int = 4,
+    cell_px: int = 320,
+    grasp_px: int = 512,
+    each: bool = False,
+    html: bool = True,
+    cones: bool = False,
+    name: str = "best_grasps",
+    title: str = "",
+    palette: int | None = 256,
+    progress: Callable[[int], None] | None = None,
+) -> ShowResult:
+    """Render the ranked grasps and write ``<name>.png``, ``<name>.html`` and, with
+    ``each``, ``grasps/<object>_<task>_<rank>.png`` under ``out_dir``.
+
+    rankings : one per (object, task), in the order to show
+    objects : object name -> GraspObject (the meshes the rows were simulated on)
+    palette : reduce the grid PNG to this many colours (None keeps full colour)
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    style = OverlayStyle(cones=cones)
+    result = ShowResult()
+    images: dict[tuple[str, str, int], np.ndarray] = {}
+    entries: list[ViewerEntry] = []
+    for ranking in rankings:
+        obj = objects[ranking.object]
+        for g in ranking.best:
+            caption = f"#{g.rank}  F={fmt_value(g.score)}"
+            scene = grasp_scene(obj, g.row, title=f"{g.object} · {g.task} #{g.rank}")
+            image, camera = grasp_image(scene, size_px=cell_px, style=style, caption=caption)
+            images[(ranking.object, ranking.task, g.rank)] = image
+            if each:
+                path = (
+                    out_dir / "grasps" / f"{safe_name(g.object)}_{safe_name(g.task)}_{g.rank}.png"
+                )
+                big, _ = grasp_image(
+                    scene,
+                    size_px=grasp_px,
+                    style=style,
+                    camera=camera,
+                    caption=f"{g.object} · {g.task} #{g.rank}  F={fmt_value(g.score)}",
+                )
+                save_image(big, path)
+                result.grasps.append(path)
+            if html:
+                entries.append(
+                    ViewerEntry(
+                        scene,
+                        camera,
+                        title=f"#{g.rank}  F={fmt_value(g.score)}  (sample {g.sample})",
+                        group=f"{g.object} · {g.task}",
+                        facts=grasp_facts(g, mode),
+                        thumbnail=png_bytes(image, max_px=144),
+                    )
+                )
+            result.best.append(best_record(g, mode))
+            if progress is not None:
+                progress(1)
+
+    object_names = list(dict.fromkeys(r.object for r in rankings))
+    task_names = list(dict.fromkeys(r.task for r in rankings))
+    by_key = {(r.object, r.task): r for r in rankings}
+
+    def cell(obj_name, task_name, rank):
+        image = images.get((obj_name, task_name, rank))
+        if image is not None:
+            return image
+        r = by_key.get((obj_name, task_name))
+        if r is None:
+            return None
+        if rank == 1:
+            return (
+                f"no grasp with F > −∞\n{r.accepted} of {r.scored} samples accepted\n"
+                f"({task_name}, {mode})"
+            )
+        return None
+
+    if top == 1 and len(task_names) > 1:
+        cells = [[cell(o, t, 1) for t in task_names] for o in object_names]
+        rows, cols = object_names, task_names
+    else:
+        keys = [(r.object, r.task) for r in rankings]
+        cells = [[cell(o, t, k) for k in range(1, top + 1)] for o, t in keys]
+        rows = [o if len(task_names) == 1 else f"{o} · {t}" for o, t in keys]
+        cols = [f"#{k}" for k in range(1, top + 1)]
+        if len(task_names) == 1:
+            title = title or f"best grasps for {task_names[0]} ({mode})"
+    title = title or f"best grasps ({mode})"
+    result.grid = save_grid(
+        cells,
+        out_dir / f"{name}.png",
+        row_labels=rows,
+        col_labels=cols,
+        title=title,
+        colors=palette,
+    )
+    if html and entries:
+        result.html = write_viewer(
+            out_dir / f"{name}.html",
+            entries,
+            title=title,
+            subtitle=f"{len(entries)} grasps · tasks {', '.join(task_names)} · mode {mode}",
+        )
+    return result

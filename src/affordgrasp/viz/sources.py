@@ -1,0 +1,244 @@
+"""Where the grasps to show come from: a dataset directory or an in-memory table.
+
+A dataset directory is read as every ``*.parquet`` file under it (other files, such as a
+manifest, are ignored), streamed in batches so that datasets larger than memory can be
+ranked and plotted. :func:`top_grasps` keeps the best ``k`` rows per object and task with one
+pass over the scalar columns, then reads back only those rows in full.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.dataset as pads
+
+from ..errors import DatasetError, InputError
+
+BATCH_ROWS = 65536
+
+
+class GraspSource:
+    """Rows of grasps: scanned in batches, fetched by key."""
+
+    name: str
+
+    def schema(self) -> pa.Schema:
+        raise NotImplementedError
+
+    def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
+        raise NotImplementedError
+
+    def fetch(self, obj: str, keys: Sequence[tuple[int, int]]) -> list[dict]:
+        """Full rows of object ``obj`` with (seed, sample) in ``keys``, in the order of keys."""
+        raise NotImplementedError
+
+    def scalar_columns(self) -> list[str]:
+        """Columns that are not lists (metrics, status, ids): cheap to scan."""
+        return [
+            f.name
+            for f in self.schema()
+            if not (pa.types.is_list(f.type) or pa.types.is_fixed_size_list(f.type))
+        ]
+
+
+def _order_rows(rows: list[dict], keys: Sequence[tuple[int, int]]) -> list[dict]:
+    by_key = {(int(r["seed"]), int(r["sample"])): r for r in rows}
+    return [by_key[k] for k in keys if k in by_key]
+
+
+@dataclass
+class TableSource(GraspSource):
+    """Rows held in memory (e.g. samples just evaluated)."""
+
+    table: pa.Table
+    name: str = "samples"
+    objects: dict = field(default_factory=dict)  # name -> GraspObject, when known
+
+    def schema(self) -> pa.Schema:
+        return self.table.schema
+
+    def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
+        t = self.table.select(list(columns))
+        for start in range(0, max(t.num_rows, 1), BATCH_ROWS):
+            yield t.slice(start, BATCH_ROWS)
+
+    def fetch(self, obj: str, keys: Sequence[tuple[int, int]]) -> list[dict]:
+        samples = pa.array([k[1] for k in keys], pa.int64())
+        mask = pc.and_(
+            pc.equal(self.table.column("object"), obj),
+            pc.is_in(self.table.column("sample"), value_set=samples),
+        )
+        return _order_rows(self.table.filter(mask).to_pylist(), keys)
+
+
+@dataclass
+class DatasetSource(GraspSource):
+    """Every Parquet file under a directory, as one dataset."""
+
+    directory: Path
+    name: str = ""
+    files: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.directory = Path(self.directory)
+        self.name = self.name or str(self.directory)
+        if not self.directory.is_dir():
+            raise DatasetError(f"{str(self.directory)!r} is not a directory")
+        self.files = sorted(
+            str(p)
+            for p in self.directory.rglob("*.parquet")
+            if p.is_file()
+            and not any(part.startswith(".") for part in p.relative_to(self.directory).parts)
+        )
+        if not self.files:
+            raise DatasetError(
+                f"no Parquet files under {str(self.directory)!r}; give a dataset directory "
+                "written by 'affordgrasp generate', or an object (family, family:seed or mesh path)"
+            )
+        try:
+            self._dataset = pads.dataset(self.files, format="parquet")
+        except (pa.ArrowInvalid, OSError) as exc:
+            raise DatasetError(
+                f"cannot read the Parquet files under {str(self.directory)!r}: {exc}"
+            ) from exc
+        missing = {"object", "sample", "seed", "hand_pose", "joints"} - set(
+            self._dataset.schema.names
+        )
+        if missing:
+            raise DatasetError(
+                f"the Parquet files under {str(self.directory)!r} lack the columns "
+                f"{sorted(missing)}; they do not look like an affordgrasp dataset (SPEC §2.9)"
+            )
+
+    def schema(self) -> pa.Schema:
+        return self._dataset.schema
+
+    def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
+        scanner = self._dataset.scanner(columns=list(columns), batch_size=BATCH_ROWS)
+        for batch in scanner.to_batches():
+            if batch.num_rows:
+                yield pa.Table.from_batches([batch])
+
+    def fetch(self, obj: str, keys: Sequence[tuple[int, int]]) -> list[dict]:
+        samples = pa.array(sorted({k[1] for k in keys}), pa.int64())
+        flt = (pads.field("object") == obj) & pads.field("sample").isin(samples)
+        return _order_rows(self._dataset.to_table(filter=flt).to_pylist(), keys)
+
+
+@dataclass(frozen=True)
+class RankedGrasp:
+    """One of the best grasps of an object for a task (rank 1 is the best)."""
+
+    object: str
+    task: str
+    rank: int
+    score: float
+    seed: int
+    sample: int
+    row: dict
+
+
+@dataclass
+class TaskRanking:
+    """The best grasps of one object for one task, and how many rows were scored."""
+
+    object: str
+    task: str
+    scored: int = 0
+    accepted: int = 0  # rows with a score above -inf
+    best: list[RankedGrasp] = field(default_factory=list)
+
+
+def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
+    """The numeric scalar columns of a table as float64 arrays (what tasks read)."""
+    out = {}
+    for f in table.schema:
+        if pa.types.is_integer(f.type) or pa.types.is_floating(f.type):
+            out[f.name] = table.column(f.name).to_numpy().astype(np.float64)
+    return out
+
+
+def _keep_top(scores, seeds, samples, k):
+    # Highest score first; ties by (seed, sample) so the choice does not depend on order.
+    order = np.lexsort((samples, seeds, -scores))[:k]
+    return scores[order], seeds[order], samples[order]
+
+
+def top_grasps(
+    source: GraspSource,
+    tasks: Sequence,
+    *,
+    mode: str = "default",
+    top: int = 4,
+    thresholds: dict[str, dict[str, float]] | None = None,
+    progress=None,
+) -> dict[tuple[str, str], TaskRanking]:
+    """The ``top`` best rows per (object, task) by the tasks' scores (higher is better;
+    -inf and NaN never count).
+
+    tasks : Task objects (``affordgrasp.tasks.get_task``)
+    thresholds : task name -> threshold overrides
+    progress : optional callable(n_rows) called after each batch
+    """
+    if top < 1:
+        raise InputError(f"--top must be at least 1, got {top}")
+    thresholds = thresholds or {}
+    columns = source.scalar_columns()
+    kept: dict[tuple[str, str], tuple] = {}
+    counts: dict[tuple[str, str], list[int]] = {}
+    for table in source.scan(columns):
+        objects = table.column("object").combine_chunks().dictionary_encode()
+        names = objects.dictionary.to_pylist()
+        codes = objects.indices.to_numpy(zero_copy_only=False)
+        seeds = table.column("seed").to_numpy().astype(np.int64)
+        samples = table.column("sample").to_numpy().astype(np.int64)
+        numeric = numeric_columns(table)
+        # Rows grouped by object once per batch (a batch may hold many objects).
+        order = np.argsort(codes, kind="stable")
+        bounds = np.concatenate([[0], np.cumsum(np.bincount(codes, minlength=len(names)))])
+        for task in tasks:
+            scores = np.asarray(
+                task.evaluate(numeric, mode=mode, **thresholds.get(task.name, {})),
+                dtype=np.float64,
+            )
+            valid = ~np.isnan(scores) & (scores > -np.inf)
+            for code, name in enumerate(names):
+                rows = order[bounds[code] : bounds[code + 1]]
+                key = (name, task.name)
+                c = counts.setdefault(key, [0, 0])
+                c[0] += len(rows)
+                sel = rows[valid[rows]]
+                c[1] += len(sel)
+                if not len(sel):
+                    continue
+                new = (scores[sel], seeds[sel], samples[sel])
+                if key in kept:
+                    new = tuple(np.concatenate([a, b]) for a, b in zip(kept[key], new, strict=True))
+                kept[key] = _keep_top(*new, top)
+        if progress is not None:
+            progress(table.num_rows)
+    out: dict[tuple[str, str], TaskRanking] = {}
+    for key, (scored, accepted) in counts.items():
+        ranking = TaskRanking(key[0], key[1], scored, accepted)
+        if key in kept:
+            scores, seeds, samples = kept[key]
+            keys = [(int(a), int(b)) for a, b in zip(seeds, samples, strict=True)]
+            rows = source.fetch(key[0], keys)
+            by_key = {(int(r["seed"]), int(r["sample"])): r for r in rows}
+            for rank, (s, k) in enumerate(zip(scores, keys, strict=True), start=1):
+                if k in by_key:
+                    ranking.best.append(
+                        RankedGrasp(key[0], key[1], rank, float(s), k[0], k[1], by_key[k])
+                    )
+        out[key] = ranking
+    return out
+
+
+def is_dataset_path(spec: str | os.PathLike) -> bool:
+    return Path(spec).expanduser().is_dir()
