@@ -344,6 +344,78 @@ def _time_to_touch(px, py, pz, r, shape_buf, shape_joint, kinds_q, halves, radii
 
 
 @njit(cache=True)
+def _inverse_rigid(t, out):
+    """out (3, 4) = the inverse of the rigid transform t (4, 4), as [R^T | -R^T p]."""
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = t[b, a]
+        out[a, 3] = -(t[0, a] * t[0, 3] + t[1, a] * t[1, 3] + t[2, a] * t[2, 3])
+
+
+@njit(cache=True)
+def _chain_touch(px, py, pz, s, r, inv_base, inv_origin, kinds, axes, q0, speeds, shape_joint,
+                 inv_shape, shape_kinds, halves, radii, chain_len, margin):  # fmt: skip
+    """Distance of a hand-frame point to the moving shapes at closing parameter s.
+
+    The point is carried down the chain (joint frame, then undo the joint's motion) instead
+    of composing the links' poses: a few dozen operations per joint.
+    returns : (smallest distance, its shape, a safe step in s) as in _time_to_touch
+    """
+    x = inv_base[0, 0] * px + inv_base[0, 1] * py + inv_base[0, 2] * pz + inv_base[0, 3]
+    y = inv_base[1, 0] * px + inv_base[1, 1] * py + inv_base[1, 2] * pz + inv_base[1, 3]
+    z = inv_base[2, 0] * px + inv_base[2, 1] * py + inv_base[2, 2] * pz + inv_base[2, 3]
+    d_min = np.inf
+    q_min = -1
+    step = np.inf
+    for j in range(inv_origin.shape[0]):
+        o = inv_origin[j]
+        x, y, z = (
+            o[0, 0] * x + o[0, 1] * y + o[0, 2] * z + o[0, 3],
+            o[1, 0] * x + o[1, 1] * y + o[1, 2] * z + o[1, 3],
+            o[2, 0] * x + o[2, 1] * y + o[2, 2] * z + o[2, 3],
+        )
+        q = q0[j] + speeds[j] * s
+        ax = axes[j, 0]
+        ay = axes[j, 1]
+        az = axes[j, 2]
+        if kinds[j] == REVOLUTE:
+            # Rotate by -q about the axis (Rodrigues): into the moving link's frame.
+            c = np.cos(q)
+            sn = np.sin(q)
+            dot = (ax * x + ay * y + az * z) * (1.0 - c)
+            cx = ay * z - az * y
+            cy = az * x - ax * z
+            cz = ax * y - ay * x
+            x, y, z = (x * c - cx * sn + ax * dot, y * c - cy * sn + ay * dot,
+                       z * c - cz * sn + az * dot)  # fmt: skip
+        else:
+            x -= ax * q
+            y -= ay * q
+            z -= az * q
+        for sq in range(shape_joint.shape[0]):
+            if shape_joint[sq] != j:
+                continue
+            t = inv_shape[sq]
+            lx = t[0, 0] * x + t[0, 1] * y + t[0, 2] * z + t[0, 3]
+            ly = t[1, 0] * x + t[1, 1] * y + t[1, 2] * z + t[1, 3]
+            lz = t[2, 0] * x + t[2, 1] * y + t[2, 2] * z + t[2, 3]
+            h = halves[sq]
+            d = sdf_local(lx, ly, lz, shape_kinds[sq], h[0], h[1], h[2], radii[sq])
+            if d < d_min:
+                d_min = d
+                q_min = sq
+            bound = 0.0
+            for i in range(j + 1):
+                if kinds[i] == REVOLUTE:
+                    bound += abs(speeds[i]) * (r + chain_len[i])
+                else:
+                    bound += abs(speeds[i])
+            if bound > 0.0:
+                step = min(step, max(d - margin, 0.0) / bound)
+    return d_min, q_min, step
+
+
+@njit(cache=True)
 def _heap_push(key, ident, prev, size, k, i, p):
     j = size
     key[j] = k
@@ -421,6 +493,14 @@ def close_chain_until_contact(
                       link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
     _mul4_into(base, origins[0], tmp_a)
     o0 = tmp_a[:3, 3].copy()
+    inv_base = np.empty((3, 4))
+    _inverse_rigid(base, inv_base)
+    inv_origin = np.empty((m, 3, 4))
+    for j in range(m):
+        _inverse_rigid(origins[j], inv_origin[j])
+    inv_shape = np.empty((k, 3, 4))
+    for q in range(k):
+        _inverse_rigid(shape_local[q], inv_shape[q])
     chain_len = np.zeros(m)
     for j in range(1, m):
         chain_len[j] = chain_len[j - 1] + np.sqrt(
@@ -517,8 +597,6 @@ def close_chain_until_contact(
         size -= 1
         if s >= best:
             break
-        _chain_poses_into(s, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
-                          link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
         if e < 0:
             coarse = -1 - e >= nf
             c = -1 - e - nf if coarse else -1 - e
@@ -529,9 +607,10 @@ def close_chain_until_contact(
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
-            d, _, step = _time_to_touch(ph[0], ph[1], ph[2], r, shape_buf, shape_joint,
-                                        shape_kinds, shape_halves, shape_radii, kinds, speeds,
-                                        chain_len, 0.5 * hit_eps + radius)  # fmt: skip
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, inv_base, inv_origin, kinds,
+                                      axes, q0, speeds, shape_joint, inv_shape, shape_kinds,
+                                      shape_halves, shape_radii, chain_len,
+                                      0.5 * hit_eps + radius)  # fmt: skip
             if d - radius <= hit_eps:
                 # Everything inside is still clear at s_prev and goes on from s, one level
                 # down: fine cells of a coarse cell, points of a fine cell.
@@ -549,9 +628,9 @@ def close_chain_until_contact(
         dy = ph[1] - o0[1]
         dz = ph[2] - o0[2]
         r = np.sqrt(dx * dx + dy * dy + dz * dz)
-        d, _, step = _time_to_touch(ph[0], ph[1], ph[2], r, shape_buf, shape_joint, shape_kinds,
-                                    shape_halves, shape_radii, kinds, speeds, chain_len,
-                                    0.5 * hit_eps)  # fmt: skip
+        d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, inv_base, inv_origin, kinds, axes,
+                                  q0, speeds, shape_joint, inv_shape, shape_kinds, shape_halves,
+                                  shape_radii, chain_len, 0.5 * hit_eps)  # fmt: skip
         if d <= hit_eps:
             if nh == hp.shape[0]:
                 hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
@@ -583,21 +662,17 @@ def close_chain_until_contact(
             if hi - lo <= 1e-13:
                 break
             mid = 0.5 * (lo + hi)
-            _chain_poses_into(mid, base, origins, kinds, axes, q0, speeds, shape_joint,
-                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
-            dm, _, _ = _time_to_touch(ph[0], ph[1], ph[2], 0.0, shape_buf, shape_joint,
-                                      shape_kinds, shape_halves, shape_radii, kinds, speeds,
-                                      chain_len, hit_eps)  # fmt: skip
+            dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, inv_base, inv_origin, kinds,
+                                    axes, q0, speeds, shape_joint, inv_shape, shape_kinds,
+                                    shape_halves, shape_radii, chain_len, hit_eps)  # fmt: skip
             if dm <= hit_eps:
                 hi = mid
             else:
                 lo = mid
         if hi < first:
-            _chain_poses_into(hi, base, origins, kinds, axes, q0, speeds, shape_joint,
-                              shape_local, link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
-            _, q_hi, _ = _time_to_touch(ph[0], ph[1], ph[2], 0.0, shape_buf, shape_joint,
-                                        shape_kinds, shape_halves, shape_radii, kinds, speeds,
-                                        chain_len, hit_eps)  # fmt: skip
+            _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, inv_base, inv_origin, kinds,
+                                      axes, q0, speeds, shape_joint, inv_shape, shape_kinds,
+                                      shape_halves, shape_radii, chain_len, hit_eps)  # fmt: skip
             first = hi
             first_p = i
             first_q = q_hi
@@ -779,11 +854,15 @@ def merge_contacts(points, normals, dist, link, radius, cos_patch):
         i = order[oi]
         for g in range(ng):
             j = leader[g]
-            if link[j] == link[i] and (
-                normals[j, 0] * normals[i, 0]
-                + normals[j, 1] * normals[i, 1]
-                + normals[j, 2] * normals[i, 2]
-            ) > cos_patch:
+            if (
+                link[j] == link[i]
+                and (
+                    normals[j, 0] * normals[i, 0]
+                    + normals[j, 1] * normals[i, 1]
+                    + normals[j, 2] * normals[i, 2]
+                )
+                > cos_patch
+            ):
                 group[i] = g
                 break
         if group[i] < 0:

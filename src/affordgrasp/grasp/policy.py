@@ -80,8 +80,13 @@ class HandArrays:
 
     def link_poses(self, dofs: np.ndarray) -> np.ndarray:
         return kernels.link_poses(
-            np.asarray(dofs, dtype=np.float64), self.link_parent, self.link_origin,
-            self.link_axis, self.link_kind, self.link_dof, self.link_ratio,
+            np.asarray(dofs, dtype=np.float64),
+            self.link_parent,
+            self.link_origin,
+            self.link_axis,
+            self.link_kind,
+            self.link_dof,
+            self.link_ratio,
         )
 
     def shape_poses(self, dofs: np.ndarray) -> np.ndarray:
@@ -131,8 +136,10 @@ def hand_arrays(hand: Hand) -> HandArrays:
         for j0 in range(len(chain)):
             ids = [s for s, li in enumerate(shape_link) if li in chain[j0:]]
             subsets.append(
-                (np.array(ids, dtype=np.int64),
-                 np.array([chain.index(shape_link[s]) for s in ids], dtype=np.int64))
+                (
+                    np.array(ids, dtype=np.int64),
+                    np.array([chain.index(shape_link[s]) for s in ids], dtype=np.int64),
+                )
             )
         fingers.append(
             FingerArrays(
