@@ -1,0 +1,63 @@
+"""Grasp and task metrics: the metric vector Φ(O, G, U) of SPEC §2.4.
+
+Every metric works on raw contacts, without any simulator: build a
+:class:`~affordgrasp.grasp.contacts.ContactSet` from arrays (GraspIt! output, a real
+robot's tactile contacts...) with ``ContactSet.from_arrays(points, normals, mu)`` and call
+the function. Frames and units: the object's mesh frame, SI units, outward normals.
+
+==========================  ==============================================================
+function                    metric
+==========================  ==============================================================
+:func:`epsilon`             ε and the GWS volume (GraspIt!'s L1 epsilon)
+:func:`rotational_inertia`  I about the wrist axis
+:func:`hold_effort`         E_h (six gravity directions)
+:func:`impact_effort`       E_i
+:func:`discharge`           δ
+:func:`use_force`           U_τ
+:func:`use_edge`            U_g (paper's edge-ness)
+:func:`use_edge_angle`      sharpest convex dihedral angle near U
+:func:`compute_phi`         all of them, one grasp; :func:`compute_phi_batch` for many
+==========================  ==============================================================
+"""
+
+from .cones import contact_wrenches, edges_per_contact, friction_cone_edges, tangent_frames
+from .discharge import discharge
+from .effort import GRAVITY_DIRECTIONS, HOLD_EFFORT_SUFFIXES, hold_effort, impact_effort
+from .epsilon import EpsilonResult, epsilon, gws_volume
+from .inertia import rotational_inertia
+from .kernel_cache import invalidate_stale_kernel_caches
+from .lp import LPResult, LPStatus, solve_standard_lp
+from .phi import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS, compute_phi, compute_phi_batch
+from .transmission import use_force
+from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
+
+# numba loads its caches at the first call of a kernel, so this check, after the imports
+# and before any call, still comes first (see kernel_cache)
+invalidate_stale_kernel_caches()
+
+__all__ = [
+    "EDGE_RADIUS_M",
+    "GRAVITY_DIRECTIONS",
+    "HOLD_EFFORT_COLUMNS",
+    "HOLD_EFFORT_SUFFIXES",
+    "METRIC_COLUMNS",
+    "EpsilonResult",
+    "LPResult",
+    "LPStatus",
+    "compute_phi",
+    "compute_phi_batch",
+    "contact_wrenches",
+    "discharge",
+    "edges_per_contact",
+    "epsilon",
+    "friction_cone_edges",
+    "gws_volume",
+    "hold_effort",
+    "impact_effort",
+    "rotational_inertia",
+    "solve_standard_lp",
+    "tangent_frames",
+    "use_edge",
+    "use_edge_angle",
+    "use_force",
+]

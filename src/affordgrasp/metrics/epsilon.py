@@ -1,0 +1,246 @@
+"""ε, the grasp robustness of GraspIt! (L1 epsilon), and the GWS volume (SPEC §2.4).
+
+Wrenches ``w = (f, (p - c) x f / r_max)`` of every friction-cone edge (see
+:mod:`affordgrasp.metrics.cones`); the grasp wrench space is their convex hull (the
+origin is *not* added); ε is the distance from the origin to the nearest hull facet when
+the origin is strictly inside (force closure), else 0.
+
+The computation is exact and ordered so that grasps that cannot be force closure never
+build a hull:
+
+1. no contact -> ε = 0, reason ``"no contact"``;
+2. rank of the wrench matrix below 6 (flat wrench set, e.g. two antipodal contacts
+   through the centre of mass) -> ε = 0, reason ``"degenerate"``;
+3. an LP decides whether the origin is strictly interior to the hull:
+   ``max t  s.t.  Σ λ_i w_i = 0, Σ λ_i = 1, λ_i >= t``; with rank 6 the origin is
+   interior iff ``t* > 0`` (otherwise reason ``"not force closure"``);
+4. only then the exact 6D hull (:mod:`affordgrasp.metrics.hull`, qhull as fallback);
+   ε = min over facets of the facet offset, volume = hull volume.
+
+GWS volume convention: reported for force-closure grasps (where it is a quality
+measure) and 0 otherwise. GraspIt! also reports a volume for non-closure hulls; use
+:func:`gws_volume` for that number.
+
+GraspIt! takes torques about the area-weighted surface centroid and normalises them by
+its own ``maxRadius``: pass those as ``center`` and ``r_max`` to reproduce its ε.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .cones import contact_wrenches, wrench_matrix_kernel
+from .hull import HULL_DEGENERATE, HULL_OK, convex_hull_6d, hull_volume
+from .lp import FAILED, OPTIMAL, simplex_standard
+from .validation import contact_arrays, point3, positive_length
+
+log = logging.getLogger(__name__)
+
+# reason codes shared with the compiled kernels
+CLOSURE = 0
+NO_CONTACT = 1
+NOT_FORCE_CLOSURE = 2
+DEGENERATE = 3
+HULL_FALLBACK = 4  # the compiled hull gave up; the caller recomputes with qhull
+LP_FALLBACK = 5  # the compiled LP gave up; the caller recomputes with HiGHS
+
+REASONS = {
+    CLOSURE: "",
+    NO_CONTACT: "no contact",
+    NOT_FORCE_CLOSURE: "not force closure",
+    DEGENERATE: "degenerate",
+}
+
+RANK_TOL = 1e-10  # singular-value-like tolerance of the rank test, relative
+CLOSURE_TOL = 1e-12  # the LP margin t* must exceed this to call the origin interior
+
+
+@dataclass(frozen=True)
+class EpsilonResult:
+    """ε and the GWS volume of one grasp.
+
+    epsilon : float, >= 0, distance from the origin to the nearest GWS facet
+        (units of a normalised wrench: N, with torques divided by r_max)
+    volume : float, >= 0, 6-volume of the GWS for force-closure grasps, else 0
+    reason : str, "" when ε > 0, else "no contact", "not force closure" or "degenerate"
+    """
+
+    epsilon: float
+    volume: float
+    reason: str
+
+
+@njit(cache=True)
+def wrench_rank(W, rel_tol):
+    """Numerical rank of ``W`` (6, N): column-pivoted Gram-Schmidt, relative tolerance."""
+    m, n = W.shape
+    R = W.copy()
+    big = 0.0
+    for j in range(n):
+        s = 0.0
+        for i in range(m):
+            s += R[i, j] * R[i, j]
+        if s > big:
+            big = s
+    if big == 0.0:
+        return 0
+    tol2 = rel_tol * rel_tol * big
+    rank = 0
+    q = np.empty(m)
+    for _ in range(m):
+        best = 0.0
+        bj = -1
+        for j in range(n):
+            s = 0.0
+            for i in range(m):
+                s += R[i, j] * R[i, j]
+            if s > best:
+                best = s
+                bj = j
+        if best <= tol2:
+            break
+        nrm = np.sqrt(best)
+        for i in range(m):
+            q[i] = R[i, bj] / nrm
+        for j in range(n):
+            d = 0.0
+            for i in range(m):
+                d += q[i] * R[i, j]
+            for i in range(m):
+                R[i, j] -= d * q[i]
+        rank += 1
+    return rank
+
+
+@njit(cache=True)
+def closure_margin(W):
+    """LP margin ``t*`` of the origin inside conv(columns of W) (6, N).
+
+    ``max t  s.t.  Σ λ_i w_i = 0, Σ λ_i = 1, λ_i >= t`` with λ_i = μ_i + t, μ, t >= 0.
+    Returns ``(status, t*)``; status INFEASIBLE means the origin is outside the hull.
+    """
+    m, n = W.shape
+    A = np.zeros((m + 1, n + 1))
+    for i in range(m):
+        s = 0.0
+        for j in range(n):
+            A[i, j] = W[i, j]
+            s += W[i, j]
+        A[i, n] = s
+    for j in range(n):
+        A[m, j] = 1.0
+    A[m, n] = float(n)
+    b = np.zeros(m + 1)
+    b[m] = 1.0
+    c = np.zeros(n + 1)
+    c[n] = -1.0
+    x = np.empty(n + 1)
+    status, obj = simplex_standard(A, b, c, x)
+    if status == OPTIMAL:
+        return status, -obj
+    return status, 0.0
+
+
+@njit(cache=True)
+def epsilon_kernel(W):
+    """ε of a normalised wrench matrix ``W`` (6, N); returns ``(code, epsilon, volume)``.
+
+    code is CLOSURE, NO_CONTACT, NOT_FORCE_CLOSURE, DEGENERATE, HULL_FALLBACK or
+    LP_FALLBACK (the last two ask the caller to recompute with qhull / HiGHS).
+    """
+    n = W.shape[1]
+    if n == 0:
+        return NO_CONTACT, 0.0, 0.0
+    if wrench_rank(W, RANK_TOL) < 6:
+        return DEGENERATE, 0.0, 0.0
+    status, t = closure_margin(W)
+    if status == FAILED:
+        return LP_FALLBACK, 0.0, 0.0
+    if status != OPTIMAL or t <= CLOSURE_TOL:
+        return NOT_FORCE_CLOSURE, 0.0, 0.0
+    P = np.ascontiguousarray(W.T)
+    hs, verts, normals, offsets, interior = convex_hull_6d(P)
+    if hs == HULL_DEGENERATE:
+        return DEGENERATE, 0.0, 0.0
+    if hs != HULL_OK:
+        return HULL_FALLBACK, 0.0, 0.0
+    eps = np.inf
+    for f in range(offsets.shape[0]):
+        if offsets[f] < eps:
+            eps = offsets[f]
+    if eps <= 0.0:
+        return NOT_FORCE_CLOSURE, 0.0, 0.0
+    return CLOSURE, eps, hull_volume(P, verts, interior)
+
+
+def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
+    """ε and volume of wrench matrix ``W`` (6, N) with scipy's qhull (the slow reference).
+
+    Returns ``(code, epsilon, volume)`` like :func:`epsilon_kernel`.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    W = np.asarray(W, dtype=np.float64)
+    if W.shape[1] == 0:
+        return NO_CONTACT, 0.0, 0.0
+    if wrench_rank(np.ascontiguousarray(W), RANK_TOL) < 6:
+        return DEGENERATE, 0.0, 0.0
+    try:
+        hull = ConvexHull(W.T, qhull_options="Qt Qx")
+    except QhullError:
+        return DEGENERATE, 0.0, 0.0
+    # qhull's equations are n . x + offset <= 0 inside: the origin's distance is -offset
+    eps = float(np.min(-hull.equations[:, -1]))
+    if eps <= 0.0:
+        return NOT_FORCE_CLOSURE, 0.0, 0.0
+    return CLOSURE, eps, float(hull.volume)
+
+
+def epsilon(contacts, center, r_max: float, *, soft: bool = False) -> EpsilonResult:
+    """GraspIt!'s L1 epsilon and the GWS volume of a contact set (SPEC §2.4).
+
+    contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
+    center : (3,) float, reference point of the torques (the centre of mass), m
+    r_max : float, torque normalisation length (largest COM-to-vertex distance), m
+    soft : use soft-finger cones (see :mod:`affordgrasp.metrics.cones`)
+    Returns :class:`EpsilonResult` (ε >= 0, volume >= 0, reason).
+    """
+    points, normals, mu = contact_arrays(contacts)
+    center = point3(center, "center")
+    r_max = positive_length(r_max, "r_max")
+    W = wrench_matrix_kernel(points, normals, mu, center, 1.0 / r_max, bool(soft))
+    code, eps, vol = epsilon_kernel(W)
+    if code in (HULL_FALLBACK, LP_FALLBACK):
+        log.debug("compiled ε path gave up (code %d); using qhull", code)
+        code, eps, vol = epsilon_from_wrenches_qhull(W)
+    return EpsilonResult(float(eps), float(vol), REASONS[code])
+
+
+def gws_volume(contacts, center, r_max: float, *, soft: bool = False) -> float:
+    """6-volume of the grasp wrench space whether or not the grasp is force closure.
+
+    This is GraspIt!'s "volume" quality; 0 when the wrench set is flat (affine rank < 6).
+    Arguments as for :func:`epsilon`.
+    """
+    points, normals, mu = contact_arrays(contacts)
+    center = point3(center, "center")
+    r_max = positive_length(r_max, "r_max")
+    W = contact_wrenches(points, normals, mu, center, torque_scale=1.0 / r_max, soft=soft)
+    if W.shape[1] < 7:
+        return 0.0
+    P = np.ascontiguousarray(W.T)
+    status, verts, _, _, interior = convex_hull_6d(P)
+    if status == HULL_OK:
+        return float(hull_volume(P, verts, interior))
+    if status == HULL_DEGENERATE:
+        return 0.0
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return float(ConvexHull(P, qhull_options="Qt Qx").volume)
+    except QhullError:
+        return 0.0

@@ -1,0 +1,577 @@
+"""Convex hull of a wrench set in 6D, compiled (the hull behind ε and the GWS volume).
+
+A quickhull (beneath-beyond with outside sets) specialised to dimension 6 and to the tens
+to hundreds of points of a grasp wrench space. Why not scipy/qhull: qhull costs 1-20 ms
+per hull here, most of it in facet merging that precision-robust general-purpose hulls
+need; this kernel builds the same simplicial facets in a fraction of that and is called
+from compiled code without Python overhead.
+
+Precision handling (the reason qhull merges facets): a point counts as *beyond* a facet
+only when it is more than ``tol = 1e-12 * max|coordinate|`` above the facet's hyperplane,
+so points that are coplanar with a facet (the eight edges of one friction cone lie on a
+common 2-flat, symmetric grasps have many coplanar wrenches) are never added as thin
+slivers. Facet orientation is fixed by an interior point (the centroid of the initial
+simplex), not by adjacency, so round-off cannot flip a facet. Combinatorial consistency
+(each ridge in exactly two facets) is maintained and checked; any violation returns
+``HULL_FAILED`` and the caller falls back to qhull. The result has been checked against
+qhull (options ``Qt Qx``) on random and symmetric wrench sets:
+``tests/metrics/test_hull.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+HULL_OK = 0
+HULL_DEGENERATE = 1  # fewer than 7 affinely independent points: no 6D hull
+HULL_FAILED = 2  # a numerical or topological inconsistency: use qhull instead
+
+DIM = 6
+HULL_TOL = 1e-12  # beyond-test tolerance, relative to the largest |coordinate|
+RANK_TOL = 1e-10  # affine independence tolerance of the initial simplex, relative
+
+
+@njit(cache=True)
+def _hyperplane(P, verts, q0, out_n, scratch, perm, y):
+    """Unit normal ``out_n`` and offset d of the hyperplane through ``P[verts]``.
+
+    Oriented so that the interior point ``q0`` is beneath (``n . q0 < d``). Returns
+    ``(d, ok)``; ok is False for an (affinely) degenerate vertex set.
+    """
+    M = scratch
+    p0 = verts[0]
+    for r in range(DIM - 1):
+        vr = verts[r + 1]
+        for c in range(DIM):
+            M[r, c] = P[vr, c] - P[p0, c]
+    for c in range(DIM):
+        perm[c] = c
+    scale = 0.0
+    for r in range(DIM - 1):
+        for c in range(DIM):
+            v = abs(M[r, c])
+            if v > scale:
+                scale = v
+    if scale == 0.0:
+        return 0.0, False
+    # Gaussian elimination with full pivoting on the 5 x 6 difference matrix; the
+    # column left without a pivot carries the free component of the null vector.
+    for r in range(DIM - 1):
+        best = 0.0
+        bi = r
+        bj = r
+        for i in range(r, DIM - 1):
+            for j in range(r, DIM):
+                v = abs(M[i, j])
+                if v > best:
+                    best = v
+                    bi = i
+                    bj = j
+        if best <= 1e-14 * scale:
+            return 0.0, False
+        if bi != r:
+            for j in range(DIM):
+                t = M[r, j]
+                M[r, j] = M[bi, j]
+                M[bi, j] = t
+        if bj != r:
+            for i in range(DIM - 1):
+                t = M[i, r]
+                M[i, r] = M[i, bj]
+                M[i, bj] = t
+            t = perm[r]
+            perm[r] = perm[bj]
+            perm[bj] = t
+        piv = M[r, r]
+        for i in range(r + 1, DIM - 1):
+            f = M[i, r] / piv
+            if f != 0.0:
+                for j in range(r, DIM):
+                    M[i, j] -= f * M[r, j]
+    y[DIM - 1] = 1.0
+    for r in range(DIM - 2, -1, -1):
+        acc = M[r, DIM - 1]
+        for c in range(r + 1, DIM - 1):
+            acc += M[r, c] * y[c]
+        y[r] = -acc / M[r, r]
+    norm = 0.0
+    for c in range(DIM):
+        norm += y[c] * y[c]
+    norm = np.sqrt(norm)
+    for c in range(DIM):
+        out_n[perm[c]] = y[c] / norm
+    d = 0.0
+    for r in range(DIM):
+        v = verts[r]
+        for c in range(DIM):
+            d += out_n[c] * P[v, c]
+    d /= DIM
+    dq = 0.0
+    for c in range(DIM):
+        dq += out_n[c] * q0[c]
+    if dq > d:
+        for c in range(DIM):
+            out_n[c] = -out_n[c]
+        d = -d
+    return d, True
+
+
+@njit(cache=True)
+def _pencil_plane(fn, fd, v, g, dist_v, dist_g, P, verts, out_n, chk_tol):
+    """Hyperplane through the ridge shared by facets v, g and the apex p (dist_v > 0 above
+    v, dist_g <= tol above g): ``-dist_g * (n_v, d_v) + dist_v * (n_g, d_g)``, normalised.
+
+    The interior point stays beneath (both weights are >= 0 up to tol). Returns
+    ``(d, ok)``; ok is False when the result does not pass through ``P[verts]``.
+    """
+    a = -dist_g
+    b = dist_v
+    norm = 0.0
+    for c in range(DIM):
+        x = a * fn[v, c] + b * fn[g, c]
+        out_n[c] = x
+        norm += x * x
+    if norm <= 0.0:
+        return 0.0, False
+    norm = np.sqrt(norm)
+    d = (a * fd[v] + b * fd[g]) / norm
+    for c in range(DIM):
+        out_n[c] /= norm
+    for r in range(DIM):
+        x = verts[r]
+        s = 0.0
+        for c in range(DIM):
+            s += out_n[c] * P[x, c]
+        if abs(s - d) > chk_tol:
+            return 0.0, False
+    return d, True
+
+
+@njit(cache=True)
+def _initial_simplex(P, out, rank_tol):
+    """Greedy large-volume simplex of DIM + 1 points; False when affinely degenerate."""
+    N = P.shape[0]
+    centroid = np.zeros(DIM)
+    for i in range(N):
+        for c in range(DIM):
+            centroid[c] += P[i, c]
+    for c in range(DIM):
+        centroid[c] /= N
+    best = -1.0
+    i0 = 0
+    for i in range(N):
+        s = 0.0
+        for c in range(DIM):
+            d = P[i, c] - centroid[c]
+            s += d * d
+        if s > best:
+            best = s
+            i0 = i
+    out[0] = i0
+    E = np.zeros((DIM, DIM))
+    r = np.empty(DIM)
+    for step in range(DIM):
+        best = -1.0
+        bi = -1
+        for i in range(N):
+            for c in range(DIM):
+                r[c] = P[i, c] - P[i0, c]
+            for e in range(step):
+                dot = 0.0
+                for c in range(DIM):
+                    dot += r[c] * E[e, c]
+                for c in range(DIM):
+                    r[c] -= dot * E[e, c]
+            s = 0.0
+            for c in range(DIM):
+                s += r[c] * r[c]
+            if s > best:
+                best = s
+                bi = i
+        if best <= rank_tol * rank_tol:
+            return False
+        for c in range(DIM):
+            r[c] = P[bi, c] - P[i0, c]
+        # two Gram-Schmidt passes keep the basis orthogonal to round-off
+        for _ in range(2):
+            for e in range(step):
+                dot = 0.0
+                for c in range(DIM):
+                    dot += r[c] * E[e, c]
+                for c in range(DIM):
+                    r[c] -= dot * E[e, c]
+        s = 0.0
+        for c in range(DIM):
+            s += r[c] * r[c]
+        s = np.sqrt(s)
+        for c in range(DIM):
+            E[step, c] = r[c] / s
+        out[step + 1] = bi
+    return True
+
+
+@njit(cache=True)
+def _grow_i2(a, cap):
+    b = np.empty((cap, a.shape[1]), dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def _grow_f2(a, cap):
+    b = np.empty((cap, a.shape[1]), dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def _grow_1(a, cap, fill):
+    b = np.empty(cap, dtype=a.dtype)
+    b[: a.shape[0]] = a
+    b[a.shape[0] :] = fill
+    return b
+
+
+@njit(cache=True)
+def _dist(fn, fd, f, P, p):
+    s = 0.0
+    for c in range(DIM):
+        s += fn[f, c] * P[p, c]
+    return s - fd[f]
+
+
+@njit(cache=True)
+def _sorted_key4(a, b, c, d):
+    """Order-independent int64 key of four vertex indices (each < 32768)."""
+    if a > b:
+        a, b = b, a
+    if c > d:
+        c, d = d, c
+    if a > c:
+        a, c = c, a
+    if b > d:
+        b, d = d, b
+    if b > c:
+        b, c = c, b
+    return ((a * 32768 + b) * 32768 + c) * 32768 + d
+
+
+@njit(cache=True)
+def _det6(A):
+    """Determinant of a 6 x 6 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
+    det = 1.0
+    for r in range(DIM):
+        bi = r
+        best = abs(A[r, r])
+        for i in range(r + 1, DIM):
+            if abs(A[i, r]) > best:
+                best = abs(A[i, r])
+                bi = i
+        if best == 0.0:
+            return 0.0
+        if bi != r:
+            for j in range(DIM):
+                t = A[r, j]
+                A[r, j] = A[bi, j]
+                A[bi, j] = t
+            det = -det
+        piv = A[r, r]
+        det *= piv
+        for i in range(r + 1, DIM):
+            f = A[i, r] / piv
+            for j in range(r + 1, DIM):
+                A[i, j] -= f * A[r, j]
+    return det
+
+
+@njit(cache=True)
+def convex_hull_6d(P):
+    """Facets of the convex hull of ``P`` (N, 6).
+
+    Returns ``(status, vertices (F, 6) int64, normals (F, 6), offsets (F,), interior (6,))``
+    with outward unit normals: every point satisfies ``normals @ p <= offsets + tol``.
+    status is HULL_OK, HULL_DEGENERATE (affine rank < 6) or HULL_FAILED.
+    """
+    N = P.shape[0]
+    scale = 0.0
+    for i in range(N):
+        for c in range(DIM):
+            v = abs(P[i, c])
+            if v > scale:
+                scale = v
+    empty_i = np.zeros((0, DIM), dtype=np.int64)
+    empty_f = np.zeros((0, DIM))
+    q0 = np.zeros(DIM)
+    if N < DIM + 1 or scale == 0.0 or N >= 32768:
+        status = HULL_DEGENERATE if N < DIM + 1 or scale == 0.0 else HULL_FAILED
+        return status, empty_i, empty_f, np.zeros(0), q0
+    tol = HULL_TOL * scale
+    chk_tol = 1e-14 * scale
+    simplex = np.empty(DIM + 1, dtype=np.int64)
+    if not _initial_simplex(P, simplex, RANK_TOL * scale):
+        return HULL_DEGENERATE, empty_i, empty_f, np.zeros(0), q0
+    for i in range(DIM + 1):
+        for c in range(DIM):
+            q0[c] += P[simplex[i], c]
+    for c in range(DIM):
+        q0[c] /= DIM + 1
+
+    cap = 512
+    fv = np.empty((cap, DIM), dtype=np.int64)
+    nb = np.empty((cap, DIM), dtype=np.int64)
+    fn = np.empty((cap, DIM))
+    fd = np.empty(cap)
+    alive = np.zeros(cap, dtype=np.bool_)
+    ohead = np.full(cap, -1, dtype=np.int64)
+    far_pt = np.full(cap, -1, dtype=np.int64)
+    far_d = np.zeros(cap)
+    mark = np.zeros(cap, dtype=np.int64)  # visit stamp; sign tells visible (+) / not (-)
+    pdist = np.zeros(cap)  # distance of the current apex above each visited facet
+    nxt = np.full(N, -1, dtype=np.int64)
+    scratch = np.empty((DIM - 1, DIM))
+    nvec = np.empty(DIM)
+    perm = np.empty(DIM, dtype=np.int64)
+    yvec = np.empty(DIM)
+
+    for i in range(DIM + 1):
+        s = 0
+        for j in range(DIM + 1):
+            if j != i:
+                fv[i, s] = simplex[j]
+                nb[i, s] = j
+                s += 1
+        d, ok = _hyperplane(P, fv[i], q0, nvec, scratch, perm, yvec)
+        if not ok:
+            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+        fn[i] = nvec
+        fd[i] = d
+        alive[i] = True
+    nF = DIM + 1
+
+    in_simplex = np.zeros(N, dtype=np.bool_)
+    for i in range(DIM + 1):
+        in_simplex[simplex[i]] = True
+    stack = np.empty(64, dtype=np.int64)
+    nstack = 0
+    for p in range(N):
+        if in_simplex[p]:
+            continue
+        for f in range(nF):
+            dist = _dist(fn, fd, f, P, p)
+            if dist > tol:
+                if ohead[f] < 0:
+                    if nstack == stack.shape[0]:
+                        stack = _grow_1(stack, 2 * nstack, -1)
+                    stack[nstack] = f
+                    nstack += 1
+                nxt[p] = ohead[f]
+                ohead[f] = p
+                if dist > far_d[f]:
+                    far_d[f] = dist
+                    far_pt[f] = p
+                break
+
+    vis = np.empty(64, dtype=np.int64)
+    four = np.empty(DIM - 2, dtype=np.int64)
+    table_key = np.empty(0, dtype=np.int64)
+    table_f = np.empty(0, dtype=np.int64)
+    table_s = np.empty(0, dtype=np.int64)
+    hv = np.empty(64, dtype=np.int64)
+    hk = np.empty(64, dtype=np.int64)
+    hg = np.empty(64, dtype=np.int64)
+    stamp = 0
+    while nstack > 0:
+        nstack -= 1
+        f0 = stack[nstack]
+        if not alive[f0] or ohead[f0] < 0:
+            continue
+        p = far_pt[f0]
+        stamp += 1
+        # visible facets: breadth-first from f0 over the facet adjacency
+        nvis = 1
+        vis[0] = f0
+        mark[f0] = stamp
+        pdist[f0] = far_d[f0]
+        nh = 0
+        i = 0
+        while i < nvis:
+            v = vis[i]
+            i += 1
+            for k in range(DIM):
+                g = nb[v, k]
+                if mark[g] == stamp:
+                    continue
+                if mark[g] != -stamp:
+                    dg = _dist(fn, fd, g, P, p)
+                    pdist[g] = dg
+                    if dg > tol:
+                        mark[g] = stamp
+                        if nvis == vis.shape[0]:
+                            vis = _grow_1(vis, 2 * nvis, -1)
+                        vis[nvis] = g
+                        nvis += 1
+                        continue
+                    mark[g] = -stamp
+                if nh == hv.shape[0]:
+                    hv = _grow_1(hv, 2 * nh, -1)
+                    hk = _grow_1(hk, 2 * nh, -1)
+                    hg = _grow_1(hg, 2 * nh, -1)
+                hv[nh] = v
+                hk[nh] = k
+                hg[nh] = g
+                nh += 1
+        if nF + nh > cap:
+            newcap = max(2 * cap, nF + nh + 64)
+            fv = _grow_i2(fv, newcap)
+            nb = _grow_i2(nb, newcap)
+            fn = _grow_f2(fn, newcap)
+            fd = _grow_1(fd, newcap, 0.0)
+            alive = _grow_1(alive, newcap, False)
+            ohead = _grow_1(ohead, newcap, -1)
+            far_pt = _grow_1(far_pt, newcap, -1)
+            far_d = _grow_1(far_d, newcap, 0.0)
+            mark = _grow_1(mark, newcap, 0)
+            pdist = _grow_1(pdist, newcap, 0.0)
+            cap = newcap
+        # cone of new facets from p over the horizon ridges
+        for h in range(nh):
+            v = hv[h]
+            k = hk[h]
+            g = hg[h]
+            nf = nF + h
+            for c in range(DIM):
+                fv[nf, c] = fv[v, c]
+                nb[nf, c] = -1
+            fv[nf, k] = p
+            nb[nf, k] = g
+            found = False
+            for kk in range(DIM):
+                if nb[g, kk] == v:
+                    nb[g, kk] = nf
+                    found = True
+                    break
+            if not found:
+                return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+            # The new hyperplane contains the ridge, so it lies in the pencil of the two
+            # hyperplanes through that ridge (v's and g's): the combination through p is
+            # exact in exact arithmetic and costs O(DIM). Near-coplanar v and g make it
+            # ill-conditioned, so it is accepted only if it passes through all six
+            # vertices to 1e-14 of the data scale; otherwise the plane is solved afresh.
+            d, ok = _pencil_plane(fn, fd, v, g, pdist[v], pdist[g], P, fv[nf], nvec, chk_tol)
+            if not ok:
+                d, ok = _hyperplane(P, fv[nf], q0, nvec, scratch, perm, yvec)
+                if not ok:
+                    return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+            fn[nf] = nvec
+            fd[nf] = d
+            alive[nf] = True
+            ohead[nf] = -1
+            far_pt[nf] = -1
+            far_d[nf] = 0.0
+            mark[nf] = 0
+        # neighbours among the new facets: they share p and a 4-face of the horizon,
+        # paired through an open-addressing hash table on the sorted 4-face
+        nkeys = nh * (DIM - 1)
+        tsize = 1
+        while tsize < 2 * nkeys:
+            tsize *= 2
+        if table_key.shape[0] < tsize:
+            table_key = np.empty(tsize, dtype=np.int64)
+            table_f = np.empty(tsize, dtype=np.int64)
+            table_s = np.empty(tsize, dtype=np.int64)
+        for t in range(tsize):
+            table_key[t] = -1
+        npaired = 0
+        for h in range(nh):
+            nf = nF + h
+            kp = hk[h]
+            for j in range(DIM):
+                if j == kp:
+                    continue
+                t = 0
+                for c in range(DIM):
+                    if c != kp and c != j:
+                        four[t] = fv[nf, c]
+                        t += 1
+                key = _sorted_key4(four[0], four[1], four[2], four[3])
+                # multiplicative hashing; int64 overflow wraps, the mask keeps it >= 0
+                slot = ((key ^ (key >> 29)) * 0x2545F4914F6CDD1D) & (tsize - 1)
+                while True:
+                    tk = table_key[slot]
+                    if tk == -1:
+                        table_key[slot] = key
+                        table_f[slot] = nf
+                        table_s[slot] = j
+                        break
+                    if tk == key:
+                        if table_f[slot] < 0:  # a third facet on one 4-face
+                            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                        of = table_f[slot]
+                        nb[of, table_s[slot]] = nf
+                        nb[nf, j] = of
+                        table_f[slot] = -1
+                        npaired += 1
+                        break
+                    slot = (slot + 1) & (tsize - 1)
+        if 2 * npaired != nkeys:
+            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+        # retire the visible facets and hand their outside points to the new facets
+        for i in range(nvis):
+            alive[vis[i]] = False
+        for i in range(nvis):
+            v = vis[i]
+            pt = ohead[v]
+            ohead[v] = -1
+            while pt >= 0:
+                pn = nxt[pt]
+                if pt != p:
+                    for h in range(nh):
+                        nf = nF + h
+                        dist = _dist(fn, fd, nf, P, pt)
+                        if dist > tol:
+                            nxt[pt] = ohead[nf]
+                            ohead[nf] = pt
+                            if dist > far_d[nf]:
+                                far_d[nf] = dist
+                                far_pt[nf] = pt
+                            break
+                pt = pn
+        for h in range(nh):
+            nf = nF + h
+            if ohead[nf] >= 0:
+                if nstack == stack.shape[0]:
+                    stack = _grow_1(stack, 2 * nstack, -1)
+                stack[nstack] = nf
+                nstack += 1
+        nF += nh
+
+    count = 0
+    for f in range(nF):
+        if alive[f]:
+            count += 1
+    out_v = np.empty((count, DIM), dtype=np.int64)
+    out_n = np.empty((count, DIM))
+    out_d = np.empty(count)
+    j = 0
+    for f in range(nF):
+        if alive[f]:
+            out_v[j] = fv[f]
+            out_n[j] = fn[f]
+            out_d[j] = fd[f]
+            j += 1
+    return HULL_OK, out_v, out_n, out_d, q0
+
+
+@njit(cache=True)
+def hull_volume(P, vertices, interior):
+    """6-volume of a hull given by simplicial facets ``vertices`` (F, 6) and an interior point."""
+    A = np.empty((DIM, DIM))
+    vol = 0.0
+    for f in range(vertices.shape[0]):
+        for r in range(DIM):
+            v = vertices[f, r]
+            for c in range(DIM):
+                A[r, c] = P[v, c] - interior[c]
+        vol += abs(_det6(A))
+    return vol / 720.0  # 6!

@@ -1,0 +1,257 @@
+"""The metric vector Φ(O, G, U), assembled in one place (SPEC §2.4, column names §2.9).
+
+Each entry comes from its own metric function; this module only gathers inputs, runs the
+contact-based metrics of a whole batch in one compiled loop (no Python work per grasp on
+the hot path) and returns columns:
+
+========================  =====  ==========================================================
+column                    unit   metric
+========================  =====  ==========================================================
+epsilon                   --     ε, GraspIt!'s L1 epsilon (:mod:`.epsilon`)
+gws_volume                --     GWS 6-volume, force-closure grasps only, else 0
+epsilon_reason            str    "" when ε > 0, else why ε = 0
+inertia                   kg m²  I about the wrist axis (:mod:`.inertia`)
+hold_effort_{px..nz}      N      E_h for gravity along ±x, ±y, ±z (:mod:`.effort`)
+impact_effort             N/N·m  E_i (:mod:`.effort`)
+discharge                 --     δ (:mod:`.discharge`)
+use_force                 N      U_τ (:mod:`.transmission`)
+use_edge                  m⁻²    U_g (:mod:`.use_geometry`)
+use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.use_geometry`)
+========================  =====  ==========================================================
+
+Infeasible efforts are +inf (IEEE), never a sentinel.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit
+
+from ..errors import InputError
+from .cones import wrench_matrix_kernel
+from .discharge import discharge
+from .effort import (
+    HOLD_EFFORT_SUFFIXES,
+    hold_effort,
+    hold_effort_kernel,
+    impact_effort,
+    impact_effort_kernel,
+    use_wrench,
+)
+from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_kernel
+from .inertia import rotational_inertia
+from .lp import OPTIMAL
+from .transmission import use_force, use_force_kernel
+from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
+from .validation import contact_arrays, points_n3, units_n3
+
+log = logging.getLogger(__name__)
+
+HOLD_EFFORT_COLUMNS = tuple(f"hold_effort_{s}" for s in HOLD_EFFORT_SUFFIXES)
+METRIC_COLUMNS: tuple[str, ...] = (
+    "epsilon",
+    "gws_volume",
+    "epsilon_reason",
+    "inertia",
+    *HOLD_EFFORT_COLUMNS,
+    "impact_effort",
+    "discharge",
+    "use_force",
+    "use_edge",
+    "use_edge_angle",
+)
+
+
+@njit(cache=True)
+def contact_metrics_batch(
+    points, normals, mu, offsets, center, r_max, use_point, use_normal, wrist_axis, soft
+):
+    """ε, GWS volume, E_h, E_i and U_τ of many grasps on one object, compiled.
+
+    points, normals (K, 3) and mu (K,): all contacts, grasp i owning rows
+    ``offsets[i]:offsets[i + 1]``; center (3,), r_max: the object's; use_point,
+    use_normal (outward unit), wrist_axis (unit): (n, 3).
+    Returns ``(code, eps, volume, hold (n, 6), impact, force, redo)``; ``redo[i]`` marks a
+    grasp on which a compiled solver gave up (the caller recomputes it).
+    """
+    n = offsets.shape[0] - 1
+    code = np.empty(n, dtype=np.int64)
+    eps = np.empty(n)
+    vol = np.empty(n)
+    hold = np.empty((n, 6))
+    impact = np.empty(n)
+    force = np.empty(n)
+    redo = np.zeros(n, dtype=np.bool_)
+    inv_r = 1.0 / r_max
+    for i in range(n):
+        s = offsets[i]
+        e = offsets[i + 1]
+        P = np.ascontiguousarray(points[s:e])
+        N = np.ascontiguousarray(normals[s:e])
+        M = np.ascontiguousarray(mu[s:e])
+        Wn = wrench_matrix_kernel(P, N, M, center, inv_r, soft)
+        c, eps[i], vol[i] = epsilon_kernel(Wn)
+        code[i] = c
+        W = wrench_matrix_kernel(P, N, M, center, 1.0, soft)
+        ok_hold = hold_effort_kernel(W, hold[i])
+        w_use = use_wrench(use_point[i], use_normal[i], center)
+        ok_impact, impact[i] = impact_effort_kernel(W, w_use, wrist_axis[i])
+        status, force[i] = use_force_kernel(W, w_use, e - s)
+        redo[i] = (
+            (not ok_hold)
+            or (not ok_impact)
+            or status != OPTIMAL
+            or c == HULL_FALLBACK
+            or c == LP_FALLBACK
+        )
+    return code, eps, vol, hold, impact, force, redo
+
+
+def _stack_contacts(contacts: Sequence) -> tuple[np.ndarray, ...]:
+    """All contacts of all grasps, concatenated, and each grasp's row offsets."""
+    arrays = [contact_arrays(cs) for cs in contacts]
+    counts = np.array([a[0].shape[0] for a in arrays], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    if arrays and counts.sum():
+        points = np.ascontiguousarray(np.concatenate([a[0] for a in arrays]))
+        normals = np.ascontiguousarray(np.concatenate([a[1] for a in arrays]))
+        mu = np.ascontiguousarray(np.concatenate([a[2] for a in arrays]))
+    else:
+        points = np.zeros((0, 3))
+        normals = np.zeros((0, 3))
+        mu = np.zeros(0)
+    return points, normals, mu, offsets
+
+
+def compute_phi_batch(
+    mass,
+    mesh,
+    contacts: Sequence,
+    use_point,
+    use_normal,
+    use_triangle,
+    wrist_point,
+    wrist_axis,
+    *,
+    soft: bool = False,
+    edge_radius: float = EDGE_RADIUS_M,
+) -> dict[str, np.ndarray]:
+    """Φ for n grasps of one object (SPEC §2.4), as columns named by :data:`METRIC_COLUMNS`.
+
+    mass : MassProperties of the object (centre of mass, r_max, inertia)
+    mesh : trimesh.Trimesh of the object, m (for U_g and the edge angle)
+    contacts : sequence of n ContactSets (object frame)
+    use_point (n, 3) m; use_normal (n, 3) outward; use_triangle (n,) face index of U
+    wrist_point (n, 3) m; wrist_axis (n, 3) approach direction (normalised here)
+    soft : soft-finger cones for every contact metric; edge_radius : m, for use_edge_angle
+    Returns {column: (n,) array}: float64 columns (+inf where infeasible) and
+    ``epsilon_reason`` as an object array of str.
+    """
+    n = len(contacts)
+    use_point = points_n3(use_point, "use_point") if n else np.zeros((0, 3))
+    use_normal = units_n3(use_normal, "use_normal") if n else np.zeros((0, 3))
+    wrist_point = points_n3(wrist_point, "wrist_point") if n else np.zeros((0, 3))
+    wrist_axis = units_n3(wrist_axis, "wrist_axis") if n else np.zeros((0, 3))
+    use_triangle = np.asarray(use_triangle).reshape(-1)
+    for name, arr in (
+        ("use_point", use_point),
+        ("use_normal", use_normal),
+        ("wrist_point", wrist_point),
+        ("wrist_axis", wrist_axis),
+        ("use_triangle", use_triangle),
+    ):
+        if arr.shape[0] != n:
+            raise InputError(f"{name} has {arr.shape[0]} rows, expected one per grasp ({n})")
+    center = np.ascontiguousarray(mass.center_of_mass, dtype=np.float64).reshape(3)
+    r_max = float(mass.r_max)
+    points, normals, mu, offsets = _stack_contacts(contacts)
+
+    code, eps, vol, hold, impact, force, redo = contact_metrics_batch(
+        points,
+        normals,
+        mu,
+        offsets,
+        center,
+        r_max,
+        use_point,
+        use_normal,
+        wrist_axis,
+        bool(soft),
+    )
+    reason_of_code = np.array([REASONS[c] for c in sorted(REASONS)], dtype=object)
+    reason = reason_of_code[np.clip(code, 0, len(reason_of_code) - 1)]
+    for i in np.flatnonzero(redo):
+        # rare: a compiled solver could not certify its answer; the per-metric
+        # functions retry with HiGHS / qhull
+        log.debug("grasp %d: recomputing contact metrics with the reference solvers", i)
+        cs = contacts[i]
+        res = epsilon(cs, center, r_max, soft=soft)
+        eps[i], vol[i] = res.epsilon, res.volume
+        reason[i] = res.reason
+        hold[i] = hold_effort(cs, center, soft=soft, backend="highs")
+        impact[i] = impact_effort(
+            cs, center, use_point[i], use_normal[i], wrist_axis[i], soft=soft, backend="highs"
+        )
+        force[i] = use_force(cs, center, use_point[i], use_normal[i], soft=soft, backend="highs")
+
+    out: dict[str, np.ndarray] = {
+        "epsilon": eps,
+        "gws_volume": vol,
+        "epsilon_reason": reason,
+        "inertia": np.asarray(rotational_inertia(mass, wrist_point, wrist_axis), dtype=float)
+        if n
+        else np.zeros(0),
+    }
+    for j, name in enumerate(HOLD_EFFORT_COLUMNS):
+        out[name] = np.ascontiguousarray(hold[:, j])
+    out["impact_effort"] = impact
+    out["discharge"] = (
+        np.asarray(discharge(use_point, use_normal, wrist_point, wrist_axis), dtype=float)
+        if n
+        else np.zeros(0)
+    )
+    out["use_force"] = force
+    out["use_edge"] = (
+        np.asarray(use_edge(mesh, use_triangle, use_point), dtype=float) if n else np.zeros(0)
+    )
+    out["use_edge_angle"] = (
+        np.asarray(use_edge_angle(mesh, use_point, radius=edge_radius), dtype=float)
+        if n
+        else np.zeros(0)
+    )
+    return {name: out[name] for name in METRIC_COLUMNS}
+
+
+def compute_phi(
+    mass,
+    mesh,
+    contacts,
+    use_point,
+    use_normal,
+    use_triangle: int,
+    wrist_point,
+    wrist_axis,
+    *,
+    soft: bool = False,
+    edge_radius: float = EDGE_RADIUS_M,
+) -> dict[str, float | str]:
+    """Φ of one grasp (SPEC §2.4): {column: float or str}, see :func:`compute_phi_batch`.
+
+    use_point, use_normal (outward), wrist_point, wrist_axis : (3,); use_triangle : int
+    """
+    cols = compute_phi_batch(
+        mass,
+        mesh,
+        [contacts],
+        np.reshape(use_point, (1, 3)),
+        np.reshape(use_normal, (1, 3)),
+        np.reshape(use_triangle, (1,)),
+        np.reshape(wrist_point, (1, 3)),
+        np.reshape(wrist_axis, (1, 3)),
+        soft=soft,
+        edge_radius=edge_radius,
+    )
+    return {k: (str(v[0]) if k == "epsilon_reason" else float(v[0])) for k, v in cols.items()}

@@ -1,0 +1,269 @@
+"""Local geometry at the use point: U_g (edge-ness) and the sharpest-edge angle (SPEC §2.4).
+
+**U_g** (the paper's definition). Take the triangle hit at U and every triangle that
+shares at least one vertex with it; express all their vertices in a frame whose origin is
+U and whose z axis is the hit triangle's normal; least-squares fit the height function
+``z = a x² + b x y + c y² + d x + e y + f``; the Hessian ``[[2a, b], [b, 2c]]`` has
+eigenvalues λ1, λ2 and ``U_g = (λ1 - λ2)² = 4 ((a - c)² + b²)``, in m⁻².
+
+Well-posed fits do not depend on the in-plane origin or orientation of the frame (a
+translation only changes the linear terms). Degenerate fits (fewer than six independent
+points, e.g. a tetrahedron's corner) use the minimum-norm least-squares solution, made
+frame independent by fitting in coordinates divided by the neighbourhood's RMS radius and
+in the orthonormal monomial basis ``(x², √2 x y, y², x, y, 1)``, so U_g stays invariant
+to rigid motions and scales as s⁻² under a uniform scaling. Singular values of the
+design matrix below 1e-10 of the largest count as zero.
+
+Flaws, measured rather than hidden: U_g scales as 1/h² with the size h of the fitted
+neighbourhood (a finely meshed edge has a large curvature, a coarsely meshed one a small
+one), and over one flank of an acute wedge the opposite flank folds back under the
+fitting plane, so sharp edges score lower than blunt creases. On the built-in blades it
+does not separate cutting edges from other points (``benchmarks/calibrate_use_edge.py``,
+numbers in :data:`affordgrasp.tasks.TAU_UG_DEFAULT`); the edge angle below does.
+
+**Sharpest-edge angle** (resolution independent): the smallest interior dihedral angle
+(the opening angle of the solid: π on a flat face, small on a sharp convex edge) among
+the convex mesh edges within ``radius`` (default 3 mm) of U; π when there is none.
+Concave edges are ignored (they cannot cut). Units: rad.
+
+Validated on known geometries (``tests/metrics/test_use_geometry.py``): plane (U_g = 0),
+finely meshed cylinder (U_g = 1/R²), sphere (U_g ≈ 0), wedges of known opening angle.
+Per-mesh data (vertex-face incidence, convex edge segments and their search tree) are
+computed once and cached for as long as the mesh object lives unmodified.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+from ..errors import InputError
+from .validation import points_n3
+
+EDGE_RADIUS_M = 0.003  # default search radius of the sharpest-edge angle
+_FLAT_ANGLE = 1e-9  # dihedral angles below this (rad) are flat, not edges
+_FIT_RCOND = 1e-10  # relative singular-value cutoff of the quadratic fit
+_CHUNK = 2048  # use points per batched fit
+
+# ------------------------------------------------------------------------------------
+# per-mesh cache: keyed by object identity, validated by trimesh's content hash, and
+# dropped when the mesh is garbage collected
+# ------------------------------------------------------------------------------------
+_CACHE: dict[int, tuple[weakref.ref, int, dict]] = {}
+
+
+def _mesh_cache(mesh) -> dict:
+    key = id(mesh)
+    content = hash(mesh)
+    entry = _CACHE.get(key)
+    if entry is not None and entry[0]() is mesh and entry[1] == content:
+        return entry[2]
+    data: dict = {}
+    ref = weakref.ref(mesh, lambda _ref, key=key: _CACHE.pop(key, None))
+    _CACHE[key] = (ref, content, data)
+    return data
+
+
+def _vertex_faces_csr(mesh) -> tuple[np.ndarray, np.ndarray]:
+    data = _mesh_cache(mesh)
+    if "vf" not in data:
+        faces = np.asarray(mesh.faces, dtype=np.int64)
+        flat = faces.ravel()
+        order = np.argsort(flat, kind="stable")
+        ptr = np.zeros(len(mesh.vertices) + 1, dtype=np.int64)
+        np.add.at(ptr, flat + 1, 1)
+        data["vf"] = (np.cumsum(ptr), order // 3)
+    return data["vf"]
+
+
+def _check_triangles(mesh, use_triangle) -> np.ndarray:
+    T = np.asarray(use_triangle).reshape(-1)
+    if T.size and not np.issubdtype(T.dtype, np.integer):
+        if not np.all(np.equal(np.mod(T, 1), 0)):
+            raise InputError(f"use_triangle must hold integer face indices, got {T[:5]}")
+    T = T.astype(np.int64)
+    n_faces = len(mesh.faces)
+    if np.any(T < 0) or np.any(T >= n_faces):
+        raise InputError(
+            f"use_triangle indices must lie in [0, {n_faces}), got min {T.min()} max {T.max()}"
+        )
+    return T
+
+
+def _frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal in-plane axes (e1, e2) of unit normals (n, 3)."""
+    helper = np.zeros_like(normals)
+    use_x = np.abs(normals[:, 0]) < 0.9
+    helper[use_x, 0] = 1.0
+    helper[~use_x, 1] = 1.0
+    e1 = np.cross(normals, helper)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    e2 = np.cross(normals, e1)
+    return e1, e2
+
+
+def _triangle_normals(mesh, T: np.ndarray) -> np.ndarray:
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces, dtype=np.int64)[T]
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    norm = np.linalg.norm(n, axis=1)
+    bad = norm <= 1e-300
+    if np.any(bad):
+        # a zero-area hit triangle has no normal: use the mesh's (area-weighted) one
+        n[bad] = np.asarray(mesh.face_normals)[T[bad]]
+        norm[bad] = np.maximum(np.linalg.norm(n[bad], axis=1), 1e-300)
+    return n / norm[:, None]
+
+
+def use_edge(mesh, use_triangle, use_point=None) -> float | np.ndarray:
+    """U_g, the paper's edge-ness of the surface at the use point (SPEC §2.4), m⁻².
+
+    mesh : trimesh.Trimesh, m
+    use_triangle : int or (n,) int, index of the face hit at the use point
+    use_point : (3,) or (n, 3) m, origin of the fitting frame; the hit triangle's
+        centroid when omitted (identical result for well-posed fits)
+    Returns a float for a single query, else (n,) float64.
+    """
+    single = np.ndim(use_triangle) == 0
+    T = _check_triangles(mesh, use_triangle)
+    n = T.shape[0]
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces, dtype=np.int64)
+    if use_point is None:
+        origin = V[F[T]].mean(axis=1)
+    else:
+        origin = np.broadcast_to(points_n3(use_point, "use_point"), (n, 3))
+    if n == 0:
+        return np.zeros(0)
+    # chunks bound the memory of the padded design matrices (a vertex of high valence,
+    # e.g. the centre of a fan, pads every query of its chunk to its row count)
+    value = np.concatenate(
+        [
+            _use_edge_chunk(mesh, T[i : i + _CHUNK], np.ascontiguousarray(origin[i : i + _CHUNK]))
+            for i in range(0, n, _CHUNK)
+        ]
+    )
+    return float(value[0]) if single else value
+
+
+def _use_edge_chunk(mesh, T: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    n = T.shape[0]
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces, dtype=np.int64)
+    ptr, face_of = _vertex_faces_csr(mesh)
+
+    # vertices of every face incident to a vertex of the hit triangle, per query
+    corner = F[T].ravel()  # (3n,)
+    counts = ptr[corner + 1] - ptr[corner]
+    total = int(counts.sum())
+    query_of_corner = np.repeat(np.arange(n), 3)
+    query = np.repeat(query_of_corner, counts)
+    within = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+    faces_near = face_of[np.repeat(ptr[corner], counts) + within]
+    key = np.repeat(query, 3) * len(V) + F[faces_near].ravel()
+    key = np.unique(key)
+    q = key // len(V)
+    vert = key % len(V)
+
+    normal = _triangle_normals(mesh, T)
+    e1, e2 = _frames(normal)
+    d = V[vert] - origin[q]
+    x = np.einsum("ij,ij->i", d, e1[q])
+    y = np.einsum("ij,ij->i", d, e2[q])
+    z = np.einsum("ij,ij->i", d, normal[q])
+    per_query = np.bincount(q, minlength=n).astype(np.float64)
+    h = np.sqrt(np.bincount(q, weights=x * x + y * y, minlength=n) / np.maximum(per_query, 1))
+    h = np.where(h > 0, h, 1.0)
+    x, y, z = x / h[q], y / h[q], z / h[q]
+    M = np.stack([x * x, np.sqrt(2.0) * x * y, y * y, x, y, np.ones_like(x)], axis=1)
+
+    # all fits at once: design matrices zero-padded to a common row count (zero rows do
+    # not change a least-squares problem), one batched SVD, minimum-norm pseudo-inverse
+    order = np.argsort(q, kind="stable")
+    start = np.searchsorted(q[order], np.arange(n))
+    pos = np.empty_like(q)
+    pos[order] = np.arange(q.size) - start[q[order]]
+    rows = int(per_query.max())
+    Mpad = np.zeros((n, rows, 6))
+    zpad = np.zeros((n, rows))
+    Mpad[q, pos] = M
+    zpad[q, pos] = z
+    U, S, Vt = np.linalg.svd(Mpad, full_matrices=False)
+    cutoff = S[:, :1] * _FIT_RCOND
+    inv_s = np.divide(1.0, S, out=np.zeros_like(S), where=S > cutoff)
+    coef = np.einsum("nji,nj->ni", Vt, inv_s * np.einsum("nrj,nr->nj", U, zpad))
+    a = coef[:, 0]
+    b = np.sqrt(2.0) * coef[:, 1]
+    c = coef[:, 2]
+    return 4.0 * ((a - c) ** 2 + b**2) / h**2
+
+
+# ------------------------------------------------------------------------------------
+# sharpest convex edge near the use point
+# ------------------------------------------------------------------------------------
+
+
+def _edge_index(mesh, radius: float):
+    data = _mesh_cache(mesh)
+    key = ("edges", radius)
+    if key in data:
+        return data[key]
+    from scipy.spatial import cKDTree
+
+    angles = np.asarray(mesh.face_adjacency_angles, dtype=np.float64)
+    convex = np.asarray(mesh.face_adjacency_convex, dtype=bool)
+    keep = convex & (angles > _FLAT_ANGLE)
+    edges = np.asarray(mesh.face_adjacency_edges, dtype=np.int64)[keep]
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    A = V[edges[:, 0]] if len(edges) else np.zeros((0, 3))
+    B = V[edges[:, 1]] if len(edges) else np.zeros((0, 3))
+    interior = np.pi - angles[keep]
+    # sample every edge at a spacing <= radius: a point within `radius` of a segment is
+    # then within radius + spacing / 2 of one of its samples, and long edges (a blade's
+    # edge can be one segment) still sit in a compact tree
+    spacing = radius
+    length = np.linalg.norm(B - A, axis=1)
+    n_samples = np.ceil(length / spacing).astype(np.int64) + 1
+    owner = np.repeat(np.arange(len(edges)), n_samples)
+    start = np.repeat(np.cumsum(n_samples) - n_samples, n_samples)
+    t = (np.arange(owner.size) - start) / np.maximum(n_samples[owner] - 1, 1)
+    samples = A[owner] + t[:, None] * (B - A)[owner]
+    tree = cKDTree(samples) if owner.size else None
+    data[key] = (tree, owner, A, B, interior, spacing)
+    return data[key]
+
+
+def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    AB = B - A
+    denom = np.maximum(np.einsum("ij,ij->i", AB, AB), 1e-300)
+    t = np.clip(np.einsum("ij,ij->i", P - A, AB) / denom, 0.0, 1.0)
+    return np.linalg.norm(P - (A + t[:, None] * AB), axis=1)
+
+
+def use_edge_angle(mesh, use_point, *, radius: float = EDGE_RADIUS_M) -> float | np.ndarray:
+    """Smallest interior dihedral angle of a convex edge within ``radius`` of U, rad.
+
+    mesh : trimesh.Trimesh, m
+    use_point : (3,) or (n, 3) m
+    radius : float, m, search radius (default :data:`EDGE_RADIUS_M`)
+    Returns π where no convex edge is that close; a float for a single point, else (n,).
+    """
+    single = np.ndim(use_point) == 1
+    P = points_n3(use_point, "use_point")
+    radius = float(radius)
+    if not (np.isfinite(radius) and radius > 0):
+        raise InputError(f"radius must be a positive length in metres, got {radius}")
+    out = np.full(P.shape[0], np.pi)
+    tree, owner, A, B, interior, spacing = _edge_index(mesh, radius)
+    if tree is not None and P.shape[0]:
+        hits = tree.query_ball_point(P, radius + 0.5 * spacing, return_sorted=False)
+        lengths = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
+        if lengths.sum():
+            query = np.repeat(np.arange(P.shape[0]), lengths)
+            edge = owner[np.concatenate([np.asarray(h, dtype=np.int64) for h in hits])]
+            pair = np.unique(query * len(A) + edge)
+            query, edge = pair // len(A), pair % len(A)
+            close = _segment_distance(P[query], A[edge], B[edge]) <= radius
+            np.minimum.at(out, query[close], interior[edge[close]])
+    return float(out[0]) if single else out

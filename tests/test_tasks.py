@@ -1,0 +1,212 @@
+"""Affordance functions, thresholds, the registry and declarative task files (tasks.py)."""
+
+import math
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+from affordgrasp import tasks
+from affordgrasp.errors import TaskError
+
+INF = np.inf
+
+
+def table(**overrides):
+    """Five grasps; defaults make every task pass, overrides change columns."""
+    n = 5
+    cols = {
+        "epsilon": np.full(n, 0.4),
+        "gws_volume": np.full(n, 0.01),
+        "inertia": np.array([1.0, 2.0, 3.0, 4.0, 5.0]) * 1e-4,
+        "impact_effort": np.array([10.0, 20.0, 30.0, 40.0, INF]),
+        "discharge": np.full(n, 0.99),
+        "use_force": np.array([0.5, 1.0, 1.5, 2.0, 2.5]),
+        "use_edge": np.full(n, 1e6),
+        "use_edge_angle": np.full(n, math.radians(20)),
+    }
+    for s in ("px", "nx", "py", "ny", "pz", "nz"):
+        cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
+    cols.update({k: np.asarray(v, dtype=float) for k, v in overrides.items()})
+    return cols
+
+
+@pytest.fixture
+def registry():
+    """Let a test register tasks; remove them afterwards."""
+    before = set(tasks.list_tasks())
+    yield
+    for name in set(tasks.list_tasks()) - before:
+        tasks.unregister_task(name)
+
+
+def test_builtin_tasks_are_listed():
+    assert {"beat", "cut", "cut-angle", "pick", "viable"} <= set(tasks.list_tasks())
+    with pytest.raises(TaskError, match="available tasks: .*beat"):
+        tasks.get_task("juggle")
+
+
+def test_beat_follows_the_paper():
+    beat = tasks.get_task("beat")
+    np.testing.assert_allclose(
+        beat.evaluate(table()), [1e-5, 1e-5, 1e-5, 1e-5, 0.0]
+    )  # I / E_i, and I / inf = 0
+    low_eps = table(epsilon=[0.2, 0.4, 0.4, 0.4, 0.4])
+    low_delta = table(discharge=[0.99, 0.9, 0.99, 0.99, 0.99])
+    no_hold = table(hold_effort_pz=[1.0, 2.0, INF, 4.0, 5.0])
+    assert beat.evaluate(low_eps)[0] == -INF
+    assert beat.evaluate(low_delta)[1] == -INF
+    assert beat.evaluate(no_hold)[2] == -INF
+    assert np.isfinite(beat.evaluate(low_eps, mode="no-robustness")[0])
+    assert np.all(beat.evaluate(table(), mode="extra-robustness") == -INF)  # ε = 0.4 < 0.5
+    assert np.isfinite(beat.evaluate(low_delta, tau_delta=0.8)[1])
+
+
+def test_cut_and_cut_angle():
+    cut = tasks.get_task("cut")
+    np.testing.assert_allclose(cut.evaluate(table()), table()["use_force"])
+    flat = table(use_edge=[0.0, 1e6, 1e6, 1e6, 1e6])
+    assert cut.evaluate(flat)[0] == -INF and cut.evaluate(flat, tau_ug=-1.0)[0] == 0.5
+    angle = tasks.get_task("cut-angle")
+    blunt = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3])
+    assert angle.evaluate(blunt)[0] == -INF and angle.evaluate(blunt)[1] == 1.0
+    assert angle.thresholds["tau_angle"] == pytest.approx(tasks.TAU_EDGE_ANGLE_DEFAULT)
+    assert cut.thresholds["tau_ug"] == tasks.TAU_UG_DEFAULT
+
+
+def test_pick_and_viable():
+    np.testing.assert_allclose(tasks.get_task("pick").evaluate(table()), [-6, -12, -18, -24, -30])
+    cols = table(epsilon=[0.1, 0.2, 0.2, 0.2, 0.2], impact_effort=[10, 200, 10, 10, 10])
+    cols["hold_effort_px"] = np.array([1.0, 1.0, 300.0, 1.0, 1.0])
+    np.testing.assert_array_equal(tasks.get_task("viable").evaluate(cols), [0, 0, 0, 1, 1])
+    np.testing.assert_array_equal(tasks.is_viable(cols), [False, False, False, True, True])
+    np.testing.assert_array_equal(
+        tasks.is_viable(cols, eps_min=0.05), [True, False, False, True, True]
+    )
+
+
+def test_modes_and_overrides_are_checked():
+    beat = tasks.get_task("beat")
+    assert beat.thresholds_for("no-robustness")["tau_eps"] == -INF
+    assert beat.thresholds_for("extra-robustness")["tau_eps"] == 0.5
+    assert beat.thresholds_for()["tau_delta"] == 0.95
+    assert set(beat.thresholds_by_mode()) == {"default", "no-robustness", "extra-robustness"}
+    with pytest.raises(TaskError, match="no mode"):
+        beat.evaluate(table(), mode="reckless")
+    with pytest.raises(TaskError, match="no threshold 'tau_x'"):
+        beat.evaluate(table(), tau_x=1.0)
+    with pytest.raises(TaskError, match="missing.*available"):
+        beat.evaluate({"epsilon": np.ones(3)})
+
+
+def test_arrow_and_pandas_inputs():
+    pd = pytest.importorskip("pandas")
+    cols = table()
+    expected = tasks.get_task("beat").evaluate(cols)
+    arrow = pa.table({"object": ["knife:0"] * 5, **cols, "epsilon_reason": [""] * 5})
+    np.testing.assert_array_equal(tasks.get_task("beat").evaluate(arrow), expected)
+    frame = pd.DataFrame({"object": ["knife:0"] * 5, **cols})
+    np.testing.assert_array_equal(tasks.evaluate_task("beat", frame), expected)
+    np.testing.assert_array_equal(
+        tasks.get_task("pick").evaluate(arrow), -6 * cols["hold_effort_px"]
+    )
+
+
+def test_python_registration(registry):
+    def lever(m, t):
+        return np.where(m["use_force"] > t["min_force"], m["use_force"] * m["discharge"], -np.inf)
+
+    task = tasks.register_task(
+        "lever", lever, thresholds={"min_force": 1.0}, requires=["use_force", "discharge"]
+    )
+    assert tasks.get_task("lever") is task
+    out = task.evaluate(table())
+    assert out[0] == -INF and out[4] == pytest.approx(2.5 * 0.99)
+    assert task.evaluate(table(), min_force=0.0)[0] == pytest.approx(0.495)
+    with pytest.raises(TaskError, match="already registered"):
+        tasks.register_task("lever", lever)
+    tasks.register_task("lever", lever, replace=True)
+
+
+TOML = """
+[tasks.pry]
+description = "lever something open"
+value = "use_force / impact_effort"
+requires = "epsilon >= tau_eps and discharge >= 0.5"
+[tasks.pry.thresholds]
+tau_eps = 0.3
+[tasks.pry.modes.extra-robustness]
+tau_eps = 0.5
+
+[tasks.steady]
+value = "-log(hold_effort_sum) + 0 * max(epsilon, 0.1, gws_volume)"
+requires = "not (epsilon < 0.1) and isfinite(hold_effort_sum)"
+"""
+
+
+def test_toml_task_file(tmp_path, registry):
+    path = tmp_path / "mytasks.toml"
+    path.write_text(TOML)
+    assert tasks.load_task_file(path) == ["pry", "steady"]
+    pry = tasks.get_task("pry")
+    assert set(pry.requires) == {"use_force", "impact_effort", "epsilon", "discharge"}
+    cols = table(epsilon=[0.2, 0.4, 0.4, 0.4, 0.4], discharge=[0.9, 0.9, 0.1, 0.9, 0.9])
+    out = pry.evaluate(cols)
+    np.testing.assert_allclose(out, [-INF, 1.0 / 20, -INF, 2.0 / 40, 0.0])
+    assert np.all(pry.evaluate(cols, mode="extra-robustness") == -INF)
+    assert pry.evaluate(cols, mode="no-robustness")[0] == pytest.approx(0.05)  # τ_ε = -inf
+    steady = tasks.get_task("steady").evaluate(table(hold_effort_px=[1, 2, 3, 4, INF]))
+    assert steady[0] == pytest.approx(-np.log(6.0)) and steady[4] == -INF
+
+
+def test_environment_variable(tmp_path, monkeypatch, registry):
+    path = tmp_path / "env.toml"
+    path.write_text('[tasks.envtask]\nvalue = "2 * use_force"\n')
+    monkeypatch.setenv(tasks.ENV_VAR, str(path))
+    monkeypatch.setattr(tasks, "_ENV_LOADED", set())
+    assert "envtask" in tasks.list_tasks()
+    np.testing.assert_allclose(
+        tasks.get_task("envtask").evaluate(table()), 2 * table()["use_force"]
+    )
+
+
+@pytest.mark.parametrize(
+    "expr, token",
+    [
+        ("__import__('os')", "__import__"),
+        ("epsilon.__class__", "Attribute"),
+        ("(lambda: 1)()", "lambda"),
+        ("[x for x in epsilon]", "ListComp"),
+        ("epsilon[0]", "Subscript"),
+        ("'text'", "'text'"),
+        ("open('f')", "open"),
+        ("_private + 1", "_private"),
+        ("abs(epsilon, out=epsilon)", "keyword argument 'out'"),
+        ("epsilon if epsilon else 0", "IfExp"),
+        ("epsilon @ epsilon", "MatMult"),
+        ("epsilon +", "not a valid expression"),
+    ],
+)
+def test_safe_evaluator_rejects_everything_else(expr, token, registry):
+    with pytest.raises(TaskError, match=None) as err:
+        tasks.task_from_expressions("bad", expr)
+    assert token in str(err.value)
+    assert "bad" not in tasks.list_tasks()
+
+
+def test_bad_task_files(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[tasks.x]\nvalue = "1"\ncolour = "red"\n')
+    with pytest.raises(TaskError, match="unknown keys"):
+        tasks.load_task_file(bad)
+    bad.write_text("[tasks.x]\nrequires = 'epsilon > 0'\n")
+    with pytest.raises(TaskError, match="needs a 'value'"):
+        tasks.load_task_file(bad)
+    bad.write_text("not toml [")
+    with pytest.raises(TaskError, match="not valid TOML"):
+        tasks.load_task_file(bad)
+    with pytest.raises(TaskError, match="does not exist"):
+        tasks.load_task_file(tmp_path / "missing.toml")
+    bad.write_text('[tasks.x]\nvalue = "1"\n[tasks.x.modes.default]\ntau = 1\n')
+    with pytest.raises(TaskError, match="unknown thresholds"):
+        tasks.load_task_file(bad)
