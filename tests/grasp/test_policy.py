@@ -228,3 +228,30 @@ def test_contacts_on_one_link_are_at_least_3_mm_apart(box_object):
             p = c.points[c.link == link]
             d = np.linalg.norm(p[:, None] - p[None], axis=2) + np.eye(len(p))
             assert d.min() >= 3e-3 - 1e-12
+
+
+FAMILIES = ["hammer", "knife", "meat_cleaver", "axe", "screwdriver", "spatula", "sword", "dagger",
+            "bottle", "wine_glass", "tumbler", "mug", "ice_cream_cone"]  # fmt: skip
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_every_family_no_interpenetration_and_contacts_within_tolerance(family):
+    from affordgrasp.objects import resolve_object
+
+    obj = resolve_object(family)
+    hand = get_hand("barrett")
+    probe = np.vstack(
+        [obj.mesh.vertices, trimesh.sample.sample_surface_even(obj.mesh, 15000, seed=3)[0]]
+    )
+    batch = simulate(obj, random_pregrasps(6, sum(map(ord, family))), hand=hand)
+    assert (batch.status != "missed").any()
+    for i in range(len(batch)):
+        check_grasp(
+            obj,
+            hand,
+            batch.status[i],
+            batch.hand_pose[i],
+            batch.joints[i],
+            batch.contacts[i],
+            probe,
+        )

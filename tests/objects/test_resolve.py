@@ -202,3 +202,7 @@ def test_built_in_families_resolve(real_families):
     assert objects.FAMILIES is real_families.FAMILIES
     again = resolve_module._resolve_family.__wrapped__("knife", 0, 1.0, None, None)
     assert again.mesh_hash == obj.mesh_hash  # deterministic, not only cached
+
+
+def test_family_aliases_resolve_to_the_family():
+    assert resolve_object("cleaver:2").name == "meat_cleaver:2"

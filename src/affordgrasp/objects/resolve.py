@@ -165,6 +165,8 @@ def _split_family(text: str) -> tuple[str | None, str | None]:
     if not families:
         return None, None
     by_key = {_normalise(name): name for name in families}
+    aliases = getattr(_families(), "ALIASES", {})
+    by_key.update({_normalise(alias): name for alias, name in aliases.items() if name in families})
     head, sep, tail = text.partition(":")
     name = by_key.get(_normalise(head))
     if name is None:
