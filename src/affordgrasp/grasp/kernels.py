@@ -315,32 +315,12 @@ def _chain_poses_into(
 
 
 @njit(cache=True)
-def _time_to_touch(px, py, pz, r, shape_buf, shape_joint, kinds_q, halves, radii, joint_kinds,
-                   speeds, chain_len, margin):  # fmt: skip
-    """Smallest distance to the moving shapes, its shape, and a safe step in s.
-
-    The step is min over shapes of (distance - margin) / (speed bound of the point relative
-    to that shape's link); r is the point's distance from the first joint origin (plus the
-    radius of a cell when tracing a cell). With a margin below the hit level the steps reach
-    the hit level in finitely many steps.
-    """
-    d_min = np.inf
-    q_min = -1
-    step = np.inf
-    for q in range(shape_buf.shape[0]):
-        d = sdf_world(px, py, pz, shape_buf[q], kinds_q[q], halves[q], radii[q])
-        if d < d_min:
-            d_min = d
-            q_min = q
-        bound = 0.0
-        for j in range(shape_joint[q] + 1):
-            if joint_kinds[j] == REVOLUTE:
-                bound += abs(speeds[j]) * (r + chain_len[j])
-            else:
-                bound += abs(speeds[j])
-        if bound > 0.0:
-            step = min(step, max(d - margin, 0.0) / bound)
-    return d_min, q_min, step
+def _rotate(t, v):
+    """The rotation part of t (4, 4) applied to v (3,)."""
+    out = np.empty(3)
+    for a in range(3):
+        out[a] = t[a, 0] * v[0] + t[a, 1] * v[1] + t[a, 2] * v[2]
+    return out
 
 
 @njit(cache=True)
@@ -359,7 +339,11 @@ def _chain_touch(px, py, pz, s, r, inv_base, inv_origin, kinds, axes, q0, speeds
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
     of composing the links' poses: a few dozen operations per joint.
-    returns : (smallest distance, its shape, a safe step in s) as in _time_to_touch
+    r is the point's distance from the first joint origin (plus a cell's radius when the
+    point is a cell centre); with a margin below the hit level the steps reach the hit level
+    in finitely many steps.
+    returns : (smallest distance, its shape, a safe step in s: min over shapes of
+        (distance - margin) / (the point's speed bound relative to that shape's link))
     """
     x = inv_base[0, 0] * px + inv_base[0, 1] * py + inv_base[0, 2] * pz + inv_base[0, 3]
     y = inv_base[1, 0] * px + inv_base[1, 1] * py + inv_base[1, 2] * pz + inv_base[1, 3]
@@ -521,7 +505,7 @@ def close_chain_until_contact(
     # When every joint is revolute about parallel axes (a planar finger, like the Barrett's),
     # the links sweep a slab across that axis: nothing outside it can be touched.
     _mul4_into(base, origins[0], tmp_a)
-    a0 = tmp_a[:3, :3] @ axes[0]
+    a0 = _rotate(tmp_a, axes[0])
     planar = True
     for j in range(m):
         if kinds[j] != REVOLUTE:
@@ -529,7 +513,7 @@ def close_chain_until_contact(
             break
         if j > 0:
             _mul4_into(link_buf[j - 1], origins[j], tmp_b)
-            aj = tmp_b[:3, :3] @ axes[j]
+            aj = _rotate(tmp_b, axes[j])
             if abs(aj[0] * a0[0] + aj[1] * a0[1] + aj[2] * a0[2]) < 1.0 - 1e-9:
                 planar = False
                 break
@@ -579,9 +563,10 @@ def close_chain_until_contact(
     for c in range(nk):
         if kr[c] < 0.0:
             continue
-        d, _, step = _time_to_touch(kc[c, 0], kc[c, 1], kc[c, 2], kr[c], shape_buf, shape_joint,
-                                    shape_kinds, shape_halves, shape_radii, kinds, speeds,
-                                    chain_len, 0.5 * hit_eps + coarse_radius[c])  # fmt: skip
+        d, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], inv_base,
+                                  inv_origin, kinds, axes, q0, speeds, shape_joint, inv_shape,
+                                  shape_kinds, shape_halves, shape_radii, chain_len,
+                                  0.5 * hit_eps + coarse_radius[c])  # fmt: skip
         if step < s_max:
             size = _heap_push(key, ident, prev, size, step, -1 - nf - c, 0.0)
     best = s_max  # an upper bound on the first crossing, lowered by every hit
