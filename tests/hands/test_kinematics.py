@@ -62,11 +62,13 @@ def test_barrett_closing_f3():
     # above the knuckle; at 140° it leans 50° past that towards the palm axis.
     hand, q = barrett_dofs(0.0, f3_prox=np.pi / 2, f3_dist=np.deg2rad(30))
     np.testing.assert_allclose(pose_of(hand, q, "f3_prox")[:3, 2], [0, 0, 1], atol=1e-12)
-    np.testing.assert_allclose(pose_of(hand, q, "f3_dist")[:3, 3], [0, -50 * MM, 85 * MM],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        pose_of(hand, q, "f3_dist")[:3, 3], [0, -50 * MM, 85 * MM], atol=1e-12
+    )
     total = np.pi / 2 + np.deg2rad(42 + 30)  # from the outward direction towards +y
-    np.testing.assert_allclose(pose_of(hand, q, "f3_dist")[:3, 2],
-                               [0, -np.cos(total), np.sin(total)], atol=1e-12)
+    np.testing.assert_allclose(
+        pose_of(hand, q, "f3_dist")[:3, 2], [0, -np.cos(total), np.sin(total)], atol=1e-12
+    )
     hand, q = barrett_dofs(0.0, f3_prox=np.deg2rad(140))
     d = pose_of(hand, q, "f3_prox")[:3, 2]
     np.testing.assert_allclose(d, [0, np.sin(np.deg2rad(50)), np.cos(np.deg2rad(50))], atol=1e-12)

@@ -20,10 +20,15 @@ SHOWN_METRICS = (
 
 def add_arguments(p) -> None:
     add_sampling_arguments(p)
-    p.add_argument("--task", action="append", default=None,
-                   help="task to rank by (repeatable; default: every registered task)")
-    p.add_argument("--mode", default="default",
-                   help="threshold mode: default, no-robustness, extra-robustness")
+    p.add_argument(
+        "--task",
+        action="append",
+        default=None,
+        help="task to rank by (repeatable; default: every registered task)",
+    )
+    p.add_argument(
+        "--mode", default="default", help="threshold mode: default, no-robustness, extra-robustness"
+    )
     p.add_argument("--tasks-file", default=None, help="TOML file declaring more tasks")
 
 

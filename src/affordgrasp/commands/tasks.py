@@ -18,8 +18,14 @@ def run(args, out) -> None:
         by_mode = task.thresholds_by_mode()
         for mode, values in by_mode.items():
             shown = ", ".join(f"{k}={v:g}" for k, v in values.items()) or "-"
-            rows.append([name if mode == "default" else "", mode, shown,
-                         task.description if mode == "default" else ""])
+            rows.append(
+                [
+                    name if mode == "default" else "",
+                    mode,
+                    shown,
+                    task.description if mode == "default" else "",
+                ]
+            )
         doc[name] = {
             "description": task.description,
             "requires": list(task.requires),
