@@ -258,6 +258,39 @@ def approach_until_contact(
 
 
 @njit(cache=True)
+def _joint_motion_into(kind, axis, q, mot):
+    """mot (4, 4) = the motion of a joint at value q: rotation about or translation along axis."""
+    if kind == REVOLUTE:
+        c = np.cos(q)
+        sn = np.sin(q)
+        C = 1.0 - c
+        ax = axis[0]
+        ay = axis[1]
+        az = axis[2]
+        mot[0, 0] = c + ax * ax * C
+        mot[0, 1] = ax * ay * C - az * sn
+        mot[0, 2] = ax * az * C + ay * sn
+        mot[1, 0] = ay * ax * C + az * sn
+        mot[1, 1] = c + ay * ay * C
+        mot[1, 2] = ay * az * C - ax * sn
+        mot[2, 0] = az * ax * C - ay * sn
+        mot[2, 1] = az * ay * C + ax * sn
+        mot[2, 2] = c + az * az * C
+        mot[0, 3] = 0.0
+        mot[1, 3] = 0.0
+        mot[2, 3] = 0.0
+    else:
+        for a in range(3):
+            for b in range(3):
+                mot[a, b] = 1.0 if a == b else 0.0
+            mot[a, 3] = axis[a] * q
+    mot[3, 0] = 0.0
+    mot[3, 1] = 0.0
+    mot[3, 2] = 0.0
+    mot[3, 3] = 1.0
+
+
+@njit(cache=True)
 def _chain_poses_into(
     s,
     base,
@@ -279,35 +312,7 @@ def _chain_poses_into(
     mot = np.empty((4, 4))
     for j in range(m):
         _mul4_into(tmp_a, origins[j], tmp_b)
-        q = q0[j] + speeds[j] * s
-        if kinds[j] == REVOLUTE:
-            c = np.cos(q)
-            sn = np.sin(q)
-            C = 1.0 - c
-            ax = axes[j, 0]
-            ay = axes[j, 1]
-            az = axes[j, 2]
-            mot[0, 0] = c + ax * ax * C
-            mot[0, 1] = ax * ay * C - az * sn
-            mot[0, 2] = ax * az * C + ay * sn
-            mot[1, 0] = ay * ax * C + az * sn
-            mot[1, 1] = c + ay * ay * C
-            mot[1, 2] = ay * az * C - ax * sn
-            mot[2, 0] = az * ax * C - ay * sn
-            mot[2, 1] = az * ay * C + ax * sn
-            mot[2, 2] = c + az * az * C
-            mot[0, 3] = 0.0
-            mot[1, 3] = 0.0
-            mot[2, 3] = 0.0
-        else:
-            for a in range(3):
-                for b in range(3):
-                    mot[a, b] = 1.0 if a == b else 0.0
-                mot[a, 3] = axes[j, a] * q
-        mot[3, 0] = 0.0
-        mot[3, 1] = 0.0
-        mot[3, 2] = 0.0
-        mot[3, 3] = 1.0
+        _joint_motion_into(kinds[j], axes[j], q0[j] + speeds[j] * s, mot)
         _mul4_into(tmp_b, mot, tmp_a)
         link_buf[j, :, :] = tmp_a
     for q in range(shape_joint.shape[0]):
@@ -748,35 +753,7 @@ def link_poses(q, parent, origin, axis, kind, dof, ratio):
                 for b in range(4):
                     out[i, a, b] = 1.0 if a == b else 0.0
             continue
-        v = ratio[i] * q[dof[i]]
-        if kind[i] == REVOLUTE:
-            c = np.cos(v)
-            sn = np.sin(v)
-            C = 1.0 - c
-            ax = axis[i, 0]
-            ay = axis[i, 1]
-            az = axis[i, 2]
-            mot[0, 0] = c + ax * ax * C
-            mot[0, 1] = ax * ay * C - az * sn
-            mot[0, 2] = ax * az * C + ay * sn
-            mot[1, 0] = ay * ax * C + az * sn
-            mot[1, 1] = c + ay * ay * C
-            mot[1, 2] = ay * az * C - ax * sn
-            mot[2, 0] = az * ax * C - ay * sn
-            mot[2, 1] = az * ay * C + ax * sn
-            mot[2, 2] = c + az * az * C
-            mot[0, 3] = 0.0
-            mot[1, 3] = 0.0
-            mot[2, 3] = 0.0
-        else:
-            for a in range(3):
-                for b in range(3):
-                    mot[a, b] = 1.0 if a == b else 0.0
-                mot[a, 3] = axis[i, a] * v
-        mot[3, 0] = 0.0
-        mot[3, 1] = 0.0
-        mot[3, 2] = 0.0
-        mot[3, 3] = 1.0
+        _joint_motion_into(kind[i], axis[i], ratio[i] * q[dof[i]], mot)
         _mul4_into(out[parent[i]], origin[i], tmp)
         _mul4_into(tmp, mot, out[i])
     return out
