@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
@@ -15,17 +16,11 @@ def add_sampling_arguments(p) -> None:
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     p.add_argument("--hand", default="barrett", help="barrett (default) or parallel_jaw")
     p.add_argument(
-        "--size", type=float, default=None, help="rescale a mesh file: longest extent, m"
+        "--size-m", type=float, default=None, help="rescale a mesh file: longest extent, m"
     )
     p.add_argument("--units", default=None, help="units of a mesh file: m, cm, mm, in, ft")
     p.add_argument("--out", default=None, help="write one row per sample to this Parquet file")
-    p.add_argument("--batch", type=int, default=250, help=argparse_suppress())
-
-
-def argparse_suppress():
-    import argparse
-
-    return argparse.SUPPRESS
+    p.add_argument("--batch", type=int, default=250, help=argparse.SUPPRESS)
 
 
 def check_counts(args) -> None:

@@ -70,7 +70,7 @@ def run(args, out) -> None:
     names = args.task or [t for t in list_tasks() if t != "viable"]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
-    obj = resolve_object(args.object, size_m=args.size, units=args.units)
+    obj = resolve_object(args.object, size_m=args.size_m, units=args.units)
     table, spent, wall = run_batches(args, out, obj, metrics=True)
     from ..dataset.schema import metric_arrays
 

@@ -17,12 +17,23 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
     )
-    p.add_argument("--engine", choices=("local", "ray"), default="local")
+    p.add_argument(
+        "--engine",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
+    )
     p.add_argument(
         "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
     )
     p.add_argument("--hand", default="barrett", help="hand model (default barrett)")
-    p.add_argument("--shard-size", type=int, default=DEFAULT_SHARD_SIZE, metavar="ROWS")
+    p.add_argument(
+        "--shard-size",
+        type=int,
+        default=DEFAULT_SHARD_SIZE,
+        metavar="ROWS",
+        help=f"rows per shard file (default {DEFAULT_SHARD_SIZE})",
+    )
     p.add_argument(
         "--chunk-size",
         type=int,

@@ -17,7 +17,9 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
     )
-    p.add_argument("--engine", choices=("local", "ray"), default="local")
+    p.add_argument(
+        "--engine", choices=("local", "ray"), default="local", help="local processes or Ray"
+    )
     p.add_argument("--address", default=None, help="an existing Ray cluster (--engine ray)")
     p.add_argument(
         "--no-baseline",

@@ -13,7 +13,7 @@ def run(args, out) -> None:
     from ..objects import resolve_object
 
     check_counts(args)
-    obj = resolve_object(args.object, size_m=args.size, units=args.units)
+    obj = resolve_object(args.object, size_m=args.size_m, units=args.units)
     table, spent, wall = run_batches(args, out, obj, metrics=False)
     rows, doc = status_summary(table)
     rate = args.samples / spent["simulate"] if spent["simulate"] > 0 else float("inf")
