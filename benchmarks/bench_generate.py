@@ -1,0 +1,97 @@
+"""Throughput of dataset generation: grasps/s and grasps/s per core, end to end.
+
+Runs ``affordgrasp.dataset.generate`` on a few built-in objects, first on one core (in
+process), then on every core (local worker processes), optionally on a local Ray, into
+fresh directories, and reports the rates and the split between simulation and metrics.
+
+    python benchmarks/bench_generate.py --samples 1000 --objects knife hammer mug
+    python benchmarks/bench_generate.py --samples 1000 --ray --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import tempfile
+import time
+from pathlib import Path
+
+from affordgrasp.dataset.engines import default_workers
+from affordgrasp.dataset.generate import generate
+from affordgrasp.evaluate import evaluate_samples
+from affordgrasp.objects import resolve_object
+
+
+def stage_split(objects: list[str], n: int, seed: int) -> dict:
+    """Seconds per sample spent in simulation and in metrics, one core, warm."""
+    out = {}
+    for spec in objects:
+        obj = resolve_object(spec)
+        evaluate_samples(obj, 8, seed=seed, start=10**6)  # warm caches and compiled kernels
+        _, timing = evaluate_samples(obj, n, seed=seed)
+        out[obj.name] = {k: v / n * 1e3 for k, v in timing.items()}
+    return out
+
+
+def cpu_seconds() -> float:
+    """CPU time of this process and of its finished children (the local workers)."""
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def run(objects, samples, seed, workers, engine, root: Path) -> dict:
+    out = root / f"{engine}-{workers}"
+    cpu0 = cpu_seconds()
+    summary = generate(
+        objects, samples, out, seed=seed, workers=workers, engine=engine, shard_size=1024
+    )
+    d = summary.to_dict()
+    d["grasps_per_s_per_core"] = summary.grasps_per_s / summary.workers
+    if engine == "local":
+        # Robust to other load on the machine: grasps per CPU-second, start-up included.
+        d["cpu_s"] = cpu_seconds() - cpu0
+        d["grasps_per_cpu_s"] = summary.samples_written / d["cpu_s"]
+    return d
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--objects", nargs="+", default=["knife", "hammer", "mug", "screwdriver"])
+    p.add_argument("--samples", type=int, default=500, help="per object")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--ray", action="store_true", help="also run the Ray engine")
+    p.add_argument("--json", default=None, help="write the results to this file")
+    args = p.parse_args()
+
+    cores = default_workers()
+    results = {"cores": cores, "samples_per_object": args.samples, "objects": args.objects}
+    started = time.perf_counter()
+    results["ms_per_sample_one_core"] = stage_split(args.objects, min(200, args.samples), 1)
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        runs = [("local", 1), ("local", cores)] + ([("ray", cores)] if args.ray else [])
+        results["runs"] = []
+        for engine, workers in runs:
+            r = run(args.objects, args.samples, args.seed, workers, engine, root)
+            results["runs"].append(r)
+            cpu = f", {r['grasps_per_cpu_s']:.1f} per CPU-second" if "grasps_per_cpu_s" in r else ""
+            print(
+                f"{engine:5s} x{r['workers']}: {r['samples_written']} grasps in "
+                f"{r['elapsed_s']:.1f} s = {r['grasps_per_s']:.1f} grasps/s, "
+                f"{r['grasps_per_s_per_core']:.1f} per core{cpu}",
+                flush=True,
+            )
+    for name, t in results["ms_per_sample_one_core"].items():
+        print(
+            f"{name:16s} simulate {t['simulate']:.1f} ms  metrics {t['metrics']:.1f} ms "
+            f"per sample (one core)"
+        )
+    results["elapsed_s"] = time.perf_counter() - started
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,210 @@
+"""Brute-force argmax of an affordance over a dataset (paper §IV-C, SPEC §2.6).
+
+:func:`best_grasps` streams a dataset in batches, scores every row with a task's affordance
+function F_T and keeps the ``top`` rows, so memory stays bounded however large the dataset.
+Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks); ties go to the
+object given first, then the lower sample index, so the result is the same as sorting the
+whole table by (F_T descending, object, sample).
+
+A first pass reads only the metric columns; a second fetches the full rows of the winners,
+reading only the row groups that hold them.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.dataset as pads
+import pyarrow.parquet as pq
+
+from ..errors import DatasetError, InputError
+from .layout import read_manifest
+from .reading import open_dataset, select_objects
+from .schema import METRIC_COLUMNS
+
+AFFORDANCE_COLUMN = "affordance"
+RANK_COLUMN = "rank"
+
+
+@dataclass
+class BestGrasps:
+    """The top rows of a dataset for a task.
+
+    table : the rows (every dataset column) best first, plus ``rank`` (1 = best) and
+        ``affordance`` (F_T)
+    rows_scanned : rows scored; finite : rows whose F_T is above −∞
+    """
+
+    task: str
+    mode: str
+    table: pa.Table
+    rows_scanned: int
+    finite: int
+    objects: list[str]
+
+    def to_dict(self) -> dict:
+        from .schema import HOLD_EFFORT_COLUMNS
+
+        rows = []
+        for r in self.table.to_pylist():
+            hold = [r[c] for c in HOLD_EFFORT_COLUMNS if c in r]
+            row = {
+                "rank": r[RANK_COLUMN],
+                "object": r["object"],
+                "sample": r["sample"],
+                "affordance": r[AFFORDANCE_COLUMN],
+                "status": r["status"],
+                "p0": r["p0"],
+                "use_dir": r["use_dir"],
+            }
+            row.update({c: r[c] for c in METRIC_COLUMNS if c in r})
+            if hold:
+                row["hold_effort_sum"] = float(np.sum(hold))
+            rows.append(row)
+        return {
+            "task": self.task,
+            "mode": self.mode,
+            "rows_scanned": self.rows_scanned,
+            "finite": self.finite,
+            "objects": self.objects,
+            "best": rows,
+        }
+
+
+def resolve_task(name: str):
+    """A registered task by name (``affordgrasp.tasks``)."""
+    from .. import tasks
+
+    return tasks.get_task(name)
+
+
+def task_values(task, columns, mode: str = "default", thresholds: Mapping | None = None):
+    """F_T for every row of ``columns`` (an Arrow table or a mapping of (n,) arrays)."""
+    if isinstance(columns, pa.Table):
+        # Only the numeric metric columns: the task reads names, not strings like `object`.
+        columns = columns.select(
+            [c for c in columns.column_names if pa.types.is_floating(columns.schema.field(c).type)]
+        )
+    values = task.evaluate(columns, mode=mode, **dict(thresholds or {}))
+    return np.asarray(values, dtype=np.float64)
+
+
+def _top_order(values: np.ndarray, obj_rank: np.ndarray, sample: np.ndarray) -> np.ndarray:
+    # Sort keys: F_T descending, then object order, then sample (lexsort: last key first).
+    return np.lexsort((sample, obj_rank, -values))
+
+
+def best_grasps(
+    directory: str | os.PathLike,
+    task: str,
+    *,
+    mode: str = "default",
+    objects: list[str] | None = None,
+    top: int = 5,
+    thresholds: Mapping[str, float] | None = None,
+    batch_size: int = 65536,
+) -> BestGrasps:
+    """The ``top`` rows of the dataset in ``directory`` by the affordance of ``task``.
+
+    objects : restrict to these objects (``knife`` matches ``knife:0``)
+    thresholds : overrides of the task's thresholds (e.g. ``{"epsilon": 0.1}``)
+    Raises DatasetError for a directory that is not a dataset or has no metrics.
+    """
+    if not isinstance(top, int) or top < 1:
+        raise InputError(f"--top must be a positive integer, got {top!r}")
+    manifest = read_manifest(directory)
+    if not manifest.get("metrics", True):
+        raise DatasetError(
+            f"dataset {str(directory)!r} was generated with --no-metrics, so it has no metrics "
+            "to score; generate it again without --no-metrics"
+        )
+    task_obj = resolve_task(task)
+    task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
+    names = [o["name"] for o in manifest["objects"]]
+    chosen = select_objects(directory, objects)
+    dataset = open_dataset(directory)
+    flt = pads.field("object").isin(chosen) if chosen else None
+    metric_cols = [c for c in METRIC_COLUMNS if c in dataset.schema.names]
+    scanner = dataset.scanner(
+        columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
+    )
+    name_set = pa.array(names, pa.string())
+    best_v = np.empty(0)
+    best_o = np.empty(0, dtype=np.int64)
+    best_s = np.empty(0, dtype=np.int64)
+    scanned = finite = 0
+    for batch in scanner.to_batches():
+        if batch.num_rows == 0:
+            continue
+        table = pa.Table.from_batches([batch])
+        values = task_values(task_obj, table, mode, thresholds)
+        scanned += len(values)
+        keep = values > -np.inf  # −inf (a failed threshold) and NaN never rank
+        finite += int(keep.sum())
+        if not keep.any():
+            continue
+        o = pc.index_in(table["object"], value_set=name_set).to_numpy(zero_copy_only=False)
+        s = table["sample"].to_numpy()
+        v, o, s = values[keep], o[keep], s[keep]
+        v = np.concatenate([best_v, v])
+        o = np.concatenate([best_o, o])
+        s = np.concatenate([best_s, s])
+        order = _top_order(v, o, s)[:top]
+        best_v, best_o, best_s = v[order], o[order], s[order]
+
+    rows = _fetch_rows(dataset, names, best_o, best_s)
+    rows = rows.append_column(RANK_COLUMN, pa.array(np.arange(1, len(best_v) + 1), pa.int64()))
+    rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
+    return BestGrasps(
+        task=task,
+        mode=mode,
+        table=rows,
+        rows_scanned=scanned,
+        finite=finite,
+        objects=chosen or names,
+    )
+
+
+def _fetch_rows(
+    dataset: pads.Dataset, names: list[str], obj: np.ndarray, sample: np.ndarray
+) -> pa.Table:
+    """The full rows of (object, sample) pairs, in the order given."""
+    if len(obj) == 0:
+        return dataset.schema.empty_table()
+    flt = None
+    for o, s in zip(obj.tolist(), sample.tolist(), strict=True):
+        term = (pads.field("object") == names[o]) & (pads.field("sample") == s)
+        flt = term if flt is None else flt | term
+    # One scan; row-group statistics on (object, sample) skip the shards without a winner.
+    found = dataset.to_table(filter=flt)
+    where = {
+        (a, b): i
+        for i, (a, b) in enumerate(
+            zip(found["object"].to_pylist(), found["sample"].to_pylist(), strict=True)
+        )
+    }
+    if len(where) != found.num_rows or len(where) != len(obj):  # pragma: no cover
+        raise DatasetError("the dataset holds duplicate or missing rows; generate it again")
+    order = [where[(names[o], s)] for o, s in zip(obj.tolist(), sample.tolist(), strict=True)]
+    return found.take(pa.array(order, pa.int64()))
+
+
+def write_best(result: BestGrasps, path: str | os.PathLike) -> Path:
+    """Write the top rows as one Parquet file (the viewer reads it), task and mode in metadata."""
+    path = Path(path)
+    if path.suffix != ".parquet":
+        raise InputError(f"--out must name a .parquet file, got {str(path)!r}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meta = dict(result.table.schema.metadata or {})
+    meta[b"affordgrasp_best"] = json.dumps(
+        {"task": result.task, "mode": result.mode, "objects": result.objects}
+    ).encode()
+    pq.write_table(result.table.replace_schema_metadata(meta), path)
+    return path

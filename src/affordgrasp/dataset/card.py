@@ -1,0 +1,315 @@
+"""The dataset card: what a dataset is, for machines (``_card.json``) and people (``_card.md``).
+
+Written beside the shards whenever a generation run ends (also when interrupted, then marked
+incomplete). It records the hand, the friction table, the simulation tolerances, the task
+thresholds in force, every object with its mass properties and mesh hash, the software
+version, the command lines that built the dataset and the counts per status. Everything it
+says about the rows is read from the shard footers, so it is right after a resume too.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from .layout import CARD_JSON_NAME, CARD_MD_NAME, FORMAT, FORMAT_VERSION, write_json_atomic
+
+log = logging.getLogger(__name__)
+
+
+def hand_description(hand) -> dict:
+    return {
+        "name": hand.name,
+        "description": hand.description,
+        "pregrasp_dof": hand.pregrasp_dof,
+        "dofs": [
+            {"name": d.name, "lower": d.lower, "upper": d.upper, "role": d.role} for d in hand.dofs
+        ],
+        "links": [
+            {"name": link.name, "parent": link.parent, "material": link.material}
+            for link in hand.links
+        ],
+        "fingers": [
+            {"name": f.name, "dofs": list(f.dofs), "speeds": list(f.speeds)} for f in hand.fingers
+        ],
+    }
+
+
+def object_description(obj) -> dict:
+    m = obj.mass
+    return {
+        "name": obj.name,
+        "category": obj.category,
+        "source": obj.source,
+        "mesh_hash": obj.mesh_hash,
+        "vertices": int(len(obj.mesh.vertices)),
+        "faces": int(len(obj.mesh.faces)),
+        "density_kg_m3": float(m.density),
+        "volume_m3": float(m.volume),
+        "mass_kg": float(m.mass),
+        "center_of_mass_m": np.asarray(m.center_of_mass, dtype=float).tolist(),
+        "inertia_kg_m2": np.asarray(m.inertia, dtype=float).tolist(),
+        "r_max_m": float(m.r_max),
+        "bounds_m": np.asarray(m.bounds, dtype=float).tolist(),
+    }
+
+
+def simulation_settings() -> dict:
+    from ..grasp import policy
+    from ..materials import DEFAULT_OBJECT_MATERIAL
+
+    settings = {
+        "hit_eps_m": policy.HIT_EPS,
+        "contact_tol_m": policy.CONTACT_TOL,
+        "merge_radius_m": policy.MERGE_RADIUS,
+        "object_material": DEFAULT_OBJECT_MATERIAL,
+    }
+    try:
+        from ..metrics.cones import N_EDGES
+
+        settings["friction_cone_edges"] = N_EDGES
+    except ImportError:  # pragma: no cover - metrics stage missing
+        pass
+    return settings
+
+
+def task_thresholds() -> dict:
+    """The thresholds of every registered task in every mode, as far as the tasks say."""
+    try:
+        from .. import tasks
+    except ImportError:
+        return {}
+    out = {}
+    try:
+        names = tasks.list_tasks()
+    except Exception:  # noqa: BLE001 - a card must not fail because of a task plug-in
+        return {}
+    for entry in names:
+        name = getattr(entry, "name", entry)
+        try:
+            task = tasks.get_task(name)
+            out[str(name)] = _task_thresholds(task)
+        except Exception:  # noqa: BLE001
+            log.debug("no thresholds for task %r", name, exc_info=True)
+    return out
+
+
+def _task_thresholds(task) -> dict:
+    for attr in ("thresholds_by_mode", "modes"):
+        value = getattr(task, attr, None)
+        if callable(value):
+            value = value()
+        if isinstance(value, dict):
+            return {str(k): _plain(v) for k, v in value.items()}
+    thresholds = getattr(task, "thresholds", None)
+    if callable(thresholds):
+        thresholds = thresholds()
+    return _plain(thresholds) if thresholds is not None else {}
+
+
+def _plain(value):
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if np.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return None if np.isnan(v) else v
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if hasattr(value, "__dict__") and not isinstance(value, type):
+        return _plain(dict(vars(value)))
+    return value
+
+
+def schema_description(metrics: bool) -> list[dict]:
+    from .schema import SCHEMA, SIMULATION_SCHEMA
+
+    schema = SCHEMA if metrics else SIMULATION_SCHEMA
+    return [{"name": f.name, "type": str(f.type)} for f in schema]
+
+
+def build_card(
+    *,
+    manifest: dict,
+    objects: Sequence,
+    hand,
+    shards: dict,
+    plan: Sequence,
+    previous: dict | None,
+    run: dict,
+) -> dict:
+    from ..materials import friction_table
+
+    per_object: dict[str, Counter] = {o.name: Counter() for o in objects}
+    closure: Counter = Counter()
+    rows = 0
+    for shard, info in shards.items():
+        name = objects[shard.object_index].name
+        per_object[name].update(info.get("status_counts", {}))
+        closure[name] += int(info.get("force_closure", 0))
+        rows += shard.rows
+    totals: Counter = Counter()
+    for c in per_object.values():
+        totals.update(c)
+    planned_rows = sum(s.rows for s in plan)
+    runs = list((previous or {}).get("runs", [])) + [run]
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "affordgrasp_version": __version__,
+        "complete": rows == planned_rows,
+        "rows": rows,
+        "rows_planned": planned_rows,
+        "shards": len(shards),
+        "shards_planned": len(plan),
+        "seed": manifest["seed"],
+        "samples_per_object": manifest["samples"],
+        "shard_size": manifest["shard_size"],
+        "metrics": manifest["metrics"],
+        "soft_contacts": manifest["soft"],
+        "command": manifest.get("command"),
+        "created": manifest.get("created"),
+        "runs": runs,
+        "status_counts": dict(sorted(totals.items())),
+        "status_counts_per_object": {k: dict(sorted(v.items())) for k, v in per_object.items()},
+        "force_closure_per_object": (
+            {o.name: closure[o.name] for o in objects} if manifest["metrics"] else None
+        ),
+        "objects": [object_description(o) for o in objects],
+        "hand": hand_description(hand),
+        "friction_table": friction_table(),
+        "simulation": simulation_settings(),
+        "task_thresholds": task_thresholds(),
+        "columns": schema_description(manifest["metrics"]),
+    }
+
+
+def card_markdown(card: dict) -> str:
+    """The card as a short Markdown page."""
+    state = "complete" if card["complete"] else "INCOMPLETE (run the same command to finish it)"
+    lines = [
+        "# affordgrasp dataset",
+        "",
+        f"* state: {state}; {card['rows']:,} of {card['rows_planned']:,} rows in "
+        f"{card['shards']} of {card['shards_planned']} shards",
+        f"* affordgrasp {card['affordgrasp_version']}, format {card['format_version']}",
+        f"* seed {card['seed']}, {card['samples_per_object']:,} samples per object, "
+        f"shards of {card['shard_size']} rows, metrics: {'yes' if card['metrics'] else 'no'}, "
+        f"soft contacts: {'yes' if card['soft_contacts'] else 'no'}",
+        f"* created {card.get('created')} by: `{_command_text(card.get('command'))}`",
+        "",
+        "## Status counts",
+        "",
+        "| object | " + " | ".join(_statuses(card)) + " |",
+        "|---|" + "---:|" * len(_statuses(card)),
+    ]
+    for name, counts in card["status_counts_per_object"].items():
+        cells = " | ".join(f"{counts.get(s, 0):,}" for s in _statuses(card))
+        lines.append(f"| {name} | {cells} |")
+    if card.get("force_closure_per_object"):
+        lines += [
+            "",
+            "Force closure (ε > 0): "
+            + ", ".join(f"{k} {v:,}" for k, v in card["force_closure_per_object"].items()),
+        ]
+    lines += [
+        "",
+        "## Objects",
+        "",
+        "| object | category | mass (kg, unit density) | volume (m³) | r_max (m) | mesh hash |",
+        "|---|---|---:|---:|---:|---|",
+    ]
+    for o in card["objects"]:
+        lines.append(
+            f"| {o['name']} | {o['category']} | {o['mass_kg']:.4g} | {o['volume_m3']:.4g} | "
+            f"{o['r_max_m']:.4g} | `{o['mesh_hash'][:16]}…` |"
+        )
+    hand = card["hand"]
+    lines += [
+        "",
+        f"## Hand: {hand['name']}",
+        "",
+        hand.get("description") or "",
+        "",
+        "| DOF | lower | upper | role |",
+        "|---|---:|---:|---|",
+    ]
+    for d in hand["dofs"]:
+        lines.append(f"| {d['name']} | {d['lower']:.4g} | {d['upper']:.4g} | {d['role']} |")
+    lines += [
+        "",
+        "Link materials: " + ", ".join(f"{x['name']} {x['material']}" for x in hand["links"]),
+    ]
+    lines += ["", "## Simulation", ""]
+    lines += [f"* {k}: {v}" for k, v in card["simulation"].items()]
+    lines += ["", "## Friction table (μ)", ""]
+    lines.append(", ".join(f"{k} {v}" for k, v in card["friction_table"].items()))
+    if card["task_thresholds"]:
+        lines += ["", "## Task thresholds", "", "```json"]
+        lines.append(json.dumps(card["task_thresholds"], indent=2))
+        lines.append("```")
+    lines += ["", "## Runs", ""]
+    for r in card["runs"]:
+        lines.append(
+            f"* {r.get('started')}: `{_command_text(r.get('command'))}`, engine {r.get('engine')} "
+            f"× {r.get('workers')}, {r.get('samples_written', 0):,} samples in "
+            f"{r.get('elapsed_s', 0):.1f} s{'' if r.get('complete') else ' (interrupted)'}"
+        )
+    lines += [
+        "",
+        "## Columns",
+        "",
+        "See docs/dataset.md for meanings and units.",
+        "",
+    ]
+    lines += [f"* `{c['name']}`: {c['type']}" for c in card["columns"]]
+    return "\n".join(lines) + "\n"
+
+
+def _statuses(card: dict) -> list[str]:
+    try:
+        from ..grasp.policy import STATUSES
+
+        known = list(STATUSES)
+    except ImportError:  # pragma: no cover
+        known = []
+    seen = sorted({s for c in card["status_counts_per_object"].values() for s in c})
+    return known + [s for s in seen if s not in known]
+
+
+def _command_text(command) -> str:
+    if not command:
+        return "(Python API)"
+    import shlex
+
+    return shlex.join(command)
+
+
+def read_card(directory: str | Path) -> dict | None:
+    path = Path(directory) / CARD_JSON_NAME
+    if not path.is_file():
+        return None
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def write_card(directory: Path, **kwargs) -> dict:
+    """Build the card from the run's facts and write both files atomically."""
+    card = build_card(previous=read_card(directory), **kwargs)
+    write_json_atomic(directory / CARD_JSON_NAME, card)
+    md_path = directory / CARD_MD_NAME
+    tmp = md_path.with_name(f".{md_path.name}.tmp")
+    tmp.write_text(card_markdown(card), encoding="utf-8")
+    tmp.replace(md_path)
+    return card

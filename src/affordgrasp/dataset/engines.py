@@ -1,0 +1,347 @@
+"""Where simulations run: in this process, on local worker processes, or on Ray (SPEC §2.6).
+
+Every engine runs the same unit of work, a :class:`Job` (a range of seeded samples, or given
+inputs, of one object), through the same function, :func:`run_job`, and hands the resulting
+Arrow table back to the caller, which alone writes files. So the output does not depend on the
+engine or on the number of workers; only where the computing happens changes.
+
+Workers never resolve object specs: the caller resolves each object once and ships its
+mesh (:class:`ObjectPayload`); a worker rebuilds the object and checks its mesh hash. So a
+cluster's machines need affordgrasp installed, but neither the mesh files nor the time to
+build and repair procedural objects.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import uuid
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyarrow as pa
+
+from ..errors import InputError, require
+
+log = logging.getLogger(__name__)
+
+ENGINES = ("local", "ray")
+
+
+@dataclass(frozen=True)
+class ObjectPayload:
+    """What a worker needs to rebuild a resolved object exactly.
+
+    vertices : (v, 3) float64, m; faces : (f, 3) int64 — the prepared mesh as resolved.
+    """
+
+    name: str
+    category: str
+    source: str
+    density: float
+    mesh_hash: str
+    vertices: np.ndarray
+    faces: np.ndarray
+
+    @classmethod
+    def from_object(cls, obj) -> ObjectPayload:
+        return cls(
+            name=obj.name,
+            category=obj.category,
+            source=obj.source,
+            density=float(obj.mass.density),
+            mesh_hash=obj.mesh_hash,
+            vertices=np.ascontiguousarray(obj.mesh.vertices, dtype=np.float64),
+            faces=np.ascontiguousarray(obj.mesh.faces, dtype=np.int64),
+        )
+
+    def build(self):
+        """The GraspObject again, with the same mesh bytes (checked by hash)."""
+        import trimesh
+
+        from ..objects import GraspObject, mass_properties, mesh_hash
+
+        mesh = trimesh.Trimesh(self.vertices, self.faces, process=False)
+        digest = mesh_hash(mesh)
+        if digest != self.mesh_hash:  # pragma: no cover - a transport error
+            raise RuntimeError(f"object {self.name!r} arrived with a different mesh hash")
+        return GraspObject(
+            name=self.name,
+            category=self.category,
+            mesh=mesh,
+            mass=mass_properties(mesh, density=self.density),
+            mesh_hash=digest,
+            source=self.source,
+        )
+
+
+@dataclass(frozen=True)
+class RunContext:
+    """The settings every job of a run shares."""
+
+    objects: tuple[ObjectPayload, ...]
+    hand: str = "barrett"
+    seed: int = 0
+    metrics: bool = True
+    soft: bool = False
+    key: str = field(default_factory=lambda: uuid.uuid4().hex)
+
+
+@dataclass(frozen=True)
+class Job:
+    """Samples ``start .. start+n-1`` of object ``object_index``.
+
+    With ``p0`` (n, 6) and ``use_dir`` (n, 2) the inputs are these (the optimiser); without
+    them they are the run's seeded uniform samples (the generator).
+    """
+
+    object_index: int
+    start: int
+    n: int
+    p0: np.ndarray | None = None
+    use_dir: np.ndarray | None = None
+
+
+# Per process: the context of the current run and its rebuilt objects.
+_CONTEXT: RunContext | None = None
+_OBJECTS: dict[int, object] = {}
+
+
+def _install_context(context: RunContext) -> None:
+    global _CONTEXT
+    if _CONTEXT is None or _CONTEXT.key != context.key:
+        _CONTEXT = context
+        _OBJECTS.clear()
+
+
+def _object(index: int):
+    obj = _OBJECTS.get(index)
+    if obj is None:
+        obj = _CONTEXT.objects[index].build()
+        _OBJECTS[index] = obj
+    return obj
+
+
+def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
+    """Evaluate one job in this process; the same function on every engine."""
+    from ..evaluate import evaluate, evaluate_samples
+
+    if context is not None:
+        _install_context(context)
+    ctx = _CONTEXT
+    obj = _object(job.object_index)
+    if job.p0 is None:
+        table, _ = evaluate_samples(
+            obj,
+            job.n,
+            seed=ctx.seed,
+            start=job.start,
+            hand=ctx.hand,
+            soft=ctx.soft,
+            metrics=ctx.metrics,
+        )
+    else:
+        table, _ = evaluate(
+            obj,
+            job.p0,
+            job.use_dir,
+            hand=ctx.hand,
+            seed=ctx.seed,
+            sample_start=job.start,
+            soft=ctx.soft,
+            metrics=ctx.metrics,
+        )
+    return table
+
+
+def _worker_init(context: RunContext) -> None:
+    # Ctrl-C reaches the whole process group; only the parent decides what to do about it.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _install_context(context)
+
+
+def default_workers() -> int:
+    """Every core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class Engine:
+    """Submit jobs, wait for some to finish, collect their tables, stop."""
+
+    workers: int = 1
+    name: str = ""
+
+    def submit(self, job: Job):
+        raise NotImplementedError
+
+    def wait(self, handles: list) -> list:
+        """Block until at least one of ``handles`` is done; return the done ones."""
+        raise NotImplementedError
+
+    def result(self, handle) -> pa.Table:
+        raise NotImplementedError
+
+    def close(self, cancel: bool = False) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        self.close(cancel=exc_type is not None)
+
+
+class InlineEngine(Engine):
+    """Jobs run in this process when submitted (one worker: no process to start)."""
+
+    name = "local"
+
+    def __init__(self, context: RunContext):
+        self.context = context
+        self.workers = 1
+
+    def submit(self, job: Job):
+        return _Done(run_job(job, self.context))
+
+    def wait(self, handles: list) -> list:
+        return list(handles)
+
+    def result(self, handle) -> pa.Table:
+        return handle.table
+
+
+class _Done:
+    """A finished inline job (a hashable handle like a future's)."""
+
+    __slots__ = ("table",)
+
+    def __init__(self, table: pa.Table):
+        self.table = table
+
+
+class LocalEngine(Engine):
+    """A pool of worker processes on this machine (started with 'spawn': safe with threads)."""
+
+    name = "local"
+
+    def __init__(self, context: RunContext, workers: int):
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        self.workers = workers
+        self._pool = ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_worker_init,
+            initargs=(context,),
+        )
+
+    def submit(self, job: Job):
+        return self._pool.submit(run_job, job)
+
+    def wait(self, handles: list) -> list:
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        done, _ = wait(handles, return_when=FIRST_COMPLETED)
+        return list(done)
+
+    def result(self, handle) -> pa.Table:
+        return handle.result()
+
+    def close(self, cancel: bool = False) -> None:
+        if cancel:
+            # Running jobs' results would be thrown away: stop their processes now rather
+            # than wait for them. The executor keeps them in a private mapping.
+            processes = list(getattr(self._pool, "_processes", {}).values())
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            for p in processes:
+                if p.is_alive():
+                    p.terminate()
+            for p in processes:
+                p.join(timeout=5)
+        else:
+            self._pool.shutdown(wait=True)
+
+
+def _ray_run_job(context: RunContext, job: Job) -> pa.Table:
+    return run_job(job, context)
+
+
+class RayEngine(Engine):
+    """Jobs as Ray tasks, one CPU each, on a local Ray or an existing cluster (``address``)."""
+
+    name = "ray"
+
+    def __init__(self, context: RunContext, workers: int | None, address: str | None):
+        ray = require("ray", "cluster")
+        self._ray = ray
+        self._started = False
+        if not ray.is_initialized():
+            kwargs = {"address": address, "ignore_reinit_error": True, "log_to_driver": False}
+            if address is None:
+                kwargs["num_cpus"] = workers or default_workers()
+                kwargs["include_dashboard"] = False
+            try:
+                ray.init(**kwargs)
+            except ConnectionError as exc:
+                raise InputError(
+                    f"cannot connect to the Ray cluster at {address!r}: {exc}; give the "
+                    "address 'ray start --head' printed (e.g. 'ray://host:10001' or 'host:6379')"
+                ) from exc
+            self._started = True
+        cpus = int(ray.cluster_resources().get("CPU", 1))
+        self.workers = max(1, cpus if workers is None or address is not None else workers)
+        self._context_ref = ray.put(context)
+        self._remote = ray.remote(num_cpus=1, max_retries=2)(_ray_run_job)
+
+    def submit(self, job: Job):
+        return self._remote.remote(self._context_ref, job)
+
+    def wait(self, handles: list) -> list:
+        done, _ = self._ray.wait(handles, num_returns=1)
+        # Take everything already finished, not only the first.
+        more, _ = self._ray.wait(handles, num_returns=len(handles), timeout=0)
+        return list({h: None for h in [*done, *more]})
+
+    def result(self, handle) -> pa.Table:
+        return self._ray.get(handle)
+
+    def close(self, cancel: bool = False) -> None:
+        if self._started:
+            self._ray.shutdown()
+
+
+def check_engine(engine: str, workers: int | None, address: str | None) -> None:
+    """Refuse bad engine options before any work (or any directory) is made."""
+    if engine not in ENGINES:
+        raise InputError(f"unknown engine {engine!r}; choose one of: {', '.join(ENGINES)}")
+    if workers is not None and (isinstance(workers, bool) or workers < 1):
+        raise InputError(f"--workers must be at least 1, got {workers}")
+    if address is not None and engine != "ray":
+        raise InputError("--address is for the Ray engine; add --engine ray")
+    if engine == "ray":
+        try:
+            require("ray", "cluster")
+        except ImportError as exc:
+            raise InputError(str(exc)) from None
+
+
+def make_engine(
+    context: RunContext,
+    *,
+    engine: str = "local",
+    workers: int | None = None,
+    address: str | None = None,
+) -> Engine:
+    """The engine asked for: ``local`` (``workers`` processes; 1: this process) or ``ray``."""
+    check_engine(engine, workers, address)
+    if engine == "ray":
+        return RayEngine(context, workers, address)
+    workers = workers or default_workers()
+    if workers == 1:
+        return InlineEngine(context)
+    return LocalEngine(context, workers)

@@ -1,0 +1,364 @@
+"""Generate a sharded Parquet dataset of evaluated grasps (SPEC §2.6, paper §IV-B).
+
+:func:`generate` samples (p0, d) uniformly for every object, simulates the grasp policy,
+computes Φ, and writes every sample, stable or not, as Parquet shards (see
+``affordgrasp.dataset.layout`` for the directory layout and ``docs/dataset.md`` for the
+schema). Guarantees:
+
+* deterministic: sample ``i`` of an object depends only on (seed, i, object, hand), never on
+  the engine, the number of workers or shard boundaries;
+* resumable: shards are renamed into place only when whole, so after Ctrl-C, a crash or
+  ``kill -9`` the same call finishes the job and the rows equal an uninterrupted run's;
+* memory-bounded: only the chunks of shards still being computed are held, at most one
+  shard's worth plus two chunks per worker, however large the run.
+
+The work is cut into chunks (a few hundred samples) so that every worker is busy even on a
+small run and progress is reported often; the caller's process alone writes files.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections import Counter
+from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager, nullcontext
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.compute as pc
+
+from .. import __version__
+from ..errors import DatasetError, InputError
+from . import card as card_module
+from .engines import Engine, Job, ObjectPayload, RunContext, check_engine, make_engine
+from .layout import (
+    DEFAULT_SHARD_SIZE,
+    FORMAT,
+    FORMAT_VERSION,
+    Shard,
+    plan_shards,
+    prepare_directory,
+    remove_stale_temporaries,
+    shard_metadata,
+    valid_shard_info,
+    write_shard,
+)
+
+log = logging.getLogger(__name__)
+
+DEFAULT_CHUNK_SIZE = 256
+MIN_CHUNK_SIZE = 8
+
+ProgressFactory = Callable[[int], AbstractContextManager[Callable[[int], None]]]
+
+
+@dataclass
+class GenerationSummary:
+    """What a call to :func:`generate` did and what the dataset now holds."""
+
+    directory: str
+    complete: bool
+    samples_per_object: int
+    shards_total: int
+    shards_written: int
+    shards_skipped: int
+    samples_written: int
+    elapsed_s: float
+    engine: str
+    workers: int
+    status_counts: dict[str, dict[str, int]] = field(default_factory=dict)
+
+    @property
+    def grasps_per_s(self) -> float:
+        return self.samples_written / self.elapsed_s if self.elapsed_s > 0 else 0.0
+
+    def to_dict(self) -> dict:
+        return {
+            "directory": self.directory,
+            "complete": self.complete,
+            "samples_per_object": self.samples_per_object,
+            "shards_total": self.shards_total,
+            "shards_written": self.shards_written,
+            "shards_skipped": self.shards_skipped,
+            "samples_written": self.samples_written,
+            "elapsed_s": self.elapsed_s,
+            "grasps_per_s": self.grasps_per_s,
+            "engine": self.engine,
+            "workers": self.workers,
+            "status_counts": self.status_counts,
+        }
+
+
+def build_manifest(
+    objects: Sequence,
+    *,
+    samples: int,
+    seed: int,
+    hand: str,
+    shard_size: int,
+    metrics: bool,
+    soft: bool,
+    command: Sequence[str] | None,
+) -> dict:
+    """The plan of a run as a JSON document (``_manifest.json``)."""
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "affordgrasp_version": __version__,
+        "seed": seed,
+        "samples": samples,
+        "shard_size": shard_size,
+        "hand": hand,
+        "metrics": metrics,
+        "soft": soft,
+        "objects": [
+            {
+                "index": i,
+                "name": o.name,
+                "category": o.category,
+                "mesh_hash": o.mesh_hash,
+                "source": o.source,
+            }
+            for i, o in enumerate(objects)
+        ],
+        "command": list(command) if command is not None else None,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+
+
+def resolve_objects(specs: Sequence) -> list:
+    """Resolve object specs once, refusing duplicates (they would duplicate rows)."""
+    from ..objects import resolve_object
+
+    if not specs:
+        raise InputError("no objects given; name at least one object (e.g. 'knife', 'knife:7')")
+    objects = [resolve_object(s) for s in specs]
+    seen: dict[str, int] = {}
+    for i, o in enumerate(objects):
+        if o.name in seen:
+            raise InputError(
+                f"object {o.name!r} is named twice ({specs[seen[o.name]]!r} and {specs[i]!r}); "
+                "name each object once"
+            )
+        seen[o.name] = i
+    return objects
+
+
+def _check_counts(samples: int, seed: int, shard_size: int, chunk_size: int) -> None:
+    for name, value, low in (
+        ("--samples", samples, 1),
+        ("--seed", seed, 0),
+        ("--shard-size", shard_size, 1),
+        ("--chunk-size", chunk_size, 1),
+    ):
+        if not isinstance(value, int) or isinstance(value, bool) or value < low:
+            raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
+
+
+def generate(
+    objects: Sequence,
+    samples: int,
+    out: str | Path,
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    engine: str = "local",
+    address: str | None = None,
+    hand: str = "barrett",
+    shard_size: int = DEFAULT_SHARD_SIZE,
+    chunk_size: int = DEFAULT_CHUNK_SIZE,
+    metrics: bool = True,
+    soft: bool = False,
+    command: Sequence[str] | None = None,
+    progress: ProgressFactory | None = None,
+) -> GenerationSummary:
+    """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
+
+    objects : object specs ("knife", "knife:7", a mesh path) or GraspObjects
+    samples : samples per object; seed : the run's seed (sample i depends on (seed, i) only)
+    workers : processes (local) or CPUs (local Ray); default every core. 1 runs in-process.
+    engine : "local" or "ray"; address : an existing Ray cluster (engine "ray")
+    shard_size : rows per shard file; chunk_size : most samples per unit of work
+    metrics : compute Φ (False writes the simulation columns only)
+    command : the command line, recorded in the manifest and the card
+    progress : ``progress(total_samples)`` returns a context manager yielding ``advance(n)``
+
+    Raises DatasetError when ``out`` holds another command's dataset or something else.
+    A KeyboardInterrupt stops the workers and leaves only whole shards (and an up-to-date
+    card marked incomplete); calling again resumes. Local workers are started with 'spawn':
+    a script calling this with ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
+    """
+    from ..hands import get_hand
+
+    _check_counts(samples, seed, shard_size, chunk_size)
+    check_engine(engine, workers, address)
+    hand_model = get_hand(hand)
+    resolved = resolve_objects(list(objects))
+    directory = Path(out)
+    if directory.exists() and not directory.is_dir():
+        raise DatasetError(f"--out {str(directory)!r} is a file; give a directory")
+    manifest = build_manifest(
+        resolved,
+        samples=samples,
+        seed=seed,
+        hand=hand_model.name,
+        shard_size=shard_size,
+        metrics=metrics,
+        soft=soft,
+        command=command,
+    )
+    manifest = prepare_directory(directory, manifest)
+    removed = remove_stale_temporaries(directory)
+    if removed:
+        log.info("removed %d half-written file(s) left by an interrupted run", removed)
+
+    from .schema import SCHEMA, SIMULATION_SCHEMA
+
+    schema = SCHEMA if metrics else SIMULATION_SCHEMA
+    plan = plan_shards(len(resolved), samples, shard_size)
+    infos: dict[Shard, dict] = {}
+    for shard in plan:
+        info = valid_shard_info(directory, shard, schema)
+        if info is not None:
+            infos[shard] = info
+    todo = [s for s in plan if s not in infos]
+    skipped = len(infos)
+
+    context = RunContext(
+        objects=tuple(ObjectPayload.from_object(o) for o in resolved),
+        hand=hand_model.name,
+        seed=seed,
+        metrics=metrics,
+        soft=soft,
+    )
+    started = time.perf_counter()
+    started_at = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    written_rows = 0
+    complete = False
+    engine_name, n_workers = engine, 0
+    try:
+        if todo:
+            with make_engine(context, engine=engine, workers=workers, address=address) as eng:
+                engine_name, n_workers = eng.name, eng.workers
+                total = sum(s.rows for s in todo)
+                bar = progress(total) if progress is not None else nullcontext(lambda n: None)
+                with bar as advance:
+                    for shard, info in _run_shards(
+                        eng, todo, resolved, directory, chunk_size, advance
+                    ):
+                        infos[shard] = info
+                        written_rows += shard.rows
+        complete = True
+    finally:
+        elapsed = time.perf_counter() - started
+        summary = GenerationSummary(
+            directory=str(directory),
+            complete=complete,
+            samples_per_object=samples,
+            shards_total=len(plan),
+            shards_written=len(infos) - skipped,
+            shards_skipped=skipped,
+            samples_written=written_rows,
+            elapsed_s=elapsed,
+            engine=engine_name,
+            workers=n_workers,
+            status_counts=_status_counts(resolved, infos),
+        )
+        if todo or card_module.read_card(directory) is None:  # a no-op run changes nothing
+            card_module.write_card(
+                directory,
+                manifest=manifest,
+                objects=resolved,
+                hand=hand_model,
+                shards=infos,
+                plan=plan,
+                run={
+                    "command": list(command) if command is not None else None,
+                    "engine": engine_name,
+                    "workers": n_workers,
+                    "started": started_at,
+                    "elapsed_s": round(elapsed, 3),
+                    "samples_written": written_rows,
+                    "complete": complete,
+                },
+            )
+    return summary
+
+
+def _status_counts(objects: Sequence, infos: dict[Shard, dict]) -> dict[str, dict[str, int]]:
+    counts: dict[str, Counter] = {o.name: Counter() for o in objects}
+    for shard, info in infos.items():
+        counts[objects[shard.object_index].name].update(info.get("status_counts", {}))
+    return {name: dict(sorted(c.items())) for name, c in counts.items()}
+
+
+def _run_shards(
+    engine: Engine,
+    todo: list[Shard],
+    objects: Sequence,
+    directory: Path,
+    chunk_size: int,
+    advance: Callable[[int], None],
+):
+    """Compute the shards in ``todo`` on ``engine``, write each when whole; yield (shard, info).
+
+    At most ``2 * workers`` chunks run at once and at most one shard's chunks plus those are
+    held in memory.
+    """
+    total_rows = sum(s.rows for s in todo)
+    # Small runs: smaller chunks so every worker has work; content does not depend on it.
+    chunk = max(MIN_CHUNK_SIZE, min(chunk_size, math.ceil(total_rows / (4 * engine.workers))))
+    jobs = (
+        (shard, Job(shard.object_index, start, min(start + chunk, shard.stop) - start))
+        for shard in todo
+        for start in range(shard.start, shard.stop, chunk)
+    )
+    depth = 1 if engine.workers == 1 and engine.name == "local" else 2 * engine.workers
+    # A slow chunk must not let finished chunks of later shards pile up: cap the chunks held
+    # (running or waiting for their shard). Chunks go out in plan order, so the first open
+    # shard can always be submitted whole under this cap and the run never stalls.
+    cap = depth + max(math.ceil(s.rows / chunk) for s in todo)
+    in_flight: dict = {}
+    parts: dict[Shard, dict[int, pa.Table]] = {}
+    held = 0
+    exhausted = False
+    while True:
+        while not exhausted and len(in_flight) < depth and held < cap:
+            item = next(jobs, None)
+            if item is None:
+                exhausted = True
+                break
+            shard, job = item
+            in_flight[engine.submit(job)] = (shard, job)
+            held += 1
+        if not in_flight:
+            return
+        for handle in engine.wait(list(in_flight)):
+            shard, job = in_flight.pop(handle)
+            table = engine.result(handle)
+            if table.num_rows != job.n:  # pragma: no cover - a broken worker
+                raise RuntimeError(f"a job returned {table.num_rows} rows instead of {job.n}")
+            pieces = parts.setdefault(shard, {})
+            pieces[job.start] = table
+            advance(job.n)
+            if sum(t.num_rows for t in pieces.values()) == shard.rows:
+                whole = pa.concat_tables([pieces[k] for k in sorted(pieces)]).combine_chunks()
+                held -= len(pieces)
+                del parts[shard]
+                counts = _count_statuses(whole)
+                info = shard_metadata(shard, objects[shard.object_index].name, counts)
+                if "epsilon" in whole.column_names:
+                    info["force_closure"] = int(
+                        pc.sum(pc.greater(whole["epsilon"], 0)).as_py() or 0
+                    )
+                write_shard(directory, shard, whole, info)
+                log.info("wrote %s (%d rows)", shard.name, shard.rows)
+                yield shard, info
+
+
+def _count_statuses(table: pa.Table) -> dict[str, int]:
+    counts = pc.value_counts(table.column("status")).to_pylist()
+    return {c["values"]: int(c["counts"]) for c in sorted(counts, key=lambda c: c["values"])}

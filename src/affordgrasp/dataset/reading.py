@@ -1,0 +1,105 @@
+"""Reading a generated dataset back: the shards as one Arrow dataset, streamed in batches.
+
+pandas, polars and DuckDB read a dataset directory directly as well (see docs/dataset.md);
+these functions add the checks: that the directory is an affordgrasp dataset, which objects it
+holds, and that only whole shards are read.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.dataset as pads
+
+from ..errors import DatasetError
+from .layout import read_manifest, shard_paths
+
+
+def open_dataset(directory: str | os.PathLike) -> pads.Dataset:
+    """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order)."""
+    from .schema import SCHEMA, SIMULATION_SCHEMA
+
+    manifest = read_manifest(directory)
+    paths = shard_paths(directory)
+    if not paths:
+        raise DatasetError(
+            f"dataset {str(directory)!r} has no shards yet; run the command in its "
+            "_manifest.json to generate them"
+        )
+    schema = SCHEMA if manifest.get("metrics", True) else SIMULATION_SCHEMA
+    return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
+
+
+def dataset_objects(directory: str | os.PathLike) -> list[str]:
+    """Names of the objects of a dataset, in the order they were given."""
+    return [o["name"] for o in read_manifest(directory)["objects"]]
+
+
+def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -> list[str] | None:
+    """Object names in the dataset matching ``wanted`` (``knife`` matches ``knife:0``).
+
+    None or empty selects every object. Raises DatasetError naming the objects available.
+    """
+    if not wanted:
+        return None
+    names = dataset_objects(directory)
+    chosen = []
+    for w in wanted:
+        w = w.strip()
+        if w in names:
+            chosen.append(w)
+        elif f"{w}:0" in names:
+            chosen.append(f"{w}:0")
+        elif os.path.basename(w) in names:
+            chosen.append(os.path.basename(w))
+        else:
+            raise DatasetError(
+                f"object {w!r} is not in dataset {str(directory)!r}; it holds: {', '.join(names)}"
+            )
+    return chosen
+
+
+def object_filter(objects: Sequence[str] | None) -> pads.Expression | None:
+    if not objects:
+        return None
+    return pads.field("object").isin(list(objects))
+
+
+def iter_batches(
+    directory: str | os.PathLike,
+    *,
+    columns: Sequence[str] | None = None,
+    objects: Sequence[str] | None = None,
+    batch_size: int = 65536,
+) -> Iterator[pa.RecordBatch]:
+    """Stream the rows of a dataset (optionally some columns, some objects) in batches."""
+    dataset = open_dataset(directory)
+    scanner = dataset.scanner(
+        columns=list(columns) if columns is not None else None,
+        filter=object_filter(select_objects(directory, objects)),
+        batch_size=batch_size,
+    )
+    yield from scanner.to_batches()
+
+
+def read_table(
+    directory: str | os.PathLike,
+    *,
+    columns: Sequence[str] | None = None,
+    objects: Sequence[str] | None = None,
+) -> pa.Table:
+    """A whole dataset (or some columns/objects of it) as one table: for small datasets."""
+    dataset = open_dataset(directory)
+    return dataset.to_table(
+        columns=list(columns) if columns is not None else None,
+        filter=object_filter(select_objects(directory, objects)),
+    )
+
+
+def dataset_dir(path: str | os.PathLike) -> Path:
+    path = Path(path)
+    read_manifest(path)
+    return path

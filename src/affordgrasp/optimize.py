@@ -1,0 +1,467 @@
+"""Direct optimisation of an affordance F_T over (p0, d) in simulation (SPEC §2.6).
+
+Beyond the paper's brute-force argmax: the cross-entropy method (CEM) searches the 8-D box
+x = (p0, d) ∈ [-1, 1]^5 × [0, 1] × [-1, 1]^2 for the grasp with the largest F_T.
+
+* Generation 0 is the run's uniform samples 0..m-1 (the same samples ``generate`` and the
+  random baseline use), so CEM starts where random sampling starts.
+* Each later generation is drawn from a Gaussian with a diagonal covariance, fitted to the
+  elites (the best ``elite_fraction`` of the population, plus the previous elites: the
+  simulation is deterministic, so keeping them is safe) and smoothed with the previous fit.
+  Angles (the approach azimuth u1, the roll u3 and the use azimuth d1) wrap around; the other
+  coordinates are clipped to the box.
+* −∞ (a failed threshold) ranks below every finite value and never becomes an elite once a
+  finite value is known. Until then the elites are the samples with the best *guidance*:
+  how close the grasp came to a usable one (contacts made, ε), which leads the search
+  towards the feasible region instead of sampling blindly.
+* A share of every generation (``explore_fraction``, and at least half while only guidance
+  leads) is drawn uniformly, so feasible regions the fit has not seen keep being found.
+
+:func:`cem_maximize` is the method on any vectorised objective; :func:`optimize` applies it to
+a task on an object and, with the same simulation budget, runs uniform random sampling.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable, Mapping
+from contextlib import nullcontext
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyarrow as pa
+
+from .errors import InputError
+
+log = logging.getLogger(__name__)
+
+DIM = 8
+LOW = np.array([-1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0])
+HIGH = np.ones(DIM)
+WIDTH = HIGH - LOW
+# u1 (azimuth, π·u1), u3 (roll, π·u3) and d1 (use azimuth) are angles: period 2 in u.
+PERIODIC = np.array([True, False, True, False, False, False, True, False])
+
+Objective = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass
+class CEMTrace:
+    """Every point CEM evaluated, in order, and what each generation did.
+
+    x : (budget, 8) inputs; values : (budget,) objective values (−inf allowed)
+    generations : per generation: evaluations so far, best so far, finite fraction, mean std
+    """
+
+    x: np.ndarray
+    values: np.ndarray
+    generations: list[dict] = field(default_factory=list)
+
+    @property
+    def best_index(self) -> int | None:
+        if not np.any(self.values > -np.inf):
+            return None
+        return int(np.argmax(self.values))
+
+    def best_so_far(self) -> np.ndarray:
+        """(budget,) the best value among the first i+1 evaluations."""
+        return np.maximum.accumulate(np.where(np.isnan(self.values), -np.inf, self.values))
+
+
+def default_population(budget: int) -> int:
+    """About 20 generations, each between 32 and 1000 samples."""
+    return int(np.clip(budget // 20, 32, 1000))
+
+
+def _wrap(u: np.ndarray) -> np.ndarray:
+    return (u + 1.0) % 2.0 - 1.0
+
+
+def _fit(elites: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and std of elite points (k, 8), circular on the periodic coordinates."""
+    mean = elites.mean(axis=0)
+    ang = np.pi * elites[:, PERIODIC]
+    mean[PERIODIC] = np.arctan2(np.sin(ang).mean(axis=0), np.cos(ang).mean(axis=0)) / np.pi
+    dev = elites - mean
+    dev[:, PERIODIC] = _wrap(dev[:, PERIODIC])
+    return mean, np.sqrt((dev**2).mean(axis=0))
+
+
+def _sample(rng: np.random.Generator, mean: np.ndarray, std: np.ndarray, n: int) -> np.ndarray:
+    x = mean + std * rng.standard_normal((n, DIM))
+    x[:, PERIODIC] = _wrap(x[:, PERIODIC])
+    return np.clip(x, LOW, HIGH)
+
+
+def uniform_inputs(rng: np.random.Generator, n: int) -> np.ndarray:
+    return LOW + WIDTH * rng.random((n, DIM))
+
+
+def cem_maximize(
+    objective: Objective,
+    *,
+    budget: int,
+    seed: int = 0,
+    population: int | None = None,
+    elite_fraction: float = 0.1,
+    smoothing: float = 0.7,
+    min_std: float = 0.01,
+    explore_fraction: float = 0.1,
+    initial: np.ndarray | None = None,
+    on_generation: Callable[[int], None] | None = None,
+) -> CEMTrace:
+    """Maximise ``objective`` over the (p0, d) box with the cross-entropy method.
+
+    objective : (m, 8) inputs → (m,) values; −inf for infeasible, NaN counts as −inf. It
+        may return (values, guidance) instead: among infeasible points, a larger guidance
+        (finite) ranks first, so the search heads for the feasible region while no or few
+        feasible points are known; guidance never ranks an infeasible point above a feasible.
+    budget : total evaluations; population : per generation (default ``default_population``)
+    min_std : floor of the std, as a fraction of each coordinate's range
+    explore_fraction : share of every later generation drawn uniformly from the box (at
+        least half while no feasible point is known)
+    initial : (m, 8) the first generation (default: uniform from ``seed``)
+    on_generation : called with the number of evaluations of each generation
+    """
+    if not isinstance(budget, int) or budget < 1:
+        raise InputError(f"--budget must be a positive integer, got {budget!r}")
+    pop = population or default_population(budget)
+    if pop < 2:
+        raise InputError(f"the population must be at least 2, got {pop}")
+    if not 0 < elite_fraction <= 0.5:
+        raise InputError(f"elite_fraction must lie in (0, 0.5], got {elite_fraction}")
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 0xCE]))
+    n_elite = max(2, math.ceil(elite_fraction * pop))
+    floor = min_std * WIDTH
+    xs: list[np.ndarray] = []
+    vs: list[np.ndarray] = []
+    generations: list[dict] = []
+    mean = std = None
+    elite_x = np.empty((0, DIM))
+    elite_v = np.empty(0)
+    elite_g = np.empty(0)
+    used = 0
+    while used < budget:
+        m = min(pop, budget - used)
+        if used == 0 and initial is not None:
+            x = np.asarray(initial, dtype=np.float64)[:m]
+        elif mean is None:
+            x = uniform_inputs(rng, m)
+        else:
+            x = _sample(rng, mean, std, m)
+            # A share of uniform samples keeps finding feasible regions the fit has not seen;
+            # half of the generation while the fit follows guidance only (it may mislead).
+            share = explore_fraction if np.any(elite_v > -np.inf) else max(explore_fraction, 0.5)
+            k = int(round(share * m))
+            x[:k] = uniform_inputs(rng, k)
+        got = objective(x)
+        v, g = got if isinstance(got, tuple) else (got, None)
+        v = np.asarray(v, dtype=np.float64)
+        if v.shape != (len(x),):
+            raise ValueError(f"objective returned shape {v.shape} for {len(x)} inputs")
+        v = np.where(np.isnan(v), -np.inf, v)
+        if g is None:
+            g = np.full(len(x), np.nan)  # no guidance: infeasible points never become elites
+        g = np.asarray(g, dtype=np.float64)
+        xs.append(x)
+        vs.append(v)
+        used += len(x)
+        # Elites among this generation and the previous elites: finite values first (best
+        # first), then the infeasible ones with the best guidance, if any.
+        cx = np.concatenate([elite_x, x])
+        cv = np.concatenate([elite_v, v])
+        cg = np.concatenate([elite_g, g])
+        finite = cv > -np.inf  # +inf, if a task gives it, is a value too; NaN is not
+        # Guidance only while nothing feasible is known: it is a heuristic, the values are not.
+        usable = finite | (np.isfinite(cg) & ~finite.any())
+        cx, cv, cg, finite = cx[usable], cv[usable], cg[usable], finite[usable]
+        order = np.lexsort((-np.nan_to_num(cg), -np.where(finite, cv, 0.0), ~finite))[:n_elite]
+        elite_x, elite_v, elite_g = cx[order], cv[order], cg[order]
+        if len(elite_v) >= 2:
+            new_mean, new_std = _fit(elite_x)
+            if mean is None:
+                mean, std = new_mean, np.maximum(new_std, floor)
+            else:
+                step = new_mean - mean
+                step[PERIODIC] = _wrap(step[PERIODIC])
+                mean = mean + smoothing * step
+                mean[PERIODIC] = _wrap(mean[PERIODIC])
+                std = np.maximum(smoothing * new_std + (1 - smoothing) * std, floor)
+        elif len(elite_v) == 1:
+            # One usable point: search around it, broadly.
+            mean = elite_x[0].copy()
+            std = WIDTH / 4 if std is None else std
+        generations.append(
+            {
+                "generation": len(generations),
+                "evaluations": used,
+                "best": float(elite_v[0]) if len(elite_v) else -math.inf,
+                "finite_elites": int(np.sum(elite_v > -np.inf)),
+                "finite_fraction": float(np.mean(v > -np.inf)),
+                "mean_std": float(np.mean(std / WIDTH)) if std is not None else None,
+            }
+        )
+        if on_generation is not None:
+            on_generation(len(x))
+    return CEMTrace(x=np.concatenate(xs), values=np.concatenate(vs), generations=generations)
+
+
+# -------------------------------------------------------------------------- on the simulator
+
+
+@dataclass
+class Found:
+    """A grasp found by a search: its F_T, inputs and full row (every column of evaluate)."""
+
+    value: float
+    p0: np.ndarray
+    use_dir: np.ndarray
+    evaluations: int  # how many simulations the search had run when it found it
+    row: dict
+
+    def to_dict(self) -> dict:
+        keep = {k: v for k, v in self.row.items() if not k.startswith("contact_")}
+        return {
+            "value": self.value,
+            "p0": self.p0.tolist(),
+            "use_dir": self.use_dir.tolist(),
+            "found_after": self.evaluations,
+            "row": keep,
+        }
+
+
+@dataclass
+class OptimizationResult:
+    """CEM against uniform random sampling at the same simulation budget."""
+
+    object: str
+    task: str
+    mode: str
+    budget: int
+    seed: int
+    cem: Found | None
+    random: Found | None
+    cem_trace: CEMTrace
+    random_values: np.ndarray | None
+    elapsed_s: float
+
+    @property
+    def cem_evaluations_to_match_random(self) -> int | None:
+        """Simulations CEM needed to reach random sampling's best (None: never)."""
+        if self.random is None:
+            return 1 if self.cem is not None else None
+        reached = np.nonzero(self.cem_trace.best_so_far() >= self.random.value)[0]
+        return int(reached[0]) + 1 if len(reached) else None
+
+    @property
+    def random_fraction_at_least_cem(self) -> float | None:
+        """Fraction of the random samples at least as good as CEM's best."""
+        if self.random_values is None or self.cem is None:
+            return None
+        return float(np.mean(self.random_values >= self.cem.value))
+
+    def to_dict(self) -> dict:
+        return {
+            "object": self.object,
+            "task": self.task,
+            "mode": self.mode,
+            "budget": self.budget,
+            "seed": self.seed,
+            "cem": self.cem.to_dict() if self.cem else None,
+            "random": self.random.to_dict() if self.random else None,
+            "cem_finite": int(np.sum(self.cem_trace.values > -np.inf)),
+            "random_finite": (
+                int(np.sum(self.random_values > -np.inf))
+                if self.random_values is not None
+                else None
+            ),
+            "cem_evaluations_to_match_random": self.cem_evaluations_to_match_random,
+            "random_fraction_at_least_cem": self.random_fraction_at_least_cem,
+            "generations": self.cem_trace.generations,
+            "elapsed_s": self.elapsed_s,
+        }
+
+
+class _Simulator:
+    """Scores batches of inputs with F_T on an engine, remembering the best row."""
+
+    def __init__(self, engine, task, mode, thresholds, seed):
+        self.engine = engine
+        self.task = task
+        self.mode = mode
+        self.thresholds = dict(thresholds or {})
+        self.seed = seed
+        self.next_sample = 0
+
+    def _run(self, jobs) -> pa.Table:
+        handles = [self.engine.submit(j) for j in jobs]
+        tables = {}
+        pending = list(handles)
+        while pending:
+            for h in self.engine.wait(pending):
+                tables[h] = self.engine.result(h)
+                pending.remove(h)
+        return pa.concat_tables([tables[h] for h in handles])
+
+    def _split(self, n: int) -> list[tuple[int, int]]:
+        parts = max(1, min(n, 2 * self.engine.workers))
+        bounds = np.linspace(0, n, parts + 1).astype(int)
+        return [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+
+    def score(self, table: pa.Table) -> np.ndarray:
+        from .dataset.best import task_values
+
+        values = task_values(self.task, table, self.mode, self.thresholds)
+        return np.where(np.isnan(values), -np.inf, values)
+
+    def inputs(self, x: np.ndarray) -> tuple[np.ndarray, pa.Table]:
+        from .dataset.engines import Job
+
+        start = self.next_sample
+        jobs = [
+            Job(0, start + a, b - a, p0=x[a:b, :6].copy(), use_dir=x[a:b, 6:].copy())
+            for a, b in self._split(len(x))
+        ]
+        self.next_sample += len(x)
+        table = self._run(jobs)
+        return self.score(table), table
+
+    def seeded(self, start: int, stop: int) -> tuple[np.ndarray, pa.Table]:
+        from .dataset.engines import Job
+
+        jobs = [Job(0, start + a, b - a) for a, b in self._split(stop - start)]
+        table = self._run(jobs)
+        return self.score(table), table
+
+
+def _found(values: np.ndarray, table: pa.Table, offset: int) -> Found | None:
+    if not np.any(values > -np.inf):
+        return None
+    i = int(np.argmax(values))
+    row = table.slice(i, 1).to_pylist()[0]
+    return Found(
+        value=float(values[i]),
+        p0=np.asarray(row["p0"], dtype=np.float64),
+        use_dir=np.asarray(row["use_dir"], dtype=np.float64),
+        evaluations=offset + i + 1,
+        row=row,
+    )
+
+
+def guidance(table: pa.Table) -> np.ndarray:
+    """How close each grasp came to a usable one: contacts made, plus 100 ε.
+
+    Ranks infeasible (−∞) samples among themselves while CEM has too few feasible ones: more
+    links touching and force closure make every task's thresholds likelier to pass.
+    """
+    n = table["n_contacts"].to_numpy().astype(np.float64)
+    eps = table["epsilon"].to_numpy() if "epsilon" in table.column_names else 0.0
+    return n + 100.0 * np.nan_to_num(eps)
+
+
+def _better(a: Found | None, b: Found | None) -> Found | None:
+    if a is None:
+        return b
+    if b is None:
+        return a
+    return b if b.value > a.value else a
+
+
+def optimize(
+    obj,
+    task: str,
+    *,
+    mode: str = "default",
+    budget: int = 20000,
+    seed: int = 0,
+    thresholds: Mapping[str, float] | None = None,
+    hand: str = "barrett",
+    workers: int | None = None,
+    engine: str = "local",
+    address: str | None = None,
+    population: int | None = None,
+    baseline: bool = True,
+    progress=None,
+) -> OptimizationResult:
+    """Maximise F_T of ``task`` on ``obj`` with CEM; also uniform random sampling, same budget.
+
+    obj : an object spec or GraspObject; budget : simulations for each method
+    baseline : also run random sampling (samples 0..budget-1 of the run ``seed``, the rows
+        ``generate --seed`` writes; CEM's first generation is their first part, reused)
+    progress : ``progress(total)`` returns a context manager yielding ``advance(n)``
+    """
+    from .dataset.best import resolve_task
+    from .dataset.engines import ObjectPayload, RunContext, check_engine, make_engine
+    from .grasp.pregrasp import sample_inputs
+    from .hands import get_hand
+    from .objects import resolve_object
+
+    if not isinstance(budget, int) or budget < 1:
+        raise InputError(f"--budget must be a positive integer, got {budget!r}")
+    if not isinstance(seed, int) or seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {seed!r}")
+    check_engine(engine, workers, address)
+    task_obj = resolve_task(task)
+    task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
+    resolved = resolve_object(obj)
+    hand_model = get_hand(hand)
+    pop = population or default_population(budget)
+    context = RunContext(
+        objects=(ObjectPayload.from_object(resolved),), hand=hand_model.name, seed=seed
+    )
+    started = time.perf_counter()
+    total = budget + (max(0, budget - min(pop, budget)) if baseline else 0)
+    bar = progress(total) if progress is not None else nullcontext(lambda n: None)
+    with make_engine(context, engine=engine, workers=workers, address=address) as eng, bar as adv:
+        sim = _Simulator(eng, task_obj, mode, thresholds, seed)
+        # The first generation is the random run's first samples: evaluate them once.
+        p0, d = sample_inputs(seed, 0, min(pop, budget))
+        first_values, first_table = sim.seeded(0, len(p0))
+        sim.next_sample = len(p0)  # CEM's own rows are numbered on from there
+        adv(len(p0))
+        best = {"cem": _found(first_values, first_table, 0)}
+        calls = {"n": 0}
+
+        def objective(x: np.ndarray) -> np.ndarray:
+            calls["n"] += 1
+            if calls["n"] == 1:
+                return first_values, guidance(first_table)
+            offset = sim.next_sample
+            values, table = sim.inputs(x)
+            best["cem"] = _better(best["cem"], _found(values, table, offset))
+            return values, guidance(table)
+
+        trace = cem_maximize(
+            objective,
+            budget=budget,
+            seed=seed,
+            population=pop,
+            initial=np.concatenate([p0, d], axis=1),
+            on_generation=lambda n: adv(n) if calls["n"] > 1 else None,
+        )
+        random_best = random_values = None
+        if baseline:
+            random_best = _found(first_values, first_table, 0)
+            parts = [first_values]
+            step = max(pop, 256 * eng.workers)
+            for start in range(len(p0), budget, step):
+                stop = min(budget, start + step)
+                values, table = sim.seeded(start, stop)
+                random_best = _better(random_best, _found(values, table, start))
+                parts.append(values)
+                adv(stop - start)
+            random_values = np.concatenate(parts)
+    return OptimizationResult(
+        object=resolved.name,
+        task=task,
+        mode=mode,
+        budget=budget,
+        seed=seed,
+        cem=best["cem"],
+        random=random_best,
+        cem_trace=trace,
+        random_values=random_values,
+        elapsed_s=time.perf_counter() - started,
+    )

@@ -1,0 +1,37 @@
+"""Shared fixtures: one small dataset, generated once, that other tests compare against."""
+
+from __future__ import annotations
+
+import pytest
+from dataset_support import SAMPLES, SEED, SHARD_SIZE
+
+
+@pytest.fixture(scope="session")
+def box_mesh(tmp_path_factory):
+    import trimesh
+
+    path = tmp_path_factory.mktemp("meshes") / "box.stl"
+    trimesh.creation.box([0.12, 0.04, 0.03]).export(path)
+    return path
+
+
+@pytest.fixture(scope="session")
+def object_specs(box_mesh):
+    return ["knife", str(box_mesh)]
+
+
+@pytest.fixture(scope="session")
+def reference_dataset(tmp_path_factory, object_specs):
+    """The uninterrupted, single-process run every other run must reproduce."""
+    from affordgrasp.dataset.generate import generate
+
+    out = tmp_path_factory.mktemp("reference") / "ds"
+    generate(object_specs, SAMPLES, out, seed=SEED, workers=1, shard_size=SHARD_SIZE)
+    return out
+
+
+@pytest.fixture(scope="session")
+def reference_table(reference_dataset):
+    from affordgrasp.dataset.reading import read_table
+
+    return read_table(reference_dataset)

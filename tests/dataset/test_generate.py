@@ -1,0 +1,182 @@
+"""Generation: determinism, resume after Ctrl-C and kill -9, refusal of foreign directories."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pyarrow as pa
+import pyarrow.compute as pc
+import pytest
+from dataset_support import SAMPLES, SEED, SHARD_SIZE
+
+from affordgrasp.dataset.generate import generate
+from affordgrasp.dataset.layout import plan_shards, shard_paths
+from affordgrasp.dataset.reading import read_table
+from affordgrasp.errors import DatasetError
+
+
+def rows_of(table: pa.Table, obj: str, start: int, stop: int) -> pa.Table:
+    mask = pc.and_(
+        pc.equal(table["object"], obj),
+        pc.and_(pc.greater_equal(table["sample"], start), pc.less(table["sample"], stop)),
+    )
+    return table.filter(mask).replace_schema_metadata(None)
+
+
+def same_rows(a: pa.Table, b: pa.Table) -> None:
+    a = a.replace_schema_metadata(None)
+    b = b.replace_schema_metadata(None)
+    assert a.schema == b.schema
+    assert a.num_rows == b.num_rows
+    for name in a.column_names:
+        assert a[name].equals(b[name]), f"column {name} differs"
+
+
+def test_plan_is_a_pure_function_of_the_command():
+    plan = plan_shards(2, 10, 4)
+    assert [(s.object_index, s.start, s.stop) for s in plan] == [
+        (0, 0, 4),
+        (0, 4, 8),
+        (0, 8, 10),
+        (1, 0, 4),
+        (1, 4, 8),
+        (1, 8, 10),
+    ]
+    assert plan == plan_shards(2, 10, 4)
+    assert plan[2].name == "part-00000-000000000008.parquet"
+
+
+def test_reference_rows_are_every_sample_in_order(reference_table):
+    assert reference_table.num_rows == 2 * SAMPLES
+    for name in ("knife:0", "box.stl"):
+        rows = rows_of(reference_table, name, 0, SAMPLES)
+        assert rows["sample"].to_pylist() == list(range(SAMPLES))
+    assert set(reference_table["seed"].to_pylist()) == {SEED}
+    # Unstable samples are written too.
+    assert {"missed", "touched", "grasped"} & set(reference_table["status"].to_pylist())
+    assert len(set(reference_table["status"].to_pylist())) >= 2
+
+
+def test_rows_equal_a_direct_evaluation(reference_table):
+    from affordgrasp.evaluate import evaluate_samples
+
+    direct, _ = evaluate_samples("knife", 12, seed=SEED, start=40)
+    same_rows(rows_of(reference_table, "knife:0", 40, 52), direct)
+
+
+def test_rows_do_not_depend_on_workers_or_shard_boundaries(tmp_path, object_specs, reference_table):
+    n = 32
+    summary = generate(
+        object_specs, n, tmp_path / "w2", seed=SEED, workers=2, shard_size=20, chunk_size=8
+    )
+    assert summary.complete and summary.workers == 2
+    got = read_table(tmp_path / "w2")
+    for name in ("knife:0", "box.stl"):
+        same_rows(rows_of(got, name, 0, n), rows_of(reference_table, name, 0, n))
+
+
+def test_refuses_a_directory_made_by_another_command(reference_dataset, object_specs):
+    before = sorted(p.name for p in reference_dataset.iterdir())
+    with pytest.raises(DatasetError, match="seed 5 there vs 6 here"):
+        generate(object_specs, SAMPLES, reference_dataset, seed=6, shard_size=SHARD_SIZE)
+    with pytest.raises(DatasetError, match="samples"):
+        generate(object_specs, 10, reference_dataset, seed=SEED, shard_size=SHARD_SIZE)
+    assert sorted(p.name for p in reference_dataset.iterdir()) == before
+
+
+def test_refuses_a_foreign_directory(tmp_path, box_mesh):
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.raises(DatasetError, match="not empty"):
+        generate([str(box_mesh)], 4, tmp_path, workers=1)
+
+
+def test_damaged_shard_and_stale_temporary_are_redone(tmp_path, box_mesh, reference_table):
+    out = tmp_path / "ds"
+    generate([str(box_mesh)], 24, out, seed=SEED, workers=1, shard_size=8)
+    shards = shard_paths(out)
+    assert len(shards) == 3
+    shards[1].write_bytes(b"PAR1 not really")  # damaged after it was written
+    stale = out / f".{shards[2].name}.tmp-12345"
+    stale.write_bytes(b"half a shard")
+    summary = generate([str(box_mesh)], 24, out, seed=SEED, workers=1, shard_size=8)
+    assert (summary.shards_written, summary.shards_skipped) == (1, 2)
+    assert not stale.exists()
+    same_rows(read_table(out), rows_of(reference_table, "box.stl", 0, 24))
+
+
+def _cli(args: list[str]) -> list[str]:
+    return [sys.executable, "-m", "affordgrasp.cli", *args]
+
+
+def _start(cmd: list[str]) -> subprocess.Popen:
+    # Its own process group, like a shell job: signals reach the workers too.
+    return subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+
+
+def _wait_for_shards(out, at_least: int, proc: subprocess.Popen, timeout: float = 60) -> int:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        n = len(shard_paths(out)) if out.exists() else 0
+        if n >= at_least:
+            return n
+        if proc.poll() is not None:
+            raise AssertionError(f"generation ended early: {proc.communicate()}")
+        time.sleep(0.005)
+    raise AssertionError("no shard appeared in time")
+
+
+def test_ctrl_c_then_kill_9_then_resume_equals_an_uninterrupted_run(
+    tmp_path, object_specs, reference_dataset, reference_table
+):
+    out = tmp_path / "ds"
+    cmd = _cli(
+        ["generate", *object_specs, "--samples", str(SAMPLES), "--out", str(out)]
+        + ["--seed", str(SEED), "--shard-size", str(SHARD_SIZE), "--workers", "2"]
+        + ["--chunk-size", "8"]
+    )
+    total = len(plan_shards(2, SAMPLES, SHARD_SIZE))
+
+    # Ctrl-C (SIGINT to the process group, as a terminal sends it): a clean stop.
+    proc = _start(cmd)
+    _wait_for_shards(out, 1, proc)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Run the same command to finish" in err
+    first = len(shard_paths(out))
+    assert 1 <= first < total
+    card = json.loads((out / "_card.json").read_text())
+    assert card["complete"] is False and card["shards"] == first
+
+    # kill -9 of the driver and its workers, mid-run.
+    proc = _start(cmd)
+    _wait_for_shards(out, first + 1, proc)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert len(shard_paths(out)) < total
+
+    # The same command again finishes the job.
+    proc = _start(cmd + ["--json"])
+    stdout, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    summary = json.loads(stdout)
+    assert summary["complete"] and summary["shards_skipped"] >= first + 1
+    assert summary["shards_skipped"] + summary["shards_written"] == total
+
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []
+    same_rows(read_table(out), reference_table)
+    card = json.loads((out / "_card.json").read_text())
+    ref_card = json.loads((reference_dataset / "_card.json").read_text())
+    assert card["complete"] and card["status_counts"] == ref_card["status_counts"]
+    assert [r["complete"] for r in card["runs"]] == [False, True]  # kill -9 leaves no record
