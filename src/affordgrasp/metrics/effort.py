@@ -148,6 +148,8 @@ def _lp_value(res) -> float:
         return float(res.objective)
     if res.status is LPStatus.INFEASIBLE:
         return float("inf")
+    if res.status is LPStatus.UNDECIDED:
+        return float("nan")
     raise RuntimeError("a minimum-effort LP reported unbounded; its costs are >= 0")
 
 

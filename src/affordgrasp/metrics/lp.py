@@ -54,6 +54,9 @@ class LPStatus(enum.Enum):
     OPTIMAL = "optimal"
     INFEASIBLE = "infeasible"
     UNBOUNDED = "unbounded"
+    # Neither the simplex nor the interior-point method could decide (numerical trouble on
+    # a nearly degenerate program). The metrics report NaN for it, never a guess.
+    UNDECIDED = "undecided"
 
 
 @dataclass(frozen=True)
@@ -348,6 +351,15 @@ class HighsStandardLP:
         self._highs.run()
         status = self._highs.getModelStatus()
         S = self._status_enum
+        if status not in (S.kOptimal, S.kInfeasible, S.kUnbounded, S.kUnboundedOrInfeasible):
+            # Numerical trouble in the simplex on a nearly degenerate program: the
+            # interior-point method, from scratch, usually decides it.
+            self._highs.clearSolver()
+            self._highs.setOptionValue("solver", "ipm")
+            self._highs.run()
+            status = self._highs.getModelStatus()
+            self._highs.setOptionValue("solver", "choose")
+            self._highs.clearSolver()
         if status == S.kOptimal:
             x = np.asarray(self._highs.getSolution().col_value, dtype=np.float64)
             objective = float(self._highs.getInfo().objective_function_value)
@@ -357,7 +369,11 @@ class HighsStandardLP:
         if status in (S.kUnbounded, S.kUnboundedOrInfeasible):
             # min c@x with x >= 0: "unbounded or infeasible" is resolved by a phase-1 solve
             return self._resolve_unbounded_or_infeasible(b)
-        raise RuntimeError(f"HiGHS ended with status {self._highs.modelStatusToString(status)}")
+        log.warning(
+            "HiGHS could not decide a nearly degenerate LP (status %s): its metric is NaN",
+            self._highs.modelStatusToString(status),
+        )
+        return _not_optimal(LPStatus.UNDECIDED, self._n)
 
     def _resolve_unbounded_or_infeasible(self, b: np.ndarray) -> LPResult:
         feasibility = HighsStandardLP(self._A, np.zeros(self._n)).solve(b)

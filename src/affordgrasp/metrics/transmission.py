@@ -105,7 +105,10 @@ def use_force_highs(W: np.ndarray, w_use: np.ndarray, n_contacts: int) -> float:
     assert W.shape[1] == n_contacts * (W.shape[1] // n_contacts)
     A, b, c = use_force_lp(np.ascontiguousarray(W), w_use, n_contacts)
     res = HighsStandardLP(A, c).solve(b)
-    # F = 0, λ = 0 is feasible and F is bounded: anything but an optimum is a bug
+    # F = 0, λ = 0 is feasible and F is bounded: anything but an optimum (or a program no
+    # solver could decide numerically, reported as NaN) is a bug
+    if res.status is LPStatus.UNDECIDED:
+        return float("nan")
     if res.status is not LPStatus.OPTIMAL:
         raise RuntimeError(f"the U_τ program must have an optimum, HiGHS says {res.status}")
     return max(0.0, -float(res.objective))
