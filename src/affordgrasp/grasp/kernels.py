@@ -127,71 +127,86 @@ def _bounding_radius(kind, half, r):
 
 
 @njit(cache=True)
+def _in_column(c, rr, pose, t_max):
+    """Whether a sphere (hand-frame centre c, radius rr grown by a shape's bounding radius)
+    meets the shape's bounding sphere while the hand travels 0..t_max along +z."""
+    dx = c[0] - pose[0, 3]
+    dy = c[1] - pose[1, 3]
+    d2 = dx * dx + dy * dy
+    if d2 > rr * rr:
+        return False
+    half_chord = np.sqrt(rr * rr - d2)
+    dz = c[2] - pose[2, 3]
+    return dz + half_chord >= 0.0 and dz - half_chord <= t_max
+
+
+@njit(cache=True)
 def approach_until_contact(
-    points,
-    cell_start,
-    cell_center,
-    cell_radius,
-    rot,
-    trans,
-    poses,
-    kinds,
-    halves,
-    radii,
-    t_max,
-    hit_eps,
-):
+    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
+    rot, trans, poses, kinds, halves, radii, t_max, hit_eps,
+):  # fmt: skip
     """Distance the hand can travel along its +z before a link touches a sample point.
 
     points : (n, 3) object samples in the object frame, grouped by cell
-    cell_start : (c + 1,) offsets of each cell's points; cell_center (c, 3), cell_radius (c,)
-        a bounding sphere per cell
+    cell_start : (c + 1,) offsets of each fine cell's points; cell_center (c, 3),
+        cell_radius (c,) a bounding sphere per cell; coarse_start (k + 1,) offsets of each
+        coarse cell's fine cells, coarse_center (k, 3), coarse_radius (k,)
     rot, trans : the start pose of the hand (object frame = rot @ hand + trans)
     poses : (s, 4, 4) shape poses in the hand frame; kinds (s,), halves (s, 3), radii (s,)
     returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
 
-    Cells are traced first as spheres (a conservative bound for all their points); a cell
-    whose sphere touches a shape is refined point by point from that time on.
+    Only cells whose sphere crosses the column a shape sweeps are kept (coarse cells first,
+    then their fine cells). Cells are traced as spheres (a conservative bound for all their
+    points); a cell whose sphere touches a shape is refined point by point from then on.
     """
     nc = cell_center.shape[0]
+    nk = coarse_center.shape[0]
     ns = poses.shape[0]
     rho = np.empty(ns)
     for s in range(ns):
         # Grown by the hit level: a point can come within hit_eps of a rounded corner while
         # still outside the exact bounding sphere.
         rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + 2.0 * hit_eps
-    cap = nc * ns
+    cap = 64
     lower = np.empty(cap)
     upper = np.empty(cap)
     cidx = np.empty(cap, dtype=np.int64)
     sidx = np.empty(cap, dtype=np.int64)
     ch = np.empty((nc, 3))
+    placed = np.zeros(nc, dtype=np.bool_)
     tmp = np.empty(3)
     m = 0
-    for c in range(nc):
-        _to_hand(cell_center[c], rot, trans, tmp)
-        ch[c, 0] = tmp[0]
-        ch[c, 1] = tmp[1]
-        ch[c, 2] = tmp[2]
+    for kk in range(nk):
+        _to_hand(coarse_center[kk], rot, trans, tmp)
         for s in range(ns):
-            rr = rho[s] + cell_radius[c]
-            dx = tmp[0] - poses[s, 0, 3]
-            dy = tmp[1] - poses[s, 1, 3]
-            d2 = dx * dx + dy * dy
-            if d2 > rr * rr:
+            if not _in_column(tmp, coarse_radius[kk] + rho[s], poses[s], t_max):
                 continue
-            half_chord = np.sqrt(rr * rr - d2)
-            t_out = tmp[2] - poses[s, 2, 3] + half_chord
-            if t_out < 0.0:
-                continue
-            t_in = max(tmp[2] - poses[s, 2, 3] - half_chord, 0.0)
-            if t_in > t_max:
-                continue
-            lower[m] = t_in
-            upper[m] = t_out
-            cidx[m] = c
-            sidx[m] = s
-            m += 1
+            for c in range(coarse_start[kk], coarse_start[kk + 1]):
+                if not placed[c]:
+                    _to_hand(cell_center[c], rot, trans, ch[c])
+                    placed[c] = True
+                rr = rho[s] + cell_radius[c]
+                dx = ch[c, 0] - poses[s, 0, 3]
+                dy = ch[c, 1] - poses[s, 1, 3]
+                d2 = dx * dx + dy * dy
+                if d2 > rr * rr:
+                    continue
+                half_chord = np.sqrt(rr * rr - d2)
+                t_out = ch[c, 2] - poses[s, 2, 3] + half_chord
+                t_in = max(ch[c, 2] - poses[s, 2, 3] - half_chord, 0.0)
+                if t_out < 0.0 or t_in > t_max:
+                    continue
+                if m == cap:
+                    cap *= 2
+                    lower = np.concatenate((lower, np.empty(m)))
+                    upper = np.concatenate((upper, np.empty(m)))
+                    cidx = np.concatenate((cidx, np.empty(m, dtype=np.int64)))
+                    sidx = np.concatenate((sidx, np.empty(m, dtype=np.int64)))
+                lower[m] = t_in
+                upper[m] = t_out
+                cidx[m] = c
+                sidx[m] = s
+                m += 1
     order = np.argsort(lower[:m])
     best = t_max
     best_p = -1
@@ -673,8 +688,9 @@ def close_chain_until_contact(
 
 @njit(cache=True)
 def touching_points(
-    points, cell_start, cell_center, cell_radius, rot, trans, poses, kinds, halves, radii, tol
-):
+    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
+    rot, trans, poses, kinds, halves, radii, tol,
+):  # fmt: skip
     """Samples within ``tol`` of any shape at a fixed hand configuration.
 
     returns : point indices (k,), shape indices (k,), signed distances (k,) and the shape's
@@ -682,7 +698,6 @@ def touching_points(
         link towards the sample).
     """
     ns = poses.shape[0]
-    nc = cell_center.shape[0]
     cap = 64
     pi = np.empty(cap, dtype=np.int64)
     si = np.empty(cap, dtype=np.int64)
@@ -694,44 +709,57 @@ def touching_points(
         rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + tol
     tmp = np.empty(3)
     ph = np.empty(3)
-    for c in range(nc):
-        _to_hand(cell_center[c], rot, trans, tmp)
+    for kk in range(coarse_center.shape[0]):
+        _to_hand(coarse_center[kk], rot, trans, tmp)
+        near = False
         for s in range(ns):
             dx = tmp[0] - poses[s, 0, 3]
             dy = tmp[1] - poses[s, 1, 3]
             dz = tmp[2] - poses[s, 2, 3]
-            rr = rho[s] + cell_radius[c]
-            if dx * dx + dy * dy + dz * dz > rr * rr:
-                continue
-            dc = sdf_world(tmp[0], tmp[1], tmp[2], poses[s], kinds[s], halves[s], radii[s])
-            if dc - cell_radius[c] > tol:
-                continue
-            for i in range(cell_start[c], cell_start[c + 1]):
-                _to_hand(points[i], rot, trans, ph)
-                d = sdf_world(ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s])
-                if d > tol:
+            rr = rho[s] + coarse_radius[kk]
+            if dx * dx + dy * dy + dz * dz <= rr * rr:
+                near = True
+                break
+        if not near:
+            continue
+        for c in range(coarse_start[kk], coarse_start[kk + 1]):
+            _to_hand(cell_center[c], rot, trans, tmp)
+            for s in range(ns):
+                dx = tmp[0] - poses[s, 0, 3]
+                dy = tmp[1] - poses[s, 1, 3]
+                dz = tmp[2] - poses[s, 2, 3]
+                rr = rho[s] + cell_radius[c]
+                if dx * dx + dy * dy + dz * dz > rr * rr:
                     continue
-                if m == cap:
-                    cap *= 2
-                    pi2 = np.empty(cap, dtype=np.int64)
-                    si2 = np.empty(cap, dtype=np.int64)
-                    dist2 = np.empty(cap)
-                    nrm2 = np.empty((cap, 3))
-                    pi2[:m] = pi
-                    si2[:m] = si
-                    dist2[:m] = dist
-                    nrm2[:m] = nrm
-                    pi, si, dist, nrm = pi2, si2, dist2, nrm2
-                nx, ny, nz = outward_normal_world(
-                    ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s]
-                )
-                pi[m] = i
-                si[m] = s
-                dist[m] = d
-                nrm[m, 0] = nx
-                nrm[m, 1] = ny
-                nrm[m, 2] = nz
-                m += 1
+                dc = sdf_world(tmp[0], tmp[1], tmp[2], poses[s], kinds[s], halves[s], radii[s])
+                if dc - cell_radius[c] > tol:
+                    continue
+                for i in range(cell_start[c], cell_start[c + 1]):
+                    _to_hand(points[i], rot, trans, ph)
+                    d = sdf_world(ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s])
+                    if d > tol:
+                        continue
+                    if m == cap:
+                        cap *= 2
+                        pi2 = np.empty(cap, dtype=np.int64)
+                        si2 = np.empty(cap, dtype=np.int64)
+                        dist2 = np.empty(cap)
+                        nrm2 = np.empty((cap, 3))
+                        pi2[:m] = pi
+                        si2[:m] = si
+                        dist2[:m] = dist
+                        nrm2[:m] = nrm
+                        pi, si, dist, nrm = pi2, si2, dist2, nrm2
+                    nx, ny, nz = outward_normal_world(
+                        ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s]
+                    )
+                    pi[m] = i
+                    si[m] = s
+                    dist[m] = d
+                    nrm[m, 0] = nx
+                    nrm[m, 1] = ny
+                    nrm[m, 2] = nz
+                    m += 1
     return pi[:m], si[:m], dist[:m], nrm[:m]
 
 
