@@ -32,7 +32,7 @@ COMMANDS = {
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="affordgrasp",
-        description="Task-oriented grasp quality: simulate, score, generate, learn, show.",
+        description="Task-oriented grasp quality: simulate, score, generate datasets, show.",
     )
     parser.add_argument("--version", action="version", version=f"affordgrasp {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
