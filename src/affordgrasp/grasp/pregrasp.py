@@ -85,13 +85,13 @@ def start_poses(
     hi = hull_vertices.max(axis=0)
     centre = (lo + hi) / 2
     radius = float(np.max(np.linalg.norm(hull_vertices - centre, axis=1)))
-    proj = np.einsum("vk,nkj->nvj", hull_vertices, rot)  # (n, v, 3) coordinates in x, y, z
-    pmin = proj.min(axis=1)
-    pmax = proj.max(axis=1)
-    mid = (pmin + pmax) / 2
-    half = (pmax - pmin) / 2
-    x = mid[:, 0] + p0[:, 3] * half[:, 0]
-    y = mid[:, 1] + p0[:, 4] * half[:, 1]
+    # The object's extent along each hand's x and y axes: (v, n) projections, one matmul each.
+    px = hull_vertices @ rot[:, :, 0].T
+    py = hull_vertices @ rot[:, :, 1].T
+    xlo, xhi = px.min(axis=0), px.max(axis=0)
+    ylo, yhi = py.min(axis=0), py.max(axis=0)
+    x = (xlo + xhi) / 2 + p0[:, 3] * (xhi - xlo) / 2
+    y = (ylo + yhi) / 2 + p0[:, 4] * (yhi - ylo) / 2
     z = rot[:, :, 2] @ centre - radius - hand_reach
     origin = rot[:, :, 0] * x[:, None] + rot[:, :, 1] * y[:, None] + rot[:, :, 2] * z[:, None]
     poses = np.zeros((len(p0), 4, 4))
