@@ -141,138 +141,6 @@ def _in_column(c, rr, pose, t_max):
 
 
 @njit(cache=True)
-def approach_until_contact(
-    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
-    rot, trans, poses, kinds, halves, radii, t_max, hit_eps,
-):  # fmt: skip
-    """Distance the hand can travel along its +z before a link touches a sample point.
-
-    points : (n, 3) object samples in the object frame, grouped by cell
-    cell_start : (c + 1,) offsets of each fine cell's points; cell_center (c, 3),
-        cell_radius (c,) a bounding sphere per cell; coarse_start (k + 1,) offsets of each
-        coarse cell's fine cells, coarse_center (k, 3), coarse_radius (k,)
-    rot, trans : the start pose of the hand (object frame = rot @ hand + trans)
-    poses : (s, 4, 4) shape poses in the hand frame; kinds (s,), halves (s, 3), radii (s,)
-    returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
-
-    Only cells whose sphere crosses the column a shape sweeps are kept (coarse cells first,
-    then their fine cells). Cells are traced as spheres (a conservative bound for all their
-    points); a cell whose sphere touches a shape is refined point by point from then on.
-    """
-    nc = cell_center.shape[0]
-    nk = coarse_center.shape[0]
-    ns = poses.shape[0]
-    rho = np.empty(ns)
-    for s in range(ns):
-        # Grown by the hit level: a point can come within hit_eps of a rounded corner while
-        # still outside the exact bounding sphere.
-        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + 2.0 * hit_eps
-    cap = 64
-    lower = np.empty(cap)
-    upper = np.empty(cap)
-    cidx = np.empty(cap, dtype=np.int64)
-    sidx = np.empty(cap, dtype=np.int64)
-    ch = np.empty((nc, 3))
-    placed = np.zeros(nc, dtype=np.bool_)
-    tmp = np.empty(3)
-    m = 0
-    for kk in range(nk):
-        _to_hand(coarse_center[kk], rot, trans, tmp)
-        for s in range(ns):
-            if not _in_column(tmp, coarse_radius[kk] + rho[s], poses[s], t_max):
-                continue
-            for c in range(coarse_start[kk], coarse_start[kk + 1]):
-                if not placed[c]:
-                    _to_hand(cell_center[c], rot, trans, ch[c])
-                    placed[c] = True
-                rr = rho[s] + cell_radius[c]
-                dx = ch[c, 0] - poses[s, 0, 3]
-                dy = ch[c, 1] - poses[s, 1, 3]
-                d2 = dx * dx + dy * dy
-                if d2 > rr * rr:
-                    continue
-                half_chord = np.sqrt(rr * rr - d2)
-                t_out = ch[c, 2] - poses[s, 2, 3] + half_chord
-                t_in = max(ch[c, 2] - poses[s, 2, 3] - half_chord, 0.0)
-                if t_out < 0.0 or t_in > t_max:
-                    continue
-                if m == cap:
-                    cap *= 2
-                    lower = np.concatenate((lower, np.empty(m)))
-                    upper = np.concatenate((upper, np.empty(m)))
-                    cidx = np.concatenate((cidx, np.empty(m, dtype=np.int64)))
-                    sidx = np.concatenate((sidx, np.empty(m, dtype=np.int64)))
-                lower[m] = t_in
-                upper[m] = t_out
-                cidx[m] = c
-                sidx[m] = s
-                m += 1
-    order = np.argsort(lower[:m])
-    best = t_max
-    best_p = -1
-    best_s = -1
-    ph = np.empty(3)
-    for k in range(m):
-        j = order[k]
-        t = lower[j]
-        if t >= best:
-            break
-        c = cidx[j]
-        s = sidx[j]
-        stop = min(upper[j], best)
-        touched = False
-        t_cell_prev = t
-        for _ in range(MAX_STEPS):
-            d = sdf_world(ch[c, 0], ch[c, 1], ch[c, 2] - t, poses[s], kinds[s], halves[s], radii[s])
-            d -= cell_radius[c]
-            if d <= hit_eps:
-                touched = True
-                break
-            t_cell_prev = t
-            t += d
-            if t >= stop:
-                break
-        if not touched:
-            continue
-        t_cell = t
-        for i in range(cell_start[c], cell_start[c + 1]):
-            _to_hand(points[i], rot, trans, ph)
-            t = t_cell
-            t_prev = t_cell_prev
-            stop = min(upper[j], best)
-            for _ in range(MAX_STEPS):
-                if t >= stop:
-                    break
-                d = sdf_world(ph[0], ph[1], ph[2] - t, poses[s], kinds[s], halves[s], radii[s])
-                if d <= hit_eps:
-                    # The first crossing of the hit level, whatever the steps that found it:
-                    # the result does not depend on where tracing started.
-                    lo = t_prev
-                    hi = t
-                    for _ in range(BISECTIONS):
-                        if hi - lo <= 1e-13:
-                            break
-                        mid = 0.5 * (lo + hi)
-                        dm = sdf_world(
-                            ph[0], ph[1], ph[2] - mid, poses[s], kinds[s], halves[s], radii[s]
-                        )
-                        if dm <= hit_eps:
-                            hi = mid
-                        else:
-                            lo = mid
-                    if hi < best:
-                        best = hi
-                        best_p = i
-                        best_s = s
-                    break
-                t_prev = t
-                t += d
-    if best_p < 0:
-        return np.inf, -1, -1
-    return best, best_p, best_s
-
-
-@njit(cache=True)
 def _joint_motion_into(kind, axis, q, mot):
     """mot (4, 4) = the motion of a joint at value q: rotation about or translation along axis."""
     if kind == REVOLUTE:
@@ -460,6 +328,146 @@ def _heap_pop(key, ident, prev, size):
         prev[child], prev[j] = prev[j], prev[child]
         j = child
     return k, i, p, size
+
+
+@njit(cache=True)
+def approach_until_contact(
+    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
+    rot, trans, poses, kinds, halves, radii, t_max, hit_eps,
+):  # fmt: skip
+    """Distance the hand can travel along its +z before a link touches a sample point.
+
+    points : (n, 3) object samples in the object frame, grouped by cell
+    cell_start : (c + 1,) offsets of each fine cell's points; cell_center (c, 3),
+        cell_radius (c,) a bounding sphere per cell; coarse_start (k + 1,) offsets of each
+        coarse cell's fine cells, coarse_center (k, 3), coarse_radius (k,)
+    rot, trans : the start pose of the hand (object frame = rot @ hand + trans)
+    poses : (s, 4, 4) shape poses in the hand frame; kinds (s,), halves (s, 3), radii (s,)
+    returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
+
+    Every point moves at unit speed relative to the hand, so a step never exceeds its
+    distance to a shape. (cell or point, shape) pairs sit in one priority queue keyed by a
+    lower bound on their touching time, as in the closing search: coarse cells whose sphere
+    crosses the column a shape sweeps, then, once a cell's sphere touches, its fine cells,
+    then their points. The first crossing of the hit level is refined by bisection.
+    """
+    n = points.shape[0]
+    nc = cell_center.shape[0]
+    nk = coarse_center.shape[0]
+    ns = poses.shape[0]
+    rho = np.empty(ns)
+    for s in range(ns):
+        # Grown by the hit level: a point can come within hit_eps of a rounded corner while
+        # still outside the exact bounding sphere.
+        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + 2.0 * hit_eps
+    # Entity codes: a point i, then fine cell n + c, then coarse cell n + nc + k; an entry's
+    # id is entity * ns + shape.
+    kc = np.empty((nk, 3))
+    cap = 1
+    for kk in range(nk):
+        _to_hand(coarse_center[kk], rot, trans, kc[kk])
+        for s in range(ns):
+            if _in_column(kc[kk], coarse_radius[kk] + rho[s], poses[s], t_max):
+                cap += 1 + coarse_start[kk + 1] - coarse_start[kk]
+                cap += cell_start[coarse_start[kk + 1]] - cell_start[coarse_start[kk]]
+    key = np.empty(cap)
+    ident = np.empty(cap, dtype=np.int64)
+    prev = np.empty(cap)
+    size = 0
+    for kk in range(nk):
+        for s in range(ns):
+            rr = coarse_radius[kk] + rho[s]
+            if not _in_column(kc[kk], rr, poses[s], t_max):
+                continue
+            dx = kc[kk, 0] - poses[s, 0, 3]
+            dy = kc[kk, 1] - poses[s, 1, 3]
+            t_in = max(kc[kk, 2] - poses[s, 2, 3] - np.sqrt(rr * rr - dx * dx - dy * dy), 0.0)
+            size = _heap_push(key, ident, prev, size, t_in, (n + nc + kk) * ns + s, t_in)
+    best = t_max
+    hp = np.empty(16, dtype=np.int64)
+    hs = np.empty(16, dtype=np.int64)
+    hlo = np.empty(16)
+    hhi = np.empty(16)
+    nh = 0
+    x = np.empty(3)
+    margin = 0.5 * hit_eps
+    for _ in range(10_000_000):
+        if size == 0:
+            break
+        t, e, t_prev = _heap_pop(key, ident, prev, size)[:3]
+        size -= 1
+        if t >= best:
+            break
+        s = e % ns
+        ent = e // ns
+        if ent >= n:
+            coarse = ent >= n + nc
+            c = ent - n - nc if coarse else ent - n
+            radius = coarse_radius[c] if coarse else cell_radius[c]
+            _to_hand(coarse_center[c] if coarse else cell_center[c], rot, trans, x)
+            d = sdf_world(x[0], x[1], x[2] - t, poses[s], kinds[s], halves[s], radii[s]) - radius
+            if d <= hit_eps:
+                # Everything inside is clear at t_prev and goes on from t, one level down.
+                if coarse:
+                    for f in range(coarse_start[c], coarse_start[c + 1]):
+                        size = _heap_push(key, ident, prev, size, t, (n + f) * ns + s, t_prev)
+                else:
+                    for i in range(cell_start[c], cell_start[c + 1]):
+                        size = _heap_push(key, ident, prev, size, t, i * ns + s, t_prev)
+            else:
+                nxt = t + d - margin
+                # Past the shape's bounding sphere the pair can no longer touch.
+                if nxt < best and x[2] - poses[s, 2, 3] - nxt > -(rho[s] + radius):
+                    size = _heap_push(key, ident, prev, size, nxt, e, t)
+            continue
+        _to_hand(points[ent], rot, trans, x)
+        d = sdf_world(x[0], x[1], x[2] - t, poses[s], kinds[s], halves[s], radii[s])
+        if d <= hit_eps:
+            if nh == hp.shape[0]:
+                hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
+                hs = np.concatenate((hs, np.empty(nh, dtype=np.int64)))
+                hlo = np.concatenate((hlo, np.empty(nh)))
+                hhi = np.concatenate((hhi, np.empty(nh)))
+            hp[nh] = ent
+            hs[nh] = s
+            hlo[nh] = t_prev
+            hhi[nh] = t
+            nh += 1
+            best = min(best, t)
+        else:
+            nxt = t + max(d - margin, 1e-12)
+            if nxt < best and x[2] - poses[s, 2, 3] - nxt > -rho[s]:
+                size = _heap_push(key, ident, prev, size, nxt, e, t)
+    # The first crossing among the hits whose bracket starts before the best hit: the
+    # result does not depend on where tracing started.
+    first = np.inf
+    first_p = -1
+    first_s = -1
+    for h in range(nh):
+        if hlo[h] > best:
+            continue
+        s = hs[h]
+        _to_hand(points[hp[h]], rot, trans, x)
+        lo = hlo[h]
+        hi = hhi[h]
+        for _ in range(BISECTIONS):
+            if hi - lo <= 1e-13:
+                break
+            mid = 0.5 * (lo + hi)
+            if (
+                sdf_world(x[0], x[1], x[2] - mid, poses[s], kinds[s], halves[s], radii[s])
+                <= hit_eps
+            ):
+                hi = mid
+            else:
+                lo = mid
+        if hi < first:
+            first = hi
+            first_p = hp[h]
+            first_s = s
+    if first_p < 0:
+        return np.inf, -1, -1
+    return first, first_p, first_s
 
 
 @njit(cache=True)
