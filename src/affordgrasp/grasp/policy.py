@@ -56,7 +56,9 @@ class FingerArrays:
     kinds: np.ndarray  # (m,)
     axes: np.ndarray  # (m, 3)
     ratios: np.ndarray  # (m,)
-    shapes: tuple  # per first active joint j0: (shape ids, chain index of each) of links >= j0
+    # Per first active joint j0, the shapes of the links it moves (chain links >= j0): chain
+    # index (k,), pose in the link (k, 4, 4), kind (k,), half extents (k, 3), radius (k,).
+    shapes: tuple
 
 
 @dataclass(frozen=True)
@@ -133,12 +135,17 @@ def hand_arrays(hand: Hand) -> HandArrays:
     for finger in hand.fingers:
         chain = [link_of_dof[d] for d in finger.dofs]
         subsets = []
+        all_local = np.array(local, dtype=np.float64).reshape(-1, 4, 4)
+        all_halves = np.array(halves, dtype=np.float64).reshape(-1, 3)
         for j0 in range(len(chain)):
-            ids = [s for s, li in enumerate(shape_link) if li in chain[j0:]]
+            ids = np.array([s for s, li in enumerate(shape_link) if li in chain[j0:]], dtype=int)
             subsets.append(
                 (
-                    np.array(ids, dtype=np.int64),
                     np.array([chain.index(shape_link[s]) for s in ids], dtype=np.int64),
+                    np.ascontiguousarray(all_local[ids]),
+                    np.array(kinds, dtype=np.int64)[ids],
+                    np.ascontiguousarray(all_halves[ids]),
+                    np.array(radii, dtype=np.float64)[ids],
                 )
             )
         fingers.append(
@@ -269,15 +276,14 @@ def close_fingers(
             q0 = f.ratios * dofs[f.dofs]
             speeds = np.zeros(len(f.dofs))
             speeds[active] = f.ratios[active] * f.speeds[active]
-            ids, chain_index = f.shapes[min(active)]
+            chain_index, local, kinds, halves, radii = f.shapes[active[0]]
             # Largest s before an active DOF reaches its upper limit.
             s_max = max(min((f.upper[j] - dofs[f.dofs[j]]) / f.speeds[j] for j in active), 0.0)
             s_hit, _, q_hit = kernels.close_chain_until_contact(
                 samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
                 samples.coarse_start, samples.coarse_center, samples.coarse_radius,
                 rot, trans, links[f.parent], f.origins, f.kinds, f.axes, q0, speeds,
-                chain_index, arrays.shape_local[ids], arrays.kinds[ids], arrays.halves[ids],
-                arrays.radii[ids], s_max, HIT_EPS,
+                chain_index, local, kinds, halves, radii, s_max, HIT_EPS,
             )  # fmt: skip
             s = min(s_hit, s_max)
             for j in active:
