@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ..errors import InputError
+from .common import parse_thresholds
 
 METRICS_SHOWN = (
     ("ε", "epsilon"),
@@ -33,23 +33,6 @@ def add_task_arguments(p) -> None:
         metavar="NAME=VALUE",
         help="override one threshold of the task, e.g. tau_eps=0.1 (repeatable)",
     )
-
-
-def parse_thresholds(items: list[str]) -> dict[str, float]:
-    """``["tau_eps=0.1", ...]`` as a dict; bad items raise an InputError naming them."""
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        try:
-            number = float(value)
-        except ValueError:
-            number = math.nan
-        if not sep or not name.strip() or math.isnan(number):
-            raise InputError(
-                f"--threshold {item!r} must be NAME=VALUE with a number, e.g. tau_eps=0.1"
-            )
-        out[name.strip()] = number
-    return out
 
 
 def add_arguments(p) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import time
 
 import numpy as np
@@ -79,3 +80,20 @@ def write_table(table, path: str | None, out) -> None:
     pq.write_table(table, tmp)
     os.replace(tmp, path)
     out.text(f"wrote {table.num_rows} rows to {path}")
+
+
+def parse_thresholds(items: list[str]) -> dict[str, float]:
+    """``["tau_eps=0.1", ...]`` as a dict; bad items raise an InputError naming them."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name.strip() or math.isnan(number):
+            raise InputError(
+                f"--threshold {item!r} must be NAME=VALUE with a number, e.g. tau_eps=0.1"
+            )
+        out[name.strip()] = number
+    return out

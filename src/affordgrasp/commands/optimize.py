@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from .best import add_task_arguments, metric_cells, parse_thresholds, shown_metrics
+from .best import add_task_arguments, metric_cells, shown_metrics
+from .common import parse_thresholds
 
 
 def add_arguments(p) -> None:

@@ -12,6 +12,7 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
+from .common import check_counts, parse_thresholds
 
 DEFAULT_SAMPLES = 1000
 
@@ -123,29 +124,6 @@ def parse_tasks(values: list[str] | None, mode: str, threshold_items: list[str])
     for t in tasks:
         t.thresholds_for(mode, **per_task.get(t.name, {}))  # checks the mode now
     return tasks, per_task
-
-
-def parse_thresholds(items: list[str]) -> dict[str, float]:
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        try:
-            number = float(value)
-        except ValueError:
-            number = math.nan
-        if not sep or not name.strip() or math.isnan(number):
-            raise InputError(
-                f"--threshold {item!r} must be NAME=VALUE with a number, e.g. tau_eps=0.1"
-            )
-        out[name.strip()] = number
-    return out
-
-
-def check_counts(args) -> None:
-    if args.samples <= 0:
-        raise InputError(f"--samples must be a positive integer, got {args.samples}")
-    if args.seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
 
 
 def open_sources(args, out) -> list:

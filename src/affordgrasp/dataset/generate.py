@@ -253,6 +253,15 @@ def generate(
                         written_rows += shard.rows
         complete = True
     finally:
+        if not complete:
+            # An interrupt can land between a shard's rename into place and its bookkeeping:
+            # the card counts what is on disk, valid, not what the loop had recorded.
+            for shard in todo:
+                if shard not in infos:
+                    info = valid_shard_info(directory, shard, schema)
+                    if info is not None:
+                        infos[shard] = info
+                        written_rows += shard.rows
         elapsed = time.perf_counter() - started
         summary = GenerationSummary(
             directory=str(directory),
