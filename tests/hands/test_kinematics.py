@@ -117,3 +117,33 @@ def test_axis_angle_is_a_right_handed_rotation():
     r = axis_angle([0, 0, 1], np.pi / 2)
     np.testing.assert_allclose(r @ [1, 0, 0], [0, 1, 0], atol=1e-12)
     np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-12)
+
+
+def _jaw_hand(**changes):
+    from affordgrasp.hands import Dof, Finger, Joint
+    from affordgrasp.hands.model import transform
+
+    shape = (Shape("box", (0.01, 0.01, 0.01), 0.002),)
+    axis = changes.get("axis", np.array([1.0, 0, 0]))
+    links = [
+        Link("palm", None, None, shape, "plastic"),
+        Link("a", "palm", Joint("prismatic", transform(), axis, "close_a"), shape, "rubber"),
+        Link(
+            "b",
+            "palm",
+            Joint("prismatic", transform(), -np.array(axis), changes.get("b_dof", "close_b")),
+            shape,
+            "rubber",
+        ),
+    ]
+    dofs = (Dof("close_a", 0, 0.04, "close"), Dof("close_b", 0, 0.04, "close"))
+    fingers = (Finger("a", ("close_a",), (1.0,)), Finger("b", ("close_b",), (1.0,)))
+    return Hand("jaws", tuple(links), dofs, fingers, None)
+
+
+def test_hand_validation_refuses_what_the_closing_search_cannot_sweep():
+    assert _jaw_hand().name == "jaws"
+    with pytest.raises(HandError, match="unit vector"):
+        _jaw_hand(axis=np.array([2.0, 0, 0]))
+    with pytest.raises(HandError, match="exactly one link"):
+        _jaw_hand(b_dof="close_a")  # one DOF mirrored onto both jaws

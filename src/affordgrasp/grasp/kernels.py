@@ -23,8 +23,13 @@ BOX = 0
 CYLINDER = 1
 REVOLUTE = 0
 PRISMATIC = 1
-MAX_STEPS = 2000
 BISECTIONS = 48
+# Closing parameter (rad for revolute joints, m for prismatic ones) used to tell whether a
+# point within the hit level is being pressed (its distance falls) or left behind.
+PROBE = 1e-7
+# Step of a point inside the hit level that is not pressed: with speed bounds of a few
+# tenths of a metre per radian it moves a few micrometres.
+SLIDE_STEP = 2e-5
 
 
 @njit(cache=True, fastmath=False)
@@ -513,10 +518,18 @@ def close_chain_until_contact(
     inv_shape = np.empty((k, 3, 4))
     for q in range(k):
         _inverse_rigid(shape_local[q], inv_shape[q])
+    # Bound on the distance from the first joint to joint j whatever the joints do: the fixed
+    # offsets plus the largest extension of every slide before it.
+    slide = np.zeros(m)
+    for j in range(m):
+        if kinds[j] == PRISMATIC:
+            slide[j] = max(abs(q0[j]), abs(q0[j] + speeds[j] * s_max))
     chain_len = np.zeros(m)
     for j in range(1, m):
-        chain_len[j] = chain_len[j - 1] + np.sqrt(
-            origins[j, 0, 3] ** 2 + origins[j, 1, 3] ** 2 + origins[j, 2, 3] ** 2
+        chain_len[j] = (
+            chain_len[j - 1]
+            + slide[j - 1]
+            + np.sqrt(origins[j, 0, 3] ** 2 + origins[j, 1, 3] ** 2 + origins[j, 2, 3] ** 2)
         )
     reach = 0.0
     for q in range(k):
@@ -527,9 +540,11 @@ def close_chain_until_contact(
         ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
         reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
     reach += 2.0 * hit_eps
+    # The shapes were placed at s = 0; slides can carry them further out, by at most the
+    # slide's travel from where it is now.
     for j in range(m):
         if kinds[j] == PRISMATIC:
-            reach += abs(speeds[j]) * s_max
+            reach += abs(speeds[j]) * s_max + slide[j]
     # When every joint is revolute about parallel axes (a planar finger, like the Barrett's),
     # the links sweep a slab across that axis: nothing outside it can be touched.
     _mul4_into(base, origins[0], tmp_a)
@@ -644,7 +659,17 @@ def close_chain_until_contact(
         d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, inv_base, inv_origin, kinds, axes,
                                   q0, speeds, shape_joint, inv_shape, shape_kinds, shape_halves,
                                   shape_radii, chain_len, 0.5 * hit_eps)  # fmt: skip
+        pressing = False
         if d <= hit_eps:
+            # Within the hit level, a point blocks the finger only if the motion presses into
+            # it: a link left touching by the approach (or an earlier phase) that closes away
+            # from the object is free to move, as in GraspIt!.
+            d_next, _, _ = _chain_touch(ph[0], ph[1], ph[2], s + PROBE, r, inv_base, inv_origin,
+                                        kinds, axes, q0, speeds, shape_joint, inv_shape,
+                                        shape_kinds, shape_halves, shape_radii, chain_len,
+                                        0.5 * hit_eps)  # fmt: skip
+            pressing = d_next < d
+        if pressing:
             if nh == hp.shape[0]:
                 hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
                 hlo = np.concatenate((hlo, np.empty(nh)))
@@ -655,9 +680,10 @@ def close_chain_until_contact(
             nh += 1
             best = min(best, s)
         else:
-            # At least a nanoradian, so grazing points do not stall; it cannot carry a point
-            # through a link millimetres thick.
-            nxt = s + max(step, 1e-9)
+            # A point inside the hit level that is not pressed (receding or sliding) has no
+            # safe step from its distance; it moves on by a small fixed one (a few µm of
+            # motion) until it is clear or pressed.
+            nxt = s + (step if d > hit_eps else SLIDE_STEP)
             if nxt < best:
                 size = _heap_push(key, ident, prev, size, nxt, e, s)
     # The first crossing among the hits whose bracket starts before the best hit.

@@ -225,9 +225,60 @@ def validate_hand(hand: Hand) -> None:
             if link.joint.kind not in ("revolute", "prismatic"):
                 raise HandError(f"link {link.name!r}: joint kind must be revolute or prismatic")
         seen.add(link.name)
+    for link in hand.links:
+        frames = [("shape pose", sh.pose) for sh in link.shapes]
+        if link.joint is not None:
+            frames.append(("joint origin", link.joint.origin))
+            if abs(np.linalg.norm(link.joint.axis) - 1.0) > 1e-9:
+                raise HandError(
+                    f"link {link.name!r}: the joint axis must be a unit vector, got "
+                    f"{np.asarray(link.joint.axis).tolist()}"
+                )
+        for what, m in frames:
+            m = np.asarray(m, dtype=np.float64)
+            r = m[:3, :3] if m.shape == (4, 4) else None
+            if r is None or not (
+                np.allclose(r @ r.T, np.eye(3), atol=1e-9)
+                and np.linalg.det(r) > 0
+                and np.allclose(m[3], [0, 0, 0, 1])
+            ):
+                raise HandError(f"link {link.name!r}: the {what} must be a rigid 4x4 transform")
     for d in hand.dofs:
         if not d.lower <= d.upper:
             raise HandError(f"DOF {d.name!r}: lower limit {d.lower} > upper limit {d.upper}")
+    # The closing search sweeps each finger as one chain of links, hung from a link that no
+    # closing DOF moves: check the hand has that form.
+    driven: dict[str, list[str]] = {}
+    for link in hand.links:
+        if link.joint is not None:
+            driven.setdefault(link.joint.dof, []).append(link.name)
+    parent_of = {link.name: link.parent for link in hand.links}
+    closing = {name for f in hand.fingers for name in f.dofs}
+    for f in hand.fingers:
+        chain = []
+        for name in f.dofs:
+            links = driven.get(name, [])
+            if len(links) != 1:
+                raise HandError(
+                    f"finger {f.name!r}: closing DOF {name!r} must drive exactly one link, "
+                    f"it drives {links or 'none'} (mirror a jaw with a finger of its own)"
+                )
+            chain.append(links[0])
+        for a, b in zip(chain, chain[1:], strict=False):
+            if parent_of[b] != a:
+                raise HandError(
+                    f"finger {f.name!r}: link {b!r} must hang from {a!r}, the link of the "
+                    "previous closing DOF"
+                )
+        ancestor = parent_of[chain[0]]
+        while ancestor is not None:
+            joint = hand.links[hand.link_names.index(ancestor)].joint
+            if joint is not None and joint.dof in closing:
+                raise HandError(
+                    f"finger {f.name!r} hangs from {ancestor!r}, which a closing DOF "
+                    f"({joint.dof!r}) moves; fingers must hang from links that stay put"
+                )
+            ancestor = parent_of[ancestor]
     for f in hand.fingers:
         if len(f.dofs) != len(f.speeds) or not f.dofs:
             raise HandError(f"finger {f.name!r}: needs one speed per closing DOF")
