@@ -100,7 +100,7 @@ def test_samples_do_not_depend_on_how_a_run_is_split():
 def test_bad_pregrasps_are_refused():
     with pytest.raises(InputError, match="shape"):
         validate_pregrasps(np.zeros((3, 5)))
-    with pytest.raises(InputError, match=r"\[-1, 1\]"):
+    with pytest.raises(InputError, match="row 0, parameter 0 is 2.0"):
         validate_pregrasps(np.full((1, 6), 2.0))
-    with pytest.raises(InputError, match="NaN"):
+    with pytest.raises(InputError, match="nan"):
         validate_pregrasps(np.full((1, 6), np.nan))

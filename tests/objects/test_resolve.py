@@ -127,7 +127,9 @@ def test_family_density_and_size(fake):
     assert heavy is not light
     assert heavy.mass.mass == pytest.approx(2.0 * light.mass.mass)
     assert heavy.mesh_hash == light.mesh_hash
-    assert resolve_object("knife:1", size_m=0.22).mesh.extents.max() == pytest.approx(0.22)
+    # A family keeps its real size: rescaling it would give other geometry the same name.
+    with pytest.raises(InputError, match="mesh files only"):
+        resolve_object("knife:1", size_m=0.22)
 
 
 @pytest.mark.parametrize(

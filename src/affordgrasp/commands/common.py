@@ -24,11 +24,37 @@ def add_sampling_arguments(p) -> None:
     p.add_argument("--batch", type=int, default=250, help=argparse.SUPPRESS)
 
 
+MAX_SEED = 2**63 - 1
+
+
 def check_counts(args) -> None:
+    """Sample count, seed (and batch size, output path when the command has them), before
+    any work is done."""
     if args.samples <= 0:
         raise InputError(f"--samples must be a positive integer, got {args.samples}")
-    if args.seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
+    if not 0 <= args.seed <= MAX_SEED:
+        raise InputError(f"--seed must be an integer in [0, 2**63 - 1], got {args.seed}")
+    if getattr(args, "batch", 1) <= 0:
+        raise InputError(f"--batch must be a positive integer, got {args.batch}")
+    if getattr(args, "out", None):
+        check_output_file(args.out, "--out")
+
+
+def check_output_file(path: str, option: str) -> None:
+    """Refuse an output file that cannot be written, before the work that fills it."""
+    import os
+
+    if os.path.isdir(path):
+        raise InputError(
+            f"{option} {path!r} is a directory; give a file name, e.g. {path}/x.parquet"
+        )
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent):
+        raise InputError(
+            f"{option} {path!r}: the folder {parent!r} does not exist; create it first"
+        )
+    if not os.access(parent, os.W_OK):
+        raise InputError(f"{option} {path!r}: the folder {parent!r} is not writable")
 
 
 def run_batches(args, out, obj, metrics: bool):
@@ -77,8 +103,14 @@ def write_table(table, path: str | None, out) -> None:
     import pyarrow.parquet as pq
 
     tmp = f"{path}.partial"
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise InputError(f"cannot write {path!r}: {exc.strerror or exc}") from exc
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
     out.text(f"wrote {table.num_rows} rows to {path}")
 
 

@@ -10,13 +10,16 @@ from ..errors import InputError
 
 def add_arguments(p) -> None:
     sub = p.add_subparsers(dest="action", metavar="ACTION")
-    sub.add_parser("list", help="list the families (the default)")
+    listing = sub.add_parser("list", help="list the families (the default)")
     e = sub.add_parser("export", help="write one object as a mesh file (OBJ, STL, PLY, GLB, OFF)")
     e.add_argument("object", help="family, family:seed, or a mesh path")
     e.add_argument("--seed", type=int, default=None, help="family seed (same as family:SEED)")
     e.add_argument("-o", "--out", required=True, help="output file; the extension sets the format")
     # --json also after the action (the parent parser has it too).
-    e.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    for q in (listing, e):
+        q.add_argument(
+            "--json", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS
+        )
 
 
 def run(args, out) -> None:
@@ -33,8 +36,12 @@ def run(args, out) -> None:
         ext = path.suffix.lower().lstrip(".")
         if ext not in ("obj", "stl", "ply", "glb", "off"):
             raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        obj.mesh.export(path)
+        if not path.parent.is_dir():
+            raise InputError(f"-o {str(path)!r}: the folder {str(path.parent)!r} does not exist")
+        try:
+            obj.mesh.export(path)
+        except OSError as exc:
+            raise InputError(f"cannot write {str(path)!r}: {exc.strerror or exc}") from exc
         m = obj.mass
         ext_m = m.bounds[1] - m.bounds[0]
         out.text(

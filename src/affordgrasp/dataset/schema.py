@@ -73,7 +73,9 @@ def _fixed(values: np.ndarray, width: int) -> pa.Array:
 def _ragged_vec3(chunks: list[np.ndarray]) -> pa.Array:
     counts = np.array([len(c) for c in chunks], dtype=np.int32)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-    flat = np.concatenate([np.asarray(c, dtype=np.float64).reshape(-1, 3) for c in chunks])
+    flat = np.concatenate(
+        [np.zeros((0, 3))] + [np.asarray(c, dtype=np.float64).reshape(-1, 3) for c in chunks]
+    )
     inner = pa.FixedSizeListArray.from_arrays(pa.array(flat.reshape(-1)), 3)
     return pa.ListArray.from_arrays(pa.array(offsets), inner)
 

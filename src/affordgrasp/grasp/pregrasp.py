@@ -42,10 +42,15 @@ def validate_pregrasps(p0) -> np.ndarray:
     p0 = np.atleast_2d(np.asarray(p0, dtype=np.float64))
     if p0.ndim != 2 or p0.shape[1] != 6:
         raise InputError(f"pregrasps must have shape (n, 6), got {p0.shape}")
-    if not np.all(np.isfinite(p0)):
-        raise InputError("pregrasps contain NaN or inf")
-    if np.any(np.abs(p0[:, :5]) > 1.0) or np.any((p0[:, 5] < 0) | (p0[:, 5] > 1)):
-        raise InputError("pregrasp parameters must lie in [-1, 1]^5 x [0, 1]")
+    bad = ~np.isfinite(p0)
+    bad[:, :5] |= np.abs(np.nan_to_num(p0[:, :5])) > 1.0
+    bad[:, 5] |= (p0[:, 5] < 0) | (p0[:, 5] > 1)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise InputError(
+            f"pregrasp row {row}, parameter {col} is {float(p0[row, col])}: pregrasps must be finite "
+            "and lie in [-1, 1]^5 x [0, 1]"
+        )
     return p0
 
 
@@ -53,8 +58,13 @@ def validate_use_directions(d) -> np.ndarray:
     d = np.atleast_2d(np.asarray(d, dtype=np.float64))
     if d.ndim != 2 or d.shape[1] != 2:
         raise InputError(f"use directions must have shape (n, 2), got {d.shape}")
-    if not np.all(np.isfinite(d)) or np.any(np.abs(d) > 1.0):
-        raise InputError("use directions must be finite and lie in [-1, 1]^2")
+    bad = ~np.isfinite(d) | (np.abs(np.nan_to_num(d)) > 1.0)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise InputError(
+            f"use direction row {row}, parameter {col} is {float(d[row, col])}: use directions must "
+            "be finite and lie in [-1, 1]^2"
+        )
     return d
 
 

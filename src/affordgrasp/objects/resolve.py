@@ -123,6 +123,13 @@ def resolve_object(
         )
     family, seed_text = _split_family(text)
     if family is not None:
+        if size_m is not None or units is not None:
+            # A rescaled family would keep the family's name with other geometry.
+            raise InputError(
+                f"{text!r} is a built-in family, made at its real size in metres; size and "
+                "units options apply to mesh files only (export it with 'affordgrasp objects "
+                "export' and rescale the file if you need another size)"
+            )
         seed = _parse_seed(seed_text, family, text)
         return _resolve_family(family, seed, density, size_m, units)
     path = Path(text).expanduser()
