@@ -48,8 +48,8 @@ def validate_pregrasps(p0) -> np.ndarray:
     if bad.any():
         row, col = np.argwhere(bad)[0]
         raise InputError(
-            f"pregrasp row {row}, parameter {col} is {float(p0[row, col])}: pregrasps must be finite "
-            "and lie in [-1, 1]^5 x [0, 1]"
+            f"pregrasp row {row}, parameter {col} is {float(p0[row, col])}: pregrasps must "
+            "be finite and lie in [-1, 1]^5 x [0, 1]"
         )
     return p0
 
@@ -62,8 +62,8 @@ def validate_use_directions(d) -> np.ndarray:
     if bad.any():
         row, col = np.argwhere(bad)[0]
         raise InputError(
-            f"use direction row {row}, parameter {col} is {float(d[row, col])}: use directions must "
-            "be finite and lie in [-1, 1]^2"
+            f"use direction row {row}, parameter {col} is {float(d[row, col])}: use "
+            "directions must be finite and lie in [-1, 1]^2"
         )
     return d
 
