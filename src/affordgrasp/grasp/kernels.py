@@ -91,7 +91,8 @@ def outward_normal_world(px, py, pz, pose, kind, half, r):
     nz = z - cz
     n = np.sqrt(nx * nx + ny * ny + nz * nz)
     if n < 1e-12:
-        # The point is inside the core (deep penetration): use the nearest box face.
+        # The point is inside the core (deep penetration, which the policy never produces):
+        # any unit vector will do; take the shape's ±z.
         nx, ny, nz = 0.0, 0.0, 1.0 if z >= 0 else -1.0
         n = 1.0
     nx /= n
@@ -440,11 +441,12 @@ def approach_until_contact(
             nh += 1
             best = min(best, t)
         else:
-            nxt = t + max(d - margin, 1e-12)
+            nxt = t + d - margin  # d > hit_eps = 2 margin: at least margin
             if nxt < best and x[2] - poses[s, 2, 3] - nxt > -rho[s]:
                 size = _heap_push(key, ident, prev, size, nxt, e, t)
-    # The first crossing among the hits whose bracket starts before the best hit: the
-    # result does not depend on where tracing started.
+    # Refine the hits whose bracket starts before the best one by bisection. Steps that
+    # jump past the best hit are dropped, so the hand stops with a gap in [hit_eps / 2,
+    # hit_eps] to the closest sample, never touching it.
     first = np.inf
     first_p = -1
     first_s = -1

@@ -6,7 +6,7 @@ more than ``SHARP_ANGLE``, and their vertices) are flagged: the object's normal 
 defined there, so a contact on them takes the link's normal instead (see ``policy``).
 
 Because every hand link is rounded by a radius r, a link touching the surface between
-samples can sink into the true mesh by at most about spacing**2 / (8 r): 0.06 mm for the
+samples can sink into the true mesh by at most about spacing**2 / (4 r): 0.1 mm for the
 default 1.4 mm spacing and the Barrett palm rim (r = 5 mm). Beyond ``MAX_POINTS`` samples
 (a surface of several m²) the spacing grows and a warning says the tolerance is not met.
 """
@@ -162,7 +162,7 @@ def sample_surface(
             mesh.area,
             max_points,
             spacing * 1e3,
-            spacing**2 / 8 / 5e-3 * 1e3,
+            spacing**2 / 4 / 5e-3 * 1e3,
         )
 
     pts = [vertices]
