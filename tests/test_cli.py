@@ -114,3 +114,11 @@ def test_console_script_runs():
     )  # fmt: skip
     assert result.returncode == 0
     json.loads(result.stdout)
+
+
+def test_unwritable_output_is_refused_before_the_work(tmp_path, capsys):
+    assert main(["simulate", "knife", "--samples", "5", "--out", str(tmp_path)]) == 2
+    assert "is a directory" in capsys.readouterr().err
+    missing = tmp_path / "no" / "such" / "x.parquet"
+    assert main(["evaluate", "knife", "--samples", "5", "--out", str(missing)]) == 2
+    assert "does not exist" in capsys.readouterr().err

@@ -28,16 +28,13 @@ MAX_SEED = 2**63 - 1
 
 
 def check_counts(args) -> None:
-    """Sample count, seed (and batch size, output path when the command has them), before
-    any work is done."""
+    """Sample count, seed and batch size, before any work is done."""
     if args.samples <= 0:
         raise InputError(f"--samples must be a positive integer, got {args.samples}")
     if not 0 <= args.seed <= MAX_SEED:
         raise InputError(f"--seed must be an integer in [0, 2**63 - 1], got {args.seed}")
     if getattr(args, "batch", 1) <= 0:
         raise InputError(f"--batch must be a positive integer, got {args.batch}")
-    if getattr(args, "out", None):
-        check_output_file(args.out, "--out")
 
 
 def check_output_file(path: str, option: str) -> None:

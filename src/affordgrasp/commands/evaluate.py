@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import add_sampling_arguments, check_counts, run_batches, status_summary, write_table
+from .common import (
+    add_sampling_arguments,
+    check_counts,
+    check_output_file,
+    run_batches,
+    status_summary,
+    write_table,
+)
 
 SHOWN_METRICS = (
     "epsilon",
@@ -65,6 +72,8 @@ def run(args, out) -> None:
     from ..tasks import MetricColumns, get_task, is_viable, list_tasks, load_task_file
 
     check_counts(args)
+    if args.out:
+        check_output_file(args.out, "--out")
     if args.tasks_file:
         load_task_file(args.tasks_file)
     names = args.task or [t for t in list_tasks() if t != "viable"]

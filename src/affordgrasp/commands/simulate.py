@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from .common import add_sampling_arguments, check_counts, run_batches, status_summary, write_table
+from .common import (
+    add_sampling_arguments,
+    check_counts,
+    check_output_file,
+    run_batches,
+    status_summary,
+    write_table,
+)
 
 
 def add_arguments(p) -> None:
@@ -13,6 +20,8 @@ def run(args, out) -> None:
     from ..objects import resolve_object
 
     check_counts(args)
+    if args.out:
+        check_output_file(args.out, "--out")
     obj = resolve_object(args.object, size_m=args.size_m, units=args.units)
     table, spent, wall = run_batches(args, out, obj, metrics=False)
     rows, doc = status_summary(table)
