@@ -16,14 +16,18 @@ def hand_names() -> list[str]:
     return list(_HANDS)
 
 
-@cache
-def get_hand(name: str = "barrett") -> Hand:
-    """A built-in hand by name ("barrett" or "parallel_jaw")."""
+def get_hand(name: str | Hand = "barrett") -> Hand:
+    """A built-in hand by name ("barrett" or "parallel_jaw"); a Hand is returned as it is."""
     if isinstance(name, Hand):
         return name
+    return _builtin_hand(name)
+
+
+@cache
+def _builtin_hand(name: str) -> Hand:
     try:
         return _HANDS[name]()
-    except KeyError:
+    except (KeyError, TypeError):
         raise HandError(f"unknown hand {name!r}; built-in hands: {', '.join(_HANDS)}") from None
 
 
