@@ -15,6 +15,7 @@ from affordgrasp.grasp.policy import (
     simulate,
 )
 from affordgrasp.hands import get_hand
+from affordgrasp.objects import family_names, resolve_object
 
 PENETRATION_TOL = 1e-4  # m
 
@@ -230,14 +231,8 @@ def test_contacts_on_one_link_are_at_least_3_mm_apart(box_object):
             assert d.min() >= 3e-3 - 1e-12
 
 
-FAMILIES = ["hammer", "knife", "meat_cleaver", "axe", "screwdriver", "spatula", "sword", "dagger",
-            "bottle", "wine_glass", "tumbler", "mug", "ice_cream_cone"]  # fmt: skip
-
-
-@pytest.mark.parametrize("family", FAMILIES)
+@pytest.mark.parametrize("family", family_names())
 def test_every_family_no_interpenetration_and_contacts_within_tolerance(family):
-    from affordgrasp.objects import resolve_object
-
     obj = resolve_object(family)
     hand = get_hand("barrett")
     probe = np.vstack(

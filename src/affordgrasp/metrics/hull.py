@@ -149,6 +149,17 @@ def _pencil_plane(fn, fd, v, g, dist_v, dist_g, P, verts, out_n, chk_tol):
 
 
 @njit(cache=True)
+def _remove_components(r, E, step):
+    """r -= its components along the orthonormal rows E[:step] (one Gram-Schmidt pass)."""
+    for e in range(step):
+        dot = 0.0
+        for c in range(DIM):
+            dot += r[c] * E[e, c]
+        for c in range(DIM):
+            r[c] -= dot * E[e, c]
+
+
+@njit(cache=True)
 def _initial_simplex(P, out, rank_tol):
     """Greedy large-volume simplex of DIM + 1 points; False when affinely degenerate."""
     N = P.shape[0]
@@ -177,12 +188,7 @@ def _initial_simplex(P, out, rank_tol):
         for i in range(N):
             for c in range(DIM):
                 r[c] = P[i, c] - P[i0, c]
-            for e in range(step):
-                dot = 0.0
-                for c in range(DIM):
-                    dot += r[c] * E[e, c]
-                for c in range(DIM):
-                    r[c] -= dot * E[e, c]
+            _remove_components(r, E, step)
             s = 0.0
             for c in range(DIM):
                 s += r[c] * r[c]
@@ -195,12 +201,7 @@ def _initial_simplex(P, out, rank_tol):
             r[c] = P[bi, c] - P[i0, c]
         # two Gram-Schmidt passes keep the basis orthogonal to round-off
         for _ in range(2):
-            for e in range(step):
-                dot = 0.0
-                for c in range(DIM):
-                    dot += r[c] * E[e, c]
-                for c in range(DIM):
-                    r[c] -= dot * E[e, c]
+            _remove_components(r, E, step)
         s = 0.0
         for c in range(DIM):
             s += r[c] * r[c]

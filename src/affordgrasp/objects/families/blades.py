@@ -300,59 +300,83 @@ def _blade_stations(x0: float, length: float, point_len: float, n_body: int, n_p
     return x0 + length * u, u
 
 
-def dagger(p: ParameterDraw) -> manifold3d.Manifold:
-    """Double-edged dagger with cross-guard and pommel; 0.22-0.35 m long."""
-    blade_len = p.uniform("blade_length_m", 0.12, 0.22, 0.17)
-    grip_len = p.uniform("grip_length_m", 0.08, 0.11, 0.095)
-    base_w = p.uniform("blade_width_m", 0.025, 0.040, 0.032)
-    taper = p.uniform("width_taper", 0.25, 0.6, 0.45)
-    point_len = p.uniform("point_fraction", 0.15, 0.35, 0.25)
-    flat = p.uniform("flat_fraction", 0.08, 0.3, 0.15)
+def _hilted_double_edge(p: ParameterDraw, r: dict) -> manifold3d.Manifold:
+    """A double-edged blade with cross-guard and pommel: the dagger and the sword, which
+    differ only in their ranges (``r``: parameter name -> (low, high, typical), plus the
+    overall length range, grip thickness, station count and tang overlap)."""
+    blade_len = p.uniform("blade_length_m", *r["blade_length_m"])
+    grip_len = p.uniform("grip_length_m", *r["grip_length_m"])
+    base_w = p.uniform("blade_width_m", *r["blade_width_m"])
+    taper = p.uniform("width_taper", *r["width_taper"])
+    point_len = p.uniform("point_fraction", *r["point_fraction"])
+    flat = p.uniform("flat_fraction", *r["flat_fraction"])
     edge_angle = np.radians(p.uniform("edge_angle_deg", 15.0, 22.0, 19.0))
     hilt, x0 = _hilt(
         p,
         grip_len,
-        (p.uniform("grip_half_height_m", 0.011, 0.014, 0.0125), 0.0095),
-        guard_span=p.uniform("guard_span_m", 0.06, 0.10, 0.075),
-        guard_thick=p.uniform("guard_thickness_m", 0.007, 0.011, 0.009),
-        guard_depth=p.uniform("guard_depth_m", 0.014, 0.02, 0.017),
-        guard_curve=p.uniform("guard_curve_m", 0.0, 0.008, 0.003),
-        pommel_r=p.uniform("pommel_radius_m", 0.013, 0.018, 0.015),
+        (p.uniform("grip_half_height_m", *r["grip_half_height_m"]), r["grip_half_width_m"]),
+        guard_span=p.uniform("guard_span_m", *r["guard_span_m"]),
+        guard_thick=p.uniform("guard_thickness_m", *r["guard_thickness_m"]),
+        guard_depth=p.uniform("guard_depth_m", *r["guard_depth_m"]),
+        guard_curve=p.uniform("guard_curve_m", *r["guard_curve_m"]),
+        pommel_r=p.uniform("pommel_radius_m", *r["pommel_radius_m"]),
     )
-    blade_len = float(np.clip(blade_len, 0.225 - x0, 0.345 - x0))
+    low, high = r["length_m"]
+    blade_len = float(np.clip(blade_len, low - x0, high - x0))
     p.values["blade_length_m"] = blade_len
-    xs, u = _blade_stations(x0, blade_len, point_len, 16, 28)
+    xs, u = _blade_stations(x0, blade_len, point_len, r["stations"], 28)
     half_w = _pointed_half_width(u, base_w / 2, taper, point_len)
-    xs = np.concatenate([[x0 - 0.006], xs])
+    xs = np.concatenate([[x0 - r["tang_overlap_m"]], xs])
     half_w = np.concatenate([[half_w[0]], half_w])
     blade = double_edge_blade(xs, half_w, flat, edge_angle)
     return union([hilt, blade])
+
+
+def dagger(p: ParameterDraw) -> manifold3d.Manifold:
+    """Double-edged dagger with cross-guard and pommel; 0.22-0.35 m long."""
+    return _hilted_double_edge(
+        p,
+        {
+            "blade_length_m": (0.12, 0.22, 0.17),
+            "grip_length_m": (0.08, 0.11, 0.095),
+            "blade_width_m": (0.025, 0.040, 0.032),
+            "width_taper": (0.25, 0.6, 0.45),
+            "point_fraction": (0.15, 0.35, 0.25),
+            "flat_fraction": (0.08, 0.3, 0.15),
+            "grip_half_height_m": (0.011, 0.014, 0.0125),
+            "grip_half_width_m": 0.0095,
+            "guard_span_m": (0.06, 0.10, 0.075),
+            "guard_thickness_m": (0.007, 0.011, 0.009),
+            "guard_depth_m": (0.014, 0.02, 0.017),
+            "guard_curve_m": (0.0, 0.008, 0.003),
+            "pommel_radius_m": (0.013, 0.018, 0.015),
+            "length_m": (0.225, 0.345),
+            "stations": 16,
+            "tang_overlap_m": 0.006,
+        },
+    )
 
 
 def sword(p: ParameterDraw) -> manifold3d.Manifold:
     """Double-edged straight sword (arming sword); 0.70-1.00 m long."""
-    blade_len = p.uniform("blade_length_m", 0.55, 0.80, 0.70)
-    grip_len = p.uniform("grip_length_m", 0.10, 0.17, 0.12)
-    base_w = p.uniform("blade_width_m", 0.035, 0.055, 0.045)
-    taper = p.uniform("width_taper", 0.35, 0.75, 0.55)
-    point_len = p.uniform("point_fraction", 0.06, 0.15, 0.09)
-    flat = p.uniform("flat_fraction", 0.1, 0.35, 0.2)
-    edge_angle = np.radians(p.uniform("edge_angle_deg", 15.0, 22.0, 19.0))
-    hilt, x0 = _hilt(
+    return _hilted_double_edge(
         p,
-        grip_len,
-        (p.uniform("grip_half_height_m", 0.013, 0.016, 0.0145), 0.012),
-        guard_span=p.uniform("guard_span_m", 0.16, 0.24, 0.20),
-        guard_thick=p.uniform("guard_thickness_m", 0.010, 0.016, 0.013),
-        guard_depth=p.uniform("guard_depth_m", 0.016, 0.024, 0.02),
-        guard_curve=p.uniform("guard_curve_m", 0.0, 0.02, 0.008),
-        pommel_r=p.uniform("pommel_radius_m", 0.018, 0.026, 0.022),
+        {
+            "blade_length_m": (0.55, 0.80, 0.70),
+            "grip_length_m": (0.10, 0.17, 0.12),
+            "blade_width_m": (0.035, 0.055, 0.045),
+            "width_taper": (0.35, 0.75, 0.55),
+            "point_fraction": (0.06, 0.15, 0.09),
+            "flat_fraction": (0.1, 0.35, 0.2),
+            "grip_half_height_m": (0.013, 0.016, 0.0145),
+            "grip_half_width_m": 0.012,
+            "guard_span_m": (0.16, 0.24, 0.20),
+            "guard_thickness_m": (0.010, 0.016, 0.013),
+            "guard_depth_m": (0.016, 0.024, 0.02),
+            "guard_curve_m": (0.0, 0.02, 0.008),
+            "pommel_radius_m": (0.018, 0.026, 0.022),
+            "length_m": (0.71, 0.99),
+            "stations": 24,
+            "tang_overlap_m": 0.008,
+        },
     )
-    blade_len = float(np.clip(blade_len, 0.71 - x0, 0.99 - x0))
-    p.values["blade_length_m"] = blade_len
-    xs, u = _blade_stations(x0, blade_len, point_len, 24, 28)
-    half_w = _pointed_half_width(u, base_w / 2, taper, point_len)
-    xs = np.concatenate([[x0 - 0.008], xs])
-    half_w = np.concatenate([[half_w[0]], half_w])
-    blade = double_edge_blade(xs, half_w, flat, edge_angle)
-    return union([hilt, blade])
