@@ -95,9 +95,3 @@ def evaluate_samples(
     return evaluate(
         obj, p0, d, hand=hand, seed=seed, sample_start=start, soft=soft, metrics=metrics
     )
-
-
-def summarize_status(status: np.ndarray) -> dict[str, int]:
-    from .grasp.policy import STATUSES
-
-    return {s: int(np.sum(status == s)) for s in STATUSES}
