@@ -18,7 +18,6 @@ import time
 import numpy as np
 import trimesh
 
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import (
     compute_phi_batch,
     discharge,
@@ -31,6 +30,7 @@ from affordgrasp.metrics import (
     use_force,
 )
 from affordgrasp.metrics.cones import wrench_matrix_kernel
+from affordgrasp.metrics.contacts import ContactSet
 from affordgrasp.metrics.epsilon import epsilon_kernel
 from affordgrasp.metrics.phi import _stack_contacts, contact_metrics_batch
 from affordgrasp.objects.mass import mass_properties

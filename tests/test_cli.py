@@ -8,7 +8,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from affordgrasp.cli import main
-from affordgrasp.dataset.schema import METRIC_COLUMNS
+from affordgrasp.columns import METRIC_COLUMNS
 
 SPEC_COLUMNS = [
     "object", "object_hash", "sample", "seed", "p0", "use_dir", "status", "hand_pose", "joints",

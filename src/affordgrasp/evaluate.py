@@ -2,7 +2,7 @@
 
 ``evaluate`` runs it for given inputs; ``evaluate_samples`` draws the inputs from a seed so a
 sample's content depends only on (seed, sample index); both return an Arrow table with the
-columns of SPEC §2.9 (see ``affordgrasp.dataset.schema``).
+per-sample columns (see ``affordgrasp.schema`` and docs/conventions.md).
 """
 
 from __future__ import annotations
@@ -12,14 +12,13 @@ import time
 import numpy as np
 import pyarrow as pa
 
-from .dataset.schema import batch_to_table
+from .columns import USE_METRICS
 from .grasp.policy import SimulationBatch, simulate
 from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
 from .metrics.phi import compute_phi_batch
 from .objects import GraspObject, resolve_object
-
-USE_METRICS = ("impact_effort", "discharge", "use_force", "use_edge", "use_edge_angle")
+from .schema import batch_to_table
 
 
 def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False) -> dict:

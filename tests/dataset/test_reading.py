@@ -13,8 +13,8 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 from affordgrasp import __version__
 from affordgrasp.dataset.layout import shard_paths
 from affordgrasp.dataset.reading import open_dataset, read_table, select_objects
-from affordgrasp.dataset.schema import SCHEMA
 from affordgrasp.errors import DatasetError
+from affordgrasp.schema import SCHEMA
 
 
 def test_every_shard_has_the_documented_schema(reference_dataset):

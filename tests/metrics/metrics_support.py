@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from affordgrasp.grasp.contacts import ContactSet
+from affordgrasp.metrics.contacts import ContactSet
 from affordgrasp.objects.mass import MassProperties
 
 SQRT2 = np.sqrt(2.0)

@@ -5,8 +5,8 @@ import pytest
 from metrics_support import random_contacts, ref_wrenches
 from scipy.optimize import linprog
 
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import GRAVITY_DIRECTIONS, hold_effort, impact_effort
+from affordgrasp.metrics.contacts import ContactSet
 
 
 def dual_min_effort(W, b):

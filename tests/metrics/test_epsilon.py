@@ -6,8 +6,8 @@ from metrics_support import cube_face_contacts, random_contacts, ref_wrenches
 from scipy.spatial import ConvexHull, QhullError
 
 from affordgrasp.errors import InputError
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import epsilon, gws_volume
+from affordgrasp.metrics.contacts import ContactSet
 from affordgrasp.metrics.epsilon import epsilon_from_wrenches_qhull
 
 

@@ -1,31 +1,46 @@
-"""Stale numba caches of the metric kernels are dropped when a source changes (kernel_cache.py)."""
+"""The numba caches of the metric kernels follow every source they inline (kernel_cache.py)."""
 
-import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
+import affordgrasp.metrics  # noqa: F401 - installs the locator
 from affordgrasp.metrics import kernel_cache
+from affordgrasp.metrics.epsilon import epsilon_kernel
 
 
-def test_cache_files_are_dropped_only_when_sources_change(tmp_path, monkeypatch):
-    cache = tmp_path / "__pycache__"
-    cache.mkdir()
-    files = ["hull.convex_hull_6d-1.py311.nbi", "hull.convex_hull_6d-1.py311.1.nbc"]
-    other = cache / "somewhere_else.f-1.py311.nbi"  # not a metrics module: kept
-    for name in files:
-        (cache / name).write_bytes(b"x")
-    other.write_bytes(b"x")
-    sources = {"hull.py": [1, 10], "epsilon.py": [2, 20]}
-    monkeypatch.setattr(kernel_cache, "_cache_dirs", lambda: [cache])
-    monkeypatch.setattr(kernel_cache, "_fingerprint", lambda: dict(sources))
+def test_stamp_follows_every_kernel_source(tmp_path):
+    (tmp_path / "hull.py").write_text("@njit(cache=True)\ndef f(): pass\n")
+    (tmp_path / "epsilon.py").write_text("@njit(cache=True)\ndef g(): pass\n")
+    (tmp_path / "plain.py").write_text("def h(): pass\n")
+    before = kernel_cache.package_stamp.__wrapped__(tmp_path)
+    (tmp_path / "plain.py").write_text("def h(): return 1\n")  # no kernel: same stamp
+    assert kernel_cache.package_stamp.__wrapped__(tmp_path) == before
+    (tmp_path / "hull.py").write_text("@njit(cache=True)\ndef f(): return 1\n")
+    assert kernel_cache.package_stamp.__wrapped__(tmp_path) != before
 
-    kernel_cache.invalidate_stale_kernel_caches()  # no stamp yet: drop everything
-    assert not any((cache / n).exists() for n in files) and other.exists()
-    assert json.loads((cache / kernel_cache._STAMP_NAME).read_text()) == sources
 
-    for name in files:
-        (cache / name).write_bytes(b"x")
-    kernel_cache.invalidate_stale_kernel_caches()  # unchanged sources: keep
-    assert all((cache / n).exists() for n in files)
+def test_package_kernels_carry_the_package_stamp():
+    (locator_class,) = kernel_cache._installed
+    func = epsilon_kernel.py_func
+    locator = locator_class.from_function(func, func.__code__.co_filename)
+    assert locator is not None
+    numba_stamp, package = locator.get_source_stamp()
+    assert package == kernel_cache.package_stamp()
+    assert locator_class.from_function(test_stamp_follows_every_kernel_source, __file__) is None
 
-    sources["hull.py"] = [3, 11]
-    kernel_cache.invalidate_stale_kernel_caches()  # an edit: drop again
-    assert not any((cache / n).exists() for n in files)
+
+def test_import_deletes_no_cache_file(tmp_path):
+    # A cache file of a metrics module under NUMBA_CACHE_DIR (numba mirrors the source tree
+    # there). Importing the package used to delete such files; now it must leave them.
+    package_dir = Path(kernel_cache.__file__).resolve().parent
+    mirror = tmp_path / package_dir.relative_to(package_dir.anchor)
+    mirror.mkdir(parents=True)
+    planted = mirror / "hull.convex_hull_6d-1.py311.nbi"
+    planted.write_bytes(b"x")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    src = str(package_dir.parents[1])
+    env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")])
+    subprocess.run([sys.executable, "-c", "import affordgrasp.metrics"], env=env, check=True)
+    assert planted.read_bytes() == b"x"

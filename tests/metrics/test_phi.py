@@ -5,7 +5,6 @@ import pytest
 import trimesh
 from metrics_support import rotation_about_x, transform_mass
 
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import (
     METRIC_COLUMNS,
     compute_phi,
@@ -20,6 +19,7 @@ from affordgrasp.metrics import (
     use_force,
 )
 from affordgrasp.metrics import phi as phi_module
+from affordgrasp.metrics.contacts import ContactSet
 from affordgrasp.objects.mass import mass_properties
 
 SPEC_COLUMNS = [

@@ -5,8 +5,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from metrics_support import random_contacts
 
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import epsilon, hold_effort, impact_effort, use_force
+from affordgrasp.metrics.contacts import ContactSet
 
 U = np.array([0.08, 0.0, 0.0])
 NU = np.array([1.0, 0.0, 0.0])

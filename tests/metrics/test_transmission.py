@@ -5,8 +5,8 @@ import pytest
 from metrics_support import random_contacts, ref_wrenches
 from scipy.optimize import linprog
 
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import use_force
+from affordgrasp.metrics.contacts import ContactSet
 
 
 def reference_use_force(cs, center, U, nU):

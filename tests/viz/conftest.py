@@ -307,7 +307,7 @@ def write_dataset(directory: Path, objects: list, rows_per_object: int = 6, seed
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from affordgrasp.dataset.schema import SCHEMA
+    from affordgrasp.schema import SCHEMA
 
     rng = np.random.default_rng(seed)
     directory.mkdir(parents=True, exist_ok=True)

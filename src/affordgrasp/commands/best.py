@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .common import parse_thresholds
 
 METRICS_SHOWN = (
@@ -45,8 +43,8 @@ def add_arguments(p) -> None:
 
 def shown_metrics(task_name: str) -> list[tuple[str, str]]:
     """(label, column) of the metrics a task reads, ε first; all of them if it does not say."""
+    from ..columns import HOLD_EFFORT_COLUMNS
     from ..dataset.best import resolve_task
-    from ..dataset.schema import HOLD_EFFORT_COLUMNS
 
     requires = set(getattr(resolve_task(task_name), "requires", ()) or ())
     if not requires:
@@ -58,12 +56,12 @@ def shown_metrics(task_name: str) -> list[tuple[str, str]]:
 
 
 def metric_cells(row: dict, shown=METRICS_SHOWN) -> list:
-    from ..dataset.schema import HOLD_EFFORT_COLUMNS
+    from ..columns import HOLD_EFFORT_SUM, hold_effort_sum
 
     cells = []
     for _, name in shown:
-        if name == "hold_effort_sum":
-            cells.append(float(np.sum([row[c] for c in HOLD_EFFORT_COLUMNS])))
+        if name == HOLD_EFFORT_SUM:
+            cells.append(hold_effort_sum(row))
         else:
             cells.append(row.get(name, math.nan))
     return cells

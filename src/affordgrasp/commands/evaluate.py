@@ -41,7 +41,7 @@ def add_arguments(p) -> None:
 
 def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict]:
     """The best sample of every task, as table rows and a JSON-ready dict."""
-    from ..dataset.schema import metric_arrays
+    from ..schema import metric_arrays
     from ..tasks import MetricColumns, get_task
 
     metrics = MetricColumns(metric_arrays(table))
@@ -81,7 +81,7 @@ def run(args, out) -> None:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
     obj = resolve_object(args.object, size_m=args.size_m, units=args.units)
     table, spent, wall = run_batches(args, out, obj, metrics=True)
-    from ..dataset.schema import metric_arrays
+    from ..schema import metric_arrays
 
     rows, status_doc = status_summary(table)
     metrics = MetricColumns(metric_arrays(table))

@@ -24,10 +24,10 @@ import pyarrow.compute as pc
 import pyarrow.dataset as pads
 import pyarrow.parquet as pq
 
+from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
 from ..errors import DatasetError, InputError
 from .layout import read_manifest
 from .reading import open_dataset, select_objects
-from .schema import METRIC_COLUMNS
 
 AFFORDANCE_COLUMN = "affordance"
 RANK_COLUMN = "rank"
@@ -50,11 +50,8 @@ class BestGrasps:
     objects: list[str]
 
     def to_dict(self) -> dict:
-        from .schema import HOLD_EFFORT_COLUMNS
-
         rows = []
         for r in self.table.to_pylist():
-            hold = [r[c] for c in HOLD_EFFORT_COLUMNS if c in r]
             row = {
                 "rank": r[RANK_COLUMN],
                 "object": r["object"],
@@ -65,8 +62,8 @@ class BestGrasps:
                 "use_dir": r["use_dir"],
             }
             row.update({c: r[c] for c in METRIC_COLUMNS if c in r})
-            if hold:
-                row["hold_effort_sum"] = float(np.sum(hold))
+            if HOLD_EFFORT_COLUMNS[0] in r:
+                row[HOLD_EFFORT_SUM] = hold_effort_sum(r)
             rows.append(row)
         return {
             "task": self.task,

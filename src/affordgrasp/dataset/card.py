@@ -131,7 +131,7 @@ def _plain(value):
 
 
 def schema_description(metrics: bool) -> list[dict]:
-    from .schema import SCHEMA, SIMULATION_SCHEMA
+    from ..schema import SCHEMA, SIMULATION_SCHEMA
 
     schema = SCHEMA if metrics else SIMULATION_SCHEMA
     return [{"name": f.name, "type": str(f.type)} for f in schema]

@@ -215,7 +215,7 @@ def generate(
     if removed:
         log.info("removed %d half-written file(s) left by an interrupted run", removed)
 
-    from .schema import SCHEMA, SIMULATION_SCHEMA
+    from ..schema import SCHEMA, SIMULATION_SCHEMA
 
     schema = SCHEMA if metrics else SIMULATION_SCHEMA
     plan = plan_shards(len(resolved), samples, shard_size)

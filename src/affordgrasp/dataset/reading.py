@@ -20,7 +20,7 @@ from .layout import read_manifest, shard_paths
 
 def open_dataset(directory: str | os.PathLike) -> pads.Dataset:
     """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order)."""
-    from .schema import SCHEMA, SIMULATION_SCHEMA
+    from ..schema import SCHEMA, SIMULATION_SCHEMA
 
     manifest = read_manifest(directory)
     paths = shard_paths(directory)

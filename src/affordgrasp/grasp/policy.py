@@ -29,15 +29,16 @@ import numpy as np
 from ..errors import InputError
 from ..hands import Hand, get_hand
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
+from ..metrics.contacts import ContactSet
+from ..tolerances import CONTACT_DISTANCE_M, STOP_DISTANCE_M
 from . import kernels
-from .contacts import ContactSet
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
 from .surface import SurfaceSample, sample_surface
 
 log = logging.getLogger(__name__)
 
-HIT_EPS = 5e-5  # m: a link stops within 0.05 mm of the surface
-CONTACT_TOL = 2e-4  # m: links within 0.2 mm touch (SPEC: about 0.1-0.2 mm)
+HIT_EPS = STOP_DISTANCE_M  # m: a link stops within 0.05 mm of the surface
+CONTACT_TOL = CONTACT_DISTANCE_M  # m: links within 0.2 mm touch (SPEC: about 0.1-0.2 mm)
 MERGE_RADIUS = 3e-3  # m: contacts of one link closer than this are merged (as GraspIt!)
 PATCH_ANGLE = np.deg2rad(10.0)
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import HandError
 from ..materials import MATERIALS
+from ..tolerances import ORTHONORMAL
 
 BOX = 0
 CYLINDER = 1
@@ -229,7 +230,7 @@ def validate_hand(hand: Hand) -> None:
         frames = [("shape pose", sh.pose) for sh in link.shapes]
         if link.joint is not None:
             frames.append(("joint origin", link.joint.origin))
-            if abs(np.linalg.norm(link.joint.axis) - 1.0) > 1e-9:
+            if abs(np.linalg.norm(link.joint.axis) - 1.0) > ORTHONORMAL:
                 raise HandError(
                     f"link {link.name!r}: the joint axis must be a unit vector, got "
                     f"{np.asarray(link.joint.axis).tolist()}"
@@ -238,7 +239,7 @@ def validate_hand(hand: Hand) -> None:
             m = np.asarray(m, dtype=np.float64)
             r = m[:3, :3] if m.shape == (4, 4) else None
             if r is None or not (
-                np.allclose(r @ r.T, np.eye(3), atol=1e-9)
+                np.allclose(r @ r.T, np.eye(3), atol=ORTHONORMAL)
                 and np.linalg.det(r) > 0
                 and np.allclose(m[3], [0, 0, 0, 1])
             ):

@@ -1,9 +1,9 @@
-"""Grasp and task metrics: the metric vector Φ(O, G, U) of SPEC §2.4.
+"""Grasp and task metrics: the metric vector Φ(O, G, U) (conventions: docs/conventions.md).
 
-Every metric works on raw contacts, without any simulator: build a
-:class:`~affordgrasp.grasp.contacts.ContactSet` from arrays (GraspIt! output, a real
-robot's tactile contacts...) with ``ContactSet.from_arrays(points, normals, mu)`` and call
-the function. Frames and units: the object's mesh frame, SI units, outward normals.
+Every metric works on raw contacts, without any simulator: build a :class:`ContactSet` from
+arrays (GraspIt! output, a real robot's tactile contacts...) with
+``ContactSet.from_arrays(points, normals, mu)`` and call the function. Frames and units: the
+object's mesh frame, SI units, outward normals.
 
 ==========================  ==============================================================
 function                    metric
@@ -20,20 +20,17 @@ function                    metric
 ==========================  ==============================================================
 """
 
+from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUFFIXES, METRIC_COLUMNS, hold_effort_sum
 from .cones import contact_wrenches, edges_per_contact, friction_cone_edges, tangent_frames
+from .contacts import ContactSet
 from .discharge import discharge
-from .effort import GRAVITY_DIRECTIONS, HOLD_EFFORT_SUFFIXES, hold_effort, impact_effort
+from .effort import GRAVITY_DIRECTIONS, hold_effort, impact_effort
 from .epsilon import EpsilonResult, epsilon, gws_volume
 from .inertia import rotational_inertia
-from .kernel_cache import invalidate_stale_kernel_caches
 from .lp import LPResult, LPStatus, solve_standard_lp
-from .phi import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS, compute_phi, compute_phi_batch
+from .phi import compute_phi, compute_phi_batch
 from .transmission import use_force
 from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
-
-# numba loads its caches at the first call of a kernel, so this check, after the imports
-# and before any call, still comes first (see kernel_cache)
-invalidate_stale_kernel_caches()
 
 __all__ = [
     "EDGE_RADIUS_M",
@@ -41,6 +38,7 @@ __all__ = [
     "HOLD_EFFORT_COLUMNS",
     "HOLD_EFFORT_SUFFIXES",
     "METRIC_COLUMNS",
+    "ContactSet",
     "EpsilonResult",
     "LPResult",
     "LPStatus",
@@ -53,6 +51,7 @@ __all__ = [
     "friction_cone_edges",
     "gws_volume",
     "hold_effort",
+    "hold_effort_sum",
     "impact_effort",
     "rotational_inertia",
     "solve_standard_lp",

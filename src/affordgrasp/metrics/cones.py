@@ -32,11 +32,16 @@ import numpy as np
 from numba import njit
 
 from ..errors import InputError
+from ..tolerances import CONE_AXIS_SWITCH
+from .kernel_cache import install_package_stamp
+
+# before the first @njit of the metrics: every kernel module imports this one first
+install_package_stamp()
 
 N_EDGES = 8  # edges of the linearised Coulomb cone (GraspIt!)
 N_SOFT_EDGES = 2  # extra torsional edges of a soft-finger contact
 SOFT_PATCH_RADIUS_M = 0.005  # contact patch radius behind the torsional coefficient
-_AXIS_TOL = 1e-12  # GraspIt!'s switch from the x axis to the z axis for t1
+_AXIS_TOL = CONE_AXIS_SWITCH  # GraspIt!'s switch from the x axis to the z axis for t1
 
 
 def edges_per_contact(soft: bool = False) -> int:

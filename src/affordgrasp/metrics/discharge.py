@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..tolerances import ZERO_MOMENT
 from .validation import points_n3, units_n3
 
-MOMENT_TOL = 1e-12  # |M| below this fraction of |U - w| counts as a zero moment
+MOMENT_TOL = ZERO_MOMENT  # |M| below this fraction of |U - w| counts as a zero moment
 
 
 def discharge(use_point, use_normal, wrist_point, wrist_axis) -> float | np.ndarray:

@@ -25,11 +25,10 @@ from .cones import wrench_matrix_kernel
 from .lp import INFEASIBLE, OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
 from .validation import contact_arrays, point3, unit3
 
-# Order of the six gravity directions of E_h, and the matching column suffixes.
+# Order of the six gravity directions of E_h (column suffixes: columns.HOLD_EFFORT_SUFFIXES).
 GRAVITY_DIRECTIONS = np.array(
     [[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0], [0, 0, -1.0]]
 )
-HOLD_EFFORT_SUFFIXES = ("px", "nx", "py", "ny", "pz", "nz")
 
 
 @njit(cache=True)
@@ -119,7 +118,7 @@ def hold_effort(contacts, center, *, soft: bool = False, backend: str = "simplex
     center : (3,) float, centre of mass, m
     soft : soft-finger cones; backend : "simplex" or "highs" (see :mod:`.lp`)
     Returns (6,) float, N: minimum sum of normal forces that balances 1 N of gravity along
-    +x, −x, +y, −y, +z, −z (:data:`HOLD_EFFORT_SUFFIXES`); +inf when it cannot.
+    +x, −x, +y, −y, +z, −z (:data:`affordgrasp.columns.HOLD_EFFORT_SUFFIXES`); +inf when it cannot.
     """
     check_backend(backend)
     points, normals, mu = contact_arrays(contacts)

@@ -30,11 +30,11 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
+from ..columns import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS
 from ..errors import InputError
 from .cones import wrench_matrix_kernel
 from .discharge import discharge
 from .effort import (
-    HOLD_EFFORT_SUFFIXES,
     hold_effort,
     hold_effort_kernel,
     impact_effort,
@@ -49,20 +49,6 @@ from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
 from .validation import contact_arrays, points_n3, units_n3
 
 log = logging.getLogger(__name__)
-
-HOLD_EFFORT_COLUMNS = tuple(f"hold_effort_{s}" for s in HOLD_EFFORT_SUFFIXES)
-METRIC_COLUMNS: tuple[str, ...] = (
-    "epsilon",
-    "gws_volume",
-    "epsilon_reason",
-    "inertia",
-    *HOLD_EFFORT_COLUMNS,
-    "impact_effort",
-    "discharge",
-    "use_force",
-    "use_edge",
-    "use_edge_angle",
-)
 
 
 @njit(cache=True)

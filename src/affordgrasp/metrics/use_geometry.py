@@ -39,10 +39,11 @@ import weakref
 import numpy as np
 
 from ..errors import InputError
+from ..tolerances import FLAT_DIHEDRAL
 from .validation import points_n3
 
 EDGE_RADIUS_M = 0.003  # default search radius of the sharpest-edge angle
-_FLAT_ANGLE = 1e-9  # dihedral angles below this (rad) are flat, not edges
+_FLAT_ANGLE = FLAT_DIHEDRAL  # dihedral angles below this (rad) are flat, not edges
 _FIT_RCOND = 1e-10  # relative singular-value cutoff of the quadratic fit
 _CHUNK = 2048  # use points per batched fit
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..tolerances import UNIT_NORMAL, ZERO_LENGTH
 
 
 def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -18,6 +19,18 @@ def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             "contacts must be a ContactSet (build one from raw arrays with "
             "ContactSet.from_arrays(points, normals, mu))"
         ) from exc
+    return check_contact_arrays(points, normals, mu)
+
+
+def check_contact_arrays(
+    points: np.ndarray, normals: np.ndarray, mu: np.ndarray, *, normalise: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The one check of contact arrays (shapes, finiteness, ``mu >= 0``, non-zero normals).
+
+    Normals are rescaled to unit length when ``normalise`` is set or when one of them is
+    off by more than 1e-12 (the cones assume unit normals; a ContactSet built directly,
+    without :meth:`ContactSet.from_arrays`, may not have them).
+    """
     if not (points.shape == normals.shape and mu.shape[0] == points.shape[0]):
         raise InputError(
             f"inconsistent contact arrays: points {points.shape}, normals {normals.shape}, "
@@ -27,12 +40,10 @@ def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         raise InputError("contact points and normals must be finite (found NaN or inf)")
     if np.any(~np.isfinite(mu)) or np.any(mu < 0):
         raise InputError(f"friction coefficients must be finite and >= 0, got {mu}")
-    # ContactSet.from_arrays normalises, but a ContactSet built directly may not be: the
-    # cones assume unit normals
     length = np.linalg.norm(normals, axis=1)
-    if np.any(length < 1e-12):
+    if np.any(length < ZERO_LENGTH):
         raise InputError("every contact normal must be non-zero")
-    if np.any(np.abs(length - 1.0) > 1e-12):
+    if normalise or np.any(np.abs(length - 1.0) > UNIT_NORMAL):
         normals = np.ascontiguousarray(normals / length[:, None])
     return points, normals, mu
 
@@ -49,7 +60,7 @@ def unit3(v, name: str) -> np.ndarray:
     """A (3,) unit vector from a finite non-zero direction."""
     v = point3(v, name)
     n = float(np.linalg.norm(v))
-    if n < 1e-12:
+    if n < ZERO_LENGTH:
         raise InputError(f"{name} must be a non-zero direction, got {v}")
     return v / n
 
@@ -68,7 +79,7 @@ def units_n3(x, name: str) -> np.ndarray:
     """Rows normalised to unit length; zero rows are refused."""
     x = points_n3(x, name)
     n = np.linalg.norm(x, axis=1)
-    if np.any(n < 1e-12):
+    if np.any(n < ZERO_LENGTH):
         raise InputError(f"every row of {name} must be a non-zero direction")
     return x / n[:, None]
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..columns import hold_effort_sum
 from .figure import png_bytes, save_image
 from .grid import save_grid
 from .html import ViewerEntry, fmt_value, write_viewer
@@ -37,7 +38,6 @@ METRIC_FACTS = (
     ("U_g (m⁻²)", "use_edge"),
     ("edge angle (°)", "use_edge_angle"),
 )
-HOLD_COLUMNS = tuple(f"hold_effort_{s}" for s in ("px", "nx", "py", "ny", "pz", "nz"))
 
 
 @dataclass
@@ -53,13 +53,6 @@ class ShowResult:
 def safe_name(text: str) -> str:
     """A file-name-safe version of an object or task name (``knife:3`` → ``knife-3``)."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "-", text).strip("-") or "object"
-
-
-def hold_effort_sum(row: dict) -> float:
-    values = [row.get(c) for c in HOLD_COLUMNS]
-    if any(v is None for v in values):
-        return math.nan
-    return float(np.sum(np.asarray(values, dtype=np.float64)))
 
 
 def grasp_facts(g: RankedGrasp, mode: str) -> list[tuple[str, str]]:

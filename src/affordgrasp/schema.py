@@ -1,4 +1,4 @@
-"""The per-sample table (SPEC §2.9): column names, types and conversion to Arrow.
+"""The per-sample table: column types and conversion to Arrow (names: :mod:`.columns`).
 
 Every simulated sample is one row, stable or not. Points and normals are in the object's
 mesh frame, metres; the outward normal of the object is stored. +inf is stored as IEEE inf.
@@ -11,27 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from .. import __version__
-
-METRIC_COLUMNS = (
-    "epsilon",
-    "gws_volume",
-    "epsilon_reason",
-    "inertia",
-    "hold_effort_px",
-    "hold_effort_nx",
-    "hold_effort_py",
-    "hold_effort_ny",
-    "hold_effort_pz",
-    "hold_effort_nz",
-    "impact_effort",
-    "discharge",
-    "use_force",
-    "use_edge",
-    "use_edge_angle",
-)
-
-HOLD_EFFORT_COLUMNS = METRIC_COLUMNS[4:10]
+from . import __version__
+from .columns import METRIC_COLUMNS
 
 _f64 = pa.float64()
 _vec3 = pa.list_(_f64, 3)

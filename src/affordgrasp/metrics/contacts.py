@@ -7,16 +7,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from .validation import check_contact_arrays
 
 
 @dataclass(frozen=True)
 class ContactSet:
     """Contacts of one grasp, in the object's mesh frame.
 
-    points : (k, 3) float64, contact points on the object surface, m
-    normals : (k, 3) float64, the object's *outward* unit normal at each point
-    mu : (k,) float64, Coulomb friction coefficient of each contact
-    link : (k,) str (object array), name of the hand link that makes the contact
+    Attributes
+    ----------
+    points : (k, 3) float64
+        Contact points on the object surface, m.
+    normals : (k, 3) float64
+        The object's *outward* unit normal at each point.
+    mu : (k,) float64
+        Coulomb friction coefficient of each contact.
+    link : (k,) object array of str
+        Name of the hand link that makes each contact.
     """
 
     points: np.ndarray
@@ -29,14 +36,27 @@ class ContactSet:
 
     @classmethod
     def empty(cls) -> ContactSet:
+        """A set with no contacts."""
         return cls(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=object))
 
     @classmethod
     def from_arrays(cls, points, normals, mu, link=None) -> ContactSet:
         """Validate raw arrays (e.g. from another simulator or a robot) into a ContactSet.
 
-        ``mu`` may be a scalar (same coefficient for every contact); ``link`` defaults to
-        ``"c0", "c1", ...``. Normals are normalised; zero or non-finite ones are refused.
+        Parameters
+        ----------
+        points, normals : (k, 3) array_like
+            Contact points (m) and the object's outward normals there (any non-zero length;
+            they are normalised).
+        mu : float or (k,) array_like
+            Friction coefficients (a scalar: the same for every contact).
+        link : (k,) sequence of str, optional
+            Link names; default ``"c0", "c1", ...``.
+
+        Raises
+        ------
+        InputError
+            On a wrong shape, a non-finite value, a negative ``mu`` or a zero normal.
         """
         points = np.asarray(points, dtype=np.float64)
         if points.ndim == 1 and points.size == 0:
@@ -53,14 +73,7 @@ class ContactSet:
             )
         k = points.shape[0]
         mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (k,)).copy()
-        if not (np.all(np.isfinite(points)) and np.all(np.isfinite(normals))):
-            raise InputError("contact points and normals must be finite (found NaN or inf)")
-        if np.any(~np.isfinite(mu)) or np.any(mu < 0):
-            raise InputError(f"friction coefficients must be finite and >= 0, got {mu}")
-        lengths = np.linalg.norm(normals, axis=1)
-        if np.any(lengths < 1e-12):
-            raise InputError("every contact normal must be non-zero")
-        normals = normals / lengths[:, None]
+        points, normals, mu = check_contact_arrays(points, normals, mu, normalise=True)
         if link is None:
             link = np.array([f"c{i}" for i in range(k)], dtype=object)
         else:

@@ -1,4 +1,4 @@
-"""Affordance functions, thresholds, the registry and declarative task files (tasks.py)."""
+"""Affordance functions, thresholds, the registry and declarative task files (tasks/)."""
 
 import math
 
@@ -163,11 +163,15 @@ def test_environment_variable(tmp_path, monkeypatch, registry):
     path = tmp_path / "env.toml"
     path.write_text('[tasks.envtask]\nvalue = "2 * use_force"\n')
     monkeypatch.setenv(tasks.ENV_VAR, str(path))
-    monkeypatch.setattr(tasks, "_ENV_LOADED", set())
-    assert "envtask" in tasks.list_tasks()
-    np.testing.assert_allclose(
-        tasks.get_task("envtask").evaluate(table()), 2 * table()["use_force"]
-    )
+    fresh = tasks.TaskRegistry()  # reads the variable at its first lookup...
+    assert "envtask" in fresh.names()
+    np.testing.assert_allclose(fresh.get("envtask").evaluate(table()), 2 * table()["use_force"])
+    # ...and only then: a later change of the variable is not re-read at every lookup
+    path.write_text('[tasks.other]\nvalue = "use_force"\n')
+    monkeypatch.setenv(tasks.ENV_VAR, str(path))
+    assert "other" not in fresh.names()
+    assert fresh.load_environment() == ["other"] and "other" in fresh
+    assert "envtask" not in tasks.TaskRegistry(environment=False).names()
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,116 @@
+"""Affordance functions F_T over the metric vector Φ, and their registry.
+
+A task maps metric columns to one float64 score per grasp (higher is better, -inf for
+"not usable for this task"). Thresholds are parameters: every task has default
+thresholds, per-mode overrides (the paper's Table I modes) and accepts call-time
+overrides::
+
+    import affordgrasp as ag
+    beat = ag.get_task("beat")
+    scores = beat.evaluate(table, mode="extra-robustness")      # dict, Arrow or pandas
+    scores = beat.evaluate(table, tau_delta=0.9)                # one threshold changed
+
+Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
+
+* ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, else I / E_i (0 when E_i = inf);
+* ``cut``: -inf if ε < τ_ε or U_g < τ_Ug, else U_τ;
+* ``cut-angle``: as ``cut`` with the resolution-independent edge test
+  ``use_edge_angle <= τ_angle`` instead of U_g;
+* ``pick``: -ΣE_h;
+* ``viable``: 1.0 if ε > 0.15 and ΣE_h < 250 and E_i < 100, else 0.0 (the learning
+  ground truth; :func:`is_viable` returns the boolean mask).
+
+Modes: ``default`` (τ_ε = 0.3), ``no-robustness`` (τ_ε = -inf), ``extra-robustness``
+(τ_ε = 0.5); τ_δ = 0.95 and the edge thresholds are the same in every mode.
+
+Adding tasks without editing the package:
+
+* Python: ``register_task("pry", func, thresholds={...}, requires=[...])`` with
+  ``func(metrics, thresholds) -> (n,) float array``; ``metrics`` maps column names to
+  float arrays (plus the derived ``hold_effort_sum``);
+* a TOML file, loaded with :func:`load_task_file` or listed in the ``AFFORDGRASP_TASKS``
+  environment variable (paths separated by ``os.pathsep``; read once, at the first
+  lookup)::
+
+      [tasks.pry]
+      description = "lever something open"
+      value = "use_force / impact_effort"
+      requires = "epsilon >= tau_eps and discharge >= 0.5"   # failing rows score -inf
+      [tasks.pry.thresholds]
+      tau_eps = 0.3
+      [tasks.pry.modes.extra-robustness]
+      tau_eps = 0.5
+
+  Expressions are restricted (:mod:`affordgrasp.tasks.expressions`): names, numbers,
+  arithmetic, comparisons, ``and``/``or``/``not`` and :data:`EXPRESSION_FUNCTIONS`.
+
+Layout: :mod:`.task` (the :class:`Task` type), :mod:`.thresholds` (defaults and modes),
+:mod:`.builtins`, :mod:`.expressions`, :mod:`.toml` (task files), :mod:`.metric_columns`
+(reading columns from any table type) and :mod:`.registry` (:data:`TASKS`).
+"""
+
+from __future__ import annotations
+
+from ..columns import DERIVED_COLUMNS, HOLD_EFFORT_COLUMNS
+from .expressions import EXPRESSION_CONSTANTS, EXPRESSION_FUNCTIONS, Expression, expression_task
+from .metric_columns import MetricColumns
+from .registry import (
+    ENV_VAR,
+    TASKS,
+    TaskRegistry,
+    evaluate_task,
+    get_task,
+    is_viable,
+    list_tasks,
+    load_task_file,
+    register_task,
+    task_from_expressions,
+    unregister_task,
+)
+from .task import Task, TaskFunction, make_task
+from .thresholds import (
+    MODES,
+    TAU_DELTA_DEFAULT,
+    TAU_EDGE_ANGLE_DEFAULT,
+    TAU_EPS_DEFAULT,
+    TAU_EPS_EXTRA,
+    TAU_UG_DEFAULT,
+    VIABLE_EPS_MIN,
+    VIABLE_HOLD_MAX,
+    VIABLE_IMPACT_MAX,
+)
+from .toml import read_task_file
+
+__all__ = [
+    "DERIVED_COLUMNS",
+    "ENV_VAR",
+    "EXPRESSION_CONSTANTS",
+    "EXPRESSION_FUNCTIONS",
+    "HOLD_EFFORT_COLUMNS",
+    "MODES",
+    "TASKS",
+    "TAU_DELTA_DEFAULT",
+    "TAU_EDGE_ANGLE_DEFAULT",
+    "TAU_EPS_DEFAULT",
+    "TAU_EPS_EXTRA",
+    "TAU_UG_DEFAULT",
+    "VIABLE_EPS_MIN",
+    "VIABLE_HOLD_MAX",
+    "VIABLE_IMPACT_MAX",
+    "Expression",
+    "MetricColumns",
+    "Task",
+    "TaskFunction",
+    "TaskRegistry",
+    "evaluate_task",
+    "expression_task",
+    "get_task",
+    "is_viable",
+    "list_tasks",
+    "load_task_file",
+    "make_task",
+    "read_task_file",
+    "register_task",
+    "task_from_expressions",
+    "unregister_task",
+]

@@ -1,0 +1,88 @@
+"""Metric columns as float64 arrays, whatever table type holds them."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..columns import DERIVED_COLUMNS, HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, hold_effort_sum
+from ..errors import TaskError
+
+
+class MetricColumns(Mapping):
+    """Read-only view of metric columns as float64 arrays, with derived columns.
+
+    Accepts a mapping of name -> array, a pyarrow Table or a pandas DataFrame. A missing
+    column raises a :class:`TaskError` that lists the available ones.
+    """
+
+    def __init__(self, columns: Any):
+        self._source = columns
+        self._cache: dict[str, np.ndarray] = {}
+        self._names = _column_names(columns)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name in self._cache:
+            return self._cache[name]
+        if name == HOLD_EFFORT_SUM:
+            value = hold_effort_sum({c: self[c] for c in HOLD_EFFORT_COLUMNS})
+        elif name in self._names:
+            value = _column_as_float(self._source, name)
+        else:
+            raise TaskError(
+                f"metric column {name!r} is missing; available: {', '.join(sorted(self._names))}"
+            )
+        self._cache[name] = value
+        return value
+
+    def __iter__(self):
+        return iter(list(self._names) + list(DERIVED_COLUMNS))
+
+    def __len__(self) -> int:
+        return len(self._names) + len(DERIVED_COLUMNS)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._names or name in DERIVED_COLUMNS
+
+    @property
+    def n_rows(self) -> int:
+        """Number of rows, read without converting any column (some are strings)."""
+        src = self._source
+        if hasattr(src, "num_rows"):  # pyarrow
+            return int(src.num_rows)
+        if hasattr(src, "columns") and hasattr(src, "to_numpy"):  # pandas
+            return len(src)
+        for name in self._names:
+            col = src[name]
+            return len(col) if hasattr(col, "__len__") else int(np.shape(col)[0])
+        return 0
+
+
+def _column_names(columns: Any) -> tuple[str, ...]:
+    if hasattr(columns, "column_names"):  # pyarrow Table / RecordBatch
+        return tuple(columns.column_names)
+    if hasattr(columns, "columns") and hasattr(columns, "to_numpy"):  # pandas DataFrame
+        return tuple(str(c) for c in columns.columns)
+    if isinstance(columns, Mapping):
+        return tuple(str(c) for c in columns.keys())
+    raise TaskError(
+        "metric columns must be a mapping of name -> array, a pyarrow Table or a pandas "
+        f"DataFrame, got {type(columns).__name__}"
+    )
+
+
+def _column_as_float(source: Any, name: str) -> np.ndarray:
+    if hasattr(source, "column_names"):
+        col = source.column(name)
+        col = col.to_numpy() if hasattr(col, "to_numpy") else np.asarray(col)
+    else:
+        col = source[name]
+        if hasattr(col, "to_numpy"):
+            col = col.to_numpy()
+    try:
+        arr = np.asarray(col, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise TaskError(f"metric column {name!r} is not numeric") from exc
+    return arr

@@ -1,0 +1,208 @@
+"""The task registry: built-in tasks, tasks registered in Python and tasks from TOML files.
+
+One :class:`TaskRegistry` object, :data:`TASKS`, serves the module-level functions. The
+task files named by the ``AFFORDGRASP_TASKS`` environment variable are read once, at the
+first lookup, not at every lookup; :meth:`TaskRegistry.load_environment` reads the
+variable again (after changing it in a running process).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import numpy as np
+
+from ..errors import TaskError
+from .builtins import builtin_tasks, viable_mask
+from .expressions import expression_task
+from .metric_columns import MetricColumns
+from .task import Task, TaskFunction, make_task
+from .toml import read_task_file
+
+log = logging.getLogger(__name__)
+
+ENV_VAR = "AFFORDGRASP_TASKS"
+
+
+class TaskRegistry:
+    """Tasks by name.
+
+    Parameters
+    ----------
+    builtins : bool
+        Start with the built-in tasks (beat, cut, cut-angle, pick, viable).
+    environment : bool
+        Read the task files of ``AFFORDGRASP_TASKS`` at the first lookup.
+    """
+
+    def __init__(self, *, builtins: bool = True, environment: bool = True):
+        self._tasks: dict[str, Task] = {t.name: t for t in builtin_tasks()} if builtins else {}
+        self._environment_pending = environment
+
+    def _ensure_environment(self) -> None:
+        if self._environment_pending:
+            self.load_environment()
+
+    def load_environment(self) -> list[str]:
+        """Register the tasks of every file in ``AFFORDGRASP_TASKS`` (``os.pathsep``-separated).
+
+        Returns the names registered. Called once by the first lookup; call it again after
+        changing the variable.
+        """
+        self._environment_pending = False
+        names: list[str] = []
+        for entry in os.environ.get(ENV_VAR, "").split(os.pathsep):
+            if entry.strip():
+                names += self.load_file(entry.strip(), replace=True)
+        return names
+
+    def register(self, task: Task, *, replace: bool = False) -> Task:
+        """Add a :class:`Task`; ``replace`` allows replacing a task of the same name."""
+        if not isinstance(task, Task):
+            raise TaskError(f"expected a Task, got {type(task).__name__}")
+        self._ensure_environment()
+        if task.name in self._tasks and not replace:
+            raise TaskError(
+                f"task {task.name!r} is already registered (pass replace=True to replace it)"
+            )
+        self._tasks[task.name] = task
+        return task
+
+    def unregister(self, name: str) -> None:
+        """Remove a task (built-in ones included)."""
+        self._ensure_environment()
+        if name not in self._tasks:
+            raise TaskError(f"unknown task {name!r}; available: {', '.join(sorted(self._tasks))}")
+        del self._tasks[name]
+
+    def get(self, name: str) -> Task:
+        """The task ``name``; an unknown name raises a TaskError listing the known ones."""
+        self._ensure_environment()
+        try:
+            return self._tasks[name]
+        except (KeyError, TypeError):
+            raise TaskError(
+                f"unknown task {name!r}; available tasks: {', '.join(sorted(self._tasks))}"
+            ) from None
+
+    def names(self) -> list[str]:
+        """Names of the registered tasks, sorted."""
+        self._ensure_environment()
+        return sorted(self._tasks)
+
+    def load_file(self, path: str | os.PathLike, *, replace: bool = False) -> list[str]:
+        """Register every task of a TOML file; returns their names (none if one is bad)."""
+        found = read_task_file(path)
+        if not replace:
+            for task in found:
+                if task.name in self._tasks:
+                    raise TaskError(
+                        f"task {task.name!r} is already registered (pass replace=True to "
+                        "replace it)"
+                    )
+        for task in found:
+            self._tasks[task.name] = task
+        names = [t.name for t in found]
+        log.info("loaded tasks %s from %s", ", ".join(names), path)
+        return names
+
+    def __contains__(self, name: object) -> bool:
+        self._ensure_environment()
+        return name in self._tasks
+
+    def __iter__(self):
+        return iter(self.names())
+
+    def __len__(self) -> int:
+        self._ensure_environment()
+        return len(self._tasks)
+
+
+TASKS = TaskRegistry()
+
+
+def register_task(
+    name: str,
+    func: TaskFunction,
+    thresholds: Mapping[str, float] | None = None,
+    modes: Mapping[str, Mapping[str, float]] | None = None,
+    description: str = "",
+    requires: Iterable[str] = (),
+    *,
+    replace: bool = False,
+) -> Task:
+    """Register an affordance function under ``name`` and return its :class:`Task`.
+
+    Parameters
+    ----------
+    name : str
+        Registry name.
+    func : callable
+        ``func(metrics, thresholds) -> (n,) float64``, vectorised over rows.
+    thresholds : mapping of str to float, optional
+        Default threshold values.
+    modes : mapping of str to mapping, optional
+        Mode name to threshold overrides, added to the Table I modes (``default``,
+        ``no-robustness``, ``extra-robustness``: they set ``tau_eps`` when the task has
+        that threshold).
+    description : str
+        One line for listings.
+    requires : iterable of str
+        Metric columns read by ``func`` (checked before every evaluation).
+    replace : bool
+        Allow replacing an existing task of that name.
+    """
+    task = make_task(name, func, thresholds, modes, description, requires)
+    return TASKS.register(task, replace=replace)
+
+
+def task_from_expressions(
+    name: str,
+    value: str,
+    requires: str | None = None,
+    thresholds: Mapping[str, float] | None = None,
+    modes: Mapping[str, Mapping[str, float]] | None = None,
+    description: str = "",
+    *,
+    replace: bool = False,
+) -> Task:
+    """Register a declarative task from ``value`` / ``requires`` expressions."""
+    task = expression_task(name, value, requires, thresholds, modes, description)
+    return TASKS.register(task, replace=replace)
+
+
+def load_task_file(path: str | os.PathLike, *, replace: bool = False) -> list[str]:
+    """Register every task of a TOML file (see :mod:`affordgrasp.tasks`); returns their names."""
+    return TASKS.load_file(path, replace=replace)
+
+
+def unregister_task(name: str) -> None:
+    """Remove a task (built-in ones included) from the registry."""
+    TASKS.unregister(name)
+
+
+def get_task(name: str) -> Task:
+    """The registered task ``name``; unknown names raise a TaskError listing the known."""
+    return TASKS.get(name)
+
+
+def list_tasks() -> list[str]:
+    """Names of the registered tasks, sorted."""
+    return TASKS.names()
+
+
+def evaluate_task(name: str, columns: Any, mode: str = "default", **overrides: float) -> np.ndarray:
+    """Shorthand for ``get_task(name).evaluate(columns, mode, **overrides)``."""
+    return get_task(name).evaluate(columns, mode, **overrides)
+
+
+def is_viable(columns: Any, **overrides: float) -> np.ndarray:
+    """Boolean mask of viable grasps (ε > 0.15, ΣE_h < 250, E_i < 100 by default)."""
+    task = get_task("viable")
+    values = task.thresholds_for("default", **overrides)
+    metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
+    with np.errstate(invalid="ignore"):
+        return np.asarray(viable_mask(metrics, values), dtype=bool)

@@ -1,0 +1,123 @@
+"""An affordance function F_T with its thresholds and threshold modes."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from ..errors import TaskError
+from .metric_columns import MetricColumns
+from .thresholds import standard_modes
+
+TaskFunction = Callable[[Mapping[str, np.ndarray], Mapping[str, float]], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Task:
+    """An affordance function with its thresholds.
+
+    name : registry name
+    func : ``func(metrics, thresholds) -> (n,) float64``
+    thresholds : default threshold values by name
+    modes : mode name -> threshold overrides of that mode
+    description : one line for listings
+    requires : metric columns the function reads
+    """
+
+    name: str
+    func: TaskFunction
+    thresholds: Mapping[str, float] = field(default_factory=dict)
+    modes: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    description: str = ""
+    requires: tuple[str, ...] = ()
+
+    def thresholds_for(self, mode: str = "default", **overrides: float) -> dict[str, float]:
+        """Threshold values in ``mode`` with call-time ``overrides`` applied."""
+        if mode not in self.modes:
+            raise TaskError(
+                f"task {self.name!r} has no mode {mode!r}; modes: {', '.join(self.modes)}"
+            )
+        values = dict(self.thresholds)
+        values.update(self.modes[mode])
+        for key, value in overrides.items():
+            if key not in values:
+                raise TaskError(
+                    f"task {self.name!r} has no threshold {key!r}; thresholds: "
+                    f"{', '.join(values) or 'none'}"
+                )
+            try:
+                values[key] = float(value)
+            except (TypeError, ValueError) as exc:
+                raise TaskError(f"threshold {key!r} must be a number, got {value!r}") from exc
+        return values
+
+    def thresholds_by_mode(self) -> dict[str, dict[str, float]]:
+        """Every mode's threshold values (for dataset cards and listings)."""
+        return {mode: self.thresholds_for(mode) for mode in self.modes}
+
+    def evaluate(self, columns: Any, mode: str = "default", **overrides: float) -> np.ndarray:
+        """Score every row of ``columns`` (mapping, pyarrow Table or pandas DataFrame).
+
+        Returns (n,) float64; -inf where the task's requirements fail.
+        """
+        values = self.thresholds_for(mode, **overrides)
+        metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
+        for name in self.requires:
+            metrics[name]  # fail early, naming the missing column
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            out = np.asarray(self.func(metrics, MappingProxyType(values)), dtype=np.float64)
+        n = metrics.n_rows
+        if out.ndim == 0:
+            out = np.full(n, float(out))
+        if out.shape != (n,):
+            raise TaskError(
+                f"task {self.name!r} returned shape {out.shape}, expected ({n},) scores"
+            )
+        return out
+
+    __call__ = evaluate
+
+
+def make_task(
+    name: str,
+    func: TaskFunction,
+    thresholds: Mapping[str, float] | None = None,
+    modes: Mapping[str, Mapping[str, float]] | None = None,
+    description: str = "",
+    requires: Iterable[str] = (),
+) -> Task:
+    """A checked :class:`Task`; the Table I modes are added to the task's own ``modes``.
+
+    The Table I modes (``default``, ``no-robustness``, ``extra-robustness``) set ``tau_eps``
+    when the task has that threshold; a task's own modes add to or refine them.
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise TaskError(f"a task name must be a non-empty string, got {name!r}")
+    if not callable(func):
+        raise TaskError(f"task {name!r}: func must be callable, got {type(func).__name__}")
+    thresholds = {str(k): float(v) for k, v in (thresholds or {}).items()}
+    merged = standard_modes(thresholds)
+    for mode, over in (modes or {}).items():
+        merged[str(mode)] = {
+            **merged.get(str(mode), {}),
+            **{str(k): float(v) for k, v in over.items()},
+        }
+    for mode, over in merged.items():
+        unknown = set(over) - set(thresholds)
+        if unknown:
+            raise TaskError(
+                f"task {name!r}, mode {mode!r}: unknown thresholds {sorted(unknown)}; "
+                f"declare them in thresholds ({', '.join(thresholds) or 'none'})"
+            )
+    return Task(
+        name=name,
+        func=func,
+        thresholds=MappingProxyType(thresholds),
+        modes=MappingProxyType({k: MappingProxyType(v) for k, v in merged.items()}),
+        description=description,
+        requires=tuple(requires),
+    )

@@ -1,0 +1,73 @@
+"""Tasks declared in TOML files (``[tasks.<name>]`` tables of expressions and thresholds)."""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from ..errors import TaskError
+from .expressions import expression_task
+from .task import Task
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TaskError(f"{where} must be a number, got {value!r}")
+    return float(value)
+
+
+def read_task_file(path: str | os.PathLike) -> list[Task]:
+    """Every task of a TOML file (see :mod:`affordgrasp.tasks`), checked, not registered."""
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            doc = tomllib.load(fh)
+    except FileNotFoundError:
+        raise TaskError(f"task file {str(path)!r} does not exist") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise TaskError(f"task file {str(path)!r} is not valid TOML: {exc}") from None
+    section = doc.get("tasks")
+    if not isinstance(section, dict) or not section:
+        raise TaskError(f"task file {str(path)!r} has no [tasks.<name>] tables")
+    found: list[Task] = []
+    for name, spec in section.items():
+        where = f"{path.name}: task {name!r}"
+        if not isinstance(spec, dict):
+            raise TaskError(f"{where} must be a table")
+        unknown = set(spec) - {"value", "requires", "thresholds", "modes", "description"}
+        if unknown:
+            raise TaskError(
+                f"{where}: unknown keys {sorted(unknown)} "
+                "(allowed: value, requires, thresholds, modes, description)"
+            )
+        if "value" not in spec:
+            raise TaskError(f"{where} needs a 'value' expression")
+        thresholds = {
+            str(k): _number(v, f"{where} threshold {k!r}")
+            for k, v in dict(spec.get("thresholds", {})).items()
+        }
+        modes_in = spec.get("modes")
+        modes = None
+        if modes_in is not None:
+            if not isinstance(modes_in, dict):
+                raise TaskError(f"{where}: 'modes' must be a table of tables")
+            modes = {
+                str(mode): {
+                    str(k): _number(v, f"{where} mode {mode!r} threshold {k!r}")
+                    for k, v in dict(over).items()
+                }
+                for mode, over in modes_in.items()
+            }
+        found.append(
+            expression_task(
+                str(name),
+                spec["value"],
+                spec.get("requires"),
+                thresholds,
+                modes,
+                str(spec.get("description", "")),
+            )
+        )
+    return found
