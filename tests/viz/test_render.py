@@ -1,4 +1,4 @@
-"""The PNG renderer (affordgrasp.viz.render): geometry checked in pixels."""
+"""The PNG renderer (viz/camera, viz/raycast, viz/overlays): geometry checked in pixels."""
 
 import io
 
@@ -8,9 +8,7 @@ from PIL import Image
 from scipy.ndimage import binary_dilation
 
 from affordgrasp.errors import InputError
-from affordgrasp.viz.render import (
-    HAND_PART,
-    OBJECT_PART,
+from affordgrasp.viz import (
     Camera,
     GraspScene,
     OverlayStyle,
@@ -20,6 +18,7 @@ from affordgrasp.viz.render import (
     render_image,
     save_grasp_png,
 )
+from affordgrasp.viz.raycast import HAND_PART, OBJECT_PART
 
 
 def top_camera(size=128, height=0.5):

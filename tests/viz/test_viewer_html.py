@@ -6,8 +6,8 @@ import re
 import numpy as np
 import pytest
 
+from affordgrasp.viz import auto_camera, grasp_scene
 from affordgrasp.viz.html import ViewerEntry, viewer_document, write_viewer
-from affordgrasp.viz.render import auto_camera, grasp_scene
 
 from .conftest import grasp_row_on_box
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from .common import parse_thresholds
+from .common import add_task_arguments, parse_thresholds
 
 METRICS_SHOWN = (
     ("ε", "epsilon"),
@@ -17,25 +17,9 @@ METRICS_SHOWN = (
 )
 
 
-def add_task_arguments(p) -> None:
-    p.add_argument("--task", required=True, help="task name (see 'affordgrasp tasks')")
-    p.add_argument(
-        "--mode",
-        default="default",
-        help="threshold mode: default, no-robustness, extra-robustness",
-    )
-    p.add_argument(
-        "--threshold",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override one threshold of the task, e.g. tau_eps=0.1 (repeatable)",
-    )
-
-
 def add_arguments(p) -> None:
     p.add_argument("directory", metavar="DIR", help="a dataset written by 'affordgrasp generate'")
-    add_task_arguments(p)
+    add_task_arguments(p, several=False)
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
     p.add_argument("--top", type=int, default=5, help="how many grasps to show (default 5)")
     p.add_argument("--out", default=None, help="write the top rows to this .parquet file")

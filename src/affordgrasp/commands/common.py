@@ -56,25 +56,21 @@ def check_output_file(path: str, option: str) -> None:
 
 def run_batches(args, out, obj, metrics: bool):
     """Evaluate in batches with a progress bar; returns (table, seconds per stage, wall)."""
-    import pyarrow as pa
-
     from ..evaluate import evaluate_samples
 
-    tables = []
-    spent = {"simulate": 0.0, "metrics": 0.0, "table": 0.0}
     started = time.perf_counter()
     with out.progress(f"{obj.name}", args.samples) as advance:
-        for start in range(0, args.samples, args.batch):
-            n = min(args.batch, args.samples - start)
-            table, timing = evaluate_samples(
-                obj, n, seed=args.seed, start=start, hand=args.hand, metrics=metrics
-            )
-            for k, v in timing.items():
-                spent[k] += v
-            tables.append(table)
-            advance(n)
+        result = evaluate_samples(
+            obj,
+            args.samples,
+            seed=args.seed,
+            hand=args.hand,
+            metrics=metrics,
+            batch_size=args.batch,
+            progress=advance,
+        )
     wall = time.perf_counter() - started
-    return pa.concat_tables(tables), spent, wall
+    return result.table, dict(result.timings), wall
 
 
 def status_summary(table) -> tuple[list[list], dict]:
@@ -126,3 +122,80 @@ def parse_thresholds(items: list[str]) -> dict[str, float]:
             )
         out[name.strip()] = number
     return out
+
+
+def add_task_arguments(
+    p,
+    *,
+    several: bool = True,
+    required: bool = True,
+    thresholds: bool = True,
+    help: str | None = None,
+) -> None:
+    """The task options of every command: ``--task``, ``--mode`` and ``--threshold``.
+
+    several : ``--task`` is repeatable and takes comma lists (``--task beat,cut``); else one
+        task name. thresholds : add ``--threshold NAME=VALUE``.
+    """
+    if several:
+        p.add_argument(
+            "--task",
+            action="append",
+            required=required,
+            default=None,
+            metavar="TASK[,TASK...]",
+            help=help or "task(s) to rank by, e.g. cut or beat,cut,pick (see 'affordgrasp tasks')",
+        )
+    else:
+        p.add_argument(
+            "--task", required=required, help=help or "task name (see 'affordgrasp tasks')"
+        )
+    p.add_argument(
+        "--mode",
+        default="default",
+        help="threshold mode: default, no-robustness or extra-robustness (default: default)",
+    )
+    if thresholds:
+        p.add_argument(
+            "--threshold",
+            action="append",
+            default=[],
+            metavar="NAME=VALUE",
+            help="override a threshold of the task(s) that have it, e.g. tau_eps=0.1 (repeatable)",
+        )
+
+
+def task_names(values: list[str] | str | None) -> list[str]:
+    """Task names from ``--task`` values (repeated and/or comma-separated), first kept."""
+    if isinstance(values, str):
+        values = [values]
+    names: list[str] = []
+    for value in values or []:
+        names.extend(n.strip() for n in value.split(",") if n.strip())
+    return list(dict.fromkeys(names))
+
+
+def parse_tasks(values: list[str] | None, mode: str, threshold_items: list[str]):
+    """Task objects, and per-task threshold overrides, from the command line."""
+    from ..tasks import get_task
+
+    names = task_names(values)
+    if not names:
+        raise InputError(
+            "--task needs at least one task name, e.g. --task cut (see 'affordgrasp tasks')"
+        )
+    tasks = [get_task(n) for n in names]
+    overrides = parse_thresholds(threshold_items)
+    per_task: dict[str, dict[str, float]] = {}
+    for name, value in overrides.items():
+        having = [t for t in tasks if name in t.thresholds_for(mode)]
+        if not having:
+            raise InputError(
+                f"--threshold {name}: none of the tasks {', '.join(t.name for t in tasks)} has a "
+                "threshold of that name (see 'affordgrasp tasks')"
+            )
+        for t in having:
+            per_task.setdefault(t.name, {})[name] = value
+    for t in tasks:
+        t.thresholds_for(mode, **per_task.get(t.name, {}))  # checks the mode now
+    return tasks, per_task

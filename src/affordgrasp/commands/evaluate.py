@@ -6,10 +6,12 @@ import numpy as np
 
 from .common import (
     add_sampling_arguments,
+    add_task_arguments,
     check_counts,
     check_output_file,
     run_batches,
     status_summary,
+    task_names,
     write_table,
 )
 
@@ -27,14 +29,11 @@ SHOWN_METRICS = (
 
 def add_arguments(p) -> None:
     add_sampling_arguments(p)
-    p.add_argument(
-        "--task",
-        action="append",
-        default=None,
-        help="task to rank by (repeatable; default: every registered task)",
-    )
-    p.add_argument(
-        "--mode", default="default", help="threshold mode: default, no-robustness, extra-robustness"
+    add_task_arguments(
+        p,
+        required=False,
+        thresholds=False,
+        help="task(s) to rank by, e.g. beat,cut (repeatable; default: every registered task)",
     )
     p.add_argument("--tasks-file", default=None, help="TOML file declaring more tasks")
 
@@ -76,7 +75,7 @@ def run(args, out) -> None:
         check_output_file(args.out, "--out")
     if args.tasks_file:
         load_task_file(args.tasks_file)
-    names = args.task or [t for t in list_tasks() if t != "viable"]
+    names = task_names(args.task) or [t for t in list_tasks() if t != "viable"]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
     obj = resolve_object(args.object, size_m=args.size_m, units=args.units)

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from .best import add_task_arguments, metric_cells, shown_metrics
-from .common import parse_thresholds
+from .best import metric_cells, shown_metrics
+from .common import add_task_arguments, parse_thresholds
 
 
 def add_arguments(p) -> None:
     p.add_argument("object", metavar="OBJECT", help="knife, knife:7 or a mesh path")
-    add_task_arguments(p)
+    add_task_arguments(p, several=False)
     p.add_argument("--budget", type=int, default=20000, help="simulations (default 20000)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--hand", default="barrett", help="hand model (default barrett)")

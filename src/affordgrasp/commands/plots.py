@@ -7,7 +7,8 @@ for the tasks asked (default beat, cut, pick), ``affordances.png`` into OUTDIR.
 
 from __future__ import annotations
 
-from .show import add_source_arguments, add_task_arguments, check_counts, open_sources, parse_tasks
+from .common import add_task_arguments, check_counts, parse_tasks
+from .show import add_source_arguments, open_sources
 
 DEFAULT_TASKS = "beat,cut,pick"
 

@@ -12,9 +12,10 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
-from .common import check_counts, parse_thresholds
+from .common import add_task_arguments, check_counts, parse_tasks
 
 DEFAULT_SAMPLES = 1000
+EVALUATION_BATCH = 250
 
 
 def add_source_arguments(p) -> None:
@@ -49,29 +50,6 @@ def add_source_arguments(p) -> None:
     p.add_argument("-o", "--out", required=True, metavar="OUTDIR", help="directory to write into")
 
 
-def add_task_arguments(p, *, required: bool = True) -> None:
-    p.add_argument(
-        "--task",
-        action="append",
-        required=required,
-        default=None,
-        metavar="TASK[,TASK...]",
-        help="task(s) to rank by, e.g. cut or beat,cut,pick (see 'affordgrasp tasks')",
-    )
-    p.add_argument(
-        "--mode",
-        default="default",
-        help="threshold mode: default, no-robustness or extra-robustness (default: default)",
-    )
-    p.add_argument(
-        "--threshold",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override a threshold of the tasks that have it, e.g. tau_eps=0.1 (repeatable)",
-    )
-
-
 def add_arguments(p) -> None:
     add_source_arguments(p)
     add_task_arguments(p)
@@ -98,34 +76,6 @@ def add_arguments(p) -> None:
 # --------------------------------------------------------------------------- shared helpers
 
 
-def parse_tasks(values: list[str] | None, mode: str, threshold_items: list[str]):
-    """Task objects, and per-task threshold overrides, from the command line."""
-    from ..tasks import get_task
-
-    names: list[str] = []
-    for value in values or []:
-        names.extend(n.strip() for n in value.split(",") if n.strip())
-    if not names:
-        raise InputError(
-            "--task needs at least one task name, e.g. --task cut (see 'affordgrasp tasks')"
-        )
-    tasks = [get_task(n) for n in dict.fromkeys(names)]
-    overrides = parse_thresholds(threshold_items)
-    per_task: dict[str, dict[str, float]] = {}
-    for name, value in overrides.items():
-        having = [t for t in tasks if name in t.thresholds_for(mode)]
-        if not having:
-            raise InputError(
-                f"--threshold {name}: none of the tasks {', '.join(t.name for t in tasks)} has a "
-                "threshold of that name (see 'affordgrasp tasks')"
-            )
-        for t in having:
-            per_task.setdefault(t.name, {})[name] = value
-    for t in tasks:
-        t.thresholds_for(mode, **per_task.get(t.name, {}))  # checks the mode now
-    return tasks, per_task
-
-
 def open_sources(args, out) -> list:
     """One GraspSource per SOURCE: datasets as they are, objects evaluated now."""
     from ..evaluate import evaluate_samples
@@ -138,19 +88,16 @@ def open_sources(args, out) -> list:
             sources.append(DatasetSource(Path(spec).expanduser()))
             continue
         obj = resolve_object(spec)
-        tables = []
-        batch = 250
         with out.progress(f"evaluating {obj.name}", args.samples) as advance:
-            for start in range(0, args.samples, batch):
-                n = min(batch, args.samples - start)
-                table, _ = evaluate_samples(obj, n, seed=args.seed, start=start, hand=args.hand)
-                tables.append(table)
-                advance(n)
-        import pyarrow as pa
-
-        sources.append(
-            TableSource(pa.concat_tables(tables), name=obj.name, objects={obj.name: obj})
-        )
+            table, _ = evaluate_samples(
+                obj,
+                args.samples,
+                seed=args.seed,
+                hand=args.hand,
+                batch_size=EVALUATION_BATCH,
+                progress=advance,
+            )
+        sources.append(TableSource(table, name=obj.name, objects={obj.name: obj}))
     return sources
 
 

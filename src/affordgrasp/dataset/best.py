@@ -82,20 +82,48 @@ def resolve_task(name: str):
     return tasks.get_task(name)
 
 
+def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
+    """The numeric scalar columns of a table as float64 arrays (what tasks read)."""
+    out = {}
+    for f in table.schema:
+        if pa.types.is_integer(f.type) or pa.types.is_floating(f.type):
+            out[f.name] = table.column(f.name).to_numpy().astype(np.float64)
+    return out
+
+
 def task_values(task, columns, mode: str = "default", thresholds: Mapping | None = None):
     """F_T for every row of ``columns`` (an Arrow table or a mapping of (n,) arrays)."""
     if isinstance(columns, pa.Table):
-        # Only the numeric metric columns: the task reads names, not strings like `object`.
-        columns = columns.select(
-            [c for c in columns.column_names if pa.types.is_floating(columns.schema.field(c).type)]
-        )
+        # Only the numeric columns: the task reads names, not strings like `object`.
+        columns = numeric_columns(columns)
     values = task.evaluate(columns, mode=mode, **dict(thresholds or {}))
     return np.asarray(values, dtype=np.float64)
 
 
-def _top_order(values: np.ndarray, obj_rank: np.ndarray, sample: np.ndarray) -> np.ndarray:
-    # Sort keys: F_T descending, then object order, then sample (lexsort: last key first).
-    return np.lexsort((sample, obj_rank, -values))
+class TopRows:
+    """The ``k`` best rows seen so far, streamed: highest value first, ties by the keys.
+
+    Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks). Ties go to the
+    smaller first key, then the smaller second key..., so the result does not depend on the
+    order in which rows arrive.
+    """
+
+    def __init__(self, k: int, n_keys: int):
+        self.k = k
+        self.values = np.empty(0)
+        self.keys = tuple(np.empty(0, dtype=np.int64) for _ in range(n_keys))
+
+    def add(self, values: np.ndarray, *keys: np.ndarray) -> int:
+        """Offer rows (values (n,), each key (n,) int); returns how many can rank (> −∞)."""
+        keep = values > -np.inf  # False for NaN too
+        n = int(keep.sum())
+        if n:
+            v = np.concatenate([self.values, values[keep]])
+            ks = [np.concatenate([a, b[keep]]) for a, b in zip(self.keys, keys, strict=True)]
+            order = np.lexsort((*reversed(ks), -v))[: self.k]  # lexsort: last key first
+            self.values = v[order]
+            self.keys = tuple(a[order] for a in ks)
+        return n
 
 
 def best_grasps(
@@ -133,9 +161,7 @@ def best_grasps(
         columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
     )
     name_set = pa.array(names, pa.string())
-    best_v = np.empty(0)
-    best_o = np.empty(0, dtype=np.int64)
-    best_s = np.empty(0, dtype=np.int64)
+    best = TopRows(top, 2)  # ties: the object given first, then the lower sample index
     scanned = finite = 0
     for batch in scanner.to_batches():
         if batch.num_rows == 0:
@@ -143,18 +169,10 @@ def best_grasps(
         table = pa.Table.from_batches([batch])
         values = task_values(task_obj, table, mode, thresholds)
         scanned += len(values)
-        keep = values > -np.inf  # −inf (a failed threshold) and NaN never rank
-        finite += int(keep.sum())
-        if not keep.any():
-            continue
         o = pc.index_in(table["object"], value_set=name_set).to_numpy(zero_copy_only=False)
         s = table["sample"].to_numpy()
-        v, o, s = values[keep], o[keep], s[keep]
-        v = np.concatenate([best_v, v])
-        o = np.concatenate([best_o, o])
-        s = np.concatenate([best_s, s])
-        order = _top_order(v, o, s)[:top]
-        best_v, best_o, best_s = v[order], o[order], s[order]
+        finite += best.add(values, o.astype(np.int64), s.astype(np.int64))
+    best_v, (best_o, best_s) = best.values, best.keys
 
     rows = _fetch_rows(dataset, names, best_o, best_s)
     rows = rows.append_column(RANK_COLUMN, pa.array(np.arange(1, len(best_v) + 1), pa.int64()))

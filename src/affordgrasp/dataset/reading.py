@@ -17,12 +17,35 @@ import pyarrow.dataset as pads
 from ..errors import DatasetError
 from .layout import read_manifest, shard_paths
 
+# Columns without which Parquet files are not affordgrasp samples (see docs/conventions.md).
+REQUIRED_COLUMNS = ("object", "sample", "seed", "hand_pose", "joints")
 
-def open_dataset(directory: str | os.PathLike) -> pads.Dataset:
-    """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order)."""
+
+def open_dataset(directory: str | os.PathLike, *, loose: bool = False) -> pads.Dataset:
+    """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order).
+
+    Parameters
+    ----------
+    directory : path
+        A directory written by ``affordgrasp generate``.
+    loose : bool
+        Also accept a directory without a (valid) manifest: every ``*.parquet`` file under it
+        (not in hidden folders) whose columns are those of sample rows, e.g. files written
+        by ``affordgrasp evaluate --out``.
+
+    Raises
+    ------
+    DatasetError
+        When the directory is missing, not a dataset, empty or unreadable.
+    """
     from ..schema import SCHEMA, SIMULATION_SCHEMA
 
-    manifest = read_manifest(directory)
+    try:
+        manifest = read_manifest(directory)
+    except DatasetError:
+        if not loose:
+            raise
+        return _open_loose_files(Path(directory))
     paths = shard_paths(directory)
     if not paths:
         raise DatasetError(
@@ -31,6 +54,34 @@ def open_dataset(directory: str | os.PathLike) -> pads.Dataset:
         )
     schema = SCHEMA if manifest.get("metrics", True) else SIMULATION_SCHEMA
     return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
+
+
+def _open_loose_files(directory: Path) -> pads.Dataset:
+    if not directory.is_dir():
+        raise DatasetError(f"{str(directory)!r} is not a directory")
+    files = sorted(
+        str(p)
+        for p in directory.rglob("*.parquet")
+        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(directory).parts)
+    )
+    if not files:
+        raise DatasetError(
+            f"no Parquet files under {str(directory)!r}; give a dataset directory "
+            "written by 'affordgrasp generate', or an object (family, family:seed or mesh path)"
+        )
+    try:
+        dataset = pads.dataset(files, format="parquet")
+    except (pa.ArrowInvalid, OSError) as exc:
+        raise DatasetError(
+            f"cannot read the Parquet files under {str(directory)!r}: {exc}"
+        ) from exc
+    missing = set(REQUIRED_COLUMNS) - set(dataset.schema.names)
+    if missing:
+        raise DatasetError(
+            f"the Parquet files under {str(directory)!r} lack the columns {sorted(missing)}; "
+            "they do not look like an affordgrasp dataset (see docs/conventions.md)"
+        )
+    return dataset
 
 
 def dataset_objects(directory: str | os.PathLike) -> list[str]:

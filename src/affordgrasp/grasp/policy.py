@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import logging
 import time
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..caching import IdentityCache
 from ..errors import InputError
 from ..hands import Hand, get_hand
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
@@ -96,13 +96,15 @@ class HandArrays:
         return kernels.shape_poses(self.link_poses(dofs), self.shape_link, self.shape_local)
 
 
-_HAND_CACHE: dict[str, HandArrays] = {}
+_HAND_ARRAYS: IdentityCache[HandArrays] = IdentityCache()
 
 
 def hand_arrays(hand: Hand) -> HandArrays:
-    cached = _HAND_CACHE.get(hand.name)
-    if cached is not None and cached.hand is hand:
-        return cached
+    """The hand as flat arrays for the compiled kernels, built once per Hand object."""
+    return _HAND_ARRAYS.get(hand, lambda: _build_hand_arrays(hand))
+
+
+def _build_hand_arrays(hand: Hand) -> HandArrays:
     shape_link, local, kinds, halves, radii = [], [], [], [], []
     for i, link in enumerate(hand.links):
         for s in link.shapes:
@@ -178,7 +180,6 @@ def hand_arrays(hand: Hand) -> HandArrays:
         tuple(link.material for link in hand.links),
         tuple(fingers),
     )
-    _HAND_CACHE[hand.name] = arrays
     return arrays
 
 
@@ -190,17 +191,17 @@ class ObjectGeometry:
     hull_vertices: np.ndarray
 
 
-_GEOMETRY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_GEOMETRY: IdentityCache[ObjectGeometry] = IdentityCache()
 
 
 def object_geometry(obj) -> ObjectGeometry:
     """Surface samples and hull of ``obj`` (a GraspObject), cached for the object's lifetime."""
-    geom = _GEOMETRY.get(obj)
-    if geom is None:
+
+    def build() -> ObjectGeometry:
         mesh = obj.mesh
-        geom = ObjectGeometry(sample_surface(mesh), np.asarray(mesh.convex_hull.vertices))
-        _GEOMETRY[obj] = geom
-    return geom
+        return ObjectGeometry(sample_surface(mesh), np.asarray(mesh.convex_hull.vertices))
+
+    return _GEOMETRY.get(obj, build)
 
 
 @dataclass(frozen=True)

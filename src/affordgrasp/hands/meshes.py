@@ -21,6 +21,7 @@ from functools import lru_cache
 import numpy as np
 import trimesh
 
+from ..caching import IdentityCache
 from .model import Hand, Shape
 
 # Points on the unit sphere used to sweep the ball: an icosphere of 162 vertices keeps the
@@ -118,14 +119,9 @@ def posed_hand_mesh(
     return HandMesh(mesh, np.concatenate(face_link), tuple(hand.link_names))
 
 
-_LINK_MESH_CACHE: dict[int, tuple[Hand, list]] = {}
+_LINK_MESHES: IdentityCache[list] = IdentityCache()
 
 
 def _link_meshes_cached(hand: Hand) -> list[trimesh.Trimesh | None]:
-    # Hands are frozen dataclasses holding arrays (unhashable): cache by identity and keep the
-    # hand alive with its meshes so the id cannot be reused.
-    cached = _LINK_MESH_CACHE.get(id(hand))
-    if cached is None or cached[0] is not hand:
-        cached = (hand, link_meshes(hand))
-        _LINK_MESH_CACHE[id(hand)] = cached
-    return cached[1]
+    # Hands are frozen dataclasses holding arrays (unhashable): cached by identity
+    return _LINK_MESHES.get(hand, lambda: link_meshes(hand))

@@ -34,10 +34,9 @@ computed once and cached for as long as the mesh object lives unmodified.
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 
+from ..caching import IdentityCache
 from ..errors import InputError
 from ..tolerances import FLAT_DIHEDRAL
 from .validation import points_n3
@@ -47,23 +46,12 @@ _FLAT_ANGLE = FLAT_DIHEDRAL  # dihedral angles below this (rad) are flat, not ed
 _FIT_RCOND = 1e-10  # relative singular-value cutoff of the quadratic fit
 _CHUNK = 2048  # use points per batched fit
 
-# ------------------------------------------------------------------------------------
-# per-mesh cache: keyed by object identity, validated by trimesh's content hash, and
-# dropped when the mesh is garbage collected
-# ------------------------------------------------------------------------------------
-_CACHE: dict[int, tuple[weakref.ref, int, dict]] = {}
+# per-mesh derived data, validated by trimesh's content hash (see affordgrasp.caching)
+_MESH_DATA: IdentityCache[dict] = IdentityCache()
 
 
 def _mesh_cache(mesh) -> dict:
-    key = id(mesh)
-    content = hash(mesh)
-    entry = _CACHE.get(key)
-    if entry is not None and entry[0]() is mesh and entry[1] == content:
-        return entry[2]
-    data: dict = {}
-    ref = weakref.ref(mesh, lambda _ref, key=key: _CACHE.pop(key, None))
-    _CACHE[key] = (ref, content, data)
-    return data
+    return _MESH_DATA.get(mesh, dict, version=hash(mesh))
 
 
 def _vertex_faces_csr(mesh) -> tuple[np.ndarray, np.ndarray]:

@@ -6,6 +6,9 @@ matplotlib's Agg canvas and written as PNG; the viewer is one self-contained HTM
 * :func:`grasp_scene` turns a sample row (SPEC §2.9 columns) into a :class:`GraspScene`;
   :func:`save_grasp_png` / :func:`grasp_image` draw it (camera: :func:`auto_camera`, or your
   own :class:`Camera`).
+* Modules: :mod:`.scene` (what is drawn), :mod:`.camera` (pinhole cameras, the default view),
+  :mod:`.raycast` (the image: one ray caster per scene), :mod:`.overlays` (contacts, use
+  point, wrist axis drawn over it).
 * :func:`top_grasps` ranks a dataset or table by tasks; :func:`draw_best` writes the grid,
   the per-grasp PNGs and the HTML page (``affordgrasp show``).
 * :func:`summarize` and :func:`save_plots` plot a dataset (``affordgrasp plots``).
@@ -13,22 +16,13 @@ matplotlib's Agg canvas and written as PNG; the viewer is one self-contained HTM
 
 from __future__ import annotations
 
+from .camera import Camera, auto_camera, framed_camera
 from .grid import grid_image, save_grid
 from .html import ViewerEntry, write_viewer
+from .overlays import OverlayStyle, draw_grasp, grasp_image, save_grasp_png
 from .plots import save_plots, summarize
-from .render import (
-    Camera,
-    GraspScene,
-    OverlayStyle,
-    Render,
-    auto_camera,
-    draw_grasp,
-    framed_camera,
-    grasp_image,
-    grasp_scene,
-    render_image,
-    save_grasp_png,
-)
+from .raycast import RayCaster, Render, render_image
+from .scene import GraspScene, grasp_scene
 from .showcase import draw_best
 from .sources import DatasetSource, TableSource, top_grasps
 
@@ -37,6 +31,7 @@ __all__ = [
     "DatasetSource",
     "GraspScene",
     "OverlayStyle",
+    "RayCaster",
     "Render",
     "TableSource",
     "ViewerEntry",

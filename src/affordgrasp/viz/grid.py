@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .render import COM_COLOR, CONTACT_COLOR, USE_COLOR, WRIST_COLOR
+from .overlays import COM_COLOR, CONTACT_COLOR, USE_COLOR, WRIST_COLOR
 
 LABEL_PX = 28  # width of the row-label column and height of the column-label row
 TITLE_PX = 30

@@ -6,7 +6,7 @@ base64 arrays. Nothing is fetched from the network, so it opens offline from dis
 
 Meshes are sent once: each object, and each hand as its link meshes in the link frames; a
 grasp is then the link poses (row-major 4x4, link → object), contacts, use point, wrist axis,
-centre of mass and the camera of its PNG (same conventions as :mod:`affordgrasp.viz.render`).
+centre of mass and the camera of its PNG (same conventions as :mod:`affordgrasp.viz.camera`).
 Vertices are float32 metres, normals int8 (normalised), indices uint16 or uint32.
 """
 
@@ -28,7 +28,9 @@ import trimesh
 from .. import __version__
 from ..hands import Hand
 from ..hands.meshes import link_meshes
-from .render import Camera, GraspScene, corner_normals
+from .camera import Camera
+from .raycast import corner_normals
+from .scene import GraspScene
 
 
 @dataclass(frozen=True)

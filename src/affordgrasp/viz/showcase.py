@@ -23,7 +23,8 @@ from ..columns import hold_effort_sum
 from .figure import png_bytes, save_image
 from .grid import save_grid
 from .html import ViewerEntry, fmt_value, write_viewer
-from .render import OverlayStyle, grasp_image, grasp_scene
+from .overlays import OverlayStyle, grasp_image
+from .scene import grasp_scene
 from .sources import RankedGrasp, TaskRanking
 
 # Facts listed beside each grasp in the viewer: (label, column).

@@ -1,9 +1,10 @@
 """Where the grasps to show come from: a dataset directory or an in-memory table.
 
-A dataset directory is read as every ``*.parquet`` file under it (other files, such as a
-manifest, are ignored), streamed in batches so that datasets larger than memory can be
-ranked and plotted. :func:`top_grasps` keeps the best ``k`` rows per object and task with one
-pass over the scalar columns, then reads back only those rows in full.
+A dataset directory is read by :func:`affordgrasp.dataset.reading.open_dataset` (its shards,
+or every ``*.parquet`` file under a directory without a manifest), streamed in batches so
+that datasets larger than memory can be ranked and plotted. :func:`top_grasps` keeps the
+best ``k`` rows per object and task with one pass over the scalar columns (ranked by
+:class:`affordgrasp.dataset.best.TopRows`), then reads back only those rows in full.
 """
 
 from __future__ import annotations
@@ -18,7 +19,9 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
-from ..errors import DatasetError, InputError
+from ..dataset.best import TopRows, numeric_columns, task_values
+from ..dataset.reading import open_dataset
+from ..errors import InputError
 
 BATCH_ROWS = 65536
 
@@ -88,33 +91,8 @@ class DatasetSource(GraspSource):
     def __post_init__(self) -> None:
         self.directory = Path(self.directory)
         self.name = self.name or str(self.directory)
-        if not self.directory.is_dir():
-            raise DatasetError(f"{str(self.directory)!r} is not a directory")
-        self.files = sorted(
-            str(p)
-            for p in self.directory.rglob("*.parquet")
-            if p.is_file()
-            and not any(part.startswith(".") for part in p.relative_to(self.directory).parts)
-        )
-        if not self.files:
-            raise DatasetError(
-                f"no Parquet files under {str(self.directory)!r}; give a dataset directory "
-                "written by 'affordgrasp generate', or an object (family, family:seed or mesh path)"
-            )
-        try:
-            self._dataset = pads.dataset(self.files, format="parquet")
-        except (pa.ArrowInvalid, OSError) as exc:
-            raise DatasetError(
-                f"cannot read the Parquet files under {str(self.directory)!r}: {exc}"
-            ) from exc
-        missing = {"object", "sample", "seed", "hand_pose", "joints"} - set(
-            self._dataset.schema.names
-        )
-        if missing:
-            raise DatasetError(
-                f"the Parquet files under {str(self.directory)!r} lack the columns "
-                f"{sorted(missing)}; they do not look like an affordgrasp dataset (SPEC §2.9)"
-            )
+        self._dataset = open_dataset(self.directory, loose=True)
+        self.files = list(self._dataset.files)
 
     def schema(self) -> pa.Schema:
         return self._dataset.schema
@@ -155,21 +133,6 @@ class TaskRanking:
     best: list[RankedGrasp] = field(default_factory=list)
 
 
-def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
-    """The numeric scalar columns of a table as float64 arrays (what tasks read)."""
-    out = {}
-    for f in table.schema:
-        if pa.types.is_integer(f.type) or pa.types.is_floating(f.type):
-            out[f.name] = table.column(f.name).to_numpy().astype(np.float64)
-    return out
-
-
-def _keep_top(scores, seeds, samples, k):
-    # Highest score first; ties by (seed, sample) so the choice does not depend on order.
-    order = np.lexsort((samples, seeds, -scores))[:k]
-    return scores[order], seeds[order], samples[order]
-
-
 def top_grasps(
     source: GraspSource,
     tasks: Sequence,
@@ -190,7 +153,7 @@ def top_grasps(
         raise InputError(f"--top must be at least 1, got {top}")
     thresholds = thresholds or {}
     columns = source.scalar_columns()
-    kept: dict[tuple[str, str], tuple] = {}
+    kept: dict[tuple[str, str], TopRows] = {}  # ties by (seed, sample)
     counts: dict[tuple[str, str], list[int]] = {}
     for table in source.scan(columns):
         objects = table.column("object").combine_chunks().dictionary_encode()
@@ -203,31 +166,21 @@ def top_grasps(
         order = np.argsort(codes, kind="stable")
         bounds = np.concatenate([[0], np.cumsum(np.bincount(codes, minlength=len(names)))])
         for task in tasks:
-            scores = np.asarray(
-                task.evaluate(numeric, mode=mode, **thresholds.get(task.name, {})),
-                dtype=np.float64,
-            )
-            valid = ~np.isnan(scores) & (scores > -np.inf)
+            scores = task_values(task, numeric, mode, thresholds.get(task.name))
             for code, name in enumerate(names):
                 rows = order[bounds[code] : bounds[code + 1]]
                 key = (name, task.name)
                 c = counts.setdefault(key, [0, 0])
                 c[0] += len(rows)
-                sel = rows[valid[rows]]
-                c[1] += len(sel)
-                if not len(sel):
-                    continue
-                new = (scores[sel], seeds[sel], samples[sel])
-                if key in kept:
-                    new = tuple(np.concatenate([a, b]) for a, b in zip(kept[key], new, strict=True))
-                kept[key] = _keep_top(*new, top)
+                ranking = kept.setdefault(key, TopRows(top, 2))
+                c[1] += ranking.add(scores[rows], seeds[rows], samples[rows])
         if progress is not None:
             progress(table.num_rows)
     out: dict[tuple[str, str], TaskRanking] = {}
     for key, (scored, accepted) in counts.items():
         ranking = TaskRanking(key[0], key[1], scored, accepted)
-        if key in kept:
-            scores, seeds, samples = kept[key]
+        if key in kept and len(kept[key].values):
+            scores, (seeds, samples) = kept[key].values, kept[key].keys
             keys = [(int(a), int(b)) for a, b in zip(seeds, samples, strict=True)]
             rows = source.fetch(key[0], keys)
             by_key = {(int(r["seed"]), int(r["sample"])): r for r in rows}

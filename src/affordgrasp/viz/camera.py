@@ -1,0 +1,204 @@
+"""Pinhole cameras and the default view of a grasp.
+
+Conventions (see ``docs/viewing.md``):
+
+* :class:`Camera` is a pinhole camera: ``eye`` looks at ``target``, ``up`` is up in the image,
+  ``fov_deg`` is the vertical field of view. Pixel (0, 0) is the top-left corner of the image;
+  x grows to the right, y downwards; a pixel's centre is at (i + 0.5, j + 0.5).
+* The default camera (:func:`auto_camera`) keeps the hand at the top of the image (image up is
+  the direction the hand came from, ``-wrist_axis``), looks at the grasp from the direction
+  among 64 fixed candidates where the most of both the object and the hand are visible, and
+  frames the object and the hand together.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import InputError
+from .scene import GraspScene, scene_bounds, scene_points
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera.
+
+    eye, target, up : (3,) float, metres (``up`` need not be orthogonal to the view)
+    fov_deg : vertical field of view, degrees
+    width, height : image size, pixels
+    """
+
+    eye: np.ndarray
+    target: np.ndarray
+    up: np.ndarray
+    fov_deg: float = 30.0
+    width: int = 512
+    height: int = 512
+
+    def __post_init__(self) -> None:
+        for name in ("eye", "target", "up"):
+            v = np.asarray(getattr(self, name), dtype=np.float64).reshape(3)
+            if not np.all(np.isfinite(v)):
+                raise InputError(f"camera {name} must be 3 finite numbers, got {v}")
+            object.__setattr__(self, name, v)
+        if not 1.0 <= float(self.fov_deg) <= 170.0:
+            raise InputError(f"camera fov_deg must be in [1, 170] degrees, got {self.fov_deg}")
+        if int(self.width) < 2 or int(self.height) < 2:
+            raise InputError(
+                f"camera image must be at least 2x2 pixels, got {self.width}x{self.height}"
+            )
+        if np.linalg.norm(self.eye - self.target) <= 0:
+            raise InputError("camera eye and target must differ")
+
+    def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(right, up, forward), orthonormal, in the world frame."""
+        forward = self.target - self.eye
+        forward = forward / np.linalg.norm(forward)
+        right = np.cross(forward, self.up)
+        if np.linalg.norm(right) < 1e-9:  # up parallel to the view: any perpendicular will do
+            right = np.cross(forward, any_perpendicular(forward))
+        right /= np.linalg.norm(right)
+        up = np.cross(right, forward)
+        return right, up, forward
+
+    @property
+    def focal_px(self) -> float:
+        return 0.5 * self.height / np.tan(np.deg2rad(self.fov_deg) / 2.0)
+
+    def with_size(self, width: int, height: int) -> Camera:
+        return replace(self, width=int(width), height=int(height))
+
+    def rays(self) -> tuple[np.ndarray, np.ndarray]:
+        """Origins (h*w, 3) and unit directions (h*w, 3) through pixel centres, row-major."""
+        right, up, forward = self.basis()
+        x = (np.arange(self.width) + 0.5 - 0.5 * self.width) / self.focal_px
+        y = (np.arange(self.height) + 0.5 - 0.5 * self.height) / self.focal_px
+        xx, yy = np.meshgrid(x, y)
+        d = forward + xx.reshape(-1, 1) * right - yy.reshape(-1, 1) * up
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        return np.broadcast_to(self.eye, d.shape).copy(), d
+
+    def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel coordinates (n, 2) (x right, y down) and distance from the eye (n,).
+
+        Points behind the camera get NaN pixel coordinates.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3) - self.eye
+        right, up, forward = self.basis()
+        z = p @ forward
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = 0.5 * self.width + self.focal_px * (p @ right) / z
+            v = 0.5 * self.height - self.focal_px * (p @ up) / z
+        uv = np.column_stack([u, v])
+        uv[z <= 1e-9] = np.nan
+        return uv, np.linalg.norm(p, axis=1)
+
+
+def unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def any_perpendicular(v: np.ndarray) -> np.ndarray:
+    a = np.array([1.0, 0.0, 0.0]) if abs(v[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    return unit(np.cross(v, a))
+
+
+def _fibonacci_sphere(n: int) -> np.ndarray:
+    i = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * i / n
+    r = np.sqrt(1.0 - z * z)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def _image_up(scene: GraspScene) -> np.ndarray:
+    a = scene.wrist_axis
+    if np.all(np.isfinite(a)) and np.linalg.norm(a) > 0:
+        return -unit(a)  # the hand came from there: keep it at the top
+    return np.array([0.0, 0.0, 1.0])
+
+
+def framed_camera(
+    scene: GraspScene,
+    view_dir: np.ndarray,
+    *,
+    up: np.ndarray | None = None,
+    fov_deg: float = 30.0,
+    width: int = 512,
+    height: int = 512,
+    margin: float = 0.06,
+) -> Camera:
+    """A camera on the side ``view_dir`` (from the scene towards the eye) that frames the
+    object and the hand with ``margin`` (a fraction of the image) free on each side."""
+    v = unit(np.asarray(view_dir, dtype=np.float64))
+    up = _image_up(scene) if up is None else np.asarray(up, dtype=np.float64)
+    if np.linalg.norm(np.cross(v, up)) < 1e-3:
+        up = any_perpendicular(v)
+    pts = scene_points(scene)
+    lo, hi = scene_bounds(scene)
+    t0 = 0.5 * (lo + hi)
+    right, cam_up, forward = Camera(t0 + v, t0, up, fov_deg, width, height).basis()
+    # Exact fit for a fixed view direction: a point p is inside the image when
+    # |(p - t)·right| <= kx ((p - t)·forward + D) (and the same with up, ky), with t the target
+    # and D the eye's distance; the smallest D over lateral shifts of t has a closed form.
+    q = pts - t0
+    depth = q @ forward
+    ky = np.tan(np.deg2rad(fov_deg) / 2.0) * (1.0 - 2.0 * margin)
+    kx = ky * width / height
+    shift = np.zeros(3)
+    distance = 0.0
+    for axis, k in ((right, kx), (cam_up, ky)):
+        a = q @ axis
+        hi_a = float(np.max(a - k * depth))
+        lo_a = float(np.min(a + k * depth))
+        shift += 0.5 * (hi_a + lo_a) * axis
+        distance = max(distance, (hi_a - lo_a) / (2.0 * k))
+    # Keep every point in front of the eye, with some room.
+    distance = max(distance, float(-depth.min()) + 0.05 * float(np.linalg.norm(hi - lo)), 1e-3)
+    target = t0 + shift
+    return Camera(target + v * distance, target, up, fov_deg, width, height)
+
+
+def auto_camera(
+    scene: GraspScene,
+    *,
+    width: int = 512,
+    height: int = 512,
+    fov_deg: float = 30.0,
+    candidates: int = 64,
+) -> Camera:
+    """The default camera: the one of ``candidates`` fixed directions that sees the most of
+    both the object and the hand (and the use point), framed; image up is ``-wrist_axis``."""
+    from .raycast import BACKGROUND_PART, HAND_PART, OBJECT_PART, visible_from
+
+    caster = scene.caster
+    dirs = _fibonacci_sphere(candidates)
+    a = scene.wrist_axis
+    if np.all(np.isfinite(a)) and np.linalg.norm(a) > 0:
+        # Straight along the approach, the palm hides the object or the object the hand.
+        dirs = dirs[np.abs(dirs @ unit(a)) < 0.85]
+    probe = 40
+    # One framed low-resolution camera per candidate (cheap numpy), then all their rays and
+    # the use-point sight lines in one embree call.
+    cams = [framed_camera(scene, v, fov_deg=fov_deg, width=probe, height=probe) for v in dirs]
+    if not cams:
+        return framed_camera(
+            scene, np.array([0.3, -1.0, 0.5]), fov_deg=fov_deg, width=width, height=height
+        )
+    origins, rays = zip(*(c.rays() for c in cams), strict=True)
+    tri = caster.cast(np.concatenate(origins), np.concatenate(rays))["primID"]
+    part = np.where(tri >= 0, caster.face_part[np.maximum(tri, 0)], BACKGROUND_PART)
+    part = part.reshape(len(cams), probe * probe)
+    obj_px = np.count_nonzero(part == OBJECT_PART, axis=1) / part.shape[1]
+    hand_px = np.count_nonzero(part == HAND_PART, axis=1) / part.shape[1]
+    score = np.sqrt(obj_px * hand_px) if scene.hand is not None else obj_px
+    if np.all(np.isfinite(scene.use_point)):
+        eyes = np.array([c.eye for c in cams])
+        seen = visible_from(caster, eyes, np.broadcast_to(scene.use_point, eyes.shape))
+        score = np.where(seen, 1.15 * score, score)
+    # Prefer a camera above the grasp: a tiny, deterministic tie-breaker between mirror views.
+    score = score + 1e-3 * (dirs @ _image_up(scene))
+    best = dirs[int(np.argmax(score))]
+    return framed_camera(scene, best, fov_deg=fov_deg, width=width, height=height)

@@ -1,0 +1,220 @@
+"""Ray casting a grasp scene (embree through ``embreex``): shaded colours, depth, parts.
+
+The object and the posed hand are cast in one scene; each pixel is shaded by its normal
+(Lambert, two lights fixed to the camera, a flat colour per part: the object grey, the palm
+and fingers blue) and silhouettes are outlined so the picture reads at thumbnail size. The
+result depends only on the inputs (no randomness, no GL). A scene builds its caster once
+(:attr:`GraspScene.caster`): the default camera, the image and the visibility tests of the
+overlays all cast into the same one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from ..caching import IdentityCache
+from .camera import Camera, unit
+from .scene import GraspScene, scene_bounds
+
+BACKGROUND = np.array([1.0, 1.0, 1.0])
+OBJECT_COLOR = np.array([0.74, 0.74, 0.72])
+PALM_COLOR = np.array([0.24, 0.36, 0.62])
+FINGER_COLOR = np.array([0.40, 0.56, 0.86])
+OUTLINE_COLOR = np.array([0.12, 0.12, 0.14])
+
+# Parts in the part buffer of a render.
+BACKGROUND_PART = 0
+OBJECT_PART = 1
+HAND_PART = 2
+
+# Shading normals are averaged over faces within this angle of each other; sharper edges
+# stay sharp (a blade's edge, a box's corner).
+SMOOTH_ANGLE_DEG = 35.0
+
+
+@dataclass(frozen=True)
+class Render:
+    """A ray-cast image.
+
+    rgb : (h, w, 3) uint8
+    depth : (h, w) float, distance from the eye to the surface, inf on the background
+    part : (h, w) int8, BACKGROUND_PART / OBJECT_PART / HAND_PART
+    camera : the camera, at the image's size
+    """
+
+    rgb: np.ndarray
+    depth: np.ndarray
+    part: np.ndarray
+    camera: Camera
+
+
+@dataclass(frozen=True)
+class RayCaster:
+    """The scene's triangles in one embree scene, with shading data per face corner.
+
+    Rays are cast in float32 relative to ``origin`` (the scene's centre) to keep precision.
+    """
+
+    scene: object
+    origin: np.ndarray  # (3,)
+    corner_normals: np.ndarray  # (f, 3, 3)
+    face_color: np.ndarray  # (f, 3)
+    face_part: np.ndarray  # (f,) int8
+
+    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
+        """First hits: primID (n,) (-1: miss), tfar (n,) distance, u, v barycentrics."""
+        o = (np.asarray(origins, dtype=np.float64) - self.origin).astype(np.float32)
+        return self.scene.run(o, np.asarray(dirs, dtype=np.float32), output=1)
+
+    @classmethod
+    def of_scene(cls, scene: GraspScene) -> RayCaster:
+        """The caster of a grasp scene (use :attr:`GraspScene.caster`: it is built once)."""
+        return _build_caster(scene)
+
+    def render(self, camera: Camera, *, supersample: int = 2) -> Render:
+        """Shaded colours, depth and part per pixel, seen by ``camera``."""
+        return _render(self, camera, supersample=supersample)
+
+
+def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -> np.ndarray:
+    """Shading normals at each face corner, (f, 3, 3): the area-weighted mean of the normals
+    of the faces around the corner's vertex that are within ``angle_deg`` of the face."""
+    faces = np.asarray(mesh.faces)
+    fn = np.asarray(mesh.face_normals)
+    weighted = fn * np.asarray(mesh.area_faces)[:, None]
+    vf = np.asarray(mesh.vertex_faces)  # (v, max degree), -1 padded
+    around = vf[faces]  # (f, 3, d)
+    valid = around >= 0
+    idx = np.where(valid, around, 0)
+    near = np.einsum("fk,fcdk->fcd", fn, fn[idx]) >= np.cos(np.deg2rad(angle_deg))
+    w = np.where((valid & near)[..., None], weighted[idx], 0.0)
+    n = w.sum(axis=2)
+    norm = np.linalg.norm(n, axis=2, keepdims=True)
+    fallback = np.broadcast_to(fn[:, None, :], n.shape)
+    return np.where(norm > 1e-20, n / np.maximum(norm, 1e-20), fallback)
+
+
+_OBJECT_CORNER_NORMALS: IdentityCache[np.ndarray] = IdentityCache()
+
+
+def _object_corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
+    # Objects are shared and reused across grasps (hand meshes are new for every grasp).
+    return _OBJECT_CORNER_NORMALS.get(mesh, lambda: corner_normals(mesh), version=hash(mesh))
+
+
+def _build_caster(scene: GraspScene) -> RayCaster:
+    from embreex import mesh_construction, rtcore_scene
+
+    meshes = [scene.object_mesh]
+    normals = [_object_corner_normals(scene.object_mesh)]
+    colors = [np.broadcast_to(OBJECT_COLOR, (len(scene.object_mesh.faces), 3))]
+    parts = [np.full(len(scene.object_mesh.faces), OBJECT_PART, dtype=np.int8)]
+    if scene.hand is not None:
+        hm = scene.hand.mesh
+        meshes.append(hm)
+        normals.append(corner_normals(hm))
+        is_palm = scene.hand.face_link == 0
+        colors.append(np.where(is_palm[:, None], PALM_COLOR, FINGER_COLOR))
+        parts.append(np.full(len(hm.faces), HAND_PART, dtype=np.int8))
+    lo, hi = scene_bounds(scene)
+    origin = 0.5 * (lo + hi)
+    triangles = np.concatenate([np.asarray(m.triangles) for m in meshes]) - origin
+    ray_scene = rtcore_scene.EmbreeScene()
+    mesh_construction.TriangleMesh(scene=ray_scene, vertices=triangles.astype(np.float32))
+    return RayCaster(
+        ray_scene,
+        origin,
+        np.concatenate(normals),
+        np.concatenate(colors),
+        np.concatenate(parts),
+    )
+
+
+def render_image(scene: GraspScene, camera: Camera, *, supersample: int = 2) -> Render:
+    """Ray-cast the object and the hand: shaded colours, depth and part per pixel."""
+    return scene.caster.render(camera, supersample=supersample)
+
+
+def _render(caster: RayCaster, camera: Camera, *, supersample: int = 2) -> Render:
+    s = max(1, int(supersample))
+    big = camera.with_size(camera.width * s, camera.height * s)
+    origins, dirs = big.rays()
+    res = caster.cast(origins, dirs)
+    h, w = big.height, big.width
+    tri = res["primID"].astype(np.int64)
+    hit = tri >= 0
+    t = tri[hit]
+    u = res["u"][hit].astype(np.float64)
+    v = res["v"][hit].astype(np.float64)
+    bary = np.column_stack([1.0 - u - v, u, v])
+    n = np.einsum("nc,nck->nk", bary, caster.corner_normals[t])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    d = dirs[hit]
+    n = np.where((np.sum(n * d, axis=1) > 0)[:, None], -n, n)  # two-sided: face the camera
+    right, up, forward = big.basis()
+    key = unit(-forward + 0.6 * up - 0.5 * right)  # upper left, in front
+    fill = unit(-forward - 0.3 * up + 0.7 * right)
+    lambert = 0.42 + 0.50 * np.clip(n @ key, 0, None) + 0.20 * np.clip(n @ fill, 0, None)
+    colors = np.tile(BACKGROUND, (h * w, 1))
+    colors[hit] = np.clip(caster.face_color[t] * lambert[:, None], 0.0, 1.0)
+    depth = np.full(h * w, np.inf)
+    depth[hit] = res["tfar"][hit]
+    part = np.zeros(h * w, dtype=np.int8)
+    part[hit] = caster.face_part[t]
+    colors = colors.reshape(h, w, 3)
+    depth = depth.reshape(h, w)
+    part = part.reshape(h, w)
+    edge = _outline(depth, part, tol=0.01 * _finite_range(depth))
+    colors[edge] = OUTLINE_COLOR
+    if s > 1:
+        colors = colors.reshape(camera.height, s, camera.width, s, 3).mean(axis=(1, 3))
+        # A pixel's depth and part are those of its nearest sample: anything seen at all
+        # in a pixel counts (background only where every sample missed).
+        blocks = depth.reshape(camera.height, s, camera.width, s).transpose(0, 2, 1, 3)
+        blocks = blocks.reshape(camera.height, camera.width, s * s)
+        nearest = np.argmin(blocks, axis=2)[..., None]
+        depth = np.take_along_axis(blocks, nearest, axis=2)[..., 0]
+        part_blocks = part.reshape(camera.height, s, camera.width, s).transpose(0, 2, 1, 3)
+        part_blocks = part_blocks.reshape(camera.height, camera.width, s * s)
+        part = np.take_along_axis(part_blocks, nearest, axis=2)[..., 0]
+    rgb = np.round(np.clip(colors, 0, 1) * 255).astype(np.uint8)
+    return Render(rgb, depth, part, camera)
+
+
+def _finite_range(depth: np.ndarray) -> float:
+    finite = depth[np.isfinite(depth)]
+    return float(finite.max() - finite.min()) if finite.size else 0.0
+
+
+def _outline(depth: np.ndarray, part: np.ndarray, tol: float) -> np.ndarray:
+    """Pixels on a silhouette: the part changes, or the depth jumps, to a neighbour."""
+    edge = np.zeros(part.shape, dtype=bool)
+    dz = np.where(np.isfinite(depth), depth, 1e9)
+    for a, b in ((np.s_[1:, :], np.s_[:-1, :]), (np.s_[:, 1:], np.s_[:, :-1])):
+        jump = (part[a] != part[b]) | (np.abs(dz[a] - dz[b]) > max(tol, 1e-6))
+        # Mark the nearer pixel of the pair: outlines hug the foreground.
+        nearer_a = dz[a] <= dz[b]
+        edge[a] |= jump & nearer_a
+        edge[b] |= jump & ~nearer_a
+    return edge
+
+
+def visible(caster: RayCaster, camera: Camera, points: np.ndarray, tol: float = 2e-3) -> np.ndarray:
+    """Whether each point (n, 3) is seen by the camera (nothing nearer along its ray)."""
+    points = np.asarray(points, dtype=np.float64)
+    return visible_from(caster, np.broadcast_to(camera.eye, points.shape), points, tol)
+
+
+def visible_from(
+    caster: RayCaster, eyes: np.ndarray, points: np.ndarray, tol: float = 2e-3
+) -> np.ndarray:
+    """Whether each point (n, 3) is seen from its eye (n, 3)."""
+    d = np.asarray(points, dtype=np.float64) - eyes
+    dist = np.linalg.norm(d, axis=1)
+    d = d / dist[:, None]
+    res = caster.cast(eyes, d)
+    first = np.where(res["primID"] >= 0, res["tfar"], np.inf)
+    return first >= dist - tol
