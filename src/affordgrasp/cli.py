@@ -36,6 +36,13 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
+def add_verbose_argument(p: argparse.ArgumentParser) -> None:
+    """``-v`` on a subcommand too (``affordgrasp generate ... -v``); the top level sets it."""
+    p.add_argument(
+        "-v", "--verbose", action="store_true", default=argparse.SUPPRESS, help="log details"
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="affordgrasp",
@@ -53,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
             raise
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+        add_verbose_argument(p)
         module.add_arguments(p)
         p.set_defaults(_module=module)
     return parser

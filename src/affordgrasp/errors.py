@@ -47,3 +47,19 @@ def require(module: str, extra: str):
             f"this feature needs the optional package '{module}'; "
             f"install it with: pip install 'affordgrasp[{extra}]'"
         ) from exc
+
+
+def did_you_mean(name: object, choices) -> str:
+    """`` (did you mean 'hammer'?)`` when ``name`` is close to one of ``choices``, else ``""``.
+
+    For messages about unknown names: a typo gets the intended name back.
+    """
+    import difflib
+
+    if not isinstance(name, str) or not name:
+        return ""
+    by_key = {str(c).lower(): str(c) for c in choices}
+    close = difflib.get_close_matches(name.strip().lower(), list(by_key), n=2, cutoff=0.6)
+    if not close:
+        return ""
+    return " (did you mean " + " or ".join(repr(by_key[c]) for c in close) + "?)"

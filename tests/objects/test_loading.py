@@ -264,3 +264,31 @@ def test_thin_solid_is_kept():
     # A 0.5 mm thick blade is a real solid, not a flat patch.
     blade = box((0.2, 0.03, 0.0005))
     assert_solid(prepare_mesh(blade), 0.2 * 0.03 * 0.0005)
+
+
+@pytest.mark.parametrize(
+    "size, options, expected",
+    [
+        ((100.0, 100.0, 100.0), {}, r"100 m long if its coordinates are metres.*--units mm"),
+        ((1000.0, 1000.0, 1000.0), {}, r"1e\+03 m long.*--units mm"),
+        ((4.9, 4.9, 4.9), {}, r"4.9 m long.*--units (cm|in)"),
+        ((0.002, 0.002, 0.002), {}, r"0.002 m long.*--units with the file's unit"),
+        ((100.0, 10.0, 10.0), {"units": "m"}, r"100 m long with --units m.*--units mm"),
+        ((0.12, 0.03, 0.02), {"units": "mm"}, r"0.00012 m long with --units mm.*--units m\b"),
+        ((1.0, 1.0, 1.0), {"size_m": 8.0}, r"--size-m 8 makes cube.stl 8 m long"),
+    ],
+)
+def test_mesh_file_of_implausible_size_is_refused_with_the_fix(tmp_path, size, options, expected):
+    path = tmp_path / "cube.stl"
+    box(size).export(path)
+    with pytest.raises(MeshError, match=expected):
+        load_mesh(path, **options)
+
+
+def test_mesh_file_of_plausible_size_loads(tmp_path):
+    path = tmp_path / "cube.stl"
+    box((100.0, 50.0, 20.0)).export(path)
+    assert load_mesh(path, units="mm").extents.max() == pytest.approx(0.1)
+    assert load_mesh(path, size_m=0.25).extents.max() == pytest.approx(0.25)
+    box((0.1, 0.05, 0.02)).export(path)
+    assert load_mesh(path).extents.max() == pytest.approx(0.1)

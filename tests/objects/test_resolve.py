@@ -97,9 +97,9 @@ def test_mesh_path_resolves(box_file):
 
 
 def test_mesh_path_options(box_file):
-    obj = resolve_object(box_file, units="mm", density=1000.0)
-    assert obj.mesh.extents.max() == pytest.approx(3e-4)
-    assert obj.mass.mass == pytest.approx(1000.0 * 6e-12, rel=1e-5)
+    obj = resolve_object(box_file, units="in", density=1000.0)
+    assert obj.mesh.extents.max() == pytest.approx(0.3 * 0.0254)
+    assert obj.mass.mass == pytest.approx(1000.0 * 0.006 * 0.0254**3, rel=1e-5)
     assert resolve_object(box_file, size_m=0.6).mesh.extents.max() == pytest.approx(0.6)
     with pytest.raises(InputError, match="density"):
         resolve_object(box_file, density=-1.0)

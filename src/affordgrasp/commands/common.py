@@ -16,12 +16,49 @@ def add_sampling_arguments(p) -> None:
     p.add_argument("--samples", type=int, default=1000, help="number of grasps (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     p.add_argument("--hand", default="barrett", help="barrett (default) or parallel_jaw")
-    p.add_argument(
-        "--size-m", type=float, default=None, help="rescale a mesh file: longest extent, m"
-    )
-    p.add_argument("--units", default=None, help="units of a mesh file: m, cm, mm, in, ft")
+    add_scale_arguments(p)
     p.add_argument("--out", default=None, help="write one row per sample to this Parquet file")
     p.add_argument("--batch", type=int, default=250, help=argparse.SUPPRESS)
+
+
+def add_scale_arguments(p) -> None:
+    """``--size-m`` / ``--units`` for every command that takes an object (mesh files only)."""
+    p.add_argument(
+        "--size-m",
+        type=float,
+        default=None,
+        metavar="M",
+        help="rescale mesh files so that their longest extent is M metres",
+    )
+    p.add_argument(
+        "--units", default=None, help="length unit of mesh files: m (default), cm, mm, in, ft"
+    )
+
+
+def scale_options(args) -> dict:
+    return {"size_m": getattr(args, "size_m", None), "units": getattr(args, "units", None)}
+
+
+def resolve_objects(specs, args) -> list:
+    """Resolve object specs with ``--size-m`` / ``--units`` applied to the mesh files.
+
+    Families are built at their real size; the options apply to the mesh files among
+    ``specs`` and are refused when there is none.
+    """
+    from ..objects import resolve_object
+    from ..objects.resolve import is_family_spec
+
+    scale = scale_options(args)
+    if all(v is None for v in scale.values()):
+        return [resolve_object(s) for s in specs]
+    if all(is_family_spec(s) for s in specs):
+        given = " and ".join(f"--{k.replace('_', '-')}" for k, v in scale.items() if v is not None)
+        raise InputError(
+            f"{given} rescale mesh files, and {', '.join(map(repr, specs))} "
+            + ("is a built-in family" if len(specs) == 1 else "are built-in families")
+            + " (made at real size in metres); drop the option or name a mesh file"
+        )
+    return [resolve_object(s) if is_family_spec(s) else resolve_object(s, **scale) for s in specs]
 
 
 MAX_SEED = 2**63 - 1

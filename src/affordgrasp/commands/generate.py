@@ -7,6 +7,7 @@ import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
+from .common import add_scale_arguments, resolve_objects, scale_options
 
 
 def add_arguments(p) -> None:
@@ -27,6 +28,7 @@ def add_arguments(p) -> None:
         "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
     )
     p.add_argument("--hand", default="barrett", help="hand model (default barrett)")
+    add_scale_arguments(p)
     p.add_argument(
         "--shard-size",
         type=int,
@@ -51,6 +53,10 @@ def command_line(args) -> list[str]:
     cmd = ["affordgrasp", "generate", *args.objects, "--samples", str(args.samples)]
     cmd += ["--out", str(args.out), "--seed", str(args.seed), "--hand", args.hand]
     cmd += ["--shard-size", str(args.shard_size)]
+    if args.size_m is not None:
+        cmd += ["--size-m", repr(args.size_m)]
+    if args.units is not None:
+        cmd += ["--units", args.units]
     if args.no_metrics:
         cmd.append("--no-metrics")
     if args.engine != "local":
@@ -64,9 +70,12 @@ def command_line(args) -> list[str]:
 
 def run(args, out) -> None:
     cmd = command_line(args)
+    objects = args.objects
+    if any(v is not None for v in scale_options(args).values()):
+        objects = resolve_objects(args.objects, args)
     try:
         summary = generate(
-            args.objects,
+            objects,
             args.samples,
             args.out,
             seed=args.seed,

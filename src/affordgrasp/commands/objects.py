@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..cli import add_verbose_argument
 from ..errors import InputError
+from .common import add_scale_arguments, resolve_objects
 
 
 def add_arguments(p) -> None:
@@ -15,15 +17,17 @@ def add_arguments(p) -> None:
     e.add_argument("object", help="family, family:seed, or a mesh path")
     e.add_argument("--seed", type=int, default=None, help="family seed (same as family:SEED)")
     e.add_argument("-o", "--out", required=True, help="output file; the extension sets the format")
+    add_scale_arguments(e)
     # --json also after the action (the parent parser has it too).
     for q in (listing, e):
         q.add_argument(
             "--json", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS
         )
+        add_verbose_argument(q)
 
 
 def run(args, out) -> None:
-    from ..objects import FAMILIES, resolve_object
+    from ..objects import FAMILIES
 
     if getattr(args, "action", None) == "export":
         spec = args.object
@@ -31,7 +35,7 @@ def run(args, out) -> None:
             if ":" in spec:
                 raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
             spec = f"{spec}:{args.seed}"
-        obj = resolve_object(spec)
+        (obj,) = resolve_objects([spec], args)
         path = Path(args.out)
         ext = path.suffix.lower().lstrip(".")
         if ext not in ("obj", "stl", "ply", "glb", "off"):

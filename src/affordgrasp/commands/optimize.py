@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .best import metric_cells, shown_metrics
-from .common import add_task_arguments, parse_thresholds
+from .common import add_scale_arguments, add_task_arguments, parse_thresholds, resolve_objects
 
 
 def add_arguments(p) -> None:
@@ -12,6 +12,7 @@ def add_arguments(p) -> None:
     p.add_argument("--budget", type=int, default=20000, help="simulations (default 20000)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--hand", default="barrett", help="hand model (default barrett)")
+    add_scale_arguments(p)
     p.add_argument(
         "--population", type=int, default=None, help="samples per generation (default budget/20)"
     )
@@ -32,8 +33,9 @@ def add_arguments(p) -> None:
 def run(args, out) -> None:
     from ..optimize import optimize
 
+    (obj,) = resolve_objects([args.object], args)
     result = optimize(
-        args.object,
+        obj,
         args.task,
         mode=args.mode,
         budget=args.budget,

@@ -12,7 +12,14 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
-from .common import add_task_arguments, check_counts, parse_tasks
+from .common import (
+    add_scale_arguments,
+    add_task_arguments,
+    check_counts,
+    parse_tasks,
+    resolve_objects,
+    scale_options,
+)
 
 DEFAULT_SAMPLES = 1000
 EVALUATION_BATCH = 250
@@ -47,6 +54,7 @@ def add_source_arguments(p) -> None:
         metavar="PATH",
         help="mesh file of a dataset object that is not a built-in family (repeatable)",
     )
+    add_scale_arguments(p)
     p.add_argument("-o", "--out", required=True, metavar="OUTDIR", help="directory to write into")
 
 
@@ -80,14 +88,26 @@ def open_sources(args, out) -> list:
     """One GraspSource per SOURCE: datasets as they are, objects evaluated now."""
     from ..evaluate import evaluate_samples
     from ..objects import resolve_object
+    from ..objects.resolve import is_family_spec
     from ..viz.sources import DatasetSource, TableSource, is_dataset_path
 
     sources = []
+    specs = [s for s in args.source if not is_dataset_path(s)]
+    scaled = [s for s in [*specs, *args.mesh] if not is_family_spec(s)]
+    scale = scale_options(args)
+    if not scaled and any(v is not None for v in scale.values()):
+        if specs:
+            resolve_objects(specs, args)  # refuses the options for families, saying why
+        raise InputError(
+            "--units / --size-m rescale mesh files, and no SOURCE or --mesh is one; drop "
+            "the option, or pass the dataset's mesh with --mesh PATH"
+        )
+    objects = {s: resolve_object(s, **({} if is_family_spec(s) else scale)) for s in specs}
     for spec in args.source:
         if is_dataset_path(spec):
             sources.append(DatasetSource(Path(spec).expanduser()))
             continue
-        obj = resolve_object(spec)
+        obj = objects[spec]
         with out.progress(f"evaluating {obj.name}", args.samples) as advance:
             table, _ = evaluate_samples(
                 obj,
@@ -101,9 +121,15 @@ def open_sources(args, out) -> list:
     return sources
 
 
-def resolve_dataset_object(name: str, object_hash: str | None, source, meshes: list[str], out):
-    """The GraspObject a dataset's rows were simulated on, found by name (and checked by hash)."""
+def resolve_dataset_object(
+    name: str, object_hash: str | None, source, meshes: list[str], out, scale: dict | None = None
+):
+    """The GraspObject a dataset's rows were simulated on, found by name (and checked by hash).
+
+    ``scale`` (``size_m`` / ``units``) applies to mesh files, as when the dataset was made.
+    """
     from ..objects import resolve_object
+    from ..objects.resolve import is_family_spec
 
     candidates: list[str] = []
     for m in meshes:
@@ -116,7 +142,8 @@ def resolve_dataset_object(name: str, object_hash: str | None, source, meshes: l
     last_error = None
     for spec in candidates:
         try:
-            obj = resolve_object(spec)
+            options = {} if is_family_spec(spec) else (scale or {})
+            obj = resolve_object(spec, **options)
         except InputError as exc:
             last_error = exc
             continue
@@ -151,7 +178,7 @@ def objects_of(rankings, sources_by_object, args, out) -> dict:
             continue
         row = r.best[0].row if r.best else {}
         objects[r.object] = resolve_dataset_object(
-            r.object, row.get("object_hash"), source, args.mesh, out
+            r.object, row.get("object_hash"), source, args.mesh, out, scale_options(args)
         )
     return objects
 

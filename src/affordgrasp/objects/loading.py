@@ -36,7 +36,9 @@ from affordgrasp.objects.off import read_off, triangulate_polygon
 
 __all__ = [
     "SUPPORTED_EXTENSIONS",
+    "PLAUSIBLE_SIZE_M",
     "UNITS_TO_M",
+    "check_plausible_size",
     "load_mesh",
     "prepare_mesh",
 ]
@@ -47,8 +49,9 @@ SUPPORTED_EXTENSIONS: tuple[str, ...] = (".glb", ".gltf", ".obj", ".off", ".ply"
 
 UNITS_TO_M: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
 
-# Outside this range of the longest extent, metres are probably not the file's unit.
-PLAUSIBLE_SIZE_M: tuple[float, float] = (0.005, 5.0)
+# Longest extent of an object a hand can grasp. Outside it, metres are probably not the
+# file's unit (a 100 mm cube read as metres is 100 m long), and mesh files are refused.
+PLAUSIBLE_SIZE_M: tuple[float, float] = (0.005, 3.0)
 
 # A solid whose volume is below this fraction of its bounding cube encloses nothing: it is
 # a flat sheet closed onto itself (a knife blade is ~1e-4, far above).
@@ -98,7 +101,7 @@ def load_mesh(
     else:
         vertices, faces = _read_with_trimesh(file, ext)
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
-    return prepare_mesh(mesh, size_m=size_m, units=units, source=file.name)
+    return prepare_mesh(mesh, size_m=size_m, units=units, source=file.name, check_size=True)
 
 
 def prepare_mesh(
@@ -107,6 +110,7 @@ def prepare_mesh(
     size_m: float | None = None,
     units: str | None = None,
     source: str = "mesh",
+    check_size: bool = False,
 ) -> trimesh.Trimesh:
     """Clean, repair, orient and scale a mesh into a closed solid in metres.
 
@@ -124,6 +128,10 @@ def prepare_mesh(
         multiplied into metres. Give ``size_m`` or ``units``, not both.
     source : str
         Name of the mesh used in messages (a file name, a family id).
+    check_size : bool
+        Refuse a mesh whose longest extent in metres is outside ``PLAUSIBLE_SIZE_M`` (what
+        a hand can grasp), with a message naming the likely unit. Without it such a mesh
+        only logs a warning. :func:`load_mesh` checks.
 
     Returns
     -------
@@ -136,7 +144,8 @@ def prepare_mesh(
     Raises
     ------
     MeshError
-        Empty, non-finite, fully degenerate, open beyond repair, or enclosing no volume.
+        Empty, non-finite, fully degenerate, open beyond repair, or enclosing no volume;
+        with ``check_size``, an implausible size.
     InputError
         Bad ``size_m`` / ``units``.
     """
@@ -144,6 +153,11 @@ def prepare_mesh(
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     _validate_arrays(vertices, faces, source)
+    if check_size:
+        # Before the repair: an implausible size is refused however the mesh looks.
+        used = vertices[np.unique(faces)]
+        raw_extent = float(np.ptp(used, axis=0).max())
+        check_plausible_size(raw_extent, scale_kind, scale_value, units, source)
 
     work = _clean(vertices, faces.astype(np.int64), source)
     work = _closed_volume(work, source)
@@ -190,6 +204,42 @@ def _scale_request(size_m: float | None, units: str | None) -> tuple[str | None,
             raise InputError(f"unknown length unit {units!r}; use one of {', '.join(UNITS_TO_M)}")
         return "units", UNITS_TO_M[key]
     return None, 1.0
+
+
+def check_plausible_size(
+    raw_extent: float, scale_kind: str | None, scale_value: float, units: str | None, source: str
+) -> None:
+    """Refuse a mesh whose longest extent in metres is not the size of a graspable object.
+
+    ``raw_extent`` is the longest extent in the file's coordinates; ``scale_kind`` and
+    ``scale_value`` come from :func:`_scale_request`. The message names the likely unit.
+    """
+    low, high = PLAUSIBLE_SIZE_M
+    extent_m = scale_value if scale_kind == "size_m" else raw_extent * scale_value
+    if low <= extent_m <= high:
+        return
+    plausible = f"an object a hand can grasp is {low * 1000:g} mm to {high:g} m long"
+    if scale_kind == "size_m":
+        raise MeshError(
+            f"--size-m {scale_value:g} makes {source} {extent_m:g} m long, but {plausible}; "
+            "give its real longest extent in metres"
+        )
+    said = f"with --units {units}" if units else "if its coordinates are metres"
+    guesses = [
+        (name, raw_extent * factor)
+        for name, factor in UNITS_TO_M.items()
+        if low <= raw_extent * factor <= high and name != (units or "m")
+    ]
+    guesses.sort(key=lambda g: abs(math.log10(g[1] / 0.2)))  # closest to a 20 cm tool
+    if guesses:
+        name, size = guesses[0]
+        fix = f"its unit is probably {name} ({size:.3g} m long): pass --units {name}"
+    else:
+        fix = "pass --units with the file's unit"
+    raise MeshError(
+        f"{source} is {extent_m:.3g} m long {said}, but {plausible}; {fix}, or --size-m "
+        "with its real longest extent in metres"
+    )
 
 
 def _warn_if_implausible_size(extent_m: float, units: str, source: str) -> None:

@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from affordgrasp.errors import InputError
+from affordgrasp.errors import InputError, did_you_mean
 from affordgrasp.objects.loading import load_mesh, prepare_mesh
 from affordgrasp.objects.mass import MassProperties, mass_properties
 
-__all__ = ["GraspObject", "family_names", "mesh_hash", "resolve_object"]
+__all__ = ["GraspObject", "family_names", "is_family_spec", "mesh_hash", "resolve_object"]
 
 # Family objects are cached: building and repairing one can take a while, and the pipeline
 # asks for the same object again and again.
@@ -138,6 +138,11 @@ def resolve_object(
     raise InputError(_unknown_spec_message(text))
 
 
+def is_family_spec(spec: object) -> bool:
+    """Whether ``spec`` names a built-in family (``knife``, ``knife:7``), not a mesh file."""
+    return isinstance(spec, str) and _split_family(spec.strip())[0] is not None
+
+
 def _check_density(density: float) -> float:
     try:
         value = float(density)
@@ -196,8 +201,10 @@ def _parse_seed(seed_text: str | None, family: str, spec: str) -> int:
 def _unknown_spec_message(text: str) -> str:
     families = _available_families()
     listed = ", ".join(sorted(families)) if families else "(none installed)"
+    head = text.partition(":")[0]
+    hint = did_you_mean(head, families or ()) if not Path(text).suffix else ""
     return (
-        f"unknown object {text!r}: it is not a built-in family and no file exists at that "
+        f"unknown object {text!r}{hint}: it is not a built-in family and no file exists at that "
         f"path. Families: {listed}. Use 'family' or 'family:seed', or the path of an "
         "existing mesh file (.obj, .stl, .ply, .glb, .gltf, .off)"
     )

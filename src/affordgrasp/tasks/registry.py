@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import TaskError
+from ..errors import TaskError, did_you_mean
 from .builtins import builtin_tasks, viable_mask
 from .expressions import expression_task
 from .metric_columns import MetricColumns
@@ -75,7 +75,10 @@ class TaskRegistry:
         """Remove a task (built-in ones included)."""
         self._ensure_environment()
         if name not in self._tasks:
-            raise TaskError(f"unknown task {name!r}; available: {', '.join(sorted(self._tasks))}")
+            raise TaskError(
+                f"unknown task {name!r}{did_you_mean(name, self._tasks)}; available: "
+                f"{', '.join(sorted(self._tasks))}"
+            )
         del self._tasks[name]
 
     def get(self, name: str) -> Task:
@@ -85,7 +88,8 @@ class TaskRegistry:
             return self._tasks[name]
         except (KeyError, TypeError):
             raise TaskError(
-                f"unknown task {name!r}; available tasks: {', '.join(sorted(self._tasks))}"
+                f"unknown task {name!r}{did_you_mean(name, self._tasks)}; available tasks: "
+                f"{', '.join(sorted(self._tasks))}"
             ) from None
 
     def names(self) -> list[str]:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import TaskError
+from ..errors import TaskError, did_you_mean
 from .metric_columns import MetricColumns
 from .thresholds import standard_modes
 
@@ -39,7 +39,8 @@ class Task:
         """Threshold values in ``mode`` with call-time ``overrides`` applied."""
         if mode not in self.modes:
             raise TaskError(
-                f"task {self.name!r} has no mode {mode!r}; modes: {', '.join(self.modes)}"
+                f"task {self.name!r} has no mode {mode!r}{did_you_mean(mode, self.modes)}; "
+                f"modes: {', '.join(self.modes)}"
             )
         values = dict(self.thresholds)
         values.update(self.modes[mode])
