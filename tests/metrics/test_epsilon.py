@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from metrics_support import cube_face_contacts, random_contacts, ref_wrenches
 from scipy.spatial import ConvexHull, QhullError
 
@@ -150,3 +152,64 @@ def test_bad_arguments():
         epsilon(cs, [0, 0], 0.1)
     with pytest.raises(InputError):
         epsilon(np.zeros((3, 3)), np.zeros(3), 0.1)
+
+
+def _box_face_contacts(rng, half, noise):
+    """Contacts on 2-4 faces of a box, 1-3 per face: coplanar, with equal normals."""
+    points, normals = [], []
+    for face in rng.choice(6, size=int(rng.integers(2, 5)), replace=False):
+        axis, sign = face // 2, (1.0 if face % 2 == 0 else -1.0)
+        for _ in range(int(rng.integers(1, 4))):
+            p = rng.uniform(-half, half)
+            p[axis] = sign * half[axis]
+            n = np.zeros(3)
+            n[axis] = sign
+            points.append(p)
+            normals.append(n)
+    normals = np.array(normals) + noise * rng.normal(size=(len(normals), 3))
+    return np.array(points), normals / np.linalg.norm(normals, axis=1)[:, None]
+
+
+def test_coplanar_contacts_with_equal_normals_match_qhull():
+    # Such sets made the compiled hull build zero-volume facets whose offsets were taken
+    # for ε (wrong by up to 0.2) or called force-closure grasps "not force closure".
+    from affordgrasp.metrics.epsilon import closure_margin
+
+    rng = np.random.default_rng(0)
+    half = np.array([0.05, 0.03, 0.02])
+    r_max = float(np.linalg.norm(half))
+    closure = 0
+    for trial in range(120):
+        points, normals = _box_face_contacts(rng, half, 1e-10 if trial % 2 else 0.0)
+        cs = ContactSet.from_arrays(points, normals, 0.4)
+        res = epsilon(cs, np.zeros(3), r_max)
+        e_ref, v_ref = reference_epsilon(cs, np.zeros(3), r_max)
+        assert res.epsilon == pytest.approx(e_ref, rel=1e-9, abs=1e-11)
+        assert res.volume == pytest.approx(v_ref, rel=1e-7, abs=1e-15)
+        W = ref_wrenches(points, normals, 0.4, np.zeros(3), 1 / r_max)
+        status, margin = closure_margin(np.ascontiguousarray(W))
+        if status == 0 and margin > 1e-9:
+            # the LP proved the origin strictly inside: ε > 0, never "degenerate"
+            assert res.epsilon > 0 and res.reason == ""
+        closure += res.epsilon > 0
+    assert closure >= 20
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_normal_noise_on_coplanar_contacts_moves_epsilon_continuously(seed):
+    # 1e-10 of noise on the normals must move ε by about that much, not flip force closure.
+    rng = np.random.default_rng(seed)
+    half = np.array([0.05, 0.03, 0.02])
+    points, normals = _box_face_contacts(rng, half, 0.0)
+    noisy = normals + 1e-10 * rng.normal(size=normals.shape)
+    noisy /= np.linalg.norm(noisy, axis=1)[:, None]
+    r_max = float(np.linalg.norm(half))
+    exact = epsilon(ContactSet.from_arrays(points, normals, 0.4), np.zeros(3), r_max)
+    moved = epsilon(ContactSet.from_arrays(points, noisy, 0.4), np.zeros(3), r_max)
+    assert moved.epsilon == pytest.approx(exact.epsilon, abs=1e-7)
+    assert exact.epsilon == pytest.approx(
+        reference_epsilon(ContactSet.from_arrays(points, normals, 0.4), np.zeros(3), r_max)[0],
+        rel=1e-9,
+        abs=1e-11,
+    )

@@ -57,6 +57,8 @@ REASONS = {
 
 RANK_TOL = 1e-10  # singular-value-like tolerance of the rank test, relative
 CLOSURE_TOL = 1e-12  # the LP margin t* must exceed this to call the origin interior
+SUPPORT_TOL = 1e-10  # a facet supports the wrench set if no wrench is higher above it
+SLIVER_TOL = 1e-8  # a facet simplex thinner than this (relative) is a sliver
 
 
 @dataclass(frozen=True)
@@ -164,17 +166,80 @@ def epsilon_kernel(W):
         return NOT_FORCE_CLOSURE, 0.0, 0.0
     P = np.ascontiguousarray(W.T)
     hs, verts, normals, offsets, interior = convex_hull_6d(P)
-    if hs == HULL_DEGENERATE:
-        return DEGENERATE, 0.0, 0.0
     if hs != HULL_OK:
+        # The LP proved the origin strictly inside a full-rank hull: never "degenerate".
         return HULL_FALLBACK, 0.0, 0.0
-    eps = np.inf
-    for f in range(offsets.shape[0]):
-        if offsets[f] < eps:
-            eps = offsets[f]
-    if eps <= 0.0:
-        return NOT_FORCE_CLOSURE, 0.0, 0.0
-    return CLOSURE, eps, hull_volume(P, verts, interior)
+    f = nearest_facet(offsets)
+    if not facet_supports(P, normals[f], offsets[f], verts[f]) or offsets[f] <= 0.0:
+        # A facet that some wrench lies above (a sliver built from nearly coplanar
+        # wrenches) cannot give ε: recompute exactly.
+        return HULL_FALLBACK, 0.0, 0.0
+    return CLOSURE, offsets[f], hull_volume(P, verts, interior)
+
+
+@njit(cache=True)
+def nearest_facet(offsets):
+    """Index of the facet with the smallest offset (the one that gives ε)."""
+    best = 0
+    for f in range(1, offsets.shape[0]):
+        if offsets[f] < offsets[best]:
+            best = f
+    return best
+
+
+@njit(cache=True)
+def facet_supports(P, normal, offset, vertices):
+    """Whether the hyperplane ``normal . x = offset`` supports the wrench set ``P`` (N, 6):
+    every wrench beneath it and its facet's six vertices on it, to ``SUPPORT_TOL`` of the
+    data scale, and the six vertices spanning a 5-flat (not a zero-volume sliver).
+    """
+    scale = 0.0
+    for i in range(P.shape[0]):
+        for c in range(6):
+            scale = max(scale, abs(P[i, c]))
+    tol = SUPPORT_TOL * scale
+    for i in range(P.shape[0]):
+        s = 0.0
+        for c in range(6):
+            s += normal[c] * P[i, c]
+        if s - offset > tol:
+            return False
+    for r in range(6):
+        s = 0.0
+        for c in range(6):
+            s += normal[c] * P[vertices[r], c]
+        if abs(s - offset) > tol:
+            return False
+    return facet_spread(P, vertices) > SLIVER_TOL * scale
+
+
+@njit(cache=True)
+def facet_spread(P, vertices):
+    """Smallest Gram-Schmidt residual of the five edge vectors of a facet simplex: its
+    "thinness" (0 when the six vertices lie in a 4-flat)."""
+    E = np.empty((5, 6))
+    for r in range(5):
+        for c in range(6):
+            E[r, c] = P[vertices[r + 1], c] - P[vertices[0], c]
+    smallest = np.inf
+    for r in range(5):
+        for _ in range(2):
+            for q in range(r):
+                d = 0.0
+                for c in range(6):
+                    d += E[r, c] * E[q, c]
+                for c in range(6):
+                    E[r, c] -= d * E[q, c]
+        nrm = 0.0
+        for c in range(6):
+            nrm += E[r, c] * E[r, c]
+        nrm = np.sqrt(nrm)
+        smallest = min(smallest, nrm)
+        if nrm == 0.0:
+            return 0.0
+        for c in range(6):
+            E[r, c] /= nrm
+    return smallest
 
 
 def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
@@ -192,7 +257,13 @@ def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
     try:
         hull = ConvexHull(W.T, qhull_options="Qt Qx")
     except QhullError:
-        return DEGENERATE, 0.0, 0.0
+        # Full rank, so qhull's trouble is precision on nearly flat input. Joggling moves
+        # the points by ~1e-11 of their scale: ε within that, never a made-up "degenerate".
+        try:
+            hull = ConvexHull(W.T, qhull_options="QJ")
+        except QhullError:
+            return DEGENERATE, 0.0, 0.0
+        log.warning("qhull needed joggled input (QJ) for a nearly flat wrench set")
     # qhull's equations are n . x + offset <= 0 inside: the origin's distance is -offset
     eps = float(np.min(-hull.equations[:, -1]))
     if eps <= 0.0:

@@ -29,6 +29,7 @@ HULL_FAILED = 2  # a numerical or topological inconsistency: use qhull instead
 
 DIM = 6
 HULL_TOL = 1e-12  # beyond-test tolerance, relative to the largest |coordinate|
+SLIVER_TOL = 1e-9  # an apex lower than this above a visible facet (relative) makes slivers
 RANK_TOL = 1e-10  # affine independence tolerance of the initial simplex, relative
 
 
@@ -309,6 +310,7 @@ def convex_hull_6d(P):
         return status, empty_i, empty_f, np.zeros(0), q0
     tol = HULL_TOL * scale
     chk_tol = 1e-14 * scale
+    sliver_tol = SLIVER_TOL * scale
     simplex = np.empty(DIM + 1, dtype=np.int64)
     if not _initial_simplex(P, simplex, RANK_TOL * scale):
         return HULL_DEGENERATE, empty_i, empty_f, np.zeros(0), q0
@@ -422,6 +424,13 @@ def convex_hull_6d(P):
                 hk[nh] = k
                 hg[nh] = g
                 nh += 1
+        # A new facet's apex stands above its ridge by at least the apex's height above the
+        # visible facet. Barely above (nearly coplanar wrenches, e.g. equal normals with
+        # 1e-10 of noise), the facet is a sliver whose hyperplane is round-off: give up
+        # rather than build a wrong hull (the caller falls back to qhull, which merges).
+        for h in range(nh):
+            if pdist[hv[h]] <= sliver_tol:
+                return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
         if nF + nh > cap:
             newcap = max(2 * cap, nF + nh + 64)
             fv = _grow_i2(fv, newcap)
