@@ -86,8 +86,9 @@ def test_same_seed_same_rows(tmp_path):
 def test_tasks_lists_thresholds(capsys):
     code, doc = run_json(capsys, "tasks")
     assert code == 0
-    assert doc["tasks"]["beat"]["thresholds"]["default"]["tau_eps"] == 0.3
-    assert doc["tasks"]["beat"]["thresholds"]["extra-robustness"]["tau_eps"] == 0.5
+    beat = doc["tasks"]["beat"]["thresholds"]
+    assert beat["default"]["tau_eps"] == 0.014 and beat["extra-robustness"]["tau_eps"] == 0.024
+    assert beat["paper"]["tau_eps"] == 0.3 and beat["paper-extra-robustness"]["tau_eps"] == 0.5
 
 
 @pytest.mark.parametrize(

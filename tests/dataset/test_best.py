@@ -20,13 +20,17 @@ HOLD = [f"hold_effort_{s}" for s in ("px", "nx", "py", "ny", "pz", "nz")]
 
 def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
     """The paper's formulas written out over the DataFrame (SPEC §2.5)."""
-    tau_eps = {"default": 0.3, "no-robustness": -np.inf, "extra-robustness": 0.5}[mode]
+    tau_eps = {
+        "default": tasks.TAU_EPS_DEFAULT,
+        "no-robustness": -np.inf,
+        "extra-robustness": tasks.TAU_EPS_EXTRA,
+    }[mode]
     hold = df[HOLD].sum(axis=1)
     if task == "pick":
         return -hold.to_numpy()
     if task == "cut":
-        tau_ug = tasks.get_task("cut").thresholds["tau_ug"]
-        ok = (df.epsilon >= tau_eps) & (df.use_edge >= tau_ug)
+        tau_angle = tasks.get_task("cut").thresholds["tau_angle"]
+        ok = (df.epsilon >= tau_eps) & (df.use_edge_angle <= tau_angle)
         return np.where(ok, df.use_force, -np.inf)
     if task == "reach":
         return (df.inertia * 1e6 - df.use_edge_angle).to_numpy()

@@ -10,7 +10,7 @@ import pyarrow.parquet as pq
 import pytest
 from dataset_support import SAMPLES, SEED, SHARD_SIZE
 
-from affordgrasp import __version__
+from affordgrasp import __version__, tasks
 from affordgrasp.dataset.layout import shard_paths
 from affordgrasp.dataset.reading import open_dataset, read_table, select_objects
 from affordgrasp.errors import DatasetError
@@ -53,7 +53,8 @@ def test_card_describes_the_dataset(reference_dataset, reference_table):
     assert card["seed"] == SEED and card["samples_per_object"] == SAMPLES
     assert card["hand"]["name"] == "barrett"
     assert card["friction_table"]["plastic-wood"] == 0.4
-    assert card["task_thresholds"]["cut"]["default"]["tau_eps"] == 0.3
+    assert card["task_thresholds"]["cut"]["default"]["tau_eps"] == tasks.TAU_EPS_DEFAULT
+    assert card["task_thresholds"]["cut"]["paper"]["tau_eps"] == 0.3
     assert [o["name"] for o in card["objects"]] == ["knife:0", "box.stl"]
     for o in card["objects"]:
         assert len(o["mesh_hash"]) == 64 and o["mass_kg"] > 0 and len(o["inertia_kg_m2"]) == 3

@@ -41,7 +41,7 @@ def registry():
 
 
 def test_builtin_tasks_are_listed():
-    assert {"beat", "cut", "cut-angle", "pick", "viable"} <= set(tasks.list_tasks())
+    assert {"beat", "cut", "cut-ug", "pick", "viable"} <= set(tasks.list_tasks())
     with pytest.raises(TaskError, match="available tasks: .*beat"):
         tasks.get_task("juggle")
 
@@ -51,46 +51,60 @@ def test_beat_follows_the_paper():
     np.testing.assert_allclose(
         beat.evaluate(table()), [1e-5, 1e-5, 1e-5, 1e-5, 0.0]
     )  # I / E_i, and I / inf = 0
-    low_eps = table(epsilon=[0.2, 0.4, 0.4, 0.4, 0.4])
+    low_eps = table(epsilon=[0.01, 0.4, 0.4, 0.4, 0.4])
     low_delta = table(discharge=[0.99, 0.9, 0.99, 0.99, 0.99])
     no_hold = table(hold_effort_pz=[1.0, 2.0, INF, 4.0, 5.0])
     assert beat.evaluate(low_eps)[0] == -INF
     assert beat.evaluate(low_delta)[1] == -INF
     assert beat.evaluate(no_hold)[2] == -INF
     assert np.isfinite(beat.evaluate(low_eps, mode="no-robustness")[0])
-    assert np.all(beat.evaluate(table(), mode="extra-robustness") == -INF)  # ε = 0.4 < 0.5
+    assert np.all(beat.evaluate(table(epsilon=np.full(5, 0.02)), mode="extra-robustness") == -INF)
+    assert np.all(beat.evaluate(table(), mode="paper-extra-robustness") == -INF)  # 0.4 < 0.5
+    assert np.isfinite(beat.evaluate(table(), mode="paper")).all()  # 0.4 >= 0.3
     assert np.isfinite(beat.evaluate(low_delta, tau_delta=0.8)[1])
 
 
-def test_cut_and_cut_angle():
+def test_cut_tests_the_edge_angle_and_cut_ug_the_papers_ug():
     cut = tasks.get_task("cut")
     np.testing.assert_allclose(cut.evaluate(table()), table()["use_force"])
-    flat = table(use_edge=[0.0, 1e6, 1e6, 1e6, 1e6])
-    assert cut.evaluate(flat)[0] == -INF and cut.evaluate(flat, tau_ug=-1.0)[0] == 0.5
-    angle = tasks.get_task("cut-angle")
-    blunt = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3])
-    assert angle.evaluate(blunt)[0] == -INF and angle.evaluate(blunt)[1] == 1.0
-    assert angle.thresholds["tau_angle"] == pytest.approx(tasks.TAU_EDGE_ANGLE_DEFAULT)
-    assert cut.thresholds["tau_ug"] == tasks.TAU_UG_DEFAULT
+    blunt = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_edge=np.full(5, 1e9))
+    assert cut.evaluate(blunt)[0] == -INF and cut.evaluate(blunt)[1] == 1.0
+    assert cut.thresholds["tau_angle"] == pytest.approx(tasks.TAU_EDGE_ANGLE_DEFAULT)
+    ug = tasks.get_task("cut-ug")
+    flat = table(use_edge=[0.0, 1e6, 1e6, 1e6, 1e6], use_edge_angle=np.full(5, math.pi))
+    assert ug.evaluate(flat)[0] == -INF and ug.evaluate(flat, tau_ug=-1.0)[0] == 0.5
+    assert ug.evaluate(flat)[1] == 1.0  # U_g alone decides, whatever the angle
+    assert ug.thresholds["tau_ug"] == tasks.TAU_UG_DEFAULT
 
 
 def test_pick_and_viable():
     np.testing.assert_allclose(tasks.get_task("pick").evaluate(table()), [-6, -12, -18, -24, -30])
-    cols = table(epsilon=[0.1, 0.2, 0.2, 0.2, 0.2], impact_effort=[10, 200, 10, 10, 10])
+    cols = table(epsilon=[0.005, 0.2, 0.2, 0.2, 0.2], impact_effort=[10, 2e5, 10, 10, 10])
     cols["hold_effort_px"] = np.array([1.0, 1.0, 300.0, 1.0, 1.0])
     np.testing.assert_array_equal(tasks.get_task("viable").evaluate(cols), [0, 0, 0, 1, 1])
     np.testing.assert_array_equal(tasks.is_viable(cols), [False, False, False, True, True])
     np.testing.assert_array_equal(
-        tasks.is_viable(cols, eps_min=0.05), [True, False, False, True, True]
+        tasks.is_viable(cols, eps_min=0.001), [True, False, False, True, True]
     )
+    # the paper's literal thresholds: ε > 0.15 and E_i < 100
+    paper = table(epsilon=[0.1, 0.2, 0.2, 0.2, 0.2], impact_effort=[10, 200, 10, 10, 10])
+    np.testing.assert_array_equal(
+        tasks.is_viable(paper, mode="paper"), [False, False, True, True, True]
+    )
+    assert tasks.VIABLE_EPS_MIN == tasks.TAU_EPS_VIABLE
 
 
 def test_modes_and_overrides_are_checked():
     beat = tasks.get_task("beat")
     assert beat.thresholds_for("no-robustness")["tau_eps"] == -INF
-    assert beat.thresholds_for("extra-robustness")["tau_eps"] == 0.5
+    assert beat.thresholds_for("extra-robustness")["tau_eps"] == tasks.TAU_EPS_EXTRA
+    assert beat.thresholds_for("paper")["tau_eps"] == 0.3
+    assert beat.thresholds_for("paper-extra-robustness")["tau_eps"] == 0.5
     assert beat.thresholds_for()["tau_delta"] == 0.95
-    assert set(beat.thresholds_by_mode()) == {"default", "no-robustness", "extra-robustness"}
+    assert set(beat.thresholds_by_mode()) == set(tasks.MODES)
+    # the calibrated values keep the paper's ratios 0.15 : 0.3 : 0.5
+    assert tasks.TAU_EPS_DEFAULT == pytest.approx(2 * tasks.TAU_EPS_VIABLE, rel=0.05)
+    assert tasks.TAU_EPS_EXTRA == pytest.approx(10 / 3 * tasks.TAU_EPS_VIABLE, rel=0.05)
     with pytest.raises(TaskError, match="no mode"):
         beat.evaluate(table(), mode="reckless")
     with pytest.raises(TaskError, match="no threshold 'tau_x'"):

@@ -10,6 +10,11 @@ import numpy as np
 
 from ..errors import InputError
 
+MODE_HELP = (
+    "threshold mode: default, no-robustness, extra-robustness, paper (the paper's literal "
+    "τ_ε = 0.3) or paper-extra-robustness (default: default)"
+)
+
 
 def add_sampling_arguments(p) -> None:
     p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
@@ -190,7 +195,7 @@ def add_task_arguments(
     p.add_argument(
         "--mode",
         default="default",
-        help="threshold mode: default, no-robustness or extra-robustness (default: default)",
+        help=MODE_HELP,
     )
     if thresholds:
         p.add_argument(

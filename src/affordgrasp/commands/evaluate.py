@@ -85,7 +85,7 @@ def run(args, out) -> None:
     rows, status_doc = status_summary(table)
     metrics = MetricColumns(metric_arrays(table))
     closure = float(np.mean(metrics["epsilon"] > 0))
-    viable = float(np.mean(is_viable(metrics)))
+    viable = float(np.mean(is_viable(metrics, args.mode)))
     busy = spent["simulate"] + spent["metrics"]
     rate = args.samples / busy if busy > 0 else float("inf")
     out.table(

@@ -13,15 +13,19 @@ overrides::
 Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
 
 * ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, else I / E_i (0 when E_i = inf);
-* ``cut``: -inf if ε < τ_ε or U_g < τ_Ug, else U_τ;
-* ``cut-angle``: as ``cut`` with the resolution-independent edge test
-  ``use_edge_angle <= τ_angle`` instead of U_g;
+* ``cut``: -inf if ε < τ_ε or the use point is not on an edge sharper than τ_angle
+  (``use_edge_angle``, resolution independent), else U_τ;
+* ``cut-ug``: the paper's form, with the edge test U_g >= τ_Ug instead of the angle;
 * ``pick``: -ΣE_h;
-* ``viable``: 1.0 if ε > 0.15 and ΣE_h < 250 and E_i < 100, else 0.0 (the learning
+* ``viable``: 1.0 if ε > τ_ε,viable and ΣE_h < 250 and E_i < τ_Ei, else 0.0 (the learning
   ground truth; :func:`is_viable` returns the boolean mask).
 
-Modes: ``default`` (τ_ε = 0.3), ``no-robustness`` (τ_ε = -inf), ``extra-robustness``
-(τ_ε = 0.5); τ_δ = 0.95 and the edge thresholds are the same in every mode.
+Modes: ``default`` (τ_ε = 0.014, calibrated), ``no-robustness`` (τ_ε = -inf),
+``extra-robustness`` (τ_ε = 0.024), and the paper's literal values ``paper`` (τ_ε = 0.3;
+viable: ε > 0.15, E_i < 100) and ``paper-extra-robustness`` (τ_ε = 0.5); τ_δ = 0.95 and
+the edge thresholds are the same in every mode. Why the defaults differ from the paper's
+Table I, with the numbers, is in the comments of the thresholds below and in
+``docs/validation.md``.
 
 Adding tasks without editing the package:
 
@@ -74,6 +78,7 @@ from .thresholds import (
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_EPS_EXTRA,
+    TAU_EPS_VIABLE,
     TAU_UG_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
@@ -93,6 +98,7 @@ __all__ = [
     "TAU_EDGE_ANGLE_DEFAULT",
     "TAU_EPS_DEFAULT",
     "TAU_EPS_EXTRA",
+    "TAU_EPS_VIABLE",
     "TAU_UG_DEFAULT",
     "VIABLE_EPS_MIN",
     "VIABLE_HOLD_MAX",

@@ -9,6 +9,7 @@ import numpy as np
 from ..columns import HOLD_EFFORT_COLUMNS
 from .task import Task, make_task
 from .thresholds import (
+    PAPER_VIABLE,
     TAU_DELTA_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
@@ -30,12 +31,12 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
-    ok = (m["epsilon"] >= t["tau_eps"]) & (m["use_edge"] >= t["tau_ug"])
+    ok = (m["epsilon"] >= t["tau_eps"]) & (m["use_edge_angle"] <= t["tau_angle"])
     return np.where(ok, m["use_force"], -np.inf)
 
 
-def _cut_angle(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
-    ok = (m["epsilon"] >= t["tau_eps"]) & (m["use_edge_angle"] <= t["tau_angle"])
+def _cut_ug(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    ok = (m["epsilon"] >= t["tau_eps"]) & (m["use_edge"] >= t["tau_ug"])
     return np.where(ok, m["use_force"], -np.inf)
 
 
@@ -56,7 +57,7 @@ def _viable(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def builtin_tasks() -> list[Task]:
-    """Fresh Task objects of the built-in tasks: beat, cut, cut-angle, pick, viable."""
+    """Fresh Task objects of the built-in tasks: beat, cut, cut-ug, pick, viable."""
     return [
         make_task(
             "beat",
@@ -68,16 +69,16 @@ def builtin_tasks() -> list[Task]:
         make_task(
             "cut",
             _cut,
-            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_ug": TAU_UG_DEFAULT},
-            description="cutting: U_τ if robust and the use point is an edge (U_g test)",
-            requires=("epsilon", "use_edge", "use_force"),
+            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_angle": TAU_EDGE_ANGLE_DEFAULT},
+            description="cutting: U_τ if robust and the use point is on a sharp edge (angle)",
+            requires=("epsilon", "use_edge_angle", "use_force"),
         ),
         make_task(
-            "cut-angle",
-            _cut_angle,
-            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_angle": TAU_EDGE_ANGLE_DEFAULT},
-            description="cutting with the resolution-independent edge test (use_edge_angle)",
-            requires=("epsilon", "use_edge_angle", "use_force"),
+            "cut-ug",
+            _cut_ug,
+            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_ug": TAU_UG_DEFAULT},
+            description="cutting as in the paper: U_τ if robust and U_g >= τ_Ug",
+            requires=("epsilon", "use_edge", "use_force"),
         ),
         make_task(
             "pick",
@@ -94,6 +95,7 @@ def builtin_tasks() -> list[Task]:
                 "hold_max": VIABLE_HOLD_MAX,
                 "impact_max": VIABLE_IMPACT_MAX,
             },
+            modes={"paper": PAPER_VIABLE, "paper-extra-robustness": PAPER_VIABLE},
             description="viable grasp (learning ground truth): 1 or 0",
             requires=("epsilon", *HOLD_EFFORT_COLUMNS, "impact_effort"),
         ),

@@ -33,7 +33,7 @@ class TaskRegistry:
     Parameters
     ----------
     builtins : bool
-        Start with the built-in tasks (beat, cut, cut-angle, pick, viable).
+        Start with the built-in tasks (beat, cut, cut-ug, pick, viable).
     environment : bool
         Read the task files of ``AFFORDGRASP_TASKS`` at the first lookup.
     """
@@ -203,10 +203,13 @@ def evaluate_task(name: str, columns: Any, mode: str = "default", **overrides: f
     return get_task(name).evaluate(columns, mode, **overrides)
 
 
-def is_viable(columns: Any, **overrides: float) -> np.ndarray:
-    """Boolean mask of viable grasps (ε > 0.15, ΣE_h < 250, E_i < 100 by default)."""
+def is_viable(columns: Any, mode: str = "default", **overrides: float) -> np.ndarray:
+    """Boolean mask of viable grasps (ε > τ_ε,viable, ΣE_h < 250, E_i < τ_Ei).
+
+    ``mode="paper"`` gives the paper's literal ε > 0.15, ΣE_h < 250, E_i < 100.
+    """
     task = get_task("viable")
-    values = task.thresholds_for("default", **overrides)
+    values = task.thresholds_for(mode, **overrides)
     metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
     with np.errstate(invalid="ignore"):
         return np.asarray(viable_mask(metrics, values), dtype=bool)
