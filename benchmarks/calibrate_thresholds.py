@@ -33,8 +33,8 @@ import json
 import numpy as np
 
 from affordgrasp.dataset.reading import read_table
-from affordgrasp.grasp.contacts import ContactSet
 from affordgrasp.metrics import epsilon as epsilon_metric
+from affordgrasp.metrics.contacts import ContactSet
 from affordgrasp.objects import resolve_object
 
 PAPER_THRESHOLDS = (0.15, 0.3, 0.5)
