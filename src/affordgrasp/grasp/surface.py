@@ -121,10 +121,48 @@ def _face_lattice(tri: np.ndarray, spacing: float):
     return pts, f
 
 
+def sample_count_bound(
+    tri: np.ndarray, edge_len: np.ndarray, n_vertices: int, spacing: float
+) -> float:
+    """An upper bound on the number of samples at ``spacing``, computed without building
+    them (floats, O(triangles)): vertices + edge interiors + n1 n2 / 2 per triangle, n1 and
+    n2 its lattice steps along its two shorter sides (see ``_face_lattice``)."""
+    side = np.sort(np.linalg.norm(tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]], axis=2), axis=1)
+    n1 = np.maximum(np.ceil(side[:, 0] / spacing), 1.0)
+    n2 = np.maximum(np.ceil(side[:, 1] / spacing), 1.0)
+    edges = float(np.sum(np.maximum(np.ceil(edge_len / spacing), 1.0) - 1.0))
+    return float(n_vertices) + edges + float(np.sum(n1 * n2 / 2.0))
+
+
+def capped_spacing(
+    tri: np.ndarray, edge_len: np.ndarray, n_vertices: int, spacing: float, max_points: int
+) -> float:
+    """The requested spacing, or the smallest one tried (steps of 1.25x, from a first jump
+    by the square root of the excess) at which :func:`sample_count_bound` is <= max_points.
+
+    Memory is bounded by construction: no sample array is built before the count fits, so
+    a mesh in the wrong units (a 100 mm cube read as 100 m) costs seconds, not 228 GiB.
+    A mesh with more than ``max_points`` vertices keeps only its vertices and edges' ends.
+    """
+    count = sample_count_bound(tri, edge_len, n_vertices, spacing)
+    if count <= max_points:
+        return spacing
+    if n_vertices >= max_points:
+        return float(np.inf)
+    # Area terms scale as 1 / spacing², so this jump lands near the cap; then step up.
+    spacing *= max(np.sqrt(count / max_points) / 1.25**2, 1.0)
+    for _ in range(400):
+        if sample_count_bound(tri, edge_len, n_vertices, spacing) <= max_points:
+            break
+        spacing *= 1.25
+    return spacing
+
+
 def sample_surface(
     mesh: trimesh.Trimesh, spacing: float = DEFAULT_SPACING, max_points: int = MAX_POINTS
 ) -> SurfaceSample:
     """Deterministic dense sample of the surface; the spacing grows if ``max_points`` is hit."""
+    requested = spacing
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces, dtype=np.int64)
     face_normals = np.asarray(mesh.face_normals, dtype=np.float64)
@@ -150,20 +188,20 @@ def sample_surface(
     vertex_sharp[edges[edge_sharp].ravel()] = True
     vertex_normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
 
-    while True:
-        seg = np.maximum(np.ceil(edge_len / spacing).astype(np.int64), 1)
-        face_pts, face_of = _face_lattice(tri, spacing)
-        if len(vertices) + int((seg - 1).sum()) + len(face_pts) <= max_points:
-            break
-        spacing *= 1.25
+    spacing = capped_spacing(tri, edge_len, len(vertices), spacing, max_points)
+    if spacing > requested:
         log.warning(
-            "surface of %.3g m² needs more than %d samples: spacing raised to %.2f mm, so a "
-            "link may sink up to about %.2f mm into the mesh",
+            "surface of %.3g m² needs more than %d samples at %.2f mm: spacing raised to "
+            "%.3g mm (samples capped for memory), so a link may sink up to about %.3g mm into "
+            "the mesh",
             mesh.area,
             max_points,
+            requested * 1e3,
             spacing * 1e3,
             spacing**2 / 4 / 5e-3 * 1e3,
         )
+    seg = np.maximum(np.ceil(edge_len / spacing).astype(np.int64), 1)
+    face_pts, face_of = _face_lattice(tri, spacing)
 
     pts = [vertices]
     nrm = [vertex_normals]

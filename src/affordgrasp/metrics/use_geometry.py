@@ -193,6 +193,9 @@ def _use_edge_chunk(mesh, T: np.ndarray, origin: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------------
 
 
+MAX_EDGE_SAMPLES = 1_000_000
+
+
 def _edge_index(mesh, radius: float):
     data = _mesh_cache(mesh)
     key = ("edges", radius)
@@ -211,8 +214,11 @@ def _edge_index(mesh, radius: float):
     # sample every edge at a spacing <= radius: a point within `radius` of a segment is
     # then within radius + spacing / 2 of one of its samples, and long edges (a blade's
     # edge can be one segment) still sit in a compact tree
-    spacing = radius
+    # The spacing grows past the radius only when the edges would need more than
+    # MAX_EDGE_SAMPLES samples (a mesh in the wrong units): the query radius grows with it and
+    # the exact segment distance still decides, so memory stays bounded and results exact.
     length = np.linalg.norm(B - A, axis=1)
+    spacing = max(radius, float(length.sum()) / MAX_EDGE_SAMPLES)
     n_samples = np.ceil(length / spacing).astype(np.int64) + 1
     owner = np.repeat(np.arange(len(edges)), n_samples)
     start = np.repeat(np.cumsum(n_samples) - n_samples, n_samples)
