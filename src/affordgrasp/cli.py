@@ -26,6 +26,7 @@ COMMANDS = {
     "optimize": "optimise a task directly in simulation (cross-entropy method)",
     "show": "render the best grasps of a task as PNG grids and an interactive HTML page",
     "plots": "plot metric distributions, status counts and affordances of a dataset",
+    "physics": "validate a dataset's grasps in MuJoCo and report how well the metrics predict them",
 }
 
 

@@ -1,0 +1,139 @@
+"""``affordgrasp physics``: validate a dataset's grasps in MuJoCo; what do the metrics predict?"""
+
+from __future__ import annotations
+
+import math
+import shlex
+import sys
+
+from ..errors import InputError, MissingDependencyError
+from ..physics.settings import PhysicsSettings
+
+
+def add_arguments(p) -> None:
+    d = PhysicsSettings()
+    p.add_argument(
+        "dataset", metavar="DATASET", help="a directory written by 'affordgrasp generate'"
+    )
+    p.add_argument(
+        "--out", required=True, metavar="DIR", help="outcome shards (Parquet directory, resumable)"
+    )
+    p.add_argument("--report", default=None, metavar="DIR", help="write the report and plots here")
+    p.add_argument(
+        "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
+    )
+    p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
+    p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
+    p.add_argument(
+        "--max-per-object", type=int, default=None, metavar="N", help="first N grasps per object"
+    )
+    p.add_argument(
+        "--load-factor",
+        type=float,
+        default=d.load_factor,
+        metavar="K",
+        help=f"hold test load, k·m·g (default {d.load_factor})",
+    )
+    p.add_argument(
+        "--density",
+        type=float,
+        default=d.density,
+        help=f"object density, kg/m^3 (default {d.density:g})",
+    )
+    p.add_argument(
+        "--grip-torque",
+        type=float,
+        default=d.grip_torque,
+        help=f"finger joint torque, N·m (default {d.grip_torque})",
+    )
+    p.add_argument(
+        "--grip-force",
+        type=float,
+        default=d.grip_force,
+        help=f"jaw force, N (default {d.grip_force})",
+    )
+    p.add_argument("--timestep", type=float, default=d.timestep, help=f"s (default {d.timestep})")
+    p.add_argument("--gravity", action="store_true", help="gravity on (-z of the hand frame)")
+    p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
+
+
+def _settings(args) -> PhysicsSettings:
+    return PhysicsSettings(
+        load_factor=args.load_factor,
+        density=args.density,
+        grip_torque=args.grip_torque,
+        grip_force=args.grip_force,
+        timestep=args.timestep,
+        gravity=args.gravity,
+        seed=args.seed,
+    )
+
+
+def run(args, out) -> None:
+    from ..physics import deps
+    from ..physics.report import DESIGNED_FOR, physics_report
+    from ..physics.run import read_outcomes, run_physics
+
+    settings = _settings(args)
+    try:
+        deps.mujoco()
+        deps.coacd()
+    except MissingDependencyError as exc:
+        raise InputError(str(exc)) from None
+    try:
+        summary = run_physics(
+            args.dataset,
+            args.out,
+            settings=settings,
+            workers=args.workers,
+            shard_size=args.shard_size,
+            objects=args.object,
+            max_per_object=args.max_per_object,
+            progress=lambda total: out.progress("validating", total),
+            log_message=lambda m: print(m, file=sys.stderr) if not out.json_mode else None,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"stopped; every finished shard is kept in {args.out}. Run the same command to "
+            f"finish:\n  {shlex.join(sys.argv)}",
+            file=sys.stderr,
+        )
+        raise
+    rows = [
+        [name, n, held, f"{100.0 * held / n:.1f}%" if n else "—"]
+        for name, (held, n) in summary.hold_ok.items()
+    ]
+    out.table("Hold test", ["object", "validated", "held", "rate"], rows)
+    rate = summary.validations_per_core_hour
+    out.table(
+        "This run",
+        ["shards written", "shards already there", "grasps", "seconds", "per core-hour"],
+        [
+            [
+                summary.shards_written,
+                summary.shards_skipped,
+                summary.rows_written,
+                round(summary.elapsed_s, 1),
+                round(rate) if rate else "—",
+            ]
+        ],
+    )
+    doc = {"summary": summary.to_dict(), "settings": settings.to_dict()}
+    if args.report:
+        report = physics_report(read_outcomes(args.out), args.report)
+        headline = []
+        for pred, outcome in DESIGNED_FOR.items():
+            g = report["all"]
+            if outcome in g["auc"]:
+                value, kind = g["auc"][outcome].get(pred, math.nan), "ROC-AUC"
+            else:
+                value, kind = g["spearman"][outcome].get(pred, math.nan), "Spearman"
+            headline.append([pred, outcome, kind, value])
+        out.table(
+            f"Metrics vs outcomes (n={report['all']['n']})",
+            ["predictor", "outcome", "statistic", "value"],
+            headline,
+        )
+        out.text(f"report: {args.report}/report.md and PNG plots")
+        doc["report"] = report
+    out.result(doc)

@@ -1,0 +1,402 @@
+"""Physics validation of a generated dataset: sharded, resumable, parallel.
+
+Plan (a pure function of the dataset and the options): the dataset's rows with a validated
+status (``grasped`` by default), objects in dataset order, samples in order, optionally the
+first ``max_per_object`` of each object, cut into shards of ``shard_size`` rows. Shard *k*
+is ``part-{k:05d}.parquet`` in the output directory, written atomically (temporary file,
+fsync, rename) by the worker that computed it; a run skips every shard already there with
+the planned row count. ``_physics.json`` records the plan and the settings; a run against
+a directory with another plan refuses and says what differs.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import multiprocessing
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .. import __version__
+from ..errors import DatasetError, InputError
+from .settings import PhysicsSettings
+
+log = logging.getLogger(__name__)
+
+__all__ = ["METRIC_COLUMNS", "PhysicsSummary", "read_outcomes", "run_physics"]
+
+FORMAT = "affordgrasp-physics"
+FORMAT_VERSION = 1
+MANIFEST = "_physics.json"
+DEFAULT_SHARD_SIZE = 128
+
+KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
+STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal")
+METRIC_COLUMNS = (
+    "epsilon",
+    "gws_volume",
+    "inertia",
+    "hold_effort_px",
+    "hold_effort_nx",
+    "hold_effort_py",
+    "hold_effort_ny",
+    "hold_effort_pz",
+    "hold_effort_nz",
+    "impact_effort",
+    "discharge",
+    "use_force",
+    "use_edge",
+    "use_edge_angle",
+    "n_contacts",
+)
+
+
+@dataclass
+class PhysicsSummary:
+    directory: str
+    rows: int
+    shards_written: int
+    shards_skipped: int
+    rows_written: int
+    elapsed_s: float
+    workers: int
+    steps: int = 0
+    busy_s: float = 0.0  # seconds the workers spent validating (sum over workers)
+    hold_ok: dict = field(default_factory=dict)  # object -> [held, validated]
+
+    @property
+    def validations_per_s(self) -> float:
+        return self.rows_written / self.elapsed_s if self.elapsed_s > 0 else 0.0
+
+    @property
+    def validations_per_core_hour(self) -> float:
+        return 3600.0 * self.rows_written / self.busy_s if self.busy_s > 0 else 0.0
+
+    def to_dict(self) -> dict:
+        return {
+            "directory": self.directory,
+            "rows": self.rows,
+            "shards_written": self.shards_written,
+            "shards_skipped": self.shards_skipped,
+            "rows_written": self.rows_written,
+            "elapsed_s": self.elapsed_s,
+            "workers": self.workers,
+            "steps": self.steps,
+            "validations_per_s": self.validations_per_s,
+            "validations_per_core_hour": self.validations_per_core_hour,
+            "hold_ok": self.hold_ok,
+        }
+
+
+def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table, dict]:
+    from ..dataset.layout import read_manifest
+    from ..dataset.reading import read_table, select_objects
+
+    manifest = read_manifest(dataset_dir)
+    if not manifest.get("metrics", True):
+        raise DatasetError(
+            f"dataset {str(dataset_dir)!r} was generated with --no-metrics; the physics "
+            "report compares metrics with outcomes: generate it with metrics"
+        )
+    chosen = select_objects(dataset_dir, objects)
+    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *METRIC_COLUMNS]
+    table = read_table(dataset_dir, columns=columns, objects=chosen)
+    status = np.asarray(table.column("status").to_pylist(), dtype=object)
+    keep = np.isin(status, list(statuses))
+    order_of = {o["name"]: o["index"] for o in manifest["objects"]}
+    obj_index = np.array([order_of[n] for n in table.column("object").to_pylist()], dtype=np.int64)
+    sample = table.column("sample").to_numpy()
+    idx = np.flatnonzero(keep)
+    idx = idx[np.lexsort((sample[idx], obj_index[idx]))]
+    if max_per_object is not None:
+        picked, counts = [], {}
+        for i in idx:
+            o = obj_index[i]
+            if counts.get(o, 0) < max_per_object:
+                counts[o] = counts.get(o, 0) + 1
+                picked.append(i)
+        idx = np.array(picked, dtype=np.int64)
+    return table.take(pa.array(idx, type=pa.int64())), manifest
+
+
+def _plan_manifest(dataset_dir, manifest, settings, statuses, objects, max_per_object, n, size):
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "affordgrasp_version": __version__,
+        "dataset": str(Path(dataset_dir).resolve()),
+        "dataset_seed": manifest["seed"],
+        "hand": manifest["hand"],
+        "objects": [
+            {"name": o["name"], "mesh_hash": o["mesh_hash"], "source": o["source"]}
+            for o in manifest["objects"]
+        ],
+        "statuses": list(statuses),
+        "object_filter": list(objects) if objects else None,
+        "max_per_object": max_per_object,
+        "rows": n,
+        "shard_size": size,
+        "settings": settings.to_dict(),
+        "settings_digest": settings.digest(),
+    }
+
+
+_PLAN_KEYS = (
+    "format",
+    "dataset",
+    "dataset_seed",
+    "hand",
+    "objects",
+    "statuses",
+    "object_filter",
+    "max_per_object",
+    "rows",
+    "shard_size",
+    "settings_digest",
+)
+
+
+def _prepare_out(out: Path, plan: dict) -> None:
+    path = out / MANIFEST
+    if path.is_file():
+        existing = json.loads(path.read_text())
+        diffs = [
+            f"{k} {existing.get(k)!r} there vs {plan.get(k)!r} here"
+            for k in _PLAN_KEYS
+            if existing.get(k) != plan.get(k)
+        ]
+        if diffs:
+            raise DatasetError(
+                f"{str(out)!r} holds a physics run with another plan ({'; '.join(diffs)}); "
+                "use another --out directory or the same options"
+            )
+        return
+    if out.exists() and any(out.iterdir()):
+        raise DatasetError(
+            f"{str(out)!r} is not empty and holds no physics run; give a new or empty directory"
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / f".{MANIFEST}.tmp-{os.getpid()}"
+    tmp.write_text(json.dumps(plan, indent=2))
+    os.replace(tmp, path)
+
+
+def shard_path(out: Path, k: int) -> Path:
+    return out / f"part-{k:05d}.parquet"
+
+
+def _shard_done(path: Path, rows: int) -> bool:
+    try:
+        return pq.ParquetFile(path).metadata.num_rows == rows
+    except (OSError, pa.ArrowInvalid):
+        return False
+
+
+def run_physics(
+    dataset_dir: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    settings: PhysicsSettings | None = None,
+    workers: int | None = 1,
+    shard_size: int = DEFAULT_SHARD_SIZE,
+    objects: Sequence[str] | None = None,
+    statuses: Sequence[str] = ("grasped",),
+    max_per_object: int | None = None,
+    progress: Callable | None = None,
+    log_message: Callable[[str], None] | None = None,
+) -> PhysicsSummary:
+    """Validate the grasps of a dataset in MuJoCo; write the outcomes as Parquet shards.
+
+    Returns a PhysicsSummary. ``progress(total)`` is a context manager yielding advance(n).
+    """
+    settings = settings or PhysicsSettings()
+    if shard_size <= 0:
+        raise InputError(f"--shard-size must be a positive integer, got {shard_size}")
+    if max_per_object is not None and max_per_object <= 0:
+        raise InputError(f"--max-per-object must be a positive integer, got {max_per_object}")
+    workers = workers or len(os.sched_getaffinity(0))
+    if workers <= 0:
+        raise InputError(f"--workers must be a positive integer, got {workers}")
+    out = Path(out)
+    rows, manifest = _plan_rows(dataset_dir, statuses, objects, max_per_object)
+    n = rows.num_rows
+    plan = _plan_manifest(
+        dataset_dir, manifest, settings, statuses, objects, max_per_object, n, shard_size
+    )
+    _prepare_out(out, plan)
+    for stale in out.glob(".part-*.tmp-*"):
+        stale.unlink(missing_ok=True)
+    shards = [(k, s, min(s + shard_size, n)) for k, s in enumerate(range(0, n, shard_size))]
+    pending = [sh for sh in shards if not _shard_done(shard_path(out, sh[0]), sh[2] - sh[1])]
+    needed = {rows.column("object")[s].as_py() for _, s, _ in pending}
+    entries = [o for o in plan["objects"] if o["name"] in needed]
+    # Decompose each object once, here, so the workers read the cache.
+    for entry in entries:
+        if log_message:
+            log_message(f"convex decomposition of {entry['name']} (cached after the first run)")
+        _scene_object(entry, settings)
+    started = time.perf_counter()
+    summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
+    jobs = [
+        (str(out), k, rows.slice(s, e - s), plan["hand"], plan["objects"], settings)
+        for k, s, e in pending
+    ]
+    total = sum(e - s for _, s, e in pending)
+    with progress(total) if progress else _null_progress() as advance:
+        if workers == 1 or len(jobs) <= 1:
+            for job in jobs:
+                _account(summary, validate_shard(*job), advance)
+        else:
+            ctx = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+                try:
+                    for result in pool.map(_validate_job, jobs):
+                        _account(summary, result, advance)
+                except BaseException:
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    raise
+    summary.elapsed_s = time.perf_counter() - started
+    summary.hold_ok = _hold_counts(out, len(shards))
+    return summary
+
+
+class _null_progress:
+    def __enter__(self):
+        return lambda n=1: None
+
+    def __exit__(self, *exc):
+        return False
+
+
+def _account(summary: PhysicsSummary, result: dict, advance) -> None:
+    summary.shards_written += 1
+    summary.rows_written += result["rows"]
+    summary.steps += result["steps"]
+    summary.busy_s += result["seconds"]
+    advance(result["rows"])
+
+
+def _validate_job(job) -> dict:
+    return validate_shard(*job)
+
+
+_SCENES: dict = {}
+_OBJECTS: dict = {}
+
+
+def _scene_object(entry: dict, settings: PhysicsSettings):
+    """The GraspObject of a manifest entry (checked against its hash) and its parts."""
+    from ..objects import resolve_object
+    from .decompose import convex_parts
+
+    key = entry["mesh_hash"]
+    if key not in _OBJECTS:
+        spec = entry["name"] if entry["source"] == "family" else entry["source"]
+        obj = resolve_object(spec)
+        if obj.mesh_hash != entry["mesh_hash"]:
+            raise DatasetError(
+                f"object {entry['name']!r} resolves to another mesh than the dataset's "
+                f"(hash {obj.mesh_hash[:12]} here vs {entry['mesh_hash'][:12]} there); "
+                "validate on the machine and software version that generated it"
+            )
+        _OBJECTS[key] = (obj, convex_parts(obj.mesh, obj.mesh_hash, settings))
+    return _OBJECTS[key]
+
+
+def _scene(hand: str, entry: dict, settings: PhysicsSettings):
+    from .scene import build_scene
+
+    key = (hand, entry["mesh_hash"], settings.digest())
+    if key not in _SCENES:
+        obj, parts = _scene_object(entry, settings)
+        _SCENES[key] = build_scene(hand, obj, settings, parts=parts)
+    return _SCENES[key]
+
+
+def validate_rows(rows: pa.Table, hand: str, objects: list[dict], settings) -> pa.Table:
+    """The outcome table of some dataset rows (their key and metric columns + outcomes)."""
+    from .trials import validate_grasp
+
+    by_name = {o["name"]: o for o in objects}
+    names = rows.column("object").to_pylist()
+    poses = rows.column("hand_pose").to_pylist()
+    joints = rows.column("joints").to_pylist()
+    ups = rows.column("use_point").to_pylist()
+    uns = rows.column("use_normal").to_pylist()
+    outcomes = []
+    for i in range(rows.num_rows):
+        scene = _scene(hand, by_name[names[i]], settings)
+        up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
+        un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
+        outcome = validate_grasp(
+            scene, np.array(poses[i]).reshape(4, 4), np.array(joints[i]), up, un
+        )
+        outcomes.append(outcome.to_row())
+    keep = [c for c in rows.column_names if c not in STATE_COLUMNS]
+    table = rows.select(keep)
+    for name in outcomes[0] if outcomes else ():
+        values = [o[name] for o in outcomes]
+        table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
+    return table
+
+
+def _outcome_type(name: str) -> pa.DataType:
+    if name in ("contacts", "hold_directions_ok", "steps"):
+        return pa.int64()
+    if name in ("hold_ok", "settled", "impact_ok", "press_held"):
+        return pa.bool_()
+    return pa.float64()
+
+
+def validate_shard(out, k, rows, hand, objects, settings) -> dict:
+    started = time.perf_counter()
+    table = validate_rows(rows, hand, objects, settings)
+    seconds = time.perf_counter() - started
+    path = shard_path(Path(out), k)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    meta = {b"affordgrasp_version": __version__.encode(), b"physics_settings": b""}
+    meta[b"physics_settings"] = settings.digest().encode()
+    table = table.replace_schema_metadata(meta)
+    with open(tmp, "wb") as fh:
+        pq.write_table(table, fh)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+    steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
+    return {"rows": table.num_rows, "steps": steps, "seconds": seconds}
+
+
+def read_outcomes(out: str | os.PathLike) -> pa.Table:
+    """Every shard of a physics run as one table (plan order)."""
+    out = Path(out)
+    if not (out / MANIFEST).is_file():
+        raise DatasetError(
+            f"{str(out)!r} is not a physics run (no {MANIFEST}); run 'affordgrasp physics' first"
+        )
+    paths = sorted(out.glob("part-*.parquet"))
+    if not paths:
+        raise DatasetError(f"physics run {str(out)!r} has no shards yet; run it again")
+    return pa.concat_tables([pq.read_table(p) for p in paths], promote_options="default")
+
+
+def _hold_counts(out: Path, n_shards: int) -> dict:
+    counts: dict = {}
+    for k in range(n_shards):
+        path = shard_path(out, k)
+        if not path.is_file():
+            continue
+        t = pq.read_table(path, columns=["object", "hold_ok"])
+        names, held = t.column("object").to_pylist(), t.column("hold_ok").to_pylist()
+        for name, ok in zip(names, held, strict=True):
+            c = counts.setdefault(name, [0, 0])
+            c[0] += bool(ok)
+            c[1] += 1
+    return counts

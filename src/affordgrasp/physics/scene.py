@@ -1,0 +1,344 @@
+"""A MuJoCo model of one hand and one object, built from our own data (no third-party meshes).
+
+* The hand frame is the world frame: the palm is fixed at the origin, and the object, a free
+  body, is placed at the inverse of the grasp's hand → object transform. With gravity off
+  (the default) this is the hand's view of any grasp.
+* Each link shape (a sphere-swept box or cylinder, see :mod:`affordgrasp.hands.model`) becomes
+  a convex mesh geom through support points of the rounded shape, so the engine sees the
+  same rounded links as the grasp simulator.
+* Joints: a closing DOF's joint becomes a MuJoCo hinge/slide joint with its limits. In every
+  finger, the first DOF is driven by a position servo with a saturated effort; the later
+  DOFs follow it through the finger's closing ratios (equality constraints, e.g. the
+  Barrett distal at 1/3 of the proximal, offset so that the grasp's joint values hold).
+  Links moved by a pregrasp DOF (the Barrett spread) are placed rigidly per grasp.
+* The object collides as its convex parts (:mod:`.decompose`); its mass, centre of mass and
+  inertia are those of the ORIGINAL mesh at ``settings.density``.
+* Friction: every hand geom carries μ(link material, object material) from the material
+  table, object geoms μ = 0; MuJoCo takes the larger of a pair, so each contact gets the
+  table's μ. Contacts are point contacts with friction (condim 3), as the metrics assume.
+* Two tools for the use tests, off stage during the hold test: a fixed anvil (mocap body)
+  and a plate on a slide joint pushed by a force actuator; both are frictionless 10 mm
+  cubes (a local obstacle at the use point that pushes only along its normal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..hands import Hand, get_hand
+from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
+from ..objects.mass import MassProperties, mass_properties
+from . import deps
+from .decompose import convex_parts
+from .settings import G, PhysicsSettings
+
+__all__ = ["Scene", "build_scene", "rounded_shape_points"]
+
+FAR = 10.0  # m: where the tools wait, well away from anything
+TOOL_HALF = 0.005  # m: the anvil and the plate are 10 mm cubes (a local obstacle at U)
+_OBJECT_BITS = (1, 2 | 4)  # contype, conaffinity: the object touches the hand and the tools
+_HAND_BITS = (2, 1)
+_TOOL_BITS = (4, 1)
+
+
+def _fibonacci_directions(n: int) -> np.ndarray:
+    i = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * i / n
+    phi = np.pi * (1.0 + 5**0.5) * i
+    r = np.sqrt(1.0 - z * z)
+    dirs = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+    # The 26 face, edge and corner directions too, so that flat faces stay flat.
+    grid = np.array(list(np.ndindex(3, 3, 3)), dtype=np.float64) - 1.0
+    grid = grid[np.any(grid != 0, axis=1)]
+    return np.concatenate([dirs, grid / np.linalg.norm(grid, axis=1, keepdims=True)])
+
+
+_DIRECTIONS = _fibonacci_directions(96)
+
+
+def rounded_shape_points(kind: str, half_extents, radius: float) -> np.ndarray:
+    """Support points of a sphere-swept box or cylinder (shape frame), (n, 3) float.
+
+    Their convex hull is inscribed in the rounded shape and touches it in every sampled
+    direction (faces and edges exactly, rounded corners within about 1 % of the radius).
+    """
+    h = np.asarray(half_extents, dtype=np.float64)
+    d = _DIRECTIONS
+    if kind == "box":
+        core = np.sign(d) * h
+    else:  # cylinder: core radius h[0], half height h[2], axis z
+        xy = d[:, :2]
+        norm = np.linalg.norm(xy, axis=1, keepdims=True)
+        rim = np.where(norm > 1e-12, xy / np.maximum(norm, 1e-12), 0.0) * h[0]
+        core = np.concatenate([rim, np.sign(d[:, 2:]) * h[2]], axis=1)
+    return np.unique(np.round(core + radius * d, 12), axis=0)
+
+
+def _fmt(values) -> str:
+    return " ".join(f"{v:.9g}" for v in np.asarray(values, dtype=np.float64).ravel())
+
+
+def _quat(rotation: np.ndarray) -> np.ndarray:
+    mj = deps.mujoco()
+    q = np.zeros(4)
+    mj.mju_mat2Quat(q, np.ascontiguousarray(rotation, dtype=np.float64).ravel())
+    return q
+
+
+@dataclass
+class Scene:
+    """A compiled model with the indices the trials need. Not thread-safe (one per process)."""
+
+    model: object  # mujoco.MjModel
+    data: object  # mujoco.MjData
+    hand: Hand
+    settings: PhysicsSettings
+    mass: MassProperties
+    object_name: str
+    n_parts: int
+    object_body: int
+    object_qpos: int  # address of the free joint's 7 qpos
+    object_dof: int  # address of its 6 dofs
+    fixed_links: list  # (body id, link index, dof index, ratio, joint kind, origin, axis)
+    fingers: list  # (actuator id, joint id, direction, [(eq id, joint id, ratio), ...])
+    closing_joints: list  # (MuJoCo joint id, DOF index, ratio) of every closing joint
+    anvil_mocap: int
+    plate_body: int
+    plate_joint: int
+    plate_actuator: int
+
+    @property
+    def object_mass(self) -> float:
+        return self.mass.mass
+
+
+def build_scene(
+    hand: Hand | str,
+    obj,
+    settings: PhysicsSettings | None = None,
+    *,
+    object_material: str = DEFAULT_OBJECT_MATERIAL,
+    parts: list | None = None,
+) -> Scene:
+    """Compile the MuJoCo model of ``hand`` and ``obj`` (a GraspObject).
+
+    parts : optional list of (vertices, faces) convex parts; default: the cached CoACD
+        decomposition of ``obj.mesh``.
+    """
+    mj = deps.mujoco()
+    settings = settings or PhysicsSettings()
+    hand = get_hand(hand)
+    if parts is None:
+        parts = convex_parts(obj.mesh, obj.mesh_hash, settings)
+    mass = mass_properties(obj.mesh, density=settings.density)
+    xml, info = _mjcf(hand, obj.name, parts, mass, settings, object_material)
+    try:
+        model = mj.MjModel.from_xml_string(xml)
+    except ValueError as exc:  # pragma: no cover - a bug in the builder, not user input
+        raise RuntimeError(f"MuJoCo rejected the generated model: {exc}") from exc
+    data = mj.MjData(model)
+
+    def body(name):
+        return mj.mj_name2id(model, mj.mjtObj.mjOBJ_BODY, name)
+
+    def joint(name):
+        return mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, name)
+
+    obj_body = body("object")
+    obj_joint = model.body_jntadr[obj_body]
+    fixed = [
+        (body(f"link_{li}"), li, di, ratio, kind, origin, axis)
+        for li, di, ratio, kind, origin, axis in info["fixed"]
+    ]
+    fingers = []
+    for act_name, jname, direction, followers in info["fingers"]:
+        act = mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, act_name)
+        fl = [
+            (mj.mj_name2id(model, mj.mjtObj.mjOBJ_EQUALITY, e), joint(j), r)
+            for e, j, r in followers
+        ]
+        fingers.append((act, joint(jname), direction, fl))
+    plate = body("plate")
+    return Scene(
+        model=model,
+        data=data,
+        hand=hand,
+        settings=settings,
+        mass=mass,
+        object_name=obj.name,
+        n_parts=len(parts),
+        object_body=obj_body,
+        object_qpos=int(model.jnt_qposadr[obj_joint]),
+        object_dof=int(model.jnt_dofadr[obj_joint]),
+        fixed_links=fixed,
+        fingers=fingers,
+        closing_joints=[(joint(f"j_{li}"), di, r) for li, di, r in info["closing_links"]],
+        anvil_mocap=int(model.body_mocapid[body("anvil")]),
+        plate_body=plate,
+        plate_joint=joint("plate_slide"),
+        plate_actuator=mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "plate_push"),
+    )
+
+
+def _mjcf(hand, name, parts, mass, settings, object_material):
+    """The model as MJCF text, and what the Scene needs to know about it."""
+    s = settings
+    assets, bodies = [], {}
+    finger_of_dof = {}
+    for f in hand.fingers:
+        for k, d in enumerate(f.dofs):
+            finger_of_dof[d] = (f, k)
+    closing_dofs = set(finger_of_dof)
+    info = {"fixed": [], "fingers": [], "closing_links": []}
+    children: dict[str, list[int]] = {}
+    for i, link in enumerate(hand.links):
+        if link.parent is not None:
+            children.setdefault(link.parent, []).append(i)
+    joint_name_of_dof: dict[str, tuple[str, float]] = {}
+
+    def link_xml(i: int, indent: str) -> str:
+        link = hand.links[i]
+        mu = friction_coefficient(link.material, object_material)
+        lines = []
+        j = link.joint
+        attrs = ""
+        joint_xml = ""
+        if j is not None:
+            r, t = j.origin[:3, :3], j.origin[:3, 3]
+            attrs = f' pos="{_fmt(t)}" quat="{_fmt(_quat(r))}"'
+            if j.dof in closing_dofs:
+                dof = hand.dofs[hand.dof_index(j.dof)]
+                lo, hi = sorted((j.ratio * dof.lower, j.ratio * dof.upper))
+                kind = "hinge" if j.kind == "revolute" else "slide"
+                joint_xml = (
+                    f'{indent}  <joint name="j_{i}" type="{kind}" axis="{_fmt(j.axis)}" '
+                    f'range="{lo:.9g} {hi:.9g}" limited="true"/>\n'
+                )
+                joint_name_of_dof[j.dof] = (f"j_{i}", j.ratio)
+                info["closing_links"].append((i, hand.dof_index(j.dof), j.ratio))
+            else:
+                info["fixed"].append(
+                    (i, hand.dof_index(j.dof), j.ratio, j.kind, j.origin.copy(), j.axis.copy())
+                )
+        lines.append(f'{indent}<body name="link_{i}"{attrs}>\n')
+        lines.append(joint_xml)
+        for k, shape in enumerate(link.shapes):
+            pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
+            pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]
+            mesh_name = f"hand_{i}_{k}"
+            assets.append(f'    <mesh name="{mesh_name}" vertex="{_fmt(pts)}"/>\n')
+            lines.append(
+                f'{indent}  <geom type="mesh" mesh="{mesh_name}" friction="{mu:.6g} 0 0" '
+                f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="3" '
+                f'density="1000" rgba="0.6 0.6 0.65 1"/>\n'
+            )
+        if not link.shapes and j is not None:
+            # A massless joint carrier (the Barrett spread base): give it a small inertia.
+            lines.append(
+                f'{indent}  <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>\n'
+            )
+        for c in children.get(link.name, []):
+            lines.append(link_xml(c, indent + "  "))
+        lines.append(f"{indent}</body>\n")
+        return "".join(lines)
+
+    palm_geoms = []
+    palm = hand.links[0]
+    mu_palm = friction_coefficient(palm.material, object_material)
+    for k, shape in enumerate(palm.shapes):
+        pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
+        pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]
+        assets.append(f'    <mesh name="palm_{k}" vertex="{_fmt(pts)}"/>\n')
+        palm_geoms.append(
+            f'      <geom type="mesh" mesh="palm_{k}" friction="{mu_palm:.6g} 0 0" '
+            f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="3"/>\n'
+        )
+    finger_xml = "".join(link_xml(c, "      ") for c in children.get(palm.name, []))
+    del bodies
+
+    object_geoms = []
+    for k, (v, _f) in enumerate(parts):
+        assets.append(f'    <mesh name="part_{k}" vertex="{_fmt(v)}"/>\n')
+        object_geoms.append(
+            f'      <geom type="mesh" mesh="part_{k}" friction="0 0 0" condim="3" '
+            f'contype="{_OBJECT_BITS[0]}" conaffinity="{_OBJECT_BITS[1]}" mass="0" '
+            'rgba="0.8 0.5 0.2 1"/>\n'
+        )
+    inertia = mass.inertia
+    full = [
+        inertia[0, 0],
+        inertia[1, 1],
+        inertia[2, 2],
+        inertia[0, 1],
+        inertia[0, 2],
+        inertia[1, 2],
+    ]
+
+    actuators, equalities = [], []
+    for f in hand.fingers:
+        first = f.dofs[0]
+        jname, ratio0 = joint_name_of_dof[first]
+        kind = hand.links[int(jname[2:])].joint.kind
+        effort = s.grip_torque if kind == "revolute" else s.grip_force
+        overshoot = s.overshoot_rad if kind == "revolute" else s.overshoot_m
+        # Gain: the servo saturates once the joint lags its target by a fifth of the overshoot.
+        kp = 5.0 * effort / overshoot
+        act = f"servo_{f.name}"
+        actuators.append(
+            f'    <position name="{act}" joint="{jname}" kp="{kp:.9g}" kv="{0.1 * kp:.9g}" '
+            f'forcerange="{-effort:.9g} {effort:.9g}" forcelimited="true"/>\n'
+        )
+        followers = []
+        for k, d in enumerate(f.dofs[1:], start=1):
+            fj, _ratio = joint_name_of_dof[d]
+            eq = f"couple_{f.name}_{k}"
+            # joint fj = a0 + a1 * joint jname; a0, a1 are set per grasp (Scene.set_grasp).
+            equalities.append(
+                f'    <joint name="{eq}" joint1="{fj}" joint2="{jname}" polycoef="0 1 0 0 0"/>\n'
+            )
+            followers.append((eq, fj, f.speeds[k] / f.speeds[0]))
+        direction = 1.0 if ratio0 > 0 else -1.0
+        info["fingers"].append((act, jname, direction, followers))
+
+    xml = f"""<mujoco model="affordgrasp-{hand.name}">
+  <compiler angle="radian" inertiafromgeom="true" boundmass="1e-4" boundinertia="1e-9"/>
+  <option timestep="{s.timestep:.9g}" gravity="0 0 {-G if s.gravity else 0.0:.9g}"
+          integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.9g}"/>
+  <default>
+    <joint armature="0.01" damping="0.05"/>
+  </default>
+  <asset>
+{"".join(assets)}  </asset>
+  <worldbody>
+    <body name="link_0">
+{"".join(palm_geoms)}{finger_xml}    </body>
+    <body name="object" pos="0 0 0.5">
+      <freejoint name="object_free"/>
+      <inertial pos="{_fmt(mass.center_of_mass)}" mass="{mass.mass:.9g}"
+                fullinertia="{_fmt(full)}"/>
+{"".join(object_geoms)}    </body>
+    <body name="anvil" mocap="true" pos="{FAR} {FAR} {FAR}">
+      <geom type="box" size="{TOOL_HALF} {TOOL_HALF} {TOOL_HALF}" pos="0 0 {TOOL_HALF}"
+            friction="0 0 0" condim="3" contype="{_TOOL_BITS[0]}" conaffinity="{_TOOL_BITS[1]}"/>
+    </body>
+    <body name="plate" pos="{-FAR} {-FAR} {-FAR}">
+      <joint name="plate_slide" type="slide" axis="0 0 1" armature="0" damping="0"
+             limited="false"/>
+      <geom type="box" size="{TOOL_HALF} {TOOL_HALF} {TOOL_HALF}" pos="0 0 {TOOL_HALF}"
+            friction="0 0 0" condim="3" mass="0.02"
+            contype="{_TOOL_BITS[0]}" conaffinity="{_TOOL_BITS[1]}"/>
+    </body>
+  </worldbody>
+  <actuator>
+{"".join(actuators)}    <motor name="plate_push" joint="plate_slide" gear="-1"/>
+  </actuator>
+  <equality>
+{"".join(equalities)}  </equality>
+</mujoco>
+"""
+    if not parts:
+        raise InputError(f"object {name!r} has no convex parts to simulate")
+    return xml, info

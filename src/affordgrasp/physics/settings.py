@@ -1,0 +1,90 @@
+"""Every number of the physics validation in one frozen record (documented in docs/physics.md).
+
+The defaults are the protocol the reported numbers were measured with; change them through
+:class:`PhysicsSettings` (Python) or the options of ``affordgrasp physics``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import asdict, dataclass, fields
+
+from ..errors import InputError
+
+G = 9.81  # m/s^2
+
+
+@dataclass(frozen=True)
+class PhysicsSettings:
+    """The validation protocol: simulation, grip, the three trials and their pass limits.
+
+    Units are SI (s, m, rad, N, N·m, kg/m^3). ``load_factor`` is k of the hold test: a force
+    of k·m·g at the centre of mass along each of ±x, ±y, ±z of the object frame.
+    """
+
+    # Simulation.
+    timestep: float = 0.002
+    density: float = 1000.0  # kg/m^3: the object mass is density × the ORIGINAL mesh volume
+    gravity: bool = False  # the hold test's six loads stand in for gravity in every direction
+    impratio: float = 10.0  # MuJoCo: stiffer friction than normal constraints (less creep)
+    # Grip: the first joint of every finger is a position servo with a saturated effort,
+    # the others follow it through the finger's closing ratios.
+    grip_torque: float = 1.5  # N·m, revolute closing joints (Barrett: about 15 N at the tip)
+    grip_force: float = 20.0  # N, prismatic closing joints (a jaw)
+    overshoot_rad: float = 0.3  # the servo target ends this far past the grasp's joint value
+    overshoot_m: float = 0.015
+    squeeze_time: float = 0.15  # s: the target ramps over this time (a step target tunnels)
+    settle_time: float = 0.05  # s: then held still before the trials
+    settled_speed: float = 0.02  # m/s: at rest after the squeeze (gravity off: an object
+    settled_spin: float = 0.5  # rad/s    pushed out of the hand keeps drifting)
+    # Hold test.
+    load_factor: float = 1.0  # k
+    hold_ramp: float = 0.05  # s: the load rises linearly, then stays
+    hold_time: float = 0.25  # s: total duration per direction, ramp included
+    max_shift_m: float = 0.01  # pass: the object moved less than this ...
+    max_angle_rad: float = math.radians(10.0)  # ... and turned less than this, in every direction
+    # Impact test (E_i): a torque pulse about the wrist axis, use point against an anvil.
+    impact_factor: float = 1.0  # peak torque = factor · m·g · (distance of U from the axis)
+    impact_time: float = 0.05  # s: pulse duration (half-sine)
+    impact_settle: float = 0.1  # s: after the pulse, before measuring
+    impact_max_angle_rad: float = math.radians(10.0)
+    # Press test (U_τ): a plate pushes on the use point with a force rising at this rate.
+    press_rate: float = 100.0  # N/s
+    press_max_force: float = 30.0  # N: the test stops here (the grasp did not slip)
+    press_slip_m: float = 0.005  # slip: the use point moved this far relative to the hand
+    # Convex decomposition of the object (coacd); part of the cache key.
+    coacd_threshold: float = 0.05
+    coacd_max_hulls: int = 24
+    coacd_resolution: int = 1000
+    coacd_mcts_iterations: int = 60
+    coacd_mcts_nodes: int = 10
+    coacd_mcts_depth: int = 3
+    seed: int = 0  # coacd's random search
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool):
+                continue
+            if not (isinstance(value, int | float) and math.isfinite(value)):
+                raise InputError(f"physics setting {f.name} must be a finite number, got {value!r}")
+            if f.name != "seed" and value <= 0 and f.name not in ("settle_time", "impact_settle"):
+                raise InputError(f"physics setting {f.name} must be > 0, got {value!r}")
+        if self.hold_ramp >= self.hold_time:
+            raise InputError(
+                f"hold_ramp ({self.hold_ramp} s) must be shorter than hold_time "
+                f"({self.hold_time} s)"
+            )
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def digest(self) -> str:
+        """A short stable hash of every setting (outputs record it, resume checks it)."""
+        text = json.dumps(self.to_dict(), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def decomposition_key(self) -> dict:
+        return {k: v for k, v in self.to_dict().items() if k.startswith("coacd_") or k == "seed"}

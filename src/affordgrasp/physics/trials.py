@@ -1,0 +1,312 @@
+"""The physical trials of one grasp: squeeze, hold (±x, ±y, ±z), impact and press.
+
+Every trial starts from the same squeezed state (a snapshot), so the six hold directions,
+the impact and the press are independent of each other and of their order. MuJoCo is
+deterministic: the same scene, grasp and settings give the same outcome bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..hands.model import joint_motion
+from . import deps
+from .scene import FAR, Scene
+from .settings import G
+
+__all__ = ["HOLD_DIRECTIONS", "GraspOutcome", "set_grasp", "validate_grasp"]
+
+HOLD_DIRECTIONS = ("px", "nx", "py", "ny", "pz", "nz")
+_AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+_TOOL_GAP = 2e-4  # m: the press plate starts this far from the use point
+
+
+@dataclass(frozen=True)
+class GraspOutcome:
+    """What the physics engine saw for one grasp (SI units; NaN: the trial did not apply).
+
+    hold_shift_m, hold_angle_rad : (6,) largest displacement of the centre of mass and
+        largest rotation of the object during the hold test, per load direction
+        (``HOLD_DIRECTIONS``: +x, -x, +y, -y, +z, -z of the object frame)
+    hold_ok : the object settled in the hand after the squeeze and every direction held
+        (shift and angle under the limits)
+    """
+
+    contacts: int  # hand-object contacts after the squeeze
+    squeeze_shift_m: float  # how far the squeeze moved the object
+    settled: bool  # after the squeeze the object touches the hand and is at rest
+    hold_shift_m: np.ndarray
+    hold_angle_rad: np.ndarray
+    hold_ok: bool
+    hold_directions_ok: int  # how many of the six directions held
+    impact_angle_rad: float
+    impact_ok: bool | None  # None: no use point
+    press_force_n: float  # largest plate force before the use point slipped (0: not settled)
+    press_held: bool | None  # the grasp never slipped up to the largest press force
+    steps: int  # simulation steps spent
+
+    def to_row(self) -> dict:
+        row = asdict(self)
+        for k, d in enumerate(HOLD_DIRECTIONS):
+            row[f"hold_shift_{d}"] = float(self.hold_shift_m[k])
+            row[f"hold_angle_{d}"] = float(self.hold_angle_rad[k])
+        del row["hold_shift_m"], row["hold_angle_rad"]
+        return row
+
+
+def _rigid_to_qpos(t: np.ndarray) -> np.ndarray:
+    mj = deps.mujoco()
+    q = np.zeros(4)
+    mj.mju_mat2Quat(q, np.ascontiguousarray(t[:3, :3]).ravel())
+    return np.concatenate([t[:3, 3], q])
+
+
+def _frame_quat(z_axis: np.ndarray) -> np.ndarray:
+    """A quaternion whose frame has ``z_axis`` as its z."""
+    z = z_axis / np.linalg.norm(z_axis)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    r = np.stack([x, y, z], axis=1)
+    mj = deps.mujoco()
+    q = np.zeros(4)
+    mj.mju_mat2Quat(q, np.ascontiguousarray(r).ravel())
+    return q
+
+
+def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
+    """Put the scene in the grasp's state: hand joints, object pose, servos at rest.
+
+    hand_pose : (4, 4) float, hand → object transform (the dataset's ``hand_pose``)
+    joints : (n_dofs,) float, DOF values in the hand's order (the dataset's ``joints``)
+    """
+    mj = deps.mujoco()
+    m, d = scene.model, scene.data
+    hand_pose = np.asarray(hand_pose, dtype=np.float64).reshape(4, 4)
+    joints = np.asarray(joints, dtype=np.float64)
+    mj.mj_resetData(m, d)
+    for body, _li, di, ratio, kind, origin, axis in scene.fixed_links:
+        t = origin @ joint_motion(kind, axis, ratio * joints[di])
+        m.body_pos[body] = t[:3, 3]
+        m.body_quat[body] = _rigid_to_qpos(t)[3:]
+    for jid, di, ratio in scene.closing_joints:
+        d.qpos[m.jnt_qposadr[jid]] = ratio * joints[di]
+    for act, jid, _direction, followers in scene.fingers:
+        q0 = d.qpos[m.jnt_qposadr[jid]]
+        d.ctrl[act] = q0
+        ratio0 = next(r for j, _di, r in scene.closing_joints if j == jid)
+        for eq, fj, speed_ratio in followers:
+            ratio_f = next(r for j, _di, r in scene.closing_joints if j == fj)
+            a1 = ratio_f * speed_ratio / ratio0
+            m.eq_data[eq, :5] = [d.qpos[m.jnt_qposadr[fj]] - a1 * q0, a1, 0.0, 0.0, 0.0]
+    obj_in_hand = np.linalg.inv(hand_pose)
+    a = scene.object_qpos
+    d.qpos[a : a + 7] = _rigid_to_qpos(obj_in_hand)
+    _park_tools(scene)
+    mj.mj_forward(m, d)
+
+
+def _park_tools(scene: Scene) -> None:
+    m, d = scene.model, scene.data
+    d.mocap_pos[scene.anvil_mocap] = [FAR, FAR, FAR]
+    m.body_pos[scene.plate_body] = [-FAR, -FAR, -FAR]
+    d.qpos[m.jnt_qposadr[scene.plate_joint]] = 0.0
+    d.qvel[m.jnt_dofadr[scene.plate_joint]] = 0.0
+    d.ctrl[scene.plate_actuator] = 0.0
+
+
+class _Snapshot:
+    """The integration state of MjData, to start every trial from the squeezed grasp."""
+
+    FIELDS = ("qpos", "qvel", "act", "ctrl", "qacc_warmstart", "mocap_pos", "mocap_quat")
+
+    def __init__(self, d):
+        self.time = d.time
+        self.arrays = {f: getattr(d, f).copy() for f in self.FIELDS}
+
+    def restore(self, scene: Scene) -> None:
+        mj = deps.mujoco()
+        d = scene.data
+        d.time = self.time
+        for f, v in self.arrays.items():
+            getattr(d, f)[:] = v
+        d.xfrc_applied[:] = 0.0
+        _park_tools(scene)
+        mj.mj_forward(scene.model, d)
+
+
+def _angle_between(q0: np.ndarray, q1: np.ndarray) -> float:
+    dot = abs(float(np.dot(q0, q1)))
+    return 2.0 * math.acos(min(1.0, dot))
+
+
+def _squeeze(scene: Scene) -> int:
+    mj = deps.mujoco()
+    m, d, s = scene.model, scene.data, scene.settings
+    start = {act: d.ctrl[act] for act, *_ in scene.fingers}
+    n_ramp = max(1, round(s.squeeze_time / s.timestep))
+    n_settle = round(s.settle_time / s.timestep)
+    for step in range(n_ramp + n_settle):
+        frac = min(1.0, (step + 1) / n_ramp)
+        for act, jid, direction, _f in scene.fingers:
+            kind = m.jnt_type[jid]
+            over = s.overshoot_rad if kind == mj.mjtJoint.mjJNT_HINGE else s.overshoot_m
+            d.ctrl[act] = start[act] + direction * over * frac
+        mj.mj_step(m, d)
+    return n_ramp + n_settle
+
+
+def _hand_contacts(scene: Scene) -> int:
+    m, d = scene.model, scene.data
+    count = 0
+    for i in range(d.ncon):
+        c = d.contact[i]
+        b1, b2 = m.geom_bodyid[c.geom[0]], m.geom_bodyid[c.geom[1]]
+        if (b1 == scene.object_body) != (b2 == scene.object_body) and c.dist < 1e-3:
+            count += 1
+    return count
+
+
+def _hold(scene: Scene, snapshot: _Snapshot, axis: np.ndarray) -> tuple[float, float, int]:
+    """Largest (shift, angle) under a load along ``axis`` (object frame); steps used."""
+    mj = deps.mujoco()
+    m, d, s = scene.model, scene.data, scene.settings
+    snapshot.restore(scene)
+    body = scene.object_body
+    com0 = d.xipos[body].copy()
+    quat0 = d.xquat[body].copy()
+    load = s.load_factor * scene.object_mass * G * (d.xmat[body].reshape(3, 3) @ axis)
+    n_ramp = max(1, round(s.hold_ramp / s.timestep))
+    n = round(s.hold_time / s.timestep)
+    shift = angle = 0.0
+    for step in range(n):
+        d.xfrc_applied[body, :3] = load * min(1.0, (step + 1) / n_ramp)
+        mj.mj_step(m, d)
+        shift = max(shift, float(np.linalg.norm(d.xipos[body] - com0)))
+        angle = max(angle, _angle_between(quat0, d.xquat[body]))
+        if shift > 2 * s.max_shift_m or angle > 2 * s.max_angle_rad:
+            return shift, angle, step + 1  # failed for good: save the time
+    return shift, angle, n
+
+
+def _use_in_world(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray):
+    d = scene.data
+    r = d.xmat[scene.object_body].reshape(3, 3)
+    p = d.xpos[scene.object_body]
+    return r @ use_point + p, r @ use_normal
+
+
+def _impact(scene: Scene, snapshot: _Snapshot, use_point, use_normal) -> tuple[float, int]:
+    """Largest object rotation during a torque pulse about the wrist axis, anvil at U."""
+    mj = deps.mujoco()
+    m, d, s = scene.model, scene.data, scene.settings
+    snapshot.restore(scene)
+    u, n_u = _use_in_world(scene, use_point, use_normal)
+    d.mocap_pos[scene.anvil_mocap] = u
+    d.mocap_quat[scene.anvil_mocap] = _frame_quat(-n_u)  # the cube lies beyond U, outside
+    mj.mj_forward(m, d)
+    body = scene.object_body
+    quat0 = d.xquat[body].copy()
+    lever = float(np.hypot(u[0], u[1]))  # distance of U from the wrist axis (the hand's z)
+    peak = s.impact_factor * scene.object_mass * G * max(lever, 1e-3)
+    n_pulse = max(1, round(s.impact_time / s.timestep))
+    n = n_pulse + round(s.impact_settle / s.timestep)
+    angle = 0.0
+    for step in range(n):
+        torque = peak * math.sin(math.pi * (step + 0.5) / n_pulse) if step < n_pulse else 0.0
+        d.xfrc_applied[body, 3:] = [0.0, 0.0, torque]
+        mj.mj_step(m, d)
+        angle = max(angle, _angle_between(quat0, d.xquat[body]))
+        if angle > 2 * s.impact_max_angle_rad:
+            return angle, step + 1
+    return angle, n
+
+
+def _press(scene: Scene, snapshot: _Snapshot, use_point, use_normal) -> tuple[float, bool, int]:
+    """Plate force on U (rising at ``press_rate``) when U first slipped; held if never."""
+    mj = deps.mujoco()
+    m, d, s = scene.model, scene.data, scene.settings
+    snapshot.restore(scene)
+    u, n_u = _use_in_world(scene, use_point, use_normal)
+    m.body_pos[scene.plate_body] = u + _TOOL_GAP * n_u
+    m.body_quat[scene.plate_body] = _frame_quat(-n_u)
+    mj.mj_forward(m, d)
+    n = max(1, round(s.press_max_force / s.press_rate / s.timestep))
+    force = 0.0
+    for step in range(n):
+        force = s.press_rate * (step + 1) * s.timestep
+        d.ctrl[scene.plate_actuator] = force
+        mj.mj_step(m, d)
+        now, _ = _use_in_world(scene, use_point, use_normal)
+        if np.linalg.norm(now - u) > s.press_slip_m:
+            return force, False, step + 1
+    return force, True, n
+
+
+def validate_grasp(
+    scene: Scene,
+    hand_pose: np.ndarray,
+    joints: np.ndarray,
+    use_point: np.ndarray | None = None,
+    use_normal: np.ndarray | None = None,
+) -> GraspOutcome:
+    """Squeeze the grasp, then run the hold test and (given a use point) impact and press.
+
+    hand_pose : (4, 4) float, hand → object; joints : (n_dofs,) float
+    use_point, use_normal : (3,) float in the object frame (normal outward), or None/NaN
+    """
+    s = scene.settings
+    set_grasp(scene, hand_pose, joints)
+    body = scene.object_body
+    com_start = scene.data.xipos[body].copy()
+    steps = _squeeze(scene)
+    contacts = _hand_contacts(scene)
+    squeeze_shift = float(np.linalg.norm(scene.data.xipos[body] - com_start))
+    a = scene.object_dof
+    speed = float(np.linalg.norm(scene.data.qvel[a : a + 3]))
+    spin = float(np.linalg.norm(scene.data.qvel[a + 3 : a + 6]))
+    settled = contacts > 0 and speed < s.settled_speed and spin < s.settled_spin
+    snapshot = _Snapshot(scene.data)
+    shifts, angles = np.zeros(6), np.zeros(6)
+    for k, axis in enumerate(_AXES):
+        shifts[k], angles[k], used = _hold(scene, snapshot, axis)
+        steps += used
+    ok_dir = (shifts < s.max_shift_m) & (angles < s.max_angle_rad)
+    has_use = (
+        use_point is not None
+        and use_normal is not None
+        and np.all(np.isfinite(use_point))
+        and np.all(np.isfinite(use_normal))
+    )
+    impact_angle, impact_ok = math.nan, None
+    press_force, press_held = math.nan, None
+    if has_use and not settled:
+        # Not in the hand after the squeeze: nothing to strike or press with.
+        impact_ok, press_force, press_held = False, 0.0, False
+    elif has_use:
+        up = np.asarray(use_point, dtype=np.float64)
+        un = np.asarray(use_normal, dtype=np.float64)
+        impact_angle, used = _impact(scene, snapshot, up, un)
+        impact_ok = bool(impact_angle < s.impact_max_angle_rad)
+        steps += used
+        press_force, press_held, used = _press(scene, snapshot, up, un)
+        steps += used
+    _park_tools(scene)
+    return GraspOutcome(
+        contacts=contacts,
+        squeeze_shift_m=squeeze_shift,
+        settled=settled,
+        hold_shift_m=shifts,
+        hold_angle_rad=angles,
+        hold_ok=bool(settled and ok_dir.all()),
+        hold_directions_ok=int(ok_dir.sum()),
+        impact_angle_rad=float(impact_angle),
+        impact_ok=impact_ok,
+        press_force_n=float(press_force),
+        press_held=press_held,
+        steps=steps,
+    )

@@ -1,0 +1,85 @@
+"""``affordgrasp physics`` on a tiny dataset: outcomes, report, resume, bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pyarrow.parquet as pq
+import pytest
+
+from affordgrasp.cli import main
+
+
+@pytest.fixture(scope="module")
+def tiny_dataset(tmp_path_factory):
+    import trimesh
+
+    from affordgrasp.dataset.generate import generate
+
+    root = tmp_path_factory.mktemp("physics-cli")
+    mesh = root / "block.stl"
+    trimesh.creation.box([0.05, 0.03, 0.04]).export(mesh)
+    out = root / "ds"
+    generate([str(mesh)], 24, out, seed=2, workers=1, shard_size=12, hand="parallel_jaw")
+    return out
+
+
+def _run(capsys, *argv):
+    code = main(["physics", *map(str, argv), "--json"])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_physics_command_writes_outcomes_report_and_resumes(tiny_dataset, tmp_path, capsys):
+    out, report = tmp_path / "physics.parquet", tmp_path / "report"
+    args = [tiny_dataset, "--out", out, "--max-per-object", 4, "--shard-size", 2, "--workers", 1]
+    code, stdout, _ = _run(capsys, *args, "--report", report)
+    assert code == 0
+    doc = json.loads(stdout)
+    assert doc["summary"]["rows"] == 4 and doc["summary"]["shards_written"] == 2
+    shards = sorted(out.glob("part-*.parquet"))
+    assert len(shards) == 2
+    table = pq.read_table(out)
+    assert {"hold_ok", "settled", "hold_shift_px", "press_force_n", "epsilon"} <= set(
+        table.column_names
+    )
+    assert set(table.column("status").to_pylist()) == {"grasped"}
+    for name in ("report.json", "report.md", "roc_hold_ok.png", "auc_hold_by_family.png"):
+        assert (report / name).is_file()
+    first = pq.read_table(shards[1])
+
+    # Resume: a lost shard is written again, the other is kept, and the rows are the same.
+    shards[1].unlink()
+    code, stdout, _ = _run(capsys, *args)
+    assert code == 0
+    summary = json.loads(stdout)["summary"]
+    assert summary["shards_skipped"] == 1 and summary["shards_written"] == 1
+    assert pq.read_table(shards[1]).to_pandas().equals(first.to_pandas())  # NaN == NaN
+
+    # Another plan in the same directory is refused, with what differs.
+    code, _, stderr = _run(capsys, tiny_dataset, "--out", out, "--load-factor", 2)
+    assert code == 2 and "settings_digest" in stderr
+
+
+def test_physics_command_rejects_a_directory_that_is_not_a_dataset(tmp_path, capsys):
+    code, _, stderr = _run(capsys, tmp_path, "--out", tmp_path / "o")
+    assert code == 2 and stderr.count("\n") == 1
+
+
+def test_missing_extra_names_the_install_command(monkeypatch):
+    import builtins
+
+    from affordgrasp.errors import MissingDependencyError
+    from affordgrasp.physics import deps
+
+    real_import = builtins.__import__
+
+    def no_mujoco(name, *a, **k):
+        if name == "mujoco":
+            raise ImportError("no mujoco here")
+        return real_import(name, *a, **k)
+
+    monkeypatch.setattr(builtins, "__import__", no_mujoco)
+    monkeypatch.delitem(__import__("sys").modules, "mujoco", raising=False)
+    with pytest.raises(MissingDependencyError, match=r'pip install "affordgrasp\[physics\]"'):
+        deps.mujoco()

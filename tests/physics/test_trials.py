@@ -1,0 +1,98 @@
+"""The physical trials on analytic cases: an antipodal jaw grasp of a box holds, one finger
+does not, the press test tells them apart, and the outcomes are deterministic."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import jaw_grasp
+
+from affordgrasp.physics import PhysicsSettings
+from affordgrasp.physics.scene import build_scene
+from affordgrasp.physics.trials import HOLD_DIRECTIONS, validate_grasp
+
+TOUCH = 0.0225 - 5e-5  # jaw travel that leaves a 0.05 mm gap to the box face (as the policy)
+
+
+@pytest.fixture(scope="module")
+def jaw_scene(box_object):
+    return build_scene("parallel_jaw", box_object)
+
+
+@pytest.fixture(scope="module")
+def one_jaw_scene(box_object):
+    """The parallel-jaw gripper without its right jaw: a hand with one finger.
+
+    (With both jaws, a box pushed by one jaw drifts into the other and ends up held: the
+    squeeze makes any one-jaw touch an antipodal grasp.)
+    """
+    from affordgrasp.hands import Hand, get_hand
+
+    two = get_hand("parallel_jaw")
+    one = Hand("one_jaw", two.links[:2], two.dofs[:1], two.fingers[:1], None)
+    return build_scene(one, box_object)
+
+
+def test_box_held_by_antipodal_jaws(jaw_scene):
+    pose, joints = jaw_grasp(TOUCH, TOUCH)
+    out = validate_grasp(jaw_scene, pose, joints)
+    assert out.contacts >= 2
+    assert out.settled and out.hold_ok and out.hold_directions_ok == 6
+    s = jaw_scene.settings
+    assert np.all(out.hold_shift_m < s.max_shift_m)
+    assert out.squeeze_shift_m < 1e-3  # balanced jaws do not push the box away
+    assert out.impact_ok is None and np.isnan(out.press_force_n)  # no use point given
+
+
+def test_box_touched_by_one_finger_falls(one_jaw_scene):
+    pose, joints = jaw_grasp(TOUCH, 0.0)
+    out = validate_grasp(one_jaw_scene, pose, joints[:1])
+    assert not out.hold_ok
+    # The squeeze pushes the box off the jaw: it drifts away, and only a load that pushes
+    # it back towards the jaw (+x) can leave it in place.
+    assert not out.settled and out.contacts == 0
+    assert out.hold_directions_ok <= 2
+    assert np.sum(out.hold_shift_m > one_jaw_scene.settings.max_shift_m) >= 4
+
+
+def test_press_on_held_box_reaches_more_force_than_on_loose_box(jaw_scene, one_jaw_scene):
+    # Press down on the top face (use point at its centre, outward normal +z of the object).
+    use_point, use_normal = np.array([0.0, 0.0, 0.03]), np.array([0.0, 0.0, 1.0])
+    held = validate_grasp(jaw_scene, *jaw_grasp(TOUCH, TOUCH), use_point, use_normal)
+    pose, joints = jaw_grasp(TOUCH, 0.0)
+    loose = validate_grasp(one_jaw_scene, pose, joints[:1], use_point, use_normal)
+    # Two rubber jaws (μ = 1) at 20 N resist about 40 N of press: the test stops at 30 N.
+    assert held.press_held and held.press_force_n == pytest.approx(30.0)
+    assert not loose.press_held and loose.press_force_n == 0.0  # the box left the hand
+    assert held.impact_ok is not None and loose.impact_ok is False
+
+
+def test_outcomes_are_deterministic(box_object):
+    pose, joints = jaw_grasp(TOUCH, TOUCH * 0.999)
+    use = (np.array([0.0, 0.02, 0.01]), np.array([0.0, 1.0, 0.0]))
+    rows = []
+    for _ in range(2):
+        scene = build_scene("parallel_jaw", box_object, PhysicsSettings(seed=3))
+        rows.append(validate_grasp(scene, pose, joints, *use).to_row())
+    assert rows[0] == rows[1]
+    assert set(f"hold_shift_{d}" for d in HOLD_DIRECTIONS) <= set(rows[0])
+
+
+def test_barrett_model_matches_the_hand_kinematics(box_object):
+    import mujoco
+
+    from affordgrasp.hands import get_hand
+    from affordgrasp.physics.trials import set_grasp
+
+    hand = get_hand("barrett")
+    scene = build_scene(hand, box_object)
+    rng = np.random.default_rng(0)
+    q = np.array([rng.uniform(d.lower, d.upper) for d in hand.dofs])
+    set_grasp(scene, np.eye(4), q)
+    fk = hand.forward_kinematics(q)
+    for i in range(len(hand.links)):
+        b = mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_BODY, f"link_{i}")
+        np.testing.assert_allclose(scene.data.xpos[b], fk[i][:3, 3], atol=1e-9)
+        np.testing.assert_allclose(scene.data.xmat[b].reshape(3, 3), fk[i][:3, :3], atol=1e-6)
+    # The distal joints follow the proximal ones at the hand's closing ratio (1/3).
+    assert scene.model.neq == 3
