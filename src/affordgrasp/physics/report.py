@@ -24,6 +24,8 @@ import numpy as np
 import pyarrow as pa
 from scipy.stats import rankdata
 
+from ..columns import HOLD_EFFORT_COLUMNS
+
 __all__ = ["physics_report", "roc_auc", "roc_curve", "spearman"]
 
 BINARY_OUTCOMES = ("hold_ok", "impact_ok", "press_held")
@@ -94,7 +96,7 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
     def col(name):
         return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=np.float64)
 
-    hold = sum(col(f"hold_effort_{d}") for d in ("px", "nx", "py", "ny", "pz", "nz"))
+    hold = sum(col(c) for c in HOLD_EFFORT_COLUMNS)
     preds = {
         "epsilon": col("epsilon"),
         "neg_hold_effort_sum": -hold,

@@ -26,6 +26,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .. import __version__
+from ..columns import METRIC_COLUMNS as _DATASET_METRICS
 from ..errors import DatasetError, InputError
 from .settings import PhysicsSettings
 
@@ -40,23 +41,8 @@ DEFAULT_SHARD_SIZE = 128
 
 KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
 STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal")
-METRIC_COLUMNS = (
-    "epsilon",
-    "gws_volume",
-    "inertia",
-    "hold_effort_px",
-    "hold_effort_nx",
-    "hold_effort_py",
-    "hold_effort_ny",
-    "hold_effort_pz",
-    "hold_effort_nz",
-    "impact_effort",
-    "discharge",
-    "use_force",
-    "use_edge",
-    "use_edge_angle",
-    "n_contacts",
-)
+# The dataset's numeric metric columns, carried into the outcome table for the report.
+METRIC_COLUMNS = (*(c for c in _DATASET_METRICS if c != "epsilon_reason"), "n_contacts")
 
 
 @dataclass
