@@ -107,7 +107,7 @@ def run(args, out) -> None:
     rate = summary.validations_per_core_hour
     out.table(
         "This run",
-        ["shards written", "shards already there", "grasps", "seconds", "per core-hour"],
+        ["shards written", "shards already there", "grasps", "seconds", "per CPU core-hour"],
         [
             [
                 summary.shards_written,

@@ -3,7 +3,8 @@
 Predictors are oriented so that larger means "better grasp": ε, −ΣE_h, −E_i, U_τ, δ and
 every registered task's score (default mode; −∞ when a threshold fails). Outcomes:
 
-* binary: ``hold_ok`` (all six hold directions), ``impact_ok``, ``press_held``;
+* binary: ``hold_ok`` (settled and all six hold directions), ``settled`` (the object came
+  to rest in the hand after the squeeze), ``impact_ok``, ``press_held``;
 * graded: ``hold_directions_ok`` (0..6), ``-impact_angle_rad``, ``press_force_n``.
 
 ROC-AUC is the Mann–Whitney probability that a random success outranks a random failure,
@@ -28,7 +29,7 @@ from ..columns import HOLD_EFFORT_COLUMNS
 
 __all__ = ["physics_report", "roc_auc", "roc_curve", "spearman"]
 
-BINARY_OUTCOMES = ("hold_ok", "impact_ok", "press_held")
+BINARY_OUTCOMES = ("hold_ok", "settled", "impact_ok", "press_held")
 GRADED_OUTCOMES = ("hold_directions_ok", "impact_steadiness", "press_force_n")
 # The pair each metric was designed for (the headline of the report).
 DESIGNED_FOR = {
@@ -130,6 +131,7 @@ def _outcomes(table: pa.Table) -> dict[str, np.ndarray]:
 
     return {
         "hold_ok": opt_bool("hold_ok"),
+        "settled": opt_bool("settled"),
         "impact_ok": opt_bool("impact_ok"),
         "press_held": opt_bool("press_held"),
         "hold_directions_ok": col("hold_directions_ok"),
@@ -168,6 +170,12 @@ def physics_report(outcomes: pa.Table, directory: str | os.PathLike | None = Non
     report = {"all": _stats(preds, outs, np.ones(len(families), dtype=bool)), "families": {}}
     for fam in sorted(set(families)):
         report["families"][fam] = _stats(preds, outs, families == fam)
+    # The same, among the grasps that survived the squeeze: does the metric predict the
+    # loads once the object is at rest in the hand?
+    settled = outs["settled"] == 1.0
+    report["settled"] = {"all": _stats(preds, outs, settled), "families": {}}
+    for fam in sorted(set(families)):
+        report["settled"]["families"][fam] = _stats(preds, outs, settled & (families == fam))
     report["designed_for"] = DESIGNED_FOR
     if directory is not None:
         directory = Path(directory)
@@ -186,8 +194,21 @@ def _f(v: float) -> str:
 
 def report_markdown(report: dict) -> str:
     lines = ["# Physics validation report", ""]
+    lines += _markdown_block(report, "")
+    if "settled" in report:
+        lines += ["", "# Among the grasps that settled after the squeeze", ""]
+        lines += _markdown_block(report["settled"], "#")
+    return "\n".join(lines) + "\n"
+
+
+def _markdown_block(report: dict, deeper: str) -> list[str]:
+    lines: list[str] = []
     groups = [("all", report["all"])] + list(report["families"].items())
-    lines += ["## Outcome rates", "", "| group | n | " + " | ".join(BINARY_OUTCOMES) + " |"]
+    lines += [
+        f"#{deeper}# Outcome rates",
+        "",
+        "| group | n | " + " | ".join(BINARY_OUTCOMES) + " |",
+    ]
     lines.append("|---" * (2 + len(BINARY_OUTCOMES)) + "|")
     for name, g in groups:
         rates = " | ".join(_f(g["rates"][o]) for o in BINARY_OUTCOMES)
@@ -196,7 +217,7 @@ def report_markdown(report: dict) -> str:
         preds = list(report["all"]["auc"][outcome])
         lines += [
             "",
-            f"## ROC-AUC for `{outcome}`",
+            f"#{deeper}# ROC-AUC for `{outcome}`",
             "",
             "| predictor | " + " | ".join(name for name, _ in groups) + " |",
         ]
@@ -209,7 +230,7 @@ def report_markdown(report: dict) -> str:
         preds = list(report["all"]["spearman"][outcome])
         lines += [
             "",
-            f"## Spearman ρ with `{outcome}`",
+            f"#{deeper}# Spearman ρ with `{outcome}`",
             "",
             "| predictor | " + " | ".join(name for name, _ in groups) + " |",
         ]
@@ -218,7 +239,7 @@ def report_markdown(report: dict) -> str:
             lines.append(
                 f"| {p} | " + " | ".join(_f(g["spearman"][outcome][p]) for _, g in groups) + " |"
             )
-    return "\n".join(lines) + "\n"
+    return lines
 
 
 def _plots(preds, outs, families, report, directory: Path) -> None:
@@ -267,6 +288,8 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
     fig.savefig(directory / "auc_hold_by_family.png", dpi=110)
     plt.close(fig)
 
+    _why_plot(preds, outs, directory, plt)
+
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, (p, o, label) in zip(
         axes,
@@ -288,4 +311,30 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(directory / "scatter.png", dpi=110)
+    plt.close(fig)
+
+
+def _why_plot(preds, outs, directory: Path, plt) -> None:
+    """Outcome rates per ε bin: where the hold test's successes and failures sit."""
+    eps = preds["epsilon"]
+    positive = eps[eps > 0]
+    edges = np.quantile(positive, [0.0, 0.25, 0.5, 0.75, 1.0]) if len(positive) else []
+    bins = [("ε = 0", eps <= 0)]
+    for lo, hi in zip(edges[:-1], edges[1:], strict=False):
+        bins.append((f"{lo:.3g}–{hi:.3g}", (eps > 0) & (eps >= lo) & (eps <= hi)))
+    fig, ax = plt.subplots(figsize=(8, 4))
+    x = np.arange(len(bins))
+    for i, outcome in enumerate(("settled", "hold_ok")):
+        rates = [float(np.nanmean(outs[outcome][sel])) if sel.any() else 0.0 for _, sel in bins]
+        ax.bar(x + 0.4 * i, rates, 0.4, label=outcome)
+    for k, (_, sel) in enumerate(bins):
+        ax.text(x[k] + 0.2, 1.02, f"n={int(sel.sum())}", ha="center", fontsize=8)
+    ax.set_xticks(x + 0.2, [name for name, _ in bins], fontsize=8)
+    ax.set_ylim(0, 1.1)
+    ax.set_xlabel("ε (force closure quartiles)")
+    ax.set_ylabel("rate")
+    ax.set_title("Outcomes per ε bin: ties at ε = 0 cap the AUC")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(directory / "why_epsilon_bins.png", dpi=110)
     plt.close(fig)
