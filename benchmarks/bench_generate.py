@@ -19,8 +19,8 @@ from pathlib import Path
 
 from affordgrasp.dataset.engines import default_workers
 from affordgrasp.dataset.generate import generate
-from affordgrasp.evaluate import evaluate_samples
 from affordgrasp.objects import resolve_object
+from affordgrasp.pipeline import evaluate_samples
 
 
 def stage_split(objects: list[str], n: int, seed: int) -> dict:

@@ -23,9 +23,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
 
-    from affordgrasp.evaluate import evaluate_samples
     from affordgrasp.grasp.policy import object_geometry
     from affordgrasp.objects import resolve_object
+    from affordgrasp.pipeline import evaluate_samples
 
     t0 = time.perf_counter()
     evaluate_samples("tumbler", 4, seed=123, hand=args.hand)  # compile / load the kernels

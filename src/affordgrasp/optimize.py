@@ -34,6 +34,7 @@ import numpy as np
 import pyarrow as pa
 
 from .errors import InputError
+from .hands import Hand
 
 log = logging.getLogger(__name__)
 
@@ -377,7 +378,7 @@ def optimize(
     budget: int = 20000,
     seed: int = 0,
     thresholds: Mapping[str, float] | None = None,
-    hand: str = "barrett",
+    hand: Hand | str = "barrett",
     workers: int | None = None,
     engine: str = "local",
     address: str | None = None,
@@ -408,9 +409,7 @@ def optimize(
     resolved = resolve_object(obj)
     hand_model = get_hand(hand)
     pop = population or default_population(budget)
-    context = RunContext(
-        objects=(ObjectPayload.from_object(resolved),), hand=hand_model.name, seed=seed
-    )
+    context = RunContext(objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed)
     started = time.perf_counter()
     total = budget + (max(0, budget - min(pop, budget)) if baseline else 0)
     bar = progress(total) if progress is not None else nullcontext(lambda n: None)

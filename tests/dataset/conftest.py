@@ -7,15 +7,6 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 
 
 @pytest.fixture(scope="session")
-def box_mesh(tmp_path_factory):
-    import trimesh
-
-    path = tmp_path_factory.mktemp("meshes") / "box.stl"
-    trimesh.creation.box([0.12, 0.04, 0.03]).export(path)
-    return path
-
-
-@pytest.fixture(scope="session")
 def object_specs(box_mesh):
     return ["knife", str(box_mesh)]
 

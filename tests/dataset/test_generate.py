@@ -63,7 +63,7 @@ def test_reference_rows_are_every_sample_in_order(reference_table):
 
 
 def test_rows_equal_a_direct_evaluation(reference_table):
-    from affordgrasp.evaluate import evaluate_samples
+    from affordgrasp.pipeline import evaluate_samples
 
     direct, _ = evaluate_samples("knife", 12, seed=SEED, start=40)
     same_rows(rows_of(reference_table, "knife:0", 40, 52), direct)
@@ -180,3 +180,20 @@ def test_ctrl_c_then_kill_9_then_resume_equals_an_uninterrupted_run(
     ref_card = json.loads((reference_dataset / "_card.json").read_text())
     assert card["complete"] and card["status_counts"] == ref_card["status_counts"]
     assert [r["complete"] for r in card["runs"]] == [False, True]  # kill -9 leaves no record
+
+
+def test_generate_uses_the_hand_object_it_is_given(tmp_path, box_mesh):
+    # Regression: the hand travelled to the jobs by name, so a custom hand named "barrett"
+    # was silently replaced by the built-in Barrett.
+    import dataclasses
+
+    from affordgrasp.hands import get_hand
+    from affordgrasp.pipeline import evaluate_samples
+
+    custom = dataclasses.replace(get_hand("parallel_jaw"), name="barrett")
+    generate([str(box_mesh)], 6, tmp_path / "custom", seed=3, workers=1, hand=custom)
+    got = read_table(tmp_path / "custom")
+    assert {len(j) for j in got["joints"].to_pylist()} == {len(custom.dofs)}
+    expected = evaluate_samples(str(box_mesh), 6, seed=3, hand=custom).table
+    assert got["joints"].to_pylist() == expected["joints"].to_pylist()
+    assert got["epsilon"].to_pylist() == expected["epsilon"].to_pylist()

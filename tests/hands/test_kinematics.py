@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from affordgrasp.errors import HandError
-from affordgrasp.hands import Hand, Link, Shape, get_hand, hand_names
+from affordgrasp.hands import Hand, Link, Shape, get_hand, list_hands
 from affordgrasp.hands.model import axis_angle
 
 MM = 1e-3
@@ -110,7 +110,7 @@ def test_hand_validation_names_the_problem():
         Hand("h", (Link("palm", None, None, palm.shapes, "cheese"),), (), (), None)
     with pytest.raises(HandError, match="unknown hand"):
         get_hand("shadow")
-    assert set(hand_names()) == {"barrett", "parallel_jaw"}
+    assert set(list_hands()) == {"barrett", "parallel_jaw"}
 
 
 def test_axis_angle_is_a_right_handed_rotation():

@@ -7,9 +7,9 @@ answer matches the independent per-direction check with scipy's interior-point s
 import numpy as np
 import scipy.optimize as so
 
-from affordgrasp.evaluate import evaluate
 from affordgrasp.metrics.cones import contact_wrenches
 from affordgrasp.metrics.effort import GRAVITY_DIRECTIONS, hold_effort_highs
+from affordgrasp.pipeline import evaluate_inputs
 
 P0 = [[-0.12506416086968986, 0.9139600077331622, -0.00145085628569364, -0.29968312816988174,
        0.6926266665706913, 0.263220983843203]]  # fmt: skip
@@ -31,5 +31,5 @@ def test_stalled_simplex_is_decided_not_raised():
         else:
             assert ref.status == 0
             assert value == np.float64(ref.fun) or abs(value - ref.fun) < 1e-6 * max(1, ref.fun)
-    table, _ = evaluate("screwdriver", P0, USE)
+    table = evaluate_inputs("screwdriver", P0, USE).table
     assert table.num_rows == 1

@@ -136,7 +136,7 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
     here by rows from a small dataset, to keep the test fast)."""
     import pyarrow.parquet as pq
 
-    import affordgrasp.evaluate
+    import affordgrasp.pipeline
 
     data = write_dataset(tmp_path / "data", [box_object], rows_per_object=6)
     table = pq.read_table(next(data.glob("*.parquet")))
@@ -146,7 +146,7 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
         calls.append((obj.name, n, seed, start, hand))
         return table.slice(start, n), {}
 
-    monkeypatch.setattr(affordgrasp.evaluate, "evaluate_samples", fake_evaluate_samples)
+    monkeypatch.setattr(affordgrasp.pipeline, "evaluate_samples", fake_evaluate_samples)
     rc, stdout, stderr = run_json(
         capsys,
         [

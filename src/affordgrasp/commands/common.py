@@ -14,13 +14,14 @@ MODE_HELP = (
     "threshold mode: default, no-robustness, extra-robustness, paper (the paper's literal "
     "τ_ε = 0.3) or paper-extra-robustness (default: default)"
 )
+HAND_HELP = "barrett (default), parallel_jaw or a .json/.toml hand file"
 
 
 def add_sampling_arguments(p) -> None:
     p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
     p.add_argument("--samples", type=int, default=1000, help="number of grasps (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
-    p.add_argument("--hand", default="barrett", help="barrett (default) or parallel_jaw")
+    p.add_argument("--hand", default="barrett", help=HAND_HELP)
     add_scale_arguments(p)
     p.add_argument("--out", default=None, help="write one row per sample to this Parquet file")
     p.add_argument("--batch", type=int, default=250, help=argparse.SUPPRESS)
@@ -98,7 +99,7 @@ def check_output_file(path: str, option: str) -> None:
 
 def run_batches(args, out, obj, metrics: bool):
     """Evaluate in batches with a progress bar; returns (table, seconds per stage, wall)."""
-    from ..evaluate import evaluate_samples
+    from ..pipeline import evaluate_samples
 
     started = time.perf_counter()
     with out.progress(f"{obj.name}", args.samples) as advance:

@@ -7,7 +7,7 @@ import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
-from .common import add_scale_arguments, resolve_objects, scale_options
+from .common import HAND_HELP, add_scale_arguments, resolve_objects, scale_options
 
 
 def add_arguments(p) -> None:
@@ -27,7 +27,7 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
     )
-    p.add_argument("--hand", default="barrett", help="hand model (default barrett)")
+    p.add_argument("--hand", default="barrett", help=HAND_HELP)
     add_scale_arguments(p)
     p.add_argument(
         "--shard-size",

@@ -3,7 +3,13 @@
 from __future__ import annotations
 
 from .best import metric_cells, shown_metrics
-from .common import add_scale_arguments, add_task_arguments, parse_thresholds, resolve_objects
+from .common import (
+    HAND_HELP,
+    add_scale_arguments,
+    add_task_arguments,
+    parse_thresholds,
+    resolve_objects,
+)
 
 
 def add_arguments(p) -> None:
@@ -11,7 +17,7 @@ def add_arguments(p) -> None:
     add_task_arguments(p, several=False)
     p.add_argument("--budget", type=int, default=20000, help="simulations (default 20000)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    p.add_argument("--hand", default="barrett", help="hand model (default barrett)")
+    p.add_argument("--hand", default="barrett", help=HAND_HELP)
     add_scale_arguments(p)
     p.add_argument(
         "--population", type=int, default=None, help="samples per generation (default budget/20)"

@@ -86,9 +86,9 @@ def add_arguments(p) -> None:
 
 def open_sources(args, out) -> list:
     """One GraspSource per SOURCE: datasets as they are, objects evaluated now."""
-    from ..evaluate import evaluate_samples
     from ..objects import resolve_object
     from ..objects.resolve import is_family_spec
+    from ..pipeline import evaluate_samples
     from ..viz.sources import DatasetSource, TableSource, is_dataset_path
 
     sources = []

@@ -23,6 +23,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..errors import InputError, require
+from ..hands import Hand
 
 log = logging.getLogger(__name__)
 
@@ -81,7 +82,9 @@ class RunContext:
     """The settings every job of a run shares."""
 
     objects: tuple[ObjectPayload, ...]
-    hand: str = "barrett"
+    # The Hand itself, not its name: a custom hand travels to the workers as it is (a name
+    # would be looked up again there, and a custom hand named "barrett" replaced).
+    hand: Hand | str = "barrett"
     seed: int = 0
     metrics: bool = True
     soft: bool = False
@@ -125,7 +128,7 @@ def _object(index: int):
 
 def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
     """Evaluate one job in this process; the same function on every engine."""
-    from ..evaluate import evaluate, evaluate_samples
+    from ..pipeline import evaluate_inputs, evaluate_samples
 
     if context is not None:
         _install_context(context)
@@ -142,7 +145,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             metrics=ctx.metrics,
         )
     else:
-        table, _ = evaluate(
+        table, _ = evaluate_inputs(
             obj,
             job.p0,
             job.use_dir,

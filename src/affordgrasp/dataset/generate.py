@@ -32,6 +32,7 @@ import pyarrow.compute as pc
 
 from .. import __version__
 from ..errors import DatasetError, InputError
+from ..hands import Hand
 from . import card as card_module
 from .engines import Engine, Job, ObjectPayload, RunContext, check_engine, make_engine
 from .layout import (
@@ -167,7 +168,7 @@ def generate(
     workers: int | None = None,
     engine: str = "local",
     address: str | None = None,
-    hand: str = "barrett",
+    hand: Hand | str = "barrett",
     shard_size: int = DEFAULT_SHARD_SIZE,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     metrics: bool = True,
@@ -182,6 +183,8 @@ def generate(
     workers : processes (local) or CPUs (local Ray); default every core. 1 runs in-process.
     engine : "local" or "ray"; address : an existing Ray cluster (engine "ray")
     shard_size : rows per shard file; chunk_size : most samples per unit of work
+    hand : a Hand, a registered hand name or a hand file (the Hand object itself is sent
+        to the workers)
     metrics : compute Φ (False writes the simulation columns only)
     command : the command line, recorded in the manifest and the card
     progress : ``progress(total_samples)`` returns a context manager yielding ``advance(n)``
@@ -229,7 +232,7 @@ def generate(
 
     context = RunContext(
         objects=tuple(ObjectPayload.from_object(o) for o in resolved),
-        hand=hand_model.name,
+        hand=hand_model,
         seed=seed,
         metrics=metrics,
         soft=soft,

@@ -136,18 +136,36 @@ def iter_batches(
     yield from scanner.to_batches()
 
 
-def read_table(
+def read_dataset(
     directory: str | os.PathLike,
     *,
     columns: Sequence[str] | None = None,
     objects: Sequence[str] | None = None,
 ) -> pa.Table:
-    """A whole dataset (or some columns/objects of it) as one table: for small datasets."""
+    """A whole dataset (or some columns/objects of it) as one Arrow table: for small datasets.
+
+    Parameters
+    ----------
+    directory : path
+        A directory written by :func:`affordgrasp.generate` / ``affordgrasp generate``.
+    columns : sequence of str, optional
+        Read only these columns (docs/conventions.md lists them).
+    objects : sequence of str, optional
+        Read only these objects (``knife`` matches ``knife:0``).
+
+    Returns
+    -------
+    pyarrow.Table
+        One row per sample, in plan order. Use :func:`iter_batches` for larger datasets.
+    """
     dataset = open_dataset(directory)
     return dataset.to_table(
         columns=list(columns) if columns is not None else None,
         filter=object_filter(select_objects(directory, objects)),
     )
+
+
+read_table = read_dataset  # the name of affordgrasp 0.1
 
 
 def dataset_dir(path: str | os.PathLike) -> Path:

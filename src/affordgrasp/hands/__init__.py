@@ -1,34 +1,126 @@
-"""Hands as data (SPEC §2.2): the Barrett BH8-282 and a parallel-jaw gripper."""
+"""Hands as data: the Barrett BH8-282, a parallel-jaw gripper, and hands you register.
+
+Look a hand up with :func:`get_hand` (a registered name, a ``.json``/``.toml`` hand file, or a
+:class:`Hand`, returned as it is); add one with :func:`register_hand`; write and read hand
+files with :func:`save_hand` / :func:`load_hand` (:mod:`.files`). Conventions of the hand
+frame, joints and fingers: :mod:`.model`.
+"""
 
 from __future__ import annotations
 
-from functools import cache
+import os
+from collections.abc import Callable
+from pathlib import Path
 
 from ..errors import HandError
 from .barrett import barrett_bh8_282
+from .files import hand_from_dict, hand_to_dict, hand_to_toml, load_hand, save_hand
 from .gripper import parallel_jaw
 from .model import Dof, Finger, Hand, Joint, Link, Shape
 
-_HANDS = {"barrett": barrett_bh8_282, "parallel_jaw": parallel_jaw}
+
+class HandRegistry:
+    """Hands by name; built-in hands are built on first lookup, then kept."""
+
+    def __init__(self) -> None:
+        self._factories: dict[str, Callable[[], Hand]] = {
+            "barrett": barrett_bh8_282,
+            "parallel_jaw": parallel_jaw,
+        }
+        self._hands: dict[str, Hand] = {}
+
+    def register(self, hand: Hand, *, replace: bool = False) -> Hand:
+        """Add ``hand`` under ``hand.name``; ``replace`` allows replacing a hand of that name."""
+        if not isinstance(hand, Hand):
+            raise HandError(f"expected a Hand, got {type(hand).__name__}")
+        if hand.name in self._factories and not replace:
+            raise HandError(
+                f"hand {hand.name!r} is already registered (pass replace=True to replace it)"
+            )
+        self._factories[hand.name] = lambda: hand
+        self._hands[hand.name] = hand
+        return hand
+
+    def unregister(self, name: str) -> None:
+        """Remove a hand (built-in ones included)."""
+        if name not in self._factories:
+            raise HandError(f"unknown hand {name!r}; hands: {', '.join(self._factories)}")
+        del self._factories[name]
+        self._hands.pop(name, None)
+
+    def get(self, name: str) -> Hand:
+        """The hand registered as ``name``."""
+        hand = self._hands.get(name) if isinstance(name, str) else None
+        if hand is None:
+            try:
+                factory = self._factories[name]
+            except (KeyError, TypeError):
+                raise HandError(
+                    f"unknown hand {name!r}; hands: {', '.join(self._factories)} "
+                    "(or a .json/.toml hand file)"
+                ) from None
+            hand = self._hands[name] = factory()
+        return hand
+
+    def names(self) -> list[str]:
+        """Names of the registered hands, built-in first."""
+        return list(self._factories)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._factories
 
 
-def hand_names() -> list[str]:
-    return list(_HANDS)
+HANDS = HandRegistry()
 
 
-def get_hand(name: str | Hand = "barrett") -> Hand:
-    """A built-in hand by name ("barrett" or "parallel_jaw"); a Hand is returned as it is."""
-    if isinstance(name, Hand):
-        return name
-    return _builtin_hand(name)
+def get_hand(hand: str | os.PathLike | Hand = "barrett") -> Hand:
+    """A hand: a :class:`Hand` as it is, a registered name, or a ``.json``/``.toml`` hand file.
+
+    Parameters
+    ----------
+    hand : Hand, str or path
+        ``"barrett"`` (default), ``"parallel_jaw"``, a name given to :func:`register_hand`,
+        or the path of a file written by :func:`save_hand`.
+
+    Raises
+    ------
+    HandError
+        For an unknown name or a bad hand file.
+    """
+    if isinstance(hand, Hand):
+        return hand
+    if isinstance(hand, os.PathLike) or (
+        isinstance(hand, str) and hand not in HANDS and Path(hand).suffix in (".json", ".toml")
+    ):
+        return load_hand(hand)
+    return HANDS.get(hand)
 
 
-@cache
-def _builtin_hand(name: str) -> Hand:
-    try:
-        return _HANDS[name]()
-    except (KeyError, TypeError):
-        raise HandError(f"unknown hand {name!r}; built-in hands: {', '.join(_HANDS)}") from None
+def register_hand(hand: Hand, *, replace: bool = False) -> Hand:
+    """Register ``hand`` under its name (then ``get_hand(name)`` and ``--hand name`` find it)."""
+    return HANDS.register(hand, replace=replace)
 
 
-__all__ = ["Dof", "Finger", "Hand", "Joint", "Link", "Shape", "get_hand", "hand_names"]
+def list_hands() -> list[str]:
+    """Names of the registered hands."""
+    return HANDS.names()
+
+
+__all__ = [
+    "HANDS",
+    "Dof",
+    "Finger",
+    "Hand",
+    "HandRegistry",
+    "Joint",
+    "Link",
+    "Shape",
+    "get_hand",
+    "hand_from_dict",
+    "hand_to_dict",
+    "hand_to_toml",
+    "list_hands",
+    "load_hand",
+    "register_hand",
+    "save_hand",
+]

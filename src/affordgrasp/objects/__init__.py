@@ -12,13 +12,22 @@ from typing import Any
 from affordgrasp.objects.loading import load_mesh, prepare_mesh
 from affordgrasp.objects.mass import MassProperties, mass_properties, mass_properties_parts
 from affordgrasp.objects.off import read_off
-from affordgrasp.objects.resolve import GraspObject, family_names, mesh_hash, resolve_object
+from affordgrasp.objects.resolve import (
+    GraspObject,
+    family_names,
+    list_families,
+    load_object,
+    mesh_hash,
+    resolve_object,
+)
 
 __all__ = [
     "FAMILIES",
     "GraspObject",
     "MassProperties",
     "family_names",
+    "list_families",
+    "load_object",
     "load_mesh",
     "make_family",
     "mass_properties",

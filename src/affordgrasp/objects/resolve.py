@@ -26,7 +26,15 @@ from affordgrasp.errors import InputError, did_you_mean
 from affordgrasp.objects.loading import load_mesh, prepare_mesh
 from affordgrasp.objects.mass import MassProperties, mass_properties
 
-__all__ = ["GraspObject", "family_names", "is_family_spec", "mesh_hash", "resolve_object"]
+__all__ = [
+    "GraspObject",
+    "family_names",
+    "is_family_spec",
+    "list_families",
+    "load_object",
+    "mesh_hash",
+    "resolve_object",
+]
 
 # Family objects are cached: building and repairing one can take a while, and the pipeline
 # asks for the same object again and again.
@@ -74,12 +82,15 @@ def mesh_hash(mesh: trimesh.Trimesh) -> str:
     return digest.hexdigest()
 
 
-def family_names() -> list[str]:
+def list_families() -> list[str]:
     """Names of the built-in procedural families, sorted."""
     return sorted(_families().FAMILIES)
 
 
-def resolve_object(
+family_names = list_families  # the name of affordgrasp 0.1
+
+
+def load_object(
     spec: str | os.PathLike | GraspObject,
     *,
     size_m: float | None = None,
@@ -136,6 +147,9 @@ def resolve_object(
     if path.exists():
         return _resolve_file(path, size_m=size_m, units=units, density=density)
     raise InputError(_unknown_spec_message(text))
+
+
+resolve_object = load_object  # the name of affordgrasp 0.1; the package uses it too
 
 
 def is_family_spec(spec: object) -> bool:

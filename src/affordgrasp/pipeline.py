@@ -1,9 +1,10 @@
 """The pipeline: pregrasp → grasp policy → contacts → metric vector Φ, for many grasps.
 
-:func:`evaluate` runs it for given inputs; :func:`evaluate_samples` draws the inputs from a
-seed so that a sample's content depends only on (seed, sample index). Both return an
-:class:`Evaluation`: an Arrow table with one row per grasp (columns: :mod:`affordgrasp.schema`
-and docs/conventions.md) and the time spent in each stage.
+:func:`evaluate` is the entry point (``affordgrasp.evaluate``): it runs the pipeline on
+given inputs (:func:`evaluate_inputs`) or on ``samples`` drawn from a seed
+(:func:`evaluate_samples`: a sample's content depends only on (seed, sample index)). All
+return an :class:`Evaluation`: an Arrow table with one row per grasp (columns:
+:mod:`affordgrasp.schema` and docs/conventions.md) and the time spent in each stage.
 """
 
 from __future__ import annotations
@@ -106,7 +107,7 @@ def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False
     return phi
 
 
-def evaluate(
+def evaluate_inputs(
     obj: GraspObject | str,
     p0,
     use_dir,
@@ -159,7 +160,7 @@ def evaluate(
 
 def evaluate_samples(
     obj: GraspObject | str,
-    n: int,
+    samples: int,
     *,
     seed: int = 0,
     start: int = 0,
@@ -169,13 +170,13 @@ def evaluate_samples(
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
 ) -> Evaluation:
-    """Draw samples ``start .. start + n - 1`` of the run ``seed`` uniformly and evaluate them.
+    """Draw samples ``start .. start + samples - 1`` of the run ``seed`` and evaluate them.
 
     Parameters
     ----------
     obj, hand, soft, metrics
-        As for :func:`evaluate`.
-    n : int
+        As for :func:`evaluate_inputs`.
+    samples : int
         Number of samples (> 0).
     seed : int
         The run's seed: sample ``i`` depends only on (seed, i).
@@ -191,19 +192,20 @@ def evaluate_samples(
     -------
     Evaluation
     """
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n <= 0:
-        raise InputError(f"n must be a positive integer, got {n!r}")
+    if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples <= 0:
+        raise InputError(f"samples must be a positive integer, got {samples!r}")
     if batch_size is not None and (not isinstance(batch_size, int | np.integer) or batch_size <= 0):
         raise InputError(f"batch_size must be a positive integer, got {batch_size!r}")
     obj = resolve_object(obj)
     hand = get_hand(hand)
+    n = int(samples)
     step = int(batch_size or n)
     tables = []
     spent = dict.fromkeys(STAGES, 0.0)
     for first in range(start, start + n, step):
         k = min(step, start + n - first)
         p0, d = sample_inputs(seed, first, first + k)
-        part = evaluate(
+        part = evaluate_inputs(
             obj, p0, d, hand=hand, seed=seed, sample_start=first, soft=soft, metrics=metrics
         )
         for stage, seconds in part.timings.items():
@@ -213,3 +215,82 @@ def evaluate_samples(
             progress(k)
     table = tables[0] if len(tables) == 1 else pa.concat_tables(tables)
     return Evaluation(table, spent)
+
+
+def evaluate(
+    obj: GraspObject | str,
+    samples: int | None = None,
+    *,
+    p0=None,
+    use_dir=None,
+    seed: int = 0,
+    start: int = 0,
+    hand: Hand | str = "barrett",
+    soft: bool = False,
+    metrics: bool = True,
+    batch_size: int | None = None,
+    progress: Callable[[int], Any] | None = None,
+) -> Evaluation:
+    """Simulate grasps on an object and compute their metric vector Φ.
+
+    Give either ``samples`` (uniform pregrasps and use directions drawn from ``seed``) or
+    ``p0`` and ``use_dir`` (your own inputs).
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+        The object: ``ag.load_object(...)``, a family (``"knife"``), ``"knife:7"`` or a mesh
+        path.
+    samples : int, optional
+        Number of grasps drawn uniformly; sample ``i`` depends only on (seed, start + i).
+    p0 : (n, 6) array_like, optional
+        Pregrasps in [-1, 1]^5 x [0, 1] (docs/conventions.md).
+    use_dir : (n, 2) array_like, optional
+        Use directions in [-1, 1]^2.
+    seed, start : int
+        The run's seed and the first sample index (with ``samples``).
+    hand : Hand or str
+        A :class:`~affordgrasp.hands.Hand`, a registered name or a hand file.
+    soft : bool
+        Soft-finger contacts (torsional friction).
+    metrics : bool
+        Compute Φ (False: the simulation columns only).
+    batch_size : int, optional
+        With ``samples``: evaluate at most this many at a time (same rows).
+    progress : callable, optional
+        With ``samples``: ``progress(k)`` after each batch of ``k`` grasps.
+
+    Returns
+    -------
+    Evaluation
+        ``.table`` (one row per grasp) and ``.timings``; ``.scores(task)`` scores a task.
+
+    Examples
+    --------
+    >>> import affordgrasp as ag
+    >>> result = ag.evaluate("mug", samples=20, seed=0)  # doctest: +SKIP
+    >>> result.scores("pick").shape  # doctest: +SKIP
+    (20,)
+    """
+    given = p0 is not None or use_dir is not None
+    if given and samples is not None:
+        raise InputError("give either samples (drawn from seed) or p0 and use_dir, not both")
+    if given:
+        if p0 is None or use_dir is None:
+            raise InputError("p0 and use_dir go together: give both")
+        return evaluate_inputs(
+            obj, p0, use_dir, hand=hand, seed=-1, sample_start=start, soft=soft, metrics=metrics
+        )
+    if samples is None:
+        raise InputError("give samples (how many grasps to draw) or p0 and use_dir")
+    return evaluate_samples(
+        obj,
+        samples,
+        seed=seed,
+        start=start,
+        hand=hand,
+        soft=soft,
+        metrics=metrics,
+        batch_size=batch_size,
+        progress=progress,
+    )

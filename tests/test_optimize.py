@@ -70,9 +70,9 @@ def test_optimizer_beats_random_sampling_in_simulation(wrist_inertia_task, box_m
     assert result.cem.value > result.random.value
     assert result.cem_evaluations_to_match_random < 240
     # The winner's row is a real simulation of its inputs.
-    from affordgrasp.evaluate import evaluate
+    from affordgrasp.pipeline import evaluate_inputs
 
-    again, _ = evaluate(str(box_mesh), result.cem.p0[None], result.cem.use_dir[None])
+    again = evaluate_inputs(str(box_mesh), result.cem.p0[None], result.cem.use_dir[None]).table
     assert again["inertia"][0].as_py() == pytest.approx(result.cem.value, rel=1e-12)
 
 
@@ -86,3 +86,16 @@ def test_optimize_cli_json(wrist_inertia_task, box_mesh, capsys):
     assert doc["budget"] == 64 and doc["cem"]["value"] >= doc["random"]["value"]
     assert len(doc["cem"]["p0"]) == 6 and len(doc["cem"]["use_dir"]) == 2
     assert main(["optimize", str(box_mesh), "--task", "cut", "--budget", "0"]) == 2
+
+
+def test_optimize_uses_the_hand_object_it_is_given(wrist_inertia_task, box_mesh):
+    # A custom hand that happens to be named like a built-in one: the optimiser must simulate
+    # it, not look the name up again (it used to run the built-in Barrett instead).
+    import dataclasses
+
+    from affordgrasp.hands import get_hand
+
+    custom = dataclasses.replace(get_hand("parallel_jaw"), name="barrett")
+    result = optimize(str(box_mesh), wrist_inertia_task, budget=40, seed=0, workers=1, hand=custom)
+    joints = result.cem.row["joints"] if result.cem is not None else result.random.row["joints"]
+    assert len(joints) == len(custom.dofs) != len(get_hand("barrett").dofs)
