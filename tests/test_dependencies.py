@@ -157,7 +157,7 @@ _FRESH_ENV_SCRIPT = textwrap.dedent(
     import numpy as np
     import trimesh
     from affordgrasp.objects.loading import prepare_mesh
-    from affordgrasp.evaluate import evaluate_samples
+    from affordgrasp.pipeline import evaluate_samples
 
     box = trimesh.creation.box((0.05, 0.04, 0.03))
     flipped = box.faces.copy()
