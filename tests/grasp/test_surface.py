@@ -44,7 +44,7 @@ def test_huge_meshes_are_sampled_in_bounded_memory(size_m, caplog):
 
 
 def test_a_kilometre_cube_runs_through_the_whole_pipeline():
-    from affordgrasp.evaluate import evaluate_samples
+    from affordgrasp.pipeline import evaluate_samples
 
     mesh = trimesh.creation.box((1000.0,) * 3)
     obj = GraspObject("cube", "mesh", mesh, mass_properties(mesh), mesh_hash(mesh), "test")
