@@ -24,6 +24,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import trimesh
 
 from ..caching import IdentityCache
 from ..errors import InputError
@@ -185,21 +186,41 @@ def _build_hand_arrays(hand: Hand) -> HandArrays:
 
 @dataclass(frozen=True)
 class ObjectGeometry:
-    """What the simulator needs of an object, computed once per object."""
+    """What the simulator needs of an object, computed once per object.
+
+    Everything here is in the object's *centred* frame: the mesh frame shifted by
+    ``origin`` (3,), the centre of the mesh's bounding box. The simulation runs in that
+    frame and its results are mapped back by adding ``origin``, so an object far from its
+    mesh origin (10 m, 1e6 m) is simulated on the same numbers as at the origin: no digits
+    lost to the offset, the same sample grid, the same search order. ``mesh`` is the
+    centred mesh (for the use-point rays, cast in float32 by the ray engine).
+    """
 
     samples: SurfaceSample
     hull_vertices: np.ndarray
+    origin: np.ndarray
+    mesh: trimesh.Trimesh
 
 
 _GEOMETRY: IdentityCache[ObjectGeometry] = IdentityCache()
+
+
+def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
+    """Origin (3,) of the frame the simulation runs in: the bounding-box centre."""
+    return 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
 
 
 def object_geometry(obj) -> ObjectGeometry:
     """Surface samples and hull of ``obj`` (a GraspObject), cached for the object's lifetime."""
 
     def build() -> ObjectGeometry:
-        mesh = obj.mesh
-        return ObjectGeometry(sample_surface(mesh), np.asarray(mesh.convex_hull.vertices))
+        vertices = np.asarray(obj.mesh.vertices, dtype=np.float64)
+        origin = centred_frame_origin(vertices)
+        # Far from the origin, v - origin is exact (both within a factor 2: Sterbenz).
+        mesh = trimesh.Trimesh(vertices - origin, np.asarray(obj.mesh.faces), process=False)
+        return ObjectGeometry(
+            sample_surface(mesh), np.asarray(mesh.convex_hull.vertices), origin, mesh
+        )
 
     return _GEOMETRY.get(obj, build)
 
@@ -356,6 +377,30 @@ def grasp_once(
     object_material: str = DEFAULT_OBJECT_MATERIAL,
 ) -> GraspResult:
     """Run the policy for one start pose (hand → object, (4, 4)) and pregrasp DOF value s."""
+    centred = start_pose.copy()
+    centred[:3, 3] -= geom.origin
+    return _to_object_frame(
+        _grasp_centred(hand, geom, centred, travel, s, object_material), geom.origin
+    )
+
+
+def _to_object_frame(r: GraspResult, origin: np.ndarray) -> GraspResult:
+    pose = r.hand_pose.copy()
+    pose[:3, 3] += origin
+    c = r.contacts
+    contacts = ContactSet(c.points + origin, c.normals, c.mu, c.link) if len(c.mu) else c
+    return GraspResult(r.status, pose, r.joints, contacts)
+
+
+def _grasp_centred(
+    hand: Hand,
+    geom: ObjectGeometry,
+    start_pose: np.ndarray,
+    travel: float,
+    s: float,
+    object_material: str,
+) -> GraspResult:
+    """:func:`grasp_once` in the centred frame of ``geom`` (poses and contacts)."""
     arrays = hand_arrays(hand)
     dofs = hand.open_dofs(s)
     rot = np.ascontiguousarray(start_pose[:3, :3])
@@ -406,6 +451,7 @@ def simulate(
     hand = get_hand(hand) if isinstance(hand, str) else hand
     p0 = validate_pregrasps(p0)
     n = len(p0)
+    geom = object_geometry(obj)
     if use_dir is None:
         use_dir = np.full((n, 2), np.nan)
         upts = np.full((n, 3), np.nan)
@@ -415,9 +461,9 @@ def simulate(
         use_dir = validate_use_directions(use_dir)
         if len(use_dir) != n:
             raise InputError(f"need one use direction per pregrasp ({n}), got {len(use_dir)}")
-        upts, unrm, utri = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
+        upts, unrm, utri = use_points(geom.mesh, obj.mass.center_of_mass - geom.origin, use_dir)
+        upts += geom.origin
     started = time.perf_counter()
-    geom = object_geometry(obj)
     hand_arrays(hand)
     status = np.empty(n, dtype=object)
     poses = np.zeros((n, 4, 4))
@@ -427,7 +473,10 @@ def simulate(
     reach = max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
     starts, travel = start_poses(p0, geom.hull_vertices, reach)
     for i in range(n):
-        r = grasp_once(hand, geom, starts[i], travel[i], p0[i, 5], object_material)
+        r = _to_object_frame(
+            _grasp_centred(hand, geom, starts[i], travel[i], p0[i, 5], object_material),
+            geom.origin,
+        )
         status[i] = r.status
         poses[i] = r.hand_pose
         joints[i] = r.joints
