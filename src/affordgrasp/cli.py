@@ -14,7 +14,7 @@ import logging
 import sys
 
 from . import __version__
-from .errors import InputError
+from .errors import InputError, cli_message
 
 COMMANDS = {
     "objects": "list the built-in object families, or export one as a mesh",
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args._module.run(args, out)
     except InputError as exc:
-        print(f"affordgrasp {args.command}: error: {exc}", file=sys.stderr)
+        print(f"affordgrasp {args.command}: error: {cli_message(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"affordgrasp {args.command}: interrupted", file=sys.stderr)

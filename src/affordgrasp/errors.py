@@ -13,7 +13,41 @@ class AffordgraspError(Exception):
 
 
 class InputError(AffordgraspError, ValueError):
-    """Bad input from the user: a file, an argument, an option value."""
+    """Bad input from the user: a file, an argument, an option value.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and how to fix it, naming the Python parameter (``samples must be a
+        positive integer, got 0``).
+    parameter : str, optional
+        The name of the bad parameter. The CLI shows it as its option (``--samples``): see
+        :func:`cli_message`.
+    """
+
+    def __init__(self, message: str = "", *, parameter: str | None = None):
+        super().__init__(message)
+        self.parameter = parameter
+
+
+def bad_parameter(parameter: str, problem: str, error: type[InputError] = InputError):
+    """An error about one parameter: ``bad_parameter("samples", "must be >= 1, got 0")``.
+
+    The message starts with the parameter's Python name; the CLI rewrites it to the option.
+    """
+    return error(f"{parameter} {problem}", parameter=parameter)
+
+
+def cli_message(exc: BaseException) -> str:
+    """The message of an error as the CLI says it: the parameter named as its option."""
+    import re
+
+    text = str(exc)
+    parameter = getattr(exc, "parameter", None)
+    if parameter:
+        flag = "--" + parameter.replace("_", "-")
+        text = re.sub(rf"(?<![\w-]){re.escape(parameter)}(?![\w])", flag, text, count=1)
+    return text
 
 
 class MeshError(InputError):
@@ -30,6 +64,10 @@ class TaskError(InputError):
 
 class DatasetError(InputError):
     """A dataset directory that is missing, foreign or inconsistent with the request."""
+
+
+class InternalError(AffordgraspError, RuntimeError):
+    """A broken invariant inside affordgrasp: a bug, not bad input (please report it)."""
 
 
 class MissingDependencyError(AffordgraspError, ImportError):

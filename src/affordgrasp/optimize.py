@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyarrow as pa
 
-from .errors import InputError
+from .errors import InputError, bad_parameter
 from .hands import Hand
 
 log = logging.getLogger(__name__)
@@ -127,7 +127,7 @@ def cem_maximize(
     on_generation : called with the number of evaluations of each generation
     """
     if not isinstance(budget, int) or budget < 1:
-        raise InputError(f"--budget must be a positive integer, got {budget!r}")
+        raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
     pop = population or default_population(budget)
     if pop < 2:
         raise InputError(f"the population must be at least 2, got {pop}")
@@ -400,9 +400,9 @@ def optimize(
     from .objects import resolve_object
 
     if not isinstance(budget, int) or budget < 1:
-        raise InputError(f"--budget must be a positive integer, got {budget!r}")
+        raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
     if not isinstance(seed, int) or seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {seed!r}")
+        raise bad_parameter("seed", f"must be a non-negative integer, got {seed!r}")
     check_engine(engine, workers, address)
     task_obj = resolve_task(task)
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now

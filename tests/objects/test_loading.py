@@ -272,10 +272,10 @@ def test_thin_solid_is_kept():
         ((100.0, 100.0, 100.0), {}, r"100 m long if its coordinates are metres.*--units mm"),
         ((1000.0, 1000.0, 1000.0), {}, r"1e\+03 m long.*--units mm"),
         ((4.9, 4.9, 4.9), {}, r"4.9 m long.*--units (cm|in)"),
-        ((0.002, 0.002, 0.002), {}, r"0.002 m long.*--units with the file's unit"),
-        ((100.0, 10.0, 10.0), {"units": "m"}, r"100 m long with --units m.*--units mm"),
-        ((0.12, 0.03, 0.02), {"units": "mm"}, r"0.00012 m long with --units mm.*--units m\b"),
-        ((1.0, 1.0, 1.0), {"size_m": 8.0}, r"--size-m 8 makes cube.stl 8 m long"),
+        ((0.002, 0.002, 0.002), {}, r"0.002 m long.*units= the file's unit"),
+        ((100.0, 10.0, 10.0), {"units": "m"}, r"100 m long with units='m'.*--units mm"),
+        ((0.12, 0.03, 0.02), {"units": "mm"}, r"0.00012 m long with units='mm'.*--units m\b"),
+        ((1.0, 1.0, 1.0), {"size_m": 8.0}, r"size_m 8 makes cube.stl 8 m long"),
     ],
 )
 def test_mesh_file_of_implausible_size_is_refused_with_the_fix(tmp_path, size, options, expected):

@@ -184,9 +184,10 @@ def test_without_families_every_spec_is_a_path(monkeypatch, box_file):
 
 @pytest.fixture
 def real_families():
-    families = pytest.importorskip("affordgrasp.objects.families")
-    if not hasattr(families, "FAMILIES"):
-        pytest.skip("objects.families does not define FAMILIES yet")
+    # the registry must exist: a missing one is a failure, not a skip
+    from affordgrasp.objects import families
+
+    assert families.FAMILIES, "objects.families defines no FAMILIES"
     resolve_module._resolve_family.cache_clear()
     return families
 

@@ -53,6 +53,10 @@ def metric_cells(row: dict, shown=METRICS_SHOWN) -> list:
 
 def run(args, out) -> None:
     from ..dataset.best import best_grasps, write_best
+    from ..errors import InputError
+
+    if args.out and not str(args.out).endswith(".parquet"):
+        raise InputError(f"--out must name a .parquet file, got {args.out!r}")
 
     result = best_grasps(
         args.directory,

@@ -25,7 +25,7 @@ import pyarrow.dataset as pads
 import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
-from ..errors import DatasetError, InputError
+from ..errors import DatasetError, bad_parameter
 from .layout import read_manifest
 from .reading import open_dataset, select_objects
 
@@ -143,7 +143,7 @@ def best_grasps(
     Raises DatasetError for a directory that is not a dataset or has no metrics.
     """
     if not isinstance(top, int) or top < 1:
-        raise InputError(f"--top must be a positive integer, got {top!r}")
+        raise bad_parameter("top", f"must be a positive integer, got {top!r}")
     manifest = read_manifest(directory)
     if not manifest.get("metrics", True):
         raise DatasetError(
@@ -215,7 +215,7 @@ def write_best(result: BestGrasps, path: str | os.PathLike) -> Path:
     """Write the top rows as one Parquet file (the viewer reads it), task and mode in metadata."""
     path = Path(path)
     if path.suffix != ".parquet":
-        raise InputError(f"--out must name a .parquet file, got {str(path)!r}")
+        raise bad_parameter("path", f"must name a .parquet file, got {str(path)!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
     meta = dict(result.table.schema.metadata or {})
     meta[b"affordgrasp_best"] = json.dumps(

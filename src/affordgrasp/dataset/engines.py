@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyarrow as pa
 
-from ..errors import InputError, require
+from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
 
 log = logging.getLogger(__name__)
@@ -66,7 +66,7 @@ class ObjectPayload:
         mesh = trimesh.Trimesh(self.vertices, self.faces, process=False)
         digest = mesh_hash(mesh)
         if digest != self.mesh_hash:  # pragma: no cover - a transport error
-            raise RuntimeError(f"object {self.name!r} arrived with a different mesh hash")
+            raise InternalError(f"object {self.name!r} arrived with a different mesh hash")
         return GraspObject(
             name=self.name,
             category=self.category,
@@ -323,9 +323,11 @@ def check_engine(engine: str, workers: int | None, address: str | None) -> None:
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of: {', '.join(ENGINES)}")
     if workers is not None and (isinstance(workers, bool) or workers < 1):
-        raise InputError(f"--workers must be at least 1, got {workers}")
+        raise bad_parameter("workers", f"must be at least 1, got {workers}")
     if address is not None and engine != "ray":
-        raise InputError("--address is for the Ray engine; add --engine ray")
+        raise InputError(
+            "address is for the Ray engine; set engine='ray' (--engine ray)", parameter="address"
+        )
     if engine == "ray":
         try:
             require("ray", "cluster")

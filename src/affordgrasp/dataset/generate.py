@@ -31,7 +31,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 
 from .. import __version__
-from ..errors import DatasetError, InputError
+from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..hands import Hand
 from . import card as card_module
 from .engines import Engine, Job, ObjectPayload, RunContext, check_engine, make_engine
@@ -150,13 +150,13 @@ def resolve_objects(specs: Sequence) -> list:
 
 def _check_counts(samples: int, seed: int, shard_size: int, chunk_size: int) -> None:
     for name, value, low in (
-        ("--samples", samples, 1),
-        ("--seed", seed, 0),
-        ("--shard-size", shard_size, 1),
-        ("--chunk-size", chunk_size, 1),
+        ("samples", samples, 1),
+        ("seed", seed, 0),
+        ("shard_size", shard_size, 1),
+        ("chunk_size", chunk_size, 1),
     ):
         if not isinstance(value, int) or isinstance(value, bool) or value < low:
-            raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
+            raise bad_parameter(name, f"must be an integer >= {low}, got {value!r}")
 
 
 def generate(
@@ -202,7 +202,7 @@ def generate(
     resolved = resolve_objects(list(objects))
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
-        raise DatasetError(f"--out {str(directory)!r} is a file; give a directory")
+        raise bad_parameter("out", f"{str(directory)!r} is a file; give a directory", DatasetError)
     manifest = build_manifest(
         resolved,
         samples=samples,
@@ -352,7 +352,7 @@ def _run_shards(
             shard, job = in_flight.pop(handle)
             table = engine.result(handle)
             if table.num_rows != job.n:  # pragma: no cover - a broken worker
-                raise RuntimeError(f"a job returned {table.num_rows} rows instead of {job.n}")
+                raise InternalError(f"a job returned {table.num_rows} rows instead of {job.n}")
             pieces = parts.setdefault(shard, {})
             pieces[job.start] = table
             advance(job.n)

@@ -27,7 +27,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..errors import DatasetError
+from ..errors import DatasetError, InternalError
 
 log = logging.getLogger(__name__)
 
@@ -203,7 +203,7 @@ def shard_metadata(shard: Shard, object_name: str, status_counts: dict[str, int]
 def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> Path:
     """Write one complete shard: a hidden temporary file, synced, then renamed into place."""
     if table.num_rows != shard.rows:
-        raise RuntimeError(f"shard {shard.name} has {table.num_rows} rows, expected {shard.rows}")
+        raise InternalError(f"shard {shard.name} has {table.num_rows} rows, expected {shard.rows}")
     metadata = dict(table.schema.metadata or {})
     metadata[SHARD_META_KEY] = json.dumps(info, sort_keys=True).encode()
     table = table.replace_schema_metadata(metadata)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..errors import InternalError
 from .cones import wrench_matrix_kernel
 from .lp import INFEASIBLE, OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
 from .validation import contact_arrays, point3, unit3
@@ -149,7 +150,7 @@ def _lp_value(res) -> float:
         return float("inf")
     if res.status is LPStatus.UNDECIDED:
         return float("nan")
-    raise RuntimeError("a minimum-effort LP reported unbounded; its costs are >= 0")
+    raise InternalError("a minimum-effort LP reported unbounded; its costs are >= 0")
 
 
 def impact_effort(

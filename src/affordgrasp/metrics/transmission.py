@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..errors import InternalError
 from .cones import wrench_matrix_kernel
 from .effort import use_wrench
 from .lp import OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
@@ -102,7 +103,8 @@ def use_force_highs(W: np.ndarray, w_use: np.ndarray, n_contacts: int) -> float:
     """U_τ with HiGHS (same program as :func:`use_force_kernel`)."""
     if n_contacts == 0:
         return 0.0
-    assert W.shape[1] == n_contacts * (W.shape[1] // n_contacts)
+    if W.shape[1] % n_contacts:
+        raise InternalError(f"{W.shape[1]} wrench columns do not split over {n_contacts} contacts")
     A, b, c = use_force_lp(np.ascontiguousarray(W), w_use, n_contacts)
     res = HighsStandardLP(A, c).solve(b)
     # F = 0, λ = 0 is feasible and F is bounded: anything but an optimum (or a program no
@@ -110,5 +112,5 @@ def use_force_highs(W: np.ndarray, w_use: np.ndarray, n_contacts: int) -> float:
     if res.status is LPStatus.UNDECIDED:
         return float("nan")
     if res.status is not LPStatus.OPTIMAL:
-        raise RuntimeError(f"the U_τ program must have an optimum, HiGHS says {res.status}")
+        raise InternalError(f"the U_τ program must have an optimum, HiGHS says {res.status}")
     return max(0.0, -float(res.objective))

@@ -221,10 +221,11 @@ def check_plausible_size(
     plausible = f"an object a hand can grasp is {low * 1000:g} mm to {high:g} m long"
     if scale_kind == "size_m":
         raise MeshError(
-            f"--size-m {scale_value:g} makes {source} {extent_m:g} m long, but {plausible}; "
-            "give its real longest extent in metres"
+            f"size_m {scale_value:g} makes {source} {extent_m:g} m long, but {plausible}; "
+            "give its real longest extent in metres",
+            parameter="size_m",
         )
-    said = f"with --units {units}" if units else "if its coordinates are metres"
+    said = f"with units={units!r}" if units else "if its coordinates are metres"
     guesses = [
         (name, raw_extent * factor)
         for name, factor in UNITS_TO_M.items()
@@ -233,12 +234,14 @@ def check_plausible_size(
     guesses.sort(key=lambda g: abs(math.log10(g[1] / 0.2)))  # closest to a 20 cm tool
     if guesses:
         name, size = guesses[0]
-        fix = f"its unit is probably {name} ({size:.3g} m long): pass --units {name}"
+        fix = (
+            f"its unit is probably {name} ({size:.3g} m long): pass units={name!r} (--units {name})"
+        )
     else:
-        fix = "pass --units with the file's unit"
+        fix = "give units= the file's unit (--units)"
     raise MeshError(
-        f"{source} is {extent_m:.3g} m long {said}, but {plausible}; {fix}, or --size-m "
-        "with its real longest extent in metres"
+        f"{source} is {extent_m:.3g} m long {said}, but {plausible}; {fix}, or size_m= "
+        "its real longest extent in metres (--size-m)"
     )
 
 

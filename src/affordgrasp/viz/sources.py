@@ -21,7 +21,7 @@ import pyarrow.dataset as pads
 
 from ..dataset.best import TopRows, numeric_columns, task_values
 from ..dataset.reading import open_dataset
-from ..errors import InputError
+from ..errors import bad_parameter
 
 BATCH_ROWS = 65536
 
@@ -150,7 +150,7 @@ def top_grasps(
     progress : optional callable(n_rows) called after each batch
     """
     if top < 1:
-        raise InputError(f"--top must be at least 1, got {top}")
+        raise bad_parameter("top", f"must be at least 1, got {top}")
     thresholds = thresholds or {}
     columns = source.scalar_columns()
     kept: dict[tuple[str, str], TopRows] = {}  # ties by (seed, sample)

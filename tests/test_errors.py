@@ -1,0 +1,24 @@
+"""One exception hierarchy; the library names parameters, the CLI names options (errors.py)."""
+
+import pytest
+
+import affordgrasp as ag
+from affordgrasp.cli import main
+from affordgrasp.errors import DatasetError, InputError, bad_parameter, cli_message
+
+
+def test_library_names_the_parameter_and_the_cli_the_option():
+    err = bad_parameter("shard_size", "must be an integer >= 1, got 0")
+    assert str(err) == "shard_size must be an integer >= 1, got 0"
+    assert cli_message(err) == "--shard-size must be an integer >= 1, got 0"
+    # only the parameter's own name is rewritten, not words that contain it
+    err = InputError("size_m 8 makes size_m_test.stl 8 m long", parameter="size_m")
+    assert cli_message(err) == "--size-m 8 makes size_m_test.stl 8 m long"
+    assert cli_message(DatasetError("no parameter here")) == "no parameter here"
+
+
+def test_generate_speaks_python_and_the_cli_speaks_flags(tmp_path, capsys):
+    with pytest.raises(InputError, match=r"^samples must be an integer >= 1, got 0$"):
+        ag.generate(["knife"], 0, tmp_path / "d")
+    assert main(["generate", "knife", "--samples", "0", "--out", str(tmp_path / "d")]) == 2
+    assert "--samples must be" in capsys.readouterr().err
