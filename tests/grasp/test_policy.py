@@ -258,7 +258,7 @@ def test_results_do_not_depend_on_where_the_object_sits(offset_m):
     # mesh origin gave other contact counts in ~10 % of grasps and moved contacts by up to
     # 60 mm. What remains is a sample of the surface grid (1.4 mm) flipping on rare
     # grasps where two samples tie to within the rounding of the input coordinates.
-    from affordgrasp.evaluate import evaluate_samples
+    from affordgrasp.pipeline import evaluate_samples
 
     def cube_at(offset):
         mesh = trimesh.creation.box((0.06, 0.06, 0.06))
