@@ -73,6 +73,15 @@ def test_evaluate_reports_tasks_and_metrics(tmp_path, capsys):
     assert 0 <= doc["force_closure_fraction"] <= 1
     table = pq.read_table(out)
     assert set(SPEC_COLUMNS) | set(METRIC_COLUMNS) <= set(table.column_names)
+    # the rate leaves out the one-time costs, and says what they were
+    assert set(doc["one_time_seconds"]) == {"kernels", "prepare"}
+
+
+def test_summary_line_names_the_one_time_costs(capsys):
+    assert main(["evaluate", "knife", "--samples", "10", "--task", "pick"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "grasps/s on one core" in text
+    assert "one-time costs, not counted: kernels" in text and "object preparation" in text
 
 
 def test_same_seed_same_rows(tmp_path):

@@ -6,6 +6,7 @@ from .common import (
     add_sampling_arguments,
     check_counts,
     check_output_file,
+    one_time_text,
     run_batches,
     status_summary,
     write_table,
@@ -31,7 +32,9 @@ def run(args, out) -> None:
         ["status", "count", "share", "contacts/grasp"],
         rows,
     )
-    out.text(f"simulation: {rate:,.0f} grasps/s on one core ({wall:.2f} s wall)")
+    out.text(
+        f"simulation: {rate:,.0f} grasps/s on one core ({wall:.2f} s wall; {one_time_text(spent)})"
+    )
     write_table(table, args.out, out)
     out.result(
         {
@@ -43,6 +46,7 @@ def run(args, out) -> None:
             "status": doc,
             "grasps_per_second_per_core": rate,
             "seconds": wall,
+            "one_time_seconds": {"kernels": spent["kernels"], "prepare": spent["prepare"]},
             "out": args.out,
         }
     )

@@ -18,6 +18,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..metrics.kernel_cache import install_package_stamp
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
+
 # Shape kinds (see affordgrasp.hands.model).
 BOX = 0
 CYLINDER = 1

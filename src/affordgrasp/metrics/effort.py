@@ -23,8 +23,11 @@ from numba import njit
 
 from ..errors import InternalError
 from .cones import wrench_matrix_kernel
+from .kernel_cache import install_package_stamp
 from .lp import INFEASIBLE, OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
 from .validation import contact_arrays, point3, unit3
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
 
 # Order of the six gravity directions of E_h (column suffixes: columns.HOLD_EFFORT_SUFFIXES).
 GRAVITY_DIRECTIONS = np.array(

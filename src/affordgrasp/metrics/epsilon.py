@@ -35,8 +35,11 @@ from numba import njit
 
 from .cones import contact_wrenches, wrench_matrix_kernel
 from .hull import HULL_DEGENERATE, HULL_OK, convex_hull_6d, hull_volume
+from .kernel_cache import install_package_stamp
 from .lp import FAILED, OPTIMAL, simplex_standard
 from .validation import contact_arrays, point3, positive_length
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
 
 log = logging.getLogger(__name__)
 

@@ -23,6 +23,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .kernel_cache import install_package_stamp
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
+
 HULL_OK = 0
 HULL_DEGENERATE = 1  # fewer than 7 affinely independent points: no 6D hull
 HULL_FAILED = 2  # a numerical or topological inconsistency: use qhull instead

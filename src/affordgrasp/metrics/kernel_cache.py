@@ -1,23 +1,21 @@
-"""Keep numba's on-disk caches of the metric kernels consistent with their sources.
+"""Keep numba's on-disk caches of the package's kernels valid, and shippable in a wheel.
 
-numba (``cache=True``) stamps a cached function with the content hash of the one file that
-defines it, but the metric kernels call kernels of sibling modules (ε calls the hull and
-the LP solver, Φ calls all of them) and inline them: after an edit of ``hull.py`` a cached
-``epsilon_kernel`` would silently keep running the old hull.
+numba (``cache=True``) stamps a cached function with the modification time and size of the
+one file that defines it. Two problems follow:
+
+* the metric kernels call kernels of sibling modules (ε calls the hull and the LP solver,
+  Φ calls all of them) and inline them: after an edit of ``hull.py`` a cached
+  ``epsilon_kernel`` would silently keep running the old hull;
+* an install copies the sources with new modification times, so caches compiled when the
+  package is built (see ``setup.py`` and :mod:`affordgrasp.compiled`) would all be stale.
 
 The fix is a cache *locator* (numba's hook that says where a function's cache lives and
-which stamp validates it): for functions defined in this package it keeps numba's own
-location and adds to numba's stamp a hash of every compiled module of the package. When
-any of them changes, every index no longer matches and numba recompiles and overwrites it.
-Nothing is deleted, and nothing happens on import of :mod:`affordgrasp.metrics`: the
-locator is installed by the kernel modules that call across modules (:mod:`.cones`, which
-:mod:`.epsilon` imports before the hull and the LP, :mod:`.effort`, :mod:`.transmission`,
-:mod:`.phi`), just before their functions are decorated. A module whose kernels call only
-its own functions (``hull.py``, ``lp.py``) is correct with numba's per-file stamp, so it
-does not matter whether it was imported before or after the install.
-
-Installed releases never change their sources, so the extra stamp only ever matters in a
-development checkout.
+which stamp validates it): for functions defined anywhere in this package it keeps numba's
+own location and replaces numba's stamp by a hash of the *contents* of every module of the
+package that defines kernels. When any of them changes, no index matches and numba
+recompiles and overwrites it; when nothing changed, caches built with the wheel load as
+they are. Nothing is deleted. The locator is installed by every kernel module just before
+its functions are decorated (:func:`install_package_stamp`, idempotent).
 """
 
 from __future__ import annotations
@@ -26,21 +24,22 @@ import hashlib
 from functools import cache
 from pathlib import Path
 
-_PACKAGE_DIR = Path(__file__).resolve().parent
+_PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
 
 
 @cache
 def package_stamp(directory: Path = _PACKAGE_DIR) -> str:
-    """Hash of the contents of every module under ``directory`` that defines compiled kernels.
+    """Hash of the contents of every module under ``directory`` (recursively) that defines
+    compiled kernels.
 
     Computed once per process (a source edited while the process runs is seen by the next
     process, as for numba's own stamps).
     """
     digest = hashlib.sha256()
-    for path in sorted(directory.glob("*.py")):
+    for path in sorted(directory.rglob("*.py")):
         text = path.read_bytes()
         if b"@njit" in text:
-            digest.update(path.name.encode())
+            digest.update(path.relative_to(directory).as_posix().encode())
             digest.update(hashlib.sha256(text).digest())
     return digest.hexdigest()
 
@@ -68,7 +67,8 @@ def _make_locator_class():
             return self._inner.get_cache_path()
 
         def get_source_stamp(self):
-            return (self._inner.get_source_stamp(), package_stamp())
+            # contents, not modification times: valid after an install copies the files
+            return ("affordgrasp-kernels", package_stamp())
 
         def get_disambiguator(self):
             return self._inner.get_disambiguator()
@@ -76,7 +76,7 @@ def _make_locator_class():
         @classmethod
         def from_function(cls, py_func, py_file):
             try:
-                inside = Path(py_file).resolve().parent == _PACKAGE_DIR
+                inside = _PACKAGE_DIR in Path(py_file).resolve().parents
             except OSError:
                 return None
             if not inside:

@@ -43,10 +43,13 @@ from .effort import (
 )
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_kernel
 from .inertia import rotational_inertia
+from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
 from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
 from .validation import contact_arrays, points_n3, units_n3
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
 
 log = logging.getLogger(__name__)
 

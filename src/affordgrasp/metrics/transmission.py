@@ -22,8 +22,11 @@ from numba import njit
 from ..errors import InternalError
 from .cones import wrench_matrix_kernel
 from .effort import use_wrench
+from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
 from .validation import contact_arrays, point3, unit3
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
 
 
 @njit(cache=True)
