@@ -27,6 +27,10 @@ COMMANDS = {
     "show": "render the best grasps of a task as PNG grids and an interactive HTML page",
     "plots": "plot metric distributions, status counts and affordances of a dataset",
     "physics": "validate a dataset's grasps in MuJoCo and report how well the metrics predict them",
+    "depth": "render the camera-in-hand depth image D(p0, O) of a pregrasp",
+    "train": "train a viability classifier or a metric regressor on a dataset",
+    "predict": "predict with a trained (or the shipped) model on every sample of a dataset",
+    "model-eval": "evaluate a model on held-out objects beside baselines, with plots",
 }
 
 
@@ -54,9 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, help_text in COMMANDS.items():
         try:
-            module = importlib.import_module(f"affordgrasp.commands.{name}")
+            module = importlib.import_module(f"affordgrasp.commands.{name.replace('-', '_')}")
         except ModuleNotFoundError as exc:
-            if exc.name == f"affordgrasp.commands.{name}":
+            if exc.name == f"affordgrasp.commands.{name.replace('-', '_')}":
                 continue
             raise
         p = sub.add_parser(name, help=help_text, description=help_text)

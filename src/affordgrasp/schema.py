@@ -45,6 +45,17 @@ METRIC_FIELDS = [
 SCHEMA = pa.schema(SAMPLE_FIELDS + METRIC_FIELDS, metadata={"affordgrasp_version": __version__})
 SIMULATION_SCHEMA = pa.schema(SAMPLE_FIELDS, metadata={"affordgrasp_version": __version__})
 
+# ``generate --depth``: D(p0, O) per row, uint16 millimetres, little-endian, row-major,
+# 0 = no return (affordgrasp.vision; docs/vision.md). Parquet's zstd compresses the column.
+DEPTH_COLUMN = "depth_mm"
+DEPTH_FIELD = pa.field(DEPTH_COLUMN, pa.binary())
+
+
+def dataset_schema(metrics: bool = True, depth: bool = False) -> pa.Schema:
+    """The schema of a dataset's shards: with or without the metrics and the depth images."""
+    schema = SCHEMA if metrics else SIMULATION_SCHEMA
+    return schema.append(DEPTH_FIELD) if depth else schema
+
 
 def _fixed(values: np.ndarray, width: int) -> pa.Array:
     flat = pa.array(np.ascontiguousarray(values, dtype=np.float64).reshape(-1))

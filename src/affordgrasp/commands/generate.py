@@ -46,6 +46,11 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--no-metrics", action="store_true", help="simulate only; write no metric columns"
     )
+    p.add_argument(
+        "--depth",
+        action="store_true",
+        help="also store each row's 128x128 depth image D(p0, O) (uint16 mm, ~3-8 kB/row)",
+    )
 
 
 def command_line(args) -> list[str]:
@@ -59,6 +64,8 @@ def command_line(args) -> list[str]:
         cmd += ["--units", args.units]
     if args.no_metrics:
         cmd.append("--no-metrics")
+    if args.depth:
+        cmd.append("--depth")
     if args.engine != "local":
         cmd += ["--engine", args.engine]
     if args.address:
@@ -86,6 +93,7 @@ def run(args, out) -> None:
             shard_size=args.shard_size,
             chunk_size=args.chunk_size,
             metrics=not args.no_metrics,
+            depth=args.depth,
             command=cmd,
             progress=lambda total: out.progress("generating", total),
         )

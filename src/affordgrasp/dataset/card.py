@@ -130,10 +130,10 @@ def _plain(value):
     return value
 
 
-def schema_description(metrics: bool) -> list[dict]:
-    from ..schema import SCHEMA, SIMULATION_SCHEMA
+def schema_description(metrics: bool, depth: bool = False) -> list[dict]:
+    from ..schema import dataset_schema
 
-    schema = SCHEMA if metrics else SIMULATION_SCHEMA
+    schema = dataset_schema(metrics, depth)
     return [{"name": f.name, "type": str(f.type)} for f in schema]
 
 
@@ -189,7 +189,8 @@ def build_card(
         "friction_table": friction_table(),
         "simulation": simulation_settings(),
         "task_thresholds": task_thresholds(),
-        "columns": schema_description(manifest["metrics"]),
+        "depth": manifest.get("depth"),
+        "columns": schema_description(manifest["metrics"], bool(manifest.get("depth"))),
     }
 
 

@@ -88,6 +88,7 @@ class RunContext:
     seed: int = 0
     metrics: bool = True
     soft: bool = False
+    depth: bool = False
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
 
@@ -155,6 +156,10 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             soft=ctx.soft,
             metrics=ctx.metrics,
         )
+    if ctx.depth:
+        from ..vision.depth import depth_column
+
+        table = table.append_column(*depth_column(obj, table))
     return table
 
 

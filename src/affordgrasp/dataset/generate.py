@@ -103,9 +103,10 @@ def build_manifest(
     metrics: bool,
     soft: bool,
     command: Sequence[str] | None,
+    depth: bool = False,
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``)."""
-    return {
+    manifest = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "affordgrasp_version": __version__,
@@ -128,6 +129,11 @@ def build_manifest(
         "command": list(command) if command is not None else None,
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
+    if depth:  # absent without depth images, so earlier datasets still resume
+        from ..vision.depth import depth_manifest
+
+        manifest["depth"] = depth_manifest()
+    return manifest
 
 
 def resolve_objects(specs: Sequence) -> list:
@@ -173,6 +179,7 @@ def generate(
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     metrics: bool = True,
     soft: bool = False,
+    depth: bool = False,
     command: Sequence[str] | None = None,
     progress: ProgressFactory | None = None,
 ) -> GenerationSummary:
@@ -186,6 +193,7 @@ def generate(
     hand : a Hand, a registered hand name or a hand file (the Hand object itself is sent
         to the workers)
     metrics : compute Φ (False writes the simulation columns only)
+    depth : also store the depth image D(p0, O) of every row (column ``depth_mm``)
     command : the command line, recorded in the manifest and the card
     progress : ``progress(total_samples)`` returns a context manager yielding ``advance(n)``
 
@@ -212,15 +220,16 @@ def generate(
         metrics=metrics,
         soft=soft,
         command=command,
+        depth=depth,
     )
     manifest = prepare_directory(directory, manifest)
     removed = remove_stale_temporaries(directory)
     if removed:
         log.info("removed %d half-written file(s) left by an interrupted run", removed)
 
-    from ..schema import SCHEMA, SIMULATION_SCHEMA
+    from ..schema import dataset_schema
 
-    schema = SCHEMA if metrics else SIMULATION_SCHEMA
+    schema = dataset_schema(metrics, depth)
     plan = plan_shards(len(resolved), samples, shard_size)
     infos: dict[Shard, dict] = {}
     for shard in plan:
@@ -236,6 +245,7 @@ def generate(
         seed=seed,
         metrics=metrics,
         soft=soft,
+        depth=depth,
     )
     started = time.perf_counter()
     started_at = time.strftime("%Y-%m-%dT%H:%M:%S%z")

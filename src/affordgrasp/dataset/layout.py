@@ -55,6 +55,7 @@ PLAN_KEYS = (
     "hand",
     "metrics",
     "soft",
+    "depth",
     "objects",
 )
 

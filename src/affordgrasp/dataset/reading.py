@@ -38,7 +38,7 @@ def open_dataset(directory: str | os.PathLike, *, loose: bool = False) -> pads.D
     DatasetError
         When the directory is missing, not a dataset, empty or unreadable.
     """
-    from ..schema import SCHEMA, SIMULATION_SCHEMA
+    from ..schema import dataset_schema
 
     try:
         manifest = read_manifest(directory)
@@ -52,7 +52,7 @@ def open_dataset(directory: str | os.PathLike, *, loose: bool = False) -> pads.D
             f"dataset {str(directory)!r} has no shards yet; run the command in its "
             "_manifest.json to generate them"
         )
-    schema = SCHEMA if manifest.get("metrics", True) else SIMULATION_SCHEMA
+    schema = dataset_schema(manifest.get("metrics", True), bool(manifest.get("depth")))
     return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
 
 

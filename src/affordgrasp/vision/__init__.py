@@ -1,0 +1,35 @@
+"""Vision (SPEC §2.7, paper §III-B): the camera in the hand, depth images, point clouds.
+
+* ``camera``: intrinsics (``DepthCamera``) and the camera pose of a pregrasp;
+* ``depth``: D(p0, O) by ray casting with Embree, uint16-millimetre encoding, PNG views;
+* ``points``: the equivalent fixed-size point clouds.
+
+See docs/vision.md for every convention.
+"""
+
+from .camera import DepthCamera, ObjectFrame, camera_poses
+from .depth import (
+    DepthRenderer,
+    depth_from_mm,
+    depth_to_mm,
+    depth_to_rgb,
+    render_depth,
+    renderer_for,
+    save_depth_png,
+)
+from .points import depth_to_points, point_clouds
+
+__all__ = [
+    "DepthCamera",
+    "DepthRenderer",
+    "ObjectFrame",
+    "camera_poses",
+    "depth_from_mm",
+    "depth_to_mm",
+    "depth_to_points",
+    "depth_to_rgb",
+    "point_clouds",
+    "render_depth",
+    "renderer_for",
+    "save_depth_png",
+]

@@ -1,0 +1,67 @@
+"""``affordgrasp predict``: a model's predictions for every sample of a dataset (Parquet)."""
+
+from __future__ import annotations
+
+from ..errors import InputError, MissingDependencyError
+
+
+def add_arguments(p) -> None:
+    p.add_argument(
+        "model",
+        metavar="MODEL",
+        help="a .safetensors model, or 'default' (the shipped classifier and regressor)",
+    )
+    p.add_argument("dataset", metavar="DATASET", help="a directory written by 'generate'")
+    p.add_argument("--out", required=True, metavar="FILE", help="predictions .parquet")
+    p.add_argument("--object", action="append", default=None, help="only this object (repeat)")
+
+
+def load_models(spec: str):
+    try:
+        from ..learning.api import resolve_models
+        from ..learning.io import load_model
+        from ..learning.torch_support import require_safetensors, require_torch
+
+        require_torch()
+        require_safetensors()
+    except MissingDependencyError as exc:
+        raise InputError(str(exc)) from None
+    return [load_model(path) for path in resolve_models(spec)]
+
+
+def run(args, out) -> None:
+    import pyarrow.parquet as pq
+
+    from ..dataset.reading import read_manifest
+    from ..learning.api import predict_dataset
+    from .common import check_output_file
+
+    if not args.out.endswith(".parquet"):
+        raise InputError(f"--out {args.out!r} must end in .parquet")
+    check_output_file(args.out, "--out")
+    read_manifest(args.dataset)
+    models = load_models(args.model)
+    with out.progress("predicting", _rows(args.dataset, args.object)) as advance:
+        table = predict_dataset(models, args.dataset, objects=args.object, progress=advance)
+    table = table.replace_schema_metadata(
+        {
+            "affordgrasp_models": ",".join(
+                c.get("arch", "") + ":" + c["target"]["name"] for _, c in models
+            )
+        }
+    )
+    pq.write_table(table, args.out, compression="zstd")
+    cols = [c for c in table.column_names if c not in ("object", "sample")]
+    rows = []
+    for c in cols:
+        v = table.column(c).to_numpy()
+        rows.append([c, float(v.mean()), float(v.min()), float(v.max())])
+    out.table(f"{table.num_rows} predictions -> {args.out}", ["name", "mean", "min", "max"], rows)
+    out.result({"out": args.out, "rows": table.num_rows, "columns": table.column_names})
+
+
+def _rows(dataset, objects) -> int:
+    from ..dataset.reading import object_filter, open_dataset, select_objects
+
+    ds = open_dataset(dataset)
+    return ds.count_rows(filter=object_filter(select_objects(dataset, objects)))

@@ -1,0 +1,277 @@
+"""Train, predict, evaluate: the learning pipeline over generated datasets (SPEC §2.7).
+
+``train_on_dataset`` splits a dataset by object instance (or family), trains a classifier or
+regressor and records the split, the settings, the test metrics and the predict-the-mean
+baseline in the model's config. ``predict_dataset`` streams a dataset and returns one row
+per sample. ``evaluate_on_dataset`` computes the metrics of ``evaluation`` for a model on a
+dataset's rows (by default its own held-out test objects).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Sequence
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .data import (
+    Samples,
+    load_depth,
+    read_rows,
+    split_by_family,
+    split_by_object,
+)
+from .evaluation import classification_report, regression_report
+from .targets import Target
+from .training import Inputs, TrainSettings, default_config, predict_scores, train_model
+
+log = logging.getLogger(__name__)
+
+PRETRAINED = {
+    "classifier": "default_classifier.safetensors",
+    "regressor": "default_regressor.safetensors",
+}
+
+
+def pretrained_path(kind: str) -> Path:
+    """Path of a shipped model: ``classifier`` (viable) or ``regressor`` (ΣE_h)."""
+    if kind not in PRETRAINED:
+        raise InputError(f"unknown pretrained model {kind!r}; choose classifier or regressor")
+    path = Path(str(resources.files("affordgrasp.learning") / "pretrained" / PRETRAINED[kind]))
+    if not path.is_file():
+        raise InputError(
+            f"the shipped {kind} is missing ({path}); rebuild it with "
+            "'python benchmarks/train_default_models.py'"
+        )
+    return path
+
+
+def resolve_models(spec: str | os.PathLike) -> list[Path]:
+    """'default' → the shipped classifier and regressor; else the one model file named."""
+    if str(spec) == "default":
+        return [pretrained_path("classifier"), pretrained_path("regressor")]
+    if str(spec) in PRETRAINED:
+        return [pretrained_path(str(spec))]
+    return [Path(spec)]
+
+
+def _subsample(idx: np.ndarray, k: int | None, seed: int) -> np.ndarray:
+    if k is None or len(idx) <= k:
+        return idx
+    rng = np.random.default_rng(seed)
+    return np.sort(rng.choice(idx, k, replace=False))
+
+
+def prepare_split(
+    dataset,
+    target: str | Target,
+    *,
+    split: str = "object",
+    test_families: Sequence[str] | None = None,
+    seed: int = 0,
+    max_train: int | None = 20000,
+    max_eval: int | None = 4000,
+    negatives_ratio: float = 3.0,
+):
+    """Rows of each part of the split, with depth images loaded (memory-capped).
+
+    Classification keeps every positive and at most ``negatives_ratio`` × as many negatives
+    per part (each epoch then draws a balanced subset). Returns (train, val, test, target,
+    split).
+    """
+    samples, target = read_rows(dataset, target)
+    if len(samples) == 0:
+        raise InputError(f"dataset {str(dataset)!r} has no rows for target {target.name!r}")
+    if split == "object":
+        sp = split_by_object(samples.object, samples.family, seed=seed)
+    elif split == "family":
+        if not test_families:
+            raise InputError("--split family needs --test-families (e.g. axe,mug)")
+        sp = split_by_family(samples.object, samples.family, test_families, seed=seed)
+    else:
+        raise InputError(f"unknown split {split!r}; choose object or family")
+    parts = []
+    for k, part in enumerate(("train", "val", "test")):
+        idx = np.flatnonzero(sp.part_of(samples.object, part))
+        cap = max_train if part == "train" else max_eval
+        if target.kind == "classification":
+            y = samples.y[idx]
+            pos, neg = idx[y > 0.5], idx[y <= 0.5]
+            pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
+            n_neg = int(round(negatives_ratio * max(len(pos), 1)))
+            if part == "test":  # the natural class balance, capped
+                n_neg = len(neg) if cap is None else max(0, cap - len(pos))
+            idx = np.sort(np.r_[pos, _subsample(neg, n_neg, seed + 10 + k)])
+        else:
+            idx = _subsample(idx, cap, seed + k)
+        parts.append(samples.take(idx))
+    for p in parts:
+        if len(p):
+            load_depth(p, dataset)
+    return parts[0], parts[1], parts[2], target, sp
+
+
+def train_on_dataset(
+    dataset,
+    *,
+    arch: str = "cnn",
+    target: str = "viable",
+    out: str | os.PathLike | None = None,
+    split: str = "object",
+    test_families: Sequence[str] | None = None,
+    settings: TrainSettings | None = None,
+    log_target: bool = False,
+    canonical: bool = False,
+    max_train: int | None = 20000,
+    progress: Callable[[dict], None] | None = None,
+    prepared=None,
+):
+    """Train a model on a dataset; returns (model, config) and writes ``out`` if given."""
+    from .io import save_model
+
+    settings = settings or TrainSettings()
+    if prepared is None:
+        prepared = prepare_split(
+            dataset,
+            target,
+            split=split,
+            test_families=test_families,
+            seed=settings.seed,
+            max_train=max_train,
+        )
+    train, val, test, tgt, sp = prepared
+    if log_target and tgt.kind == "regression":
+        tgt = Target(**dict(tgt.to_dict(), log=True))
+    if tgt.kind == "classification" and (train.y > 0.5).sum() < 2:
+        raise InputError(
+            f"the training objects of {str(dataset)!r} have {int((train.y > 0.5).sum())} viable "
+            "grasps; generate more samples or objects"
+        )
+    if len(train) < 2 or len(val) == 0:
+        raise InputError(
+            f"too few rows to train on ({len(train)} train, {len(val)} validation); generate "
+            "more samples, or objects with at least 3 instances per family"
+        )
+    config = default_config(arch, tgt, canonical=canonical)
+    model, summary = train_model(config, train, val, settings, progress=progress)
+    config["training"] = {
+        "dataset": str(dataset),
+        "split": sp.to_dict(),
+        "rows": {"train": len(train), "val": len(val), "test": len(test)},
+        "train_mean": float(np.mean(tgt.normalise(train.y))),
+        **{k: v for k, v in summary.items() if k != "history"},
+        "history": summary["history"],
+    }
+    if len(test):
+        config["test"] = report(model, config, test)
+    if out is not None:
+        save_model(out, model, config)
+    return model, config
+
+
+def report(model, config: dict, samples: Samples, *, seed: int = 0) -> dict:
+    """The metrics of a model on samples (with depth), beside predict-the-mean."""
+    tgt = Target.from_dict(config["target"])
+    scores = predict_scores(model, config, Inputs(config, samples))
+    if tgt.kind == "classification":
+        out = classification_report(samples.y, scores, seed=seed)
+        out["baseline_average_precision"] = out["positive_rate"]
+        return out
+    truth = tgt.normalise(samples.y)
+    out = regression_report(truth, scores, lower_is_better=tgt.lower_is_better, seed=seed)
+    mean = config.get("training", {}).get("train_mean", float(np.mean(truth)))
+    out["baseline_mean_mse"] = float(np.mean((truth - mean) ** 2))
+    return out
+
+
+def predictions_of(model, config: dict, samples: Samples) -> np.ndarray:
+    """Predictions in target units (a probability for a classifier)."""
+    tgt = Target.from_dict(config["target"])
+    return tgt.denormalise(predict_scores(model, config, Inputs(config, samples)))
+
+
+def prediction_column(config: dict) -> str:
+    tgt = config["target"]
+    return "viable_prob" if tgt["kind"] == "classification" else f"pred_{tgt['name']}"
+
+
+def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, progress=None):
+    """One row per sample of ``dataset``: object, sample and each model's prediction.
+
+    models : list of (model, config); streams the dataset in batches (memory-bounded).
+    """
+    import pyarrow as pa
+
+    from ..dataset.layout import read_manifest
+    from ..dataset.reading import iter_batches, select_objects
+    from ..vision.depth import decode_depth_column, depth_to_mm
+    from .data import _families, render_samples_depth
+
+    manifest = read_manifest(dataset)
+    families = _families(manifest)
+    stored = bool(manifest.get("depth"))
+    needs_depth = any(c["arch"] != "pose" for _, c in models)
+    columns = ["object", "sample", "p0", "use_dir"] + (
+        ["depth_mm"] if stored and needs_depth else []
+    )
+    chosen = select_objects(dataset, objects)
+    parts = []
+    for batch in iter_batches(dataset, columns=columns, objects=chosen, batch_size=batch_size):
+        tab = pa.Table.from_batches([batch])
+        obj = np.asarray(tab.column("object").to_pylist(), dtype=object)
+        s = Samples(
+            object=obj,
+            family=np.asarray([families.get(o, o) for o in obj], dtype=object),
+            sample=tab.column("sample").to_numpy().astype(np.int64),
+            p0=np.asarray(tab.column("p0").combine_chunks().flatten()).reshape(-1, 6),
+            use_dir=np.asarray(tab.column("use_dir").combine_chunks().flatten()).reshape(-1, 2),
+            y=np.full(len(obj), np.nan),
+        )
+        if needs_depth:
+            if stored:
+                s.depth_mm = depth_to_mm(decode_depth_column(tab.column("depth_mm")))
+            else:
+                s.depth_mm = render_samples_depth(s, manifest)
+        cols = {"object": pa.array(list(obj), pa.string()), "sample": pa.array(s.sample)}
+        for model, config in models:
+            cols[prediction_column(config)] = pa.array(predictions_of(model, config, s))
+        parts.append(pa.table(cols))
+        if progress is not None:
+            progress(len(obj))
+    if not parts:
+        raise InputError(f"no rows to predict in {str(dataset)!r}")
+    return pa.concat_tables(parts)
+
+
+def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0, max_rows=None):
+    """Metrics of a model on a dataset's rows of its target.
+
+    objects : "test" (the model's held-out test objects, when the dataset has them), "all",
+        or a list of object names. Returns (report, samples, predictions in [0, 1] scale).
+    """
+    tgt = Target.from_dict(config["target"])
+    samples, _ = read_rows(dataset, tgt)
+    if objects == "test":
+        held = config.get("training", {}).get("split", {}).get("test", [])
+        mask = np.isin(samples.object, held)
+        if not mask.any():
+            raise InputError(
+                f"none of the model's test objects ({', '.join(held) or 'none'}) is in "
+                f"{str(dataset)!r}; pass --objects all or name objects"
+            )
+    elif objects == "all":
+        mask = np.ones(len(samples), dtype=bool)
+    else:
+        mask = np.isin(samples.object, list(objects))
+        if not mask.any():
+            raise InputError(f"none of the objects {list(objects)} is in {str(dataset)!r}")
+    idx = _subsample(np.flatnonzero(mask), max_rows, seed)
+    samples = samples.take(idx)
+    if config["arch"] != "pose":
+        load_depth(samples, dataset)
+    scores = predict_scores(model, config, Inputs(config, samples))
+    return report(model, config, samples, seed=seed), samples, scores

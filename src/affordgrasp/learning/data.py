@@ -1,0 +1,319 @@
+"""Learning data from a generated dataset: inputs (p0, d, depth), targets, splits.
+
+A sample's depth image D(p0, O) is read from the dataset's ``depth_mm`` column when it was
+generated with ``--depth``; otherwise it is rendered from the object (a pure function of p0
+and the mesh; the mesh hash is checked against the manifest), so a dataset without images
+is as good for learning, only slower to load.
+
+Splits are by object instance (SPEC §2.7): the objects of the test (and validation) set never
+appear in training, and the families (categories) overlap. A split by family holds out whole
+families instead.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import DatasetError, InputError
+from .targets import Target, make_target, target_rows, target_values
+
+log = logging.getLogger(__name__)
+
+INPUT_COLUMNS = ("object", "sample", "p0", "use_dir")
+METRIC_INPUTS = (
+    "epsilon",
+    "hold_effort_px",
+    "hold_effort_nx",
+    "hold_effort_py",
+    "hold_effort_ny",
+    "hold_effort_pz",
+    "hold_effort_nz",
+    "impact_effort",
+)
+
+
+@dataclass
+class Samples:
+    """Rows chosen for learning: inputs and target, one entry per row.
+
+    object : (n,) str; family : (n,) str; sample : (n,) int64
+    p0 : (n, 6) float64; use_dir : (n, 2) float64
+    y : (n,) float64, the target in its own units (NaN when not known, e.g. predicting)
+    depth_mm : (n, size, size) uint16 or None until loaded (see :func:`load_depth`)
+    """
+
+    object: np.ndarray
+    family: np.ndarray
+    sample: np.ndarray
+    p0: np.ndarray
+    use_dir: np.ndarray
+    y: np.ndarray
+    depth_mm: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.sample)
+
+    def take(self, idx: np.ndarray) -> Samples:
+        idx = np.asarray(idx)
+        return Samples(
+            self.object[idx],
+            self.family[idx],
+            self.sample[idx],
+            self.p0[idx],
+            self.use_dir[idx],
+            self.y[idx],
+            None if self.depth_mm is None else self.depth_mm[idx],
+            dict(self.meta),
+        )
+
+
+def _families(manifest: dict) -> dict[str, str]:
+    return {o["name"]: o.get("category") or o["name"].split(":")[0] for o in manifest["objects"]}
+
+
+def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None = None):
+    """The rows of a dataset a target is defined on, with their inputs and target values.
+
+    Returns (Samples, Target). For a generic column the target's scale is set from these rows
+    (pass the training rows' Target to other splits).
+    """
+    from ..dataset.layout import read_manifest
+    from ..dataset.reading import read_table
+
+    manifest = read_manifest(directory)
+    if not manifest.get("metrics", True):
+        raise DatasetError(
+            f"dataset {str(directory)!r} was generated with --no-metrics; learning needs "
+            "the metric columns (generate it without --no-metrics)"
+        )
+    name = target if isinstance(target, str) else target.name
+    extra = [] if name in METRIC_INPUTS or name == "viable" or name.startswith("task:") else []
+    if (
+        name not in ("viable", "hold_effort_sum")
+        and not name.startswith("task:")
+        and name not in METRIC_INPUTS
+    ):
+        extra = [name]
+    columns = list(INPUT_COLUMNS) + list(METRIC_INPUTS) + extra
+    if name.startswith("task:"):
+        columns = None  # a task may read any metric column
+    try:
+        table = read_table(directory, columns=columns, objects=objects)
+    except Exception as exc:  # noqa: BLE001 - an unknown column name is bad input
+        if "No match for FieldRef" in str(exc) or "not in schema" in str(exc):
+            raise InputError(
+                f"target {name!r} is not a column of {str(directory)!r}; use 'viable', "
+                "'hold_effort_sum', a metric column (e.g. epsilon) or task:NAME"
+            ) from None
+        raise
+    if name.startswith("task:"):
+        from ..tasks import get_task
+
+        get_task(name[5:])  # an unknown task: a TaskError naming the known ones
+    values = target_values(name, table)
+    if isinstance(target, str):
+        if name not in ("viable", "hold_effort_sum"):
+            provisional = Target(name, "regression", "finite")
+            mask = target_rows(provisional, table)
+            target = make_target(name, values[mask])
+        else:
+            target = make_target(name)
+    mask = target_rows(target, table)
+    families = _families(manifest)
+    obj = np.asarray(table.column("object").to_pylist(), dtype=object)[mask]
+    samples = Samples(
+        object=obj,
+        family=np.asarray([families.get(o, o) for o in obj], dtype=object),
+        sample=table.column("sample").to_numpy()[mask].astype(np.int64),
+        p0=_fixed(table, "p0", 6)[mask],
+        use_dir=_fixed(table, "use_dir", 2)[mask],
+        y=values[mask],
+        meta={"directory": str(directory)},
+    )
+    return samples, target
+
+
+def _fixed(table, name: str, width: int) -> np.ndarray:
+    col = table.column(name).combine_chunks()
+    return np.asarray(col.flatten(), dtype=np.float64).reshape(-1, width)
+
+
+def load_depth(samples: Samples, directory=None) -> np.ndarray:
+    """The depth images (n, 128, 128) uint16 mm of the samples, read or rendered.
+
+    Stored images are read in streamed batches keeping only the chosen rows, so memory is
+    that of the result.
+    """
+    from ..dataset.layout import read_manifest
+
+    directory = directory or samples.meta.get("directory")
+    if directory is None:
+        raise InputError("samples without a dataset directory: pass directory=")
+    manifest = read_manifest(directory)
+    if manifest.get("depth"):
+        images = _read_stored_depth(directory, samples)
+    else:
+        images = render_samples_depth(samples, manifest)
+    samples.depth_mm = images
+    return images
+
+
+def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
+    from ..dataset.reading import iter_batches
+    from ..vision.depth import decode_depth_column, depth_to_mm
+
+    want: dict[tuple[str, int], int] = {
+        (o, int(s)): i for i, (o, s) in enumerate(zip(samples.object, samples.sample, strict=True))
+    }
+    out = None
+    found = 0
+    objects = sorted(set(samples.object))
+    for batch in iter_batches(
+        directory, columns=["object", "sample", "depth_mm"], objects=objects, batch_size=4096
+    ):
+        names = batch.column(0).to_pylist()
+        ids = batch.column(1).to_numpy()
+        rows = [(j, want.get((n, int(s)))) for j, (n, s) in enumerate(zip(names, ids, strict=True))]
+        rows = [(j, i) for j, i in rows if i is not None]
+        if not rows:
+            continue
+        src = np.array([j for j, _ in rows])
+        dst = np.array([i for _, i in rows])
+        images = decode_depth_column(batch.column(2).take(src))
+        if out is None:
+            out = np.zeros((len(samples),) + images.shape[1:], dtype=np.uint16)
+        out[dst] = depth_to_mm(images)
+        found += len(rows)
+    if found != len(samples):
+        raise DatasetError(f"{len(samples) - found} chosen rows have no stored depth image")
+    return out if out is not None else np.zeros((0, 128, 128), dtype=np.uint16)
+
+
+def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
+    """Render D(p0, O) of every sample from its object (resolved as the manifest says)."""
+    from ..vision.depth import depth_to_mm
+
+    out = np.zeros((len(samples), 128, 128), dtype=np.uint16)
+    by_object: dict[str, list[int]] = defaultdict(list)
+    for i, o in enumerate(samples.object):
+        by_object[o].append(i)
+    entries = {o["name"]: o for o in manifest["objects"]}
+    for name, rows in by_object.items():
+        renderer = _renderer_of(entries.get(name), name)
+        idx = np.asarray(rows)
+        for lo in range(0, len(idx), 1024):
+            part = idx[lo : lo + 1024]
+            out[part] = depth_to_mm(renderer.render(samples.p0[part]))
+    return out
+
+
+def _renderer_of(entry: dict | None, name: str):
+    from ..objects import resolve_object
+    from ..vision.depth import renderer_for
+
+    if entry is None:
+        raise DatasetError(f"object {name!r} is not in the dataset's manifest")
+    spec = name if entry.get("source", "family") == "family" else entry["source"]
+    if spec != name and not Path(spec).exists():
+        raise DatasetError(
+            f"the mesh of {name!r} ({spec}) is gone and the dataset has no depth images; "
+            "generate it with --depth or restore the mesh file"
+        )
+    obj = resolve_object(spec)
+    if entry.get("mesh_hash") and obj.mesh_hash != entry["mesh_hash"]:
+        raise DatasetError(
+            f"object {name!r} resolves to a different mesh than the dataset's; "
+            "generate the dataset with --depth to keep its images"
+        )
+    return renderer_for(obj)
+
+
+# ------------------------------------------------------------------------------------ splits
+
+
+@dataclass(frozen=True)
+class Split:
+    """Object names of each part of a split (disjoint)."""
+
+    train: tuple[str, ...]
+    val: tuple[str, ...]
+    test: tuple[str, ...]
+    kind: str = "object"
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": self.kind,
+            "train": list(self.train),
+            "val": list(self.val),
+            "test": list(self.test),
+        }
+
+    def part_of(self, objects: np.ndarray, part: str) -> np.ndarray:
+        return np.isin(objects, list(getattr(self, part)))
+
+
+def split_by_object(
+    objects: Sequence[str], families: Sequence[str], *, seed: int = 0, fraction=(0.15, 0.15)
+) -> Split:
+    """Hold out object instances, family by family, so that categories overlap.
+
+    A family with n ≥ 3 instances gives max(1, round(f·n)) to validation and to test; one with
+    2 gives one to test; one with 1 goes to training. Seeded.
+    """
+    by_family: dict[str, list[str]] = defaultdict(list)
+    for o, f in sorted(set(zip(objects, families, strict=True))):
+        by_family[f].append(o)
+    rng = np.random.default_rng(seed)
+    train, val, test = [], [], []
+    for fam in sorted(by_family):
+        names = list(by_family[fam])
+        rng.shuffle(names)
+        n = len(names)
+        n_val = max(1, round(fraction[0] * n)) if n >= 3 else 0
+        n_test = max(1, round(fraction[1] * n)) if n >= 2 else 0
+        test += names[:n_test]
+        val += names[n_test : n_test + n_val]
+        train += names[n_test + n_val :]
+    if not train or not test:
+        raise InputError(
+            "a split by object needs at least 2 instances of some family (e.g. knife:0 knife:1)"
+        )
+    return Split(tuple(sorted(train)), tuple(sorted(val)), tuple(sorted(test)), "object")
+
+
+def split_by_family(
+    objects: Sequence[str], families: Sequence[str], test_families: Sequence[str], *, seed=0
+) -> Split:
+    """Hold out whole families for test; validation takes one instance per remaining family."""
+    pairs = sorted(set(zip(objects, families, strict=True)))
+    known = {f for _, f in pairs}
+    unknown = sorted(set(test_families) - known)
+    if unknown:
+        raise InputError(f"families {unknown} are not in the dataset; it holds {sorted(known)}")
+    test = [o for o, f in pairs if f in set(test_families)]
+    rest = [(o, f) for o, f in pairs if f not in set(test_families)]
+    if not rest or not test:
+        raise InputError("a split by family needs a family to test on and one to train on")
+    inner = split_by_object(
+        [o for o, _ in rest], [f for _, f in rest], seed=seed, fraction=(0.15, 0)
+    )
+    train = [o for o in inner.train] + list(inner.test)
+    return Split(tuple(sorted(train)), inner.val, tuple(sorted(test)), "family")
+
+
+def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np.ndarray:
+    """All positives and ``ratio`` × as many negatives drawn without replacement (seeded)."""
+    labels = np.asarray(labels) > 0.5
+    pos = np.flatnonzero(labels)
+    neg = np.flatnonzero(~labels)
+    rng = np.random.default_rng(seed)
+    k = min(len(neg), int(round(ratio * len(pos))))
+    chosen = rng.choice(neg, k, replace=False) if k else np.zeros(0, dtype=np.int64)
+    return np.sort(np.concatenate([pos, chosen]))

@@ -1,0 +1,158 @@
+"""Metrics of learned models (SPEC §2.7, paper §IV-D): MSE, comparison accuracy, Global Min
+Score, precision–recall and average precision. numpy only (no torch needed).
+
+Conventions where the paper is silent:
+
+* comparison accuracy counts pairs whose true values differ; a pair whose predictions tie
+  counts one half. ``pairs=None`` uses every such pair exactly (n ≤ 4000), else ``pairs``
+  random pairs (seeded).
+* GMS for a lower-is-better target (the paper's ΣE_h): the sample with the smallest
+  prediction is chosen, GMS = fraction of the set whose true value is strictly greater than
+  the chosen one's. For a higher-is-better target the largest prediction is chosen and
+  GMS = fraction strictly smaller. Ties of the prediction go to the first sample.
+* the GMS distribution draws ``n_subsets`` random subsets of ``fraction`` of the samples
+  (without replacement, at least 2 samples), seeded; E[GMS] is its mean.
+* average precision = Σ_k (R_k − R_{k−1}) P_k over the distinct score thresholds (the step
+  integral, as scikit-learn); a constant score gives the positive rate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+
+
+def _pair(y_true, y_pred) -> tuple[np.ndarray, np.ndarray]:
+    t = np.asarray(y_true, dtype=np.float64).ravel()
+    p = np.asarray(y_pred, dtype=np.float64).ravel()
+    if t.shape != p.shape:
+        raise InputError(f"{len(t)} true values but {len(p)} predictions")
+    return t, p
+
+
+def mse(y_true, y_pred) -> float:
+    t, p = _pair(y_true, y_pred)
+    return float(np.mean((t - p) ** 2)) if len(t) else float("nan")
+
+
+def comparison_accuracy(y_true, y_pred, *, pairs: int | None = None, seed: int = 0) -> float:
+    """Share of pairs whose predicted order is their true order (see the module docstring)."""
+    t, p = _pair(y_true, y_pred)
+    n = len(t)
+    if n < 2:
+        return float("nan")
+    if pairs is None and n <= 4000:
+        i, j = np.triu_indices(n, k=1)
+    else:
+        rng = np.random.default_rng(seed)
+        k = pairs or 200_000
+        i = rng.integers(0, n, k)
+        j = rng.integers(0, n, k)
+    dt = np.sign(t[i] - t[j])
+    dp = np.sign(p[i] - p[j])
+    keep = dt != 0
+    if not keep.any():
+        return float("nan")
+    score = np.where(dp[keep] == 0, 0.5, (dp[keep] == dt[keep]).astype(np.float64))
+    return float(score.mean())
+
+
+def global_min_score(y_true, y_pred, *, lower_is_better: bool = True) -> float:
+    """GMS of one set: the share of the set truly worse than the model's choice."""
+    t, p = _pair(y_true, y_pred)
+    if len(t) == 0:
+        return float("nan")
+    if lower_is_better:
+        chosen = t[int(np.argmin(p))]
+        return float(np.mean(t > chosen))
+    chosen = t[int(np.argmax(p))]
+    return float(np.mean(t < chosen))
+
+
+def gms_distribution(
+    y_true,
+    y_pred,
+    *,
+    fraction: float = 0.1,
+    n_subsets: int = 1000,
+    seed: int = 0,
+    lower_is_better: bool = True,
+) -> np.ndarray:
+    """GMS over ``n_subsets`` random subsets of ``fraction`` of the samples (n_subsets,)."""
+    t, p = _pair(y_true, y_pred)
+    n = len(t)
+    if n < 2:
+        return np.full(0, np.nan)
+    k = max(2, int(round(fraction * n)))
+    rng = np.random.default_rng(seed)
+    out = np.empty(n_subsets)
+    for s in range(n_subsets):
+        idx = rng.choice(n, k, replace=False)
+        out[s] = global_min_score(t[idx], p[idx], lower_is_better=lower_is_better)
+    return out
+
+
+def precision_recall(labels, scores) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Precision, recall and thresholds, one per distinct score (highest threshold first).
+
+    Predicting positive at score ≥ threshold.
+    """
+    y = np.asarray(labels, dtype=np.float64).ravel() > 0.5
+    s = np.asarray(scores, dtype=np.float64).ravel()
+    if len(y) != len(s):
+        raise InputError(f"{len(y)} labels but {len(s)} scores")
+    order = np.argsort(-s, kind="mergesort")
+    s, y = s[order], y[order]
+    last = np.r_[np.flatnonzero(np.diff(s) != 0), len(s) - 1]  # end of each tie group
+    tp = np.cumsum(y)[last]
+    fp = (last + 1) - tp
+    n_pos = max(int(y.sum()), 1)
+    precision = tp / np.maximum(tp + fp, 1)
+    recall = tp / n_pos
+    return precision, recall, s[last]
+
+
+def average_precision(labels, scores) -> float:
+    """AP = Σ (R_k − R_{k−1}) P_k over the distinct thresholds."""
+    if not np.any(np.asarray(labels) > 0.5):
+        return float("nan")
+    precision, recall, _ = precision_recall(labels, scores)
+    return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
+
+
+def regression_report(
+    y_true, y_pred, *, lower_is_better: bool = True, seed: int = 0, n_subsets: int = 1000
+) -> dict:
+    """MSE, comparison accuracy, E[GMS] (and its quartiles) of predictions vs truth."""
+    g = gms_distribution(
+        y_true, y_pred, seed=seed, n_subsets=n_subsets, lower_is_better=lower_is_better
+    )
+    return {
+        "n": int(len(np.ravel(y_true))),
+        "mse": mse(y_true, y_pred),
+        "comparison_accuracy": comparison_accuracy(y_true, y_pred, seed=seed),
+        "expected_gms": float(np.mean(g)) if len(g) else float("nan"),
+        "gms_quartiles": [float(q) for q in np.percentile(g, [25, 50, 75])] if len(g) else [],
+    }
+
+
+def classification_report(labels, scores, *, seed: int = 0) -> dict:
+    """AP on the natural class balance and on a balanced subset, accuracy at 0.5."""
+    y = np.asarray(labels, dtype=np.float64) > 0.5
+    s = np.asarray(scores, dtype=np.float64)
+    pos, neg = np.flatnonzero(y), np.flatnonzero(~y)
+    rng = np.random.default_rng(seed)
+    k = min(len(pos), len(neg))
+    bal = np.r_[rng.choice(pos, k, replace=False), rng.choice(neg, k, replace=False)]
+    return {
+        "n": int(len(y)),
+        "positives": int(y.sum()),
+        "positive_rate": float(y.mean()) if len(y) else float("nan"),
+        "average_precision": average_precision(y, s),
+        "average_precision_balanced": average_precision(y[bal], s[bal]) if k else float("nan"),
+        "accuracy_at_0.5": float(np.mean((s >= 0.5) == y)) if len(y) else float("nan"),
+        "balanced_accuracy_at_0.5": (
+            float(0.5 * (np.mean(s[pos] >= 0.5) + np.mean(s[neg] < 0.5))) if k else float("nan")
+        ),
+    }

@@ -1,0 +1,67 @@
+"""PNG plots of model metrics: precision–recall curves, GMS cumulative distributions,
+predicted vs true values (headless, matplotlib Agg)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .evaluation import gms_distribution, precision_recall
+
+
+def _figure():
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], positive_rate: float):
+    """curves: label → (labels, scores). The dashed line is the predict-the-mean baseline."""
+    plt = _figure()
+    fig, ax = plt.subplots(figsize=(5, 4), dpi=120)
+    for label, (y, s) in curves.items():
+        precision, recall, _ = precision_recall(y, s)
+        ax.step(np.r_[0.0, recall], np.r_[precision[0], precision], where="pre", label=label)
+    ax.axhline(positive_rate, ls="--", c="grey", label=f"baseline ({positive_rate:.2f})")
+    ax.set(xlabel="recall", ylabel="precision", xlim=(0, 1), ylim=(0, 1.02))
+    ax.set_title("Precision-recall, held-out objects")
+    ax.legend(loc="lower left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_is_better=True):
+    """runs: label → (truth, predictions). Cumulative GMS distributions, E[GMS] as lines."""
+    plt = _figure()
+    fig, ax = plt.subplots(figsize=(5, 4), dpi=120)
+    for label, (t, p) in runs.items():
+        g = np.sort(gms_distribution(t, p, lower_is_better=lower_is_better))
+        line = ax.plot(g, np.arange(1, len(g) + 1) / len(g), label=f"{label} (E={g.mean():.2f})")
+        ax.axvline(g.mean(), c=line[0].get_color(), ls=":")
+    ax.set(xlabel="GMS", ylabel="cumulative share of 10% subsets", xlim=(0, 1), ylim=(0, 1))
+    ax.set_title("Global Min Score, held-out objects")
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
+    plt = _figure()
+    fig, ax = plt.subplots(figsize=(4.5, 4.5), dpi=120)
+    ax.scatter(truth, pred, s=4, alpha=0.4)
+    lo = float(min(np.min(truth), np.min(pred)))
+    hi = float(max(np.max(truth), np.max(pred)))
+    ax.plot([lo, hi], [lo, hi], c="grey", ls="--")
+    ax.set(xlabel="true (normalised)", ylabel="predicted (normalised)", title=label)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

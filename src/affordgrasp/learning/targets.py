@@ -1,0 +1,118 @@
+"""What a model learns (SPEC §2.7): the target of a classifier or regressor, by name.
+
+* ``viable``: classification, the learning ground truth of ``affordgrasp.tasks.is_viable``
+  (ε, ΣE_h and E_i thresholds; paper §IV-D).
+* ``hold_effort_sum``: regression of ΣE_h on viable grasps, normalised linearly from
+  [0, 250] N (the viability bound) to [0, 1], as the paper does.
+* any metric column (``epsilon``, ``impact_effort``, ...) or ``task:NAME`` (the task's
+  affordance F_T in the default mode): regression on the rows where it is finite,
+  normalised linearly from the training rows' [min, 99th percentile] to [0, 1].
+
+``log`` (an option, not the paper's): the target is log1p(value − low) before the linear
+normalisation, which tames the heavy tail of efforts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import InputError
+
+# Columns where a smaller value is the better grasp (efforts); the rest are better larger.
+LOWER_IS_BETTER = {
+    "hold_effort_sum",
+    "hold_effort_px",
+    "hold_effort_nx",
+    "hold_effort_py",
+    "hold_effort_ny",
+    "hold_effort_pz",
+    "hold_effort_nz",
+    "impact_effort",
+}
+HOLD_EFFORT_MAX = 250.0  # N, the viability bound on ΣE_h (paper §IV-D)
+
+
+@dataclass(frozen=True)
+class Target:
+    """A learning target: ``name``, ``kind`` (classification/regression), rows, scaling."""
+
+    name: str
+    kind: str  # "classification" or "regression"
+    rows: str  # "all", "viable" or "finite"
+    low: float = 0.0
+    high: float = 1.0
+    log: bool = False
+    lower_is_better: bool = False
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Target:
+        return cls(**d)
+
+    def normalise(self, values: np.ndarray) -> np.ndarray:
+        """Target units → the model's [0, 1] scale (regression) or {0, 1} (classification)."""
+        v = np.asarray(values, dtype=np.float64)
+        if self.kind == "classification":
+            return v.astype(np.float32)
+        if self.log:
+            v = np.log1p(np.maximum(v - self.low, 0.0))
+            return (v / np.log1p(self.high - self.low)).astype(np.float32)
+        return ((v - self.low) / (self.high - self.low)).astype(np.float32)
+
+    def denormalise(self, scores: np.ndarray) -> np.ndarray:
+        """The model's output → target units (a probability for classification)."""
+        s = np.asarray(scores, dtype=np.float64)
+        if self.kind == "classification":
+            return s
+        if self.log:
+            return self.low + np.expm1(s * np.log1p(self.high - self.low))
+        return self.low + s * (self.high - self.low)
+
+
+def target_values(name: str, columns) -> np.ndarray:
+    """The raw value of a target on the rows of a table of metric columns (n,)."""
+    from ..tasks import MetricColumns, evaluate_task, is_viable
+
+    metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
+    if name == "viable":
+        return is_viable(metrics).astype(np.float64)
+    if name.startswith("task:"):
+        return np.asarray(evaluate_task(name[5:], metrics), dtype=np.float64)
+    return np.asarray(metrics[name], dtype=np.float64)
+
+
+def target_rows(target: Target, columns) -> np.ndarray:
+    """Boolean mask of the rows a target is learned and evaluated on."""
+    from ..tasks import MetricColumns, is_viable
+
+    metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
+    if target.rows == "all":
+        return np.ones(metrics.n_rows, dtype=bool)
+    if target.rows == "viable":
+        return is_viable(metrics)
+    return np.isfinite(target_values(target.name, metrics))
+
+
+def make_target(name: str, train_values: np.ndarray | None = None, *, log: bool = False):
+    """The Target called ``name``; a generic column's scale comes from its training values."""
+    if not name or not isinstance(name, str):
+        raise InputError("--target must name 'viable', 'hold_effort_sum', a column or task:NAME")
+    lower = name in LOWER_IS_BETTER
+    if name == "viable":
+        return Target("viable", "classification", "all")
+    if name == "hold_effort_sum":
+        return Target(name, "regression", "viable", 0.0, HOLD_EFFORT_MAX, log, lower)
+    if train_values is None:
+        raise InputError(f"target {name!r} needs training values to set its scale")
+    v = np.asarray(train_values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if len(v) < 2:
+        raise InputError(f"target {name!r} has fewer than 2 finite training values")
+    low, high = float(v.min()), float(np.percentile(v, 99))
+    if high <= low:
+        high = low + 1.0
+    return Target(name, "regression", "finite", low, high, log, lower)

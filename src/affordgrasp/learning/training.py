@@ -1,0 +1,258 @@
+"""Training (SPEC §2.7, paper §IV-D): Adam 1e-3 decaying ∝ 1/epoch, dropout, early stopping
+with patience 5 on the validation loss, seeded and deterministic.
+
+* Classifier: binary cross-entropy; every epoch sees all positives and as many negatives,
+  redrawn each epoch (balanced training data, as the paper; the redraw uses more of the
+  negatives than one fixed subsample). Validation: a fixed balanced subset.
+* Regressor: mean squared error on the [0, 1] target scale; optionally plus a pairwise
+  ranking loss (``rank_weight``), which trains the order of predictions — what comparison
+  accuracy and GMS measure — directly.
+
+Same seed, same data, same thread count → the same weights, bit for bit
+(``torch.use_deterministic_algorithms``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .. import __version__
+from .data import Samples, balanced_indices
+from .models import build_model, count_parameters, depth_input, nearest_depth, pose_features
+from .targets import Target
+from .torch_support import require_torch
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """Optimisation settings (the paper's where it states them)."""
+
+    epochs: int = 40
+    batch_size: int = 64
+    lr: float = 1e-3
+    patience: int = 5
+    seed: int = 0
+    rank_weight: float = 0.0
+    max_seconds: float | None = None
+    threads: int = 1
+
+
+def default_config(arch: str, target: Target, **options) -> dict:
+    """A model config: architecture, sizes, inputs and target."""
+    config = {
+        "arch": arch,
+        "target": target.to_dict(),
+        "dropout": 0.3,
+        "width": 16,
+        "n_points": 256,
+        "canonical": False,
+        "camera": {"size": 128, "fov_deg": 60.0},
+        "affordgrasp_version": __version__,
+    }
+    config.update({k: v for k, v in options.items() if v is not None})
+    return config
+
+
+class Inputs:
+    """The network inputs of a set of samples, built once (images are made per batch)."""
+
+    def __init__(self, config: dict, samples: Samples):
+        from ..vision.points import point_clouds
+
+        self.arch = config["arch"]
+        self.canonical = bool(config.get("canonical"))
+        pose = pose_features(samples.p0, samples.use_dir)
+        if self.arch != "pose" and samples.depth_mm is None:
+            raise ValueError("samples need their depth images (learning.data.load_depth)")
+        if self.canonical and self.arch != "pose":
+            pose = np.concatenate([pose, nearest_depth(samples.depth_mm)], axis=1)
+        self.pose = pose
+        self.depth_mm = samples.depth_mm if self.arch == "cnn" else None
+        self.points = None
+        if self.arch.startswith("pointnet"):
+            depth = samples.depth_mm.astype(np.float32) / 1000.0
+            self.points, _ = point_clouds(
+                depth,
+                int(config.get("n_points", 256)),
+                seed=0,
+                crop_radius=None,
+                centre_depth=self.canonical,
+            )
+
+    def __len__(self) -> int:
+        return len(self.pose)
+
+    def batch(self, idx: np.ndarray):
+        torch = require_torch()
+        pose = torch.from_numpy(self.pose[idx])
+        if self.arch == "cnn":
+            return torch.from_numpy(depth_input(self.depth_mm[idx], self.canonical)), pose
+        if self.points is not None:
+            return torch.from_numpy(self.points[idx]), pose
+        return (pose,)
+
+
+def _forward(model, inputs: Inputs, idx: np.ndarray):
+    return model(*inputs.batch(idx))
+
+
+def predict_scores(model, config: dict, inputs: Inputs, batch_size: int = 256) -> np.ndarray:
+    """Model outputs (n,): probabilities (classifier) or the [0, 1] target scale (regressor)."""
+    torch = require_torch()
+    classification = config["target"]["kind"] == "classification"
+    model.eval()
+    out = np.zeros(len(inputs), dtype=np.float64)
+    with torch.no_grad():
+        for lo in range(0, len(inputs), batch_size):
+            idx = np.arange(lo, min(len(inputs), lo + batch_size))
+            y = _forward(model, inputs, idx)
+            out[idx] = (torch.sigmoid(y) if classification else y).double().numpy()
+    return out
+
+
+def _pairwise_rank_loss(torch, pred, y):
+    """Logistic loss on every ordered pair of the batch with different targets."""
+    diff_y = y[:, None] - y[None, :]
+    diff_p = (pred[:, None] - pred[None, :]) * 10.0
+    mask = diff_y > 1e-6
+    if not bool(mask.any()):
+        return pred.sum() * 0.0
+    return torch.nn.functional.softplus(-diff_p[mask]).mean()
+
+
+def train_model(
+    config: dict,
+    train: Samples,
+    val: Samples,
+    settings: TrainSettings | None = None,
+    progress: Callable[[dict], None] | None = None,
+):
+    """Train the network a config describes; returns (model with the best weights, history).
+
+    train, val : Samples with ``y`` in target units (and depth images unless arch = pose)
+    progress : called after every batch with a dict (epoch, batch, batches, loss, eta_s)
+    """
+    settings = settings or TrainSettings()
+    torch = require_torch()
+    # One thread by default: small batches gain little from more, and on a shared machine
+    # torch's spinning worker threads cost far more than they give (measured: 5x slower).
+    torch.set_num_threads(max(1, int(settings.threads)))
+    torch.manual_seed(settings.seed)
+    torch.use_deterministic_algorithms(True)
+    target = Target.from_dict(config["target"])
+    classification = target.kind == "classification"
+    model = build_model(config)
+    train_in, val_in = Inputs(config, train), Inputs(config, val)
+    y_train = torch.from_numpy(target.normalise(train.y))
+    y_val = torch.from_numpy(target.normalise(val.y))
+    if classification:
+        val_idx = balanced_indices(val.y, seed=settings.seed + 10_007)
+        loss_fn = torch.nn.BCEWithLogitsLoss()
+    else:
+        val_idx = np.arange(len(val))
+        loss_fn = torch.nn.MSELoss()
+    optimiser = torch.optim.Adam(model.parameters(), lr=settings.lr)
+    # lr of epoch k (1-based) = lr / k: "decaying with inverse proportionality with the epochs"
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimiser, lambda e: 1.0 / (e + 1))
+    full = config["arch"] == "pointnet"
+    history: list[dict] = []
+    best = (math.inf, None, 0)
+    started = time.perf_counter()
+    stale = 0
+    for epoch in range(1, settings.epochs + 1):
+        rng = np.random.default_rng(np.random.SeedSequence([settings.seed, epoch]))
+        if classification:
+            order = balanced_indices(train.y, seed=int(rng.integers(2**31)))
+            order = rng.permutation(order)
+        else:
+            order = rng.permutation(len(train))
+        batches = [
+            order[i : i + settings.batch_size] for i in range(0, len(order), settings.batch_size)
+        ]
+        model.train()
+        lr_used = optimiser.param_groups[0]["lr"]
+        total, seen = 0.0, 0
+        for b, idx in enumerate(batches, 1):
+            if len(idx) < 2:
+                continue
+            pred = _forward(model, train_in, idx)
+            loss = loss_fn(pred, y_train[idx])
+            if settings.rank_weight and not classification:
+                loss = loss + settings.rank_weight * _pairwise_rank_loss(torch, pred, y_train[idx])
+            if full and model.last_feature_transform is not None:
+                t = model.last_feature_transform
+                eye = torch.eye(t.shape[1])
+                loss = (
+                    loss + 1e-3 * ((torch.bmm(t, t.transpose(1, 2)) - eye) ** 2).sum((1, 2)).mean()
+                )
+            optimiser.zero_grad()
+            loss.backward()
+            optimiser.step()
+            total += float(loss.detach()) * len(idx)
+            seen += len(idx)
+            if progress is not None:
+                elapsed = time.perf_counter() - started
+                done = (epoch - 1) + b / len(batches)
+                progress(
+                    {
+                        "epoch": epoch,
+                        "epochs": settings.epochs,
+                        "batch": b,
+                        "batches": len(batches),
+                        "loss": total / max(seen, 1),
+                        "eta_s": elapsed / done * (settings.epochs - done),
+                    }
+                )
+        schedule.step()
+        scores = _validation_outputs(model, val_in, val_idx)
+        val_loss = float(loss_fn(scores, y_val[val_idx])) if len(val_idx) else total / max(seen, 1)
+        history.append(
+            {
+                "epoch": epoch,
+                "train_loss": total / max(seen, 1),
+                "val_loss": val_loss,
+                "lr": lr_used,
+            }
+        )
+        log.info("epoch %d train %.5f val %.5f", epoch, history[-1]["train_loss"], val_loss)
+        if val_loss < best[0] - 1e-7:
+            best = (val_loss, {k: v.clone() for k, v in model.state_dict().items()}, epoch)
+            stale = 0
+        else:
+            stale += 1
+            if stale >= settings.patience:
+                break
+        if settings.max_seconds and time.perf_counter() - started > settings.max_seconds:
+            log.info("stopping after %d epochs: time budget reached", epoch)
+            break
+    if best[1] is not None:
+        model.load_state_dict(best[1])
+    model.eval()
+    summary = {
+        "settings": asdict(settings),
+        "history": history,
+        "best_epoch": best[2],
+        "best_val_loss": best[0],
+        "seconds": time.perf_counter() - started,
+        "train_samples": len(train),
+        "parameters": count_parameters(model),
+    }
+    return model, summary
+
+
+def _validation_outputs(model, inputs: Inputs, idx: np.ndarray):
+    torch = require_torch()
+    model.eval()
+    outs = []
+    with torch.no_grad():
+        for lo in range(0, len(idx), 256):
+            outs.append(_forward(model, inputs, idx[lo : lo + 256]))
+    return torch.cat(outs) if outs else torch.zeros(0)

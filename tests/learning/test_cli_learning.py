@@ -1,0 +1,89 @@
+"""The learning commands end to end on a tiny dataset: train, predict, model-eval, depth."""
+
+import json
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from affordgrasp.cli import main
+
+pytest.importorskip("torch")
+
+
+@pytest.fixture(scope="module")
+def tiny_dataset(tmp_path_factory):
+    from affordgrasp.dataset.generate import generate
+
+    out = tmp_path_factory.mktemp("learn") / "ds"
+    generate(["knife:0", "knife:1", "knife:2"], 24, out, seed=0, workers=1, depth=True)
+    return out
+
+
+def test_train_predict_evaluate(tiny_dataset, tmp_path, capsys):
+    model = tmp_path / "m.safetensors"
+    rc = main(
+        [
+            "train",
+            str(tiny_dataset),
+            "--model",
+            "cnn",
+            "--target",
+            "n_contacts",
+            "--epochs",
+            "2",
+            "-o",
+            str(model),
+            "--json",
+        ]
+    )
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    split = doc["config"]["training"]["split"]
+    assert len(split["test"]) == 1 and split["test"][0] not in split["train"]
+    preds = tmp_path / "p.parquet"
+    assert main(["predict", str(model), str(tiny_dataset), "--out", str(preds)]) == 0
+    table = pq.read_table(preds)
+    assert table.column_names == ["object", "sample", "pred_n_contacts"]
+    assert table.num_rows == 72 and np.isfinite(table.column(2).to_numpy()).all()
+    capsys.readouterr()
+    plots = tmp_path / "plots"
+    rc = main(["model-eval", str(model), str(tiny_dataset), "--plots", str(plots), "--json"])
+    assert rc == 0, capsys.readouterr().err
+    rep = json.loads(capsys.readouterr().out)["reports"]["model"]
+    assert 0 <= rep["comparison_accuracy"] <= 1 and rep["n"] == 24
+    assert (plots / "gms_cdf.png").stat().st_size > 1000
+
+
+def test_bad_inputs_exit_2(tiny_dataset, tmp_path, capsys):
+    assert main(["train", str(tmp_path / "none"), "-o", str(tmp_path / "m.safetensors")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    rc = main(
+        ["train", str(tiny_dataset), "--target", "nope", "-o", str(tmp_path / "m.safetensors")]
+    )
+    assert rc == 2 and "nope" in capsys.readouterr().err
+    assert (
+        main(
+            [
+                "predict",
+                str(tmp_path / "x.safetensors"),
+                str(tiny_dataset),
+                "--out",
+                str(tmp_path / "p.parquet"),
+            ]
+        )
+        == 2
+    )
+
+
+def test_depth_command_png_and_npy(tmp_path, capsys):
+    npy = tmp_path / "d.npy"
+    assert main(["depth", "knife", "--p0", "0.1,0.2,0.3,0,0,0.5", "-o", str(npy), "--json"]) == 0
+    facts = json.loads(capsys.readouterr().out)
+    depth = np.load(npy)
+    assert depth.shape == (128, 128) and depth.dtype == np.float32
+    assert facts["pixels_hit"] == int((depth > 0).sum()) > 0
+    png = tmp_path / "d.png"
+    assert main(["depth", "knife", "--sample", "3", "-o", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert main(["depth", "knife", "--p0", "1,2,3"]) == 2
