@@ -173,10 +173,14 @@ def train_on_dataset(
     return model, config
 
 
-def report(model, config: dict, samples: Samples, *, seed: int = 0) -> dict:
-    """The metrics of a model on samples (with depth), beside predict-the-mean."""
+def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None) -> dict:
+    """The metrics of a model on samples (with depth), beside predict-the-mean.
+
+    scores : the model's outputs on the samples when already computed
+    """
     tgt = Target.from_dict(config["target"])
-    scores = predict_scores(model, config, Inputs(config, samples))
+    if scores is None:
+        scores = predict_scores(model, config, Inputs(config, samples))
     if tgt.kind == "classification":
         out = classification_report(samples.y, scores, seed=seed)
         out["baseline_average_precision"] = out["positive_rate"]
@@ -274,4 +278,4 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
     if config["arch"] != "pose":
         load_depth(samples, dataset)
     scores = predict_scores(model, config, Inputs(config, samples))
-    return report(model, config, samples, seed=seed), samples, scores
+    return report(model, config, samples, seed=seed, scores=scores), samples, scores

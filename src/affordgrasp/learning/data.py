@@ -94,13 +94,8 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
             "the metric columns (generate it without --no-metrics)"
         )
     name = target if isinstance(target, str) else target.name
-    extra = [] if name in METRIC_INPUTS or name == "viable" or name.startswith("task:") else []
-    if (
-        name not in ("viable", "hold_effort_sum")
-        and not name.startswith("task:")
-        and name not in METRIC_INPUTS
-    ):
-        extra = [name]
+    derived = name in ("viable", "hold_effort_sum") or name.startswith("task:")
+    extra = [] if derived or name in METRIC_INPUTS else [name]
     columns = list(INPUT_COLUMNS) + list(METRIC_INPUTS) + extra
     if name.startswith("task:"):
         columns = None  # a task may read any metric column
