@@ -96,3 +96,18 @@ def test_barrett_model_matches_the_hand_kinematics(box_object):
         np.testing.assert_allclose(scene.data.xmat[b].reshape(3, 3), fk[i][:3, :3], atol=1e-6)
     # The distal joints follow the proximal ones at the hand's closing ratio (1/3).
     assert scene.model.neq == 3
+
+
+def test_non_backdrivable_jaws_do_not_open_under_load(box_object):
+    # A 40 N push along -x of the box, twice a jaw's 20 N: a backdrivable jaw gives way, a
+    # non-backdrivable one (lead screw, worm drive) does not.
+    load = 40.0 / (box_object.mass.mass * PhysicsSettings().density * 9.81)
+    pose, joints = jaw_grasp(TOUCH, TOUCH)
+    nx = HOLD_DIRECTIONS.index("nx")
+    shifts = {}
+    for backdrivable in (False, True):
+        settings = PhysicsSettings(load_factor=load, backdrivable=backdrivable)
+        out = validate_grasp(build_scene("parallel_jaw", box_object, settings), pose, joints)
+        shifts[backdrivable] = out.hold_shift_m[nx]
+    assert shifts[False] < 1e-3
+    assert shifts[True] > PhysicsSettings().max_shift_m

@@ -54,6 +54,11 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--timestep", type=float, default=d.timestep, help=f"s (default {d.timestep})")
     p.add_argument("--gravity", action="store_true", help="gravity on (-z of the hand frame)")
+    p.add_argument(
+        "--backdrivable",
+        action="store_true",
+        help="fingers the load can push open (default: non-backdrivable drives)",
+    )
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
 
 
@@ -65,6 +70,7 @@ def _settings(args) -> PhysicsSettings:
         grip_force=args.grip_force,
         timestep=args.timestep,
         gravity=args.gravity,
+        backdrivable=args.backdrivable,
         seed=args.seed,
     )
 

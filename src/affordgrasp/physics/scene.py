@@ -105,6 +105,7 @@ class Scene:
     fixed_links: list  # (body id, link index, dof index, ratio, joint kind, origin, axis)
     fingers: list  # (actuator id, joint id, direction, [(eq id, joint id, ratio), ...])
     closing_joints: list  # (MuJoCo joint id, DOF index, ratio) of every closing joint
+    joint_range: object  # (njnt, 2) the model's joint limits as built (the ratchet moves them)
     anvil_mocap: int
     plate_body: int
     plate_joint: int
@@ -176,6 +177,7 @@ def build_scene(
         fixed_links=fixed,
         fingers=fingers,
         closing_joints=[(joint(f"j_{li}"), di, r) for li, di, r in info["closing_links"]],
+        joint_range=model.jnt_range.copy(),
         anvil_mocap=int(model.body_mocapid[body("anvil")]),
         plate_body=plate,
         plate_joint=joint("plate_slide"),
@@ -308,7 +310,10 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
   <option timestep="{s.timestep:.9g}" gravity="0 0 {-G if s.gravity else 0.0:.9g}"
           integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.9g}"/>
   <default>
-    <joint armature="0.01" damping="0.05"/>
+    <joint armature="0.01" damping="0.05" solreflimit="{s.contact_timeconst:.9g} 1"
+           solimplimit="0.95 0.99 0.001"/>
+    <geom solref="{s.contact_timeconst:.9g} 1" solimp="0.95 0.99 0.001"/>
+    <equality solref="{s.contact_timeconst:.9g} 1" solimp="0.95 0.99 0.001"/>
   </default>
   <asset>
 {"".join(assets)}  </asset>

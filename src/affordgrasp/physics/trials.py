@@ -89,6 +89,7 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
     hand_pose = np.asarray(hand_pose, dtype=np.float64).reshape(4, 4)
     joints = np.asarray(joints, dtype=np.float64)
     mj.mj_resetData(m, d)
+    m.jnt_range[:] = scene.joint_range
     for body, _li, di, ratio, kind, origin, axis in scene.fixed_links:
         t = origin @ joint_motion(kind, axis, ratio * joints[di])
         m.body_pos[body] = t[:3, 3]
@@ -150,6 +151,7 @@ def _squeeze(scene: Scene) -> int:
     start = {act: d.ctrl[act] for act, *_ in scene.fingers}
     n_ramp = max(1, round(s.squeeze_time / s.timestep))
     n_settle = round(s.settle_time / s.timestep)
+    drivers = [(jid, direction, m.jnt_qposadr[jid]) for _a, jid, direction, _f in scene.fingers]
     for step in range(n_ramp + n_settle):
         frac = min(1.0, (step + 1) / n_ramp)
         for act, jid, direction, _f in scene.fingers:
@@ -157,7 +159,19 @@ def _squeeze(scene: Scene) -> int:
             over = s.overshoot_rad if kind == mj.mjtJoint.mjJNT_HINGE else s.overshoot_m
             d.ctrl[act] = start[act] + direction * over * frac
         mj.mj_step(m, d)
+        if not s.backdrivable:
+            _ratchet(m, d, drivers)
     return n_ramp + n_settle
+
+
+def _ratchet(m, d, drivers) -> None:
+    """A non-backdrivable drive: the opening-side limit follows the finger as it closes."""
+    for jid, direction, adr in drivers:
+        q = d.qpos[adr]
+        if direction > 0:
+            m.jnt_range[jid, 0] = min(max(m.jnt_range[jid, 0], q), m.jnt_range[jid, 1])
+        else:
+            m.jnt_range[jid, 1] = max(min(m.jnt_range[jid, 1], q), m.jnt_range[jid, 0])
 
 
 def _hand_contacts(scene: Scene) -> int:
