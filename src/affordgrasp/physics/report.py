@@ -1,7 +1,8 @@
 """Do the metrics predict what the physics engine sees? ROC-AUC and Spearman, per family.
 
 Predictors are oriented so that larger means "better grasp": ε, −ΣE_h, −E_i, U_τ, δ and
-every registered task's score (default mode; −∞ when a threshold fails). Outcomes:
+every registered task's score in its default mode and without the robustness threshold
+(``task_NAME@no-robustness``); −∞ when a threshold fails. Outcomes:
 
 * binary: ``hold_ok`` (settled and all six hold directions), ``settled`` (the object came
   to rest in the hand after the squeeze), ``impact_ok``, ``press_held``;
@@ -107,11 +108,15 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
     }
     columns = {name: col(name) for name in table.column_names if _is_metric(table, name)}
     for task in list_tasks():
-        try:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                preds[f"task_{task}"] = np.asarray(evaluate_task(task, columns), dtype=np.float64)
-        except Exception:  # noqa: BLE001 - a user task may need columns a run lacks
-            continue
+        # The default mode, and the mode without the robustness threshold (τ_ε = -inf): the
+        # default thresholds may leave no grasp of a run with a finite score.
+        for mode, suffix in (("default", ""), ("no-robustness", "@no-robustness")):
+            try:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    values = evaluate_task(task, columns, mode)
+            except Exception:  # noqa: BLE001 - a user task may lack a mode or a column
+                continue
+            preds[f"task_{task}{suffix}"] = np.asarray(values, dtype=np.float64)
     return preds
 
 
