@@ -1,4 +1,4 @@
-"""Throughput of the metric vector Φ (SPEC §2.4) on random, realistic contact sets.
+"""Throughput of the metric vector Φ (conventions: Metrics) on random, realistic contact sets.
 
 Contact sets of 3-10 contacts are sampled on the surface of a built-in family object (a
 knife by default) with the object's outward normals and plastic-wood friction (μ = 0.4),

@@ -4,7 +4,7 @@ The paper (Table I and §IV-D) thresholds ε at 0.15 (viable grasp), 0.3 (defaul
 0.5 (extra robustness) without stating the torque scale. This script measures, on uniform
 random samples of the built-in families, ε on two scales computed from the same contacts:
 
-* ``epsilon``: GraspIt!'s normalised ε, torques divided by r_max (SPEC §2.4; the column);
+* ``epsilon``: GraspIt!'s normalised ε, torques divided by r_max (conventions: Metrics; the column);
 * ``epsilon_mm``: torques in N·mm (lever arms in millimetres, no r_max division), the scale
   a GraspIt! plugin gets when it builds the wrench space from GraspIt!'s millimetre
   positions without the normalisation.

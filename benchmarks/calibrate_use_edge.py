@@ -2,7 +2,7 @@
 
 The paper's τ_Ug = 10 was in the unknown units of its models, and U_g depends on the
 triangle size, so the default threshold is chosen on the procedural families that the
-package ships (SPEC §2.4 (a)):
+package ships (conventions: Metrics, U_g):
 
 * blade families (knife, meat_cleaver, axe, dagger, sword) over several seeds; their
   *cutting edge* is identified geometrically: convex mesh edges with an interior dihedral

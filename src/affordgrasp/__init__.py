@@ -24,7 +24,9 @@ name                   what
 ``best_grasps``        the argmax of a task over a dataset
 =====================  ===================================================================
 
-Names are imported on first use, so ``import affordgrasp`` stays fast.
+Names are imported on first use, so ``import affordgrasp`` stays fast. Units, frames and
+the definitions of every metric are in docs/conventions.md; a docstring that says
+"conventions: Metrics" refers to that page's section *Metrics*.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Materials and the GraspIt! static friction table (SPEC §2.3)."""
+"""Materials and the GraspIt! static friction table (conventions: Pregrasp)."""
 
 from __future__ import annotations
 

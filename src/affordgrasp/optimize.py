@@ -1,4 +1,4 @@
-"""Direct optimisation of an affordance F_T over (p0, d) in simulation (SPEC §2.6).
+"""Direct optimisation of an affordance F_T over (p0, d) in simulation (conventions: Datasets).
 
 Beyond the paper's brute-force argmax: the cross-entropy method (CEM) searches the 8-D box
 x = (p0, d) ∈ [-1, 1]^5 × [0, 1] × [-1, 1]^2 for the grasp with the largest F_T.

@@ -75,7 +75,9 @@ def _ragged_vec3(chunks: list[np.ndarray]) -> pa.Array:
 def _ragged(chunks: list[np.ndarray], typ: pa.DataType) -> pa.Array:
     counts = np.array([len(c) for c in chunks], dtype=np.int32)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-    flat = np.concatenate([np.asarray(c).reshape(-1) for c in chunks]) if chunks else []
+    flat: list | np.ndarray = (
+        np.concatenate([np.asarray(c).reshape(-1) for c in chunks]) if chunks else []
+    )
     return pa.ListArray.from_arrays(pa.array(offsets), pa.array(list(flat), type=typ))
 
 

@@ -19,7 +19,7 @@ HOLD = [f"hold_effort_{s}" for s in ("px", "nx", "py", "ny", "pz", "nz")]
 
 
 def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
-    """The paper's formulas written out over the DataFrame (SPEC §2.5)."""
+    """The paper's formulas written out over the DataFrame (conventions: Tasks)."""
     tau_eps = {
         "default": tasks.TAU_EPS_DEFAULT,
         "no-robustness": -np.inf,

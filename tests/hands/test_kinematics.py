@@ -1,4 +1,4 @@
-"""Forward kinematics of the built-in hands against poses computed by hand from the SPEC."""
+"""Forward kinematics of the built-in hands against poses computed by hand from their dimensions."""
 
 import numpy as np
 import pytest

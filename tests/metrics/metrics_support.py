@@ -1,6 +1,6 @@
 """Shared helpers of the metric tests: random contact sets and independent reference code.
 
-The reference functions here are written from SPEC §2.4 directly in plain numpy/scipy,
+The reference functions here are written from conventions: Metrics directly in plain numpy/scipy,
 independently of the compiled kernels, so that the tests check the kernels.
 """
 
@@ -16,7 +16,7 @@ SQRT2 = np.sqrt(2.0)
 
 
 def ref_cone_edges(outward_normal: np.ndarray, mu: float) -> np.ndarray:
-    """(8, 3) edge forces of one contact, GraspIt!'s tangent convention (SPEC §2.4)."""
+    """(8, 3) edge forces of one contact, GraspIt!'s tangent convention (conventions: Metrics)."""
     n = -np.asarray(outward_normal, dtype=float)
     n = n / np.linalg.norm(n)
     axis = np.array([0.0, 0.0, 1.0]) if abs(n[0]) > 1 - 1e-12 else np.array([1.0, 0.0, 0.0])

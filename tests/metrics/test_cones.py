@@ -1,4 +1,4 @@
-"""Friction cone edges and wrench matrices (cones.py, SPEC §2.4)."""
+"""Friction cone edges and wrench matrices (cones.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Momentum discharge efficiency δ (discharge.py, SPEC §2.4)."""
+"""Momentum discharge efficiency δ (discharge.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Hand effort on hold E_h and on impact E_i (effort.py, SPEC §2.4)."""
+"""Hand effort on hold E_h and on impact E_i (effort.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest

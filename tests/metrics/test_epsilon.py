@@ -1,4 +1,4 @@
-"""ε and the GWS volume (epsilon.py, SPEC §2.4) against an independent qhull computation."""
+"""ε and the GWS volume (epsilon.py, conventions: Metrics) against an independent qhull."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Rotational inertia about the wrist axis (inertia.py, SPEC §2.4)."""
+"""Rotational inertia about the wrist axis (inertia.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Force transmitted to use U_τ (transmission.py, SPEC §2.4)."""
+"""Force transmitted to use U_τ (transmission.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""U_g and the sharpest-edge angle (use_geometry.py, SPEC §2.4)."""
+"""U_g and the sharpest-edge angle (use_geometry.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest

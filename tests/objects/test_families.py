@@ -1,4 +1,4 @@
-"""Tests for the procedural object families (SPEC §2.1)."""
+"""Tests for the procedural object families (conventions: Objects)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Object specs (SPEC §2.9): families, family:seed, mesh paths; identity and caching."""
+"""Object specs (conventions: Objects): families, family:seed, mesh paths; identity, caching."""
 
 from __future__ import annotations
 

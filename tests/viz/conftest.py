@@ -301,7 +301,7 @@ def metric_row(rng: np.random.Generator) -> dict:
 
 
 def write_dataset(directory: Path, objects: list, rows_per_object: int = 6, seed: int = 0) -> Path:
-    """A small dataset directory: one Parquet shard per object with the SPEC §2.9 columns,
+    """A small dataset directory: one Parquet shard per object (conventions: Sample columns),
     hand-made grasps (the hand rotated about the approach) and random plausible metrics;
     a few rows per object are failures (+inf efforts, ε = 0)."""
     import pyarrow as pa

@@ -1,6 +1,6 @@
-"""Data at scale (SPEC §2.6): the per-sample schema, generation, reading, argmax.
+"""Data at scale (conventions: Datasets): the per-sample schema, generation, reading, argmax.
 
-* ``schema``: the columns of a sample row (SPEC §2.9);
+* ``schema``: the columns of a sample row (conventions: Sample columns);
 * ``generate``: sharded, deterministic, resumable Parquet datasets (``layout`` on disk,
   ``engines`` for local processes or Ray, ``card`` for the dataset card);
 * ``reading``: a dataset directory as one Arrow dataset;

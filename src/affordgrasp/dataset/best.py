@@ -1,4 +1,4 @@
-"""Brute-force argmax of an affordance over a dataset (paper §IV-C, SPEC §2.6).
+"""Brute-force argmax of an affordance over a dataset (paper §IV-C, conventions: Datasets).
 
 :func:`best_grasps` streams a dataset in batches, scores every row with a task's affordance
 function F_T and keeps the ``top`` rows, so memory stays bounded however large the dataset.

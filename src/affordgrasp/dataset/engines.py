@@ -1,4 +1,4 @@
-"""Where simulations run: in this process, on local worker processes, or on Ray (SPEC §2.6).
+"""Where simulations run: this process, local worker processes or Ray (conventions: Datasets).
 
 Every engine runs the same unit of work, a :class:`Job` (a range of seeded samples, or given
 inputs, of one object), through the same function, :func:`run_job`, and hands the resulting

@@ -1,4 +1,4 @@
-"""Generate a sharded Parquet dataset of evaluated grasps (SPEC §2.6, paper §IV-B).
+"""Generate a sharded Parquet dataset of evaluated grasps (conventions: Datasets, paper §IV-B).
 
 :func:`generate` samples (p0, d) uniformly for every object, simulates the grasp policy,
 computes Φ, and writes every sample, stable or not, as Parquet shards (see

@@ -1,4 +1,4 @@
-"""The on-disk layout of a generated dataset: the plan, the manifest and the shards (SPEC §2.6).
+"""The on-disk layout of a dataset: the plan, the manifest and the shards (conventions: Datasets).
 
 A dataset directory holds::
 

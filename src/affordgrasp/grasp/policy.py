@@ -1,4 +1,4 @@
-"""The grasp policy GP(p0, O) (SPEC §2.3, paper §III-A): approach, then close every finger.
+"""The grasp policy GP(p0, O) (conventions: Pregrasp; paper §III-A): approach, then close.
 
 1. The hand starts outside the object, open at its pregrasp spread, and moves along its
    approach direction until the first contact (sample points traced exactly against the
@@ -39,7 +39,7 @@ from .surface import SurfaceSample, sample_surface
 log = logging.getLogger(__name__)
 
 HIT_EPS = STOP_DISTANCE_M  # m: a link stops within 0.05 mm of the surface
-CONTACT_TOL = CONTACT_DISTANCE_M  # m: links within 0.2 mm touch (SPEC: about 0.1-0.2 mm)
+CONTACT_TOL = CONTACT_DISTANCE_M  # m: links within 0.2 mm touch (conventions: 0.1-0.2 mm)
 MERGE_RADIUS = 3e-3  # m: contacts of one link closer than this are merged (as GraspIt!)
 PATCH_ANGLE = np.deg2rad(10.0)
 

@@ -1,4 +1,4 @@
-"""Decoding the pregrasp p0 and the use direction d (SPEC §2.3, paper §IV-B).
+"""Decoding the pregrasp p0 and the use direction d (conventions: Pregrasp, paper §IV-B).
 
 Spherical coding shared by p0 and d: azimuth = π·u1, cos(polar) = u2, so uniform (u1, u2) in
 [-1, 1]^2 gives directions uniform on the sphere::

@@ -1,4 +1,4 @@
-"""The Barrett BH8-282, built from its published dimensions (SPEC §2.2).
+"""The Barrett BH8-282, built from its published dimensions (conventions: Hands).
 
 Hand frame: palm face at z = 0, approach along +z. F1 and F2 turn on spread axes at
 x = ±25 mm (F1 at +x); F3 is fixed with its proximal joint at (0, -50 mm). At spread 0 the

@@ -101,6 +101,10 @@ def _array(value: Any, shape: tuple[int, ...], where: str) -> np.ndarray:
     return arr
 
 
+def _half_extents(a: np.ndarray) -> tuple[float, float, float]:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
 def hand_from_dict(doc: dict) -> Hand:
     """The :class:`Hand` of a document made by :func:`hand_to_dict` (validated)."""
     name = str(_need(doc, "name", "hand"))
@@ -132,7 +136,7 @@ def hand_from_dict(doc: dict) -> Hand:
             shapes = tuple(
                 Shape(
                     str(_need(s, "kind", lw)),
-                    tuple(float(x) for x in _array(_need(s, "half_extents", lw), (3,), lw)),
+                    _half_extents(_array(_need(s, "half_extents", lw), (3,), lw)),
                     float(_need(s, "radius", lw)),
                     _array(s.get("pose", np.eye(4)), (4, 4), f"{lw} shape pose"),
                 )

@@ -1,6 +1,6 @@
 """A hand is data: links with collision shapes, a kinematic tree, DOFs and a closing behaviour.
 
-Conventions (SPEC §2.2):
+Conventions (conventions: Hands):
 
 * The hand frame is the palm frame: the palm face lies in the plane z = 0, its centre is the
   origin, and the hand approaches along +z.

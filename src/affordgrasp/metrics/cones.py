@@ -1,7 +1,7 @@
-"""Linearised friction cones and contact wrench matrices (SPEC §2.4, "Friction cones").
+"""Linearised friction cones and contact wrench matrices (conventions: Metrics).
 
 Every contact-based metric (ε, E_h, E_i, U_τ) uses the same cones, built exactly as
-GraspIt! builds them in the object's mesh frame, so that anyone following SPEC §2.4
+GraspIt! builds them in the object's mesh frame, so that anyone following conventions: Metrics
 reproduces the numbers to 1e-9:
 
 * ``n`` is the *inward* unit normal (minus the object's outward normal);
@@ -146,7 +146,7 @@ def tangent_frames(inward_normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def friction_cone_edges(normals: np.ndarray, mu: np.ndarray | float) -> np.ndarray:
-    """Edge forces of the linearised friction cones (SPEC §2.4).
+    """Edge forces of the linearised friction cones (conventions: Metrics).
 
     normals : (k, 3) float, the object's *outward* unit normals
     mu : (k,) float or scalar, friction coefficients
@@ -166,7 +166,7 @@ def contact_wrenches(
     torque_scale: float = 1.0,
     soft: bool = False,
 ) -> np.ndarray:
-    """Wrench matrix of all cone edges of a contact set (SPEC §2.4).
+    """Wrench matrix of all cone edges of a contact set (conventions: Metrics).
 
     points : (k, 3) float, contact points, m
     normals : (k, 3) float, outward unit normals

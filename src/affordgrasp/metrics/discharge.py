@@ -1,4 +1,4 @@
-"""Momentum discharge efficiency δ (SPEC §2.4).
+"""Momentum discharge efficiency δ (conventions: Metrics).
 
 The hand swings positively about the wrist axis (unit ``a`` through the wrist point
 ``w``). At impact the environment pushes on the use point ``U`` along the inward normal
@@ -24,7 +24,7 @@ MOMENT_TOL = ZERO_MOMENT  # |M| below this fraction of |U - w| counts as a zero 
 
 
 def discharge(use_point, use_normal, wrist_point, wrist_axis) -> float | np.ndarray:
-    """Momentum discharge efficiency δ ∈ [0, 1] (SPEC §2.4).
+    """Momentum discharge efficiency δ ∈ [0, 1] (conventions: Metrics).
 
     use_point : (3,) or (n, 3) m; use_normal : (3,) or (n, 3) outward unit normals
     wrist_point : (3,) or (n, 3) m; wrist_axis : (3,) or (n, 3), direction of +a

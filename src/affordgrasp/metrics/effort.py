@@ -1,4 +1,4 @@
-"""Hand effort on hold E_h and on impact E_i (SPEC §2.4).
+"""Hand effort on hold E_h and on impact E_i (conventions: Metrics).
 
 Both are linear programs over the cone-edge weights ``λ >= 0`` of all contacts (see
 :mod:`affordgrasp.metrics.cones`): each edge has unit normal component, so ``Σ λ`` is
@@ -116,7 +116,7 @@ def impact_effort_kernel(W, w_use, axis):
 
 
 def hold_effort(contacts, center, *, soft: bool = False, backend: str = "simplex") -> np.ndarray:
-    """Hand effort on hold E_h (SPEC §2.4).
+    """Hand effort on hold E_h (conventions: Metrics).
 
     contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
     center : (3,) float, centre of mass, m
@@ -166,7 +166,7 @@ def impact_effort(
     soft: bool = False,
     backend: str = "simplex",
 ) -> float:
-    """Hand effort on impact E_i (SPEC §2.4), N per N·m of inertial torque.
+    """Hand effort on impact E_i (conventions: Metrics), N per N·m of inertial torque.
 
     contacts : ContactSet; center : (3,) centre of mass, m
     use_point : (3,) m; use_normal : (3,) outward unit normal at the use point

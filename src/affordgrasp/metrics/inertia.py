@@ -1,4 +1,4 @@
-"""Rotational inertia I of the object about the wrist axis (SPEC §2.4).
+"""Rotational inertia I of the object about the wrist axis (conventions: Metrics).
 
 The hand is rigidly attached to the object and rotates about the wrist axis: the line
 through the wrist point ``w`` along the unit approach direction ``a``. By the
@@ -20,7 +20,7 @@ from .validation import points_n3, units_n3
 
 
 def rotational_inertia(mass, wrist_point, wrist_axis) -> float | np.ndarray:
-    """Rotational inertia about the wrist axis (SPEC §2.4), kg m².
+    """Rotational inertia about the wrist axis (conventions: Metrics), kg m².
 
     mass : MassProperties (mass kg, center_of_mass (3,) m, inertia (3, 3) kg m² about it)
     wrist_point : (3,) or (n, 3) m, a point of the axis

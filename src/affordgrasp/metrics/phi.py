@@ -1,4 +1,4 @@
-"""The metric vector Φ(O, G, U), assembled in one place (SPEC §2.4, column names §2.9).
+"""The metric vector Φ(O, G, U), assembled in one place (conventions: Metrics, Sample columns).
 
 Each entry comes from its own metric function; this module only gathers inputs, runs the
 contact-based metrics of a whole batch in one compiled loop (no Python work per grasp on
@@ -128,7 +128,7 @@ def compute_phi_batch(
     soft: bool = False,
     edge_radius: float = EDGE_RADIUS_M,
 ) -> dict[str, np.ndarray]:
-    """Φ for n grasps of one object (SPEC §2.4), as columns named by :data:`METRIC_COLUMNS`.
+    """Φ for n grasps of one object (conventions: Metrics), columns named by :data:`METRIC_COLUMNS`.
 
     mass : MassProperties of the object (centre of mass, r_max, inertia)
     mesh : trimesh.Trimesh of the object, m (for U_g and the edge angle)
@@ -227,7 +227,7 @@ def compute_phi(
     soft: bool = False,
     edge_radius: float = EDGE_RADIUS_M,
 ) -> dict[str, float | str]:
-    """Φ of one grasp (SPEC §2.4): {column: float or str}, see :func:`compute_phi_batch`.
+    """Φ of one grasp (conventions: Metrics): {column: float or str}, see :func:`compute_phi_batch`.
 
     use_point, use_normal (outward), wrist_point, wrist_axis : (3,); use_triangle : int
     """

@@ -1,4 +1,4 @@
-"""Force transmitted to use U_τ (SPEC §2.4).
+"""Force transmitted to use U_τ (conventions: Metrics).
 
 The largest force ``F >= 0`` the object can press on the environment at the use point
 ``U`` along its outward normal, in static equilibrium, with every contact force inside
@@ -79,7 +79,7 @@ def use_force(
     soft: bool = False,
     backend: str = "simplex",
 ) -> float:
-    """Force transmitted to use U_τ (SPEC §2.4), N.
+    """Force transmitted to use U_τ (conventions: Metrics), N.
 
     contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
     center : (3,) centre of mass, m; use_point : (3,) m

@@ -1,4 +1,4 @@
-"""Local geometry at the use point: U_g (edge-ness) and the sharpest-edge angle (SPEC §2.4).
+"""Geometry at the use point: U_g (edge-ness) and the sharpest-edge angle (conventions: Metrics).
 
 **U_g** (the paper's definition). Take the triangle hit at U and every triangle that
 shares at least one vertex with it; express all their vertices in a frame whose origin is
@@ -106,7 +106,7 @@ def _triangle_normals(mesh, T: np.ndarray) -> np.ndarray:
 
 
 def use_edge(mesh, use_triangle, use_point=None) -> float | np.ndarray:
-    """U_g, the paper's edge-ness of the surface at the use point (SPEC §2.4), m⁻².
+    """U_g, the paper's edge-ness of the surface at the use point (conventions: Metrics), m⁻².
 
     mesh : trimesh.Trimesh, m
     use_triangle : int or (n,) int, index of the face hit at the use point

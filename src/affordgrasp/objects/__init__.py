@@ -1,4 +1,4 @@
-"""Objects: load, repair and scale meshes, mass properties, built-in families (SPEC §2.1).
+"""Objects: load, repair and scale meshes, mass properties, families (conventions: Objects).
 
 The entry point is :func:`resolve_object`, which turns ``"knife"``, ``"knife:7"`` or a
 mesh path into a :class:`GraspObject`. The procedural families (:func:`make_family`,

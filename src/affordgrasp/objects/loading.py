@@ -1,4 +1,4 @@
-"""Load mesh files and turn any mesh into a usable solid (SPEC §2.1).
+"""Load mesh files and turn any mesh into a usable solid (conventions: Objects).
 
 :func:`load_mesh` reads OBJ, STL (ASCII and binary), PLY, GLB/GLTF (every geometry of the
 scene, with its transform) and OFF (our own reader, :mod:`affordgrasp.objects.off`).

@@ -1,4 +1,4 @@
-"""Mass properties of a closed mesh at a uniform density, or of parts (SPEC §2.1).
+"""Mass properties of a closed mesh at a uniform density, or of parts (conventions: Objects).
 
 Validated against known geometries: boxes, cylinders and spheres against their closed
 forms, and the rigid-motion laws (translation moves the centre of mass only, a rotation R

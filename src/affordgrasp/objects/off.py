@@ -1,4 +1,4 @@
-"""A robust reader for OFF meshes (the Princeton Shape Benchmark format, SPEC §2.1).
+"""A robust reader for OFF meshes (the Princeton Shape Benchmark format, conventions: Objects).
 
 OFF files in the wild have n-gon faces, comments anywhere (also right after the counts
 line), lower-case headers, header and counts on one line, extra per-vertex columns

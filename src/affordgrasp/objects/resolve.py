@@ -1,4 +1,4 @@
-"""Turn an object spec into a ready object: mesh, mass properties, identity (SPEC §2.9).
+"""Turn an object spec into a ready object: mesh, mass properties, identity (conventions: Objects).
 
 Spec grammar, as on the command line:
 

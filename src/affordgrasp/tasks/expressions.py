@@ -13,7 +13,7 @@ import ast
 import math
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -152,7 +152,7 @@ class Expression:
 
     def _eval(self, node: ast.AST, env: Mapping[str, Any]) -> Any:
         if isinstance(node, ast.Constant):
-            return float(node.value)
+            return float(cast(float, node.value))  # _check admitted numbers only
         if isinstance(node, ast.Name):
             if node.id in EXPRESSION_CONSTANTS:
                 return EXPRESSION_CONSTANTS[node.id]
@@ -180,7 +180,7 @@ class Expression:
                 left = right
             return out
         if isinstance(node, ast.Call):
-            fn = EXPRESSION_FUNCTIONS[node.func.id]
+            fn = EXPRESSION_FUNCTIONS[cast(ast.Name, node.func).id]
             return fn(*(self._eval(a, env) for a in node.args))
         raise TaskError(f"cannot evaluate {type(node).__name__}")  # unreachable after _check
 

@@ -5,22 +5,20 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-# Robustness thresholds. The paper's τ_ε (0.15 viable, 0.3 default, 0.5 extra robustness)
-# are on a scale its text does not state; on the SPEC's ε (GraspIt!'s normalised ε, torque /
-# r_max) they are out of reach: over 4000 uniform samples of each built-in family the
-# largest ε is 0.016-0.098 on tools and 0.11-0.24 on containers, so the literal values give
-# no beat or cut candidate and 0.04 % viable grasps (paper: 5 %). With torques in N·mm and
-# no r_max division (what a GraspIt! plugin gets from GraspIt!'s millimetres) ε tops at
-# 0.25-0.48 on tools, 0.3 keeps 0-0.1 % of the samples and 0.5 none on any tool, although
-# the paper shows "extra robustness" grasps on a knife (its Fig. 7): that scale does not
-# reproduce the paper's thresholds either, and it depends on the length unit. So the
-# defaults stay on the normalised ε and are calibrated by a stated rule
-# (benchmarks/calibrate_thresholds.py, 11 families of the paper's categories x 4000
-# uniform samples, seed 0): τ_ε of the viable grasp is the value at which 5 % of the
-# samples are viable (the paper's 20 M of 400 M), with E_i < 1e5 N per N·m, the paper's
-# 100 with torques in N·mm (E_i is linear in the torque, so this is a unit conversion);
-# the task thresholds keep the paper's ratios 0.15 : 0.3 : 0.5. The paper's literal values
-# remain the modes "paper" and "paper-extra-robustness".
+# Robustness thresholds. The paper's τ_ε (0.15 viable, 0.3 default, 0.5 extra robustness) are on a
+# scale its text does not state; on our ε (docs/conventions.md: GraspIt!'s normalised ε, torque /
+# r_max) they are out of reach: over 4000 uniform samples of each built-in family the largest ε is
+# 0.016-0.098 on tools and 0.11-0.24 on containers, so the literal values give no beat or cut
+# candidate and 0.04 % viable grasps (paper: 5 %). With torques in N·mm and no r_max division (what
+# a GraspIt! plugin gets from GraspIt!'s millimetres) ε tops at 0.25-0.48 on tools, 0.3 keeps 0-0.1
+# % of the samples and 0.5 none on any tool, although the paper shows "extra robustness" grasps on a
+# knife (its Fig. 7): that scale does not reproduce the paper's thresholds either, and it depends on
+# the length unit. So the defaults stay on the normalised ε and are calibrated by a stated rule
+# (benchmarks/calibrate_thresholds.py, 11 families of the paper's categories x 4000 uniform samples,
+# seed 0): τ_ε of the viable grasp is the value at which 5 % of the samples are viable (the paper's
+# 20 M of 400 M), with E_i < 1e5 N per N·m, the paper's 100 with torques in N·mm (E_i is linear in
+# the torque, so this is a unit conversion); the task thresholds keep the paper's ratios 0.15 : 0.3
+# : 0.5. The paper's literal values remain the modes "paper" and "paper-extra-robustness".
 TAU_EPS_VIABLE = 0.0071  # calibrated: 5 % of uniform samples viable
 TAU_EPS_DEFAULT = 0.014  # 2 x TAU_EPS_VIABLE (paper: 0.3 = 2 x 0.15)
 TAU_EPS_EXTRA = 0.024  # 10/3 x TAU_EPS_VIABLE (paper: 0.5)
@@ -54,7 +52,7 @@ TAU_UG_DEFAULT = 3.0e4
 # edge angle (a deviation from the paper, whose U_g test is "cut-ug").
 TAU_EDGE_ANGLE_DEFAULT = math.radians(45.0)
 
-# viable grasp (paper §III-B / SPEC §2.5), calibrated as above; "paper" mode: 0.15, 250, 100
+# viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
 VIABLE_HOLD_MAX = 250.0
 VIABLE_IMPACT_MAX = 1.0e5  # N per N·m: the paper's 100 N per N·mm

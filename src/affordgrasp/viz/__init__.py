@@ -1,9 +1,9 @@
-"""Seeing results (SPEC §2.8): grasp renders, grids, dataset plots and an offline 3D viewer.
+"""Seeing results: grasp renders, grids, dataset plots and an offline 3D viewer.
 
 Everything runs headless: images are ray cast (embree through ``embreex``), drawn with
 matplotlib's Agg canvas and written as PNG; the viewer is one self-contained HTML file.
 
-* :func:`grasp_scene` turns a sample row (SPEC §2.9 columns) into a :class:`GraspScene`;
+* :func:`grasp_scene` turns a sample row (conventions: Sample columns) into a :class:`GraspScene`;
   :func:`save_grasp_png` / :func:`grasp_image` draw it (camera: :func:`auto_camera`, or your
   own :class:`Camera`).
 * Modules: :mod:`.scene` (what is drawn), :mod:`.camera` (pinhole cameras, the default view),

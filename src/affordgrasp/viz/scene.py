@@ -84,15 +84,17 @@ def _points(row: Mapping, name: str) -> np.ndarray:
 def grasp_scene(
     obj, row: Mapping, *, hand: Hand | str | None = None, title: str = ""
 ) -> GraspScene:
-    """The scene of one sample row (a mapping with the SPEC §2.9 columns, e.g. a dict from
-    ``table.slice(i, 1).to_pylist()[0]``).
+    """The scene of one sample row: a mapping of the sample columns (conventions: Sample
+    columns), e.g. ``table.slice(i, 1).to_pylist()[0]``.
 
     obj : GraspObject (its mesh and centre of mass are drawn)
     hand : the hand that made the grasp; by default the row's ``hand`` column, else "barrett"
     """
     for name in ("hand_pose", "joints"):
         if row.get(name) is None:
-            raise InputError(f"a grasp row needs the column {name!r} (SPEC §2.9) to be drawn")
+            raise InputError(
+                f"a grasp row needs the column {name!r} (see docs/conventions.md) to be drawn"
+            )
     if hand is None:
         hand = row.get("hand")
         hand = hand if isinstance(hand, str) and hand else "barrett"

@@ -1,4 +1,4 @@
-"""Procedural tool and object families (SPEC §2.1): seeded, watertight, in metres.
+"""Procedural tool and object families (conventions: Objects): seeded, watertight, in metres.
 
 The benchmark meshes of the paper cannot be redistributed, so these families give an
 unlimited supply of train/validation/test objects, split by instance (seed).  Each family is
