@@ -56,6 +56,10 @@ def test_physics_command_writes_outcomes_report_and_resumes(tiny_dataset, tmp_pa
     assert summary["shards_skipped"] == 1 and summary["shards_written"] == 1
     assert pq.read_table(shards[1]).to_pandas().equals(first.to_pandas())  # NaN == NaN
 
+    # An object the dataset does not hold is refused, naming the ones it holds.
+    code, _, stderr = _run(capsys, tiny_dataset, "--out", tmp_path / "o2", "--object", "axe")
+    assert code == 2 and "block.stl" in stderr
+
     # Another plan in the same directory is refused, with what differs.
     code, _, stderr = _run(capsys, tiny_dataset, "--out", out, "--load-factor", 2)
     assert code == 2 and "settings_digest" in stderr

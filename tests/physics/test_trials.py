@@ -111,3 +111,25 @@ def test_non_backdrivable_jaws_do_not_open_under_load(box_object):
         shifts[backdrivable] = out.hold_shift_m[nx]
     assert shifts[False] < 1e-3
     assert shifts[True] > PhysicsSettings().max_shift_m
+
+
+def test_barrett_distal_follows_the_proximal_at_one_third(box_object):
+    from affordgrasp.hands import get_hand
+    from affordgrasp.physics.trials import _squeeze, set_grasp
+
+    hand = get_hand("barrett")
+    scene = build_scene(hand, box_object)
+    q = hand.open_dofs(0.5)
+    q[hand.dof_index("f1_dist")] = 0.2  # a breakaway state: the distal ahead of 1/3
+    far = np.eye(4)
+    far[2, 3] = -1.0  # the box 1 m away: the fingers close on nothing
+    set_grasp(scene, far, q)
+    _squeeze(scene)
+    m, d = scene.model, scene.data
+    for k in ("f1", "f2", "f3"):
+        prox = d.qpos[m.jnt_qposadr[m.joint(f"j_{hand.link_names.index(k + '_prox')}").id]]
+        dist = d.qpos[m.jnt_qposadr[m.joint(f"j_{hand.link_names.index(k + '_dist')}").id]]
+        moved = prox - q[hand.dof_index(f"{k}_prox")]
+        assert moved > 0.2  # the servo closed the finger
+        expected = q[hand.dof_index(f"{k}_dist")] + moved / 3.0
+        assert dist == pytest.approx(expected, abs=2e-3)

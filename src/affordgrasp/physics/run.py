@@ -218,6 +218,11 @@ def run_physics(
     out = Path(out)
     rows, manifest = _plan_rows(dataset_dir, statuses, objects, max_per_object)
     n = rows.num_rows
+    if n == 0:
+        raise DatasetError(
+            f"dataset {str(dataset_dir)!r} has no rows with status {', '.join(statuses)} to "
+            "validate; generate more samples or choose other objects"
+        )
     plan = _plan_manifest(
         dataset_dir, manifest, settings, statuses, objects, max_per_object, n, shard_size
     )
