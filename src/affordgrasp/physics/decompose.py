@@ -17,6 +17,7 @@ import logging
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -104,7 +105,7 @@ def _decompose(mesh: trimesh.Trimesh, settings: PhysicsSettings) -> list:
 def _write_atomic(path: Path, parts: list) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        arrays = {"count": np.array(len(parts))}
+        arrays: dict[str, Any] = {"count": np.array(len(parts))}
         for i, (v, f) in enumerate(parts):
             arrays[f"v{i}"] = v
             arrays[f"f{i}"] = f

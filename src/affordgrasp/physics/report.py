@@ -150,16 +150,17 @@ def _family(name: str) -> str:
 
 
 def _stats(preds, outs, mask) -> dict:
-    result = {"n": int(mask.sum()), "auc": {}, "spearman": {}, "rates": {}}
+    rates: dict[str, float] = {}
+    aucs: dict[str, dict[str, float]] = {}
+    rhos: dict[str, dict[str, float]] = {}
+    result = {"n": int(mask.sum()), "auc": aucs, "spearman": rhos, "rates": rates}
     for o in BINARY_OUTCOMES:
         y = outs[o][mask]
         valid = ~np.isnan(y)
-        result["rates"][o] = float(y[valid].mean()) if valid.any() else math.nan
-        result["auc"][o] = {
-            p: roc_auc(v[mask][valid], y[valid].astype(bool)) for p, v in preds.items()
-        }
+        rates[o] = float(y[valid].mean()) if valid.any() else math.nan
+        aucs[o] = {p: roc_auc(v[mask][valid], y[valid].astype(bool)) for p, v in preds.items()}
     for o in GRADED_OUTCOMES:
-        result["spearman"][o] = {p: spearman(v[mask], outs[o][mask]) for p, v in preds.items()}
+        rhos[o] = {p: spearman(v[mask], outs[o][mask]) for p, v in preds.items()}
     return result
 
 

@@ -107,12 +107,13 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
     idx = np.flatnonzero(keep)
     idx = idx[np.lexsort((sample[idx], obj_index[idx]))]
     if max_per_object is not None:
-        picked, counts = [], {}
+        picked: list[int] = []
+        counts: dict[int, int] = {}
         for i in idx:
-            o = obj_index[i]
+            o = int(obj_index[i])
             if counts.get(o, 0) < max_per_object:
                 counts[o] = counts.get(o, 0) + 1
-                picked.append(i)
+                picked.append(int(i))
         idx = np.array(picked, dtype=np.int64)
     return table.take(pa.array(idx, type=pa.int64())), manifest
 

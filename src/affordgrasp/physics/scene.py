@@ -24,6 +24,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -92,8 +93,8 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
 class Scene:
     """A compiled model with the indices the trials need. Not thread-safe (one per process)."""
 
-    model: object  # mujoco.MjModel
-    data: object  # mujoco.MjData
+    model: Any  # mujoco.MjModel (the extra is optional: no import at type-check time)
+    data: Any  # mujoco.MjData
     hand: Hand
     settings: PhysicsSettings
     mass: MassProperties
@@ -105,7 +106,7 @@ class Scene:
     fixed_links: list  # (body id, link index, dof index, ratio, joint kind, origin, axis)
     fingers: list  # (actuator id, joint id, direction, [(eq id, joint id, ratio), ...])
     closing_joints: list  # (MuJoCo joint id, DOF index, ratio) of every closing joint
-    joint_range: object  # (njnt, 2) the model's joint limits as built (the ratchet moves them)
+    joint_range: np.ndarray  # (njnt, 2) the model's joint limits as built (the ratchet moves them)
     anvil_mocap: int
     plate_body: int
     plate_joint: int
@@ -188,13 +189,13 @@ def build_scene(
 def _mjcf(hand, name, parts, mass, settings, object_material):
     """The model as MJCF text, and what the Scene needs to know about it."""
     s = settings
-    assets, bodies = [], {}
-    finger_of_dof = {}
+    assets: list[str] = []
+    finger_of_dof: dict[str, tuple] = {}
     for f in hand.fingers:
         for k, d in enumerate(f.dofs):
             finger_of_dof[d] = (f, k)
     closing_dofs = set(finger_of_dof)
-    info = {"fixed": [], "fingers": [], "closing_links": []}
+    info: dict[str, list] = {"fixed": [], "fingers": [], "closing_links": []}
     children: dict[str, list[int]] = {}
     for i, link in enumerate(hand.links):
         if link.parent is not None:
@@ -259,7 +260,6 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
             f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="3"/>\n'
         )
     finger_xml = "".join(link_xml(c, "      ") for c in children.get(palm.name, []))
-    del bodies
 
     object_geoms = []
     for k, (v, _f) in enumerate(parts):
