@@ -1,0 +1,286 @@
+"""Brute-force argmax of a task over grasps × use points (paper §IV-C, SPEC §2.6).
+
+The paper maximises F_T over (G, U): the grasp and the use point are independent inputs
+(G = GP(p0, O) depends only on p0, U = DM(d, O) only on d). A dataset row pairs one p0
+with one d, so a row is a candidate for ``beat`` or ``cut`` only when *both* are good: a
+robust grasp (1-15 % of uniform p0 on the built-in families) and a use point at the
+right spot (δ ≥ 0.95: about 1.5 % of uniform d; a knife's cutting edge: 0.1 %). On 4000
+rows that is 0.01-1 expected candidate.
+
+This module scores every simulated grasp with every sampled use point instead: n
+simulations and m ray casts give n × m pairs. The metrics split cleanly:
+
+* per grasp (computed once, by the simulation of its row): ε, GWS volume, E_h, I;
+* per use point (one ray cast): U, its normal, U_g and the edge angle;
+* per pair: δ (closed form), and the LPs E_i and U_τ, which need the grasp's contacts.
+
+A pair's metrics are exactly those :func:`affordgrasp.evaluate.evaluate` computes for the
+row (p0 of the grasp, d of the use point); the tests check it. Pairs that the task rejects
+on the cheap metrics alone are skipped before the LPs: the screen evaluates the task with
+the most favourable U_τ (+∞... a large value) and E_i (0), so it is exact for tasks that
+improve with U_τ and with 1 / E_i and fail only through thresholds, as every built-in task
+does; a task for which that is not true can pass ``screen=False``.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+from numba import njit
+
+from .evaluate import evaluate, evaluate_samples
+from .grasp.pregrasp import sample_inputs, use_points
+from .metrics.cones import wrench_matrix_kernel
+from .metrics.discharge import discharge
+from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
+from .metrics.lp import OPTIMAL
+from .metrics.transmission import use_force, use_force_kernel
+from .metrics.use_geometry import use_edge, use_edge_angle
+from .objects import GraspObject, resolve_object
+from .tasks import MetricColumns, get_task
+
+log = logging.getLogger(__name__)
+
+GRASP_COLUMNS = (
+    "epsilon",
+    "gws_volume",
+    "inertia",
+    "hold_effort_px",
+    "hold_effort_nx",
+    "hold_effort_py",
+    "hold_effort_ny",
+    "hold_effort_pz",
+    "hold_effort_nz",
+)
+# columns that depend on the use point: a task that reads none of them scores a grasp the
+# same with every use point, so one use point per grasp is enough
+USE_COLUMNS = frozenset({"discharge", "use_force", "impact_effort", "use_edge", "use_edge_angle"})
+# most favourable values of the LP metrics, for the screen
+_SCREEN_FORCE = 1e12
+_SCREEN_IMPACT = 0.0
+
+
+@njit(cache=True)
+def pair_lp_metrics(points, normals, mu, offsets, center, grasp, use_point, use_normal, axis):
+    """E_i and U_τ of pairs (grasp[i], use i), compiled.
+
+    points, normals (K, 3), mu (K,): contacts of all grasps, grasp g owning rows
+    ``offsets[g]:offsets[g + 1]``; center (3,); grasp (p,) grasp index of each pair;
+    use_point, use_normal (outward), axis (the grasp's wrist axis): (p, 3).
+    Returns (impact (p,), force (p,), redo (p,) bool: a compiled LP gave up).
+    """
+    p = grasp.shape[0]
+    impact = np.empty(p)
+    force = np.empty(p)
+    redo = np.zeros(p, dtype=np.bool_)
+    for i in range(p):
+        g = grasp[i]
+        s = offsets[g]
+        e = offsets[g + 1]
+        W = wrench_matrix_kernel(
+            np.ascontiguousarray(points[s:e]),
+            np.ascontiguousarray(normals[s:e]),
+            np.ascontiguousarray(mu[s:e]),
+            center,
+            1.0,
+            False,
+        )
+        w_use = use_wrench(use_point[i], use_normal[i], center)
+        ok, impact[i] = impact_effort_kernel(W, w_use, axis[i])
+        status, force[i] = use_force_kernel(W, w_use, e - s)
+        redo[i] = (not ok) or status != OPTIMAL
+    return impact, force, redo
+
+
+@dataclass(frozen=True)
+class UsePoints:
+    """Use points of m use directions on one object.
+
+    use_dir (m, 2); point, normal (m, 3) (outward); triangle (m,) int (-1: no hit);
+    use_edge (m,) U_g; use_edge_angle (m,) rad.
+    """
+
+    use_dir: np.ndarray
+    point: np.ndarray
+    normal: np.ndarray
+    triangle: np.ndarray
+    use_edge: np.ndarray
+    use_edge_angle: np.ndarray
+
+    @classmethod
+    def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
+        """Cast the use rays of ``use_dir`` (m, 2) on ``obj`` (an object or a spec)."""
+        obj = resolve_object(obj)
+        use_dir = np.asarray(use_dir, dtype=np.float64).reshape(-1, 2)
+        P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
+        hit = T >= 0
+        ug = np.full(len(T), np.nan)
+        ang = np.full(len(T), np.nan)
+        if hit.any():
+            ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
+            ang[hit] = use_edge_angle(obj.mesh, P[hit])
+        return cls(use_dir, P, N, T, ug, ang)
+
+
+def _contacts(table: pa.Table, rows: np.ndarray):
+    pts = table.column("contact_points").to_pylist()
+    nrm = table.column("contact_normals").to_pylist()
+    mus = table.column("contact_mu").to_pylist()
+    chunks = [
+        (np.asarray(pts[r], float).reshape(-1, 3), np.asarray(nrm[r], float).reshape(-1, 3))
+        for r in rows
+    ]
+    counts = np.array([len(c[0]) for c in chunks], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    if counts.sum():
+        points = np.ascontiguousarray(np.concatenate([c[0] for c in chunks]))
+        normals = np.ascontiguousarray(np.concatenate([c[1] for c in chunks]))
+        mu = np.ascontiguousarray(np.concatenate([np.asarray(mus[r], float) for r in rows]))
+    else:
+        points, normals, mu = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    return points, normals, mu, offsets
+
+
+def pair_scores(
+    obj: GraspObject,
+    grasps: pa.Table,
+    uses: UsePoints,
+    task: str,
+    mode: str = "default",
+    *,
+    screen: bool = True,
+    **overrides: float,
+) -> dict[str, np.ndarray]:
+    """F_T and Φ of every pair (grasp row, use point) that the screen keeps.
+
+    grasps : evaluated rows (``evaluate``/``evaluate_samples`` output, metrics included)
+    uses : the use points
+    Returns columns: ``grasp`` (row in ``grasps``), ``use`` (index in ``uses``), ``value``
+    (F_T), and the metric columns of the pairs (float64), for the kept pairs only.
+    """
+    obj = resolve_object(obj)
+    t = get_task(task)
+    n, m = grasps.num_rows, len(uses.triangle)
+    col = {c: grasps.column(c).to_numpy(zero_copy_only=False) for c in GRASP_COLUMNS}
+    wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
+    wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
+    has_contacts = grasps.column("n_contacts").to_numpy() > 0
+    hit = uses.triangle >= 0
+    use_rows = np.flatnonzero(hit)
+    if not USE_COLUMNS & set(t.requires):
+        use_rows = use_rows[:1]
+    gi, ui = np.meshgrid(np.flatnonzero(has_contacts), use_rows, indexing="ij")
+    gi, ui = gi.ravel(), ui.ravel()
+    cols = {c: col[c][gi] for c in GRASP_COLUMNS}
+    cols["discharge"] = (
+        np.asarray(discharge(uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]))
+        if len(gi)
+        else np.zeros(0)
+    )
+    cols["use_edge"] = uses.use_edge[ui]
+    cols["use_edge_angle"] = uses.use_edge_angle[ui]
+    if screen and len(gi):
+        cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
+        cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)
+        keep = t.evaluate(MetricColumns(cols), mode, **overrides) > -np.inf
+        gi, ui = gi[keep], ui[keep]
+        cols = {k: v[keep] for k, v in cols.items()}
+    log.info("%s on %s: %d of %d pairs need the LPs", task, obj.name, len(gi), n * m)
+    rows = np.unique(gi)
+    points, normals, mu, offsets = _contacts(grasps, rows)
+    local = np.searchsorted(rows, gi)
+    center = np.ascontiguousarray(obj.mass.center_of_mass, dtype=np.float64)
+    impact, force, redo = pair_lp_metrics(
+        points,
+        normals,
+        mu,
+        offsets,
+        center,
+        local.astype(np.int64),
+        np.ascontiguousarray(uses.point[ui]),
+        np.ascontiguousarray(uses.normal[ui]),
+        np.ascontiguousarray(wrist_axis[gi]),
+    )
+    for i in np.flatnonzero(redo):
+        from .metrics.contacts import ContactSet
+
+        g = local[i]
+        s, e = offsets[g], offsets[g + 1]
+        cs = ContactSet.from_arrays(points[s:e], normals[s:e], mu[s:e])
+        U, N, a = uses.point[ui[i]], uses.normal[ui[i]], wrist_axis[gi[i]]
+        impact[i] = impact_effort(cs, center, U, N, a, backend="highs")
+        force[i] = use_force(cs, center, U, N, backend="highs")
+    cols["impact_effort"] = impact
+    cols["use_force"] = force
+    values = t.evaluate(MetricColumns(cols), mode, **overrides) if len(gi) else np.zeros(0)
+    return {"grasp": gi, "use": ui, "value": np.where(np.isnan(values), -np.inf, values), **cols}
+
+
+@dataclass(frozen=True)
+class PairSearch:
+    """Result of :func:`best_pairs`.
+
+    table : the top pairs as ordinary evaluated rows (p0 of the grasp, d of the use point),
+        best first, with a ``value`` column
+    grasps, uses : how many grasps were simulated and use points cast
+    candidates : pairs with a finite F_T; lp_pairs : pairs that needed the LPs
+    """
+
+    table: pa.Table
+    grasps: int
+    uses: int
+    candidates: int
+    lp_pairs: int
+
+
+def best_pairs(
+    obj,
+    task: str,
+    *,
+    mode: str = "default",
+    grasps: int = 4000,
+    uses: int = 4000,
+    seed: int = 0,
+    top: int = 10,
+    hand: str = "barrett",
+    grasp_table: pa.Table | None = None,
+    **overrides: float,
+) -> PairSearch:
+    """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` × ``uses`` uniform samples.
+
+    The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate`` draws them; pass
+    ``grasp_table`` to reuse evaluated rows); the use directions are drawn from run
+    ``seed + 1`` so that they are independent of the rows' own d. The top pairs are
+    re-simulated with :func:`affordgrasp.evaluate.evaluate`, so the returned rows carry
+    every column of the dataset schema; a pair's value is recomputed on that row.
+    """
+    obj = resolve_object(obj)
+    if grasp_table is None:
+        grasp_table, _ = evaluate_samples(obj, grasps, seed=seed, hand=hand)
+    _, d = sample_inputs(seed + 1, 0, uses)
+    use = UsePoints.of(obj, d)
+    scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
+    values = scores["value"]
+    finite = np.flatnonzero(values > -np.inf)
+    order = finite[np.lexsort((scores["use"][finite], scores["grasp"][finite], -values[finite]))]
+    pick = order[:top]
+    p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
+    rows, _ = evaluate(
+        obj,
+        p0[scores["grasp"][pick]].reshape(-1, 6),
+        use.use_dir[scores["use"][pick]].reshape(-1, 2),
+        hand=hand,
+        seed=seed,
+    )
+    value = get_task(task).evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
+    rows = rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
+    return PairSearch(
+        table=rows,
+        grasps=grasp_table.num_rows,
+        uses=len(d),
+        candidates=int(len(finite)),
+        lp_pairs=int(len(values)),
+    )
