@@ -32,10 +32,12 @@ SAMPLE_FIELDS = [
     pa.field("contact_normals", pa.list_(_vec3)),
     pa.field("contact_mu", pa.list_(_f64)),
     pa.field("contact_link", pa.list_(pa.string())),
+    pa.field("contact_parts", pa.list_(pa.string())),
     pa.field("n_contacts", pa.int32()),
     pa.field("use_point", _vec3),
     pa.field("use_normal", _vec3),
     pa.field("use_triangle", pa.int64()),
+    pa.field("use_part", pa.string()),
     pa.field("wrist_point", _vec3),
     pa.field("wrist_axis", _vec3),
 ]
@@ -81,6 +83,24 @@ def _ragged(chunks: list[np.ndarray], typ: pa.DataType) -> pa.Array:
     return pa.ListArray.from_arrays(pa.array(offsets), pa.array(list(flat), type=typ))
 
 
+def _parts_of(obj, faces: np.ndarray) -> np.ndarray:
+    """Part names of faces ("" without labels); objects without the method have none."""
+    if getattr(obj, "face_parts", None) is None:
+        return np.full(len(faces), "", dtype=object)
+    return obj.parts_of_faces(faces)
+
+
+def _contact_parts(obj, contacts) -> list[np.ndarray]:
+    """Part under each contact of each grasp (one ray cast for the whole batch)."""
+    counts = [len(c) for c in contacts]
+    if getattr(obj, "face_parts", None) is None or not sum(counts):
+        return [np.full(k, "", dtype=object) for k in counts]
+    points = np.concatenate([c.points for c in contacts if len(c)])
+    normals = np.concatenate([c.normals for c in contacts if len(c)])
+    names = obj.parts_of_faces(obj.faces_at(points, normals))
+    return np.split(names, np.cumsum(counts)[:-1])
+
+
 def batch_to_table(
     obj, batch, *, hand: str, seed: int, sample_start: int = 0, metrics: dict | None = None
 ) -> pa.Table:
@@ -105,10 +125,12 @@ def batch_to_table(
         "contact_normals": _ragged_vec3([c.normals for c in contacts]),
         "contact_mu": _ragged([c.mu for c in contacts], _f64),
         "contact_link": _ragged([c.link for c in contacts], pa.string()),
+        "contact_parts": _ragged(_contact_parts(obj, contacts), pa.string()),
         "n_contacts": pa.array(np.array([len(c) for c in contacts], dtype=np.int32)),
         "use_point": _fixed(batch.use_point, 3),
         "use_normal": _fixed(batch.use_normal, 3),
         "use_triangle": pa.array(batch.use_triangle.astype(np.int64)),
+        "use_part": pa.array(list(_parts_of(obj, batch.use_triangle)), pa.string()),
         "wrist_point": _fixed(batch.wrist_point, 3),
         "wrist_axis": _fixed(batch.wrist_axis, 3),
     }

@@ -58,6 +58,12 @@ class GraspObject:
         :func:`mesh_hash` of ``mesh``: stable across runs and machines.
     source : str
         ``"family"``, or the absolute path of the mesh file.
+    face_parts : (n_faces,) int8 ndarray or None
+        Semantic part of each face of ``mesh``, an index into ``part_names`` (built-in
+        families; None for mesh files, which carry no labels).
+    part_names : tuple of str
+        Names of the parts (``"handle"``, ``"blade"``, ``"cutting_edge"``, ...); empty
+        without labels.
     """
 
     name: str
@@ -66,6 +72,44 @@ class GraspObject:
     mass: MassProperties
     mesh_hash: str
     source: str
+    face_parts: np.ndarray | None = None
+    part_names: tuple[str, ...] = ()
+
+    def parts_of_faces(self, faces) -> np.ndarray:
+        """Part name of each face index (object array of str; "" for -1 or no labels).
+
+        faces : (n,) int, face indices of ``mesh`` (-1: none)
+        """
+        faces = np.asarray(faces, dtype=np.int64).reshape(-1)
+        out = np.full(len(faces), "", dtype=object)
+        if self.face_parts is None:
+            return out
+        ok = (faces >= 0) & (faces < len(self.face_parts))
+        names = np.asarray(self.part_names, dtype=object)
+        out[ok] = names[self.face_parts[faces[ok]]]
+        return out
+
+    def faces_at(self, points, normals, offset_m: float = 5e-4) -> np.ndarray:
+        """Face under each surface point: the first face hit by a ray that starts
+        ``offset_m`` outside the point along its outward normal and looks back at it.
+
+        points, normals : (n, 3) m, outward unit normals. Returns (n,) int64. A ray that
+        misses (a contact on a sharp edge, whose normal is the edge's) takes the closest
+        face instead.
+        """
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+        if len(points) == 0:
+            return np.zeros(0, dtype=np.int64)
+        faces = np.asarray(
+            self.mesh.ray.intersects_first(points + offset_m * normals, -normals),
+            dtype=np.int64,
+        )
+        missed = faces < 0
+        if missed.any():
+            _, _, closest = trimesh.proximity.closest_point(self.mesh, points[missed])
+            faces[missed] = closest
+        return faces
 
 
 def mesh_hash(mesh: trimesh.Trimesh) -> str:
@@ -241,11 +285,31 @@ def _resolve_family(
     name = f"{family}:{seed}"
     raw = families.make_family(family, seed=seed)
     mesh = prepare_mesh(raw, size_m=size_m, units=units, source=name)
-    return _build(name, families.FAMILIES[family].category, mesh, density, "family")
+    face_parts = raw.metadata.get("face_parts")
+    if face_parts is not None and not np.array_equal(raw.faces, mesh.faces):
+        # preparing changed the triangles: each keeps the part of the raw face under it
+        _, _, under = trimesh.proximity.closest_point(raw, mesh.triangles_center)
+        face_parts = np.asarray(face_parts)[under]
+    return _build(
+        name,
+        families.FAMILIES[family].category,
+        mesh,
+        density,
+        "family",
+        face_parts=face_parts,
+        part_names=tuple(raw.metadata.get("part_names", ())) if face_parts is not None else (),
+    )
 
 
 def _build(
-    name: str, category: str, mesh: trimesh.Trimesh, density: float, source: str
+    name: str,
+    category: str,
+    mesh: trimesh.Trimesh,
+    density: float,
+    source: str,
+    *,
+    face_parts: np.ndarray | None = None,
+    part_names: tuple[str, ...] = (),
 ) -> GraspObject:
     mass = mass_properties(mesh, density=density)
     return GraspObject(
@@ -255,6 +319,8 @@ def _build(
         mass=mass,
         mesh_hash=mesh_hash(mesh),
         source=source,
+        face_parts=face_parts,
+        part_names=part_names,
     )
 
 
@@ -275,4 +341,6 @@ def _reuse(
         mass=mass_properties(obj.mesh, density=density),
         mesh_hash=obj.mesh_hash,
         source=obj.source,
+        face_parts=obj.face_parts,
+        part_names=obj.part_names,
     )

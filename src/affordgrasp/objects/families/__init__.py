@@ -46,7 +46,7 @@ import manifold3d
 import trimesh
 
 from affordgrasp.errors import InputError
-from affordgrasp.objects.families import blades, containers, handtools, striking
+from affordgrasp.objects.families import blades, containers, handtools, parts, striking
 from affordgrasp.objects.families.geometry import to_trimesh
 from affordgrasp.objects.families.parameters import ParameterDraw
 
@@ -204,18 +204,31 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
     name : a family name from :func:`family_names` (or an alias such as ``"cleaver"``).
     seed : non-negative int; 0 is the family's typical instance.
     Returns a watertight ``trimesh.Trimesh`` in metres, in the frame described in this
-    module's docstring, with ``metadata`` keys ``family``, ``category``, ``seed`` and
-    ``params`` (the parameter values drawn, SI units as their names say).
+    module's docstring, with ``metadata`` keys ``family``, ``category``, ``seed``,
+    ``params`` (the parameter values drawn, SI units as their names say), ``face_parts``
+    ((n_faces,) int8, each face's semantic part) and ``part_names`` (the names those
+    indices refer to, :data:`~affordgrasp.objects.families.parts.PART_NAMES`).
     Raises InputError for an unknown name or a bad seed.
     """
     key = _canonical(name)
     seed = _check_seed(seed)
     category, _, build = _BUILDERS[key]
     draw = ParameterDraw(seed)
-    solid = build(draw).simplify(_CLEAN_TOLERANCE_M)
+    with parts.recording() as recorder:
+        solid = build(draw).simplify(_CLEAN_TOLERANCE_M)
     mesh = to_trimesh(solid)
+    face_parts = parts.refine_parts(
+        key, mesh, parts.face_parts_of(solid, recorder), dict(draw.values)
+    )
     mesh.metadata.update(
-        {"family": key, "category": category, "seed": seed, "params": dict(draw.values)}
+        {
+            "family": key,
+            "category": category,
+            "seed": seed,
+            "params": dict(draw.values),
+            "face_parts": face_parts,
+            "part_names": parts.PART_NAMES,
+        }
     )
     logger.debug("built %s:%d with %d triangles", key, seed, len(mesh.faces))
     return mesh

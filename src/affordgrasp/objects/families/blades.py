@@ -20,6 +20,7 @@ import numpy as np
 from affordgrasp.objects.families.geometry import rounded_stations, sweep, sweep_along_x, union
 from affordgrasp.objects.families.handles import curved_bar, straight_grip
 from affordgrasp.objects.families.parameters import ParameterDraw
+from affordgrasp.objects.families.parts import tag
 
 __all__ = ["knife", "meat_cleaver", "dagger", "sword", "single_edge_blade", "double_edge_blade"]
 
@@ -181,7 +182,7 @@ def knife(p: ParameterDraw) -> manifold3d.Manifold:
         y_high=-0.001,
         thickness=2.0 * bevel * np.tan(edge_angle / 2.0),
     )
-    return union([grip, tang, blade])
+    return union([tag(grip, "handle"), tag(tang, "blade"), tag(blade, "blade")])
 
 
 def meat_cleaver(p: ParameterDraw) -> manifold3d.Manifold:
@@ -229,7 +230,8 @@ def meat_cleaver(p: ParameterDraw) -> manifold3d.Manifold:
     )
     hole = manifold3d.Manifold.cylinder(0.05, hole_r, circular_segments=32, center=True)
     hole = hole.translate((x_heel + blade_len - 2.6 * hole_r, -2.6 * hole_r - front_drop, 0.0))
-    return union([grip, tang, blade]) - hole
+    parts = [tag(grip, "handle"), tag(tang, "blade"), tag(blade, "blade")]
+    return union(parts) - tag(hole, "blade")
 
 
 def _hilt(
@@ -280,7 +282,8 @@ def _hilt(
         exponent=2.6,
         points=24,
     )
-    return union([pommel, grip, guard]), x_guard + guard_thick
+    hilt = union([tag(pommel, "pommel"), tag(grip, "handle"), tag(guard, "guard")])
+    return hilt, x_guard + guard_thick
 
 
 def _pointed_half_width(u: np.ndarray, base: float, taper: float, point_len: float) -> np.ndarray:
@@ -329,7 +332,7 @@ def _hilted_double_edge(p: ParameterDraw, r: dict) -> manifold3d.Manifold:
     xs = np.concatenate([[x0 - r["tang_overlap_m"]], xs])
     half_w = np.concatenate([[half_w[0]], half_w])
     blade = double_edge_blade(xs, half_w, flat, edge_angle)
-    return union([hilt, blade])
+    return union([hilt, tag(blade, "blade")])
 
 
 def dagger(p: ParameterDraw) -> manifold3d.Manifold:

@@ -14,6 +14,7 @@ import numpy as np
 from affordgrasp.objects.families.geometry import hollow_lathe, section, silhouette
 from affordgrasp.objects.families.handles import curved_bar
 from affordgrasp.objects.families.parameters import ParameterDraw
+from affordgrasp.objects.families.parts import tag
 
 __all__ = ["bottle", "wine_glass", "tumbler", "mug", "ice_cream_cone"]
 
@@ -165,7 +166,7 @@ def mug(p: ParameterDraw) -> manifold3d.Manifold:
     handle = curved_bar(
         path, np.array([0.0, 1.0, 0.0]), np.full(n, handle_t), np.full(n, handle_w), 2.4, 24
     )
-    return body + handle
+    return tag(body, "body") + tag(handle, "handle")
 
 
 def ice_cream_cone(p: ParameterDraw) -> manifold3d.Manifold:

@@ -22,6 +22,7 @@ from affordgrasp.objects.families.geometry import (
 )
 from affordgrasp.objects.families.handles import curved_bar, straight_grip
 from affordgrasp.objects.families.parameters import ParameterDraw
+from affordgrasp.objects.families.parts import tag
 
 __all__ = ["screwdriver", "spatula"]
 
@@ -79,7 +80,7 @@ def screwdriver(p: ParameterDraw) -> manifold3d.Manifold:
     ex = np.concatenate([[2.0, 2.0], exps])
     sec = np.stack([superellipse(a, b, n, 32) for a, b, n in zip(hy, hz, ex, strict=True)])
     shaft = sweep_along_x(stations, sec)
-    return union([handle, shaft])
+    return union([tag(handle, "handle"), tag(shaft, "shaft")])
 
 
 def spatula(p: ParameterDraw) -> manifold3d.Manifold:
@@ -161,7 +162,7 @@ def spatula(p: ParameterDraw) -> manifold3d.Manifold:
     rings[..., 1:] = sec
     blade = sweep(rings)
 
-    solid = union([handle, shank, blade])
+    solid = union([tag(handle, "handle"), tag(shank, "shaft"), tag(blade, "blade")])
     if n_slots:
         slot_w = 0.005
         slot_len = 0.5 * blade_len
@@ -181,5 +182,5 @@ def spatula(p: ParameterDraw) -> manifold3d.Manifold:
                 ]
             )
             slots.append(outline.extrude(0.02).translate((0.0, 0.0, z_blade - 0.01)))
-        solid = solid - union(slots)
+        solid = solid - tag(union(slots), "blade")
     return solid

@@ -20,6 +20,7 @@ from affordgrasp.objects.families.geometry import (
 )
 from affordgrasp.objects.families.handles import curved_bar, straight_grip
 from affordgrasp.objects.families.parameters import ParameterDraw
+from affordgrasp.objects.families.parts import tag
 
 __all__ = ["hammer", "axe"]
 
@@ -98,7 +99,7 @@ def hammer(p: ParameterDraw) -> manifold3d.Manifold:
         slot = curved_bar(
             slot_path[keep], _Z, np.full(keep.sum(), 0.03), slot_half, exponent=8.0, points=16
         )
-        parts.append(claw - slot)
+        parts.append(tag(claw - slot, "claw"))
     else:
         peen_r = p.uniform("peen_radius_m", 0.011, 0.015, 0.013)
         peen_reach = p.uniform("peen_reach_m", 0.035, 0.05, 0.042)
@@ -107,8 +108,8 @@ def hammer(p: ParameterDraw) -> manifold3d.Manifold:
             (peen_reach - 0.3 * peen_r, 0.7 * peen_r, 0.7 * peen_r, 2.0),
         ]
         ball = manifold3d.Manifold.sphere(peen_r, circular_segments=40)
-        parts.append(ball.translate((x_head, peen_reach - 0.2 * peen_r, 0.0)))
-    parts.append(_head_along_y(x_head, np.array(stations)))
+        parts.append(tag(ball.translate((x_head, peen_reach - 0.2 * peen_r, 0.0)), "peen"))
+    parts.append(tag(_head_along_y(x_head, np.array(stations)), "head"))
     handle = straight_grip(
         0.0,
         length + 0.003,
@@ -119,7 +120,7 @@ def hammer(p: ParameterDraw) -> manifold3d.Manifold:
         butt_flare=grip_flare,
         front_round=0.0015,
     )
-    parts.append(handle)
+    parts.append(tag(handle, "handle"))
     return union(parts)
 
 
@@ -202,4 +203,4 @@ def axe(p: ParameterDraw) -> manifold3d.Manifold:
     half_u = haft_hy * (1.0 + knob * knob_zone) * (1.0 - 0.08 * np.sin(np.pi * u)) * dome
     half_v = (haft_hz + (hz_top - haft_hz) * top_zone) * (1.0 + 0.5 * knob * knob_zone) * dome
     haft = curved_bar(path, _Z, half_u, half_v, exponent=2.2, points=36)
-    return union([haft, head])
+    return union([tag(haft, "handle"), tag(head, "head")])
