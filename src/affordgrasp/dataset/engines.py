@@ -35,6 +35,7 @@ class ObjectPayload:
     """What a worker needs to rebuild a resolved object exactly.
 
     vertices : (v, 3) float64, m; faces : (f, 3) int64 — the prepared mesh as resolved.
+    face_parts : (f,) int8 or None, part_names : tuple of str — its semantic parts.
     """
 
     name: str
@@ -44,6 +45,8 @@ class ObjectPayload:
     mesh_hash: str
     vertices: np.ndarray
     faces: np.ndarray
+    face_parts: np.ndarray | None = None
+    part_names: tuple[str, ...] = ()
 
     @classmethod
     def from_object(cls, obj) -> ObjectPayload:
@@ -55,6 +58,8 @@ class ObjectPayload:
             mesh_hash=obj.mesh_hash,
             vertices=np.ascontiguousarray(obj.mesh.vertices, dtype=np.float64),
             faces=np.ascontiguousarray(obj.mesh.faces, dtype=np.int64),
+            face_parts=getattr(obj, "face_parts", None),
+            part_names=tuple(getattr(obj, "part_names", ())),
         )
 
     def build(self):
@@ -74,6 +79,8 @@ class ObjectPayload:
             mass=mass_properties(mesh, density=self.density),
             mesh_hash=digest,
             source=self.source,
+            face_parts=self.face_parts,
+            part_names=self.part_names,
         )
 
 
