@@ -4,9 +4,15 @@ beat, cut and pick grasps on small seeded samples."""
 import numpy as np
 import pytest
 
-from affordgrasp.evaluate import evaluate, evaluate_samples
 from affordgrasp.grasp.pregrasp import sample_inputs
-from affordgrasp.pairs import UsePoints, best_pairs, pair_scores
+from affordgrasp.pairs import (
+    UsePoints,
+    best_pairs,
+    best_use_per_grasp,
+    optimize_pairs,
+    pair_scores,
+)
+from affordgrasp.pipeline import evaluate_inputs, evaluate_samples
 
 CHECKED = (
     "epsilon",
@@ -33,7 +39,7 @@ def test_pair_metrics_equal_the_rows_they_stand_for(hammer_grasps):
     rng = np.random.default_rng(0)
     pick = rng.choice(len(scores["grasp"]), size=40, replace=False)
     p0 = np.asarray(table.column("p0").to_pylist())[scores["grasp"][pick]]
-    rows, _ = evaluate("hammer", p0, d[scores["use"][pick]])
+    rows, _ = evaluate_inputs("hammer", p0, d[scores["use"][pick]])
     for name in CHECKED:
         np.testing.assert_allclose(
             scores[name][pick], rows.column(name).to_numpy(), rtol=1e-9, atol=1e-12, err_msg=name
@@ -61,3 +67,32 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
         assert np.all(eps >= 0.014)
     if task == "cut":
         assert np.all(result.table.column("use_edge_angle").to_numpy() <= np.radians(45))
+
+
+def test_optimizer_over_grasps_with_their_best_use_point():
+    found = optimize_pairs("dagger", "cut", budget=200, uses=1500, seed=0, top=5, population=50)
+    values = found.table.column("value").to_numpy()
+    assert found.grasps == 200 and found.candidates >= 1
+    assert 1 <= len(values) <= 5 and np.all(np.isfinite(values))
+    assert np.all(np.diff(values) <= 1e-12)
+    # rows are distinct (grasp, use point) pairs
+    keys = {
+        (tuple(p), tuple(d))
+        for p, d in zip(
+            found.table.column("p0").to_pylist(),
+            found.table.column("use_dir").to_pylist(),
+            strict=True,
+        )
+    }
+    assert len(keys) == len(values)
+
+
+def test_best_use_per_grasp():
+    scores = {
+        "grasp": np.array([0, 0, 1, 2, 2]),
+        "use": np.array([3, 1, 0, 5, 4]),
+        "value": np.array([1.0, 2.0, -np.inf, 0.5, 0.5]),
+    }
+    best, use = best_use_per_grasp(scores, 4)
+    np.testing.assert_array_equal(best, [2.0, -np.inf, 0.5, -np.inf])
+    np.testing.assert_array_equal(use, [1, -1, 4, -1])  # ties: the lowest use index

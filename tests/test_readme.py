@@ -48,7 +48,22 @@ def check_contacts(ns: dict, lines: list[str]) -> None:
     assert float(lines[2]) == pytest.approx(1.0, rel=1e-9)
 
 
-CHECKS = {"ag.evaluate(": check_front_door, "ContactSet.from_arrays(": check_contacts}
+def check_pairs(ns: dict, lines: list[str]) -> None:
+    found = ns["found"]
+    candidates, values = lines[-1].split(" ", 1)
+    assert int(candidates) == found.candidates >= 1
+    values = [float(v) for v in values.strip("[]").split(",")]
+    assert 1 <= len(values) <= 3 and values == sorted(values, reverse=True)
+    # every top row is a robust grasp whose use point lies on a sharp edge
+    assert all(e >= 0.014 for e in found.table["epsilon"].to_pylist())
+    assert all(a <= np.radians(45) for a in found.table["use_edge_angle"].to_pylist())
+
+
+CHECKS = {
+    "ag.evaluate(": check_front_door,
+    "ContactSet.from_arrays(": check_contacts,
+    "best_pairs(": check_pairs,
+}
 
 
 @pytest.mark.parametrize("code", BLOCKS, ids=[f"block{i}" for i in range(len(BLOCKS))])

@@ -14,7 +14,7 @@ simulations and m ray casts give n × m pairs. The metrics split cleanly:
 * per use point (one ray cast): U, its normal, U_g and the edge angle;
 * per pair: δ (closed form), and the LPs E_i and U_τ, which need the grasp's contacts.
 
-A pair's metrics are exactly those :func:`affordgrasp.evaluate.evaluate` computes for the
+A pair's metrics are exactly those :func:`affordgrasp.pipeline.evaluate_inputs` computes for the
 row (p0 of the grasp, d of the use point); the tests check it. Pairs that the task rejects
 on the cheap metrics alone are skipped before the LPs: the screen evaluates the task with
 the most favourable U_τ (+∞... a large value) and E_i (0), so it is exact for tasks that
@@ -31,7 +31,6 @@ import numpy as np
 import pyarrow as pa
 from numba import njit
 
-from .evaluate import evaluate, evaluate_samples
 from .grasp.pregrasp import sample_inputs, use_points
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
@@ -40,6 +39,7 @@ from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import use_edge, use_edge_angle
 from .objects import GraspObject, resolve_object
+from .pipeline import evaluate_inputs, evaluate_samples
 from .tasks import MetricColumns, get_task
 
 log = logging.getLogger(__name__)
@@ -254,7 +254,7 @@ def best_pairs(
     The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate`` draws them; pass
     ``grasp_table`` to reuse evaluated rows); the use directions are drawn from run
     ``seed + 1`` so that they are independent of the rows' own d. The top pairs are
-    re-simulated with :func:`affordgrasp.evaluate.evaluate`, so the returned rows carry
+    re-simulated with :func:`affordgrasp.pipeline.evaluate_inputs`, so the returned rows carry
     every column of the dataset schema; a pair's value is recomputed on that row.
     """
     obj = resolve_object(obj)
@@ -268,19 +268,115 @@ def best_pairs(
     order = finite[np.lexsort((scores["use"][finite], scores["grasp"][finite], -values[finite]))]
     pick = order[:top]
     p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
-    rows, _ = evaluate(
+    rows = _top_rows(
         obj,
-        p0[scores["grasp"][pick]].reshape(-1, 6),
-        use.use_dir[scores["use"][pick]].reshape(-1, 2),
-        hand=hand,
-        seed=seed,
+        p0[scores["grasp"][pick]],
+        use.use_dir[scores["use"][pick]],
+        task,
+        mode,
+        hand,
+        seed,
+        overrides,
     )
-    value = get_task(task).evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
-    rows = rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
     return PairSearch(
         table=rows,
         grasps=grasp_table.num_rows,
         uses=len(d),
         candidates=int(len(finite)),
         lp_pairs=int(len(values)),
+    )
+
+
+def _top_rows(obj, p0, use_dir, task, mode, hand, seed, overrides) -> pa.Table:
+    """The pairs (p0, d) re-simulated as ordinary rows, with their F_T as ``value``."""
+    rows, _ = evaluate_inputs(
+        obj, np.reshape(p0, (-1, 6)), np.reshape(use_dir, (-1, 2)), hand=hand, seed=seed
+    )
+    value = get_task(task).evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
+    return rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
+
+
+def best_use_per_grasp(scores: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each grasp's best F_T over the scored pairs and the use index that gives it.
+
+    Returns (values (n,), use (n,) int, -1 where no pair of the grasp is finite).
+    """
+    best = np.full(n, -np.inf)
+    use = np.full(n, -1, dtype=np.int64)
+    v = scores["value"]
+    ok = np.flatnonzero(v > -np.inf)
+    if len(ok):
+        order = ok[np.lexsort((scores["use"][ok], -v[ok], scores["grasp"][ok]))]
+        g = scores["grasp"][order]
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = g[1:] != g[:-1]
+        best[g[first]] = v[order[first]]
+        use[g[first]] = scores["use"][order[first]]
+    return best, use
+
+
+def optimize_pairs(
+    obj,
+    task: str,
+    *,
+    mode: str = "default",
+    budget: int = 2000,
+    uses: int = 2000,
+    seed: int = 0,
+    top: int = 10,
+    population: int | None = None,
+    hand: str = "barrett",
+    **overrides: float,
+) -> PairSearch:
+    """The cross-entropy method over p0, each grasp scored with its best of ``uses`` use points.
+
+    The search space splits as the metrics do: CEM (:func:`affordgrasp.optimize.cem_maximize`)
+    moves the pregrasp, and each simulated grasp takes the best use point of a fixed
+    uniform sample of ``uses`` directions (run ``seed + 1``), found as in
+    :func:`pair_scores`. ``budget`` counts simulations, as for ``optimize``. Returns the
+    ``top`` best distinct (grasp, use point) pairs met during the search, re-simulated.
+    """
+    from .optimize import cem_maximize, default_population, guidance
+
+    obj = resolve_object(obj)
+    get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
+    _, d = sample_inputs(seed + 1, 0, uses)
+    use = UsePoints.of(obj, d)
+    pop = population or default_population(budget)
+    p0_first, d_first = sample_inputs(seed, 0, min(pop, budget))
+    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    counts = {"lp": 0, "finite": 0}
+
+    def objective(x: np.ndarray):
+        rows, _ = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed)
+        scores = pair_scores(obj, rows, use, task, mode, **overrides)
+        best, best_use = best_use_per_grasp(scores, len(x))
+        counts["lp"] += len(scores["value"])
+        counts["finite"] += int(np.sum(scores["value"] > -np.inf))
+        found.append((x[:, :6].copy(), best, best_use))
+        return best, guidance(rows)
+
+    cem_maximize(
+        objective,
+        budget=budget,
+        seed=seed,
+        population=pop,
+        initial=np.concatenate([p0_first, d_first], axis=1),
+    )
+    p0 = np.concatenate([f[0] for f in found])
+    value = np.concatenate([f[1] for f in found])
+    use_idx = np.concatenate([f[2] for f in found])
+    ok = np.flatnonzero(value > -np.inf)
+    # distinct pairs only: CEM keeps its elites, which may be simulated again
+    key = np.concatenate([p0[ok], use_idx[ok, None].astype(float)], axis=1)
+    _, first = np.unique(key, axis=0, return_index=True)
+    ok = ok[np.sort(first)]
+    pick = ok[np.argsort(-value[ok], kind="stable")][:top]
+    rows = _top_rows(obj, p0[pick], use.use_dir[use_idx[pick]], task, mode, hand, seed, overrides)
+    return PairSearch(
+        table=rows,
+        grasps=int(len(value)),
+        uses=len(d),
+        candidates=counts["finite"],
+        lp_pairs=counts["lp"],
     )

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from affordgrasp.evaluate import evaluate_samples
 from affordgrasp.objects import resolve_object
 from affordgrasp.objects.families import family_names, make_family
 from affordgrasp.objects.families.parts import PART_NAMES, SHARP_EDGE_RAD
+from affordgrasp.pipeline import evaluate_samples
 
 # the parts every instance of a family must have (at least one face each)
 EXPECTED = {

@@ -30,6 +30,14 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--address", default=None, help="an existing Ray cluster (--engine ray)")
     p.add_argument(
+        "--uses",
+        type=int,
+        default=2000,
+        metavar="M",
+        help="score each grasp with its best of M uniform use points (ray casts, no "
+        "simulation; default 2000); 0: each sample keeps its own use direction",
+    )
+    p.add_argument(
         "--no-baseline",
         action="store_true",
         help="skip uniform random sampling with the same budget",
@@ -53,6 +61,7 @@ def run(args, out) -> None:
         address=args.address,
         population=args.population,
         baseline=not args.no_baseline,
+        uses=args.uses,
         progress=lambda total: out.progress("optimising", total),
     )
     shown = shown_metrics(args.task)

@@ -43,6 +43,14 @@ def add_source_arguments(p) -> None:
         "--seed", type=int, default=0, help="sampling seed for an object SOURCE (default 0)"
     )
     p.add_argument(
+        "--uses",
+        type=int,
+        default=2000,
+        metavar="M",
+        help="for an object SOURCE, also score every grasp with each of M uniform use points "
+        "(affordgrasp.pairs; default 2000, 0: only the samples' own use points)",
+    )
+    p.add_argument(
         "--hand",
         default="barrett",
         help="hand for an object SOURCE: barrett (default) or parallel_jaw",
@@ -84,8 +92,9 @@ def add_arguments(p) -> None:
 # --------------------------------------------------------------------------- shared helpers
 
 
-def open_sources(args, out) -> list:
-    """One GraspSource per SOURCE: datasets as they are, objects evaluated now."""
+def open_sources(args, out, tasks=(), thresholds=None) -> list:
+    """One GraspSource per SOURCE: datasets as they are, objects evaluated now (with, when
+    ``--uses`` is set, the best pairs of their grasps and ``--uses`` use points per task)."""
     from ..objects import resolve_object
     from ..objects.resolve import is_family_spec
     from ..pipeline import evaluate_samples
@@ -117,8 +126,45 @@ def open_sources(args, out) -> list:
                 batch_size=EVALUATION_BATCH,
                 progress=advance,
             )
+        if getattr(args, "uses", 0):
+            table = with_best_pairs(obj, table, tasks, thresholds or {}, args)
         sources.append(TableSource(table, name=obj.name, objects={obj.name: obj}))
     return sources
+
+
+def with_best_pairs(obj, table, tasks, thresholds, args):
+    """``table`` plus, per task, its best (grasp, use point) pairs over the table's grasps
+    and ``args.uses`` uniform use points, as ordinary rows numbered after the samples."""
+    import pyarrow as pa
+
+    from ..pairs import USE_COLUMNS, best_pairs
+
+    if args.uses < 0:
+        raise InputError(f"--uses must be a non-negative integer, got {args.uses}")
+    extra = []
+    for task in tasks:
+        if not USE_COLUMNS & set(task.requires):
+            continue  # the task ignores the use point: the samples already say it all
+        found = best_pairs(
+            obj,
+            task.name,
+            mode=args.mode,
+            uses=args.uses,
+            seed=args.seed,
+            top=args.top,
+            hand=args.hand,
+            grasp_table=table,
+            **(thresholds.get(task.name) or {}),
+        )
+        if found.table.num_rows:
+            extra.append(found.table.drop_columns(["value"]))
+    if not extra:
+        return table
+    rows = pa.concat_tables(extra).cast(table.schema)
+    start = table.num_rows
+    number = pa.array(range(start, start + rows.num_rows), pa.int64())
+    rows = rows.set_column(rows.schema.get_field_index("sample"), "sample", number)
+    return pa.concat_tables([table, rows])
 
 
 def resolve_dataset_object(
@@ -197,7 +243,7 @@ def run(args, out) -> None:
         if not 64 <= value <= 2048:
             raise InputError(f"{flag} must be between 64 and 2048 pixels, got {value}")
     tasks, thresholds = parse_tasks(args.task, args.mode, args.threshold)
-    sources = open_sources(args, out)
+    sources = open_sources(args, out, tasks, thresholds)
     rankings = []
     sources_by_object = {}
     for source in sources:
