@@ -36,15 +36,16 @@ class KernelLoad:
 
 def _dispatchers() -> list:
     from .grasp import kernels
+    from .hands import kinematics
     from .metrics import phi
 
     return [
         kernels.approach_until_contact,
-        kernels.close_chain_until_contact,
+        kernels.first_contact,
         kernels.touching_points,
         kernels.merge_contacts,
-        kernels.link_poses,
-        kernels.shape_poses,
+        kinematics.link_poses,
+        kinematics.shape_poses,
         phi.contact_metrics_batch,
     ]
 

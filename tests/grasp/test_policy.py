@@ -26,7 +26,11 @@ def hand_surface_points(hand, dofs, per_shape=3000, seed=0):
     arrays = hand_arrays(hand)
     out = []
     for pose, kind, half, r in zip(
-        hand.shape_poses(dofs), arrays.kinds, arrays.halves, arrays.radii, strict=True
+        hand.shape_poses(dofs),
+        arrays.shapes.kinds,
+        arrays.shapes.halves,
+        arrays.shapes.radii,
+        strict=True,
     ):
         box = np.array([half[0], half[0] if kind == kernels.CYLINDER else half[1], half[2]]) + r
         q = rng.uniform(-box, box, (per_shape, 3))
@@ -57,7 +61,7 @@ def check_grasp(obj, hand, status, pose, joints, contacts, probe):
     shape_poses = hand.shape_poses(joints)
     probe_h = (probe - pose[:3, 3]) @ pose[:3, :3]
     for sp, kind, half, r in zip(
-        shape_poses, arrays.kinds, arrays.halves, arrays.radii, strict=True
+        shape_poses, arrays.shapes.kinds, arrays.shapes.halves, arrays.shapes.radii, strict=True
     ):
         assert shape_sdf(probe_h, sp, kind, half, r).min() > -PENETRATION_TOL
     hs = hand_surface_points(hand, joints)
@@ -72,7 +76,13 @@ def check_grasp(obj, hand, status, pose, joints, contacts, probe):
         sel = np.nonzero(arrays.shape_link == li)[0]
         ph = ((p - pose[:3, 3]) @ pose[:3, :3])[None]
         d = min(
-            shape_sdf(ph, shape_poses[s], arrays.kinds[s], arrays.halves[s], arrays.radii[s])[0]
+            shape_sdf(
+                ph,
+                shape_poses[s],
+                arrays.shapes.kinds[s],
+                arrays.shapes.halves[s],
+                arrays.shapes.radii[s],
+            )[0]
             for s in sel
         )
         assert -PENETRATION_TOL < d <= CONTACT_TOL + 1e-12

@@ -15,9 +15,12 @@ All positions are in the hand frame (palm face z = 0, approach +z), metres.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
+from ..hands.kinematics import PRISMATIC, REVOLUTE, joint_motion_into, mul4_into
 from ..metrics.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
@@ -25,8 +28,62 @@ install_package_stamp()  # before the first @njit (see kernel_cache)
 # Shape kinds (see affordgrasp.hands.model).
 BOX = 0
 CYLINDER = 1
-REVOLUTE = 0
-PRISMATIC = 1
+
+
+class SampleCloud(NamedTuple):
+    """Object surface samples grouped into two levels of cells (see ``surface``).
+
+    points (n, 3) by cell; cell_start (c + 1,) offsets of each fine cell's points,
+    cell_center (c, 3), cell_radius (c,) a bounding sphere per cell; coarse_start (k + 1,)
+    offsets of each coarse cell's fine cells, coarse_center (k, 3), coarse_radius (k,).
+    """
+
+    points: np.ndarray
+    cell_start: np.ndarray
+    cell_center: np.ndarray
+    cell_radius: np.ndarray
+    coarse_start: np.ndarray
+    coarse_center: np.ndarray
+    coarse_radius: np.ndarray
+
+
+class ShapeSet(NamedTuple):
+    """Rounded hand shapes: local (k, 4, 4) pose (in the hand frame, or in the chain link
+    that carries each), kinds (k,) BOX / CYLINDER, halves (k, 3) half extents of the core,
+    radii (k,) rounding radius, m."""
+
+    local: np.ndarray
+    kinds: np.ndarray
+    halves: np.ndarray
+    radii: np.ndarray
+
+
+class Chain(NamedTuple):
+    """A moving kinematic chain: base (4, 4) frame of the first joint's parent in the hand
+    frame; per joint origins (m, 4, 4), kinds (m,), axes (m, 3), q0 (m,) start values and
+    speeds (m,) (q = q0 + speeds * s); shape_joint (k,) the joint whose link carries each of
+    ``shapes``."""
+
+    base: np.ndarray
+    origins: np.ndarray
+    kinds: np.ndarray
+    axes: np.ndarray
+    q0: np.ndarray
+    speeds: np.ndarray
+    shape_joint: np.ndarray
+    shapes: ShapeSet
+
+
+class ChainFrames(NamedTuple):
+    """Per-search constants of a Chain (see ``_chain_frames``)."""
+
+    inv_base: np.ndarray
+    inv_origin: np.ndarray
+    inv_shape: np.ndarray
+    chain_len: np.ndarray
+    slide: np.ndarray
+
+
 BISECTIONS = 48
 # Closing parameter (rad for revolute joints, m for prismatic ones) used to tell whether a
 # point within the hit level is being pressed (its distance falls) or left behind.
@@ -121,15 +178,6 @@ def _to_hand(p, rot, trans, out):
 
 
 @njit(cache=True)
-def _mul4_into(a, b, out):
-    for i in range(4):
-        for j in range(4):
-            out[i, j] = (
-                a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
-            )
-
-
-@njit(cache=True)
 def _bounding_radius(kind, half, r):
     if kind == BOX:
         return np.sqrt(half[0] ** 2 + half[1] ** 2 + half[2] ** 2) + r
@@ -137,79 +185,34 @@ def _bounding_radius(kind, half, r):
 
 
 @njit(cache=True)
-def _in_column(c, rr, pose, t_max):
+def _in_sweep(c, rr, pose, axis, t_max):
     """Whether a sphere (hand-frame centre c, radius rr grown by a shape's bounding radius)
-    meets the shape's bounding sphere while the hand travels 0..t_max along +z."""
+    meets the shape's bounding sphere while the shape translates by 0..t_max along axis."""
     dx = c[0] - pose[0, 3]
     dy = c[1] - pose[1, 3]
-    d2 = dx * dx + dy * dy
+    dz = c[2] - pose[2, 3]
+    along = dx * axis[0] + dy * axis[1] + dz * axis[2]
+    d2 = dx * dx + dy * dy + dz * dz - along * along
     if d2 > rr * rr:
         return False
     half_chord = np.sqrt(rr * rr - d2)
-    dz = c[2] - pose[2, 3]
-    return dz + half_chord >= 0.0 and dz - half_chord <= t_max
+    return along + half_chord >= 0.0 and along - half_chord <= t_max
 
 
 @njit(cache=True)
-def _joint_motion_into(kind, axis, q, mot):
-    """mot (4, 4) = the motion of a joint at value q: rotation about or translation along axis."""
-    if kind == REVOLUTE:
-        c = np.cos(q)
-        sn = np.sin(q)
-        C = 1.0 - c
-        ax = axis[0]
-        ay = axis[1]
-        az = axis[2]
-        mot[0, 0] = c + ax * ax * C
-        mot[0, 1] = ax * ay * C - az * sn
-        mot[0, 2] = ax * az * C + ay * sn
-        mot[1, 0] = ay * ax * C + az * sn
-        mot[1, 1] = c + ay * ay * C
-        mot[1, 2] = ay * az * C - ax * sn
-        mot[2, 0] = az * ax * C - ay * sn
-        mot[2, 1] = az * ay * C + ax * sn
-        mot[2, 2] = c + az * az * C
-        mot[0, 3] = 0.0
-        mot[1, 3] = 0.0
-        mot[2, 3] = 0.0
-    else:
-        for a in range(3):
-            for b in range(3):
-                mot[a, b] = 1.0 if a == b else 0.0
-            mot[a, 3] = axis[a] * q
-    mot[3, 0] = 0.0
-    mot[3, 1] = 0.0
-    mot[3, 2] = 0.0
-    mot[3, 3] = 1.0
-
-
-@njit(cache=True)
-def _chain_poses_into(
-    s,
-    base,
-    origins,
-    kinds,
-    axes,
-    q0,
-    speeds,
-    shape_joint,
-    shape_local,
-    link_buf,
-    shape_buf,
-    tmp_a,
-    tmp_b,
-):
+def _chain_poses_into(s, chain, link_buf, shape_buf):
     """Fill link_buf (m, 4, 4) and shape_buf (k, 4, 4) with the chain's poses at ``s``."""
-    m = origins.shape[0]
-    tmp_a[:, :] = base
+    tmp_a = np.empty((4, 4))
+    tmp_b = np.empty((4, 4))
     mot = np.empty((4, 4))
-    for j in range(m):
-        _mul4_into(tmp_a, origins[j], tmp_b)
-        _joint_motion_into(kinds[j], axes[j], q0[j] + speeds[j] * s, mot)
-        _mul4_into(tmp_b, mot, tmp_a)
+    tmp_a[:, :] = chain.base
+    for j in range(chain.origins.shape[0]):
+        mul4_into(tmp_a, chain.origins[j], tmp_b)
+        joint_motion_into(chain.kinds[j], chain.axes[j], chain.q0[j] + chain.speeds[j] * s, mot)
+        mul4_into(tmp_b, mot, tmp_a)
         link_buf[j, :, :] = tmp_a
-    for q in range(shape_joint.shape[0]):
-        _mul4_into(link_buf[shape_joint[q]], shape_local[q], shape_buf[q])
+    for q in range(chain.shape_joint.shape[0]):
+        mul4_into(link_buf[chain.shape_joint[q]], chain.shapes.local[q], shape_buf[q])
 
 
 @njit(cache=True)
@@ -231,9 +234,36 @@ def _inverse_rigid(t, out):
 
 
 @njit(cache=True)
-def _chain_touch(px, py, pz, s, r, inv_base, inv_origin, kinds, axes, q0, speeds, shape_joint,
-                 inv_shape, shape_kinds, halves, radii, chain_len, margin):  # fmt: skip
-    """Distance of a hand-frame point to the moving shapes at closing parameter s.
+def _chain_frames(chain, s_max):
+    """What every distance query of a search reuses: the inverse frames and the bound on the
+    distance from the first joint to each joint (the fixed offsets plus the largest
+    extension of every slide before it)."""
+    m = chain.origins.shape[0]
+    k = chain.shape_joint.shape[0]
+    inv_base = np.empty((3, 4))
+    _inverse_rigid(chain.base, inv_base)
+    inv_origin = np.empty((m, 3, 4))
+    for j in range(m):
+        _inverse_rigid(chain.origins[j], inv_origin[j])
+    inv_shape = np.empty((k, 3, 4))
+    for q in range(k):
+        _inverse_rigid(chain.shapes.local[q], inv_shape[q])
+    slide = np.zeros(m)
+    for j in range(m):
+        if chain.kinds[j] == PRISMATIC:
+            slide[j] = max(abs(chain.q0[j]), abs(chain.q0[j] + chain.speeds[j] * s_max))
+    chain_len = np.zeros(m)
+    for j in range(1, m):
+        o = chain.origins[j]
+        chain_len[j] = (
+            chain_len[j - 1] + slide[j - 1] + np.sqrt(o[0, 3] ** 2 + o[1, 3] ** 2 + o[2, 3] ** 2)
+        )
+    return ChainFrames(inv_base, inv_origin, inv_shape, chain_len, slide)
+
+
+@njit(cache=True)
+def _chain_touch(px, py, pz, s, r, chain, frames, margin):
+    """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
     of composing the links' poses: a few dozen operations per joint.
@@ -243,24 +273,27 @@ def _chain_touch(px, py, pz, s, r, inv_base, inv_origin, kinds, axes, q0, speeds
     returns : (smallest distance, its shape, a safe step in s: min over shapes of
         (distance - margin) / (the point's speed bound relative to that shape's link))
     """
-    x = inv_base[0, 0] * px + inv_base[0, 1] * py + inv_base[0, 2] * pz + inv_base[0, 3]
-    y = inv_base[1, 0] * px + inv_base[1, 1] * py + inv_base[1, 2] * pz + inv_base[1, 3]
-    z = inv_base[2, 0] * px + inv_base[2, 1] * py + inv_base[2, 2] * pz + inv_base[2, 3]
+    ib = frames.inv_base
+    x = ib[0, 0] * px + ib[0, 1] * py + ib[0, 2] * pz + ib[0, 3]
+    y = ib[1, 0] * px + ib[1, 1] * py + ib[1, 2] * pz + ib[1, 3]
+    z = ib[2, 0] * px + ib[2, 1] * py + ib[2, 2] * pz + ib[2, 3]
     d_min = np.inf
     q_min = -1
     step = np.inf
-    for j in range(inv_origin.shape[0]):
-        o = inv_origin[j]
+    shapes = chain.shapes
+    bound = 0.0
+    for j in range(chain.origins.shape[0]):
+        o = frames.inv_origin[j]
         x, y, z = (
             o[0, 0] * x + o[0, 1] * y + o[0, 2] * z + o[0, 3],
             o[1, 0] * x + o[1, 1] * y + o[1, 2] * z + o[1, 3],
             o[2, 0] * x + o[2, 1] * y + o[2, 2] * z + o[2, 3],
         )
-        q = q0[j] + speeds[j] * s
-        ax = axes[j, 0]
-        ay = axes[j, 1]
-        az = axes[j, 2]
-        if kinds[j] == REVOLUTE:
+        q = chain.q0[j] + chain.speeds[j] * s
+        ax = chain.axes[j, 0]
+        ay = chain.axes[j, 1]
+        az = chain.axes[j, 2]
+        if chain.kinds[j] == REVOLUTE:
             # Rotate by -q about the axis (Rodrigues): into the moving link's frame.
             c = np.cos(q)
             sn = np.sin(q)
@@ -270,28 +303,24 @@ def _chain_touch(px, py, pz, s, r, inv_base, inv_origin, kinds, axes, q0, speeds
             cz = ax * y - ay * x
             x, y, z = (x * c - cx * sn + ax * dot, y * c - cy * sn + ay * dot,
                        z * c - cz * sn + az * dot)  # fmt: skip
+            bound += abs(chain.speeds[j]) * (r + frames.chain_len[j])
         else:
             x -= ax * q
             y -= ay * q
             z -= az * q
-        for sq in range(shape_joint.shape[0]):
-            if shape_joint[sq] != j:
+            bound += abs(chain.speeds[j])
+        for sq in range(chain.shape_joint.shape[0]):
+            if chain.shape_joint[sq] != j:
                 continue
-            t = inv_shape[sq]
+            t = frames.inv_shape[sq]
             lx = t[0, 0] * x + t[0, 1] * y + t[0, 2] * z + t[0, 3]
             ly = t[1, 0] * x + t[1, 1] * y + t[1, 2] * z + t[1, 3]
             lz = t[2, 0] * x + t[2, 1] * y + t[2, 2] * z + t[2, 3]
-            h = halves[sq]
-            d = sdf_local(lx, ly, lz, shape_kinds[sq], h[0], h[1], h[2], radii[sq])
+            h = shapes.halves[sq]
+            d = sdf_local(lx, ly, lz, shapes.kinds[sq], h[0], h[1], h[2], shapes.radii[sq])
             if d < d_min:
                 d_min = d
                 q_min = sq
-            bound = 0.0
-            for i in range(j + 1):
-                if kinds[i] == REVOLUTE:
-                    bound += abs(speeds[i]) * (r + chain_len[i])
-                else:
-                    bound += abs(speeds[i])
             if bound > 0.0:
                 step = min(step, max(d - margin, 0.0) / bound)
     return d_min, q_min, step
@@ -341,228 +370,112 @@ def _heap_pop(key, ident, prev, size):
 
 
 @njit(cache=True)
-def approach_until_contact(
-    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
-    rot, trans, poses, kinds, halves, radii, t_max, hit_eps,
-):  # fmt: skip
-    """Distance the hand can travel along its +z before a link touches a sample point.
+def _refine_first_hit(cloud, rot, trans, chain, frames, hits, n_hits, best, hit_eps):
+    """The first crossing of the hit level among the hits whose bracket starts before the
+    best one, each refined by bisection on its bracket [s_prev, s].
 
-    points : (n, 3) object samples in the object frame, grouped by cell
-    cell_start : (c + 1,) offsets of each fine cell's points; cell_center (c, 3),
-        cell_radius (c,) a bounding sphere per cell; coarse_start (k + 1,) offsets of each
-        coarse cell's fine cells, coarse_center (k, 3), coarse_radius (k,)
-    rot, trans : the start pose of the hand (object frame = rot @ hand + trans)
-    poses : (s, 4, 4) shape poses in the hand frame; kinds (s,), halves (s, 3), radii (s,)
-    returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
-
-    Every point moves at unit speed relative to the hand, so a step never exceeds its
-    distance to a shape. (cell or point, shape) pairs sit in one priority queue keyed by a
-    lower bound on their touching time, as in the closing search: coarse cells whose sphere
-    crosses the column a shape sweeps, then, once a cell's sphere touches, its fine cells,
-    then their points. The first crossing of the hit level is refined by bisection.
+    hits : (h, 3) rows (point index, bracket low, bracket high) as float
+    returns : (s, point index, shape index); (inf, -1, -1) when there is no hit.
     """
-    n = points.shape[0]
-    nc = cell_center.shape[0]
-    nk = coarse_center.shape[0]
-    ns = poses.shape[0]
-    rho = np.empty(ns)
-    for s in range(ns):
-        # Grown by the hit level: a point can come within hit_eps of a rounded corner while
-        # still outside the exact bounding sphere.
-        rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + 2.0 * hit_eps
-    # Entity codes: a point i, then fine cell n + c, then coarse cell n + nc + k; an entry's
-    # id is entity * ns + shape.
-    kc = np.empty((nk, 3))
-    cap = 1
-    for kk in range(nk):
-        _to_hand(coarse_center[kk], rot, trans, kc[kk])
-        for s in range(ns):
-            if _in_column(kc[kk], coarse_radius[kk] + rho[s], poses[s], t_max):
-                cap += 1 + coarse_start[kk + 1] - coarse_start[kk]
-                cap += cell_start[coarse_start[kk + 1]] - cell_start[coarse_start[kk]]
-    key = np.empty(cap)
-    ident = np.empty(cap, dtype=np.int64)
-    prev = np.empty(cap)
-    size = 0
-    for kk in range(nk):
-        for s in range(ns):
-            rr = coarse_radius[kk] + rho[s]
-            if not _in_column(kc[kk], rr, poses[s], t_max):
-                continue
-            dx = kc[kk, 0] - poses[s, 0, 3]
-            dy = kc[kk, 1] - poses[s, 1, 3]
-            t_in = max(kc[kk, 2] - poses[s, 2, 3] - np.sqrt(rr * rr - dx * dx - dy * dy), 0.0)
-            size = _heap_push(key, ident, prev, size, t_in, (n + nc + kk) * ns + s, t_in)
-    best = t_max
-    hp = np.empty(16, dtype=np.int64)
-    hs = np.empty(16, dtype=np.int64)
-    hlo = np.empty(16)
-    hhi = np.empty(16)
-    nh = 0
-    x = np.empty(3)
-    margin = 0.5 * hit_eps
-    for _ in range(10_000_000):
-        if size == 0:
-            break
-        t, e, t_prev = _heap_pop(key, ident, prev, size)[:3]
-        size -= 1
-        if t >= best:
-            break
-        s = e % ns
-        ent = e // ns
-        if ent >= n:
-            coarse = ent >= n + nc
-            c = ent - n - nc if coarse else ent - n
-            radius = coarse_radius[c] if coarse else cell_radius[c]
-            _to_hand(coarse_center[c] if coarse else cell_center[c], rot, trans, x)
-            d = sdf_world(x[0], x[1], x[2] - t, poses[s], kinds[s], halves[s], radii[s]) - radius
-            if d <= hit_eps:
-                # Everything inside is clear at t_prev and goes on from t, one level down.
-                if coarse:
-                    for f in range(coarse_start[c], coarse_start[c + 1]):
-                        size = _heap_push(key, ident, prev, size, t, (n + f) * ns + s, t_prev)
-                else:
-                    for i in range(cell_start[c], cell_start[c + 1]):
-                        size = _heap_push(key, ident, prev, size, t, i * ns + s, t_prev)
-            else:
-                nxt = t + d - margin
-                # Past the shape's bounding sphere the pair can no longer touch.
-                if nxt < best and x[2] - poses[s, 2, 3] - nxt > -(rho[s] + radius):
-                    size = _heap_push(key, ident, prev, size, nxt, e, t)
-            continue
-        _to_hand(points[ent], rot, trans, x)
-        d = sdf_world(x[0], x[1], x[2] - t, poses[s], kinds[s], halves[s], radii[s])
-        if d <= hit_eps:
-            if nh == hp.shape[0]:
-                hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
-                hs = np.concatenate((hs, np.empty(nh, dtype=np.int64)))
-                hlo = np.concatenate((hlo, np.empty(nh)))
-                hhi = np.concatenate((hhi, np.empty(nh)))
-            hp[nh] = ent
-            hs[nh] = s
-            hlo[nh] = t_prev
-            hhi[nh] = t
-            nh += 1
-            best = min(best, t)
-        else:
-            nxt = t + d - margin  # d > hit_eps = 2 margin: at least margin
-            if nxt < best and x[2] - poses[s, 2, 3] - nxt > -rho[s]:
-                size = _heap_push(key, ident, prev, size, nxt, e, t)
-    # Refine the hits whose bracket starts before the best one by bisection. Steps that
-    # jump past the best hit are dropped, so the hand stops with a gap in [hit_eps / 2,
-    # hit_eps] to the closest sample, never touching it.
+    ph = np.empty(3)
     first = np.inf
     first_p = -1
-    first_s = -1
-    for h in range(nh):
-        if hlo[h] > best:
+    first_q = -1
+    for h in range(n_hits):
+        lo = hits[h, 1]
+        if lo > best:
             continue
-        s = hs[h]
-        _to_hand(points[hp[h]], rot, trans, x)
-        lo = hlo[h]
-        hi = hhi[h]
+        i = int(hits[h, 0])
+        hi = hits[h, 2]
+        _to_hand(cloud.points[i], rot, trans, ph)
         for _ in range(BISECTIONS):
             if hi - lo <= 1e-13:
                 break
             mid = 0.5 * (lo + hi)
-            if (
-                sdf_world(x[0], x[1], x[2] - mid, poses[s], kinds[s], halves[s], radii[s])
-                <= hit_eps
-            ):
+            dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps)
+            if dm <= hit_eps:
                 hi = mid
             else:
                 lo = mid
         if hi < first:
+            _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps)
             first = hi
-            first_p = hp[h]
-            first_s = s
+            first_p = i
+            first_q = q_hi
     if first_p < 0:
         return np.inf, -1, -1
-    return first, first_p, first_s
+    return first, first_p, first_q
 
 
 @njit(cache=True)
-def close_chain_until_contact(
-    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
-    rot, trans,
-    base, origins, kinds, axes, q0, speeds,
-    shape_joint, shape_local, shape_kinds, shape_halves, shape_radii,
-    s_max, hit_eps,
-):  # fmt: skip
-    """Closing parameter at which a moving link of a finger first touches a sample point.
+def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
+    """Motion parameter at which a moving shape of ``chain`` first touches a sample point.
 
-    The chain's joints move as q_j = q0_j + speeds_j * s (joint frames: ``origins`` in their
-    parent link, the first one's parent at ``base`` in the hand frame). shape_joint (k,) is
-    the chain link carrying each moving shape, shape_local (k, 4, 4) its pose in that link.
+    cloud : SampleCloud (object frame); rot, trans : the hand pose (object frame = rot @
+    hand + trans); chain : Chain, whose joints move as q_j = q0_j + speeds_j * s (joint
+    frames: ``origins`` in their parent link, the first one's parent at ``base`` in the
+    hand frame; ``shape_joint`` (k,) the chain link carrying each shape of ``shapes``).
+    returns : (s, point index, shape index); (inf, -1, -1) when nothing is touched by s_max.
+
     A point's speed relative to link j is bounded by sum over joints i <= j of
     |speed_i| * (|p - o_0| + chain length to joint i) for revolute joints and |speed_i| for
-    prismatic ones (o_0, the first joint's origin, does not move while the finger closes);
-    every step is a distance over that bound, so no point can pass through a link.
+    prismatic ones (o_0, the first joint's origin, does not move); every step is a distance
+    over that bound, so no point can pass through a link, however thin the object part.
 
-    Cells (as bounding spheres) and points sit in one priority queue keyed by a lower bound
-    on when they can first touch; the smallest is advanced by one step at a time, a touching
-    cell releases its points, and the search stops once no entry can beat the best hit. The
-    first crossing of the hit level is then refined by bisection among the hits that can
-    still be first.
-    returns : (s, point index, shape index); (inf, -1, -1) when nothing is touched by s_max.
+    The approach is the chain of one prismatic joint along +z carrying every shape; a
+    finger's closing is its chain of revolute (or prismatic) joints. Cells (as bounding
+    spheres) and points sit in one priority queue keyed by a lower bound on when they can
+    first touch; the smallest is advanced by one step at a time, a touching cell releases
+    its children (coarse -> fine cells -> points), and the search stops once no entry can
+    beat the best hit. The first crossing is then refined by bisection
+    (:func:`_refine_first_hit`).
     """
-    m = origins.shape[0]
-    k = shape_joint.shape[0]
+    m = chain.origins.shape[0]
+    k = chain.shape_joint.shape[0]
+    shapes = chain.shapes
     link_buf = np.empty((m, 4, 4))
     shape_buf = np.empty((k, 4, 4))
+    _chain_poses_into(0.0, chain, link_buf, shape_buf)
+    frames = _chain_frames(chain, s_max)
     tmp_a = np.empty((4, 4))
     tmp_b = np.empty((4, 4))
-    _chain_poses_into(0.0, base, origins, kinds, axes, q0, speeds, shape_joint, shape_local,
-                      link_buf, shape_buf, tmp_a, tmp_b)  # fmt: skip
-    _mul4_into(base, origins[0], tmp_a)
+    mul4_into(chain.base, chain.origins[0], tmp_a)
     o0 = tmp_a[:3, 3].copy()
-    inv_base = np.empty((3, 4))
-    _inverse_rigid(base, inv_base)
-    inv_origin = np.empty((m, 3, 4))
-    for j in range(m):
-        _inverse_rigid(origins[j], inv_origin[j])
-    inv_shape = np.empty((k, 3, 4))
-    for q in range(k):
-        _inverse_rigid(shape_local[q], inv_shape[q])
-    # Bound on the distance from the first joint to joint j whatever the joints do: the fixed
-    # offsets plus the largest extension of every slide before it.
-    slide = np.zeros(m)
-    for j in range(m):
-        if kinds[j] == PRISMATIC:
-            slide[j] = max(abs(q0[j]), abs(q0[j] + speeds[j] * s_max))
-    chain_len = np.zeros(m)
-    for j in range(1, m):
-        chain_len[j] = (
-            chain_len[j - 1]
-            + slide[j - 1]
-            + np.sqrt(origins[j, 0, 3] ** 2 + origins[j, 1, 3] ** 2 + origins[j, 2, 3] ** 2)
-        )
+    a0 = _rotate(tmp_a, chain.axes[0])
     reach = 0.0
     for q in range(k):
-        j = shape_joint[q]
+        j = chain.shape_joint[q]
         dx = shape_buf[q, 0, 3] - link_buf[j, 0, 3]
         dy = shape_buf[q, 1, 3] - link_buf[j, 1, 3]
         dz = shape_buf[q, 2, 3] - link_buf[j, 2, 3]
-        ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
-        reach = max(reach, chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
+        ext = _bounding_radius(shapes.kinds[q], shapes.halves[q], shapes.radii[q])
+        reach = max(reach, frames.chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
     reach += 2.0 * hit_eps
     # The shapes were placed at s = 0; slides can carry them further out, by at most the
     # slide's travel from where it is now.
     for j in range(m):
-        if kinds[j] == PRISMATIC:
-            reach += abs(speeds[j]) * s_max + slide[j]
+        if chain.kinds[j] == PRISMATIC:
+            reach += abs(chain.speeds[j]) * s_max + frames.slide[j]
+    # A pure translation (the approach) sweeps each shape along a column: nothing outside
+    # every column can be touched.
+    translation = m == 1 and chain.kinds[0] == PRISMATIC
+    rho = np.empty(k)
+    for q in range(k):
+        # grown by the hit level: a point can come within hit_eps of a rounded corner while
+        # still outside the exact bounding sphere
+        rho[q] = (
+            _bounding_radius(shapes.kinds[q], shapes.halves[q], shapes.radii[q]) + 2.0 * hit_eps
+        )
     # When every joint is revolute about parallel axes (a planar finger, like the Barrett's),
     # the links sweep a slab across that axis: nothing outside it can be touched.
-    _mul4_into(base, origins[0], tmp_a)
-    a0 = _rotate(tmp_a, axes[0])
     planar = True
     for j in range(m):
-        if kinds[j] != REVOLUTE:
+        if chain.kinds[j] != REVOLUTE:
             planar = False
             break
         if j > 0:
-            _mul4_into(link_buf[j - 1], origins[j], tmp_b)
-            aj = _rotate(tmp_b, axes[j])
+            mul4_into(link_buf[j - 1], chain.origins[j], tmp_b)
+            aj = _rotate(tmp_b, chain.axes[j])
             if abs(aj[0] * a0[0] + aj[1] * a0[1] + aj[2] * a0[2]) < 1.0 - 1e-9:
                 planar = False
                 break
@@ -575,56 +488,61 @@ def close_chain_until_contact(
                 + (shape_buf[q, 1, 3] - o0[1]) * a0[1]
                 + (shape_buf[q, 2, 3] - o0[2]) * a0[2]
             )
-            ext = _bounding_radius(shape_kinds[q], shape_halves[q], shape_radii[q])
-            slab = max(slab, abs(along) + ext)
-        slab += 2.0 * hit_eps
-    # Heap entries: id >= 0 a point, -1 - f the fine cell f, -1 - nf - k the coarse cell k;
+            slab = max(slab, abs(along) + rho[q])
+    # Heap entries: id >= 0 a point, -1 - f the fine cell f, -1 - nf - c the coarse cell c;
     # prev is the last key at which the entry was known not to touch (the low end of the
     # bracket of a crossing).
-    nf = cell_center.shape[0]
-    nk = coarse_center.shape[0]
+    nf = cloud.cell_center.shape[0]
+    nk = cloud.coarse_center.shape[0]
     kc = np.empty((nk, 3))
     kr = np.empty(nk)
     tmp = np.empty(3)
     cap = nk + 1
     for c in range(nk):
-        _to_hand(coarse_center[c], rot, trans, tmp)
-        dx = tmp[0] - o0[0]
-        dy = tmp[1] - o0[1]
-        dz = tmp[2] - o0[2]
-        r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
+        _to_hand(cloud.coarse_center[c], rot, trans, tmp)
         kc[c, 0] = tmp[0]
         kc[c, 1] = tmp[1]
         kc[c, 2] = tmp[2]
         kr[c] = -1.0
-        if r0 - coarse_radius[c] > reach:
+        radius = cloud.coarse_radius[c]
+        dx = tmp[0] - o0[0]
+        dy = tmp[1] - o0[1]
+        dz = tmp[2] - o0[2]
+        r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if r0 - radius > reach:
             continue
-        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - coarse_radius[c] > slab:
+        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - radius > slab:
             continue
-        kr[c] = r0 + coarse_radius[c]
-        f0 = coarse_start[c]
-        f1 = coarse_start[c + 1]
-        cap += f1 - f0 + cell_start[f1] - cell_start[f0]
+        if translation:
+            swept = False
+            for q in range(k):
+                if _in_sweep(tmp, radius + rho[q], shape_buf[q], a0, chain.speeds[0] * s_max):
+                    swept = True
+                    break
+            if not swept:
+                continue
+        kr[c] = r0 + radius
+        f0 = cloud.coarse_start[c]
+        f1 = cloud.coarse_start[c + 1]
+        cap += f1 - f0 + cloud.cell_start[f1] - cloud.cell_start[f0]
     key = np.empty(cap)
     ident = np.empty(cap, dtype=np.int64)
     prev = np.empty(cap)
     size = 0
+    margin = 0.5 * hit_eps
     for c in range(nk):
         if kr[c] < 0.0:
             continue
-        d, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], inv_base,
-                                  inv_origin, kinds, axes, q0, speeds, shape_joint, inv_shape,
-                                  shape_kinds, shape_halves, shape_radii, chain_len,
-                                  0.5 * hit_eps + coarse_radius[c])  # fmt: skip
+        radius = cloud.coarse_radius[c]
+        _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
+                                  margin + radius)  # fmt: skip
         if step < s_max:
             size = _heap_push(key, ident, prev, size, step, -1 - nf - c, 0.0)
     best = s_max  # an upper bound on the first crossing, lowered by every hit
-    hp = np.empty(64, dtype=np.int64)
-    hlo = np.empty(64)
-    hhi = np.empty(64)
+    hits = np.empty((64, 3))
     nh = 0
     ph = np.empty(3)
-    for _ in range(1_000_000):
+    for _ in range(10_000_000):
         if size == 0:
             break
         s, e, s_prev = _heap_pop(key, ident, prev, size)[:3]
@@ -634,55 +552,47 @@ def close_chain_until_contact(
         if e < 0:
             coarse = -1 - e >= nf
             c = -1 - e - nf if coarse else -1 - e
-            radius = coarse_radius[c] if coarse else cell_radius[c]
-            center = coarse_center[c] if coarse else cell_center[c]
+            radius = cloud.coarse_radius[c] if coarse else cloud.cell_radius[c]
+            center = cloud.coarse_center[c] if coarse else cloud.cell_center[c]
             _to_hand(center, rot, trans, ph)
             dx = ph[0] - o0[0]
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
-            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, inv_base, inv_origin, kinds,
-                                      axes, q0, speeds, shape_joint, inv_shape, shape_kinds,
-                                      shape_halves, shape_radii, chain_len,
-                                      0.5 * hit_eps + radius)  # fmt: skip
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin + radius)
             if d - radius <= hit_eps:
                 # Everything inside is still clear at s_prev and goes on from s, one level
                 # down: fine cells of a coarse cell, points of a fine cell.
                 if coarse:
-                    for f in range(coarse_start[c], coarse_start[c + 1]):
+                    for f in range(cloud.coarse_start[c], cloud.coarse_start[c + 1]):
                         size = _heap_push(key, ident, prev, size, s, -1 - f, s_prev)
                 else:
-                    for i in range(cell_start[c], cell_start[c + 1]):
+                    for i in range(cloud.cell_start[c], cloud.cell_start[c + 1]):
                         size = _heap_push(key, ident, prev, size, s, i, s_prev)
             elif s + step < best:
                 size = _heap_push(key, ident, prev, size, s + step, e, s)
             continue
-        _to_hand(points[e], rot, trans, ph)
+        _to_hand(cloud.points[e], rot, trans, ph)
         dx = ph[0] - o0[0]
         dy = ph[1] - o0[1]
         dz = ph[2] - o0[2]
         r = np.sqrt(dx * dx + dy * dy + dz * dz)
-        d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, inv_base, inv_origin, kinds, axes,
-                                  q0, speeds, shape_joint, inv_shape, shape_kinds, shape_halves,
-                                  shape_radii, chain_len, 0.5 * hit_eps)  # fmt: skip
+        d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin)
         pressing = False
         if d <= hit_eps:
-            # Within the hit level, a point blocks the finger only if the motion presses into
+            # Within the hit level, a point blocks the motion only if the motion presses into
             # it: a link left touching by the approach (or an earlier phase) that closes away
             # from the object is free to move, as in GraspIt!.
-            d_next, _, _ = _chain_touch(ph[0], ph[1], ph[2], s + PROBE, r, inv_base, inv_origin,
-                                        kinds, axes, q0, speeds, shape_joint, inv_shape,
-                                        shape_kinds, shape_halves, shape_radii, chain_len,
-                                        0.5 * hit_eps)  # fmt: skip
+            d_next, _, _ = _chain_touch(ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin)
             pressing = d_next < d
         if pressing:
-            if nh == hp.shape[0]:
-                hp = np.concatenate((hp, np.empty(nh, dtype=np.int64)))
-                hlo = np.concatenate((hlo, np.empty(nh)))
-                hhi = np.concatenate((hhi, np.empty(nh)))
-            hp[nh] = e
-            hlo[nh] = s_prev
-            hhi[nh] = s
+            if nh == hits.shape[0]:
+                grown = np.empty((2 * nh, 3))
+                grown[:nh] = hits
+                hits = grown
+            hits[nh, 0] = e
+            hits[nh, 1] = s_prev
+            hits[nh, 2] = s
             nh += 1
             best = min(best, s)
         else:
@@ -692,51 +602,52 @@ def close_chain_until_contact(
             nxt = s + (step if d > hit_eps else SLIDE_STEP)
             if nxt < best:
                 size = _heap_push(key, ident, prev, size, nxt, e, s)
-    # The first crossing among the hits whose bracket starts before the best hit.
-    first = np.inf
-    first_p = -1
-    first_q = -1
-    for h in range(nh):
-        if hlo[h] > best:
-            continue
-        i = hp[h]
-        _to_hand(points[i], rot, trans, ph)
-        lo = hlo[h]
-        hi = hhi[h]
-        for _ in range(BISECTIONS):
-            if hi - lo <= 1e-13:
-                break
-            mid = 0.5 * (lo + hi)
-            dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, inv_base, inv_origin, kinds,
-                                    axes, q0, speeds, shape_joint, inv_shape, shape_kinds,
-                                    shape_halves, shape_radii, chain_len, hit_eps)  # fmt: skip
-            if dm <= hit_eps:
-                hi = mid
-            else:
-                lo = mid
-        if hi < first:
-            _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, inv_base, inv_origin, kinds,
-                                      axes, q0, speeds, shape_joint, inv_shape, shape_kinds,
-                                      shape_halves, shape_radii, chain_len, hit_eps)  # fmt: skip
-            first = hi
-            first_p = i
-            first_q = q_hi
-    if first_p < 0:
-        return np.inf, -1, -1
-    return first, first_p, first_q
+    return _refine_first_hit(cloud, rot, trans, chain, frames, hits, nh, best, hit_eps)
 
 
 @njit(cache=True)
-def touching_points(
-    points, cell_start, cell_center, cell_radius, coarse_start, coarse_center, coarse_radius,
-    rot, trans, poses, kinds, halves, radii, tol,
-):  # fmt: skip
-    """Samples within ``tol`` of any shape at a fixed hand configuration.
+def approach_until_contact(cloud, rot, trans, shapes, t_max, hit_eps):
+    """Distance the hand can travel along its +z before a link touches a sample point.
+
+    cloud : SampleCloud (object frame); rot, trans : the start pose of the hand (object
+    frame = rot @ hand + trans); shapes : ShapeSet with hand-frame poses.
+    returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
+    The hand stops with a gap in [hit_eps / 2, hit_eps] to the closest sample.
+    """
+    k = shapes.kinds.shape[0]
+    chain = Chain(
+        np.eye(4),
+        np.eye(4).reshape(1, 4, 4),
+        np.array([PRISMATIC]),
+        np.array([[0.0, 0.0, 1.0]]),
+        np.zeros(1),
+        np.ones(1),
+        np.zeros(k, dtype=np.int64),
+        shapes,
+    )
+    return first_contact(cloud, rot, trans, chain, t_max, hit_eps)
+
+
+@njit(cache=True)
+def touching_points(cloud, rot, trans, shapes, tol):
+    """Samples of ``cloud`` within ``tol`` of any of ``shapes`` (hand-frame poses) at a fixed
+    hand pose (rot, trans: object frame = rot @ hand + trans).
 
     returns : point indices (k,), shape indices (k,), signed distances (k,) and the shape's
         outward unit normal at its closest point (k, 3) in the hand frame (it points from the
         link towards the sample).
     """
+    points = cloud.points
+    cell_start = cloud.cell_start
+    cell_center = cloud.cell_center
+    cell_radius = cloud.cell_radius
+    coarse_start = cloud.coarse_start
+    coarse_center = cloud.coarse_center
+    coarse_radius = cloud.coarse_radius
+    poses = shapes.local
+    kinds = shapes.kinds
+    halves = shapes.halves
+    radii = shapes.radii
     ns = poses.shape[0]
     cap = 64
     pi = np.empty(cap, dtype=np.int64)
@@ -801,39 +712,6 @@ def touching_points(
                     nrm[m, 2] = nz
                     m += 1
     return pi[:m], si[:m], dist[:m], nrm[:m]
-
-
-@njit(cache=True)
-def link_poses(q, parent, origin, axis, kind, dof, ratio):
-    """Forward kinematics: pose (l, 4, 4) of every link in the hand frame.
-
-    q (n_dofs,); per link: parent (l,) index (-1 for the root), origin (l, 4, 4) joint frame
-    in the parent link, axis (l, 3), kind (l,) REVOLUTE/PRISMATIC, dof (l,) index, ratio (l,).
-    Links are in topological order.
-    """
-    n = parent.shape[0]
-    out = np.empty((n, 4, 4))
-    mot = np.empty((4, 4))
-    tmp = np.empty((4, 4))
-    for i in range(n):
-        if parent[i] < 0:
-            for a in range(4):
-                for b in range(4):
-                    out[i, a, b] = 1.0 if a == b else 0.0
-            continue
-        _joint_motion_into(kind[i], axis[i], ratio[i] * q[dof[i]], mot)
-        _mul4_into(out[parent[i]], origin[i], tmp)
-        _mul4_into(tmp, mot, out[i])
-    return out
-
-
-@njit(cache=True)
-def shape_poses(links, shape_link, shape_local):
-    """Pose (s, 4, 4) of every shape from the link poses (l, 4, 4)."""
-    out = np.empty((shape_link.shape[0], 4, 4))
-    for s in range(shape_link.shape[0]):
-        _mul4_into(links[shape_link[s]], shape_local[s], out[s])
-    return out
 
 
 @njit(cache=True)

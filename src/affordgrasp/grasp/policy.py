@@ -28,7 +28,8 @@ import trimesh
 
 from ..caching import IdentityCache
 from ..errors import InputError
-from ..hands import Hand, get_hand
+from ..hands import Hand, get_hand, kinematics
+from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..metrics.contacts import ContactSet
 from ..tolerances import CONTACT_DISTANCE_M, STOP_DISTANCE_M
@@ -58,8 +59,8 @@ class FingerArrays:
     kinds: np.ndarray  # (m,)
     axes: np.ndarray  # (m, 3)
     ratios: np.ndarray  # (m,)
-    # Per first active joint j0, the shapes of the links it moves (chain links >= j0): chain
-    # index (k,), pose in the link (k, 4, 4), kind (k,), half extents (k, 3), radius (k,).
+    # Per first active joint j0, the shapes of the links it moves (chain links >= j0): the
+    # chain index of each (k,) and a ShapeSet posed in their links.
     shapes: tuple
 
 
@@ -68,33 +69,22 @@ class HandArrays:
     """A hand flattened for the kernels."""
 
     hand: Hand
+    tree: KinematicTree
     shape_link: np.ndarray  # (s,) link index of each shape
-    shape_local: np.ndarray  # (s, 4, 4) shape pose in its link
-    kinds: np.ndarray  # (s,)
-    halves: np.ndarray  # (s, 3)
-    radii: np.ndarray  # (s,)
-    link_parent: np.ndarray  # (l,) parent link index, -1 for the root
-    link_origin: np.ndarray  # (l, 4, 4)
-    link_axis: np.ndarray  # (l, 3)
-    link_kind: np.ndarray  # (l,)
-    link_dof: np.ndarray  # (l,) DOF index driving each link's joint, -1 for the root
-    link_ratio: np.ndarray  # (l,)
+    shapes: kernels.ShapeSet  # every shape, posed in its link
     materials: tuple[str, ...]  # per link
     fingers: tuple[FingerArrays, ...]
 
     def link_poses(self, dofs: np.ndarray) -> np.ndarray:
-        return kernels.link_poses(
-            np.asarray(dofs, dtype=np.float64),
-            self.link_parent,
-            self.link_origin,
-            self.link_axis,
-            self.link_kind,
-            self.link_dof,
-            self.link_ratio,
-        )
+        return kinematics.link_poses(np.asarray(dofs, dtype=np.float64), self.tree)
 
     def shape_poses(self, dofs: np.ndarray) -> np.ndarray:
-        return kernels.shape_poses(self.link_poses(dofs), self.shape_link, self.shape_local)
+        return kinematics.shape_poses(self.link_poses(dofs), self.shape_link, self.shapes.local)
+
+    def posed_shapes(self, dofs: np.ndarray) -> kernels.ShapeSet:
+        """Every shape with its hand-frame pose at ``dofs``."""
+        s = self.shapes
+        return kernels.ShapeSet(self.shape_poses(dofs), s.kinds, s.halves, s.radii)
 
 
 _HAND_ARRAYS: IdentityCache[HandArrays] = IdentityCache()
@@ -114,42 +104,31 @@ def _build_hand_arrays(hand: Hand) -> HandArrays:
             kinds.append(kernels.BOX if s.kind == "box" else kernels.CYLINDER)
             halves.append(s.half_extents)
             radii.append(s.radius)
-    names = hand.link_names
-    n = len(hand.links)
-    parent = np.full(n, -1, dtype=np.int64)
-    origin = np.tile(np.eye(4), (n, 1, 1))
-    axis = np.zeros((n, 3))
-    kind = np.zeros(n, dtype=np.int64)
-    dof = np.zeros(n, dtype=np.int64)
-    ratio = np.zeros(n)
+    tree = kinematics.kinematic_tree(hand)
     link_of_dof = {}
     for i, link in enumerate(hand.links):
-        if link.joint is None:
-            continue
-        j = link.joint
-        parent[i] = names.index(link.parent)
-        origin[i] = j.origin
-        axis[i] = j.axis
-        kind[i] = kernels.REVOLUTE if j.kind == "revolute" else kernels.PRISMATIC
-        dof[i] = hand.dof_index(j.dof)
-        ratio[i] = j.ratio
-        link_of_dof.setdefault(j.dof, i)
+        if link.joint is not None:
+            link_of_dof.setdefault(link.joint.dof, i)
     shape_link = np.array(shape_link, dtype=np.int64)
+    all_local = np.array(local, dtype=np.float64).reshape(-1, 4, 4)
+    all_halves = np.array(halves, dtype=np.float64).reshape(-1, 3)
+    all_kinds = np.array(kinds, dtype=np.int64)
+    all_radii = np.array(radii, dtype=np.float64)
     fingers = []
     for finger in hand.fingers:
         chain = [link_of_dof[d] for d in finger.dofs]
         subsets = []
-        all_local = np.array(local, dtype=np.float64).reshape(-1, 4, 4)
-        all_halves = np.array(halves, dtype=np.float64).reshape(-1, 3)
         for j0 in range(len(chain)):
             ids = np.array([s for s, li in enumerate(shape_link) if li in chain[j0:]], dtype=int)
             subsets.append(
                 (
                     np.array([chain.index(shape_link[s]) for s in ids], dtype=np.int64),
-                    np.ascontiguousarray(all_local[ids]),
-                    np.array(kinds, dtype=np.int64)[ids],
-                    np.ascontiguousarray(all_halves[ids]),
-                    np.array(radii, dtype=np.float64)[ids],
+                    kernels.ShapeSet(
+                        np.ascontiguousarray(all_local[ids]),
+                        all_kinds[ids],
+                        np.ascontiguousarray(all_halves[ids]),
+                        all_radii[ids],
+                    ),
                 )
             )
         fingers.append(
@@ -157,27 +136,19 @@ def _build_hand_arrays(hand: Hand) -> HandArrays:
                 np.array([hand.dof_index(d) for d in finger.dofs], dtype=np.int64),
                 np.array(finger.speeds, dtype=np.float64),
                 np.array([hand.dofs[hand.dof_index(d)].upper for d in finger.dofs]),
-                int(parent[chain[0]]),
-                origin[chain].copy(),
-                kind[chain].copy(),
-                axis[chain].copy(),
-                ratio[chain].copy(),
+                int(tree.parent[chain[0]]),
+                tree.origin[chain].copy(),
+                tree.kind[chain].copy(),
+                tree.axis[chain].copy(),
+                tree.ratio[chain].copy(),
                 tuple(subsets),
             )
         )
     arrays = HandArrays(
         hand,
+        tree,
         shape_link,
-        np.array(local, dtype=np.float64).reshape(-1, 4, 4),
-        np.array(kinds, dtype=np.int64),
-        np.array(halves, dtype=np.float64).reshape(-1, 3),
-        np.array(radii, dtype=np.float64),
-        parent,
-        origin,
-        axis,
-        kind,
-        np.where(parent < 0, -1, dof),
-        ratio,
+        kernels.ShapeSet(all_local, all_kinds, all_halves, all_radii),
         tuple(link.material for link in hand.links),
         tuple(fingers),
     )
@@ -273,7 +244,7 @@ def hand_reach(hand: Hand, dofs: np.ndarray) -> float:
     arrays = hand_arrays(hand)
     poses = arrays.shape_poses(dofs)
     reach = 0.0
-    for pose, h, r in zip(poses, arrays.halves, arrays.radii, strict=True):
+    for pose, h, r in zip(poses, arrays.shapes.halves, arrays.shapes.radii, strict=True):
         reach = max(reach, pose[2, 3] + np.linalg.norm(h) + r)
     return reach
 
@@ -289,6 +260,7 @@ def close_fingers(
     rot = np.ascontiguousarray(pose[:3, :3])
     trans = np.ascontiguousarray(pose[:3, 3])
     arrays = hand_arrays(hand)
+    cloud = samples.cloud
     dofs = dofs.copy()
     # A finger's chain hangs from a link that no closing DOF moves (the palm, or a Barrett
     # knuckle turned by the spread), so its pose is fixed while the fingers close.
@@ -299,15 +271,13 @@ def close_fingers(
             q0 = f.ratios * dofs[f.dofs]
             speeds = np.zeros(len(f.dofs))
             speeds[active] = f.ratios[active] * f.speeds[active]
-            chain_index, local, kinds, halves, radii = f.shapes[active[0]]
+            chain_index, shapes = f.shapes[active[0]]
             # Largest s before an active DOF reaches its upper limit.
             s_max = max(min((f.upper[j] - dofs[f.dofs[j]]) / f.speeds[j] for j in active), 0.0)
-            s_hit, _, q_hit = kernels.close_chain_until_contact(
-                samples.points, samples.cell_start, samples.cell_center, samples.cell_radius,
-                samples.coarse_start, samples.coarse_center, samples.coarse_radius,
-                rot, trans, links[f.parent], f.origins, f.kinds, f.axes, q0, speeds,
-                chain_index, local, kinds, halves, radii, s_max, HIT_EPS,
-            )  # fmt: skip
+            chain = kernels.Chain(
+                links[f.parent], f.origins, f.kinds, f.axes, q0, speeds, chain_index, shapes
+            )
+            s_hit, _, q_hit = kernels.first_contact(cloud, rot, trans, chain, s_max, HIT_EPS)
             s = min(s_hit, s_max)
             for j in active:
                 dofs[f.dofs[j]] = min(dofs[f.dofs[j]] + f.speeds[j] * s, f.upper[j])
@@ -322,23 +292,13 @@ def close_fingers(
 
 
 def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
-    shape_poses = arrays.shape_poses(dofs)
     samples = geom.samples
     rot = np.ascontiguousarray(pose[:3, :3])
     pi, si, dist, link_normal = kernels.touching_points(
-        samples.points,
-        samples.cell_start,
-        samples.cell_center,
-        samples.cell_radius,
-        samples.coarse_start,
-        samples.coarse_center,
-        samples.coarse_radius,
+        samples.cloud,
         rot,
         np.ascontiguousarray(pose[:3, 3]),
-        shape_poses,
-        arrays.kinds,
-        arrays.halves,
-        arrays.radii,
+        arrays.posed_shapes(dofs),
         CONTACT_TOL,
     )
     if len(pi) == 0:
@@ -405,21 +365,11 @@ def _grasp_centred(
     dofs = hand.open_dofs(s)
     rot = np.ascontiguousarray(start_pose[:3, :3])
     samples = geom.samples
-    shape_poses = arrays.shape_poses(dofs)
     t, _, _ = kernels.approach_until_contact(
-        samples.points,
-        samples.cell_start,
-        samples.cell_center,
-        samples.cell_radius,
-        samples.coarse_start,
-        samples.coarse_center,
-        samples.coarse_radius,
+        samples.cloud,
         rot,
         np.ascontiguousarray(start_pose[:3, 3]),
-        shape_poses,
-        arrays.kinds,
-        arrays.halves,
-        arrays.radii,
+        arrays.posed_shapes(dofs),
         travel,
         HIT_EPS,
     )

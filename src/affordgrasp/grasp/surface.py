@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
+from .kernels import SampleCloud
+
 log = logging.getLogger(__name__)
 
 SHARP_ANGLE = np.deg2rad(20.0)
@@ -50,6 +52,19 @@ class SurfaceSample:
     coarse_start: np.ndarray
     coarse_center: np.ndarray
     coarse_radius: np.ndarray
+
+    @property
+    def cloud(self) -> SampleCloud:
+        """The points and both cell levels as the kernels take them."""
+        return SampleCloud(
+            self.points,
+            self.cell_start,
+            self.cell_center,
+            self.cell_radius,
+            self.coarse_start,
+            self.coarse_center,
+            self.coarse_radius,
+        )
 
 
 def _runs(keys: np.ndarray) -> np.ndarray:

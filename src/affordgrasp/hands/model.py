@@ -134,25 +134,14 @@ class Hand:
         return q
 
     def forward_kinematics(self, dof_values: np.ndarray) -> np.ndarray:
-        """Pose of every link in the hand frame.
+        """Pose of every link in the hand frame (:mod:`affordgrasp.hands.kinematics`).
 
         dof_values : (n_dofs,) float
         returns : (n_links, 4, 4) float
         """
-        q = np.asarray(dof_values, dtype=np.float64)
-        if q.shape != (len(self.dofs),):
-            raise HandError(f"hand {self.name!r} needs {len(self.dofs)} DOF values, got {q.shape}")
-        poses = np.zeros((len(self.links), 4, 4))
-        index = {}
-        for i, link in enumerate(self.links):
-            index[link.name] = i
-            if link.joint is None:
-                poses[i] = np.eye(4)
-                continue
-            j = link.joint
-            value = j.ratio * q[self.dof_index(j.dof)]
-            poses[i] = poses[index[link.parent]] @ j.origin @ joint_motion(j.kind, j.axis, value)
-        return poses
+        from .kinematics import forward_kinematics
+
+        return forward_kinematics(self, dof_values)
 
     def shape_poses(self, dof_values: np.ndarray) -> np.ndarray:
         """Pose of every collision shape in the hand frame, (n_shapes, 4, 4)."""

@@ -1,0 +1,160 @@
+"""Throughput of this checkout against the previous release, measured in the same run.
+
+    python benchmarks/bench_release.py [--samples 1000] [--previous 2671c7c] [--objects ...]
+
+For each object, the current sources and a checkout of the previous release (a temporary
+``git worktree`` in the temporary directory, outside the repository, kept for the next run
+unless ``--remove-previous``) run the same measurement in
+fresh processes, one after the other, under the same conditions: load the kernels (warm
+caches: a first untimed process per version builds them), prepare the object, then time
+``evaluate_samples`` (simulation + every metric) and the Parquet write of the table, end to
+end. The rate is grasps per second of CPU time of that process (one core: the pipeline is
+single-threaded), which other work on a shared machine disturbs much less than wall time;
+wall-clock rates are printed too. Objects: the 13 built-in families and an 80 mm sphere
+(an enveloping case; the mug is the other one).
+
+Start-up is the wall time of a process that imports the pipeline and loads every kernel it
+calls (warm caches), measured the same way for both versions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+FAMILIES = [
+    "hammer", "knife", "meat_cleaver", "axe", "screwdriver", "spatula", "sword", "dagger",
+    "bottle", "wine_glass", "tumbler", "mug", "ice_cream_cone",
+]  # fmt: skip
+
+WORKER = textwrap.dedent(
+    """
+    import json, os, sys, tempfile, time
+    t_start = time.perf_counter()
+    try:
+        from affordgrasp.pipeline import evaluate_samples
+    except ImportError:  # releases before the pipeline module
+        from affordgrasp.evaluate import evaluate_samples
+    from affordgrasp.grasp.policy import object_geometry
+    from affordgrasp.objects import resolve_object
+    import pyarrow.parquet as pq
+
+    spec, n = sys.argv[1], int(sys.argv[2])
+    evaluate_samples("tumbler", 4, seed=123)  # load (or compile) every kernel
+    startup = time.perf_counter() - t_start
+    if n == 0:
+        print(json.dumps({"startup": startup}))
+        raise SystemExit
+    obj = resolve_object(spec)
+    object_geometry(obj)
+    out = os.path.join(tempfile.mkdtemp(), "rows.parquet")
+    c0, w0 = time.process_time(), time.perf_counter()
+    result = evaluate_samples(obj, n, seed=0)
+    table = result[0] if isinstance(result, tuple) else result.table
+    pq.write_table(table, out)
+    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    eps = table.column("epsilon").to_numpy()
+    print(json.dumps({"startup": startup, "cpu": cpu, "wall": wall, "n": n,
+                      "closure": float((eps > 0).mean())}))
+    """
+)
+
+
+def run_worker(src: Path, spec: str, n: int) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(src))
+    env.pop("NUMBA_CACHE_DIR", None)
+    proc = subprocess.run(
+        [sys.executable, "-c", WORKER, spec, str(n)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if proc.returncode != 0:
+        raise RuntimeError(f"{src} {spec}: {proc.stderr.strip().splitlines()[-1]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=1000)
+    parser.add_argument("--previous", default="2671c7c", help="commit of the previous release")
+    parser.add_argument("--objects", nargs="+", default=[*FAMILIES, "sphere"])
+    parser.add_argument(
+        "--remove-previous", action="store_true", help="remove the previous release's worktree"
+    )
+    args = parser.parse_args()
+
+    tmp = Path(tempfile.mkdtemp(prefix="affordgrasp-bench-"))
+    # Kept between runs (its compiled kernels with it) unless --remove-previous.
+    previous = Path(tempfile.gettempdir()) / f"affordgrasp-previous-{args.previous}"
+    if not (previous / "src").is_dir():
+        subprocess.run(
+            ["git", "-C", str(REPO), "worktree", "add", "--detach", str(previous), args.previous],
+            check=True,
+            capture_output=True,
+        )
+    import trimesh
+
+    sphere = tmp / "sphere.stl"
+    trimesh.creation.icosphere(subdivisions=4, radius=0.04).export(sphere)
+    versions = {"previous": previous / "src", "current": REPO / "src"}
+    try:
+        for name, src in versions.items():
+            print(f"{name}: warming the kernel caches ({src})", flush=True)
+            run_worker(src, "tumbler", 0)
+        startup = {
+            name: float(np.median([run_worker(src, "", 0)["startup"] for _ in range(3)]))
+            for name, src in versions.items()
+        }
+        print(
+            f"start-up (import + kernels, warm caches, wall): previous "
+            f"{startup['previous']:.2f} s, current {startup['current']:.2f} s"
+        )
+        header = (
+            f"{'object':<16}{'previous':>10}{'current':>10}{'ratio':>8}"
+            f"{'prev wall':>11}{'cur wall':>10}{'closure':>9}"
+        )
+        print(f"grasps/s per core (CPU time; simulation + every metric + Parquet), "
+              f"{args.samples} samples")  # fmt: skip
+        print(header)
+        ratios = []
+        current_rates = []
+        for spec in args.objects:
+            target = str(sphere) if spec == "sphere" else spec
+            res = {name: run_worker(src, target, args.samples) for name, src in versions.items()}
+            rate = {k: v["n"] / v["cpu"] for k, v in res.items()}
+            wall = {k: v["n"] / v["wall"] for k, v in res.items()}
+            ratio = rate["current"] / rate["previous"]
+            ratios.append(ratio)
+            current_rates.append(rate["current"])
+            print(
+                f"{spec:<16}{rate['previous']:>10.0f}{rate['current']:>10.0f}{ratio:>8.2f}"
+                f"{wall['previous']:>11.0f}{wall['current']:>10.0f}"
+                f"{res['current']['closure']:>9.0%}",
+                flush=True,
+            )
+        print(
+            f"geometric mean ratio {np.exp(np.mean(np.log(ratios))):.2f}; current: min "
+            f"{min(current_rates):.0f}, median {np.median(current_rates):.0f} grasps/s per core"
+        )
+    finally:
+        if args.remove_previous:
+            subprocess.run(
+                ["git", "-C", str(REPO), "worktree", "remove", "--force", str(previous)],
+                check=False,
+                capture_output=True,
+            )
+
+
+if __name__ == "__main__":
+    main()

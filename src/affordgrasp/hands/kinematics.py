@@ -1,0 +1,150 @@
+"""Forward kinematics of a hand, compiled: the one implementation the package uses.
+
+:meth:`Hand.forward_kinematics <affordgrasp.hands.model.Hand.forward_kinematics>` and the
+grasp kernels (approach, closing, contacts) all call :func:`link_poses`; the joint motion
+and the 4 x 4 product below are the ones the closing kernel composes along a finger.
+Validated against the hand's own numbers (link lengths, tripod geometry) in
+``tests/hands/test_kinematics.py``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from ..caching import IdentityCache
+from ..errors import HandError
+from ..metrics.kernel_cache import install_package_stamp
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
+
+REVOLUTE = 0
+PRISMATIC = 1
+
+
+class KinematicTree(NamedTuple):
+    """A hand's links as flat arrays, in topological order (the root first).
+
+    parent (l,) int64 parent link index, -1 for the root; origin (l, 4, 4) joint frame in
+    the parent link; axis (l, 3) unit joint axis; kind (l,) REVOLUTE / PRISMATIC;
+    dof (l,) int64 DOF index driving the joint (-1 for the root); ratio (l,) joint value
+    per unit of that DOF.
+    """
+
+    parent: np.ndarray
+    origin: np.ndarray
+    axis: np.ndarray
+    kind: np.ndarray
+    dof: np.ndarray
+    ratio: np.ndarray
+
+
+@njit(cache=True)
+def mul4_into(a, b, out):
+    """out (4, 4) = a @ b for rigid transforms, without temporaries."""
+    for i in range(4):
+        for j in range(4):
+            out[i, j] = (
+                a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
+            )
+
+
+@njit(cache=True)
+def joint_motion_into(kind, axis, q, mot):
+    """mot (4, 4) = the motion of a joint at value q: rotation about or translation along axis."""
+    if kind == REVOLUTE:
+        c = np.cos(q)
+        sn = np.sin(q)
+        C = 1.0 - c
+        ax = axis[0]
+        ay = axis[1]
+        az = axis[2]
+        mot[0, 0] = c + ax * ax * C
+        mot[0, 1] = ax * ay * C - az * sn
+        mot[0, 2] = ax * az * C + ay * sn
+        mot[1, 0] = ay * ax * C + az * sn
+        mot[1, 1] = c + ay * ay * C
+        mot[1, 2] = ay * az * C - ax * sn
+        mot[2, 0] = az * ax * C - ay * sn
+        mot[2, 1] = az * ay * C + ax * sn
+        mot[2, 2] = c + az * az * C
+        mot[0, 3] = 0.0
+        mot[1, 3] = 0.0
+        mot[2, 3] = 0.0
+    else:
+        for a in range(3):
+            for b in range(3):
+                mot[a, b] = 1.0 if a == b else 0.0
+            mot[a, 3] = axis[a] * q
+    mot[3, 0] = 0.0
+    mot[3, 1] = 0.0
+    mot[3, 2] = 0.0
+    mot[3, 3] = 1.0
+
+
+@njit(cache=True)
+def link_poses(q, tree):
+    """Pose (l, 4, 4) of every link in the hand frame at DOF values q (n_dofs,)."""
+    n = tree.parent.shape[0]
+    out = np.empty((n, 4, 4))
+    mot = np.empty((4, 4))
+    tmp = np.empty((4, 4))
+    for i in range(n):
+        if tree.parent[i] < 0:
+            for a in range(4):
+                for b in range(4):
+                    out[i, a, b] = 1.0 if a == b else 0.0
+            continue
+        joint_motion_into(tree.kind[i], tree.axis[i], tree.ratio[i] * q[tree.dof[i]], mot)
+        mul4_into(out[tree.parent[i]], tree.origin[i], tmp)
+        mul4_into(tmp, mot, out[i])
+    return out
+
+
+@njit(cache=True)
+def shape_poses(links, shape_link, shape_local):
+    """Pose (s, 4, 4) of every shape from the link poses (l, 4, 4)."""
+    out = np.empty((shape_link.shape[0], 4, 4))
+    for s in range(shape_link.shape[0]):
+        mul4_into(links[shape_link[s]], shape_local[s], out[s])
+    return out
+
+
+_TREES: IdentityCache[KinematicTree] = IdentityCache()
+
+
+def kinematic_tree(hand) -> KinematicTree:
+    """The hand's :class:`KinematicTree`, built once per Hand object."""
+    return _TREES.get(hand, lambda: _build_tree(hand))
+
+
+def _build_tree(hand) -> KinematicTree:
+    names = hand.link_names
+    n = len(hand.links)
+    parent = np.full(n, -1, dtype=np.int64)
+    origin = np.tile(np.eye(4), (n, 1, 1))
+    axis = np.zeros((n, 3))
+    kind = np.zeros(n, dtype=np.int64)
+    dof = np.full(n, -1, dtype=np.int64)
+    ratio = np.zeros(n)
+    for i, link in enumerate(hand.links):
+        if link.joint is None:
+            continue
+        j = link.joint
+        parent[i] = names.index(link.parent)
+        origin[i] = j.origin
+        axis[i] = np.asarray(j.axis, dtype=np.float64) / np.linalg.norm(j.axis)
+        kind[i] = REVOLUTE if j.kind == "revolute" else PRISMATIC
+        dof[i] = hand.dof_index(j.dof)
+        ratio[i] = j.ratio
+    return KinematicTree(parent, origin, axis, kind, dof, ratio)
+
+
+def forward_kinematics(hand, dof_values) -> np.ndarray:
+    """Pose (n_links, 4, 4) of every link of ``hand`` in the hand frame at ``dof_values``."""
+    q = np.asarray(dof_values, dtype=np.float64)
+    if q.shape != (len(hand.dofs),):
+        raise HandError(f"hand {hand.name!r} needs {len(hand.dofs)} DOF values, got {q.shape}")
+    return link_poses(np.ascontiguousarray(q), kinematic_tree(hand))
