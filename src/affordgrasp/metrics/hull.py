@@ -20,6 +20,8 @@ qhull (options ``Qt Qx``) on random and symmetric wrench sets:
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -123,7 +125,7 @@ def _hyperplane(P, verts, q0, out_n, scratch, perm, y):
 
 
 @njit(cache=True)
-def _pencil_plane(fn, fd, v, g, dist_v, dist_g, P, verts, out_n, chk_tol):
+def _pencil_plane(F, v, g, dist_v, dist_g, P, verts, out_n, chk_tol):
     """Hyperplane through the ridge shared by facets v, g and the apex p (dist_v > 0 above
     v, dist_g <= tol above g): ``-dist_g * (n_v, d_v) + dist_v * (n_g, d_g)``, normalised.
 
@@ -134,13 +136,13 @@ def _pencil_plane(fn, fd, v, g, dist_v, dist_g, P, verts, out_n, chk_tol):
     b = dist_v
     norm = 0.0
     for c in range(DIM):
-        x = a * fn[v, c] + b * fn[g, c]
+        x = a * F.normal[v, c] + b * F.normal[g, c]
         out_n[c] = x
         norm += x * x
     if norm <= 0.0:
         return 0.0, False
     norm = np.sqrt(norm)
-    d = (a * fd[v] + b * fd[g]) / norm
+    d = (a * F.offset[v] + b * F.offset[g]) / norm
     for c in range(DIM):
         out_n[c] /= norm
     for r in range(DIM):
@@ -217,18 +219,60 @@ def _initial_simplex(P, out, rank_tol):
     return True
 
 
-@njit(cache=True)
-def _grow_i2(a, cap):
-    b = np.empty((cap, a.shape[1]), dtype=a.dtype)
-    b[: a.shape[0]] = a
-    return b
+class FacetStore(NamedTuple):
+    """Every facet the hull has built, alive or retired, one row each (the one facet store).
+
+    vertices (cap, 6) int64 point indices; neighbours (cap, 6) int64 the facet across the
+    ridge opposite each vertex; normal (cap, 6) outward unit normal; offset (cap,) so that
+    points beneath satisfy normal @ p <= offset; alive (cap,) bool; outside (cap,) head of
+    the facet's outside-point list (-1: none); far_point (cap,), far_dist (cap,) its
+    farthest outside point; mark (cap,) visit stamp of the visibility search (sign: visible
+    + / not -); apex_dist (cap,) height of the current apex above each visited facet.
+    """
+
+    vertices: np.ndarray
+    neighbours: np.ndarray
+    normal: np.ndarray
+    offset: np.ndarray
+    alive: np.ndarray
+    outside: np.ndarray
+    far_point: np.ndarray
+    far_dist: np.ndarray
+    mark: np.ndarray
+    apex_dist: np.ndarray
 
 
 @njit(cache=True)
-def _grow_f2(a, cap):
-    b = np.empty((cap, a.shape[1]), dtype=a.dtype)
-    b[: a.shape[0]] = a
-    return b
+def _facet_store(cap):
+    return FacetStore(
+        np.empty((cap, DIM), dtype=np.int64),
+        np.empty((cap, DIM), dtype=np.int64),
+        np.empty((cap, DIM)),
+        np.zeros(cap),
+        np.zeros(cap, dtype=np.bool_),
+        np.full(cap, -1, dtype=np.int64),
+        np.full(cap, -1, dtype=np.int64),
+        np.zeros(cap),
+        np.zeros(cap, dtype=np.int64),
+        np.zeros(cap),
+    )
+
+
+@njit(cache=True)
+def _grown(F, n, cap):
+    """A store of capacity ``cap`` holding the first ``n`` facets of ``F``."""
+    G = _facet_store(cap)
+    G.vertices[:n] = F.vertices[:n]
+    G.neighbours[:n] = F.neighbours[:n]
+    G.normal[:n] = F.normal[:n]
+    G.offset[:n] = F.offset[:n]
+    G.alive[:n] = F.alive[:n]
+    G.outside[:n] = F.outside[:n]
+    G.far_point[:n] = F.far_point[:n]
+    G.far_dist[:n] = F.far_dist[:n]
+    G.mark[:n] = F.mark[:n]
+    G.apex_dist[:n] = F.apex_dist[:n]
+    return G
 
 
 @njit(cache=True)
@@ -240,11 +284,11 @@ def _grow_1(a, cap, fill):
 
 
 @njit(cache=True)
-def _dist(fn, fd, f, P, p):
+def _dist(F, f, P, p):
     s = 0.0
     for c in range(DIM):
-        s += fn[f, c] * P[p, c]
-    return s - fd[f]
+        s += F.normal[f, c] * P[p, c]
+    return s - F.offset[f]
 
 
 @njit(cache=True)
@@ -325,16 +369,7 @@ def convex_hull_6d(P):
         q0[c] /= DIM + 1
 
     cap = 512
-    fv = np.empty((cap, DIM), dtype=np.int64)
-    nb = np.empty((cap, DIM), dtype=np.int64)
-    fn = np.empty((cap, DIM))
-    fd = np.empty(cap)
-    alive = np.zeros(cap, dtype=np.bool_)
-    ohead = np.full(cap, -1, dtype=np.int64)
-    far_pt = np.full(cap, -1, dtype=np.int64)
-    far_d = np.zeros(cap)
-    mark = np.zeros(cap, dtype=np.int64)  # visit stamp; sign tells visible (+) / not (-)
-    pdist = np.zeros(cap)  # distance of the current apex above each visited facet
+    F = _facet_store(cap)
     nxt = np.full(N, -1, dtype=np.int64)
     scratch = np.empty((DIM - 1, DIM))
     nvec = np.empty(DIM)
@@ -345,15 +380,15 @@ def convex_hull_6d(P):
         s = 0
         for j in range(DIM + 1):
             if j != i:
-                fv[i, s] = simplex[j]
-                nb[i, s] = j
+                F.vertices[i, s] = simplex[j]
+                F.neighbours[i, s] = j
                 s += 1
-        d, ok = _hyperplane(P, fv[i], q0, nvec, scratch, perm, yvec)
+        d, ok = _hyperplane(P, F.vertices[i], q0, nvec, scratch, perm, yvec)
         if not ok:
             return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
-        fn[i] = nvec
-        fd[i] = d
-        alive[i] = True
+        F.normal[i] = nvec
+        F.offset[i] = d
+        F.alive[i] = True
     nF = DIM + 1
 
     in_simplex = np.zeros(N, dtype=np.bool_)
@@ -365,18 +400,18 @@ def convex_hull_6d(P):
         if in_simplex[p]:
             continue
         for f in range(nF):
-            dist = _dist(fn, fd, f, P, p)
+            dist = _dist(F, f, P, p)
             if dist > tol:
-                if ohead[f] < 0:
+                if F.outside[f] < 0:
                     if nstack == stack.shape[0]:
                         stack = _grow_1(stack, 2 * nstack, -1)
                     stack[nstack] = f
                     nstack += 1
-                nxt[p] = ohead[f]
-                ohead[f] = p
-                if dist > far_d[f]:
-                    far_d[f] = dist
-                    far_pt[f] = p
+                nxt[p] = F.outside[f]
+                F.outside[f] = p
+                if dist > F.far_dist[f]:
+                    F.far_dist[f] = dist
+                    F.far_point[f] = p
                 break
 
     vis = np.empty(64, dtype=np.int64)
@@ -391,35 +426,35 @@ def convex_hull_6d(P):
     while nstack > 0:
         nstack -= 1
         f0 = stack[nstack]
-        if not alive[f0] or ohead[f0] < 0:
+        if not F.alive[f0] or F.outside[f0] < 0:
             continue
-        p = far_pt[f0]
+        p = F.far_point[f0]
         stamp += 1
         # visible facets: breadth-first from f0 over the facet adjacency
         nvis = 1
         vis[0] = f0
-        mark[f0] = stamp
-        pdist[f0] = far_d[f0]
+        F.mark[f0] = stamp
+        F.apex_dist[f0] = F.far_dist[f0]
         nh = 0
         i = 0
         while i < nvis:
             v = vis[i]
             i += 1
             for k in range(DIM):
-                g = nb[v, k]
-                if mark[g] == stamp:
+                g = F.neighbours[v, k]
+                if F.mark[g] == stamp:
                     continue
-                if mark[g] != -stamp:
-                    dg = _dist(fn, fd, g, P, p)
-                    pdist[g] = dg
+                if F.mark[g] != -stamp:
+                    dg = _dist(F, g, P, p)
+                    F.apex_dist[g] = dg
                     if dg > tol:
-                        mark[g] = stamp
+                        F.mark[g] = stamp
                         if nvis == vis.shape[0]:
                             vis = _grow_1(vis, 2 * nvis, -1)
                         vis[nvis] = g
                         nvis += 1
                         continue
-                    mark[g] = -stamp
+                    F.mark[g] = -stamp
                 if nh == hv.shape[0]:
                     hv = _grow_1(hv, 2 * nh, -1)
                     hk = _grow_1(hk, 2 * nh, -1)
@@ -433,20 +468,11 @@ def convex_hull_6d(P):
         # 1e-10 of noise), the facet is a sliver whose hyperplane is round-off: give up
         # rather than build a wrong hull (the caller falls back to qhull, which merges).
         for h in range(nh):
-            if pdist[hv[h]] <= sliver_tol:
+            if F.apex_dist[hv[h]] <= sliver_tol:
                 return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
         if nF + nh > cap:
             newcap = max(2 * cap, nF + nh + 64)
-            fv = _grow_i2(fv, newcap)
-            nb = _grow_i2(nb, newcap)
-            fn = _grow_f2(fn, newcap)
-            fd = _grow_1(fd, newcap, 0.0)
-            alive = _grow_1(alive, newcap, False)
-            ohead = _grow_1(ohead, newcap, -1)
-            far_pt = _grow_1(far_pt, newcap, -1)
-            far_d = _grow_1(far_d, newcap, 0.0)
-            mark = _grow_1(mark, newcap, 0)
-            pdist = _grow_1(pdist, newcap, 0.0)
+            F = _grown(F, nF, newcap)
             cap = newcap
         # cone of new facets from p over the horizon ridges
         for h in range(nh):
@@ -455,14 +481,14 @@ def convex_hull_6d(P):
             g = hg[h]
             nf = nF + h
             for c in range(DIM):
-                fv[nf, c] = fv[v, c]
-                nb[nf, c] = -1
-            fv[nf, k] = p
-            nb[nf, k] = g
+                F.vertices[nf, c] = F.vertices[v, c]
+                F.neighbours[nf, c] = -1
+            F.vertices[nf, k] = p
+            F.neighbours[nf, k] = g
             found = False
             for kk in range(DIM):
-                if nb[g, kk] == v:
-                    nb[g, kk] = nf
+                if F.neighbours[g, kk] == v:
+                    F.neighbours[g, kk] = nf
                     found = True
                     break
             if not found:
@@ -472,18 +498,20 @@ def convex_hull_6d(P):
             # exact in exact arithmetic and costs O(DIM). Near-coplanar v and g make it
             # ill-conditioned, so it is accepted only if it passes through all six
             # vertices to 1e-14 of the data scale; otherwise the plane is solved afresh.
-            d, ok = _pencil_plane(fn, fd, v, g, pdist[v], pdist[g], P, fv[nf], nvec, chk_tol)
+            d, ok = _pencil_plane(
+                F, v, g, F.apex_dist[v], F.apex_dist[g], P, F.vertices[nf], nvec, chk_tol
+            )
             if not ok:
-                d, ok = _hyperplane(P, fv[nf], q0, nvec, scratch, perm, yvec)
+                d, ok = _hyperplane(P, F.vertices[nf], q0, nvec, scratch, perm, yvec)
                 if not ok:
                     return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
-            fn[nf] = nvec
-            fd[nf] = d
-            alive[nf] = True
-            ohead[nf] = -1
-            far_pt[nf] = -1
-            far_d[nf] = 0.0
-            mark[nf] = 0
+            F.normal[nf] = nvec
+            F.offset[nf] = d
+            F.alive[nf] = True
+            F.outside[nf] = -1
+            F.far_point[nf] = -1
+            F.far_dist[nf] = 0.0
+            F.mark[nf] = 0
         # neighbours among the new facets: they share p and a 4-face of the horizon,
         # paired through an open-addressing hash table on the sorted 4-face
         nkeys = nh * (DIM - 1)
@@ -506,7 +534,7 @@ def convex_hull_6d(P):
                 t = 0
                 for c in range(DIM):
                     if c != kp and c != j:
-                        four[t] = fv[nf, c]
+                        four[t] = F.vertices[nf, c]
                         t += 1
                 key = _sorted_key4(four[0], four[1], four[2], four[3])
                 # multiplicative hashing; int64 overflow wraps, the mask keeps it >= 0
@@ -522,8 +550,8 @@ def convex_hull_6d(P):
                         if table_f[slot] < 0:  # a third facet on one 4-face
                             return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
                         of = table_f[slot]
-                        nb[of, table_s[slot]] = nf
-                        nb[nf, j] = of
+                        F.neighbours[of, table_s[slot]] = nf
+                        F.neighbours[nf, j] = of
                         table_f[slot] = -1
                         npaired += 1
                         break
@@ -532,28 +560,28 @@ def convex_hull_6d(P):
             return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
         # retire the visible facets and hand their outside points to the new facets
         for i in range(nvis):
-            alive[vis[i]] = False
+            F.alive[vis[i]] = False
         for i in range(nvis):
             v = vis[i]
-            pt = ohead[v]
-            ohead[v] = -1
+            pt = F.outside[v]
+            F.outside[v] = -1
             while pt >= 0:
                 pn = nxt[pt]
                 if pt != p:
                     for h in range(nh):
                         nf = nF + h
-                        dist = _dist(fn, fd, nf, P, pt)
+                        dist = _dist(F, nf, P, pt)
                         if dist > tol:
-                            nxt[pt] = ohead[nf]
-                            ohead[nf] = pt
-                            if dist > far_d[nf]:
-                                far_d[nf] = dist
-                                far_pt[nf] = pt
+                            nxt[pt] = F.outside[nf]
+                            F.outside[nf] = pt
+                            if dist > F.far_dist[nf]:
+                                F.far_dist[nf] = dist
+                                F.far_point[nf] = pt
                             break
                 pt = pn
         for h in range(nh):
             nf = nF + h
-            if ohead[nf] >= 0:
+            if F.outside[nf] >= 0:
                 if nstack == stack.shape[0]:
                     stack = _grow_1(stack, 2 * nstack, -1)
                 stack[nstack] = nf
@@ -562,17 +590,17 @@ def convex_hull_6d(P):
 
     count = 0
     for f in range(nF):
-        if alive[f]:
+        if F.alive[f]:
             count += 1
     out_v = np.empty((count, DIM), dtype=np.int64)
     out_n = np.empty((count, DIM))
     out_d = np.empty(count)
     j = 0
     for f in range(nF):
-        if alive[f]:
-            out_v[j] = fv[f]
-            out_n[j] = fn[f]
-            out_d[j] = fd[f]
+        if F.alive[f]:
+            out_v[j] = F.vertices[f]
+            out_n[j] = F.normal[f]
+            out_d[j] = F.offset[f]
             j += 1
     return HULL_OK, out_v, out_n, out_d, q0
 
