@@ -90,6 +90,9 @@ def main() -> None:
     parser.add_argument("--previous", default="2671c7c", help="commit of the previous release")
     parser.add_argument("--objects", nargs="+", default=[*FAMILIES, "sphere"])
     parser.add_argument(
+        "--current-src", default=str(REPO / "src"), help="sources to measure as the current code"
+    )
+    parser.add_argument(
         "--remove-previous", action="store_true", help="remove the previous release's worktree"
     )
     args = parser.parse_args()
@@ -107,7 +110,7 @@ def main() -> None:
 
     sphere = tmp / "sphere.stl"
     trimesh.creation.icosphere(subdivisions=4, radius=0.04).export(sphere)
-    versions = {"previous": previous / "src", "current": REPO / "src"}
+    versions = {"previous": previous / "src", "current": Path(args.current_src)}
     try:
         for name, src in versions.items():
             print(f"{name}: warming the kernel caches ({src})", flush=True)
