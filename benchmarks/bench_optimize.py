@@ -99,10 +99,11 @@ def main() -> None:
     p.add_argument("--json", default=None)
     args = p.parse_args()
 
-    from affordgrasp.dataset.best import resolve_task, task_values
+    from affordgrasp.dataset.best import task_values
     from affordgrasp.dataset.engines import default_workers
     from affordgrasp.dataset.generate import generate
     from affordgrasp.dataset.reading import read_table
+    from affordgrasp.tasks import get_task
 
     started = time.perf_counter()
     summary = generate(args.objects, args.random, args.data, seed=1000, workers=args.workers)
@@ -133,7 +134,7 @@ def main() -> None:
         table = read_table(args.data, objects=[name])
         for tm in args.tasks:
             task, mode = tm.split(":")
-            values = task_values(resolve_task(task), table, mode)
+            values = task_values(get_task(task), table, mode)
             values = np.where(np.isnan(values), -np.inf, values)
             rr = [r for r in obj_runs if r["task"] == task and r["mode"] == mode]
             cem_best = [r["best"] for r in rr if r["best"] is not None]

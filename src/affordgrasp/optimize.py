@@ -434,11 +434,11 @@ def optimize(
         :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
         is found by ray casts, which cost no simulation
     """
-    from .dataset.best import resolve_task
     from .dataset.engines import ObjectPayload, RunContext, check_engine, make_engine
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
     from .objects import resolve_object
+    from .tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:
         raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
@@ -447,7 +447,7 @@ def optimize(
     if not isinstance(seed, int) or seed < 0:
         raise bad_parameter("seed", f"must be a non-negative integer, got {seed!r}")
     check_engine(engine, workers, address)
-    task_obj = resolve_task(task)
+    task_obj = get_task(task) if isinstance(task, str) else task
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
     resolved = resolve_object(obj)
     hand_model = get_hand(hand)

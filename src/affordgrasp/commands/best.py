@@ -28,9 +28,9 @@ def add_arguments(p) -> None:
 def shown_metrics(task_name: str) -> list[tuple[str, str]]:
     """(label, column) of the metrics a task reads, ε first; all of them if it does not say."""
     from ..columns import HOLD_EFFORT_COLUMNS
-    from ..dataset.best import resolve_task
+    from ..tasks import get_task
 
-    requires = set(getattr(resolve_task(task_name), "requires", ()) or ())
+    requires = set(getattr(get_task(task_name), "requires", ()) or ())
     if not requires:
         return list(METRICS_SHOWN)
     if requires & set(HOLD_EFFORT_COLUMNS):

@@ -26,6 +26,7 @@ import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
 from ..errors import DatasetError, bad_parameter
+from ..tasks import Task, get_task
 from .layout import read_manifest
 from .reading import open_dataset, select_objects
 
@@ -75,13 +76,6 @@ class BestGrasps:
         }
 
 
-def resolve_task(name: str):
-    """A registered task by name (``affordgrasp.tasks``)."""
-    from .. import tasks
-
-    return tasks.get_task(name)
-
-
 def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
     """The numeric scalar columns of a table as float64 arrays (what tasks read)."""
     out = {}
@@ -128,7 +122,7 @@ class TopRows:
 
 def best_grasps(
     directory: str | os.PathLike,
-    task: str,
+    task: str | Task,
     *,
     mode: str = "default",
     objects: list[str] | None = None,
@@ -136,11 +130,34 @@ def best_grasps(
     thresholds: Mapping[str, float] | None = None,
     batch_size: int = 65536,
 ) -> BestGrasps:
-    """The ``top`` rows of the dataset in ``directory`` by the affordance of ``task``.
+    """The ``top`` rows of a dataset by the affordance F_T of ``task`` (paper §IV-C).
 
-    objects : restrict to these objects (``knife`` matches ``knife:0``)
-    thresholds : overrides of the task's thresholds (e.g. ``{"epsilon": 0.1}``)
-    Raises DatasetError for a directory that is not a dataset or has no metrics.
+    Parameters
+    ----------
+    directory : path
+        A dataset written by :func:`affordgrasp.generate`.
+    task : str or Task
+        A registered task name or a :class:`~affordgrasp.tasks.Task`.
+    mode : str
+        Threshold mode (``affordgrasp tasks`` lists them).
+    objects : list of str, optional
+        Only these objects (``knife`` matches ``knife:0``).
+    top : int
+        How many rows to keep (>= 1).
+    thresholds : mapping of str to float, optional
+        Overrides of the task's thresholds, e.g. ``{"tau_eps": 0.01}``.
+    batch_size : int
+        Rows scored at a time (memory stays bounded).
+
+    Returns
+    -------
+    BestGrasps
+        The rows best first (``rank``, ``affordance`` added) and how many were scored.
+
+    Raises
+    ------
+    DatasetError
+        For a directory that is not a dataset or has no metrics.
     """
     if not isinstance(top, int) or top < 1:
         raise bad_parameter("top", f"must be a positive integer, got {top!r}")
@@ -150,7 +167,7 @@ def best_grasps(
             f"dataset {str(directory)!r} was generated with --no-metrics, so it has no metrics "
             "to score; generate it again without --no-metrics"
         )
-    task_obj = resolve_task(task)
+    task_obj = get_task(task) if isinstance(task, str) else task
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
     names = [o["name"] for o in manifest["objects"]]
     chosen = select_objects(directory, objects)
@@ -178,7 +195,7 @@ def best_grasps(
     rows = rows.append_column(RANK_COLUMN, pa.array(np.arange(1, len(best_v) + 1), pa.int64()))
     rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
     return BestGrasps(
-        task=task,
+        task=task_obj.name,
         mode=mode,
         table=rows,
         rows_scanned=scanned,

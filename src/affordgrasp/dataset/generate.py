@@ -185,19 +185,51 @@ def generate(
 ) -> GenerationSummary:
     """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
 
-    objects : object specs ("knife", "knife:7", a mesh path) or GraspObjects
-    samples : samples per object; seed : the run's seed (sample i depends on (seed, i) only)
-    workers : processes (local) or CPUs (local Ray); default every core. 1 runs in-process.
-    engine : "local" or "ray"; address : an existing Ray cluster (engine "ray")
-    shard_size : rows per shard file; chunk_size : most samples per unit of work
-    hand : a Hand, a registered hand name or a hand file (the Hand object itself is sent
-        to the workers)
-    metrics : compute Φ (False writes the simulation columns only)
-    depth : also store the depth image D(p0, O) of every row (column ``depth_mm``)
-    command : the command line, recorded in the manifest and the card
-    progress : ``progress(total_samples)`` returns a context manager yielding ``advance(n)``
+    Parameters
+    ----------
+    objects : sequence of str or GraspObject
+        Object specs (``"knife"``, ``"knife:7"``, a mesh path) or loaded objects.
+    samples : int
+        Samples per object.
+    out : path
+        The dataset directory (created; an existing one of the same plan is resumed).
+    seed : int
+        The run's seed: sample ``i`` depends only on (seed, i).
+    workers : int, optional
+        Processes (local) or CPUs (local Ray); default every core; 1 runs in-process.
+    engine : {"local", "ray"}
+        Where the jobs run.
+    address : str, optional
+        An existing Ray cluster (with ``engine="ray"``).
+    hand : Hand or str
+        A :class:`~affordgrasp.hands.Hand`, a registered name or a hand file; the Hand
+        object itself is sent to the workers.
+    shard_size : int
+        Rows per shard file.
+    chunk_size : int
+        Most samples per unit of work.
+    metrics : bool
+        Compute Φ (False writes the simulation columns only).
+    soft : bool
+        Soft-finger contacts.
+    depth : bool
+        Also store the depth image D(p0, O) of every row (column ``depth_mm``).
+    command : sequence of str, optional
+        The command line, recorded in the manifest and the card.
+    progress : callable, optional
+        ``progress(total_samples)`` returns a context manager yielding ``advance(n)``.
 
-    Raises DatasetError when ``out`` holds another command's dataset or something else.
+    Returns
+    -------
+    GenerationSummary
+
+    Raises
+    ------
+    DatasetError
+        When ``out`` holds another command's dataset or something else.
+
+    Notes
+    -----
     A KeyboardInterrupt stops the workers and leaves only whole shards (and an up-to-date
     card marked incomplete); calling again resumes. Local workers are started with 'spawn':
     a script calling this with ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.

@@ -97,7 +97,20 @@ def get_hand(hand: str | os.PathLike | Hand = "barrett") -> Hand:
 
 
 def register_hand(hand: Hand, *, replace: bool = False) -> Hand:
-    """Register ``hand`` under its name (then ``get_hand(name)`` and ``--hand name`` find it)."""
+    """Register ``hand`` under its name (then ``get_hand(name)`` finds it).
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand; its ``name`` is the key.
+    replace : bool
+        Allow replacing a hand of the same name (built-in ones included).
+
+    Returns
+    -------
+    Hand
+        ``hand`` itself.
+    """
     return HANDS.register(hand, replace=replace)
 
 

@@ -209,7 +209,20 @@ def hand_to_toml(hand: Hand) -> str:
 
 
 def save_hand(hand: Hand, path: str | os.PathLike) -> Path:
-    """Write ``hand`` to a ``.json`` or ``.toml`` file; returns the path."""
+    """Write ``hand`` to a file that :func:`load_hand` reads back exactly.
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+    path : path
+        A ``.json`` or ``.toml`` file name (the suffix picks the format).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     path = Path(path)
     if path.suffix not in FORMATS:
         raise HandError(f"a hand file must end in .json or .toml, got {str(path)!r}")
@@ -222,7 +235,18 @@ def save_hand(hand: Hand, path: str | os.PathLike) -> Path:
 
 
 def load_hand(path: str | os.PathLike) -> Hand:
-    """Read a hand from a ``.json`` or ``.toml`` file written by :func:`save_hand`."""
+    """Read a hand from a ``.json`` or ``.toml`` file (format: the module docstring).
+
+    Parameters
+    ----------
+    path : path
+        A file written by :func:`save_hand` (or by hand, in the same form).
+
+    Returns
+    -------
+    Hand
+        Validated; a bad document raises :class:`~affordgrasp.errors.HandError`.
+    """
     path = Path(path)
     if path.suffix not in FORMATS:
         raise HandError(f"a hand file must end in .json or .toml, got {str(path)!r}")

@@ -100,8 +100,21 @@ class Finger:
 class Hand:
     """A hand: links in topological order (the root, the palm, first), DOFs and fingers.
 
-    ``pregrasp_dof`` names the DOF set from the pregrasp's last parameter s ∈ [0, 1]
-    (linearly between its limits), or None when the hand has none.
+    Attributes
+    ----------
+    name : str
+        The hand's name (the registry key, stored in every sample row).
+    links : tuple of Link
+        Links, parents before children; the first is the root (the palm).
+    dofs : tuple of Dof
+        Degrees of freedom, in the order of a row's ``joints``.
+    fingers : tuple of Finger
+        Chains of closing DOFs with their closing speeds.
+    pregrasp_dof : str or None
+        The DOF set from the pregrasp's last parameter s ∈ [0, 1] (linearly between its
+        limits), or None when the hand has none.
+    description : str
+        One line for listings and dataset cards.
     """
 
     name: str

@@ -26,9 +26,21 @@ MOMENT_TOL = ZERO_MOMENT  # |M| below this fraction of |U - w| counts as a zero 
 def discharge(use_point, use_normal, wrist_point, wrist_axis) -> float | np.ndarray:
     """Momentum discharge efficiency δ ∈ [0, 1] (conventions: Metrics).
 
-    use_point : (3,) or (n, 3) m; use_normal : (3,) or (n, 3) outward unit normals
-    wrist_point : (3,) or (n, 3) m; wrist_axis : (3,) or (n, 3), direction of +a
-    Returns a float for single inputs, else (n,) float64.
+    Parameters
+    ----------
+    use_point : (3,) or (n, 3) float
+        The use point U, m.
+    use_normal : (3,) or (n, 3) float
+        Outward unit normal at U.
+    wrist_point : (3,) or (n, 3) float
+        A point of the wrist axis (the palm centre), m.
+    wrist_axis : (3,) or (n, 3) float
+        Direction +a of the wrist axis.
+
+    Returns
+    -------
+    float or (n,) float64 ndarray
+        A float for single inputs.
     """
     single = np.ndim(use_point) == 1
     U = points_n3(use_point, "use_point")

@@ -118,11 +118,23 @@ def impact_effort_kernel(W, w_use, axis):
 def hold_effort(contacts, center, *, soft: bool = False, backend: str = "simplex") -> np.ndarray:
     """Hand effort on hold E_h (conventions: Metrics).
 
-    contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
-    center : (3,) float, centre of mass, m
-    soft : soft-finger cones; backend : "simplex" or "highs" (see :mod:`.lp`)
-    Returns (6,) float, N: minimum sum of normal forces that balances 1 N of gravity along
-    +x, −x, +y, −y, +z, −z (:data:`affordgrasp.columns.HOLD_EFFORT_SUFFIXES`); +inf when it cannot.
+    Parameters
+    ----------
+    contacts : ContactSet
+        Points (k, 3) m, outward normals (k, 3), mu (k,), in the object's mesh frame.
+    center : (3,) float
+        Centre of mass, m (the reference point of the torques).
+    soft : bool
+        Soft-finger cones (torsional friction).
+    backend : {"simplex", "highs"}
+        The LP solver (:mod:`.lp`); both give the same optimum.
+
+    Returns
+    -------
+    (6,) float64 ndarray
+        N: the minimum sum of contact normal forces that balances 1 N of gravity along +x,
+        −x, +y, −y, +z, −z (:data:`affordgrasp.columns.HOLD_EFFORT_SUFFIXES`); +inf where
+        no contact forces can.
     """
     check_backend(backend)
     points, normals, mu = contact_arrays(contacts)
@@ -168,11 +180,27 @@ def impact_effort(
 ) -> float:
     """Hand effort on impact E_i (conventions: Metrics), N per N·m of inertial torque.
 
-    contacts : ContactSet; center : (3,) centre of mass, m
-    use_point : (3,) m; use_normal : (3,) outward unit normal at the use point
-    wrist_axis : (3,) direction a of the wrist axis (normalised here); the swing is
-        positive about +a
-    Returns the minimum sum of contact normal forces, +inf if infeasible.
+    Parameters
+    ----------
+    contacts : ContactSet
+        Points (k, 3) m, outward normals (k, 3), mu (k,), in the object's mesh frame.
+    center : (3,) float
+        Centre of mass, m (the reference point of the torques).
+    use_point : (3,) float
+        The use point U, m.
+    use_normal : (3,) float
+        Outward unit normal at U.
+    wrist_axis : (3,) float
+        Direction a of the wrist axis (normalised here); the swing is positive about +a.
+    soft : bool
+        Soft-finger cones (torsional friction).
+    backend : {"simplex", "highs"}
+        The LP solver (:mod:`.lp`); both give the same optimum.
+
+    Returns
+    -------
+    float
+        The minimum sum of contact normal forces; +inf if infeasible.
     """
     check_backend(backend)
     points, normals, mu = contact_arrays(contacts)

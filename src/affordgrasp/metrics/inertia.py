@@ -22,10 +22,19 @@ from .validation import points_n3, units_n3
 def rotational_inertia(mass, wrist_point, wrist_axis) -> float | np.ndarray:
     """Rotational inertia about the wrist axis (conventions: Metrics), kg m².
 
-    mass : MassProperties (mass kg, center_of_mass (3,) m, inertia (3, 3) kg m² about it)
-    wrist_point : (3,) or (n, 3) m, a point of the axis
-    wrist_axis : (3,) or (n, 3), direction of the axis (normalised here)
-    Returns a float for single inputs, else (n,) float64.
+    Parameters
+    ----------
+    mass : MassProperties
+        The object's mass (kg), centre of mass (3,) m and inertia (3, 3) kg m² about it.
+    wrist_point : (3,) or (n, 3) float
+        A point of the axis, m.
+    wrist_axis : (3,) or (n, 3) float
+        Direction of the axis (normalised here).
+
+    Returns
+    -------
+    float or (n,) float64 ndarray
+        A float for single inputs.
     """
     single = np.ndim(wrist_point) == 1 and np.ndim(wrist_axis) == 1
     w = points_n3(wrist_point, "wrist_point")

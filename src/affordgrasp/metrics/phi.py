@@ -128,16 +128,32 @@ def compute_phi_batch(
     soft: bool = False,
     edge_radius: float = EDGE_RADIUS_M,
 ) -> dict[str, np.ndarray]:
-    """Φ for n grasps of one object (conventions: Metrics), columns named by :data:`METRIC_COLUMNS`.
+    """Φ for n grasps of one object (conventions: Metrics), columns :data:`METRIC_COLUMNS`.
 
-    mass : MassProperties of the object (centre of mass, r_max, inertia)
-    mesh : trimesh.Trimesh of the object, m (for U_g and the edge angle)
-    contacts : sequence of n ContactSets (object frame)
-    use_point (n, 3) m; use_normal (n, 3) outward; use_triangle (n,) face index of U
-    wrist_point (n, 3) m; wrist_axis (n, 3) approach direction (normalised here)
-    soft : soft-finger cones for every contact metric; edge_radius : m, for use_edge_angle
-    Returns {column: (n,) array}: float64 columns (+inf where infeasible) and
-    ``epsilon_reason`` as an object array of str.
+    Parameters
+    ----------
+    mass : MassProperties
+        The object's (centre of mass, r_max, inertia).
+    mesh : trimesh.Trimesh
+        The object, m (for U_g and the edge angle).
+    contacts : sequence of n ContactSet
+        Each grasp's contacts, object frame.
+    use_point, use_normal : (n, 3) float
+        Use points (m) and their outward normals.
+    use_triangle : (n,) int
+        Face index of each use point.
+    wrist_point, wrist_axis : (n, 3) float
+        Palm centre (m) and approach direction (normalised here).
+    soft : bool
+        Soft-finger cones for every contact metric.
+    edge_radius : float
+        Search radius of ``use_edge_angle``, m.
+
+    Returns
+    -------
+    dict of str to (n,) ndarray
+        float64 columns (+inf where infeasible) and ``epsilon_reason`` as an object array
+        of str.
     """
     n = len(contacts)
     use_point = points_n3(use_point, "use_point") if n else np.zeros((0, 3))
@@ -227,9 +243,23 @@ def compute_phi(
     soft: bool = False,
     edge_radius: float = EDGE_RADIUS_M,
 ) -> dict[str, float | str]:
-    """Φ of one grasp (conventions: Metrics): {column: float or str}, see :func:`compute_phi_batch`.
+    """Φ of one grasp (conventions: Metrics); see :func:`compute_phi_batch`.
 
-    use_point, use_normal (outward), wrist_point, wrist_axis : (3,); use_triangle : int
+    Parameters
+    ----------
+    mass, mesh, contacts
+        The object's mass properties and mesh, the grasp's ContactSet.
+    use_point, use_normal, wrist_point, wrist_axis : (3,) float
+        As for :func:`compute_phi_batch`, one grasp.
+    use_triangle : int
+        Face index of the use point.
+    soft, edge_radius
+        As for :func:`compute_phi_batch`.
+
+    Returns
+    -------
+    dict of str to float or str
+        One value per column of :data:`METRIC_COLUMNS`.
     """
     cols = compute_phi_batch(
         mass,

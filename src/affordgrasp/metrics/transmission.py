@@ -81,11 +81,26 @@ def use_force(
 ) -> float:
     """Force transmitted to use U_τ (conventions: Metrics), N.
 
-    contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
-    center : (3,) centre of mass, m; use_point : (3,) m
-    use_normal : (3,) outward unit normal at the use point
-    Returns the largest force at U along the outward normal with every contact's normal
-    force <= 1 N; 0 when none.
+    Parameters
+    ----------
+    contacts : ContactSet
+        Points (k, 3) m, outward normals (k, 3), mu (k,), in the object's mesh frame.
+    center : (3,) float
+        Centre of mass, m (the reference point of the torques).
+    use_point : (3,) float
+        The use point U, m.
+    use_normal : (3,) float
+        Outward unit normal at U.
+    soft : bool
+        Soft-finger cones (torsional friction).
+    backend : {"simplex", "highs"}
+        The LP solver (:mod:`.lp`); both give the same optimum.
+
+    Returns
+    -------
+    float
+        The largest force at U along the outward normal with every contact's normal force
+        <= 1 N and inside its cone; 0 when none.
     """
     check_backend(backend)
     points, normals, mu = contact_arrays(contacts)

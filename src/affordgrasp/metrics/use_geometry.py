@@ -108,11 +108,20 @@ def _triangle_normals(mesh, T: np.ndarray) -> np.ndarray:
 def use_edge(mesh, use_triangle, use_point=None) -> float | np.ndarray:
     """U_g, the paper's edge-ness of the surface at the use point (conventions: Metrics), m⁻².
 
-    mesh : trimesh.Trimesh, m
-    use_triangle : int or (n,) int, index of the face hit at the use point
-    use_point : (3,) or (n, 3) m, origin of the fitting frame; the hit triangle's
-        centroid when omitted (identical result for well-posed fits)
-    Returns a float for a single query, else (n,) float64.
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object, m.
+    use_triangle : int or (n,) int
+        Index of the face hit at the use point.
+    use_point : (3,) or (n, 3) float, optional
+        Origin of the fitting frame, m; the hit triangle's centroid when omitted (the same
+        result for well-posed fits).
+
+    Returns
+    -------
+    float or (n,) float64 ndarray
+        A float for a single query.
     """
     single = np.ndim(use_triangle) == 0
     T = _check_triangles(mesh, use_triangle)
@@ -239,10 +248,19 @@ def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray
 def use_edge_angle(mesh, use_point, *, radius: float = EDGE_RADIUS_M) -> float | np.ndarray:
     """Smallest interior dihedral angle of a convex edge within ``radius`` of U, rad.
 
-    mesh : trimesh.Trimesh, m
-    use_point : (3,) or (n, 3) m
-    radius : float, m, search radius (default :data:`EDGE_RADIUS_M`)
-    Returns π where no convex edge is that close; a float for a single point, else (n,).
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object, m.
+    use_point : (3,) or (n, 3) float
+        The use point(s), m.
+    radius : float
+        Search radius, m (default :data:`EDGE_RADIUS_M`).
+
+    Returns
+    -------
+    float or (n,) float64 ndarray
+        π where no convex edge is that close; a float for a single point.
     """
     single = np.ndim(use_point) == 1
     P = points_n3(use_point, "use_point")

@@ -43,8 +43,10 @@ _FAMILY_CACHE_SIZE = 64
 
 @dataclass(frozen=True, eq=False)
 class GraspObject:
-    """An object ready to be grasped.
+    """An object ready to be grasped (:func:`load_object` makes one).
 
+    Attributes
+    ----------
     name : str
         Canonical id: ``"knife:3"`` for a family variant, the file name for a mesh file.
     category : str

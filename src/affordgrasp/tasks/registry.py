@@ -179,7 +179,20 @@ def task_from_expressions(
 
 
 def load_task_file(path: str | os.PathLike, *, replace: bool = False) -> list[str]:
-    """Register every task of a TOML file (see :mod:`affordgrasp.tasks`); returns their names."""
+    """Register every task of a TOML file (format: :mod:`affordgrasp.tasks`).
+
+    Parameters
+    ----------
+    path : path
+        The TOML file (``[tasks.<name>]`` tables).
+    replace : bool
+        Allow replacing registered tasks of the same names.
+
+    Returns
+    -------
+    list of str
+        The names registered (none when one task of the file is bad).
+    """
     return TASKS.load_file(path, replace=replace)
 
 
@@ -189,7 +202,23 @@ def unregister_task(name: str) -> None:
 
 
 def get_task(name: str) -> Task:
-    """The registered task ``name``; unknown names raise a TaskError listing the known."""
+    """The registered task ``name`` (the one lookup verb of the task registry).
+
+    Parameters
+    ----------
+    name : str
+        ``beat``, ``cut``, ``pick``, ... or a name given to :func:`register_task` or
+        declared in a task file (``affordgrasp tasks`` lists them).
+
+    Returns
+    -------
+    Task
+
+    Raises
+    ------
+    TaskError
+        For an unknown name (the message lists the known ones).
+    """
     return TASKS.get(name)
 
 

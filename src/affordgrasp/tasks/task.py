@@ -18,14 +18,23 @@ TaskFunction = Callable[[Mapping[str, np.ndarray], Mapping[str, float]], np.ndar
 
 @dataclass(frozen=True)
 class Task:
-    """An affordance function with its thresholds.
+    """An affordance function F_T with its thresholds (make one with :func:`make_task`).
 
-    name : registry name
-    func : ``func(metrics, thresholds) -> (n,) float64``
-    thresholds : default threshold values by name
-    modes : mode name -> threshold overrides of that mode
-    description : one line for listings
-    requires : metric columns the function reads
+    Attributes
+    ----------
+    name : str
+        Registry name.
+    func : callable
+        ``func(metrics, thresholds) -> (n,) float64``; ``metrics`` maps column names to
+        float arrays (plus ``hold_effort_sum``), ``thresholds`` names to floats.
+    thresholds : mapping of str to float
+        Default threshold values.
+    modes : mapping of str to mapping
+        Mode name to the threshold overrides of that mode.
+    description : str
+        One line for listings.
+    requires : tuple of str
+        Metric columns the function reads (checked before every evaluation).
     """
 
     name: str
@@ -61,9 +70,21 @@ class Task:
         return {mode: self.thresholds_for(mode) for mode in self.modes}
 
     def evaluate(self, columns: Any, mode: str = "default", **overrides: float) -> np.ndarray:
-        """Score every row of ``columns`` (mapping, pyarrow Table or pandas DataFrame).
+        """Score every row of ``columns``.
 
-        Returns (n,) float64; -inf where the task's requirements fail.
+        Parameters
+        ----------
+        columns : mapping, pyarrow.Table or pandas.DataFrame
+            Metric columns by name, n rows.
+        mode : str
+            Threshold mode.
+        **overrides : float
+            Threshold values that replace the mode's.
+
+        Returns
+        -------
+        (n,) float64 ndarray
+            F_T per row; -inf where the task's requirements fail.
         """
         values = self.thresholds_for(mode, **overrides)
         metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
