@@ -28,7 +28,7 @@ from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold
 from ..errors import DatasetError, bad_parameter
 from ..tasks import Task, get_task
 from .layout import read_manifest
-from .reading import open_dataset, select_objects
+from .reading import open_dataset, read_errors, select_objects
 
 AFFORDANCE_COLUMN = "affordance"
 RANK_COLUMN = "rank"
@@ -180,18 +180,20 @@ def best_grasps(
     name_set = pa.array(names, pa.string())
     best = TopRows(top, 2)  # ties: the object given first, then the lower sample index
     scanned = finite = 0
-    for batch in scanner.to_batches():
-        if batch.num_rows == 0:
-            continue
-        table = pa.Table.from_batches([batch])
-        values = task_values(task_obj, table, mode, thresholds)
-        scanned += len(values)
-        o = pc.index_in(table["object"], value_set=name_set).to_numpy(zero_copy_only=False)
-        s = table["sample"].to_numpy()
-        finite += best.add(values, o.astype(np.int64), s.astype(np.int64))
+    with read_errors(directory):
+        for batch in scanner.to_batches():
+            if batch.num_rows == 0:
+                continue
+            table = pa.Table.from_batches([batch])
+            values = task_values(task_obj, table, mode, thresholds)
+            scanned += len(values)
+            o = pc.index_in(table["object"], value_set=name_set).to_numpy(zero_copy_only=False)
+            s = table["sample"].to_numpy()
+            finite += best.add(values, o.astype(np.int64), s.astype(np.int64))
     best_v, (best_o, best_s) = best.values, best.keys
 
-    rows = _fetch_rows(dataset, names, best_o, best_s)
+    with read_errors(directory):
+        rows = _fetch_rows(dataset, names, best_o, best_s)
     rows = rows.append_column(RANK_COLUMN, pa.array(np.arange(1, len(best_v) + 1), pa.int64()))
     rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
     return BestGrasps(

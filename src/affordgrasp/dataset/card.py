@@ -18,7 +18,14 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .layout import CARD_JSON_NAME, CARD_MD_NAME, FORMAT, FORMAT_VERSION, write_json_atomic
+from .layout import (
+    CARD_JSON_NAME,
+    CARD_MD_NAME,
+    FORMAT,
+    FORMAT_VERSION,
+    write_bytes_atomic,
+    write_json_atomic,
+)
 
 log = logging.getLogger(__name__)
 
@@ -309,8 +316,5 @@ def write_card(directory: Path, **kwargs) -> dict:
     """Build the card from the run's facts and write both files atomically."""
     card = build_card(previous=read_card(directory), **kwargs)
     write_json_atomic(directory / CARD_JSON_NAME, card)
-    md_path = directory / CARD_MD_NAME
-    tmp = md_path.with_name(f".{md_path.name}.tmp")
-    tmp.write_text(card_markdown(card), encoding="utf-8")
-    tmp.replace(md_path)
+    write_bytes_atomic(directory / CARD_MD_NAME, card_markdown(card).encode("utf-8"))
     return card

@@ -42,6 +42,7 @@ from .layout import (
     Shard,
     plan_shards,
     prepare_directory,
+    read_checksums,
     remove_stale_temporaries,
     shard_metadata,
     valid_shard_info,
@@ -264,8 +265,9 @@ def generate(
     schema = dataset_schema(metrics, depth)
     plan = plan_shards(len(resolved), samples, shard_size)
     infos: dict[Shard, dict] = {}
+    checksums = read_checksums(directory)
     for shard in plan:
-        info = valid_shard_info(directory, shard, schema)
+        info = valid_shard_info(directory, shard, schema, checksums)
         if info is not None:
             infos[shard] = info
     todo = [s for s in plan if s not in infos]
@@ -301,9 +303,10 @@ def generate(
         if not complete:
             # An interrupt can land between a shard's rename into place and its bookkeeping:
             # the card counts what is on disk, valid, not what the loop had recorded.
+            checksums = read_checksums(directory)
             for shard in todo:
                 if shard not in infos:
-                    info = valid_shard_info(directory, shard, schema)
+                    info = valid_shard_info(directory, shard, schema, checksums)
                     if info is not None:
                         infos[shard] = info
                         written_rows += shard.rows
@@ -322,7 +325,9 @@ def generate(
             status_counts=_status_counts(resolved, infos),
         )
         if todo or card_module.read_card(directory) is None:  # a no-op run changes nothing
-            card_module.write_card(
+            _write_card_after(
+                complete,
+                card_module.write_card,
                 directory,
                 manifest=manifest,
                 objects=resolved,
@@ -340,6 +345,17 @@ def generate(
                 },
             )
     return summary
+
+
+def _write_card_after(complete: bool, write_card, *args, **kwargs) -> None:
+    """Write the card; after a failed run (a full disk...) a failure here is only logged,
+    so that the error the user sees is the one that stopped the run."""
+    try:
+        write_card(*args, **kwargs)
+    except DatasetError as exc:
+        if complete:
+            raise
+        log.warning("could not update the dataset card: %s", exc)
 
 
 def _status_counts(objects: Sequence, infos: dict[Shard, dict]) -> dict[str, dict[str, int]]:

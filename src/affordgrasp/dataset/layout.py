@@ -4,12 +4,15 @@ A dataset directory holds::
 
     DIR/_manifest.json                    the plan: what the command asked for (written first)
     DIR/_card.json, DIR/_card.md          the dataset card (written when a run ends)
+    DIR/_checksums.jsonl                  a BLAKE2b checksum of each shard file as written
     DIR/part-OOOOO-SSSSSSSSSSSS.parquet   one shard: object O, samples S .. S+shard_size-1
 
 The plan is a pure function of the command: object ``o`` gets samples ``0 .. samples-1`` and
 shard ``k`` of it holds samples ``k*shard_size .. min((k+1)*shard_size, samples)-1`` in order.
 A shard is written to a hidden temporary name and renamed into place only when complete and
-synced, so a shard file that exists is whole; resuming skips every valid shard.
+synced, so a shard file that exists is whole; resuming skips every valid shard. A shard
+changed afterwards (overwritten in place, truncated) no longer matches the checksum recorded
+when it was written: resuming writes it again, and readers refuse it, naming the file.
 
 Names starting with ``_`` or ``.`` are ignored by Arrow datasets, so pandas, polars and
 DuckDB read the directory (or ``DIR/*.parquet``) as one table.
@@ -17,6 +20,8 @@ DuckDB read the directory (or ``DIR/*.parquet``) as one table.
 
 from __future__ import annotations
 
+import errno
+import hashlib
 import json
 import logging
 import os
@@ -32,10 +37,13 @@ from ..errors import DatasetError, InternalError
 log = logging.getLogger(__name__)
 
 FORMAT = "affordgrasp-dataset"
-FORMAT_VERSION = 1
+# 2: shard checksums in _checksums.jsonl.
+FORMAT_VERSION = 2
 MANIFEST_NAME = "_manifest.json"
 CARD_JSON_NAME = "_card.json"
 CARD_MD_NAME = "_card.md"
+CHECKSUMS_NAME = "_checksums.jsonl"
+CHECKSUM_ALGORITHM = "blake2b-128"
 SHARD_META_KEY = b"affordgrasp_shard"
 DEFAULT_SHARD_SIZE = 4096
 COMPRESSION = "zstd"
@@ -99,14 +107,62 @@ def shard_paths(directory: str | os.PathLike) -> list[Path]:
 
 def write_json_atomic(path: Path, document: dict) -> None:
     """Write a JSON file so that readers see the old or the new version, never a mix."""
+    text = json.dumps(document, indent=2, sort_keys=False) + "\n"
+    write_bytes_atomic(path, text.encode("utf-8"))
+
+
+def write_bytes_atomic(path: Path, data: bytes) -> None:
+    """Write a file whole or not at all: a hidden temporary file, synced, then renamed.
+
+    Raises a DatasetError naming ``path`` when it cannot be written (no space left, no
+    permission, read-only file system); nothing half-written is left behind.
+    """
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(document, f, indent=2, sort_keys=False)
-        f.write("\n")
+    try:
+        write_file(tmp, data)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise write_error(path, exc) from exc
+    _sync_directory(path.parent)
+
+
+def write_file(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` and sync it to the disk (the one place files are written)."""
+    with open(path, "wb") as f:
+        f.write(data)
         f.flush()
         os.fsync(f.fileno())
-    os.replace(tmp, path)
-    _sync_directory(path.parent)
+
+
+def write_error(path: Path, exc: OSError) -> DatasetError:
+    """A one-line DatasetError for a failed write, naming the path and what to do."""
+    reason = exc.strerror or str(exc)
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        fix = "free some space (finished shards are kept) or choose another --out"
+    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        fix = "make it writable or choose another --out"
+    else:
+        fix = "check the disk and the path, or choose another --out"
+    return DatasetError(f"cannot write {str(path)!r}: {reason}; {fix}")
+
+
+def check_writable(directory: Path) -> None:
+    """Refuse an output directory that cannot be written, before any work is done."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(directory, exc) from exc
+    probe = directory / f".write-test-{os.getpid()}"
+    try:
+        write_file(probe, b"")
+    except OSError as exc:
+        raise write_error(directory, exc) from exc
+    finally:
+        try:
+            probe.unlink(missing_ok=True)
+        except OSError:
+            pass
 
 
 def read_manifest(directory: str | os.PathLike) -> dict:
@@ -160,7 +216,7 @@ def prepare_directory(directory: Path, manifest: dict) -> dict:
     Returns the manifest in force (the existing one when resuming). Raises DatasetError when
     the directory belongs to another command or to something else.
     """
-    directory.mkdir(parents=True, exist_ok=True)
+    check_writable(directory)
     path = directory / MANIFEST_NAME
     if path.exists():
         existing = read_manifest(directory)
@@ -210,13 +266,115 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
     table = table.replace_schema_metadata(metadata)
     final = directory / shard.name
     tmp = directory / f".{shard.name}.tmp-{os.getpid()}"
-    with open(tmp, "wb") as f:
-        pq.write_table(table, f, compression=COMPRESSION, row_group_size=max(1, shard.rows))
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, final)
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink, compression=COMPRESSION, row_group_size=max(1, shard.rows))
+    data = sink.getvalue().to_pybytes()
+    try:
+        write_file(tmp, data)
+        # The checksum is on disk before the shard: a shard in place always has one.
+        record_checksum(directory, shard.name, data)
+        os.replace(tmp, final)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise write_error(final, exc) from exc
     _sync_directory(directory)
     return final
+
+
+# ---------------------------------------------------------------------------------- checksums
+
+
+def file_checksum(data: bytes | memoryview) -> str:
+    """BLAKE2b (128-bit) hex digest of a file's bytes (``CHECKSUM_ALGORITHM``)."""
+    return hashlib.blake2b(data, digest_size=16).hexdigest()
+
+
+def record_checksum(directory: Path, name: str, data: bytes) -> None:
+    """Append a shard's size and checksum to ``_checksums.jsonl`` (synced)."""
+    line = json.dumps(
+        {"name": name, "bytes": len(data), CHECKSUM_ALGORITHM: file_checksum(data)},
+        sort_keys=True,
+    )
+    with open(directory / CHECKSUMS_NAME, "ab") as f:
+        f.write(line.encode() + b"\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def read_checksums(directory: Path) -> dict[str, dict]:
+    """Shard name -> {"bytes", checksum} as last recorded (a torn last line is skipped)."""
+    path = Path(directory) / CHECKSUMS_NAME
+    try:
+        text = path.read_bytes().decode("utf-8", errors="replace")
+    except FileNotFoundError:
+        return {}
+    except OSError as exc:
+        raise DatasetError(f"cannot read {str(path)!r}: {exc.strerror or exc}") from exc
+    records = {}
+    for line in text.splitlines():
+        try:
+            entry = json.loads(line)
+            records[entry["name"]] = entry
+        except (ValueError, KeyError, TypeError):
+            continue  # a line cut short by a crash: its shard was never renamed into place
+    return records
+
+
+# Shards this process has verified: (path, size, mtime_ns, checksum) -> True.
+_VERIFIED: set[tuple[str, int, int, str]] = set()
+
+
+def shard_damage(path: Path, record: dict | None) -> str | None:
+    """Why the shard file at ``path`` is not the one written (None when it is).
+
+    ``record`` is its entry of ``read_checksums``; None means no checksum was recorded.
+    """
+    if record is None:
+        return "no checksum was recorded for it (it was not written by this dataset's runs)"
+    try:
+        stat = path.stat()
+    except OSError as exc:
+        return f"it cannot be read ({exc.strerror or exc})"
+    expected = record.get(CHECKSUM_ALGORITHM)
+    key = (str(path), stat.st_size, stat.st_mtime_ns, str(expected))
+    if key in _VERIFIED:
+        return None
+    if stat.st_size != record.get("bytes"):
+        return f"it is {stat.st_size} bytes long, {record.get('bytes')} were written"
+    try:
+        actual = file_checksum(path.read_bytes())
+    except OSError as exc:
+        return f"it cannot be read ({exc.strerror or exc})"
+    if actual != expected:
+        return "its content differs from what was written (checksum mismatch)"
+    _VERIFIED.add(key)
+    return None
+
+
+def verify_shards(directory: Path, paths: list[Path], manifest: dict) -> None:
+    """Refuse shards changed since they were written, naming each damaged file and the fix."""
+    if manifest.get("format_version", 1) < 2:
+        log.warning(
+            "dataset %s predates shard checksums: damaged shards cannot be detected", directory
+        )
+        return
+    records = read_checksums(directory)
+    damaged = []
+    for path in paths:
+        why = shard_damage(path, records.get(path.name))
+        if why is not None:
+            damaged.append(f"{path.name}: {why}")
+    if damaged:
+        command = manifest.get("command")
+        fix = (
+            "run the command that made it again to rewrite the damaged shards: " + " ".join(command)
+            if command
+            else "run 'affordgrasp generate' with the dataset's options again to rewrite them"
+        )
+        more = f" (and {len(damaged) - 1} more)" if len(damaged) > 1 else ""
+        raise DatasetError(
+            f"dataset {str(directory)!r} has a damaged shard, {damaged[0]}{more}; {fix}"
+        )
 
 
 def read_shard_info(path: Path) -> dict | None:
@@ -238,12 +396,21 @@ def read_shard_info(path: Path) -> dict | None:
     return info
 
 
-def valid_shard_info(directory: Path, shard: Shard, schema: pa.Schema) -> dict | None:
-    """The footer facts of a shard already on disk when it is whole and as planned, else None."""
+def valid_shard_info(
+    directory: Path, shard: Shard, schema: pa.Schema, checksums: dict[str, dict] | None = None
+) -> dict | None:
+    """The footer facts of a shard already on disk when it is whole and as planned, else None.
+
+    ``checksums`` (``read_checksums``; read here when not given) must hold the shard's
+    checksum as written and the file must match it.
+    """
     path = directory / shard.name
     if not path.exists():
         return None
-    info = read_shard_info(path)
+    if checksums is None:
+        checksums = read_checksums(directory)
+    damage = shard_damage(path, checksums.get(shard.name))
+    info = read_shard_info(path) if damage is None else None
     ok = (
         info is not None
         and info["num_rows"] == shard.rows
@@ -254,7 +421,11 @@ def valid_shard_info(directory: Path, shard: Shard, schema: pa.Schema) -> dict |
     )
     if not ok:
         # Only a file damaged after it was written gets here (writes are atomic): redo it.
-        log.warning("shard %s is damaged or not as planned; it will be written again", path)
+        log.warning(
+            "shard %s is damaged or not as planned (%s); it will be written again",
+            path,
+            damage or "its footer does not match the plan",
+        )
         path.unlink()
         return None
     return info

@@ -2,26 +2,33 @@
 
 pandas, polars and DuckDB read a dataset directory directly as well (see docs/dataset.md);
 these functions add the checks: that the directory is an affordgrasp dataset, which objects it
-holds, and that only whole shards are read.
+holds, and that every shard is the file that was written (its checksum, see
+:func:`affordgrasp.dataset.layout.verify_shards`). A file that cannot be read is reported as
+a :class:`~affordgrasp.errors.DatasetError` naming it, never as a raw Arrow error.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.dataset as pads
+import pyarrow.parquet as pq
 
 from ..errors import DatasetError
-from .layout import read_manifest, shard_paths
+from .layout import read_manifest, shard_paths, verify_shards
 
 # Columns without which Parquet files are not affordgrasp samples (see docs/conventions.md).
 REQUIRED_COLUMNS = ("object", "sample", "seed", "hand_pose", "joints")
 
 
-def open_dataset(directory: str | os.PathLike, *, loose: bool = False) -> pads.Dataset:
+def open_dataset(
+    directory: str | os.PathLike, *, loose: bool = False, verify: bool = True
+) -> pads.Dataset:
     """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order).
 
     Parameters
@@ -31,12 +38,16 @@ def open_dataset(directory: str | os.PathLike, *, loose: bool = False) -> pads.D
     loose : bool
         Also accept a directory without a (valid) manifest: every ``*.parquet`` file under it
         (not in hidden folders) whose columns are those of sample rows, e.g. files written
-        by ``affordgrasp evaluate --out``.
+        by ``affordgrasp evaluate --out``. Their footers are checked, not checksums.
+    verify : bool
+        Check every shard against the checksum recorded when it was written (reads each
+        file once per process; see docs/dataset.md for the cost).
 
     Raises
     ------
     DatasetError
-        When the directory is missing, not a dataset, empty or unreadable.
+        When the directory is missing, not a dataset, empty or unreadable, or a shard is
+        damaged (the message names it and the command that rewrites it).
     """
     from ..schema import dataset_schema
 
@@ -52,8 +63,25 @@ def open_dataset(directory: str | os.PathLike, *, loose: bool = False) -> pads.D
             f"dataset {str(directory)!r} has no shards yet; run the command in its "
             "_manifest.json to generate them"
         )
+    if verify:
+        verify_shards(Path(directory), paths, manifest)
     schema = dataset_schema(manifest.get("metrics", True), bool(manifest.get("depth")))
     return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
+
+
+@contextlib.contextmanager
+def read_errors(where: str | os.PathLike):
+    """Turn an Arrow or OS error while reading into a DatasetError naming the damaged file."""
+    try:
+        yield
+    except (pa.ArrowException, OSError) as exc:
+        text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        match = re.search(r"[\w./\\:-]*\.parquet", text)
+        culprit = match.group(0) if match else str(where)
+        raise DatasetError(
+            f"cannot read {culprit!r}: {text}; the file is damaged or not Parquet: delete it "
+            "(and, for a dataset, run its generate command again to rewrite it)"
+        ) from exc
 
 
 def _open_loose_files(directory: Path) -> pads.Dataset:
@@ -69,12 +97,15 @@ def _open_loose_files(directory: Path) -> pads.Dataset:
             f"no Parquet files under {str(directory)!r}; give a dataset directory "
             "written by 'affordgrasp generate', or an object (family, family:seed or mesh path)"
         )
-    try:
+    for file in files:
+        # Footers only: a truncated or foreign file is named before any scan.
+        with read_errors(file):
+            try:
+                pq.read_metadata(file)
+            except (pa.ArrowException, OSError) as exc:
+                raise pa.ArrowInvalid(f"{file}: {exc}") from exc
+    with read_errors(directory):
         dataset = pads.dataset(files, format="parquet")
-    except (pa.ArrowInvalid, OSError) as exc:
-        raise DatasetError(
-            f"cannot read the Parquet files under {str(directory)!r}: {exc}"
-        ) from exc
     missing = set(REQUIRED_COLUMNS) - set(dataset.schema.names)
     if missing:
         raise DatasetError(
@@ -133,7 +164,8 @@ def iter_batches(
         filter=object_filter(select_objects(directory, objects)),
         batch_size=batch_size,
     )
-    yield from scanner.to_batches()
+    with read_errors(directory):
+        yield from scanner.to_batches()
 
 
 def read_dataset(
@@ -159,10 +191,11 @@ def read_dataset(
         One row per sample, in plan order. Use :func:`iter_batches` for larger datasets.
     """
     dataset = open_dataset(directory)
-    return dataset.to_table(
-        columns=list(columns) if columns is not None else None,
-        filter=object_filter(select_objects(directory, objects)),
-    )
+    with read_errors(directory):
+        return dataset.to_table(
+            columns=list(columns) if columns is not None else None,
+            filter=object_filter(select_objects(directory, objects)),
+        )
 
 
 read_table = read_dataset  # the name of affordgrasp 0.1

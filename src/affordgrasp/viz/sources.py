@@ -20,7 +20,7 @@ import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
 from ..dataset.best import TopRows, numeric_columns, task_values
-from ..dataset.reading import open_dataset
+from ..dataset.reading import open_dataset, read_errors
 from ..errors import bad_parameter
 
 BATCH_ROWS = 65536
@@ -99,14 +99,17 @@ class DatasetSource(GraspSource):
 
     def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
         scanner = self._dataset.scanner(columns=list(columns), batch_size=BATCH_ROWS)
-        for batch in scanner.to_batches():
-            if batch.num_rows:
-                yield pa.Table.from_batches([batch])
+        with read_errors(self.directory):
+            for batch in scanner.to_batches():
+                if batch.num_rows:
+                    yield pa.Table.from_batches([batch])
 
     def fetch(self, obj: str, keys: Sequence[tuple[int, int]]) -> list[dict]:
         samples = pa.array(sorted({k[1] for k in keys}), pa.int64())
         flt = (pads.field("object") == obj) & pads.field("sample").isin(samples)
-        return _order_rows(self._dataset.to_table(filter=flt).to_pylist(), keys)
+        with read_errors(self.directory):
+            table = self._dataset.to_table(filter=flt)
+        return _order_rows(table.to_pylist(), keys)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,191 @@
+"""Damaged shards are detected and named; a full or unwritable disk is a clear exit 2 that
+leaves nothing half-written behind."""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import shutil
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+from dataset_support import SEED
+
+from affordgrasp.cli import main
+from affordgrasp.dataset import layout
+from affordgrasp.dataset.generate import generate
+from affordgrasp.dataset.layout import CHECKSUMS_NAME, read_checksums, shard_paths
+from affordgrasp.dataset.reading import iter_batches, read_table
+from affordgrasp.errors import DatasetError
+
+SAMPLES, SHARD = 24, 8
+
+
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory, box_mesh):
+    out = tmp_path_factory.mktemp("integrity") / "ds"
+    generate([str(box_mesh)], SAMPLES, out, seed=SEED, workers=1, shard_size=SHARD)
+    return out
+
+
+@pytest.fixture
+def dataset(pristine, tmp_path):
+    out = tmp_path / "ds"
+    shutil.copytree(pristine, out)
+    return out
+
+
+def _generate(box_mesh, out) -> int:
+    argv = ["generate", str(box_mesh), "--samples", str(SAMPLES), "--out", str(out)]
+    return main([*argv, "--seed", str(SEED), "--shard-size", str(SHARD), "--workers", "1"])
+
+
+def _overwrite_mid_file(path: Path) -> None:
+    """Change bytes in the middle of the column data; the footer stays intact."""
+    data = bytearray(path.read_bytes())
+    middle = len(data) // 3
+    data[middle : middle + 64] = bytes((b ^ 0x5A) for b in data[middle : middle + 64])
+    path.write_bytes(bytes(data))
+    pq.read_metadata(path)  # still a valid footer: only the checksum can tell
+
+
+def test_every_shard_has_a_recorded_checksum(pristine):
+    records = read_checksums(pristine)
+    shards = shard_paths(pristine)
+    assert sorted(records) == [p.name for p in shards]
+    for p in shards:
+        assert records[p.name]["bytes"] == p.stat().st_size
+        assert layout.shard_damage(p, records[p.name]) is None
+
+
+def test_shard_overwritten_mid_file_is_refused_by_readers(dataset, capsys):
+    damaged = shard_paths(dataset)[1]
+    _overwrite_mid_file(damaged)
+    with pytest.raises(DatasetError, match=rf"{damaged.name}: its content differs"):
+        read_table(dataset)
+    with pytest.raises(DatasetError, match=damaged.name):
+        next(iter_batches(dataset, columns=["sample"]))
+    assert main(["best", str(dataset), "--task", "pick"]) == 2
+    err = capsys.readouterr().err
+    assert damaged.name in err and "affordgrasp generate" in err and err.count("\n") == 1
+    out = dataset.parent / "plots"
+    assert main(["plots", str(dataset), "-o", str(out), "--no-tasks"]) == 2
+    assert damaged.name in capsys.readouterr().err
+
+
+def test_shard_overwritten_mid_file_is_rewritten_on_resume(dataset, box_mesh, pristine):
+    damaged = shard_paths(dataset)[1]
+    _overwrite_mid_file(damaged)
+    assert _generate(box_mesh, dataset) == 0
+    assert damaged.read_bytes() == (pristine / damaged.name).read_bytes()
+    assert read_table(dataset).equals(read_table(pristine))
+
+
+def test_best_on_a_truncated_shard_names_the_file(dataset, capsys):
+    damaged = shard_paths(dataset)[2]
+    damaged.write_bytes(damaged.read_bytes()[: damaged.stat().st_size // 2])
+    assert main(["best", str(dataset), "--task", "pick"]) == 2
+    err = capsys.readouterr().err
+    assert damaged.name in err and "bytes long" in err, err
+    assert "ArrowInvalid" not in err and "Traceback" not in err
+
+
+def test_truncated_file_in_a_plain_parquet_folder_is_named(pristine, tmp_path, capsys):
+    # Not a dataset (no manifest, no checksums): the footers are checked, the file named.
+    folder = tmp_path / "loose"
+    folder.mkdir()
+    for p in shard_paths(pristine):
+        shutil.copy(p, folder / p.name)
+    bad = folder / shard_paths(pristine)[0].name
+    bad.write_bytes(bad.read_bytes()[:500])
+    assert main(["plots", str(folder), "-o", str(tmp_path / "p"), "--no-tasks"]) == 2
+    err = capsys.readouterr().err
+    assert bad.name in err and err.count("\n") == 1, err
+
+
+def test_shard_without_a_checksum_is_refused(dataset):
+    records = (dataset / CHECKSUMS_NAME).read_text().splitlines()
+    (dataset / CHECKSUMS_NAME).write_text("\n".join(records[1:]) + "\n")
+    with pytest.raises(DatasetError, match="no checksum was recorded"):
+        read_table(dataset)
+
+
+def test_disk_full_exits_2_naming_the_file_and_leaves_no_partial_file(
+    tmp_path, box_mesh, pristine, monkeypatch, capsys
+):
+    out = tmp_path / "ds"
+    real_write = layout.write_file
+    shards_written = []
+
+    def full_disk(path, data):
+        if ".part-" in path.name and len(shards_written) == 1:
+            with open(path, "wb") as f:
+                f.write(data[: len(data) // 2])  # what a full disk leaves
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_write(path, data)
+        if ".part-" in path.name:
+            shards_written.append(path)
+
+    monkeypatch.setattr(layout, "write_file", full_disk)
+    assert _generate(box_mesh, out) == 2
+    err = capsys.readouterr().err
+    err = _one_line(err)
+    assert "No space left on device" in err and "part-00000-000000000008.parquet" in err, err
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
+    assert [p.name for p in shard_paths(out)] == ["part-00000-000000000000.parquet"]
+    read_table(out)  # what is there is whole and verified
+
+    monkeypatch.setattr(layout, "write_file", real_write)
+    assert _generate(box_mesh, out) == 0
+    assert read_table(out).equals(read_table(pristine))
+
+
+def test_output_that_is_not_a_directory_exits_2(tmp_path, box_mesh, capsys):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("x")
+    assert _generate(box_mesh, blocker / "ds") == 2
+    assert "a-file" in _one_line(capsys.readouterr().err)
+
+
+def test_read_only_output_directory_exits_2_before_any_work(
+    tmp_path, box_mesh, monkeypatch, capsys
+):
+    readonly = tmp_path / "readonly"
+    readonly.mkdir()
+    readonly.chmod(0o555)
+    if os.access(readonly, os.W_OK):
+        # root writes anywhere: answer as the kernel does for everyone else.
+        real_mkdir, real_write = Path.mkdir, layout.write_file
+
+        def denied(path):
+            if Path(path).is_relative_to(readonly):
+                raise PermissionError(errno.EACCES, "Permission denied", str(path))
+
+        def mkdir(self, *args, **kwargs):
+            denied(self)
+            return real_mkdir(self, *args, **kwargs)
+
+        def write_file(path, data):
+            denied(path)
+            return real_write(path, data)
+
+        monkeypatch.setattr(Path, "mkdir", mkdir)
+        monkeypatch.setattr(layout, "write_file", write_file)
+    for out in (readonly / "ds", readonly):
+        assert _generate(box_mesh, out) == 2
+        err = _one_line(capsys.readouterr().err)
+        assert repr(str(out)) in err and "Permission denied" in err, err
+    assert list(readonly.iterdir()) == []
+
+
+def _one_line(err: str) -> str:
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def test_manifest_records_the_format_with_checksums(pristine):
+    manifest = json.loads((pristine / "_manifest.json").read_text())
+    assert manifest["format_version"] == layout.FORMAT_VERSION >= 2
