@@ -92,9 +92,11 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         print(f"affordgrasp {args.command}: error: {cli_message(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"affordgrasp {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", None)
+        how = f" ({exc})" if signum else ""
+        print(f"affordgrasp {args.command}: interrupted{how}", file=sys.stderr)
+        return 128 + signum if signum else 130
     except Exception as exc:  # noqa: BLE001 - the CLI's last line of defence
         logging.getLogger("affordgrasp").debug("internal failure", exc_info=True)
         print(

@@ -74,6 +74,17 @@ class MissingDependencyError(AffordgraspError, ImportError):
     """An optional dependency is needed for this feature and is not installed."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by a signal (SIGTERM, SIGHUP) and handled like Ctrl-C: workers stopped,
+    finished work kept. ``signum`` is the signal; the CLI exits with 128 + signum."""
+
+    def __init__(self, signum: int):
+        import signal
+
+        self.signum = int(signum)
+        super().__init__(f"stopped by {signal.Signals(self.signum).name}")
+
+
 def require(module: str, extra: str):
     """Import an optional dependency, or raise a message that says how to install it."""
     import importlib

@@ -434,7 +434,13 @@ def optimize(
         :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
         is found by ray casts, which cost no simulation
     """
-    from .dataset.engines import ObjectPayload, RunContext, check_engine, make_engine
+    from .dataset.engines import (
+        ObjectPayload,
+        RunContext,
+        check_engine,
+        make_engine,
+        stop_on_signals,
+    )
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
     from .objects import resolve_object
@@ -456,7 +462,11 @@ def optimize(
     started = time.perf_counter()
     total = budget + (max(0, budget - min(pop, budget)) if baseline else 0)
     bar = progress(total) if progress is not None else nullcontext(lambda n: None)
-    with make_engine(context, engine=engine, workers=workers, address=address) as eng, bar as adv:
+    with (
+        stop_on_signals(),
+        make_engine(context, engine=engine, workers=workers, address=address) as eng,
+        bar as adv,
+    ):
         use_points = None
         if uses:
             from .pairs import UsePoints

@@ -13,16 +13,20 @@ build and repair procedural objects.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
+import socket
+import threading
+import time
 import uuid
 from dataclasses import dataclass, field
 
 import numpy as np
 import pyarrow as pa
 
-from ..errors import InputError, InternalError, bad_parameter, require
+from ..errors import InputError, InternalError, Interrupted, bad_parameter, require
 from ..hands import Hand
 
 log = logging.getLogger(__name__)
@@ -171,9 +175,39 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
 
 
 def _worker_init(context: RunContext) -> None:
-    # Ctrl-C reaches the whole process group; only the parent decides what to do about it.
+    # Ctrl-C and a terminal's hangup reach the whole process group; only the parent decides
+    # what to do about them (it stops the workers). SIGTERM keeps its default: it is how
+    # the parent stops a worker.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
     _install_context(context)
+
+
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
+
+
+@contextlib.contextmanager
+def stop_on_signals(signals=STOP_SIGNALS):
+    """Within this block, SIGTERM and SIGHUP stop the run as Ctrl-C does.
+
+    The handler raises :class:`~affordgrasp.errors.Interrupted` (a KeyboardInterrupt) in
+    the main thread, so the engine's ``close(cancel=True)`` stops the worker processes and
+    the finished work is kept. Outside the main thread it does nothing (Python delivers
+    signals to the main thread only).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, handler) for s in signals}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
 
 
 def default_workers() -> int:
@@ -272,14 +306,132 @@ class LocalEngine(Engine):
             # Running jobs' results would be thrown away: stop their processes now rather
             # than wait for them. The executor keeps them in a private mapping.
             processes = list(getattr(self._pool, "_processes", {}).values())
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            for p in processes:
-                if p.is_alive():
-                    p.terminate()
-            for p in processes:
-                p.join(timeout=5)
+            with _signals_deferred():
+                self._pool.shutdown(wait=False, cancel_futures=True)
+                for p in processes:
+                    if p.is_alive():
+                        p.terminate()
+                for p in processes:
+                    p.join(timeout=5)
+                    if p.is_alive():  # pragma: no cover - a worker stuck in native code
+                        p.kill()
+                        p.join(timeout=5)
         else:
             self._pool.shutdown(wait=True)
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """A second SIGTERM/SIGHUP while workers are being stopped must not cut that short."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.signal(s, signal.SIG_IGN) for s in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+# Seconds to wait for a Ray cluster at --address to answer (AFFORDGRASP_RAY_CONNECT_TIMEOUT).
+RAY_CONNECT_TIMEOUT_S = 15.0
+
+# The HTTP/2 client preface and an empty SETTINGS frame: a gRPC server (Ray's GCS and its
+# client server) answers with a SETTINGS frame.
+_H2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
+
+
+def check_ray_address(address: str | None, timeout_s: float | None = None) -> None:
+    """Refuse, within ``timeout_s``, a Ray address that does not answer as a Ray cluster.
+
+    ``ray.init`` retries an unreachable or silent address for minutes inside native code,
+    where it cannot even be stopped by SIGTERM; this check is a socket exchange with a
+    deadline, interruptible at any time. ``auto`` and ``local`` are left to Ray.
+    """
+    if address is None or address.strip().lower() in ("auto", "local", ""):
+        return
+    if timeout_s is None:
+        timeout_s = _connect_timeout()
+    text = address.strip()
+    if "://" in text:
+        text = text.split("://", 1)[1]
+    host, sep, port = text.rstrip("/").rpartition(":")
+    host = host.strip("[]")
+    if not sep or not host or not port.isdigit():
+        raise InputError(
+            f"--address {address!r} is not HOST:PORT, ray://HOST:PORT or auto; give the "
+            "address 'ray start --head' printed"
+        )
+    where = f"the Ray cluster at {address!r}"
+    deadline = time.monotonic() + timeout_s
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout_s) as sock:
+            sock.settimeout(max(0.1, deadline - time.monotonic()))
+            sock.sendall(_H2_PREFACE)
+            header = b""
+            while len(header) < 9:
+                piece = sock.recv(9 - len(header))
+                if not piece:
+                    break
+                header += piece
+    except TimeoutError:
+        raise InputError(
+            f"cannot reach {where}: no answer within {timeout_s:g} s; check that the cluster "
+            "is running ('ray status' on its head) and reachable from here (firewall, VPN), "
+            "or set AFFORDGRASP_RAY_CONNECT_TIMEOUT to wait longer"
+        ) from None
+    except OSError as exc:
+        raise InputError(
+            f"cannot reach {where}: {exc.strerror or exc}; check the host and port "
+            "('ray start --head' prints them) and that the cluster is running"
+        ) from None
+    if len(header) < 9 or header[3] != 0x04:
+        raise InputError(
+            f"{where} answered, but not as a Ray cluster (no gRPC); check the port: the head's "
+            "GCS port (6379 by default) or its client port with ray:// (10001)"
+        )
+
+
+def _connect_timeout() -> float:
+    try:
+        value = float(os.environ.get("AFFORDGRASP_RAY_CONNECT_TIMEOUT", ""))
+    except ValueError:
+        return RAY_CONNECT_TIMEOUT_S
+    return value if value > 0 else RAY_CONNECT_TIMEOUT_S
+
+
+def _init_with_deadline(ray, kwargs: dict) -> None:
+    """``ray.init`` on a cluster, given up after the connect timeout.
+
+    Connecting blocks in native code, which neither a deadline nor SIGTERM can interrupt,
+    so it runs in a daemon thread while this thread waits in short steps: a signal is
+    handled at once and a silent cluster is reported after the timeout. The abandoned
+    thread does not keep the process alive.
+    """
+    timeout_s = _connect_timeout()
+    outcome: dict = {}
+
+    def connect() -> None:
+        try:
+            ray.init(**kwargs)
+            outcome["ok"] = True
+        except BaseException as exc:  # noqa: BLE001 - handed to the waiting thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=connect, name="ray-connect", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout_s
+    while thread.is_alive() and time.monotonic() < deadline:
+        thread.join(0.1)
+    if "error" in outcome:
+        raise outcome["error"]
+    if not outcome.get("ok"):
+        raise InputError(
+            f"cannot connect to the Ray cluster at {kwargs['address']!r}: no answer within "
+            f"{timeout_s:g} s; check that it is running ('ray status' on its head) and "
+            "reachable from here, or set AFFORDGRASP_RAY_CONNECT_TIMEOUT to wait longer"
+        )
 
 
 def _ray_run_job(context: RunContext, job: Job) -> pa.Table:
@@ -296,12 +448,21 @@ class RayEngine(Engine):
         self._ray = ray
         self._started = False
         if not ray.is_initialized():
+            check_ray_address(address)
             kwargs = {"address": address, "ignore_reinit_error": True, "log_to_driver": False}
             if address is None:
                 kwargs["num_cpus"] = workers or default_workers()
                 kwargs["include_dashboard"] = False
             try:
-                ray.init(**kwargs)
+                if address is None:
+                    # ray.init replaces the SIGTERM handler (with sys.exit); keep ours, which
+                    # stops the run the way Ctrl-C does.
+                    on_term = signal.getsignal(signal.SIGTERM)
+                    ray.init(**kwargs)
+                    if threading.current_thread() is threading.main_thread():
+                        signal.signal(signal.SIGTERM, on_term)
+                else:
+                    _init_with_deadline(ray, kwargs)
             except ConnectionError as exc:
                 raise InputError(
                     f"cannot connect to the Ray cluster at {address!r}: {exc}; give the "

@@ -34,7 +34,15 @@ from .. import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..hands import Hand
 from . import card as card_module
-from .engines import Engine, Job, ObjectPayload, RunContext, check_engine, make_engine
+from .engines import (
+    Engine,
+    Job,
+    ObjectPayload,
+    RunContext,
+    check_engine,
+    make_engine,
+    stop_on_signals,
+)
 from .layout import (
     DEFAULT_SHARD_SIZE,
     FORMAT,
@@ -288,7 +296,10 @@ def generate(
     engine_name, n_workers = engine, 0
     try:
         if todo:
-            with make_engine(context, engine=engine, workers=workers, address=address) as eng:
+            with (
+                stop_on_signals(),
+                make_engine(context, engine=engine, workers=workers, address=address) as eng,
+            ):
                 engine_name, n_workers = eng.name, eng.workers
                 total = sum(s.rows for s in todo)
                 bar = progress(total) if progress is not None else nullcontext(lambda n: None)
