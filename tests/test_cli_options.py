@@ -109,3 +109,45 @@ def test_verbose_is_accepted_after_the_subcommand(capsys):
     assert main(["objects", "list", "--verbose", "--json"]) == 0
     json.loads(capsys.readouterr().out)
     assert main(["-v", "tasks"]) == 0
+
+
+def test_tables_print_units_and_the_edge_angle_in_degrees(capsys):
+    import math
+    import re
+
+    from affordgrasp.commands.best import METRICS_SHOWN, metric_cells, metric_headings
+
+    argv = ["evaluate", "knife", "--samples", "300", "--mode", "no-robustness", "--task", "pick"]
+    assert main(argv) == 0
+    table = capsys.readouterr().out
+    assert "use_edge_angle (°)" in table and "use_force (N)" in table
+    assert "inertia (kg·m²)" in table and "hold_effort_sum (N)" in table
+    shown = float(re.search(r"use_edge_angle \(°\)\s*│\s*([-\d.e+]+)", table).group(1))
+    assert main([*argv, "--json"]) == 0
+    radians = json.loads(capsys.readouterr().out)["best"]["pick"]["metrics"]["use_edge_angle"]
+    assert shown == pytest.approx(math.degrees(radians), rel=1e-3)  # JSON stays in SI
+
+    headings = metric_headings(METRICS_SHOWN)
+    assert "edge angle (°)" in headings and "ΣE_h (N)" in headings and "ε" in headings
+    cells = metric_cells({"use_edge_angle": math.pi / 4}, [("edge angle", "use_edge_angle")])
+    assert cells == [pytest.approx(45.0)]
+
+
+def test_evaluate_shows_progress_as_it_goes(monkeypatch, capsys):
+    from contextlib import contextmanager
+
+    from affordgrasp.commands.output import Output
+
+    steps = []
+
+    @contextmanager
+    def progress(self, description, total):
+        steps.append(("start", total))
+        yield lambda n=1: steps.append(("advance", n))
+
+    monkeypatch.setattr(Output, "progress", progress)
+    assert main(["evaluate", "knife", "--samples", "600", "--task", "pick"]) == 0
+    capsys.readouterr()
+    advances = [n for kind, n in steps if kind == "advance"]
+    assert steps[0] == ("start", 600)
+    assert len(advances) >= 3 and sum(advances) == 600

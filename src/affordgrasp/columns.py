@@ -37,6 +37,45 @@ METRIC_COLUMNS: tuple[str, ...] = (
 # Columns computed from the metric columns (tasks may read them by name).
 DERIVED_COLUMNS: tuple[str, ...] = (HOLD_EFFORT_SUM,)
 
+# Unit of each metric column as stored (SI; "" when dimensionless). E_i is per 1 N·m of
+# swing torque; I and the masses behind it are at unit density.
+METRIC_UNITS: dict[str, str] = {
+    "epsilon": "",
+    "gws_volume": "",
+    "inertia": "kg·m²",
+    **{c: "N" for c in HOLD_EFFORT_COLUMNS},
+    HOLD_EFFORT_SUM: "N",
+    "impact_effort": "N per N·m",
+    "discharge": "",
+    "use_force": "N",
+    "use_edge": "m⁻²",
+    "use_edge_angle": "rad",
+}
+
+# Tables show these columns in another unit than the data: (unit shown, factor).
+DISPLAY_UNITS: dict[str, tuple[str, float]] = {"use_edge_angle": ("°", 180.0 / math.pi)}
+
+
+def display_unit(column: str) -> str:
+    """The unit a table shows ``column`` in ("" when dimensionless or unknown)."""
+    if column in DISPLAY_UNITS:
+        return DISPLAY_UNITS[column][0]
+    return METRIC_UNITS.get(column, "")
+
+
+def display_value(column: str, value: Any) -> Any:
+    """``value`` of ``column`` converted to its table unit (degrees for the edge angle)."""
+    if column in DISPLAY_UNITS and isinstance(value, int | float | np.floating):
+        return float(value) * DISPLAY_UNITS[column][1]
+    return value
+
+
+def column_heading(column: str, label: str | None = None) -> str:
+    """A table heading with the unit: ``edge angle (°)``, ``ΣE_h (N)``, ``ε``."""
+    unit = display_unit(column)
+    name = label or column
+    return f"{name} ({unit})" if unit else name
+
 
 def hold_effort_sum(values: Mapping[str, Any]) -> Any:
     """ΣE_h: the sum of the six hold efforts.

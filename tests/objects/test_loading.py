@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 
 import numpy as np
 import pytest
@@ -152,7 +153,7 @@ def test_cube_missing_a_face_is_repaired(caplog):
     with caplog.at_level(logging.WARNING):
         repaired = prepare_mesh(mesh, source="open.obj")
     assert_solid(repaired, 0.006)
-    assert "open.obj was open" in caplog.text
+    assert "open.obj was repaired: capped 1 hole (4 boundary edges" in caplog.text
 
 
 def test_big_non_convex_hole_is_capped_in_its_plane():
@@ -292,3 +293,53 @@ def test_mesh_file_of_plausible_size_loads(tmp_path):
     assert load_mesh(path, size_m=0.25).extents.max() == pytest.approx(0.25)
     box((0.1, 0.05, 0.02)).export(path)
     assert load_mesh(path).extents.max() == pytest.approx(0.1)
+
+
+def _cube(size: float = 0.05) -> trimesh.Trimesh:
+    return trimesh.creation.box((size, size, size))
+
+
+def _fin_on(cube: trimesh.Trimesh) -> trimesh.Trimesh:
+    """The cube with one triangle hanging off an edge (the edge then has three faces)."""
+    a, b = cube.edges_unique[0]
+    tip = cube.vertices[[a, b]].mean(axis=0) * 3.0
+    return trimesh.Trimesh(
+        np.vstack([cube.vertices, tip]),
+        np.vstack([cube.faces, [[a, b, len(cube.vertices)]]]),
+        process=False,
+    )
+
+
+@pytest.mark.parametrize(
+    "make, said",
+    [
+        (_fin_on, r"dropped 1 non-manifold fin \(1 triangle of open surface"),
+        (
+            lambda c: trimesh.Trimesh(c.vertices, np.vstack([c.faces[:1, ::-1], c.faces[1:]])),
+            "re-wound 1 face that was wound against the rest",
+        ),
+        (lambda c: trimesh.Trimesh(c.vertices, c.faces[:, ::-1]), "turned it outside out"),
+        (lambda c: trimesh.Trimesh(c.vertices, np.vstack([c.faces, c.faces[:3]])), "3 duplicate"),
+        (
+            lambda c: trimesh.util.concatenate([c, c.copy().apply_translation((0.02, 0, 0))]),
+            "merged 2 overlapping bodies into one solid",
+        ),
+    ],
+    ids=["fin", "flipped face", "inside out", "duplicate faces", "overlap"],
+)
+def test_repair_warning_says_what_was_done(make, said, caplog):
+    cube = _cube()
+    with caplog.at_level(logging.WARNING):
+        mesh = prepare_mesh(make(cube), source="part.obj")
+    assert mesh.is_watertight
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("part.obj was repaired: ")
+    assert re.search(said, lines[0]), lines[0]
+    assert "hole" not in lines[0]  # nothing was capped: the old message said "closed 1 hole"
+
+
+def test_clean_mesh_gets_no_repair_warning(caplog):
+    with caplog.at_level(logging.WARNING):
+        prepare_mesh(_cube(), source="part.obj")
+    assert caplog.text == ""

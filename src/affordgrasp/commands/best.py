@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ..columns import column_heading
 from .common import add_task_arguments, parse_thresholds
 
 METRICS_SHOWN = (
@@ -14,6 +15,7 @@ METRICS_SHOWN = (
     ("δ", "discharge"),
     ("U_τ", "use_force"),
     ("U_g", "use_edge"),
+    ("edge angle", "use_edge_angle"),
 )
 
 
@@ -40,15 +42,20 @@ def shown_metrics(task_name: str) -> list[tuple[str, str]]:
 
 
 def metric_cells(row: dict, shown=METRICS_SHOWN) -> list:
-    from ..columns import HOLD_EFFORT_SUM, hold_effort_sum
+    from ..columns import HOLD_EFFORT_SUM, display_value, hold_effort_sum
 
     cells = []
     for _, name in shown:
         if name == HOLD_EFFORT_SUM:
             cells.append(hold_effort_sum(row))
         else:
-            cells.append(row.get(name, math.nan))
+            cells.append(display_value(name, row.get(name, math.nan)))
     return cells
+
+
+def metric_headings(shown=METRICS_SHOWN) -> list[str]:
+    """Table headings of ``shown`` with their units (the edge angle in degrees)."""
+    return [column_heading(name, label) for label, name in shown]
 
 
 def run(args, out) -> None:
@@ -73,7 +80,7 @@ def run(args, out) -> None:
     ]
     out.table(
         f"Best {len(rows)} for task {result.task} ({result.mode}) in {args.directory}",
-        ["rank", "object", "sample", "F_T", "status", *[s for s, _ in shown]],
+        ["rank", "object", "sample", "F_T", "status", *metric_headings(shown)],
         rows,
     )
     out.text(

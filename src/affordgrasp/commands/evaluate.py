@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..columns import column_heading
 from .common import (
     add_sampling_arguments,
     add_task_arguments,
@@ -41,6 +42,7 @@ def add_arguments(p) -> None:
 
 def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict]:
     """The best sample of every task, as table rows and a JSON-ready dict."""
+    from ..columns import display_value
     from ..schema import metric_arrays
     from ..tasks import MetricColumns, get_task
 
@@ -55,7 +57,8 @@ def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict
             continue
         i = int(np.argmax(np.where(finite, values, -np.inf)))
         shown = [float(metrics[m][i]) for m in SHOWN_METRICS]
-        rows.append([name, int(table.column("sample")[i].as_py()), float(values[i]), *shown])
+        cells = [display_value(m, v) for m, v in zip(SHOWN_METRICS, shown, strict=True)]
+        rows.append([name, int(table.column("sample")[i].as_py()), float(values[i]), *cells])
         doc[name] = {
             "sample": int(table.column("sample")[i].as_py()),
             "value": float(values[i]),
@@ -101,7 +104,7 @@ def run(args, out) -> None:
     )
     best, best_doc = best_rows(table, names, args.mode)
     # One column per task, one row per quantity: fits a terminal for any number of metrics.
-    labels = ["sample", "value", *SHOWN_METRICS]
+    labels = ["sample", "value", *[column_heading(m) for m in SHOWN_METRICS]]
     out.table(
         f"best grasp per task (mode {args.mode}; '-' when no sample passes the thresholds)",
         ["quantity", *[r[0] for r in best]],

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .best import metric_cells, shown_metrics
+from .best import metric_cells, metric_headings, shown_metrics
 from .common import (
     HAND_HELP,
     add_scale_arguments,
@@ -90,7 +90,7 @@ def run(args, out) -> None:
             "F_T",
             "found after",
             "status",
-            *[s for s, _ in shown],
+            *metric_headings(shown),
         ],
         rows,
     )

@@ -159,8 +159,12 @@ def prepare_mesh(
         raw_extent = float(np.ptp(used, axis=0).max())
         check_plausible_size(raw_extent, scale_kind, scale_value, units, source)
 
-    work = _clean(vertices, faces.astype(np.int64), source)
-    work = _closed_volume(work, source)
+    repairs: list[str] = []
+    work = _clean(vertices, faces.astype(np.int64), source, repairs)
+    work = _closed_volume(work, source, repairs)
+    if repairs:
+        # One line that says what was done, so that the user can judge the result.
+        log.warning("%s was repaired: %s", source, "; ".join(repairs))
 
     extent = float(work.extents.max())
     volume = _signed_volume(work)
@@ -231,7 +235,15 @@ def check_plausible_size(
         for name, factor in UNITS_TO_M.items()
         if low <= raw_extent * factor <= high and name != (units or "m")
     ]
-    guesses.sort(key=lambda g: abs(math.log10(g[1] / 0.2)))  # closest to a 20 cm tool
+    # The likely unit: the first, in the order CAD files use them, that makes a hand-held
+    # object (2-60 cm); else the one closest to a 20 cm tool.
+    usual = {name: k for k, name in enumerate(("mm", "cm", "in", "m", "ft"))}
+    guesses.sort(
+        key=lambda g: (
+            not 0.02 <= g[1] <= 0.6,
+            usual.get(g[0], 9) if 0.02 <= g[1] <= 0.6 else abs(math.log10(g[1] / 0.2)),
+        )
+    )
     if guesses:
         name, size = guesses[0]
         fix = (
@@ -294,14 +306,19 @@ def _validate_arrays(vertices: np.ndarray, faces: np.ndarray, source: str) -> No
         )
 
 
-def _clean(vertices: np.ndarray, faces: np.ndarray, source: str) -> trimesh.Trimesh:
+def _clean(
+    vertices: np.ndarray, faces: np.ndarray, source: str, repairs: list[str]
+) -> trimesh.Trimesh:
     """Merge duplicate vertices, drop faces repeating a vertex and duplicate faces."""
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     mesh.merge_vertices()
     f = mesh.faces
-    mesh.update_faces((f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2]))
-    if len(mesh.faces):
+    repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
+    mesh.update_faces(~repeated)
+    before = len(mesh.faces)
+    if before:
         mesh.update_faces(mesh.unique_faces())
+    duplicates = before - len(mesh.faces)
     mesh.remove_unreferenced_vertices()
     extent = float(np.ptp(vertices, axis=0).max())
     # Area is compared with the bounding box so that the test does not depend on units.
@@ -310,46 +327,85 @@ def _clean(vertices: np.ndarray, faces: np.ndarray, source: str) -> trimesh.Trim
             f"{source} is degenerate: all {len(faces)} faces have zero area; pass a mesh "
             "that encloses a volume"
         )
+    if repeated.any():
+        repairs.append(f"dropped {_count(int(repeated.sum()), 'degenerate face')} (a vertex twice)")
+    if duplicates:
+        repairs.append(f"dropped {_count(duplicates, 'duplicate face')}")
     return mesh
+
+
+def _count(n: int, thing: str) -> str:
+    return f"{n} {thing}" + ("" if n == 1 else "s")
 
 
 def _is_closed(mesh: trimesh.Trimesh) -> bool:
     return bool(mesh.is_watertight and mesh.is_winding_consistent)
 
 
-def _closed_volume(mesh: trimesh.Trimesh, source: str) -> trimesh.Trimesh:
-    """Return a closed, outward-oriented mesh equal to ``mesh`` where it was already one."""
+def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> trimesh.Trimesh:
+    """Return a closed, outward-oriented mesh equal to ``mesh`` where it was already one.
+
+    Appends to ``repairs`` a phrase for every change (what was done, to how much).
+    """
     if _is_closed(mesh):
         if mesh.body_count == 1:
-            return _oriented(mesh)
-        return _combine_bodies(mesh.split(only_watertight=False, repair=False), mesh, source)
+            return _oriented(mesh, repairs)
+        bodies = mesh.split(only_watertight=False, repair=False)
+        return _combine_bodies(bodies, mesh, source, repairs)
 
     work = mesh.copy()
+    zero_area = len(work.faces)
     work.update_faces(work.nondegenerate_faces())
+    zero_area -= len(work.faces)
+    if zero_area:
+        repairs.append(f"dropped {_count(zero_area, 'zero-area face')}")
     work.remove_unreferenced_vertices()
+    wound = {tuple(sorted(face)): tuple(face) for face in work.faces.tolist()}
     _fix_normals(work)
+    turned = sum(
+        _same_cycle(wound.get(tuple(sorted(face))), tuple(face)) is False
+        for face in work.faces.tolist()
+    )
     # Split first: at an edge shared by more than two faces (closed parts touching) the
     # face adjacency stops, so each part is closed on its own and then unioned.
     bodies = list(work.split(only_watertight=False, repair=False)) or [work]
-    holes = 0
+    scale = float(np.ptp(work.vertices, axis=0).max())
+    holes: list[np.ndarray] = []
+    fins = fin_faces = 0
     for body in bodies:
         if not _is_closed(body):
-            holes += _fill_holes(body)
+            open_faces = len(body.faces)
+            loops = _fill_holes(body)
             _fix_normals(body)
+            if abs(_signed_volume(body)) <= _MIN_RELATIVE_VOLUME * scale**3:
+                # An open sheet (a fin hanging off an edge, a stray triangle): it encloses
+                # nothing and is dropped with the flat parts.
+                fins += 1
+                fin_faces += open_faces
+            else:
+                holes += [body.vertices[loop] for loop in loops]
     if all(_is_closed(body) for body in bodies):
-        if holes:
-            log.warning(
-                "%s was open: closed %d hole(s) with flat caps; check that the result is "
-                "the solid you meant",
-                source,
-                holes,
+        if turned:
+            were = "was" if turned == 1 else "were"
+            repairs.append(f"re-wound {_count(turned, 'face')} that {were} wound against the rest")
+        if fins:
+            repairs.append(
+                f"dropped {_count(fins, 'non-manifold fin')} ({_count(fin_faces, 'triangle')} "
+                "of open surface enclosing no volume)"
             )
-        return _combine_bodies(bodies, None, source)
+        if holes:
+            widest = max(float(np.ptp(h, axis=0).max()) for h in holes)
+            edges = sum(len(h) for h in holes)
+            repairs.append(
+                f"capped {_count(len(holes), 'hole')} ({edges} boundary edges, the widest "
+                f"{_length(widest)} across) with flat faces"
+            )
+        return _combine_bodies(bodies, None, source, repairs, quiet_flat=fins)
 
     merged = _manifold_repair(mesh)
     if merged is not None:
-        log.warning("%s was open: closed it by merging nearly coincident vertices", source)
-        return _oriented(merged)
+        repairs.append("closed its open edges by merging nearly coincident vertices")
+        return _oriented(merged, repairs)
 
     open_edges = _boundary_edge_count(work)
     raise MeshError(
@@ -373,15 +429,32 @@ def _signed_volume(mesh: trimesh.Trimesh) -> float:
     return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
 
 
-def _oriented(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+def _oriented(mesh: trimesh.Trimesh, repairs: list[str] | None = None) -> trimesh.Trimesh:
     if _signed_volume(mesh) < 0:
         mesh = mesh.copy()
         mesh.invert()
+        if repairs is not None:
+            repairs.append("turned it outside out (every face pointed inwards)")
     return mesh
 
 
+def _same_cycle(a: tuple | None, b: tuple) -> bool | None:
+    """Whether two triangles (same vertices) have the same winding; None if ``a`` is None."""
+    if a is None:
+        return None
+    return b in (a, a[1:] + a[:1], a[2:] + a[:2])
+
+
+def _length(metres: float) -> str:
+    return f"{metres * 1000:.3g} mm" if metres < 1 else f"{metres:.3g} m"
+
+
 def _combine_bodies(
-    bodies: list[trimesh.Trimesh], whole: trimesh.Trimesh | None, source: str
+    bodies: list[trimesh.Trimesh],
+    whole: trimesh.Trimesh | None,
+    source: str,
+    repairs: list[str],
+    quiet_flat: int = 0,
 ) -> trimesh.Trimesh:
     """One solid from closed bodies: union overlaps, flip inverted bodies, keep cavities.
 
@@ -392,10 +465,12 @@ def _combine_bodies(
     solid_bodies = [b for b in bodies if abs(_signed_volume(b)) > _MIN_RELATIVE_VOLUME * scale**3]
     if len(solid_bodies) < len(bodies):
         # Flat parts (a fin, a label) closed onto themselves add nothing to the solid.
-        log.info("%s: dropped %d flat part(s)", source, len(bodies) - len(solid_bodies))
+        flat = len(bodies) - len(solid_bodies) - quiet_flat  # fins are reported already
+        if flat > 0:
+            repairs.append(f"dropped {_count(flat, 'flat closed part')} enclosing no volume")
         bodies, whole = solid_bodies or bodies, None
     if len(bodies) == 1:
-        return _oriented(bodies[0])
+        return _oriented(bodies[0], repairs)
     volumes = np.array([_signed_volume(b) for b in bodies])
     outer = [b for b, v in zip(bodies, volumes, strict=True) if v > 0]
     cavities = []
@@ -413,7 +488,7 @@ def _combine_bodies(
             outer.append(inverted)
             flipped = True
     if flipped:
-        log.info("%s: flipped bodies that were inside out", source)
+        repairs.append("turned inside-out bodies outside out")
 
     import manifold3d
 
@@ -441,12 +516,12 @@ def _combine_bodies(
         if whole is not None and not flipped:
             return _oriented(whole)
         return _oriented(trimesh.util.concatenate([*outer, *cavities]))
-    log.info("%s: unioned %d overlapping bodies", source, len(bodies))
-    return _oriented(_from_manifold(solid))
+    repairs.append(f"merged {len(bodies)} overlapping bodies into one solid (their union)")
+    return _oriented(_from_manifold(solid), repairs)
 
 
-def _fill_holes(mesh: trimesh.Trimesh) -> int:
-    """Cap every boundary loop of a consistently wound mesh in place; return the count.
+def _fill_holes(mesh: trimesh.Trimesh) -> list[np.ndarray]:
+    """Cap every boundary loop of a consistently wound mesh in place; return the loops.
 
     Each cap is the loop triangulated in its best-fit plane, wound against the boundary
     edges so that the result stays consistently wound. Loops that cannot be traced (a
@@ -458,7 +533,7 @@ def _fill_holes(mesh: trimesh.Trimesh) -> int:
     _, inverse, counts = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
     boundary = directed[counts[inverse.ravel()] == 1]
     if len(boundary) == 0:
-        return 0
+        return []
     # The cap runs each boundary edge backwards.
     successors: dict[int, list[int]] = defaultdict(list)
     for a, b in boundary[:, ::-1].tolist():
@@ -474,10 +549,10 @@ def _fill_holes(mesh: trimesh.Trimesh) -> int:
             if current == start and len(loop) >= 3:
                 loops.append(np.array(loop, dtype=np.int64))
     if not loops:
-        return 0
+        return []
     caps = [loop[triangulate_polygon(mesh.vertices[loop])] for loop in loops]
     mesh.faces = np.vstack([faces, *caps])
-    return len(loops)
+    return loops
 
 
 def _boundary_edge_count(mesh: trimesh.Trimesh) -> int:

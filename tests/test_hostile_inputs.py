@@ -1,0 +1,418 @@
+"""A corpus of hostile inputs, generated here, each run through the command line.
+
+Every case must end in one of two ways, and the corpus says which:
+
+* ``ok``: exit 0 with a correct result (the object's volume as expected after repair, and
+  the evaluation of every sample);
+* ``refused``: exit 2 with a one-line message on stderr that names the problem.
+
+Never exit 1 (an internal error) and never a traceback. The counts per category are printed
+with ``pytest -s`` (and reported in the release notes).
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from affordgrasp.cli import main
+
+CUBE = 0.05  # m, a graspable block
+CUBE_VOLUME = CUBE**3
+
+
+@dataclass
+class Case:
+    name: str
+    category: str
+    expect: str  # "ok" or "refused"
+    make: object  # (folder) -> path or spec string
+    options: list[str] = field(default_factory=list)
+    volume: float | None = None  # expected volume after repair (m^3), for "ok"
+    refusal: str = ""  # a fragment the one-line message must contain
+    evaluate: bool = True  # also simulate a few grasps (ok cases)
+
+
+def _box(size=CUBE, offset=(0.0, 0.0, 0.0)) -> trimesh.Trimesh:
+    box = trimesh.creation.box((size, size, size))
+    box.apply_translation(offset)
+    return box
+
+
+def _write(mesh: trimesh.Trimesh, name: str):
+    def make(folder: Path) -> Path:
+        path = folder / name
+        mesh.export(path)
+        return path
+
+    return make
+
+
+def _raw(name: str, data: bytes | str):
+    def make(folder: Path) -> Path:
+        path = folder / name
+        path.write_bytes(data.encode() if isinstance(data, str) else data)
+        return path
+
+    return make
+
+
+def _off(vertices, faces, header="OFF", comment="", colour="") -> str:
+    lines = [header, f"{len(vertices)} {len(faces)} 0{comment}"]
+    lines += [" ".join(repr(float(c)) for c in v) for v in vertices]
+    lines += [f"{len(f)} " + " ".join(str(i) for i in f) + colour for f in faces]
+    return "\n".join(lines) + "\n"
+
+
+def _obj(vertices, faces) -> str:
+    lines = ["v " + " ".join(repr(float(c)) for c in vertex) for vertex in vertices]
+    lines += ["f " + " ".join(str(i + 1) for i in f) for f in faces]
+    return "\n".join(lines) + "\n"
+
+
+def _mesh(vertices, faces) -> trimesh.Trimesh:
+    return trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces), process=False)
+
+
+def _cases() -> list[Case]:
+    box = _box()
+    v, f = box.vertices, box.faces
+    quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    qv = np.array([[x, y, z] for x in (0, CUBE) for y in (0, CUBE) for z in (0, CUBE)])
+    # The two triangles of one side of the box: a square hole when both are removed.
+    side = np.flatnonzero(np.isclose(box.face_normals[:, 0], 1.0))
+    holed = np.delete(f, side, axis=0)
+    flipped_one = f.copy()
+    flipped_one[0] = flipped_one[0][::-1]
+    fin = _mesh(
+        np.vstack([v, [[CUBE * 1.5, 0.0, CUBE / 2]]]),
+        np.vstack([f, [[*_shared_edge(box), 8]]]),
+    )
+    soup = _mesh(v[f.reshape(-1)], np.arange(len(f) * 3).reshape(-1, 3))
+    second = _box(offset=(CUBE / 2, 0, 0))
+    far = _box(offset=(3 * CUBE, 0, 0))
+    inner = _box(CUBE / 2)
+    inner.invert()
+    rng = np.random.default_rng(0)
+    random_soup = _mesh(rng.normal(size=(60, 3)) * 0.05, np.arange(60).reshape(-1, 3))
+    stl = _box().export(file_type="stl")
+    ply = _box().export(file_type="ply")
+    glb = _box().export(file_type="glb")
+    nan_v = v.copy()
+    nan_v[3, 1] = np.nan
+    inf_v = v.copy()
+    inf_v[5, 2] = np.inf
+
+    ok_box = {"volume": CUBE_VOLUME}
+    return [
+        # ------------------------------------------------------------ formats and files
+        Case("cube.obj", "format", "ok", _write(box, "cube.obj"), **ok_box),
+        Case("cube ascii.stl", "format", "ok", _write(box, "cube ascii.stl"), **ok_box),
+        Case("cube binary.stl", "format", "ok", _raw("cube.stl", stl), **ok_box),
+        Case("cube.ply", "format", "ok", _raw("cube.ply", ply), **ok_box),
+        Case("cube.glb", "format", "ok", _raw("cube.glb", glb), **ok_box),
+        Case("cube.off", "format", "ok", _raw("cube.off", _off(v, f)), **ok_box),
+        Case("off quads", "format", "ok", _raw("q.off", _off(qv, quads)), **ok_box),
+        Case("off lower-case header", "format", "ok", _raw("l.off", _off(qv, quads, "off"))),
+        Case(
+            "off comment after counts",
+            "format",
+            "ok",
+            _raw("c.off", _off(qv, quads, comment=" # a comment")),
+            **ok_box,
+        ),
+        Case("off colours", "format", "ok", _raw("k.off", _off(qv, quads, colour=" 255 0 0"))),
+        Case("obj quads", "format", "ok", _raw("q.obj", _obj(qv, quads)), **ok_box),
+        Case("unicode path", "format", "ok", _write(box, "tête_ü_🔧 клин.obj"), **ok_box),
+        Case(
+            "truncated off",
+            "format",
+            "refused",
+            _raw("t.off", _off(v, f)[:120]),
+            refusal="t.off",
+        ),
+        Case("truncated binary stl", "format", "refused", _raw("t.stl", stl[:300])),
+        Case("truncated ply", "format", "refused", _raw("t.ply", ply[: len(ply) // 2])),
+        Case("truncated glb", "format", "refused", _raw("t.glb", glb[: len(glb) // 2])),
+        Case("garbage .obj", "format", "refused", _raw("g.obj", rng.bytes(4096))),
+        Case("garbage .off", "format", "refused", _raw("g.off", rng.bytes(4096))),
+        Case("garbage .glb", "format", "refused", _raw("g.glb", rng.bytes(4096))),
+        Case("garbage .stl", "format", "refused", _raw("g.stl", b"\x00" * 80 + rng.bytes(500))),
+        Case("empty .obj", "format", "refused", _raw("e.obj", b"")),
+        Case("empty .stl", "format", "refused", _raw("e.stl", b"")),
+        Case("empty .off", "format", "refused", _raw("e.off", b"")),
+        Case("off header only", "format", "refused", _raw("h.off", "OFF\n0 0 0\n")),
+        Case(
+            "wrong extension .txt",
+            "format",
+            "refused",
+            _raw("cube.txt", _obj(v, f)),
+            refusal="unsupported",
+        ),
+        Case("no extension", "format", "refused", _raw("cube", _obj(v, f))),
+        Case("obj text in a .stl", "format", "refused", _raw("obj.stl", _obj(v, f))),
+        Case("directory named .obj", "format", "refused", _folder("d.obj"), refusal="not a file"),
+        Case(
+            "missing file",
+            "format",
+            "refused",
+            lambda d: d / "missing.obj",
+            refusal="unknown object",
+        ),
+        Case(
+            "off index out of range",
+            "format",
+            "refused",
+            _raw("i.off", _off(v, [*f[:-1], [0, 1, 99]])),
+        ),
+        Case(
+            "off negative index", "format", "refused", _raw("n.off", _off(v, [*f[:-1], [0, -1, 2]]))
+        ),
+        Case(
+            "obj index out of range",
+            "format",
+            "refused",
+            _raw("i.obj", _obj(v, [*f[:-1], [0, 1, 99]])),
+        ),
+        Case("off NaN vertex", "format", "refused", _raw("nan.off", _off(nan_v, f)), refusal="NaN"),
+        Case("obj NaN vertex", "format", "refused", _raw("nan.obj", _obj(nan_v, f))),
+        Case("off inf vertex", "format", "refused", _raw("inf.off", _off(inf_v, f))),
+        Case("ply NaN vertex", "format", "refused", _write(_mesh(nan_v, f), "nan.ply")),
+        # -------------------------------------------------------- geometry and repair
+        Case(
+            "one flipped face",
+            "geometry",
+            "ok",
+            _write(_mesh(v, flipped_one), "flip1.obj"),
+            **ok_box,
+        ),
+        Case("inside out", "geometry", "ok", _write(_mesh(v, f[:, ::-1]), "inv.obj"), **ok_box),
+        Case("one face missing", "geometry", "ok", _write(_mesh(v, f[1:]), "open1.obj"), **ok_box),
+        Case("square hole", "geometry", "ok", _write(_mesh(v, holed), "open2.obj"), **ok_box),
+        Case(
+            "duplicated faces",
+            "geometry",
+            "ok",
+            _write(_mesh(v, np.vstack([f, f[:4]])), "dup.obj"),
+            **ok_box,
+        ),
+        Case(
+            "zero-area faces",
+            "geometry",
+            "ok",
+            _write(_mesh(v, np.vstack([f, [[0, 0, 1], [2, 2, 2]]])), "zero.obj"),
+            **ok_box,
+        ),
+        Case("unmerged soup", "geometry", "ok", _write(soup, "soup.obj"), **ok_box),
+        Case("non-manifold fin", "geometry", "ok", _write(fin, "fin.obj"), **ok_box),
+        Case(
+            "overlapping bodies",
+            "geometry",
+            "ok",
+            _write(trimesh.util.concatenate([box, second]), "two.obj"),
+            volume=1.5 * CUBE_VOLUME,
+        ),
+        Case(
+            "disjoint bodies",
+            "geometry",
+            "ok",
+            _write(trimesh.util.concatenate([box, far]), "apart.obj"),
+            volume=2 * CUBE_VOLUME,
+        ),
+        Case(
+            "cavity",
+            "geometry",
+            "ok",
+            _write(trimesh.util.concatenate([box, inner]), "hollow.obj"),
+            volume=CUBE_VOLUME * 7 / 8,
+        ),
+        Case(
+            "sphere",
+            "geometry",
+            "ok",
+            _write(trimesh.creation.icosphere(3, 0.04), "ball.stl"),
+            volume=4 / 3 * np.pi * 0.04**3 * 0.99,
+        ),
+        Case(
+            "thin blade",
+            "geometry",
+            "ok",
+            _write(trimesh.creation.box((0.2, 0.03, 0.0005)), "blade.stl"),
+            volume=0.2 * 0.03 * 0.0005,
+        ),
+        Case(
+            "single triangle", "geometry", "refused", _write(_mesh(v[:3], [[0, 1, 2]]), "tri.obj")
+        ),
+        Case(
+            "flat quad",
+            "geometry",
+            "refused",
+            _write(_mesh(qv[:4], [[0, 1, 3], [0, 3, 2]]), "quad.obj"),
+        ),
+        Case(
+            "collinear faces",
+            "geometry",
+            "refused",
+            _raw("line.off", _off([[0, 0, 0], [0.01, 0, 0], [0.02, 0, 0]], [[0, 1, 2]])),
+        ),
+        Case(
+            "one point",
+            "geometry",
+            "refused",
+            _raw("pt.off", _off([[0.01, 0.01, 0.01]] * 3, [[0, 1, 2]])),
+        ),
+        Case("random triangle soup", "geometry", "refused", _write(random_soup, "rand.obj")),
+        # ------------------------------------------------------------------- scale
+        Case(
+            "mm cube, no units",
+            "scale",
+            "refused",
+            _write(_box(50.0), "mm.stl"),
+            refusal="--units mm",
+        ),
+        Case(
+            "mm cube --units mm",
+            "scale",
+            "ok",
+            _write(_box(50.0), "mm.stl"),
+            ["--units", "mm"],
+            **ok_box,
+        ),
+        Case(
+            "mm cube --size-m",
+            "scale",
+            "ok",
+            _write(_box(50.0), "mm.stl"),
+            ["--size-m", "0.05"],
+            **ok_box,
+        ),
+        Case("km cube", "scale", "refused", _write(_box(1000.0), "km.stl"), refusal="m long"),
+        Case("4.9 m cube", "scale", "refused", _write(_box(4.9), "big.stl"), refusal="--units"),
+        Case("1 mm cube", "scale", "refused", _write(_box(0.001), "tiny.stl"), refusal="--size-m"),
+        Case("1e300 coordinates", "scale", "refused", _raw("huge.obj", _obj(qv * 2e301, quads))),
+        Case(
+            "far from the origin",
+            "scale",
+            "ok",
+            _write(_box(offset=(1e6, -2e6, 5e5)), "far.obj"),
+            **ok_box,
+        ),
+        Case("cube --size-m 0", "scale", "refused", _write(box, "s0.obj"), ["--size-m", "0"]),
+        Case("cube --size-m nan", "scale", "refused", _write(box, "snan.obj"), ["--size-m", "nan"]),
+        Case("cube --size-m 10", "scale", "refused", _write(box, "s10.obj"), ["--size-m", "10"]),
+        Case(
+            "cube --units furlong", "scale", "refused", _write(box, "u.obj"), ["--units", "furlong"]
+        ),
+        Case(
+            "both --units and --size-m",
+            "scale",
+            "refused",
+            _write(box, "b.obj"),
+            ["--units", "mm", "--size-m", "0.1"],
+        ),
+        # ------------------------------------------------------------------ arguments
+        Case(
+            "family typo",
+            "arguments",
+            "refused",
+            lambda d: "hamer",
+            refusal="did you mean 'hammer'",
+        ),
+        Case("bad family seed", "arguments", "refused", lambda d: "knife:abc", refusal="seed"),
+        Case("unknown task", "arguments", "refused", lambda d: "knife", ["--task", "hamering"]),
+        Case("unknown mode", "arguments", "refused", lambda d: "knife", ["--mode", "strict"]),
+        Case("unknown hand", "arguments", "refused", lambda d: "knife", ["--hand", "shadow"]),
+        Case("zero samples", "arguments", "refused", lambda d: "knife", ["--samples", "0"]),
+        Case("negative seed", "arguments", "refused", lambda d: "knife", ["--seed", "-1"]),
+        Case("--out is a folder", "arguments", "refused", lambda d: "knife", ["--out", "."]),
+    ]
+
+
+def _shared_edge(box: trimesh.Trimesh) -> list[int]:
+    """Two vertices of an edge of the box on its x = max face (the fin hangs off it)."""
+    right = np.flatnonzero(np.isclose(box.vertices[:, 0], box.vertices[:, 0].max()))
+    edges = {tuple(sorted(e)) for e in box.edges_unique.tolist()}
+    for a in right:
+        for b in right:
+            if a < b and (a, b) in edges:
+                return [int(a), int(b)]
+    raise AssertionError("no edge found")
+
+
+def _folder(name: str):
+    def make(folder: Path) -> Path:
+        path = folder / name
+        path.mkdir()
+        return path
+
+    return make
+
+
+CASES = _cases()
+OUTCOMES: Counter = Counter()
+SAMPLES = 3
+
+
+def _run(argv: list[str], capsys) -> tuple[int, str, str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(argv)
+    captured = capsys.readouterr()
+    # A warning would be one more line on the user's stderr.
+    shown = [f"{w.category.__name__}: {w.message} ({w.filename}:{w.lineno})" for w in caught]
+    assert not shown, "\n".join(shown)
+    return code, captured.out, captured.err
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_hostile_input(case: Case, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = str(case.make(tmp_path))
+    if case.category == "arguments":
+        argv = ["evaluate", spec, "--samples", str(SAMPLES), *case.options, "--json"]
+        if "--samples" in case.options:
+            argv = ["evaluate", spec, *case.options, "--json"]
+    else:
+        argv = ["objects", "export", spec, *case.options, "-o", str(tmp_path / "out.obj")]
+        argv.append("--json")
+    code, out, err = _run(argv, capsys)
+    assert "Traceback" not in err, err
+    assert code in (0, 2), f"exit {code} (internal error): {err}"
+    outcome = "ok" if code == 0 else "refused"
+    OUTCOMES[(case.category, outcome)] += 1
+    assert outcome == case.expect, f"expected {case.expect}, got exit {code}: {err.strip()}"
+    if outcome == "refused":
+        lines = [line for line in err.splitlines() if line.strip()]
+        assert len(lines) == 1, err
+        assert lines[0].startswith(f"affordgrasp {argv[0]}: error: "), lines[0]
+        assert case.refusal in lines[0], lines[0]
+        return
+    doc = json.loads(out)
+    if case.volume is not None:
+        assert doc["volume_m3"] == pytest.approx(case.volume, rel=0.02)
+    if not case.evaluate or case.category == "arguments":
+        return
+    code, out, err = _run(
+        ["evaluate", spec, "--samples", str(SAMPLES), *case.options, "--json"], capsys
+    )
+    assert code == 0, err
+    result = json.loads(out)
+    assert sum(s["count"] for s in result["status"].values()) == SAMPLES
+
+
+def test_corpus_size_and_report():
+    """Run last in this file: the corpus is large enough and every case was decided."""
+    counts = Counter(c.category for c in CASES)
+    assert len(CASES) >= 60, counts
+    expected = Counter((c.category, c.expect) for c in CASES)
+    if sum(OUTCOMES.values()) == len(CASES):  # the whole corpus ran in this session
+        assert OUTCOMES == expected
+        report = ", ".join(f"{cat} {n} {how}" for (cat, how), n in sorted(OUTCOMES.items()))
+        print(f"\nhostile inputs: {len(CASES)} cases; {report}")
