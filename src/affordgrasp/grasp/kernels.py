@@ -91,6 +91,10 @@ PROBE = 1e-7
 # Step of a point inside the hit level that is not pressed: with speed bounds of a few
 # tenths of a metre per radian it moves a few micrometres.
 SLIDE_STEP = 2e-5
+# A search entry carries the set of shapes it may touch as a bit mask (all when the hand
+# has more shapes than bits).
+ALL_SHAPES = -1
+MASK_BITS = 62
 
 
 @njit(cache=True, fastmath=False)
@@ -262,14 +266,20 @@ def _chain_frames(chain, s_max):
 
 
 @njit(cache=True)
-def _chain_touch(px, py, pz, s, r, chain, frames, margin):
+def _has_shape(mask, q):
+    """Whether shape q is in a search entry's bit mask of the shapes it may touch."""
+    return mask == ALL_SHAPES or (q < MASK_BITS and ((mask >> q) & 1) == 1)
+
+
+@njit(cache=True)
+def _chain_touch(px, py, pz, s, r, chain, frames, margin, mask=ALL_SHAPES):
     """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
     of composing the links' poses: a few dozen operations per joint.
     r is the point's distance from the first joint origin (plus a cell's radius when the
     point is a cell centre); with a margin below the hit level the steps reach the hit level
-    in finitely many steps.
+    in finitely many steps. Only the shapes in ``mask`` count (see ``_has_shape``).
     returns : (smallest distance, its shape, a safe step in s: min over shapes of
         (distance - margin) / (the point's speed bound relative to that shape's link))
     """
@@ -310,7 +320,7 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin):
             z -= az * q
             bound += abs(chain.speeds[j])
         for sq in range(chain.shape_joint.shape[0]):
-            if chain.shape_joint[sq] != j:
+            if chain.shape_joint[sq] != j or not _has_shape(mask, sq):
                 continue
             t = frames.inv_shape[sq]
             lx = t[0, 0] * x + t[0, 1] * y + t[0, 2] * z + t[0, 3]
@@ -327,11 +337,14 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin):
 
 
 @njit(cache=True)
-def _heap_push(key, ident, prev, size, k, i, p):
+def _heap_push(heap, size, k, i, p, m):
+    """Push (key k, entity i, bracket low p, shape mask m) on the binary heap."""
+    key, ident, prev, mask = heap
     j = size
     key[j] = k
     ident[j] = i
     prev[j] = p
+    mask[j] = m
     while j > 0:
         parent = (j - 1) // 2
         if key[parent] <= key[j]:
@@ -339,19 +352,24 @@ def _heap_push(key, ident, prev, size, k, i, p):
         key[parent], key[j] = key[j], key[parent]
         ident[parent], ident[j] = ident[j], ident[parent]
         prev[parent], prev[j] = prev[j], prev[parent]
+        mask[parent], mask[j] = mask[j], mask[parent]
         j = parent
     return size + 1
 
 
 @njit(cache=True)
-def _heap_pop(key, ident, prev, size):
+def _heap_pop(heap, size):
+    """Pop the smallest key: (key, entity, bracket low, shape mask, new size)."""
+    key, ident, prev, mask = heap
     k = key[0]
     i = ident[0]
     p = prev[0]
+    m = mask[0]
     size -= 1
     key[0] = key[size]
     ident[0] = ident[size]
     prev[0] = prev[size]
+    mask[0] = mask[size]
     j = 0
     while True:
         left = 2 * j + 1
@@ -365,8 +383,9 @@ def _heap_pop(key, ident, prev, size):
         key[child], key[j] = key[j], key[child]
         ident[child], ident[j] = ident[j], ident[child]
         prev[child], prev[j] = prev[j], prev[child]
+        mask[child], mask[j] = mask[j], mask[child]
         j = child
-    return k, i, p, size
+    return k, i, p, m, size
 
 
 @njit(cache=True)
@@ -405,6 +424,34 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, hits, n_hits, best, hit_
     if first_p < 0:
         return np.inf, -1, -1
     return first, first_p, first_q
+
+
+@njit(cache=True)
+def _sweep_mask(c, radius, within, shape_buf, rho, axis, t_max):
+    """For a translation: the shapes among ``within`` whose swept column meets the sphere
+    (hand-frame centre c, radius) — the only ones it may touch; 0 when none."""
+    bits = 0
+    for q in range(min(shape_buf.shape[0], MASK_BITS)):
+        if _has_shape(within, q) and _in_sweep(c, radius + rho[q], shape_buf[q], axis, t_max):
+            bits |= 1 << q
+    return bits
+
+
+@njit(cache=True)
+def _still_ahead(c, radius, mask, shape_buf, rho, axis, s):
+    """For a translation at parameter s: whether a shape of ``mask`` has not yet passed the
+    sphere (hand-frame centre c, radius) along the axis."""
+    for q in range(shape_buf.shape[0]):
+        if not _has_shape(mask, q):
+            continue
+        along = (
+            (c[0] - shape_buf[q, 0, 3]) * axis[0]
+            + (c[1] - shape_buf[q, 1, 3]) * axis[1]
+            + (c[2] - shape_buf[q, 2, 3]) * axis[2]
+        )
+        if along - s > -(rho[q] + radius):
+            return True
+    return False
 
 
 @njit(cache=True)
@@ -459,6 +506,10 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     # A pure translation (the approach) sweeps each shape along a column: nothing outside
     # every column can be touched.
     translation = m == 1 and chain.kinds[0] == PRISMATIC
+    t_sweep = abs(chain.speeds[0]) * s_max
+    # the direction the shapes travel (a slide may close along -axis)
+    a_move = a0 * (1.0 if chain.speeds[0] >= 0.0 else -1.0)
+    v_move = abs(chain.speeds[0])
     rho = np.empty(k)
     for q in range(k):
         # grown by the hit level: a point can come within hit_eps of a rounded corner while
@@ -496,6 +547,7 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     nk = cloud.coarse_center.shape[0]
     kc = np.empty((nk, 3))
     kr = np.empty(nk)
+    kmask = np.full(nk, ALL_SHAPES, dtype=np.int64)
     tmp = np.empty(3)
     cap = nk + 1
     for c in range(nk):
@@ -514,20 +566,23 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
         if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - radius > slab:
             continue
         if translation:
+            # the shapes whose swept column the cell crosses: the only ones it may touch
+            bits = 0
             swept = False
             for q in range(k):
-                if _in_sweep(tmp, radius + rho[q], shape_buf[q], a0, chain.speeds[0] * s_max):
+                if _in_sweep(tmp, radius + rho[q], shape_buf[q], a_move, t_sweep):
                     swept = True
-                    break
+                    if q < MASK_BITS:
+                        bits |= 1 << q
             if not swept:
                 continue
+            kmask[c] = bits if k <= MASK_BITS else ALL_SHAPES
         kr[c] = r0 + radius
         f0 = cloud.coarse_start[c]
         f1 = cloud.coarse_start[c + 1]
         cap += f1 - f0 + cloud.cell_start[f1] - cloud.cell_start[f0]
-    key = np.empty(cap)
-    ident = np.empty(cap, dtype=np.int64)
-    prev = np.empty(cap)
+    heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap),
+            np.empty(cap, dtype=np.int64))  # fmt: skip
     size = 0
     margin = 0.5 * hit_eps
     for c in range(nk):
@@ -535,9 +590,9 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
             continue
         radius = cloud.coarse_radius[c]
         _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
-                                  margin + radius)  # fmt: skip
+                                  margin + radius, kmask[c])  # fmt: skip
         if step < s_max:
-            size = _heap_push(key, ident, prev, size, step, -1 - nf - c, 0.0)
+            size = _heap_push(heap, size, step, -1 - nf - c, 0.0, kmask[c])
     best = s_max  # an upper bound on the first crossing, lowered by every hit
     hits = np.empty((64, 3))
     nh = 0
@@ -545,8 +600,7 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     for _ in range(10_000_000):
         if size == 0:
             break
-        s, e, s_prev = _heap_pop(key, ident, prev, size)[:3]
-        size -= 1
+        s, e, s_prev, mask, size = _heap_pop(heap, size)
         if s >= best:
             break
         if e < 0:
@@ -559,31 +613,46 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
-            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin + radius)
+            d, _, step = _chain_touch(
+                ph[0], ph[1], ph[2], s, r, chain, frames, margin + radius, mask
+            )
             if d - radius <= hit_eps:
                 # Everything inside is still clear at s_prev and goes on from s, one level
                 # down: fine cells of a coarse cell, points of a fine cell.
                 if coarse:
                     for f in range(cloud.coarse_start[c], cloud.coarse_start[c + 1]):
-                        size = _heap_push(key, ident, prev, size, s, -1 - f, s_prev)
+                        sub = mask
+                        if translation and k <= MASK_BITS:
+                            _to_hand(cloud.cell_center[f], rot, trans, tmp)
+                            sub = _sweep_mask(tmp, cloud.cell_radius[f], mask, shape_buf, rho,
+                                              a_move, t_sweep)  # fmt: skip
+                            if sub == 0:
+                                continue
+                        size = _heap_push(heap, size, s, -1 - f, s_prev, sub)
                 else:
                     for i in range(cloud.cell_start[c], cloud.cell_start[c + 1]):
-                        size = _heap_push(key, ident, prev, size, s, i, s_prev)
+                        size = _heap_push(heap, size, s, i, s_prev, mask)
             elif s + step < best:
-                size = _heap_push(key, ident, prev, size, s + step, e, s)
+                ahead = not translation or _still_ahead(
+                    ph, radius, mask, shape_buf, rho, a_move, v_move * (s + step)
+                )
+                if ahead:
+                    size = _heap_push(heap, size, s + step, e, s, mask)
             continue
         _to_hand(cloud.points[e], rot, trans, ph)
         dx = ph[0] - o0[0]
         dy = ph[1] - o0[1]
         dz = ph[2] - o0[2]
         r = np.sqrt(dx * dx + dy * dy + dz * dz)
-        d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin)
+        d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, mask)
         pressing = False
         if d <= hit_eps:
             # Within the hit level, a point blocks the motion only if the motion presses into
             # it: a link left touching by the approach (or an earlier phase) that closes away
             # from the object is free to move, as in GraspIt!.
-            d_next, _, _ = _chain_touch(ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin)
+            d_next, _, _ = _chain_touch(
+                ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin, mask
+            )
             pressing = d_next < d
         if pressing:
             if nh == hits.shape[0]:
@@ -600,8 +669,10 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
             # safe step from its distance; it moves on by a small fixed one (a few µm of
             # motion) until it is clear or pressed.
             nxt = s + (step if d > hit_eps else SLIDE_STEP)
-            if nxt < best:
-                size = _heap_push(key, ident, prev, size, nxt, e, s)
+            if nxt < best and (
+                not translation or _still_ahead(ph, 0.0, mask, shape_buf, rho, a_move, v_move * nxt)
+            ):
+                size = _heap_push(heap, size, nxt, e, s, mask)
     return _refine_first_hit(cloud, rot, trans, chain, frames, hits, nh, best, hit_eps)
 
 
