@@ -133,3 +133,17 @@ def test_barrett_distal_follows_the_proximal_at_one_third(box_object):
         assert moved > 0.2  # the servo closed the finger
         expected = q[hand.dof_index(f"{k}_dist")] + moved / 3.0
         assert dist == pytest.approx(expected, abs=2e-3)
+
+
+def test_link_meshes_follow_the_rounded_shapes():
+    from affordgrasp.physics.scene import rounded_shape_points
+
+    # Support function of the hull of the points against the exact one of the rounded box.
+    half, radius = np.array([0.0045, 0.0025, 0.038]), 0.008
+    points = rounded_shape_points("box", half, radius)
+    u = np.random.default_rng(0).normal(size=(20000, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    exact = np.abs(u) @ half + radius
+    hull = (u @ points.T).max(axis=1)
+    assert np.all(hull <= exact + 1e-12)  # inscribed: never bigger than the link
+    assert np.max(exact - hull) < 0.015 * radius
