@@ -189,3 +189,21 @@ def _one_line(err: str) -> str:
 def test_manifest_records_the_format_with_checksums(pristine):
     manifest = json.loads((pristine / "_manifest.json").read_text())
     assert manifest["format_version"] == layout.FORMAT_VERSION >= 2
+
+
+def test_full_disk_while_writing_best_or_an_export_leaves_no_file(
+    pristine, tmp_path, monkeypatch, capsys
+):
+    def full_disk(path, data):
+        with open(path, "wb") as f:
+            f.write(data[: len(data) // 2])
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(layout, "write_file", full_disk)
+    top = tmp_path / "top.parquet"
+    assert main(["best", str(pristine), "--task", "pick", "--out", str(top)]) == 2
+    assert "top.parquet" in _one_line(capsys.readouterr().err)
+    mesh = tmp_path / "knife.stl"
+    assert main(["objects", "export", "knife", "-o", str(mesh)]) == 2
+    assert "No space left on device" in _one_line(capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []

@@ -42,10 +42,10 @@ def run(args, out) -> None:
             raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
         if not path.parent.is_dir():
             raise InputError(f"-o {str(path)!r}: the folder {str(path.parent)!r} does not exist")
-        try:
-            obj.mesh.export(path)
-        except OSError as exc:
-            raise InputError(f"cannot write {str(path)!r}: {exc.strerror or exc}") from exc
+        from ..dataset.layout import write_bytes_atomic
+
+        data = obj.mesh.export(file_type=ext)
+        write_bytes_atomic(path, data.encode() if isinstance(data, str) else data)
         m = obj.mass
         ext_m = m.bounds[1] - m.bounds[0]
         out.text(

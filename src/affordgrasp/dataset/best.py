@@ -27,7 +27,7 @@ import pyarrow.parquet as pq
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
 from ..errors import DatasetError, bad_parameter
 from ..tasks import Task, get_task
-from .layout import read_manifest
+from .layout import read_manifest, write_bytes_atomic
 from .reading import open_dataset, read_errors, select_objects
 
 AFFORDANCE_COLUMN = "affordance"
@@ -240,5 +240,8 @@ def write_best(result: BestGrasps, path: str | os.PathLike) -> Path:
     meta[b"affordgrasp_best"] = json.dumps(
         {"task": result.task, "mode": result.mode, "objects": result.objects}
     ).encode()
-    pq.write_table(result.table.replace_schema_metadata(meta), path)
+    sink = pa.BufferOutputStream()
+    pq.write_table(result.table.replace_schema_metadata(meta), sink)
+    # Whole or not at all: a full disk raises a DatasetError naming the path, no stub left.
+    write_bytes_atomic(path, sink.getvalue().to_pybytes())
     return path
