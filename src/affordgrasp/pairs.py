@@ -1,4 +1,4 @@
-"""Brute-force argmax of a task over grasps × use points (paper §IV-C, SPEC §2.6).
+"""Brute-force argmax of a task over grasps × use points (paper §IV-C, conventions: Datasets).
 
 The paper maximises F_T over (G, U): the grasp and the use point are independent inputs
 (G = GP(p0, O) depends only on p0, U = DM(d, O) only on d). A dataset row pairs one p0

@@ -1,4 +1,4 @@
-"""Learning task metrics from the camera-in-hand view (SPEC §2.7, paper §III-B, §IV-D).
+"""Learning task metrics from the camera-in-hand view (conventions: Vision, paper §III-B, §IV-D).
 
 * ``targets``: what is learned (``viable``, ``hold_effort_sum``, any column, ``task:NAME``);
 * ``data``: rows, depth images and splits by object instance or family from a dataset;

@@ -1,4 +1,4 @@
-"""Train, predict, evaluate: the learning pipeline over generated datasets (SPEC §2.7).
+"""Train, predict, evaluate: the learning pipeline over generated datasets (conventions: Vision).
 
 ``train_on_dataset`` splits a dataset by object instance (or family), trains a classifier or
 regressor and records the split, the settings, the test metrics and the predict-the-mean

@@ -5,9 +5,9 @@ generated with ``--depth``; otherwise it is rendered from the object (a pure fun
 and the mesh; the mesh hash is checked against the manifest), so a dataset without images
 is as good for learning, only slower to load.
 
-Splits are by object instance (SPEC §2.7): the objects of the test (and validation) set never
-appear in training, and the families (categories) overlap. A split by family holds out whole
-families instead.
+Splits are by object instance (conventions: Vision): the objects of the test (and
+validation) set never appear in training, and the families (categories) overlap. A split by
+family holds out whole families instead.
 """
 
 from __future__ import annotations

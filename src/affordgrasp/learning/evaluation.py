@@ -1,5 +1,5 @@
-"""Metrics of learned models (SPEC §2.7, paper §IV-D): MSE, comparison accuracy, Global Min
-Score, precision–recall and average precision. numpy only (no torch needed).
+"""Metrics of learned models (conventions: Vision; paper §IV-D): MSE, comparison accuracy,
+Global Min Score, precision–recall and average precision. numpy only (no torch needed).
 
 Conventions where the paper is silent:
 

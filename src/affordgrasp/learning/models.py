@@ -1,4 +1,4 @@
-"""The networks (SPEC §2.7, paper §III-B): a CNN on the depth image, PointNet (full, with
+"""The networks (conventions: Vision, paper §III-B): a CNN on the depth image, PointNet (full, with
 T-Nets, and slim, T-Nets fixed to the identity) on the equivalent point cloud, and a pose-only
 baseline; each fuses the pregrasp p0 and the use direction d late, before a fully connected
 head that outputs one logit (classifier) or one value (regressor, the [0, 1] target scale).

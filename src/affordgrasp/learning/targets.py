@@ -1,4 +1,4 @@
-"""What a model learns (SPEC §2.7): the target of a classifier or regressor, by name.
+"""What a model learns (conventions: Vision): the target of a classifier or regressor, by name.
 
 * ``viable``: classification, the learning ground truth of ``affordgrasp.tasks.is_viable``
   (ε, ΣE_h and E_i thresholds; paper §IV-D).

@@ -1,5 +1,5 @@
-"""Training (SPEC §2.7, paper §IV-D): Adam 1e-3 decaying ∝ 1/epoch, dropout, early stopping
-with patience 5 on the validation loss, seeded and deterministic.
+"""Training (conventions: Vision; paper §IV-D): Adam 1e-3 decaying ∝ 1/epoch, dropout, early
+stopping with patience 5 on the validation loss, seeded and deterministic.
 
 * Classifier: binary cross-entropy; every epoch sees all positives and as many negatives,
   redrawn each epoch (balanced training data, as the paper; the redraw uses more of the

@@ -1,4 +1,4 @@
-"""Vision (SPEC §2.7, paper §III-B): the camera in the hand, depth images, point clouds.
+"""Vision (conventions: Vision, paper §III-B): the camera in the hand, depth images, point clouds.
 
 * ``camera``: intrinsics (``DepthCamera``) and the camera pose of a pregrasp;
 * ``depth``: D(p0, O) by ray casting with Embree, uint16-millimetre encoding, PNG views;

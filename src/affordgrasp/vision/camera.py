@@ -1,4 +1,4 @@
-"""The camera in the hand (SPEC §2.7, paper §III-B): intrinsics and pose from the pregrasp p0.
+"""The camera in the hand (conventions: Vision; paper §III-B): intrinsics, pose from the pregrasp.
 
 Conventions (docs/vision.md repeats them with a worked example):
 

@@ -1,4 +1,4 @@
-"""Depth images D(p0, O) from the camera in the hand (SPEC §2.7, paper §III-B).
+"""Depth images D(p0, O) from the camera in the hand (conventions: Vision, paper §III-B).
 
 Rays are cast with Embree (``embreex``), many images per call. Depth is the distance along
 the optical axis (the camera-frame z of the first hit), metres, float32; a pixel whose ray

@@ -1,4 +1,4 @@
-"""Point clouds equivalent to the depth images (SPEC §2.7, paper §III-B).
+"""Point clouds equivalent to the depth images (conventions: Vision, paper §III-B).
 
 Each valid pixel (depth > 0) back-projects to the camera-frame point ``depth · ray`` (see
 ``camera.DepthCamera.ray_directions``: ray z = 1, so the point's z is the depth). Background is
