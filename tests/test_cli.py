@@ -132,3 +132,22 @@ def test_unwritable_output_is_refused_before_the_work(tmp_path, capsys):
     missing = tmp_path / "no" / "such" / "x.parquet"
     assert main(["evaluate", "knife", "--samples", "5", "--out", str(missing)]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_hand_option_takes_a_hand_file(tmp_path, capsys):
+    import dataclasses
+
+    from affordgrasp.hands import get_hand, save_hand
+
+    jaw = dataclasses.replace(get_hand("parallel_jaw"), name="my_jaw")
+    path = save_hand(jaw, tmp_path / "my_jaw.toml")
+    out = tmp_path / "sims.parquet"
+    code, doc = run_json(
+        capsys, "simulate", "mug", "--samples", "8", "--hand", str(path), "--out", str(out)
+    )
+    assert code == 0, doc
+    table = pq.read_table(out)
+    assert set(table.column("hand").to_pylist()) == {"my_jaw"}
+    assert {len(j) for j in table.column("joints").to_pylist()} == {len(jaw.dofs)}
+    assert main(["simulate", "mug", "--samples", "2", "--hand", str(tmp_path / "no.toml")]) == 2
+    assert "does not exist" in capsys.readouterr().err
