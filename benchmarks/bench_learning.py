@@ -34,15 +34,15 @@ PAPER = {  # Table II of the paper: MSE, comparison accuracy, expected GMS
 }
 REGRESSORS = {
     "cnn": {"arch": "cnn", "rank_weight": 0.0},
-    "pointnet": {"arch": "pointnet", "rank_weight": 0.0},
-    "pointnet-slim": {"arch": "pointnet-slim", "rank_weight": 0.0},
-    "pose": {"arch": "pose", "rank_weight": 0.0},
     "cnn+rank": {"arch": "cnn", "rank_weight": 1.0},
+    "pose": {"arch": "pose", "rank_weight": 0.0},
+    "pointnet-slim": {"arch": "pointnet-slim", "rank_weight": 0.0},
+    "pointnet": {"arch": "pointnet", "rank_weight": 0.0},
 }
 CLASSIFIERS = {
     "cnn": {"arch": "cnn"},
-    "pointnet-slim": {"arch": "pointnet-slim"},
     "pose": {"arch": "pose"},
+    "pointnet-slim": {"arch": "pointnet-slim"},
 }
 
 
@@ -152,7 +152,12 @@ def main() -> None:
     parser.add_argument("--epochs", type=int, default=40)
     parser.add_argument("--only", default=None, help="comma-separated regressors/classifiers")
     parser.add_argument("--k", type=int, default=32)
+    parser.add_argument("-v", "--verbose", action="store_true", help="log every epoch")
     args = parser.parse_args()
+    if args.verbose:
+        import logging
+
+        logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     args.models.mkdir(parents=True, exist_ok=True)
     only = set(args.only.split(",")) if args.only else None
     results: dict = {"regressors": {}, "classifiers": {}, "seconds": {}}
@@ -170,12 +175,12 @@ def main() -> None:
         model, config, secs = trained(
             args.models, f"reg_{name}", "hold_effort_sum", recipe, reg, args.data, args.epochs
         )
-        results["regressors"][name] = config["test"]
-        results["seconds"][f"reg_{name}"] = secs or config["training"]["seconds"]
-        from affordgrasp.learning.api import Inputs, predict_scores
+        from affordgrasp.learning.api import Inputs, predict_scores, report
 
         runs[name] = predict_scores(model, config, Inputs(config, reg[2]))
-        print(f"  {name}: {json.dumps(config['test'])}")
+        results["regressors"][name] = report(model, config, reg[2], scores=runs[name])
+        results["seconds"][f"reg_{name}"] = secs or config["training"]["seconds"]
+        print(f"  {name}: {json.dumps(results['regressors'][name])}", flush=True)
     truth = reg[3].normalise(reg[2].y)
     print("\nTable II (ΣE_h regressors, held-out objects; paper's values in brackets)")
     print(f"{'model':16s} {'MSE':>14s} {'comparison':>14s} {'E[GMS]':>14s}")
@@ -205,13 +210,12 @@ def main() -> None:
         model, config, secs = trained(
             args.models, f"cls_{name}", "viable", recipe, cls, args.data, args.epochs
         )
-        from affordgrasp.learning.api import Inputs, predict_scores
+        from affordgrasp.learning.api import Inputs, predict_scores, report
 
-        results["classifiers"][name] = config["test"]
-        results["seconds"][f"cls_{name}"] = secs or config["training"]["seconds"]
         cls_runs[name] = predict_scores(model, config, Inputs(config, cls[2]))
+        results["classifiers"][name] = t = report(model, config, cls[2], scores=cls_runs[name])
+        results["seconds"][f"cls_{name}"] = secs or config["training"]["seconds"]
         cls_models[name] = (model, config)
-        t = config["test"]
         print(
             f"  {name}: AP {t['average_precision']:.3f} (positive rate "
             f"{t['positive_rate']:.3f}), balanced AP {t['average_precision_balanced']:.3f}"

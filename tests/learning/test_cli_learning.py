@@ -87,3 +87,19 @@ def test_depth_command_png_and_npy(tmp_path, capsys):
     assert main(["depth", "knife", "--sample", "3", "-o", str(png)]) == 0
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert main(["depth", "knife", "--p0", "1,2,3"]) == 2
+
+
+def test_predict_with_the_shipped_models(tiny_dataset, tmp_path):
+    from affordgrasp.learning.api import pretrained_path
+    from affordgrasp.learning.io import read_config
+
+    for kind, target in (("classifier", "viable"), ("regressor", "hold_effort_sum")):
+        path = pretrained_path(kind)
+        assert path.stat().st_size < 10_000_000
+        assert read_config(path)["target"]["name"] == target
+    out = tmp_path / "p.parquet"
+    assert main(["predict", "default", str(tiny_dataset), "--out", str(out)]) == 0
+    table = pq.read_table(out)
+    assert table.column_names == ["object", "sample", "viable_prob", "pred_hold_effort_sum"]
+    p = table.column("viable_prob").to_numpy()
+    assert table.num_rows == 72 and np.all((p >= 0) & (p <= 1))

@@ -79,9 +79,10 @@ def prepare_split(
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
-    Classification keeps every positive and at most ``negatives_ratio`` × as many negatives
-    per part (each epoch then draws a balanced subset). Returns (train, val, test, target,
-    split).
+    Classification keeps every training/validation positive and at most ``negatives_ratio``
+    × as many negatives (each epoch then draws a balanced subset); the test rows keep the
+    natural class balance (a uniform subsample of at most ``max_eval`` rows). Returns
+    (train, val, test, target, split).
     """
     samples, target = read_rows(dataset, target)
     if len(samples) == 0:
@@ -98,15 +99,13 @@ def prepare_split(
     for k, part in enumerate(("train", "val", "test")):
         idx = np.flatnonzero(sp.part_of(samples.object, part))
         cap = max_train if part == "train" else max_eval
-        if target.kind == "classification":
+        if target.kind == "classification" and part != "test":
             y = samples.y[idx]
             pos, neg = idx[y > 0.5], idx[y <= 0.5]
             pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
             n_neg = int(round(negatives_ratio * max(len(pos), 1)))
-            if part == "test":  # the natural class balance, capped
-                n_neg = len(neg) if cap is None else max(0, cap - len(pos))
             idx = np.sort(np.r_[pos, _subsample(neg, n_neg, seed + 10 + k)])
-        else:
+        else:  # regression rows, and the classifier's test rows at their natural balance
             idx = _subsample(idx, cap, seed + k)
         parts.append(samples.take(idx))
     for p in parts:
