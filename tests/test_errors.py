@@ -22,3 +22,23 @@ def test_generate_speaks_python_and_the_cli_speaks_flags(tmp_path, capsys):
         ag.generate(["knife"], 0, tmp_path / "d")
     assert main(["generate", "knife", "--samples", "0", "--out", str(tmp_path / "d")]) == 2
     assert "--samples must be" in capsys.readouterr().err
+
+
+def test_library_raises_no_bare_runtime_error_and_has_no_assert():
+    # Invariants are InternalError (a RuntimeError that says "this is a bug"); bad input is
+    # an InputError. Asserts vanish under python -O, so the library has none.
+    import ast
+    from pathlib import Path
+
+    package = Path(ag.__file__).resolve().parent
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            bare = (
+                isinstance(node, ast.Raise)
+                and isinstance(node.exc, ast.Call)
+                and getattr(node.exc.func, "id", None) == "RuntimeError"
+            )
+            if bare or isinstance(node, ast.Assert):
+                found.append(f"{path.relative_to(package)}:{node.lineno}")
+    assert not found, found

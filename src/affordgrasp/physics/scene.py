@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, InternalError
 from ..hands import Hand, get_hand
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..objects.mass import MassProperties, mass_properties
@@ -143,7 +143,7 @@ def build_scene(
     try:
         model = mj.MjModel.from_xml_string(xml)
     except ValueError as exc:  # pragma: no cover - a bug in the builder, not user input
-        raise RuntimeError(f"MuJoCo rejected the generated model: {exc}") from exc
+        raise InternalError(f"MuJoCo rejected the generated model: {exc}") from exc
     data = mj.MjData(model)
 
     def body(name):

@@ -24,6 +24,8 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from ...errors import InternalError
+
 __all__ = ["PART_NAMES", "part_index", "tag", "recording", "face_parts_of", "refine_parts"]
 
 PART_NAMES: tuple[str, ...] = (
@@ -106,7 +108,7 @@ def face_parts_of(solid: manifold3d.Manifold, recorder: Mapping[int, str]) -> np
     out = np.repeat(labels, counts)
     n_tri = len(np.asarray(mesh.tri_verts))
     if len(out) != n_tri:  # pragma: no cover - manifold always covers every triangle
-        raise RuntimeError(f"triangle runs cover {len(out)} of {n_tri} triangles")
+        raise InternalError(f"triangle runs cover {len(out)} of {n_tri} triangles")
     return out
 
 
