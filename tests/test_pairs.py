@@ -96,3 +96,19 @@ def test_best_use_per_grasp():
     best, use = best_use_per_grasp(scores, 4)
     np.testing.assert_array_equal(best, [2.0, -np.inf, 0.5, -np.inf])
     np.testing.assert_array_equal(use, [1, -1, 4, -1])  # ties: the lowest use index
+
+
+def test_optimize_command_finds_a_default_mode_cut_with_use_points(capsys):
+    import json
+
+    from affordgrasp.cli import main
+
+    argv = ["optimize", "dagger", "--task", "cut", "--budget", "100", "--population", "50"]
+    code = main([*argv, "--uses", "1000", "--workers", "1", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert code == 0
+    found = [doc[m] for m in ("cem", "random") if doc[m] is not None]
+    assert found, "neither search found a default-mode cut"
+    for f in found:
+        assert np.isfinite(f["value"]) and f["row"]["epsilon"] >= 0.014
+        assert f["row"]["use_edge_angle"] <= np.radians(45)
