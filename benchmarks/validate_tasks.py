@@ -23,7 +23,7 @@ It also renders one figure per task with the best grasp of each family in each m
 (paper Figs. 3-6), and the paper's threshold-mode comparison on the knife (Fig. 7).
 Results go to ``--out`` (JSON + PNG); intermediate tables are cached in ``--cache``.
 
-Run: ``python benchmarks/validate_tasks.py --seeds 5 --out docs/figures/validation``.
+Run: ``python benchmarks/validate_tasks.py --seeds 5 --out /tmp/validation``.
 """
 
 from __future__ import annotations
