@@ -151,3 +151,15 @@ def test_evaluate_shows_progress_as_it_goes(monkeypatch, capsys):
     advances = [n for kind, n in steps if kind == "advance"]
     assert steps[0] == ("start", 600)
     assert len(advances) >= 3 and sum(advances) == 600
+
+
+def test_tasks_table_prints_thresholds_in_their_units(capsys):
+    assert main(["tasks"]) == 0
+    table = capsys.readouterr().out
+    assert "tau_angle=45°" in table  # stored as 0.785398 rad
+    assert "0.785398" not in table
+    assert "tau_ug=3e+04 m⁻²" in table
+    assert "hold_max=250 N" in table
+    assert main(["tasks", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["tasks"]["cut"]["thresholds"]["default"]["tau_angle"] == pytest.approx(0.785398)

@@ -2,6 +2,31 @@
 
 from __future__ import annotations
 
+# The metric column each built-in threshold is compared with: its unit is the column's.
+THRESHOLD_COLUMNS = {
+    "tau_eps": "epsilon",
+    "tau_delta": "discharge",
+    "tau_angle": "use_edge_angle",
+    "tau_ug": "use_edge",
+    "eps_min": "epsilon",
+    "hold_max": "hold_effort_sum",
+    "impact_max": "impact_effort",
+}
+
+
+def threshold_text(name: str, value: float) -> str:
+    """``tau_angle=45°``, ``tau_ug=30000 m⁻²``, ``tau_eps=0.3``: the value in its table unit."""
+    from ..columns import display_unit, display_value
+
+    column = THRESHOLD_COLUMNS.get(name)
+    if column is None:
+        return f"{name}={value:g}"
+    unit = display_unit(column)
+    shown = f"{display_value(column, value):.4g}"
+    if not unit:
+        return f"{name}={shown}"
+    return f"{name}={shown}{unit}" if unit == "°" else f"{name}={shown} {unit}"
+
 
 def add_arguments(p) -> None:
     p.add_argument("--tasks-file", default=None, help="TOML file declaring more tasks")
@@ -17,7 +42,7 @@ def run(args, out) -> None:
         task = get_task(name)
         by_mode = task.thresholds_by_mode()
         for mode, values in by_mode.items():
-            shown = ", ".join(f"{k}={v:g}" for k, v in values.items()) or "-"
+            shown = ", ".join(threshold_text(k, v) for k, v in values.items()) or "-"
             rows.append(
                 [
                     name if mode == "default" else "",
