@@ -15,6 +15,7 @@ hides a missing declaration until a user installs into a fresh environment. Two 
 from __future__ import annotations
 
 import ast
+import functools
 import importlib.metadata as md
 import json
 import subprocess
@@ -56,8 +57,14 @@ def _imports(path: Path) -> list[tuple[str, bool]]:
     return found
 
 
+@functools.cache
+def _owners() -> dict[str, list[str]]:
+    # Scans every installed distribution: once per session, not once per import.
+    return md.packages_distributions()
+
+
 def _distributions(module: str) -> set[str]:
-    dists = set(md.packages_distributions().get(module, []))
+    dists = set(_owners().get(module, []))
     if not dists:
         # A distribution that installs a bare extension module (manifold3d) is not always
         # listed by packages_distributions(); its name is the module's.
