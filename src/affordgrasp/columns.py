@@ -25,6 +25,9 @@ USE_METRICS: tuple[str, ...] = (
     "use_edge_angle",
 )
 
+# Numeric metrics that depend on the grasp only (not on the use point).
+GRASP_METRICS: tuple[str, ...] = ("epsilon", "gws_volume", "inertia", *HOLD_EFFORT_COLUMNS)
+
 METRIC_COLUMNS: tuple[str, ...] = (
     "epsilon",
     "gws_volume",

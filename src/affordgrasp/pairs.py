@@ -31,6 +31,7 @@ import numpy as np
 import pyarrow as pa
 from numba import njit
 
+from .columns import GRASP_METRICS, USE_METRICS
 from .grasp.pregrasp import sample_inputs, use_points
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
@@ -44,20 +45,10 @@ from .tasks import MetricColumns, get_task
 
 log = logging.getLogger(__name__)
 
-GRASP_COLUMNS = (
-    "epsilon",
-    "gws_volume",
-    "inertia",
-    "hold_effort_px",
-    "hold_effort_nx",
-    "hold_effort_py",
-    "hold_effort_ny",
-    "hold_effort_pz",
-    "hold_effort_nz",
-)
+GRASP_COLUMNS = GRASP_METRICS
 # columns that depend on the use point: a task that reads none of them scores a grasp the
 # same with every use point, so one use point per grasp is enough
-USE_COLUMNS = frozenset({"discharge", "use_force", "impact_effort", "use_edge", "use_edge_angle"})
+USE_COLUMNS = frozenset(USE_METRICS)
 # most favourable values of the LP metrics, for the screen
 _SCREEN_FORCE = 1e12
 _SCREEN_IMPACT = 0.0
