@@ -147,3 +147,46 @@ def test_link_meshes_follow_the_rounded_shapes():
     hull = (u @ points.T).max(axis=1)
     assert np.all(hull <= exact + 1e-12)  # inscribed: never bigger than the link
     assert np.max(exact - hull) < 0.015 * radius
+
+
+def test_tools_touch_the_use_point_from_outside(jaw_scene):
+    import mujoco
+
+    from affordgrasp.physics.trials import _squeeze, place_anvil, place_plate, set_grasp
+
+    # U on the +y face of the box; the tools must sit beyond it, not inside the box.
+    use_point, use_normal = np.array([0.015, 0.02, 0.0]), np.array([0.0, 1.0, 0.0])
+    m, d = jaw_scene.model, jaw_scene.data
+    for place, body in (
+        (place_anvil, m.body("anvil").id),
+        (place_plate, jaw_scene.plate_body),
+    ):
+        set_grasp(jaw_scene, *jaw_grasp(TOUCH, TOUCH))
+        _squeeze(jaw_scene)
+        place(jaw_scene, use_point, use_normal)
+        mujoco.mj_forward(m, d)
+        tool = [
+            d.contact[k].dist
+            for k in range(d.ncon)
+            if body in (m.geom_bodyid[d.contact[k].geom[0]], m.geom_bodyid[d.contact[k].geom[1]])
+        ]
+        assert all(dist > -1e-4 for dist in tool), f"a tool starts {min(tool):.4f} m inside"
+        centre = d.xipos[body]  # the cube's centre of mass lies outside, along +y
+        assert centre[1] > d.xipos[jaw_scene.object_body][1] + 0.02
+
+
+def test_impact_torque_turns_the_object_in_the_swing_direction(box_object):
+    from affordgrasp.physics.trials import _impact, _Snapshot, _squeeze, set_grasp
+
+    # A pulse far above what the jaws hold (factor 100), with U where the anvil does not
+    # block the swing: the box turns about +z of the hand, the approach axis.
+    scene = build_scene("parallel_jaw", box_object, PhysicsSettings(impact_factor=100.0))
+    set_grasp(scene, *jaw_grasp(TOUCH, TOUCH))
+    _squeeze(scene)
+    r0 = scene.data.xmat[scene.object_body].reshape(3, 3).copy()
+    angle, _ = _impact(
+        scene, _Snapshot(scene.data), np.array([-0.015, 0.02, 0.0]), np.array([0.0, 1.0, 0.0])
+    )
+    r = r0.T @ scene.data.xmat[scene.object_body].reshape(3, 3)
+    assert angle > np.radians(0.5)
+    assert r[1, 0] - r[0, 1] > 0  # positive rotation about z

@@ -214,15 +214,33 @@ def _use_in_world(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray):
     return r @ use_point + p, r @ use_normal
 
 
+def place_anvil(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> np.ndarray:
+    """Fix the anvil against U (object frame), outside the object; returns U in the world."""
+    mj = deps.mujoco()
+    u, n_u = _use_in_world(scene, use_point, use_normal)
+    scene.data.mocap_pos[scene.anvil_mocap] = u
+    # The cube occupies +z of its frame: z along the outward normal puts it beyond U.
+    scene.data.mocap_quat[scene.anvil_mocap] = _frame_quat(n_u)
+    mj.mj_forward(scene.model, scene.data)
+    return u
+
+
+def place_plate(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> np.ndarray:
+    """Put the press plate just beyond U (its motor pushes along -z, the inward normal)."""
+    mj = deps.mujoco()
+    u, n_u = _use_in_world(scene, use_point, use_normal)
+    scene.model.body_pos[scene.plate_body] = u + _TOOL_GAP * n_u
+    scene.model.body_quat[scene.plate_body] = _frame_quat(n_u)
+    mj.mj_forward(scene.model, scene.data)
+    return u
+
+
 def _impact(scene: Scene, snapshot: _Snapshot, use_point, use_normal) -> tuple[float, int]:
     """Largest object rotation during a torque pulse about the wrist axis, anvil at U."""
     mj = deps.mujoco()
     m, d, s = scene.model, scene.data, scene.settings
     snapshot.restore(scene)
-    u, n_u = _use_in_world(scene, use_point, use_normal)
-    d.mocap_pos[scene.anvil_mocap] = u
-    d.mocap_quat[scene.anvil_mocap] = _frame_quat(-n_u)  # the cube lies beyond U, outside
-    mj.mj_forward(m, d)
+    u = place_anvil(scene, use_point, use_normal)
     body = scene.object_body
     quat0 = d.xquat[body].copy()
     lever = float(np.hypot(u[0], u[1]))  # distance of U from the wrist axis (the hand's z)
@@ -245,10 +263,7 @@ def _press(scene: Scene, snapshot: _Snapshot, use_point, use_normal) -> tuple[fl
     mj = deps.mujoco()
     m, d, s = scene.model, scene.data, scene.settings
     snapshot.restore(scene)
-    u, n_u = _use_in_world(scene, use_point, use_normal)
-    m.body_pos[scene.plate_body] = u + _TOOL_GAP * n_u
-    m.body_quat[scene.plate_body] = _frame_quat(-n_u)
-    mj.mj_forward(m, d)
+    u = place_plate(scene, use_point, use_normal)
     n = max(1, round(s.press_max_force / s.press_rate / s.timestep))
     force = 0.0
     for step in range(n):
