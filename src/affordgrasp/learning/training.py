@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .. import __version__
+from ..errors import InputError
 from .data import Samples, balanced_indices
 from .models import build_model, count_parameters, depth_input, nearest_depth, pose_features
 from .targets import Target
@@ -71,7 +72,7 @@ class Inputs:
         self.canonical = bool(config.get("canonical"))
         pose = pose_features(samples.p0, samples.use_dir)
         if self.arch != "pose" and samples.depth_mm is None:
-            raise ValueError("samples need their depth images (learning.data.load_depth)")
+            raise InputError("samples need their depth images (learning.data.load_depth)")
         if self.canonical and self.arch != "pose":
             pose = np.concatenate([pose, nearest_depth(samples.depth_mm)], axis=1)
         self.pose = pose
