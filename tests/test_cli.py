@@ -10,7 +10,7 @@ import pytest
 from affordgrasp.cli import main
 from affordgrasp.columns import METRIC_COLUMNS
 
-SPEC_COLUMNS = [
+EXPECTED_COLUMNS = [
     "object", "object_hash", "sample", "seed", "p0", "use_dir", "status", "hand_pose", "joints",
     "contact_points", "contact_normals", "contact_mu", "contact_link", "use_point", "use_normal",
     "wrist_point", "wrist_axis",
@@ -59,7 +59,7 @@ def test_simulate_summarises_and_writes_the_spec_columns(tmp_path, capsys):
     assert doc["grasps_per_second_per_core"] > 0
     table = pq.read_table(out)
     assert table.num_rows == 40
-    assert set(SPEC_COLUMNS) <= set(table.column_names)
+    assert set(EXPECTED_COLUMNS) <= set(table.column_names)
     assert table.column("sample").to_pylist() == list(range(40))
 
 
@@ -72,7 +72,7 @@ def test_evaluate_reports_tasks_and_metrics(tmp_path, capsys):
     assert set(doc["best"]) == {"pick"}
     assert 0 <= doc["force_closure_fraction"] <= 1
     table = pq.read_table(out)
-    assert set(SPEC_COLUMNS) | set(METRIC_COLUMNS) <= set(table.column_names)
+    assert set(EXPECTED_COLUMNS) | set(METRIC_COLUMNS) <= set(table.column_names)
     # the rate leaves out the one-time costs, and says what they were
     assert set(doc["one_time_seconds"]) == {"kernels", "prepare"}
 

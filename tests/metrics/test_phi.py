@@ -22,7 +22,7 @@ from affordgrasp.metrics import phi as phi_module
 from affordgrasp.metrics.contacts import ContactSet
 from affordgrasp.objects.mass import mass_properties
 
-SPEC_COLUMNS = [
+EXPECTED_COLUMNS = [
     "epsilon", "gws_volume", "epsilon_reason", "inertia", "hold_effort_px", "hold_effort_nx",
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
     "discharge", "use_force", "use_edge", "use_edge_angle",
@@ -59,7 +59,7 @@ def _phi(scene, **kw):
 
 def test_columns_are_exactly_the_spec_names(scene):
     cols = _phi(scene)
-    assert list(cols) == SPEC_COLUMNS == list(METRIC_COLUMNS)
+    assert list(cols) == EXPECTED_COLUMNS == list(METRIC_COLUMNS)
     for name, col in cols.items():
         assert col.shape == (12,)
         if name == "epsilon_reason":
@@ -95,7 +95,7 @@ def test_single_grasp_and_fallback_path(scene, monkeypatch):
     mesh, mass, contacts, U, nU, T, w, a = scene
     cols = _phi(scene)
     one = compute_phi(mass, mesh, contacts[5], U[5], nU[5], int(T[5]), w[5], a[5])
-    assert list(one) == SPEC_COLUMNS
+    assert list(one) == EXPECTED_COLUMNS
     assert isinstance(one["epsilon_reason"], str) and isinstance(one["epsilon"], float)
     for k, v in one.items():
         assert v == cols[k][5]
@@ -108,7 +108,7 @@ def test_single_grasp_and_fallback_path(scene, monkeypatch):
 
     monkeypatch.setattr(phi_module, "contact_metrics_batch", give_up)
     slow = _phi(scene)
-    for k in SPEC_COLUMNS:
+    for k in EXPECTED_COLUMNS:
         if k == "epsilon_reason":
             assert list(slow[k]) == list(cols[k])
         else:
@@ -195,4 +195,4 @@ def test_soft_contacts_and_input_checks(scene):
         compute_phi_batch(mass, mesh, contacts, U[:3], nU, T, w, a)
     empty = compute_phi_batch(mass, mesh, [], np.zeros((0, 3)), np.zeros((0, 3)), [],
                               np.zeros((0, 3)), np.zeros((0, 3)))  # fmt: skip
-    assert list(empty) == SPEC_COLUMNS and all(len(v) == 0 for v in empty.values())
+    assert list(empty) == EXPECTED_COLUMNS and all(len(v) == 0 for v in empty.values())

@@ -1,4 +1,4 @@
-"""ε, the grasp robustness of GraspIt! (L1 epsilon), and the GWS volume (SPEC §2.4).
+"""ε, the grasp robustness of GraspIt! (L1 epsilon), and the GWS volume (conventions: Metrics).
 
 Wrenches ``w = (f, (p - c) x f / r_max)`` of every friction-cone edge (see
 :mod:`affordgrasp.metrics.cones`); the grasp wrench space is their convex hull (the
@@ -275,7 +275,7 @@ def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
 
 
 def epsilon(contacts, center, r_max: float, *, soft: bool = False) -> EpsilonResult:
-    """GraspIt!'s L1 epsilon and the GWS volume of a contact set (SPEC §2.4).
+    """GraspIt!'s L1 epsilon and the GWS volume of a contact set (conventions: Metrics).
 
     contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
     center : (3,) float, reference point of the torques (the centre of mass), m

@@ -1,4 +1,4 @@
-"""Linear programs of the metrics (SPEC §2.4: "LPs solved to optimality").
+"""Linear programs of the metrics, solved to optimality (conventions: Metrics).
 
 Every LP of the metric vector is small (6 to ~20 rows, tens to a few hundred columns) and
 is written in standard form::

@@ -1,0 +1,46 @@
+"""The repository documents itself: no reference to a SPEC document it does not contain."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SCANNED = ["src", "docs", "examples", "benchmarks", "README.md"]
+WORD = re.compile(r"\bSPEC\b")  # case-sensitive: "spec" (an object spec) is a word of the API
+
+
+def scanned_files() -> list[Path]:
+    files: list[Path] = []
+    for name in SCANNED:
+        path = ROOT / name
+        files.extend(sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path])
+    return files
+
+
+def test_the_scan_reads_the_repository():
+    texts = [p for p in scanned_files() if p.suffix in {".py", ".md"}]
+    assert len(texts) >= 50, "the scanned folders are missing: run the tests from a checkout"
+    assert ROOT / "src" / "affordgrasp" / "metrics" / "epsilon.py" in texts
+
+
+@pytest.mark.parametrize("name", SCANNED)
+def test_no_reference_to_an_outside_spec(name):
+    hits = []
+    for path in scanned_files():
+        if not path.is_relative_to(ROOT / name):
+            continue
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            continue  # images and other binary files
+        for number, line in enumerate(text.splitlines(), 1):
+            if WORD.search(line):
+                hits.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()[:80]}")
+    assert not hits, "say it in docs/conventions.md instead:\n" + "\n".join(hits)
+
+
+def test_the_pattern_catches_a_reference_and_spares_the_word_spec():
+    assert WORD.search('"""Linear programs (SPEC §2.4)."""')
+    assert WORD.search("the SPEC's normalised ε")
+    assert not WORD.search("an object spec, a Spec grammar, USE_SPECULAR")
