@@ -13,7 +13,7 @@ import json
 import time
 
 from affordgrasp.grasp.pregrasp import sample_inputs
-from affordgrasp.objects import resolve_object
+from affordgrasp.objects import load_object
 from affordgrasp.vision import renderer_for
 
 
@@ -26,7 +26,7 @@ def main() -> None:
     p0, _ = sample_inputs(0, 0, args.images)
     rows = {}
     for spec in args.objects:
-        obj = resolve_object(spec)
+        obj = load_object(spec)
         renderer = renderer_for(obj)
         renderer.render(p0[:16])  # warm
         cpu, wall = time.process_time(), time.perf_counter()

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from affordgrasp.dataset.engines import default_workers
 from affordgrasp.dataset.generate import generate
-from affordgrasp.objects import resolve_object
+from affordgrasp.objects import load_object
 from affordgrasp.pipeline import evaluate_samples
 
 
@@ -27,7 +27,7 @@ def stage_split(objects: list[str], n: int, seed: int) -> dict:
     """Seconds per sample spent in simulation and in metrics, one core, warm."""
     out = {}
     for spec in objects:
-        obj = resolve_object(spec)
+        obj = load_object(spec)
         evaluate_samples(obj, 8, seed=seed, start=10**6)  # warm caches and compiled kernels
         _, timing = evaluate_samples(obj, n, seed=seed)
         out[obj.name] = {k: v / n * 1e3 for k, v in timing.items()}

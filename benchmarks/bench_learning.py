@@ -82,7 +82,7 @@ def trained(models_dir: Path, name: str, target: str, recipe: dict, prepared, da
 
 def k_candidates(data, split, classifier, regressor, *, k=32, trials=40, rows=600, seed=0):
     """Per task: mean GMS-like rank, success rate and oracle-match of model vs random choice."""
-    from affordgrasp.dataset.reading import read_table
+    from affordgrasp.dataset.reading import read_dataset
     from affordgrasp.learning.api import predictions_of
     from affordgrasp.learning.data import load_depth, read_rows
     from affordgrasp.tasks import evaluate_task, list_tasks
@@ -95,7 +95,7 @@ def k_candidates(data, split, classifier, regressor, *, k=32, trials=40, rows=60
     load_depth(samples, data)
     p_viable = predictions_of(*classifier, samples)
     effort = predictions_of(*regressor, samples)
-    table = read_table(data, objects=list(split.test))
+    table = read_dataset(data, objects=list(split.test))
     names = np.asarray(table.column("object").to_pylist(), dtype=object)
     ids = table.column("sample").to_numpy()
     index = {(o, int(s)): i for i, (o, s) in enumerate(zip(names, ids, strict=True))}

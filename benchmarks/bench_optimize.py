@@ -23,13 +23,13 @@ DEFAULT_TASKS = ["pick:default", "cut:default", "cut:no-robustness", "beat:no-ro
 
 
 def cem_run(spec: str, task: str, mode: str, budget: int, seed: int) -> dict:
-    from affordgrasp.objects import resolve_object
+    from affordgrasp.objects import load_object
     from affordgrasp.optimize import optimize
 
     try:
         r = optimize(spec, task, mode=mode, budget=budget, seed=seed, workers=1, baseline=False)
     except Exception as exc:  # noqa: BLE001 - report the failing case, keep benchmarking
-        name = resolve_object(spec).name
+        name = load_object(spec).name
         print(f"FAILED {name} {task}:{mode} seed {seed}: {type(exc).__name__}: {exc}", flush=True)
         return {
             "object": name,
@@ -102,7 +102,7 @@ def main() -> None:
     from affordgrasp.dataset.best import task_values
     from affordgrasp.dataset.engines import default_workers
     from affordgrasp.dataset.generate import generate
-    from affordgrasp.dataset.reading import read_table
+    from affordgrasp.dataset.reading import read_dataset
     from affordgrasp.tasks import get_task
 
     started = time.perf_counter()
@@ -131,7 +131,7 @@ def main() -> None:
     for spec in args.objects:
         obj_runs = [r for r in runs if r["object"].split(":")[0] == spec.split(":")[0]]
         name = obj_runs[0]["object"]
-        table = read_table(args.data, objects=[name])
+        table = read_dataset(args.data, objects=[name])
         for tm in args.tasks:
             task, mode = tm.split(":")
             values = task_values(get_task(task), table, mode)

@@ -24,7 +24,7 @@ def main() -> None:
     args = parser.parse_args()
 
     from affordgrasp.grasp.policy import object_geometry
-    from affordgrasp.objects import resolve_object
+    from affordgrasp.objects import load_object
     from affordgrasp.pipeline import evaluate_samples
 
     t0 = time.perf_counter()
@@ -39,7 +39,7 @@ def main() -> None:
     sim_rates = []
     for spec in args.objects:
         t0 = time.perf_counter()
-        obj = resolve_object(spec)
+        obj = load_object(spec)
         object_geometry(obj)
         prepare = time.perf_counter() - t0
         t0 = time.perf_counter()

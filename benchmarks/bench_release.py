@@ -45,7 +45,7 @@ WORKER = textwrap.dedent(
     except ImportError:  # releases before the pipeline module
         from affordgrasp.evaluate import evaluate_samples
     from affordgrasp.grasp.policy import object_geometry
-    from affordgrasp.objects import resolve_object
+    from affordgrasp.objects import load_object
     import pyarrow.parquet as pq
 
     spec, n = sys.argv[1], int(sys.argv[2])
@@ -54,7 +54,7 @@ WORKER = textwrap.dedent(
     if n == 0:
         print(json.dumps({"startup": startup}))
         raise SystemExit
-    obj = resolve_object(spec)
+    obj = load_object(spec)
     object_geometry(obj)
     out = os.path.join(tempfile.mkdtemp(), "rows.parquet")
     c0, w0 = time.process_time(), time.perf_counter()

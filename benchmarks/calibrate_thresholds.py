@@ -32,10 +32,10 @@ import json
 
 import numpy as np
 
-from affordgrasp.dataset.reading import read_table
+from affordgrasp.dataset.reading import read_dataset
 from affordgrasp.metrics import epsilon as epsilon_metric
 from affordgrasp.metrics.contacts import ContactSet
-from affordgrasp.objects import resolve_object
+from affordgrasp.objects import load_object
 
 PAPER_THRESHOLDS = (0.15, 0.3, 0.5)
 # The paper's training objects: hammer, screwdriver, bottle, glass, sword, dagger, meat
@@ -105,14 +105,14 @@ def main() -> None:
         "contact_mu",
         *HOLD_COLUMNS,
     ]
-    table = read_table(args.dataset, columns=cols)
+    table = read_dataset(args.dataset, columns=cols)
     objects = sorted(set(table.column("object").to_pylist()))
     report: dict = {"objects": {}}
     all_eps, all_mm, all_effort_ok = [], [], []
     pool_eps, pool_ok = [], []
     for name in objects:
         sub = table.filter(np.asarray(table.column("object").to_pylist()) == name)
-        obj = resolve_object(name)
+        obj = load_object(name)
         eps = sub.column("epsilon").to_numpy()
         mm = epsilon_mm(sub, obj)
         hold = np.sum([sub.column(c).to_numpy() for c in HOLD_COLUMNS], axis=0)

@@ -38,7 +38,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from scipy.spatial import ConvexHull, QhullError
 
-from affordgrasp.objects import resolve_object
+from affordgrasp.objects import load_object
 from affordgrasp.pairs import best_pairs, optimize_pairs
 from affordgrasp.pipeline import evaluate_samples
 
@@ -152,7 +152,7 @@ def main() -> None:
         for family in TASK_FAMILIES[task]:
             entry = {"brute_force": [], "optimizer": [], "candidates": [], "seeds": []}
             for seed in range(args.seeds):
-                obj = resolve_object(f"{family}:{seed}")
+                obj = load_object(f"{family}:{seed}")
                 com = obj.mass.center_of_mass
                 table = grasp_table(cache, family, seed, args.grasps)
                 found = best_pairs(
@@ -212,7 +212,7 @@ def figures(args, out: Path, cache: Path, report: dict) -> None:
         families = TASK_FAMILIES[task][:5]
         rows = []
         for family in families:
-            obj = resolve_object(f"{family}:0")
+            obj = load_object(f"{family}:0")
             table = grasp_table(cache, family, 0, args.grasps)
             cells = []
             for mode in MODES:
@@ -239,7 +239,7 @@ def figures(args, out: Path, cache: Path, report: dict) -> None:
             out / f"validation_{task}.png",
         )
     # Fig. 7: beat and cut on the knife, three robustness requirements
-    obj = resolve_object("knife:0")
+    obj = load_object("knife:0")
     table = grasp_table(cache, "knife", 0, args.grasps)
     rows, numbers = [], {}
     for task in ("beat", "cut"):

@@ -443,7 +443,7 @@ def optimize(
     )
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
-    from .objects import resolve_object
+    from .objects import load_object
     from .tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:
@@ -455,7 +455,7 @@ def optimize(
     check_engine(engine, workers, address)
     task_obj = get_task(task) if isinstance(task, str) else task
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
-    resolved = resolve_object(obj)
+    resolved = load_object(obj)
     hand_model = get_hand(hand)
     pop = population or default_population(budget)
     context = RunContext(objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed)

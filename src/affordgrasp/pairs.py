@@ -39,7 +39,7 @@ from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import use_edge, use_edge_angle
-from .objects import GraspObject, resolve_object
+from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .tasks import MetricColumns, get_task
 
@@ -104,7 +104,7 @@ class UsePoints:
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
         """Cast the use rays of ``use_dir`` (m, 2) on ``obj`` (an object or a spec)."""
-        obj = resolve_object(obj)
+        obj = load_object(obj)
         use_dir = np.asarray(use_dir, dtype=np.float64).reshape(-1, 2)
         P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
         hit = T >= 0
@@ -152,7 +152,7 @@ def pair_scores(
     Returns columns: ``grasp`` (row in ``grasps``), ``use`` (index in ``uses``), ``value``
     (F_T), and the metric columns of the pairs (float64), for the kept pairs only.
     """
-    obj = resolve_object(obj)
+    obj = load_object(obj)
     t = get_task(task)
     n, m = grasps.num_rows, len(uses.triangle)
     col = {c: grasps.column(c).to_numpy(zero_copy_only=False) for c in GRASP_COLUMNS}
@@ -248,7 +248,7 @@ def best_pairs(
     re-simulated with :func:`affordgrasp.pipeline.evaluate_inputs`, so the returned rows carry
     every column of the dataset schema; a pair's value is recomputed on that row.
     """
-    obj = resolve_object(obj)
+    obj = load_object(obj)
     if grasp_table is None:
         grasp_table, _ = evaluate_samples(obj, grasps, seed=seed, hand=hand)
     _, d = sample_inputs(seed + 1, 0, uses)
@@ -329,7 +329,7 @@ def optimize_pairs(
     """
     from .optimize import cem_maximize, default_population, guidance
 
-    obj = resolve_object(obj)
+    obj = load_object(obj)
     get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)

@@ -23,7 +23,7 @@ from .grasp.policy import SimulationBatch, simulate
 from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
 from .metrics.phi import compute_phi_batch
-from .objects import GraspObject, resolve_object
+from .objects import GraspObject, load_object
 from .schema import batch_to_table
 
 STAGES = ("simulate", "metrics", "table")
@@ -143,7 +143,7 @@ def evaluate_inputs(
     -------
     Evaluation
     """
-    obj = resolve_object(obj)
+    obj = load_object(obj)
     hand = get_hand(hand)
     t0 = time.perf_counter()
     batch = simulate(obj, p0, use_dir, hand=hand)
@@ -196,7 +196,7 @@ def evaluate_samples(
         raise InputError(f"samples must be a positive integer, got {samples!r}")
     if batch_size is not None and (not isinstance(batch_size, int | np.integer) or batch_size <= 0):
         raise InputError(f"batch_size must be a positive integer, got {batch_size!r}")
-    obj = resolve_object(obj)
+    obj = load_object(obj)
     hand = get_hand(hand)
     n = int(samples)
     step = int(batch_size or n)

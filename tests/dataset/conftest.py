@@ -23,6 +23,6 @@ def reference_dataset(tmp_path_factory, object_specs):
 
 @pytest.fixture(scope="session")
 def reference_table(reference_dataset):
-    from affordgrasp.dataset.reading import read_table
+    from affordgrasp.dataset.reading import read_dataset
 
-    return read_table(reference_dataset)
+    return read_dataset(reference_dataset)

@@ -16,7 +16,7 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 
 from affordgrasp.dataset.generate import generate
 from affordgrasp.dataset.layout import plan_shards, shard_paths
-from affordgrasp.dataset.reading import read_table
+from affordgrasp.dataset.reading import read_dataset
 from affordgrasp.errors import DatasetError
 
 
@@ -75,7 +75,7 @@ def test_rows_do_not_depend_on_workers_or_shard_boundaries(tmp_path, object_spec
         object_specs, n, tmp_path / "w2", seed=SEED, workers=2, shard_size=20, chunk_size=8
     )
     assert summary.complete and summary.workers == 2
-    got = read_table(tmp_path / "w2")
+    got = read_dataset(tmp_path / "w2")
     for name in ("knife:0", "box.stl"):
         same_rows(rows_of(got, name, 0, n), rows_of(reference_table, name, 0, n))
 
@@ -106,7 +106,7 @@ def test_damaged_shard_and_stale_temporary_are_redone(tmp_path, box_mesh, refere
     summary = generate([str(box_mesh)], 24, out, seed=SEED, workers=1, shard_size=8)
     assert (summary.shards_written, summary.shards_skipped) == (1, 2)
     assert not stale.exists()
-    same_rows(read_table(out), rows_of(reference_table, "box.stl", 0, 24))
+    same_rows(read_dataset(out), rows_of(reference_table, "box.stl", 0, 24))
 
 
 def _cli(args: list[str]) -> list[str]:
@@ -175,7 +175,7 @@ def test_ctrl_c_then_kill_9_then_resume_equals_an_uninterrupted_run(
     assert summary["shards_skipped"] + summary["shards_written"] == total
 
     assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []
-    same_rows(read_table(out), reference_table)
+    same_rows(read_dataset(out), reference_table)
     card = json.loads((out / "_card.json").read_text())
     ref_card = json.loads((reference_dataset / "_card.json").read_text())
     assert card["complete"] and card["status_counts"] == ref_card["status_counts"]
@@ -192,7 +192,7 @@ def test_generate_uses_the_hand_object_it_is_given(tmp_path, box_mesh):
 
     custom = dataclasses.replace(get_hand("parallel_jaw"), name="barrett")
     generate([str(box_mesh)], 6, tmp_path / "custom", seed=3, workers=1, hand=custom)
-    got = read_table(tmp_path / "custom")
+    got = read_dataset(tmp_path / "custom")
     assert {len(j) for j in got["joints"].to_pylist()} == {len(custom.dofs)}
     expected = evaluate_samples(str(box_mesh), 6, seed=3, hand=custom).table
     assert got["joints"].to_pylist() == expected["joints"].to_pylist()

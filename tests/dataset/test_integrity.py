@@ -17,7 +17,7 @@ from affordgrasp.cli import main
 from affordgrasp.dataset import layout
 from affordgrasp.dataset.generate import generate
 from affordgrasp.dataset.layout import CHECKSUMS_NAME, read_checksums, shard_paths
-from affordgrasp.dataset.reading import iter_batches, read_table
+from affordgrasp.dataset.reading import iter_batches, read_dataset
 from affordgrasp.errors import DatasetError
 
 SAMPLES, SHARD = 24, 8
@@ -64,7 +64,7 @@ def test_shard_overwritten_mid_file_is_refused_by_readers(dataset, capsys):
     damaged = shard_paths(dataset)[1]
     _overwrite_mid_file(damaged)
     with pytest.raises(DatasetError, match=rf"{damaged.name}: its content differs"):
-        read_table(dataset)
+        read_dataset(dataset)
     with pytest.raises(DatasetError, match=damaged.name):
         next(iter_batches(dataset, columns=["sample"]))
     assert main(["best", str(dataset), "--task", "pick"]) == 2
@@ -80,7 +80,7 @@ def test_shard_overwritten_mid_file_is_rewritten_on_resume(dataset, box_mesh, pr
     _overwrite_mid_file(damaged)
     assert _generate(box_mesh, dataset) == 0
     assert damaged.read_bytes() == (pristine / damaged.name).read_bytes()
-    assert read_table(dataset).equals(read_table(pristine))
+    assert read_dataset(dataset).equals(read_dataset(pristine))
 
 
 def test_best_on_a_truncated_shard_names_the_file(dataset, capsys):
@@ -109,7 +109,7 @@ def test_shard_without_a_checksum_is_refused(dataset):
     records = (dataset / CHECKSUMS_NAME).read_text().splitlines()
     (dataset / CHECKSUMS_NAME).write_text("\n".join(records[1:]) + "\n")
     with pytest.raises(DatasetError, match="no checksum was recorded"):
-        read_table(dataset)
+        read_dataset(dataset)
 
 
 def test_disk_full_exits_2_naming_the_file_and_leaves_no_partial_file(
@@ -135,11 +135,11 @@ def test_disk_full_exits_2_naming_the_file_and_leaves_no_partial_file(
     assert "No space left on device" in err and "part-00000-000000000008.parquet" in err, err
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
     assert [p.name for p in shard_paths(out)] == ["part-00000-000000000000.parquet"]
-    read_table(out)  # what is there is whole and verified
+    read_dataset(out)  # what is there is whole and verified
 
     monkeypatch.setattr(layout, "write_file", real_write)
     assert _generate(box_mesh, out) == 0
-    assert read_table(out).equals(read_table(pristine))
+    assert read_dataset(out).equals(read_dataset(pristine))
 
 
 def test_output_that_is_not_a_directory_exits_2(tmp_path, box_mesh, capsys):

@@ -7,7 +7,7 @@ import pytest
 from dataset_support import SEED
 
 from affordgrasp.dataset.generate import generate
-from affordgrasp.dataset.reading import read_table
+from affordgrasp.dataset.reading import read_dataset
 
 
 def test_a_small_run_on_a_local_ray_equals_the_local_engine(
@@ -19,7 +19,7 @@ def test_a_small_run_on_a_local_ray_equals_the_local_engine(
         object_specs, n, tmp_path / "ray", seed=SEED, engine="ray", workers=2, shard_size=10
     )
     assert summary.complete and summary.engine == "ray"
-    got = read_table(tmp_path / "ray").replace_schema_metadata(None)
+    got = read_dataset(tmp_path / "ray").replace_schema_metadata(None)
     want = reference_table.filter(pc.less(reference_table["sample"], n)).replace_schema_metadata(
         None
     )

@@ -12,7 +12,7 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 
 from affordgrasp import __version__, tasks
 from affordgrasp.dataset.layout import shard_paths
-from affordgrasp.dataset.reading import open_dataset, read_table, select_objects
+from affordgrasp.dataset.reading import open_dataset, read_dataset, select_objects
 from affordgrasp.errors import DatasetError
 from affordgrasp.schema import SCHEMA
 
@@ -61,7 +61,7 @@ def test_card_describes_the_dataset(reference_dataset, reference_table):
     statuses = reference_table["status"].to_pylist()
     assert card["status_counts"] == {s: statuses.count(s) for s in sorted(set(statuses))}
     assert card["force_closure_per_object"]["knife:0"] == int(
-        np.sum(read_table(reference_dataset, objects=["knife"])["epsilon"].to_numpy() > 0)
+        np.sum(read_dataset(reference_dataset, objects=["knife"])["epsilon"].to_numpy() > 0)
     )
     md = (reference_dataset / "_card.md").read_text()
     assert "knife:0" in md and "box.stl" in md and "state: complete" in md

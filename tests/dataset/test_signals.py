@@ -19,7 +19,7 @@ from dataset_support import SEED
 
 from affordgrasp.dataset.engines import check_ray_address
 from affordgrasp.dataset.layout import plan_shards, shard_paths
-from affordgrasp.dataset.reading import read_table
+from affordgrasp.dataset.reading import read_dataset
 from affordgrasp.errors import InputError
 
 SRC = Path(__file__).resolve().parents[2] / "src"
@@ -107,7 +107,7 @@ def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum
     summary = json.loads(stdout)
     assert summary["complete"]
     assert summary["shards_skipped"] + summary["shards_written"] == len(plan_shards(1, 64, 8))
-    assert read_table(out)["sample"].to_pylist() == list(range(64))
+    assert read_dataset(out)["sample"].to_pylist() == list(range(64))
 
 
 @pytest.fixture

@@ -15,7 +15,7 @@ from affordgrasp.grasp.policy import (
     simulate,
 )
 from affordgrasp.hands import get_hand
-from affordgrasp.objects import family_names, resolve_object
+from affordgrasp.objects import list_families, load_object
 
 PENETRATION_TOL = 1e-4  # m
 
@@ -241,9 +241,9 @@ def test_contacts_on_one_link_are_at_least_3_mm_apart(box_object):
             assert d.min() >= 3e-3 - 1e-12
 
 
-@pytest.mark.parametrize("family", family_names())
+@pytest.mark.parametrize("family", list_families())
 def test_every_family_no_interpenetration_and_contacts_within_tolerance(family):
-    obj = resolve_object(family)
+    obj = load_object(family)
     hand = get_hand("barrett")
     probe = np.vstack(
         [obj.mesh.vertices, trimesh.sample.sample_surface_even(obj.mesh, 15000, seed=3)[0]]

@@ -18,9 +18,9 @@ USE = [[-0.6556178262023638, 0.8415510768293228]]
 
 def test_stalled_simplex_is_decided_not_raised():
     from affordgrasp.grasp.policy import simulate
-    from affordgrasp.objects import resolve_object
+    from affordgrasp.objects import load_object
 
-    obj = resolve_object("screwdriver")
+    obj = load_object("screwdriver")
     contacts = simulate(obj, np.array(P0)).contacts[0]
     W = contact_wrenches(contacts.points, contacts.normals, contacts.mu, obj.mass.center_of_mass)
     got = hold_effort_highs(W)

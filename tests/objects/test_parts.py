@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from affordgrasp.objects import resolve_object
-from affordgrasp.objects.families import family_names, make_family
+from affordgrasp.objects import list_families, load_object
+from affordgrasp.objects.families import make_family
 from affordgrasp.objects.families.parts import PART_NAMES, SHARP_EDGE_RAD
 from affordgrasp.pipeline import evaluate_samples
 
@@ -28,7 +28,7 @@ EXPECTED = {
 
 
 def test_every_family_is_listed():
-    assert set(EXPECTED) == set(family_names())
+    assert set(EXPECTED) == set(list_families())
 
 
 @pytest.mark.parametrize("seed", [0, 5])
@@ -93,7 +93,7 @@ def test_hammer_striking_face_faces_minus_y_at_the_end_of_the_head():
 
 def test_parts_columns_in_the_dataset(tmp_path):
     table = evaluate_samples("knife:1", 120, seed=0).table
-    obj = resolve_object("knife:1")
+    obj = load_object("knife:1")
     names = set(obj.part_names)
     use = table.column("use_part").to_pylist()
     tri = table.column("use_triangle").to_numpy()
@@ -115,4 +115,4 @@ def test_parts_columns_in_the_dataset(tmp_path):
     box = evaluate_samples(str(path), 40, seed=0).table
     assert set(box.column("use_part").to_pylist()) == {""}
     assert {p for c in box.column("contact_parts").to_pylist() for p in c} <= {""}
-    assert resolve_object(str(path)).face_parts is None
+    assert load_object(str(path)).face_parts is None

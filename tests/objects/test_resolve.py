@@ -13,7 +13,7 @@ import trimesh
 
 import affordgrasp.objects as objects
 from affordgrasp.errors import InputError, MeshError
-from affordgrasp.objects import GraspObject, mesh_hash, resolve_object
+from affordgrasp.objects import GraspObject, load_object, mesh_hash
 from affordgrasp.objects import resolve as resolve_module
 
 
@@ -84,7 +84,7 @@ def test_mesh_hash_is_sensitive():
 
 def test_mesh_path_resolves(box_file):
     for spec in (box_file, str(box_file)):
-        obj = resolve_object(spec)
+        obj = load_object(spec)
         assert isinstance(obj, GraspObject)
         assert obj.name == "part.stl"
         assert obj.category == "mesh"
@@ -93,43 +93,43 @@ def test_mesh_path_resolves(box_file):
         assert obj.mass.volume == pytest.approx(0.006, rel=1e-6)
         assert obj.mass.density == 1.0
         assert obj.mesh_hash == mesh_hash(obj.mesh)
-    assert resolve_object(box_file).mesh_hash == resolve_object(str(box_file)).mesh_hash
+    assert load_object(box_file).mesh_hash == load_object(str(box_file)).mesh_hash
 
 
 def test_mesh_path_options(box_file):
-    obj = resolve_object(box_file, units="in", density=1000.0)
+    obj = load_object(box_file, units="in", density=1000.0)
     assert obj.mesh.extents.max() == pytest.approx(0.3 * 0.0254)
     assert obj.mass.mass == pytest.approx(1000.0 * 0.006 * 0.0254**3, rel=1e-5)
-    assert resolve_object(box_file, size_m=0.6).mesh.extents.max() == pytest.approx(0.6)
+    assert load_object(box_file, size_m=0.6).mesh.extents.max() == pytest.approx(0.6)
     with pytest.raises(InputError, match="density"):
-        resolve_object(box_file, density=-1.0)
+        load_object(box_file, density=-1.0)
 
 
 def test_family_grammar(fake):
-    default = resolve_object("knife")
+    default = load_object("knife")
     assert default.name == "knife:0"
     assert default.category == "blade"
     assert default.source == "family"
-    assert resolve_object("knife:0") is default  # cached
-    assert resolve_object(" Knife ") is default
-    seven = resolve_object("knife:7")
+    assert load_object("knife:0") is default  # cached
+    assert load_object(" Knife ") is default
+    seven = load_object("knife:7")
     assert seven.name == "knife:7"
     assert seven.mesh.extents.max() == pytest.approx(0.17)
     assert seven.mesh_hash != default.mesh_hash
-    assert resolve_object("meat-cleaver:2").name == "meat_cleaver:2"
-    assert resolve_object("knife:007") is resolve_object("knife:7")
+    assert load_object("meat-cleaver:2").name == "meat_cleaver:2"
+    assert load_object("knife:007") is load_object("knife:7")
     assert fake.calls == [("knife", 0), ("knife", 7), ("meat_cleaver", 2)]
 
 
 def test_family_density_and_size(fake):
-    light = resolve_object("knife:1")
-    heavy = resolve_object("knife:1", density=2.0)
+    light = load_object("knife:1")
+    heavy = load_object("knife:1", density=2.0)
     assert heavy is not light
     assert heavy.mass.mass == pytest.approx(2.0 * light.mass.mass)
     assert heavy.mesh_hash == light.mesh_hash
     # A family keeps its real size: rescaling it would give other geometry the same name.
     with pytest.raises(InputError, match="mesh files only"):
-        resolve_object("knife:1", size_m=0.22)
+        load_object("knife:1", size_m=0.22)
 
 
 @pytest.mark.parametrize(
@@ -137,39 +137,39 @@ def test_family_density_and_size(fake):
 )
 def test_bad_seed(fake, spec):
     with pytest.raises(InputError, match="seed after ':' must be a non-negative integer"):
-        resolve_object(spec)
+        load_object(spec)
 
 
 def test_unknown_name_lists_the_families(fake, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(InputError, match=r"unknown object 'spoon'.*knife, meat_cleaver.*path"):
-        resolve_object("spoon")
+        load_object("spoon")
     with pytest.raises(InputError, match="unknown object 'spoon:3'"):
-        resolve_object("spoon:3")
+        load_object("spoon:3")
     with pytest.raises(InputError, match="does-not-exist.obj"):
-        resolve_object(tmp_path / "does-not-exist.obj")
+        load_object(tmp_path / "does-not-exist.obj")
     with pytest.raises(InputError, match="empty"):
-        resolve_object("  ")
+        load_object("  ")
     with pytest.raises(InputError, match="int"):
-        resolve_object(42)  # type: ignore[arg-type]
+        load_object(42)  # type: ignore[arg-type]
 
 
 def test_family_name_wins_over_a_file_of_that_name(fake, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "knife").write_text("not a mesh")
-    assert resolve_object("knife").source == "family"
+    assert load_object("knife").source == "family"
     with pytest.raises(MeshError, match="unsupported mesh format"):
-        resolve_object("./knife")
+        load_object("./knife")
 
 
 def test_resolved_object_passes_through(box_file):
-    obj = resolve_object(box_file, density=500.0)
-    assert resolve_object(obj) is obj
-    assert resolve_object(obj, density=500.0) is obj
-    other = resolve_object(obj, density=1000.0)
+    obj = load_object(box_file, density=500.0)
+    assert load_object(obj) is obj
+    assert load_object(obj, density=500.0) is obj
+    other = load_object(obj, density=1000.0)
     assert other.mesh is obj.mesh and other.mass.mass == pytest.approx(2 * obj.mass.mass)
     with pytest.raises(InputError, match="already resolved"):
-        resolve_object(obj, size_m=0.1)
+        load_object(obj, size_m=0.1)
 
 
 def test_without_families_every_spec_is_a_path(monkeypatch, box_file):
@@ -178,8 +178,8 @@ def test_without_families_every_spec_is_a_path(monkeypatch, box_file):
 
     monkeypatch.setattr(resolve_module, "_families", missing)
     with pytest.raises(InputError, match=r"Families: \(none installed\)"):
-        resolve_object("knife")
-    assert resolve_object(box_file).name == "part.stl"
+        load_object("knife")
+    assert load_object(box_file).name == "part.stl"
 
 
 @pytest.fixture
@@ -193,14 +193,14 @@ def real_families():
 
 
 def test_built_in_families_resolve(real_families):
-    names = objects.family_names()
+    names = objects.list_families()
     assert names == sorted(real_families.FAMILIES)
     assert "knife" in names
-    obj = resolve_object("knife")
+    obj = load_object("knife")
     assert obj.name == "knife:0"
     assert obj.category == real_families.FAMILIES["knife"].category
     assert obj.mesh.is_watertight and obj.mass.volume > 0
-    assert resolve_object("knife:0") is obj
+    assert load_object("knife:0") is obj
     assert objects.make_family is real_families.make_family
     assert objects.FAMILIES is real_families.FAMILIES
     again = resolve_module._resolve_family.__wrapped__("knife", 0, 1.0, None, None)
@@ -208,4 +208,4 @@ def test_built_in_families_resolve(real_families):
 
 
 def test_family_aliases_resolve_to_the_family():
-    assert resolve_object("cleaver:2").name == "meat_cleaver:2"
+    assert load_object("cleaver:2").name == "meat_cleaver:2"

@@ -17,9 +17,9 @@ FAST = PhysicsSettings(
 
 @pytest.fixture(scope="module")
 def mug():
-    from affordgrasp.objects import resolve_object
+    from affordgrasp.objects import load_object
 
-    return resolve_object("mug:0")
+    return load_object("mug:0")
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,7 @@ import pytest
 import trimesh
 
 from affordgrasp.hands import get_hand
-from affordgrasp.objects import resolve_object
+from affordgrasp.objects import load_object
 
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 
@@ -239,7 +239,7 @@ def box_object(tmp_path_factory):
     """A 20 x 4 x 3 cm box, as a mesh file object (no procedural family needed)."""
     path = tmp_path_factory.mktemp("objects") / "bar.stl"
     trimesh.creation.box((0.20, 0.04, 0.03)).export(path)
-    return resolve_object(str(path))
+    return load_object(str(path))
 
 
 def grasp_row_on_box(obj, *, spread: float = 0.0, closed: float = 0.6, sample: int = 0) -> dict:
@@ -346,4 +346,4 @@ def write_dataset(directory: Path, objects: list, rows_per_object: int = 6, seed
 def block_object(tmp_path_factory):
     path = tmp_path_factory.mktemp("objects2") / "block.stl"
     trimesh.creation.box((0.08, 0.06, 0.05)).export(path)
-    return resolve_object(str(path))
+    return load_object(str(path))

@@ -45,18 +45,18 @@ def scale_options(args) -> dict:
     return {"size_m": getattr(args, "size_m", None), "units": getattr(args, "units", None)}
 
 
-def resolve_objects(specs, args) -> list:
+def load_objects(specs, args) -> list:
     """Resolve object specs with ``--size-m`` / ``--units`` applied to the mesh files.
 
     Families are built at their real size; the options apply to the mesh files among
     ``specs`` and are refused when there is none.
     """
-    from ..objects import resolve_object
+    from ..objects import load_object
     from ..objects.resolve import is_family_spec
 
     scale = scale_options(args)
     if all(v is None for v in scale.values()):
-        return [resolve_object(s) for s in specs]
+        return [load_object(s) for s in specs]
     if all(is_family_spec(s) for s in specs):
         given = " and ".join(f"--{k.replace('_', '-')}" for k, v in scale.items() if v is not None)
         raise InputError(
@@ -64,7 +64,7 @@ def resolve_objects(specs, args) -> list:
             + ("is a built-in family" if len(specs) == 1 else "are built-in families")
             + " (made at real size in metres); drop the option or name a mesh file"
         )
-    return [resolve_object(s) if is_family_spec(s) else resolve_object(s, **scale) for s in specs]
+    return [load_object(s) if is_family_spec(s) else load_object(s, **scale) for s in specs]
 
 
 MAX_SEED = 2**63 - 1

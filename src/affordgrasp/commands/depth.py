@@ -48,7 +48,7 @@ def parse_p0(text: str) -> np.ndarray:
 
 def run(args, out) -> None:
     from ..grasp.pregrasp import sample_inputs
-    from ..objects import resolve_object
+    from ..objects import load_object
     from ..vision import DepthCamera, renderer_for, save_depth_png
 
     if args.out is not None and not args.out.endswith((".png", ".npy")):
@@ -63,7 +63,7 @@ def run(args, out) -> None:
             raise InputError(f"--sample must be >= 0, got {i}")
         p0, _ = sample_inputs(args.seed, i, i + 1)
     camera = DepthCamera(size=args.size, fov_deg=args.fov)
-    obj = resolve_object(args.object)
+    obj = load_object(args.object)
     renderer = renderer_for(obj, camera)
     depth = renderer.render(p0)[0]
     pose = renderer.poses(p0)[0]

@@ -71,7 +71,7 @@ def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict
 
 
 def run(args, out) -> None:
-    from ..objects import resolve_object
+    from ..objects import load_object
     from ..tasks import MetricColumns, get_task, is_viable, list_tasks, load_task_file
 
     check_counts(args)
@@ -82,7 +82,7 @@ def run(args, out) -> None:
     names = task_names(args.task) or [t for t in list_tasks() if t != "viable"]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
-    obj = resolve_object(args.object, size_m=args.size_m, units=args.units)
+    obj = load_object(args.object, size_m=args.size_m, units=args.units)
     table, spent, wall = run_batches(args, out, obj, metrics=True)
     from ..schema import metric_arrays
 

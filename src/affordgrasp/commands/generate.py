@@ -7,7 +7,7 @@ import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
-from .common import HAND_HELP, add_scale_arguments, resolve_objects, scale_options
+from .common import HAND_HELP, add_scale_arguments, load_objects, scale_options
 
 
 def add_arguments(p) -> None:
@@ -79,7 +79,7 @@ def run(args, out) -> None:
     cmd = command_line(args)
     objects = args.objects
     if any(v is not None for v in scale_options(args).values()):
-        objects = resolve_objects(args.objects, args)
+        objects = load_objects(args.objects, args)
     try:
         summary = generate(
             objects,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..cli import add_verbose_argument
 from ..errors import InputError
-from .common import add_scale_arguments, resolve_objects
+from .common import add_scale_arguments, load_objects
 
 
 def add_arguments(p) -> None:
@@ -35,7 +35,7 @@ def run(args, out) -> None:
             if ":" in spec:
                 raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
             spec = f"{spec}:{args.seed}"
-        (obj,) = resolve_objects([spec], args)
+        (obj,) = load_objects([spec], args)
         path = Path(args.out)
         ext = path.suffix.lower().lstrip(".")
         if ext not in ("obj", "stl", "ply", "glb", "off"):

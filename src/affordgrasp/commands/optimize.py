@@ -7,8 +7,8 @@ from .common import (
     HAND_HELP,
     add_scale_arguments,
     add_task_arguments,
+    load_objects,
     parse_thresholds,
-    resolve_objects,
 )
 
 
@@ -47,7 +47,7 @@ def add_arguments(p) -> None:
 def run(args, out) -> None:
     from ..optimize import optimize
 
-    (obj,) = resolve_objects([args.object], args)
+    (obj,) = load_objects([args.object], args)
     result = optimize(
         obj,
         args.task,

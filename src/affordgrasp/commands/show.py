@@ -16,8 +16,8 @@ from .common import (
     add_scale_arguments,
     add_task_arguments,
     check_counts,
+    load_objects,
     parse_tasks,
-    resolve_objects,
     scale_options,
 )
 
@@ -95,7 +95,7 @@ def add_arguments(p) -> None:
 def open_sources(args, out, tasks=(), thresholds=None) -> list:
     """One GraspSource per SOURCE: datasets as they are, objects evaluated now (with, when
     ``--uses`` is set, the best pairs of their grasps and ``--uses`` use points per task)."""
-    from ..objects import resolve_object
+    from ..objects import load_object
     from ..objects.resolve import is_family_spec
     from ..pipeline import evaluate_samples
     from ..viz.sources import DatasetSource, TableSource, is_dataset_path
@@ -106,12 +106,12 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
     scale = scale_options(args)
     if not scaled and any(v is not None for v in scale.values()):
         if specs:
-            resolve_objects(specs, args)  # refuses the options for families, saying why
+            load_objects(specs, args)  # refuses the options for families, saying why
         raise InputError(
             "--units / --size-m rescale mesh files, and no SOURCE or --mesh is one; drop "
             "the option, or pass the dataset's mesh with --mesh PATH"
         )
-    objects = {s: resolve_object(s, **({} if is_family_spec(s) else scale)) for s in specs}
+    objects = {s: load_object(s, **({} if is_family_spec(s) else scale)) for s in specs}
     for spec in args.source:
         if is_dataset_path(spec):
             sources.append(DatasetSource(Path(spec).expanduser()))
@@ -174,7 +174,7 @@ def resolve_dataset_object(
 
     ``scale`` (``size_m`` / ``units``) applies to mesh files, as when the dataset was made.
     """
-    from ..objects import resolve_object
+    from ..objects import load_object
     from ..objects.resolve import is_family_spec
 
     candidates: list[str] = []
@@ -189,7 +189,7 @@ def resolve_dataset_object(
     for spec in candidates:
         try:
             options = {} if is_family_spec(spec) else (scale or {})
-            obj = resolve_object(spec, **options)
+            obj = load_object(spec, **options)
         except InputError as exc:
             last_error = exc
             continue

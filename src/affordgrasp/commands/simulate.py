@@ -18,12 +18,12 @@ def add_arguments(p) -> None:
 
 
 def run(args, out) -> None:
-    from ..objects import resolve_object
+    from ..objects import load_object
 
     check_counts(args)
     if args.out:
         check_output_file(args.out, "--out")
-    obj = resolve_object(args.object, size_m=args.size_m, units=args.units)
+    obj = load_object(args.object, size_m=args.size_m, units=args.units)
     table, spent, wall = run_batches(args, out, obj, metrics=False)
     rows, doc = status_summary(table)
     rate = args.samples / spent["simulate"] if spent["simulate"] > 0 else float("inf")

@@ -145,13 +145,13 @@ def build_manifest(
     return manifest
 
 
-def resolve_objects(specs: Sequence) -> list:
+def load_objects(specs: Sequence) -> list:
     """Resolve object specs once, refusing duplicates (they would duplicate rows)."""
-    from ..objects import resolve_object
+    from ..objects import load_object
 
     if not specs:
         raise InputError("no objects given; name at least one object (e.g. 'knife', 'knife:7')")
-    objects = [resolve_object(s) for s in specs]
+    objects = [load_object(s) for s in specs]
     seen: dict[str, int] = {}
     for i, o in enumerate(objects):
         if o.name in seen:
@@ -248,7 +248,7 @@ def generate(
     _check_counts(samples, seed, shard_size, chunk_size)
     check_engine(engine, workers, address)
     hand_model = get_hand(hand)
-    resolved = resolve_objects(list(objects))
+    resolved = load_objects(list(objects))
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
         raise bad_parameter("out", f"{str(directory)!r} is a file; give a directory", DatasetError)

@@ -198,9 +198,6 @@ def read_dataset(
         )
 
 
-read_table = read_dataset  # the name of affordgrasp 0.1
-
-
 def dataset_dir(path: str | os.PathLike) -> Path:
     path = Path(path)
     read_manifest(path)

@@ -394,7 +394,7 @@ def simulate(
 ) -> SimulationBatch:
     """Simulate the policy for a batch of pregrasps on one object.
 
-    obj : GraspObject (see ``affordgrasp.objects.resolve_object``)
+    obj : GraspObject (see ``affordgrasp.objects.load_object``)
     p0 : (n, 6) pregrasps in [-1, 1]^5 x [0, 1]
     use_dir : (n, 2) use directions in [-1, 1]^2, or None (then no use point: NaN)
     """

@@ -85,7 +85,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
     (pass the training rows' Target to other splits).
     """
     from ..dataset.layout import read_manifest
-    from ..dataset.reading import read_table
+    from ..dataset.reading import read_dataset
 
     manifest = read_manifest(directory)
     if not manifest.get("metrics", True):
@@ -100,7 +100,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
     if name.startswith("task:"):
         columns = None  # a task may read any metric column
     try:
-        table = read_table(directory, columns=columns, objects=objects)
+        table = read_dataset(directory, columns=columns, objects=objects)
     except Exception as exc:  # noqa: BLE001 - an unknown column name is bad input
         if "No match for FieldRef" in str(exc) or "not in schema" in str(exc):
             raise InputError(
@@ -210,7 +210,7 @@ def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
 
 
 def _renderer_of(entry: dict | None, name: str):
-    from ..objects import resolve_object
+    from ..objects import load_object
     from ..vision.depth import renderer_for
 
     if entry is None:
@@ -221,7 +221,7 @@ def _renderer_of(entry: dict | None, name: str):
             f"the mesh of {name!r} ({spec}) is gone and the dataset has no depth images; "
             "generate it with --depth or restore the mesh file"
         )
-    obj = resolve_object(spec)
+    obj = load_object(spec)
     if entry.get("mesh_hash") and obj.mesh_hash != entry["mesh_hash"]:
         raise DatasetError(
             f"object {name!r} resolves to a different mesh than the dataset's; "

@@ -1,6 +1,6 @@
 """Objects: load, repair and scale meshes, mass properties, families (conventions: Objects).
 
-The entry point is :func:`resolve_object`, which turns ``"knife"``, ``"knife:7"`` or a
+The entry point is :func:`load_object`, which turns ``"knife"``, ``"knife:7"`` or a
 mesh path into a :class:`GraspObject`. The procedural families (:func:`make_family`,
 ``FAMILIES``) are imported on first use.
 """
@@ -14,18 +14,15 @@ from affordgrasp.objects.mass import MassProperties, mass_properties, mass_prope
 from affordgrasp.objects.off import read_off
 from affordgrasp.objects.resolve import (
     GraspObject,
-    family_names,
     list_families,
     load_object,
     mesh_hash,
-    resolve_object,
 )
 
 __all__ = [
     "FAMILIES",
     "GraspObject",
     "MassProperties",
-    "family_names",
     "list_families",
     "load_object",
     "load_mesh",
@@ -35,7 +32,6 @@ __all__ = [
     "mesh_hash",
     "prepare_mesh",
     "read_off",
-    "resolve_object",
 ]
 
 # Served from objects.families on first access: building the family table is not needed

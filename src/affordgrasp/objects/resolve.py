@@ -28,12 +28,10 @@ from affordgrasp.objects.mass import MassProperties, mass_properties
 
 __all__ = [
     "GraspObject",
-    "family_names",
     "is_family_spec",
     "list_families",
     "load_object",
     "mesh_hash",
-    "resolve_object",
 ]
 
 # Family objects are cached: building and repairing one can take a while, and the pipeline
@@ -133,9 +131,6 @@ def list_families() -> list[str]:
     return sorted(_families().FAMILIES)
 
 
-family_names = list_families  # the name of affordgrasp 0.1
-
-
 def load_object(
     spec: str | os.PathLike | GraspObject,
     *,
@@ -193,9 +188,6 @@ def load_object(
     if path.exists():
         return _resolve_file(path, size_m=size_m, units=units, density=density)
     raise InputError(_unknown_spec_message(text))
-
-
-resolve_object = load_object  # the name of affordgrasp 0.1; the package uses it too
 
 
 def is_family_spec(spec: object) -> bool:

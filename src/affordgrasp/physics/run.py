@@ -88,7 +88,7 @@ class PhysicsSummary:
 
 def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table, dict]:
     from ..dataset.layout import read_manifest
-    from ..dataset.reading import read_table, select_objects
+    from ..dataset.reading import read_dataset, select_objects
 
     manifest = read_manifest(dataset_dir)
     if not manifest.get("metrics", True):
@@ -98,7 +98,7 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
         )
     chosen = select_objects(dataset_dir, objects)
     columns = [*KEY_COLUMNS, *STATE_COLUMNS, *METRIC_COLUMNS]
-    table = read_table(dataset_dir, columns=columns, objects=chosen)
+    table = read_dataset(dataset_dir, columns=columns, objects=chosen)
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
     keep = np.isin(status, list(statuses))
     order_of = {o["name"]: o["index"] for o in manifest["objects"]}
@@ -291,13 +291,13 @@ _OBJECTS: dict = {}
 
 def _scene_object(entry: dict, settings: PhysicsSettings):
     """The GraspObject of a manifest entry (checked against its hash) and its parts."""
-    from ..objects import resolve_object
+    from ..objects import load_object
     from .decompose import convex_parts
 
     key = entry["mesh_hash"]
     if key not in _OBJECTS:
         spec = entry["name"] if entry["source"] == "family" else entry["source"]
-        obj = resolve_object(spec)
+        obj = load_object(spec)
         if obj.mesh_hash != entry["mesh_hash"]:
             raise DatasetError(
                 f"object {entry['name']!r} resolves to another mesh than the dataset's "

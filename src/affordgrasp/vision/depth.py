@@ -106,9 +106,9 @@ def render_depth(obj, p0, camera: DepthCamera | None = None) -> np.ndarray:
 
     if isinstance(obj, trimesh.Trimesh):
         return DepthRenderer(obj, camera).render(p0)
-    from ..objects import resolve_object
+    from ..objects import load_object
 
-    return renderer_for(resolve_object(obj), camera).render(p0)
+    return renderer_for(load_object(obj), camera).render(p0)
 
 
 def depth_to_mm(depth: np.ndarray) -> np.ndarray:

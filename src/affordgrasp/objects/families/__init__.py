@@ -50,7 +50,7 @@ from affordgrasp.objects.families import blades, containers, handtools, parts, s
 from affordgrasp.objects.families.geometry import to_trimesh
 from affordgrasp.objects.families.parameters import ParameterDraw
 
-__all__ = ["FamilyInfo", "FAMILIES", "CATEGORIES", "ALIASES", "family_names", "make_family"]
+__all__ = ["FamilyInfo", "FAMILIES", "CATEGORIES", "ALIASES", "make_family"]
 
 logger = logging.getLogger(__name__)
 
@@ -167,22 +167,17 @@ ALIASES: dict[str, str] = {
 _CLEAN_TOLERANCE_M = 1e-6
 
 
-def family_names() -> list[str]:
-    """Canonical names of the built-in families, in a fixed order."""
-    return list(FAMILIES)
-
-
 def _canonical(name: object) -> str:
     if not isinstance(name, str):
         raise InputError(
             f"family name must be a string, got {type(name).__name__} {name!r}; "
-            f"available families: {', '.join(family_names())}"
+            f"available families: {', '.join(FAMILIES)}"
         )
     key = name.strip().lower().replace("-", "_").replace(" ", "_")
     key = ALIASES.get(key, key)
     if key not in FAMILIES:
         raise InputError(
-            f"unknown object family {name!r}; available families: {', '.join(family_names())}"
+            f"unknown object family {name!r}; available families: {', '.join(FAMILIES)}"
             f" (aliases: {', '.join(sorted(ALIASES))})"
         )
     return key
@@ -201,7 +196,7 @@ def _check_seed(seed: object) -> int:
 def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
     """Build one instance of a procedural family.
 
-    name : a family name from :func:`family_names` (or an alias such as ``"cleaver"``).
+    name : a family name from :func:`affordgrasp.list_families` (or an alias, ``"cleaver"``).
     seed : non-negative int; 0 is the family's typical instance.
     Returns a watertight ``trimesh.Trimesh`` in metres, in the frame described in this
     module's docstring, with ``metadata`` keys ``family``, ``category``, ``seed``,
