@@ -121,9 +121,9 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
 
 
 def _is_metric(table: pa.Table, name: str) -> bool:
-    from .run import METRIC_COLUMNS
+    from .run import REPORTED_METRICS
 
-    return name in METRIC_COLUMNS
+    return name in REPORTED_METRICS
 
 
 def _outcomes(table: pa.Table) -> dict[str, np.ndarray]:

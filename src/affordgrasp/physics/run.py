@@ -26,13 +26,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .. import __version__
-from ..columns import METRIC_COLUMNS as _DATASET_METRICS
+from ..columns import METRIC_COLUMNS
 from ..errors import DatasetError, InputError
 from .settings import PhysicsSettings
 
 log = logging.getLogger(__name__)
 
-__all__ = ["METRIC_COLUMNS", "PhysicsSummary", "read_outcomes", "run_physics"]
+__all__ = ["REPORTED_METRICS", "PhysicsSummary", "read_outcomes", "run_physics"]
 
 FORMAT = "affordgrasp-physics"
 FORMAT_VERSION = 1
@@ -41,8 +41,9 @@ DEFAULT_SHARD_SIZE = 128
 
 KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
 STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal")
-# The dataset's numeric metric columns, carried into the outcome table for the report.
-METRIC_COLUMNS = (*(c for c in _DATASET_METRICS if c != "epsilon_reason"), "n_contacts")
+# The dataset's numeric metric columns (not the text epsilon_reason) and the contact count,
+# carried into the outcome table for the report.
+REPORTED_METRICS = (*(c for c in METRIC_COLUMNS if c != "epsilon_reason"), "n_contacts")
 
 
 @dataclass
@@ -97,7 +98,7 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
             "report compares metrics with outcomes: generate it with metrics"
         )
     chosen = select_objects(dataset_dir, objects)
-    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *METRIC_COLUMNS]
+    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS]
     table = read_dataset(dataset_dir, columns=columns, objects=chosen)
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
     keep = np.isin(status, list(statuses))
