@@ -21,6 +21,16 @@ _UNVERSIONED = object()
 class IdentityCache(Generic[T]):
     """Values built from objects, keyed by the objects' identity and held weakly.
 
+    A value lives as long as the object it was built from; ``get`` rebuilds it when the
+    ``version`` given differs from the stored one. The cache takes no parameters.
+
+    Attributes
+    ----------
+    get : method
+        ``get(obj, build, *, version=...)``: the cached value of ``obj`` or ``build()``.
+    clear : method
+        Forget every value.
+
     Examples
     --------
     >>> normals = IdentityCache()

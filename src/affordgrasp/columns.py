@@ -60,21 +60,60 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {"use_edge_angle": ("°", 180.0 / 
 
 
 def display_unit(column: str) -> str:
-    """The unit a table shows ``column`` in ("" when dimensionless or unknown)."""
+    """The unit a table shows ``column`` in.
+
+    Parameters
+    ----------
+    column : str
+        A metric or derived column name (``use_edge_angle``, ``hold_effort_sum``, ...).
+
+    Returns
+    -------
+    str
+        The unit shown (``°`` for the edge angle, else the stored SI unit); ``""`` when the
+        column is dimensionless or unknown.
+    """
     if column in DISPLAY_UNITS:
         return DISPLAY_UNITS[column][0]
     return METRIC_UNITS.get(column, "")
 
 
 def display_value(column: str, value: Any) -> Any:
-    """``value`` of ``column`` converted to its table unit (degrees for the edge angle)."""
+    """``value`` of ``column`` converted to its table unit (degrees for the edge angle).
+
+    Parameters
+    ----------
+    column : str
+        The column the value belongs to.
+    value : object
+        A stored value (SI). Numbers of a column with a display unit are converted;
+        anything else (text, arrays, None) is returned unchanged.
+
+    Returns
+    -------
+    object
+        ``float`` in the display unit, or ``value`` itself.
+    """
     if column in DISPLAY_UNITS and isinstance(value, int | float | np.floating):
         return float(value) * DISPLAY_UNITS[column][1]
     return value
 
 
 def column_heading(column: str, label: str | None = None) -> str:
-    """A table heading with the unit: ``edge angle (°)``, ``ΣE_h (N)``, ``ε``."""
+    """A table heading with the unit: ``edge angle (°)``, ``ΣE_h (N)``, ``ε``.
+
+    Parameters
+    ----------
+    column : str
+        The column whose unit is shown (see :func:`display_unit`).
+    label : str, optional
+        The text shown instead of the column name.
+
+    Returns
+    -------
+    str
+        ``"<label or column> (<unit>)"``, or the bare name for a dimensionless column.
+    """
     unit = display_unit(column)
     name = label or column
     return f"{name} ({unit})" if unit else name

@@ -34,12 +34,38 @@ def bad_parameter(parameter: str, problem: str, error: type[InputError] = InputE
     """An error about one parameter: ``bad_parameter("samples", "must be >= 1, got 0")``.
 
     The message starts with the parameter's Python name; the CLI rewrites it to the option.
+
+    Parameters
+    ----------
+    parameter : str
+        The Python name of the bad parameter.
+    problem : str
+        What is wrong with it, starting with a verb (``"must be >= 1, got 0"``).
+    error : type
+        The :class:`InputError` subclass to build.
+
+    Returns
+    -------
+    InputError
+        The error (not raised), with ``parameter`` set.
     """
     return error(f"{parameter} {problem}", parameter=parameter)
 
 
 def cli_message(exc: BaseException) -> str:
-    """The message of an error as the CLI says it: the parameter named as its option."""
+    """The message of an error as the CLI says it: the parameter named as its option.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error; when it has a ``parameter`` attribute, the first mention of that name
+        becomes its option (``samples`` -> ``--samples``).
+
+    Returns
+    -------
+    str
+        The one-line message.
+    """
     import re
 
     text = str(exc)
@@ -75,8 +101,15 @@ class MissingDependencyError(AffordgraspError, ImportError):
 
 
 class Interrupted(KeyboardInterrupt):
-    """A run stopped by a signal (SIGTERM, SIGHUP) and handled like Ctrl-C: workers stopped,
-    finished work kept. ``signum`` is the signal; the CLI exits with 128 + signum."""
+    """A run stopped by a signal (SIGTERM, SIGHUP) and handled like Ctrl-C.
+
+    Workers are stopped and finished work is kept; the CLI exits with 128 + signum.
+
+    Parameters
+    ----------
+    signum : int
+        The signal number.
+    """
 
     def __init__(self, signum: int):
         import signal
@@ -86,7 +119,25 @@ class Interrupted(KeyboardInterrupt):
 
 
 def require(module: str, extra: str):
-    """Import an optional dependency, or raise a message that says how to install it."""
+    """Import an optional dependency, or raise a message that says how to install it.
+
+    Parameters
+    ----------
+    module : str
+        The module to import (``"torch"``, ``"mujoco"``).
+    extra : str
+        The optional extra of affordgrasp that installs it (``"learn"``, ``"physics"``).
+
+    Returns
+    -------
+    module
+        The imported module.
+
+    Raises
+    ------
+    MissingDependencyError
+        When it is not installed; the message gives the ``pip install`` line.
+    """
     import importlib
 
     try:
@@ -102,6 +153,18 @@ def did_you_mean(name: object, choices) -> str:
     """`` (did you mean 'hammer'?)`` when ``name`` is close to one of ``choices``, else ``""``.
 
     For messages about unknown names: a typo gets the intended name back.
+
+    Parameters
+    ----------
+    name : object
+        The unknown name (anything that is not a non-empty str gives ``""``).
+    choices : iterable
+        The known names (compared case-insensitively).
+
+    Returns
+    -------
+    str
+        The suggestion with its leading space, or ``""``.
     """
     import difflib
 

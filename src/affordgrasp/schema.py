@@ -54,7 +54,20 @@ DEPTH_FIELD = pa.field(DEPTH_COLUMN, pa.binary())
 
 
 def dataset_schema(metrics: bool = True, depth: bool = False) -> pa.Schema:
-    """The schema of a dataset's shards: with or without the metrics and the depth images."""
+    """The schema of a dataset's shards.
+
+    Parameters
+    ----------
+    metrics : bool
+        Include the metric columns (:data:`affordgrasp.columns.METRIC_COLUMNS`).
+    depth : bool
+        Include the depth image column (uint16 millimetres).
+
+    Returns
+    -------
+    pyarrow.Schema
+        Key, grasp state and (optionally) metric and depth fields, in shard order.
+    """
     schema = SCHEMA if metrics else SIMULATION_SCHEMA
     return schema.append(DEPTH_FIELD) if depth else schema
 
@@ -104,7 +117,31 @@ def _contact_parts(obj, contacts) -> list[np.ndarray]:
 def batch_to_table(
     obj, batch, *, hand: str, seed: int, sample_start: int = 0, metrics: dict | None = None
 ) -> pa.Table:
-    """Rows of a SimulationBatch (and its metrics, a dict of column → (n,) array) as a Table."""
+    """Rows of a simulated batch (and their metrics) as an Arrow table.
+
+    Parameters
+    ----------
+    obj : GraspObject
+        The object grasped (its name, hash and face parts label the rows).
+    batch : SimulationBatch
+        n simulated grasps: pregrasps p0 (n, 7), use directions (n, 2), hand poses, joint
+        angles (rad), contacts (ragged, m) and use points (n, 3) m.
+    hand : str
+        The hand's name.
+    seed : int
+        The dataset seed recorded in each row.
+    sample_start : int
+        Sample index of the first row.
+    metrics : dict of str to ndarray, optional
+        Column name to an (n,) array (float64; ``epsilon_reason`` str); None leaves the
+        metric columns out.
+
+    Returns
+    -------
+    pyarrow.Table
+        n rows with the fields of :func:`dataset_schema`; positions in metres, directions
+        unit vectors, joint angles in radians.
+    """
     n = len(batch)
     contacts = batch.contacts
     cols = {
@@ -147,7 +184,19 @@ def batch_to_table(
 
 
 def metric_arrays(table: pa.Table) -> dict[str, np.ndarray]:
-    """The metric columns of a table as numpy arrays (for tasks and summaries)."""
+    """The metric columns of a table as numpy arrays (for tasks and summaries).
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        Rows with some or all of the metric columns.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Column name to an (n,) array: float64 for the numeric metrics, object (str) for
+        ``epsilon_reason``; columns absent from ``table`` are left out.
+    """
     out = {}
     for name in METRIC_COLUMNS:
         if name in table.column_names:

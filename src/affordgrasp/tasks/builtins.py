@@ -45,6 +45,21 @@ def _pick(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def viable_mask(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    """Which grasps are viable: ε > eps_min, ΣE_h < hold_max and E_i < impact_max.
+
+    Parameters
+    ----------
+    m : mapping of str to ndarray
+        ``epsilon``, ``hold_effort_sum`` (N) and ``impact_effort`` (N per N·m), each (n,)
+        float64.
+    t : mapping of str to float
+        ``eps_min``, ``hold_max`` (N) and ``impact_max`` (N per N·m).
+
+    Returns
+    -------
+    (n,) bool ndarray
+        True for a viable grasp (NaN metrics are not viable).
+    """
     return (
         (m["epsilon"] > t["eps_min"])
         & (m["hold_effort_sum"] < t["hold_max"])
@@ -57,7 +72,13 @@ def _viable(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def builtin_tasks() -> list[Task]:
-    """Fresh Task objects of the built-in tasks: beat, cut, cut-ug, pick, viable."""
+    """Fresh Task objects of the built-in tasks: beat, cut, cut-ug, pick, viable.
+
+    Returns
+    -------
+    list of Task
+        New objects on every call (a registry may replace them without touching others).
+    """
     return [
         make_task(
             "beat",

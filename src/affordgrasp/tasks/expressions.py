@@ -76,7 +76,16 @@ _CMPOPS = {
 
 
 class Expression:
-    """A parsed, checked task expression over metric and threshold names."""
+    """A parsed, checked task expression over metric and threshold names.
+
+    Parameters
+    ----------
+    source : str
+        The expression (``"use_force * (epsilon > tau_eps)"``): numbers, names, arithmetic,
+        comparisons, ``and``/``or``/``not`` and the functions the task format allows.
+    where : str
+        How error messages name the expression (``"task 'cut': value"``).
+    """
 
     def __init__(self, source: str, *, where: str = "expression"):
         if not isinstance(source, str) or not source.strip():
@@ -230,7 +239,28 @@ def expression_task(
     modes: Mapping[str, Mapping[str, float]] | None = None,
     description: str = "",
 ) -> Task:
-    """A declarative task: ``value`` where the ``requires`` expression holds, else -inf."""
+    """A declarative task: ``value`` where the ``requires`` expression holds, else -inf.
+
+    Parameters
+    ----------
+    name : str
+        Registry name.
+    value : str
+        Expression of the task value over metric columns and thresholds.
+    requires : str, optional
+        Boolean expression a grasp must satisfy; elsewhere the value is -inf.
+    thresholds : mapping of str to float, optional
+        Default threshold values (names used by the expressions).
+    modes : mapping of str to mapping, optional
+        Mode name to threshold overrides.
+    description : str
+        One line for listings.
+
+    Returns
+    -------
+    Task
+        Checked, not registered; its ``requires`` are the columns the expressions read.
+    """
     thresholds = dict(thresholds or {})
     value_expr = Expression(value, where=f"task {name!r} value")
     req_expr = Expression(requires, where=f"task {name!r} requires") if requires else None

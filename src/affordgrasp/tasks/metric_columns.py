@@ -16,6 +16,12 @@ class MetricColumns(Mapping):
 
     Accepts a mapping of name -> array, a pyarrow Table or a pandas DataFrame. A missing
     column raises a :class:`TaskError` that lists the available ones.
+
+    Parameters
+    ----------
+    columns : mapping, pyarrow.Table or pandas.DataFrame
+        The metric columns of n rows; each is read once, as an (n,) float64 array, on
+        first access. ``hold_effort_sum`` is derived when the six hold efforts are there.
     """
 
     def __init__(self, columns: Any):

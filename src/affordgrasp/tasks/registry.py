@@ -158,6 +158,11 @@ def register_task(
         Metric columns read by ``func`` (checked before every evaluation).
     replace : bool
         Allow replacing an existing task of that name.
+
+    Returns
+    -------
+    Task
+        The registered task.
     """
     task = make_task(name, func, thresholds, modes, description, requires)
     return TASKS.register(task, replace=replace)
@@ -173,7 +178,20 @@ def task_from_expressions(
     *,
     replace: bool = False,
 ) -> Task:
-    """Register a declarative task from ``value`` / ``requires`` expressions."""
+    """Register a declarative task from ``value`` / ``requires`` expressions.
+
+    Parameters
+    ----------
+    name, value, requires, thresholds, modes, description
+        As for :func:`affordgrasp.tasks.expressions.expression_task`.
+    replace : bool
+        Allow replacing an existing task of that name.
+
+    Returns
+    -------
+    Task
+        The registered task.
+    """
     task = expression_task(name, value, requires, thresholds, modes, description)
     return TASKS.register(task, replace=replace)
 
@@ -197,7 +215,13 @@ def load_task_file(path: str | os.PathLike, *, replace: bool = False) -> list[st
 
 
 def unregister_task(name: str) -> None:
-    """Remove a task (built-in ones included) from the registry."""
+    """Remove a task (built-in ones included) from the registry.
+
+    Parameters
+    ----------
+    name : str
+        A registered task name; an unknown one raises :class:`TaskError`.
+    """
     TASKS.unregister(name)
 
 
@@ -223,12 +247,35 @@ def get_task(name: str) -> Task:
 
 
 def list_tasks() -> list[str]:
-    """Names of the registered tasks, sorted."""
+    """Names of the registered tasks, sorted.
+
+    Returns
+    -------
+    list of str
+        Built-in tasks, registered ones and those of ``AFFORDGRASP_TASKS`` files.
+    """
     return TASKS.names()
 
 
 def evaluate_task(name: str, columns: Any, mode: str = "default", **overrides: float) -> np.ndarray:
-    """Shorthand for ``get_task(name).evaluate(columns, mode, **overrides)``."""
+    """Shorthand for ``get_task(name).evaluate(columns, mode, **overrides)``.
+
+    Parameters
+    ----------
+    name : str
+        A registered task.
+    columns : mapping, pyarrow.Table or pandas.DataFrame
+        The metric columns of n rows.
+    mode : str
+        Threshold mode (``default``, ``no-robustness``, ``extra-robustness``, ...).
+    **overrides : float
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        The task value of each row; -inf where the task's requirements fail.
+    """
     return get_task(name).evaluate(columns, mode, **overrides)
 
 
@@ -236,6 +283,19 @@ def is_viable(columns: Any, mode: str = "default", **overrides: float) -> np.nda
     """Boolean mask of viable grasps (ε > τ_ε,viable, ΣE_h < 250, E_i < τ_Ei).
 
     ``mode="paper"`` gives the paper's literal ε > 0.15, ΣE_h < 250, E_i < 100.
+
+    Parameters
+    ----------
+    columns : mapping, pyarrow.Table or pandas.DataFrame
+        The metric columns of n rows.
+    mode : str
+        Threshold mode of the ``viable`` task.
+    **overrides : float
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    (n,) bool ndarray
     """
     task = get_task("viable")
     values = task.thresholds_for(mode, **overrides)

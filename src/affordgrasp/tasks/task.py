@@ -116,6 +116,26 @@ def make_task(
 
     The Table I modes (``default``, ``no-robustness``, ``extra-robustness``) set ``tau_eps``
     when the task has that threshold; a task's own modes add to or refine them.
+
+    Parameters
+    ----------
+    name : str
+        Registry name.
+    func : callable
+        ``func(metrics, thresholds) -> (n,) float64``, vectorised over rows.
+    thresholds : mapping of str to float, optional
+        Default threshold values.
+    modes : mapping of str to mapping, optional
+        Mode name to threshold overrides.
+    description : str
+        One line for listings.
+    requires : iterable of str
+        Metric columns ``func`` reads.
+
+    Returns
+    -------
+    Task
+        Checked (names, finite thresholds, callable), not registered.
     """
     if not isinstance(name, str) or not name.strip():
         raise TaskError(f"a task name must be a non-empty string, got {name!r}")

@@ -79,6 +79,16 @@ def standard_modes(thresholds: Mapping[str, float]) -> dict[str, dict[str, float
 
     The ``default`` mode keeps the task's own thresholds (a task declared with its own
     ``tau_eps`` keeps it); the other modes set ``tau_eps`` when the task has one.
+
+    Parameters
+    ----------
+    thresholds : mapping of str to float
+        The task's default thresholds.
+
+    Returns
+    -------
+    dict of str to dict
+        Mode name to the threshold overrides of that mode.
     """
     modes: dict[str, dict[str, float]] = {}
     for mode, tau in MODE_EPS.items():

@@ -19,7 +19,18 @@ def _number(value: Any, where: str) -> float:
 
 
 def read_task_file(path: str | os.PathLike) -> list[Task]:
-    """Every task of a TOML file (see :mod:`affordgrasp.tasks`), checked, not registered."""
+    """Every task of a TOML file (see :mod:`affordgrasp.tasks`), checked, not registered.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file (``[tasks.<name>]`` tables).
+
+    Returns
+    -------
+    list of Task
+        In file order; a bad task raises :class:`TaskError` naming the file and the task.
+    """
     path = Path(path)
     try:
         with path.open("rb") as fh:
