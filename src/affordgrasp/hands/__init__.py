@@ -20,7 +20,19 @@ from .model import Dof, Finger, Hand, Joint, Link, Shape
 
 
 class HandRegistry:
-    """Hands by name; built-in hands are built on first lookup, then kept."""
+    """Hands by name; built-in hands are built on first lookup, then kept.
+
+    The registry takes no parameters; :data:`HANDS` is the one the package uses.
+
+    Attributes
+    ----------
+    register : method
+        ``register(hand, *, replace=False)``: add a hand under its name.
+    unregister : method
+        ``unregister(name)``: remove one.
+    get : method
+        ``get(name)``: the hand of that name (:class:`HandError` if unknown).
+    """
 
     def __init__(self) -> None:
         self._factories: dict[str, Callable[[], Hand]] = {
@@ -82,6 +94,11 @@ def get_hand(hand: str | os.PathLike | Hand = "barrett") -> Hand:
         ``"barrett"`` (default), ``"parallel_jaw"``, a name given to :func:`register_hand`,
         or the path of a file written by :func:`save_hand`.
 
+    Returns
+    -------
+    Hand
+        The hand (the same object for the same registered name).
+
     Raises
     ------
     HandError
@@ -115,7 +132,13 @@ def register_hand(hand: Hand, *, replace: bool = False) -> Hand:
 
 
 def list_hands() -> list[str]:
-    """Names of the registered hands."""
+    """Names of the registered hands.
+
+    Returns
+    -------
+    list of str
+        The built-in hands (``barrett``, ``parallel_jaw``) and those registered since.
+    """
     return HANDS.names()
 
 

@@ -63,7 +63,14 @@ def _finger(prefix: str, parent: str, origin: np.ndarray) -> tuple[Link, Link]:
 
 
 def barrett_bh8_282() -> Hand:
-    """The Barrett BH8-282 three-finger hand."""
+    """The Barrett BH8-282 three-finger hand.
+
+    Returns
+    -------
+    Hand
+        A new, validated description: palm and three fingers of two links each, the
+        spread DOF as pregrasp DOF (rad), three closing DOFs (rad); lengths in m.
+    """
     palm = Link(
         "palm",
         None,

@@ -45,7 +45,19 @@ def _matrix(m: Any) -> list:
 
 
 def hand_to_dict(hand: Hand) -> dict:
-    """The hand as plain data (str, float, lists, dicts): JSON- and TOML-ready."""
+    """The hand as plain data (str, float, lists, dicts): JSON- and TOML-ready.
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+
+    Returns
+    -------
+    dict
+        Links (poses as 4 x 4 nested lists, lengths in m), DOFs (limits in rad or m),
+        fingers and the pregrasp DOF; :func:`hand_from_dict` rebuilds the hand exactly.
+    """
     links = []
     for link in hand.links:
         doc: dict[str, Any] = {"name": link.name, "material": link.material}
@@ -106,7 +118,18 @@ def _half_extents(a: np.ndarray) -> tuple[float, float, float]:
 
 
 def hand_from_dict(doc: dict) -> Hand:
-    """The :class:`Hand` of a document made by :func:`hand_to_dict` (validated)."""
+    """The :class:`Hand` of a document made by :func:`hand_to_dict` (validated).
+
+    Parameters
+    ----------
+    doc : dict
+        The document (from JSON or TOML).
+
+    Returns
+    -------
+    Hand
+        Validated; a bad document raises :class:`~affordgrasp.errors.HandError`.
+    """
     name = str(_need(doc, "name", "hand"))
     where = f"hand {name!r}"
     try:
@@ -202,7 +225,18 @@ def _toml_table(doc: dict, path: str, lines: list[str]) -> None:
 
 
 def hand_to_toml(hand: Hand) -> str:
-    """The hand as a TOML document."""
+    """The hand as a TOML document.
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+
+    Returns
+    -------
+    str
+        TOML text of :func:`hand_to_dict` (floats written exactly).
+    """
     lines: list[str] = []
     _toml_table(hand_to_dict(hand), "", lines)
     return "\n".join(lines) + "\n"

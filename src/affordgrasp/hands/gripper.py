@@ -18,6 +18,14 @@ RADIUS = 0.004
 
 
 def parallel_jaw() -> Hand:
+    """The parallel-jaw gripper of this module's docstring.
+
+    Returns
+    -------
+    Hand
+        A new, validated description: a palm and two jaws on prismatic DOFs (m), no
+        pregrasp DOF.
+    """
     palm = Link(
         "palm",
         None,

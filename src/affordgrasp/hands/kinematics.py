@@ -27,10 +27,20 @@ PRISMATIC = 1
 class KinematicTree(NamedTuple):
     """A hand's links as flat arrays, in topological order (the root first).
 
-    parent (l,) int64 parent link index, -1 for the root; origin (l, 4, 4) joint frame in
-    the parent link; axis (l, 3) unit joint axis; kind (l,) REVOLUTE / PRISMATIC;
-    dof (l,) int64 DOF index driving the joint (-1 for the root); ratio (l,) joint value
-    per unit of that DOF.
+    Attributes
+    ----------
+    parent : (l,) int64 ndarray
+        Parent link index, -1 for the root.
+    origin : (l, 4, 4) float64 ndarray
+        Joint frame in the parent link frame at q = 0 (m).
+    axis : (l, 3) float64 ndarray
+        Unit joint axis in the joint frame.
+    kind : (l,) int64 ndarray
+        ``REVOLUTE`` or ``PRISMATIC``.
+    dof : (l,) int64 ndarray
+        Index of the DOF driving the joint (-1 for the root).
+    ratio : (l,) float64 ndarray
+        Joint value per unit of that DOF.
     """
 
     parent: np.ndarray
@@ -43,7 +53,15 @@ class KinematicTree(NamedTuple):
 
 @njit(cache=True)
 def mul4_into(a, b, out):
-    """out (4, 4) = a @ b for rigid transforms, without temporaries."""
+    """out = a @ b for rigid transforms, without temporaries.
+
+    Parameters
+    ----------
+    a, b : (4, 4) float64 ndarray
+        Rigid transforms (the last row 0, 0, 0, 1 is assumed).
+    out : (4, 4) float64 ndarray
+        Written in place; must not alias ``a`` or ``b``.
+    """
     for i in range(4):
         for j in range(4):
             out[i, j] = (
@@ -53,7 +71,19 @@ def mul4_into(a, b, out):
 
 @njit(cache=True)
 def joint_motion_into(kind, axis, q, mot):
-    """mot (4, 4) = the motion of a joint at value q: rotation about or translation along axis."""
+    """The motion of a joint at value q: rotation about or translation along its axis.
+
+    Parameters
+    ----------
+    kind : int
+        ``REVOLUTE`` or ``PRISMATIC``.
+    axis : (3,) float64 ndarray
+        Unit axis in the joint frame.
+    q : float
+        Joint value, rad or m.
+    mot : (4, 4) float64 ndarray
+        Written in place with the motion.
+    """
     if kind == REVOLUTE:
         c = np.cos(q)
         sn = np.sin(q)
@@ -86,7 +116,20 @@ def joint_motion_into(kind, axis, q, mot):
 
 @njit(cache=True)
 def link_poses(q, tree):
-    """Pose (l, 4, 4) of every link in the hand frame at DOF values q (n_dofs,)."""
+    """Pose of every link in the hand frame.
+
+    Parameters
+    ----------
+    q : (n_dofs,) float64 ndarray
+        DOF values (rad or m), in the hand's DOF order.
+    tree : KinematicTree
+        The hand's links (:func:`kinematic_tree`).
+
+    Returns
+    -------
+    (l, 4, 4) float64 ndarray
+        Link frame to hand frame, translations in m.
+    """
     n = tree.parent.shape[0]
     out = np.empty((n, 4, 4))
     mot = np.empty((4, 4))
@@ -105,7 +148,22 @@ def link_poses(q, tree):
 
 @njit(cache=True)
 def shape_poses(links, shape_link, shape_local):
-    """Pose (s, 4, 4) of every shape from the link poses (l, 4, 4)."""
+    """Pose of every shape from the link poses.
+
+    Parameters
+    ----------
+    links : (l, 4, 4) float64 ndarray
+        Link poses (:func:`link_poses`).
+    shape_link : (s,) int64 ndarray
+        The link each shape belongs to.
+    shape_local : (s, 4, 4) float64 ndarray
+        Shape frame in its link frame.
+
+    Returns
+    -------
+    (s, 4, 4) float64 ndarray
+        Shape frame to hand frame.
+    """
     out = np.empty((shape_link.shape[0], 4, 4))
     for s in range(shape_link.shape[0]):
         mul4_into(links[shape_link[s]], shape_local[s], out[s])
@@ -116,7 +174,18 @@ _TREES: IdentityCache[KinematicTree] = IdentityCache()
 
 
 def kinematic_tree(hand) -> KinematicTree:
-    """The hand's :class:`KinematicTree`, built once per Hand object."""
+    """The hand's :class:`KinematicTree`, built once per Hand object.
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+
+    Returns
+    -------
+    KinematicTree
+        Cached by the hand's identity.
+    """
     return _TREES.get(hand, lambda: _build_tree(hand))
 
 
@@ -143,7 +212,20 @@ def _build_tree(hand) -> KinematicTree:
 
 
 def forward_kinematics(hand, dof_values) -> np.ndarray:
-    """Pose (n_links, 4, 4) of every link of ``hand`` in the hand frame at ``dof_values``."""
+    """Pose of every link of ``hand`` in the hand frame at ``dof_values``.
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+    dof_values : (n_dofs,) array_like of float
+        DOF values (rad or m), in ``hand.dof_names`` order.
+
+    Returns
+    -------
+    (n_links, 4, 4) float64 ndarray
+        Link frame to hand frame, translations in m.
+    """
     q = np.asarray(dof_values, dtype=np.float64)
     if q.shape != (len(hand.dofs),):
         raise HandError(f"hand {hand.name!r} needs {len(hand.dofs)} DOF values, got {q.shape}")

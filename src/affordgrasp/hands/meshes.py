@@ -34,9 +34,14 @@ _RIM_SEGMENTS = 48
 class HandMesh:
     """A posed hand as one triangle mesh.
 
-    mesh : trimesh.Trimesh, metres, in the frame asked for
-    face_link : (f,) int, index into ``link_names`` of the link each face belongs to
+    Attributes
+    ----------
+    mesh : trimesh.Trimesh
+        Metres, in the frame asked for.
+    face_link : (f,) int ndarray
+        Index into ``link_names`` of the link each face belongs to.
     link_names : tuple of str
+        The hand's link names.
     """
 
     mesh: trimesh.Trimesh
@@ -74,14 +79,36 @@ def _shape_mesh_cached(
 
 
 def shape_mesh(shape: Shape) -> trimesh.Trimesh:
-    """The surface of one rounded shape as a closed, outward-oriented mesh in its own frame."""
+    """The surface of one rounded shape as a closed, outward-oriented mesh in its own frame.
+
+    Parameters
+    ----------
+    shape : Shape
+        A sphere-swept box or cylinder.
+
+    Returns
+    -------
+    trimesh.Trimesh
+        Metres, in the shape frame.
+    """
     return _shape_mesh_cached(
         shape.kind, tuple(float(v) for v in shape.half_extents), float(shape.radius)
     ).copy()
 
 
 def link_meshes(hand: Hand) -> list[trimesh.Trimesh | None]:
-    """One mesh per link in its link frame (the union of its shapes), None for shapeless links."""
+    """One mesh per link in its link frame (the union of its shapes).
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+
+    Returns
+    -------
+    list of trimesh.Trimesh or None
+        In link order, metres; None for a link without shapes. Cached per Hand object.
+    """
     out: list[trimesh.Trimesh | None] = []
     for link in hand.links:
         parts = []
@@ -98,8 +125,18 @@ def posed_hand_mesh(
 ) -> HandMesh:
     """The hand at ``dof_values`` as one mesh, with the link of every face.
 
-    dof_values : (n_dofs,) float, in ``hand.dof_names`` order (a row's ``joints``)
-    hand_pose : (4, 4) or (16,) float, row-major hand → object; None for the hand frame
+    Parameters
+    ----------
+    hand : Hand
+        The hand.
+    dof_values : (n_dofs,) array_like of float
+        DOF values (rad or m) in ``hand.dof_names`` order (a row's ``joints``).
+    hand_pose : (4, 4) or (16,) array_like of float, optional
+        Row-major hand → object transform (m); None for the hand frame.
+
+    Returns
+    -------
+    HandMesh
     """
     link_poses = hand.forward_kinematics(np.asarray(dof_values, dtype=np.float64))
     if hand_pose is not None:

@@ -37,11 +37,17 @@ CYLINDER = 1
 class Shape:
     """A sphere-swept convex core in its link's frame.
 
-    kind : "box" (core half extents hx, hy, hz) or "cylinder" (core radius hx, half height hz,
-        axis along the shape's z)
-    half_extents : (3,) float, m, the core (before rounding)
-    radius : float, m, rounding radius
-    pose : (4, 4) float, the shape frame in the link frame
+    Attributes
+    ----------
+    kind : str
+        ``"box"`` (core half extents hx, hy, hz) or ``"cylinder"`` (core radius hx, half
+        height hz, axis along the shape's z).
+    half_extents : (3,) float
+        The core before rounding, m.
+    radius : float
+        Rounding radius, m.
+    pose : (4, 4) float
+        The shape frame in the link frame.
     """
 
     kind: str
@@ -54,11 +60,18 @@ class Shape:
 class Joint:
     """The joint that connects a link to its parent.
 
-    kind : "revolute" or "prismatic"
-    origin : (4, 4) float, joint frame in the parent link frame at q = 0
-    axis : (3,) float, unit axis in the joint frame
-    dof : str, the DOF that drives it
-    ratio : float, q = ratio * dof_value
+    Attributes
+    ----------
+    kind : str
+        ``"revolute"`` or ``"prismatic"``.
+    origin : (4, 4) float
+        Joint frame in the parent link frame at q = 0 (m).
+    axis : (3,) float
+        Unit axis in the joint frame.
+    dof : str
+        The DOF that drives it.
+    ratio : float
+        q = ratio * dof_value.
     """
 
     kind: str
@@ -70,6 +83,22 @@ class Joint:
 
 @dataclass(frozen=True)
 class Link:
+    """A rigid body of the hand.
+
+    Attributes
+    ----------
+    name : str
+        Unique within the hand.
+    parent : str or None
+        The parent link's name; None for the root (the palm).
+    joint : Joint or None
+        The joint to the parent; None for the root.
+    shapes : tuple of Shape
+        The link's collision and display geometry.
+    material : str
+        Surface material (friction with the object: :mod:`affordgrasp.materials`).
+    """
+
     name: str
     parent: str | None
     joint: Joint | None
@@ -79,7 +108,17 @@ class Link:
 
 @dataclass(frozen=True)
 class Dof:
-    """One degree of freedom: rad for revolute, m for prismatic."""
+    """One degree of freedom: rad for revolute, m for prismatic.
+
+    Attributes
+    ----------
+    name : str
+        Unique within the hand.
+    lower, upper : float
+        Limits, rad or m.
+    role : str
+        ``"pregrasp"`` (set before the approach, e.g. the spread) or ``"close"``.
+    """
 
     name: str
     lower: float
@@ -89,7 +128,17 @@ class Dof:
 
 @dataclass(frozen=True)
 class Finger:
-    """A chain of closing DOFs (proximal first) and the speed of each while closing."""
+    """A chain of closing DOFs (proximal first) and the speed of each while closing.
+
+    Attributes
+    ----------
+    name : str
+        The finger's name.
+    dofs : tuple of str
+        Closing DOFs, proximal first.
+    speeds : tuple of float
+        Relative closing speed of each DOF (the distal of the Barrett turns at 1/3).
+    """
 
     name: str
     dofs: tuple[str, ...]
@@ -164,7 +213,21 @@ class Hand:
 
 
 def joint_motion(kind: str, axis: np.ndarray, value: float) -> np.ndarray:
-    """The (4, 4) motion of a joint at ``value`` (rad or m)."""
+    """The motion of a joint at ``value``.
+
+    Parameters
+    ----------
+    kind : str
+        ``"revolute"`` or ``"prismatic"``.
+    axis : (3,) float ndarray
+        Unit axis in the joint frame.
+    value : float
+        Joint value, rad or m.
+
+    Returns
+    -------
+    (4, 4) float64 ndarray
+    """
     m = np.eye(4)
     if kind == "revolute":
         m[:3, :3] = axis_angle(axis, value)
@@ -174,7 +237,19 @@ def joint_motion(kind: str, axis: np.ndarray, value: float) -> np.ndarray:
 
 
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix (3, 3) of ``angle`` rad about the unit ``axis`` (right-hand rule)."""
+    """Rotation matrix of ``angle`` about the unit ``axis`` (right-hand rule).
+
+    Parameters
+    ----------
+    axis : (3,) float ndarray
+        Unit axis.
+    angle : float
+        Angle, rad.
+
+    Returns
+    -------
+    (3, 3) float64 ndarray
+    """
     x, y, z = np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis)
     c, s = np.cos(angle), np.sin(angle)
     C = 1.0 - c
@@ -188,7 +263,19 @@ def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
 
 
 def transform(rotation: np.ndarray | None = None, translation=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """A (4, 4) rigid transform from a rotation (3, 3) and a translation (3,)."""
+    """A rigid transform from a rotation and a translation.
+
+    Parameters
+    ----------
+    rotation : (3, 3) float ndarray, optional
+        Rotation matrix; None for the identity.
+    translation : (3,) array_like of float
+        Translation, m.
+
+    Returns
+    -------
+    (4, 4) float64 ndarray
+    """
     m = np.eye(4)
     if rotation is not None:
         m[:3, :3] = rotation
@@ -197,7 +284,13 @@ def transform(rotation: np.ndarray | None = None, translation=(0.0, 0.0, 0.0)) -
 
 
 def validate_hand(hand: Hand) -> None:
-    """Check a hand description once, with messages that name the problem."""
+    """Check a hand description once, with messages that name the problem.
+
+    Parameters
+    ----------
+    hand : Hand
+        The hand; a problem raises :class:`~affordgrasp.errors.HandError`.
+    """
     names = [link.name for link in hand.links]
     if len(set(names)) != len(names):
         raise HandError(f"hand {hand.name!r}: link names must be unique, got {names}")
