@@ -215,8 +215,25 @@ def check_plausible_size(
 ) -> None:
     """Refuse a mesh whose longest extent in metres is not the size of a graspable object.
 
-    ``raw_extent`` is the longest extent in the file's coordinates; ``scale_kind`` and
-    ``scale_value`` come from :func:`_scale_request`. The message names the likely unit.
+    The message names the likely unit.
+
+    Parameters
+    ----------
+    raw_extent : float
+        The longest bounding-box extent in the file's coordinates.
+    scale_kind : str or None
+        How the coordinates are scaled to metres (from :func:`_scale_request`).
+    scale_value : float
+        The factor or target size of that scaling.
+    units : str or None
+        The unit the user gave, if any.
+    source : str
+        The mesh's name for the message.
+
+    Raises
+    ------
+    MeshError
+        When the extent in metres is outside ``PLAUSIBLE_SIZE_M``.
     """
     low, high = PLAUSIBLE_SIZE_M
     extent_m = scale_value if scale_kind == "size_m" else raw_extent * scale_value

@@ -23,13 +23,22 @@ __all__ = ["MassProperties", "mass_properties", "mass_properties_parts"]
 class MassProperties:
     """Mass properties of an object in its mesh frame, SI units.
 
-    density : float, kg/m^3 (1.0 by default, as in the paper)
-    volume : float, m^3
-    mass : float, kg
-    center_of_mass : (3,) float, m
-    inertia : (3, 3) float, kg m^2, about the centre of mass, mesh-frame axes
-    r_max : float, m, largest distance from the centre of mass to a mesh vertex
-    bounds : (2, 3) float, m, axis-aligned bounding box (min row, max row)
+    Attributes
+    ----------
+    density : float
+        kg/m^3 (1.0 by default, as in the paper).
+    volume : float
+        m^3.
+    mass : float
+        kg.
+    center_of_mass : (3,) float ndarray
+        m.
+    inertia : (3, 3) float ndarray
+        kg m^2, about the centre of mass, mesh-frame axes.
+    r_max : float
+        m, largest distance from the centre of mass to a mesh vertex.
+    bounds : (2, 3) float ndarray
+        m, axis-aligned bounding box (min row, max row).
     """
 
     density: float

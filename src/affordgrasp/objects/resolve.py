@@ -117,6 +117,16 @@ def mesh_hash(mesh: trimesh.Trimesh) -> str:
 
     The bytes hashed are the vertices as little-endian float64 (n, 3), C order, followed by
     the faces as little-endian int64 (m, 3), C order; anyone can recompute it.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Vertices (n, 3) in metres, faces (m, 3).
+
+    Returns
+    -------
+    str
+        64 lowercase hex digits.
     """
     vertices = np.ascontiguousarray(mesh.vertices, dtype="<f8")
     faces = np.ascontiguousarray(mesh.faces, dtype="<i8")
@@ -127,7 +137,13 @@ def mesh_hash(mesh: trimesh.Trimesh) -> str:
 
 
 def list_families() -> list[str]:
-    """Names of the built-in procedural families, sorted."""
+    """Names of the built-in procedural families, sorted (the one listing verb of families).
+
+    Returns
+    -------
+    list of str
+        Canonical names (``axe``, ``bottle``, ...); aliases such as ``cleaver`` are not listed.
+    """
     return sorted(_families().FAMILIES)
 
 
@@ -151,6 +167,11 @@ def load_object(
         Length unit of a mesh file (``m``, ``cm``, ``mm``, ``in``, ``ft``).
     density : float, optional
         kg/m^3 for the mass properties; 1.0 (the paper's unit density) when not given.
+
+    Returns
+    -------
+    GraspObject
+        Family objects are cached: the same spec and options give the same object.
 
     Raises
     ------
@@ -191,7 +212,17 @@ def load_object(
 
 
 def is_family_spec(spec: object) -> bool:
-    """Whether ``spec`` names a built-in family (``knife``, ``knife:7``), not a mesh file."""
+    """Whether ``spec`` names a built-in family (``knife``, ``knife:7``), not a mesh file.
+
+    Parameters
+    ----------
+    spec : object
+        An object spec; anything but a str is not a family spec.
+
+    Returns
+    -------
+    bool
+    """
     return isinstance(spec, str) and _split_family(spec.strip())[0] is not None
 
 

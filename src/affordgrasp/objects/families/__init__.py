@@ -59,9 +59,14 @@ logger = logging.getLogger(__name__)
 class FamilyInfo:
     """What a procedural family is.
 
-    name : canonical family name, e.g. ``"knife"``.
-    category : semantic label, one of :data:`CATEGORIES`.
-    description : one line, with the typical real size.
+    Attributes
+    ----------
+    name : str
+        Canonical family name, e.g. ``"knife"``.
+    category : str
+        Semantic label, one of :data:`CATEGORIES`.
+    description : str
+        One line, with the typical real size.
     """
 
     name: str
@@ -196,14 +201,26 @@ def _check_seed(seed: object) -> int:
 def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
     """Build one instance of a procedural family.
 
-    name : a family name from :func:`affordgrasp.list_families` (or an alias, ``"cleaver"``).
-    seed : non-negative int; 0 is the family's typical instance.
-    Returns a watertight ``trimesh.Trimesh`` in metres, in the frame described in this
-    module's docstring, with ``metadata`` keys ``family``, ``category``, ``seed``,
-    ``params`` (the parameter values drawn, SI units as their names say), ``face_parts``
-    ((n_faces,) int8, each face's semantic part) and ``part_names`` (the names those
-    indices refer to, :data:`~affordgrasp.objects.families.parts.PART_NAMES`).
-    Raises InputError for an unknown name or a bad seed.
+    Parameters
+    ----------
+    name : str
+        A family name from :func:`affordgrasp.list_families` (or an alias, ``"cleaver"``).
+    seed : int
+        Non-negative; 0 is the family's typical instance.
+
+    Returns
+    -------
+    trimesh.Trimesh
+        Watertight, in metres, in the frame described in this module's docstring, with
+        ``metadata`` keys ``family``, ``category``, ``seed``, ``params`` (the parameter
+        values drawn, SI units as their names say), ``face_parts`` ((n_faces,) int8, each
+        face's semantic part) and ``part_names`` (the names those indices refer to,
+        :data:`~affordgrasp.objects.families.parts.PART_NAMES`).
+
+    Raises
+    ------
+    InputError
+        For an unknown name or a bad seed.
     """
     key = _canonical(name)
     seed = _check_seed(seed)

@@ -14,6 +14,11 @@ class ParameterDraw:
     the generator is not consumed.  Every other seed draws each parameter uniformly from its
     range, in the order the family asks for them, so the same seed gives the same object.
     The values drawn are kept in :attr:`values` (name -> value) for the mesh metadata.
+
+    Parameters
+    ----------
+    seed : int
+        Non-negative; 0 for the typical instance.
     """
 
     def __init__(self, seed: int) -> None:
