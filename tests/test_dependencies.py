@@ -27,6 +27,8 @@ from pathlib import Path
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
+import affordgrasp
+
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "affordgrasp"
 
@@ -181,6 +183,10 @@ _FRESH_ENV_SCRIPT = textwrap.dedent(
     """
 )
 
+# The folder the tests import affordgrasp from (the installed package in CI, src/ in a
+# checkout): the subprocess runs the same build, with the same compiled kernels.
+PACKAGE_ROOT = Path(affordgrasp.__file__).resolve().parents[1]
+
 
 def test_pipeline_runs_with_only_the_declared_dependencies():
     declared = sorted(_names(_project()["dependencies"]))
@@ -189,7 +195,7 @@ def test_pipeline_runs_with_only_the_declared_dependencies():
         capture_output=True,
         text=True,
         cwd=ROOT,
-        env={**__import__("os").environ, "PYTHONPATH": str(ROOT / "src")},
+        env={**__import__("os").environ, "PYTHONPATH": str(PACKAGE_ROOT)},
         timeout=600,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -17,12 +17,15 @@ from pathlib import Path
 import pytest
 from dataset_support import SEED
 
+import affordgrasp
 from affordgrasp.dataset.engines import check_ray_address
 from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
 from affordgrasp.errors import InputError
 
-SRC = Path(__file__).resolve().parents[2] / "src"
+# The folder the tests import affordgrasp from (the installed package in CI, src/ in a
+# checkout): a subprocess must run the same build, with the same compiled kernels.
+SRC = Path(affordgrasp.__file__).resolve().parents[1]
 
 
 def _start(args: list[str], **env) -> subprocess.Popen:
