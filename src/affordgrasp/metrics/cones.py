@@ -45,7 +45,17 @@ _AXIS_TOL = CONE_AXIS_SWITCH  # GraspIt!'s switch from the x axis to the z axis 
 
 
 def edges_per_contact(soft: bool = False) -> int:
-    """Number of wrench columns per contact: 8, or 10 with soft-finger torsion."""
+    """Number of wrench columns per contact: 8, or 10 with soft-finger torsion.
+
+    Parameters
+    ----------
+    soft : bool
+        Soft-finger contacts (two torsional edges added).
+
+    Returns
+    -------
+    int
+    """
     return N_EDGES + (N_SOFT_EDGES if soft else 0)
 
 
@@ -73,7 +83,25 @@ def _tangent_frame(nx, ny, nz):
 def wrench_matrix_kernel(points, normals, mu, center, torque_scale, soft):
     """Compiled wrench matrix; see the module docstring for the layout.
 
-    points (k, 3), normals (k, 3) outward unit, mu (k,), center (3,) -> (6, k * E)
+    Parameters
+    ----------
+    points : (k, 3) float64 ndarray
+        Contact points, m.
+    normals : (k, 3) float64 ndarray
+        Outward unit normals.
+    mu : (k,) float64 ndarray
+        Friction coefficients.
+    center : (3,) float64 ndarray
+        Reference point of the torques, m.
+    torque_scale : float
+        Multiplies the torque rows (1 / r_max for ε, 1 for the efforts).
+    soft : bool
+        Add the two torsional edges per contact.
+
+    Returns
+    -------
+    (6, k * E) float64 ndarray
+        Columns contact-major, E = :func:`edges_per_contact`.
     """
     k = points.shape[0]
     E = N_EDGES + (N_SOFT_EDGES if soft else 0)
@@ -132,8 +160,15 @@ def _as_contact_arrays(points, normals, mu):
 def tangent_frames(inward_normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """GraspIt!'s tangent vectors of each contact.
 
-    inward_normals : (k, 3) float, unit normals pointing *into* the object
-    Returns t1, t2 : (k, 3) float, unit; (t1, t2, n) is a right-handed frame.
+    Parameters
+    ----------
+    inward_normals : (k, 3) float ndarray
+        Unit normals pointing *into* the object.
+
+    Returns
+    -------
+    t1, t2 : (k, 3) float64 ndarray
+        Unit; (t1, t2, n) is a right-handed frame.
     """
     n = np.asarray(inward_normals, dtype=np.float64).reshape(-1, 3)
     t1 = np.empty_like(n)
@@ -148,9 +183,17 @@ def tangent_frames(inward_normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def friction_cone_edges(normals: np.ndarray, mu: np.ndarray | float) -> np.ndarray:
     """Edge forces of the linearised friction cones (conventions: Metrics).
 
-    normals : (k, 3) float, the object's *outward* unit normals
-    mu : (k,) float or scalar, friction coefficients
-    Returns (k, 8, 3) float: ``f_j = n + mu (cos θ_j t1 + sin θ_j t2)`` with n inward.
+    Parameters
+    ----------
+    normals : (k, 3) float ndarray
+        The object's *outward* unit normals.
+    mu : (k,) float ndarray or float
+        Friction coefficients.
+
+    Returns
+    -------
+    (k, 8, 3) float64 ndarray
+        ``f_j = n + mu (cos θ_j t1 + sin θ_j t2)`` with n inward (unit normal component).
     """
     normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
     W = contact_wrenches(np.zeros_like(normals), normals, mu, np.zeros(3))
@@ -168,13 +211,25 @@ def contact_wrenches(
 ) -> np.ndarray:
     """Wrench matrix of all cone edges of a contact set (conventions: Metrics).
 
-    points : (k, 3) float, contact points, m
-    normals : (k, 3) float, outward unit normals
-    mu : (k,) float or scalar
-    center : (3,) float, the reference point of the torques (centre of mass), m
-    torque_scale : float, multiplies the torque rows (ε uses 1 / r_max; efforts use 1)
-    soft : add the two torsional edges of a soft-finger contact per contact
-    Returns (6, k * E) float, columns contact-major (see the module docstring).
+    Parameters
+    ----------
+    points : (k, 3) float ndarray
+        Contact points, m.
+    normals : (k, 3) float ndarray
+        Outward unit normals.
+    mu : (k,) float ndarray or float
+        Friction coefficients.
+    center : (3,) float ndarray
+        The reference point of the torques (centre of mass), m.
+    torque_scale : float
+        Multiplies the torque rows (ε uses 1 / r_max; efforts use 1).
+    soft : bool
+        Add the two torsional edges of a soft-finger contact per contact.
+
+    Returns
+    -------
+    (6, k * E) float64 ndarray
+        Forces (N per unit edge) then torques, columns contact-major (module docstring).
     """
     points, normals, mu = _as_contact_arrays(points, normals, mu)
     center = np.ascontiguousarray(center, dtype=np.float64).reshape(3)

@@ -39,7 +39,19 @@ GRAVITY_DIRECTIONS = np.array(
 def use_wrench(use_point, use_normal, center):
     """Wrench of a unit force at the use point along the *inward* normal, about ``center``.
 
-    use_point (3,), use_normal (3,) outward unit, center (3,) -> (6,)
+    Parameters
+    ----------
+    use_point : (3,) float64 ndarray
+        The use point U, m.
+    use_normal : (3,) float64 ndarray
+        Outward unit normal at U.
+    center : (3,) float64 ndarray
+        Reference point of the torques, m.
+
+    Returns
+    -------
+    (6,) float64 ndarray
+        Force (N) then torque (N·m) of 1 N.
     """
     w = np.empty(6)
     nx = -use_normal[0]
@@ -68,7 +80,21 @@ def _status_value(status, obj):
 
 @njit(cache=True)
 def hold_effort_kernel(W, out):
-    """E_h of wrench matrix ``W`` (6, N) into ``out`` (6,); False if an LP needs HiGHS."""
+    """E_h of a wrench matrix, compiled.
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    out : (6,) float64 ndarray
+        Written with E_h along +x, −x, +y, −y, +z, −z, N (+inf where infeasible).
+
+    Returns
+    -------
+    bool
+        False when an LP could not be certified and HiGHS must recompute it.
+    """
     n = W.shape[1]
     if n == 0:
         for d in range(6):
@@ -90,7 +116,25 @@ def hold_effort_kernel(W, out):
 
 @njit(cache=True)
 def impact_lp(W, w_use, axis):
-    """Standard-form data ``(A, b, c)`` of the E_i program (variables λ, then s)."""
+    """Standard-form data of the E_i program (variables λ, then s).
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    w_use : (6,) float64 ndarray
+        Wrench of the unit use force (:func:`use_wrench`).
+    axis : (3,) float64 ndarray
+        Unit wrist axis a.
+
+    Returns
+    -------
+    A : (6, N + 1) float64 ndarray
+    b : (6,) float64 ndarray
+    c : (N + 1,) float64 ndarray
+        min c·x subject to A x = b, x >= 0.
+    """
     n = W.shape[1]
     A = np.empty((6, n + 1))
     A[:, :n] = W
@@ -106,7 +150,25 @@ def impact_lp(W, w_use, axis):
 
 @njit(cache=True)
 def impact_effort_kernel(W, w_use, axis):
-    """E_i of wrench matrix ``W`` (6, N); returns ``(ok, value)``, ok False -> use HiGHS."""
+    """E_i of a wrench matrix, compiled.
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    w_use : (6,) float64 ndarray
+        Wrench of the unit use force.
+    axis : (3,) float64 ndarray
+        Unit wrist axis a.
+
+    Returns
+    -------
+    ok : bool
+        False: use HiGHS (:func:`impact_effort_highs`).
+    value : float
+        N per N·m, +inf if infeasible.
+    """
     if W.shape[1] == 0:
         return True, np.inf
     A, b, c = impact_lp(W, w_use, axis)
@@ -147,7 +209,19 @@ def hold_effort(contacts, center, *, soft: bool = False, backend: str = "simplex
 
 
 def hold_effort_highs(W: np.ndarray) -> np.ndarray:
-    """E_h of wrench matrix ``W`` (6, N) with HiGHS: one model, six right-hand sides."""
+    """E_h of a wrench matrix with HiGHS: one model, six right-hand sides.
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+
+    Returns
+    -------
+    (6,) float64 ndarray
+        N, +inf where infeasible.
+    """
     if W.shape[1] == 0:
         return np.full(6, np.inf)
     model = HighsStandardLP(W, np.ones(W.shape[1]))
@@ -218,7 +292,23 @@ def impact_effort(
 
 
 def impact_effort_highs(W: np.ndarray, w_use: np.ndarray, axis: np.ndarray) -> float:
-    """E_i with HiGHS (same program as :func:`impact_effort_kernel`)."""
+    """E_i with HiGHS (same program as :func:`impact_effort_kernel`).
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    w_use : (6,) float64 ndarray
+        Wrench of the unit use force.
+    axis : (3,) float64 ndarray
+        Unit wrist axis a.
+
+    Returns
+    -------
+    float
+        N per N·m, +inf if infeasible.
+    """
     if W.shape[1] == 0:
         return float("inf")
     A, b, c = impact_lp(np.ascontiguousarray(W), w_use, axis)

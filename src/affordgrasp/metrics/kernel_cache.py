@@ -29,11 +29,20 @@ _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
 
 @cache
 def package_stamp(directory: Path = _PACKAGE_DIR) -> str:
-    """Hash of the contents of every module under ``directory`` (recursively) that defines
-    compiled kernels.
+    """Hash of the contents of every module under ``directory`` that defines compiled kernels.
 
     Computed once per process (a source edited while the process runs is seen by the next
     process, as for numba's own stamps).
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+        Searched recursively; the package's directory by default.
+
+    Returns
+    -------
+    str
+        Hex digest.
     """
     digest = hashlib.sha256()
     for path in sorted(directory.rglob("*.py")):

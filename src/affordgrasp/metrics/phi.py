@@ -60,11 +60,37 @@ def contact_metrics_batch(
 ):
     """ε, GWS volume, E_h, E_i and U_τ of many grasps on one object, compiled.
 
-    points, normals (K, 3) and mu (K,): all contacts, grasp i owning rows
-    ``offsets[i]:offsets[i + 1]``; center (3,), r_max: the object's; use_point,
-    use_normal (outward unit), wrist_axis (unit): (n, 3).
-    Returns ``(code, eps, volume, hold (n, 6), impact, force, redo)``; ``redo[i]`` marks a
-    grasp on which a compiled solver gave up (the caller recomputes it).
+    Parameters
+    ----------
+    points, normals : (K, 3) float64 ndarray
+        All contacts (m; outward unit normals), grasp i owning rows
+        ``offsets[i]:offsets[i + 1]``.
+    mu : (K,) float64 ndarray
+        Friction coefficients.
+    offsets : (n + 1,) int64 ndarray
+        Row ranges of the grasps.
+    center : (3,) float64 ndarray
+        The object's centre of mass, m.
+    r_max : float
+        The object's torque normalisation length, m.
+    use_point, use_normal, wrist_axis : (n, 3) float64 ndarray
+        Use points (m), their outward unit normals, unit wrist axes.
+    soft : bool
+        Soft-finger cones.
+
+    Returns
+    -------
+    code : (n,) int64 ndarray
+        ε's reason code.
+    eps, volume : (n,) float64 ndarray
+    hold : (n, 6) float64 ndarray
+        E_h, N.
+    impact : (n,) float64 ndarray
+        E_i, N per N·m.
+    force : (n,) float64 ndarray
+        U_τ, N.
+    redo : (n,) bool ndarray
+        Grasps on which a compiled solver gave up (the caller recomputes them).
     """
     n = offsets.shape[0] - 1
     code = np.empty(n, dtype=np.int64)

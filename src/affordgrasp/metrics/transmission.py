@@ -35,6 +35,22 @@ def use_force_lp(W, w_use, n_contacts):
 
     Variables: λ (N = k * E), F, then one slack per contact. Rows: 6 equilibrium rows,
     then one normal-force bound per contact (edges are contact-major in ``W``).
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    w_use : (6,) float64 ndarray
+        Wrench of the unit use force.
+    n_contacts : int
+        k.
+
+    Returns
+    -------
+    A : (6 + k, N + 1 + k) float64 ndarray
+    b : (6 + k,) float64 ndarray
+    c : (N + 1 + k,) float64 ndarray
     """
     n = W.shape[1]
     k = n_contacts
@@ -55,10 +71,25 @@ def use_force_lp(W, w_use, n_contacts):
 
 @njit(cache=True)
 def use_force_kernel(W, w_use, n_contacts):
-    """U_τ of wrench matrix ``W`` (6, N); returns ``(status, value)``.
+    """U_τ of a wrench matrix, compiled.
 
-    status is OPTIMAL, or the simplex status when it could not certify an optimum (the
-    caller then uses HiGHS).
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    w_use : (6,) float64 ndarray
+        Wrench of the unit use force.
+    n_contacts : int
+        k.
+
+    Returns
+    -------
+    status : int
+        OPTIMAL, or the simplex status when it could not certify an optimum (the caller
+        then uses HiGHS).
+    value : float
+        N.
     """
     if n_contacts == 0:
         return OPTIMAL, 0.0
@@ -118,7 +149,23 @@ def use_force(
 
 
 def use_force_highs(W: np.ndarray, w_use: np.ndarray, n_contacts: int) -> float:
-    """U_τ with HiGHS (same program as :func:`use_force_kernel`)."""
+    """U_τ with HiGHS (same program as :func:`use_force_kernel`).
+
+    Parameters
+    ----------
+        W : (6, N) float64 ndarray
+            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+            N = k * E columns, contact-major.
+    w_use : (6,) float64 ndarray
+        Wrench of the unit use force.
+    n_contacts : int
+        k.
+
+    Returns
+    -------
+    float
+        N; 0 when no force can be transmitted.
+    """
     if n_contacts == 0:
         return 0.0
     if W.shape[1] % n_contacts:

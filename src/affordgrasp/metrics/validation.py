@@ -9,7 +9,21 @@ from ..tolerances import UNIT_NORMAL, ZERO_LENGTH
 
 
 def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Contiguous float64 ``points (k, 3), normals (k, 3), mu (k,)`` of a ContactSet."""
+    """Contiguous float64 arrays of a ContactSet.
+
+    Parameters
+    ----------
+    contacts : ContactSet
+        k contacts.
+
+    Returns
+    -------
+    points : (k, 3) float64 ndarray
+        m.
+    normals : (k, 3) float64 ndarray
+        Outward unit normals.
+    mu : (k,) float64 ndarray
+    """
     try:
         points = np.ascontiguousarray(contacts.points, dtype=np.float64).reshape(-1, 3)
         normals = np.ascontiguousarray(contacts.normals, dtype=np.float64).reshape(-1, 3)
@@ -30,6 +44,22 @@ def check_contact_arrays(
     Normals are rescaled to unit length when ``normalise`` is set or when one of them is
     off by more than 1e-12 (the cones assume unit normals; a ContactSet built directly,
     without :meth:`ContactSet.from_arrays`, may not have them).
+
+    Parameters
+    ----------
+    points : (k, 3) float64 ndarray
+        m.
+    normals : (k, 3) float64 ndarray
+        Outward normals.
+    mu : (k,) float64 ndarray
+        Friction coefficients, >= 0.
+    normalise : bool
+        Always rescale the normals.
+
+    Returns
+    -------
+    points, normals, mu
+        The same shapes, float64; normals unit.
     """
     if not (points.shape == normals.shape and mu.shape[0] == points.shape[0]):
         raise InputError(
@@ -49,7 +79,19 @@ def check_contact_arrays(
 
 
 def point3(x, name: str) -> np.ndarray:
-    """A finite (3,) float64 vector, or an InputError naming ``name``."""
+    """A finite (3,) float64 vector, or an InputError naming ``name``.
+
+    Parameters
+    ----------
+    x : array_like of float
+        The value given.
+    name : str
+        The parameter's name, for the :class:`~affordgrasp.errors.InputError` message.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+    """
     x = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
     if x.shape != (3,) or not np.all(np.isfinite(x)):
         raise InputError(f"{name} must be 3 finite numbers, got {x}")
@@ -57,7 +99,19 @@ def point3(x, name: str) -> np.ndarray:
 
 
 def unit3(v, name: str) -> np.ndarray:
-    """A (3,) unit vector from a finite non-zero direction."""
+    """A (3,) unit vector from a finite non-zero direction.
+
+    Parameters
+    ----------
+    v : array_like of float
+        The value given.
+    name : str
+        The parameter's name, for the :class:`~affordgrasp.errors.InputError` message.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+    """
     v = point3(v, name)
     n = float(np.linalg.norm(v))
     if n < ZERO_LENGTH:
@@ -66,7 +120,19 @@ def unit3(v, name: str) -> np.ndarray:
 
 
 def points_n3(x, name: str) -> np.ndarray:
-    """A finite (n, 3) float64 array (a single (3,) vector becomes (1, 3))."""
+    """A finite (n, 3) float64 array (a single (3,) vector becomes (1, 3)).
+
+    Parameters
+    ----------
+    x : array_like of float
+        The value given.
+    name : str
+        The parameter's name, for the :class:`~affordgrasp.errors.InputError` message.
+
+    Returns
+    -------
+    (n, 3) float64 ndarray
+    """
     x = np.asarray(x, dtype=np.float64)
     if x.ndim == 1:
         x = x.reshape(1, -1)
@@ -76,7 +142,19 @@ def points_n3(x, name: str) -> np.ndarray:
 
 
 def units_n3(x, name: str) -> np.ndarray:
-    """Rows normalised to unit length; zero rows are refused."""
+    """Rows normalised to unit length; zero rows are refused.
+
+    Parameters
+    ----------
+    x : array_like of float
+        The value given.
+    name : str
+        The parameter's name, for the :class:`~affordgrasp.errors.InputError` message.
+
+    Returns
+    -------
+    (n, 3) float64 ndarray
+    """
     x = points_n3(x, name)
     n = np.linalg.norm(x, axis=1)
     if np.any(n < ZERO_LENGTH):
@@ -85,6 +163,19 @@ def units_n3(x, name: str) -> np.ndarray:
 
 
 def positive_length(r: float, name: str) -> float:
+    """A finite length > 0, in metres, or an InputError naming ``name``.
+
+    Parameters
+    ----------
+    r : float
+        The length, m.
+    name : str
+        The parameter's name, for the message.
+
+    Returns
+    -------
+    float
+    """
     r = float(r)
     if not (np.isfinite(r) and r > 0):
         raise InputError(f"{name} must be a positive length in metres, got {r}")
