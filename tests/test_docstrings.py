@@ -88,7 +88,6 @@ MODULES = sorted(
 # Modules whose docstrings are still in the compact "name : shape" style, converted package
 # by package. A converted module leaves this list (the test below says when).
 PENDING: set[str] = {
-    "cli.py",
     "commands/best.py",
     "commands/common.py",
     "commands/depth.py",
@@ -105,7 +104,6 @@ PENDING: set[str] = {
     "commands/simulate.py",
     "commands/tasks.py",
     "commands/train.py",
-    "compiled.py",
     "dataset/best.py",
     "dataset/card.py",
     "dataset/engines.py",
@@ -114,8 +112,6 @@ PENDING: set[str] = {
     "dataset/reading.py",
     "grasp/kernels.py",
     "grasp/policy.py",
-    "grasp/pregrasp.py",
-    "grasp/surface.py",
     "learning/api.py",
     "learning/data.py",
     "learning/evaluation.py",
@@ -125,7 +121,6 @@ PENDING: set[str] = {
     "learning/targets.py",
     "learning/torch_support.py",
     "learning/training.py",
-    "materials.py",
     "metrics/epsilon.py",
     "metrics/hull.py",
     "metrics/lp.py",
@@ -144,7 +139,6 @@ PENDING: set[str] = {
     "physics/scene.py",
     "physics/settings.py",
     "physics/trials.py",
-    "pipeline.py",
     "vision/camera.py",
     "vision/depth.py",
     "vision/points.py",

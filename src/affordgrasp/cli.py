@@ -42,13 +42,25 @@ class _Parser(argparse.ArgumentParser):
 
 
 def add_verbose_argument(p: argparse.ArgumentParser) -> None:
-    """``-v`` on a subcommand too (``affordgrasp generate ... -v``); the top level sets it."""
+    """``-v`` on a subcommand too (``affordgrasp generate ... -v``); the top level sets it.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument(
         "-v", "--verbose", action="store_true", default=argparse.SUPPRESS, help="log details"
     )
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``affordgrasp`` argument parser with every subcommand registered.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
     parser = _Parser(
         prog="affordgrasp",
         description="Task-oriented grasp quality: simulate, score, generate datasets, show.",
@@ -72,6 +84,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the command line.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments without the program name; ``sys.argv[1:]`` when None.
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 2 for bad input (one line naming the problem and the
+        fix), 1 for any other error, 128 + signum when stopped by a signal.
+    """
     from .commands.output import Output
 
     parser = build_parser()

@@ -22,8 +22,12 @@ from dataclasses import dataclass
 class KernelLoad:
     """What making the kernels ready cost.
 
-    seconds : float, wall time
-    compiled : bool, True when at least one kernel was compiled (no usable cache)
+    Attributes
+    ----------
+    seconds : float
+        Wall time, s.
+    compiled : bool
+        True when at least one kernel was compiled (no usable cache).
     """
 
     seconds: float
@@ -51,7 +55,12 @@ def _dispatchers() -> list:
 
 
 def warm_up() -> KernelLoad:
-    """Load (or compile) every kernel the pipeline calls, by running it on a small box."""
+    """Load (or compile) every kernel the pipeline calls, by running it on a small box.
+
+    Returns
+    -------
+    KernelLoad
+    """
     import trimesh
 
     from .objects import GraspObject, mass_properties, mesh_hash
@@ -67,6 +76,7 @@ def warm_up() -> KernelLoad:
 
 
 def main() -> None:
+    """Warm the kernels up and print what it cost (``python -m affordgrasp.compiled``)."""
     load = warm_up()
     print(f"affordgrasp: {load.describe()}")
 

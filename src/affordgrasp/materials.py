@@ -35,7 +35,18 @@ DEFAULT_OBJECT_MATERIAL = "plastic"
 
 
 def friction_coefficient(a: str, b: str) -> float:
-    """Static friction coefficient μ between materials ``a`` and ``b`` (order free)."""
+    """Static friction coefficient μ between materials ``a`` and ``b`` (order free).
+
+    Parameters
+    ----------
+    a, b : str
+        Material names (:data:`MATERIALS`); an unknown one raises InputError.
+
+    Returns
+    -------
+    float
+        μ, dimensionless.
+    """
     for name in (a, b):
         if name not in MATERIALS:
             raise InputError(f"unknown material {name!r}; known materials: {', '.join(MATERIALS)}")
@@ -44,5 +55,10 @@ def friction_coefficient(a: str, b: str) -> float:
 
 
 def friction_table() -> dict[str, float]:
-    """The whole table as ``{"a-b": mu}``, for dataset cards."""
+    """The whole table as ``{"a-b": mu}``, for dataset cards.
+
+    Returns
+    -------
+    dict of str to float
+    """
     return {f"{a}-{b}": mu for (a, b), mu in _STATIC_FRICTION.items()}

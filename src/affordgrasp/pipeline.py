@@ -80,11 +80,25 @@ class Evaluation:
 
 
 def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False) -> dict:
-    """Φ for every row of a simulation batch: column name → (n,) array.
+    """Φ for every row of a simulation batch.
 
     A row whose use ray left the object without a hit (from the cavity of a hollow object
     through its opening) has no use point: its use metrics are NaN (undefined), the others
     are computed as usual.
+
+    Parameters
+    ----------
+    obj : GraspObject
+        The object simulated.
+    batch : SimulationBatch
+        n grasps with their contacts (m, object frame), use points and wrist axes.
+    soft : bool
+        Soft-finger cones.
+
+    Returns
+    -------
+    dict of str to (n,) ndarray
+        Column name → float64 array (``epsilon_reason``: object array of str).
     """
     no_use = batch.use_triangle < 0
     use_point = np.where(no_use[:, None], obj.mass.center_of_mass, batch.use_point)

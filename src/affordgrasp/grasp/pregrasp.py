@@ -30,7 +30,18 @@ from ..errors import InputError
 
 
 def spherical_direction(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
-    """Unit directions (n, 3) from normalised spherical coordinates u1, u2 ∈ [-1, 1]."""
+    """Unit directions from normalised spherical coordinates.
+
+    Parameters
+    ----------
+    u1, u2 : (n,) float ndarray
+        Coordinates in [-1, 1].
+
+    Returns
+    -------
+    (n, 3) float64 ndarray
+        Unit vectors.
+    """
     phi = np.pi * np.asarray(u1, dtype=np.float64)
     cos_t = np.clip(np.asarray(u2, dtype=np.float64), -1.0, 1.0)
     sin_t = np.sqrt(1.0 - cos_t**2)
@@ -38,7 +49,17 @@ def spherical_direction(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
 
 
 def validate_pregrasps(p0) -> np.ndarray:
-    """p0 as an (n, 6) float64 array inside [-1, 1]^5 × [0, 1], or a clear InputError."""
+    """p0 as an (n, 6) float64 array inside [-1, 1]^5 × [0, 1], or a clear InputError.
+
+    Parameters
+    ----------
+    p0 : array_like
+        One (6,) pregrasp or (n, 6).
+
+    Returns
+    -------
+    (n, 6) float64 ndarray
+    """
     p0 = np.atleast_2d(np.asarray(p0, dtype=np.float64))
     if p0.ndim != 2 or p0.shape[1] != 6:
         raise InputError(f"pregrasps must have shape (n, 6), got {p0.shape}")
@@ -55,6 +76,17 @@ def validate_pregrasps(p0) -> np.ndarray:
 
 
 def validate_use_directions(d) -> np.ndarray:
+    """Use directions as an (n, 2) float64 array inside [-1, 1]^2, or a clear InputError.
+
+    Parameters
+    ----------
+    d : array_like
+        One (2,) use direction or (n, 2).
+
+    Returns
+    -------
+    (n, 2) float64 ndarray
+    """
     d = np.atleast_2d(np.asarray(d, dtype=np.float64))
     if d.ndim != 2 or d.shape[1] != 2:
         raise InputError(f"use directions must have shape (n, 2), got {d.shape}")
@@ -69,7 +101,18 @@ def validate_use_directions(d) -> np.ndarray:
 
 
 def hand_rotations(p0: np.ndarray) -> np.ndarray:
-    """Hand orientations (n, 3, 3), columns x, y, z (approach) in the object frame."""
+    """Hand orientations in the object frame.
+
+    Parameters
+    ----------
+    p0 : (n, 6) float64 ndarray
+        Pregrasps.
+
+    Returns
+    -------
+    (n, 3, 3) float64 ndarray
+        Columns x, y, z (approach) of the hand frame.
+    """
     z = spherical_direction(p0[:, 0], p0[:, 1])
     ref = np.where(np.abs(z[:, 2:3]) > 0.99, [[1.0, 0.0, 0.0]], [[0.0, 0.0, 1.0]])
     x0 = np.cross(ref, z)
@@ -84,11 +127,24 @@ def hand_rotations(p0: np.ndarray) -> np.ndarray:
 def start_poses(
     p0: np.ndarray, hull_vertices: np.ndarray, hand_reach: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Start poses (n, 4, 4) of the hand (hand → object) and the approach length to try (n,).
+    """Start poses of the hand and the approach length to try.
 
-    hull_vertices : (v, 3) the object's convex-hull vertices (the extent seen along any
-        direction is that of its hull)
-    hand_reach : float, m, how far the open hand extends in front of the palm face
+    Parameters
+    ----------
+    p0 : (n, 6) float64 ndarray
+        Pregrasps.
+    hull_vertices : (v, 3) float64 ndarray
+        The object's convex-hull vertices, m (the extent seen along any direction is that of
+        its hull).
+    hand_reach : float
+        How far the open hand extends in front of the palm face, m.
+
+    Returns
+    -------
+    poses : (n, 4, 4) float64 ndarray
+        Hand → object, m.
+    lengths : (n,) float64 ndarray
+        Approach length, m.
     """
     rot = hand_rotations(p0)
     lo = hull_vertices.min(axis=0)
@@ -117,10 +173,24 @@ def use_points(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """DM(d, O): farthest surface hit along each use direction from the centre of mass.
 
-    use_dir : (n, 2) in [-1, 1]^2
-    returns : points (n, 3), outward normals (n, 3), triangle indices (n,) int64; rows whose
-        ray leaves the object without a hit (possible from a hollow object's cavity) are NaN
-        with triangle -1.
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object, m.
+    center : (3,) float64 ndarray
+        Centre of mass, m.
+    use_dir : (n, 2) float64 ndarray
+        Use directions in [-1, 1]^2.
+
+    Returns
+    -------
+    points : (n, 3) float64 ndarray
+        m.
+    normals : (n, 3) float64 ndarray
+        Outward unit normals.
+    triangles : (n,) int64 ndarray
+        Face indices. Rows whose ray leaves the object without a hit (possible from a hollow
+        object's cavity) are NaN with triangle -1.
     """
     d = spherical_direction(use_dir[:, 0], use_dir[:, 1])
     n = len(d)
@@ -159,11 +229,23 @@ SAMPLE_BLOCK = 1024
 
 
 def sample_inputs(seed: int, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
-    """Uniform pregrasps (n, 6) and use directions (n, 2) for samples start..stop-1.
+    """Uniform pregrasps and use directions for samples start..stop-1.
 
     Sample i depends only on (seed, i): draws come in fixed blocks of SAMPLE_BLOCK samples,
     each block from its own ``SeedSequence([seed, block])``, so any split of a run into
     shards or workers produces the same samples. Every object of a run shares the sequence.
+
+    Parameters
+    ----------
+    seed : int
+        The run's seed.
+    start, stop : int
+        Sample range.
+
+    Returns
+    -------
+    p0 : (n, 6) float64 ndarray
+    use_dir : (n, 2) float64 ndarray
     """
     if seed < 0:
         raise InputError(f"seed must be a non-negative integer, got {seed}")

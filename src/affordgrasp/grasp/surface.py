@@ -35,11 +35,24 @@ CELL_SIZE = 6e-3  # fine cells; coarse cells are 3 x 3 x 3 of them
 class SurfaceSample:
     """Surface samples grouped into a two-level grid of cells.
 
-    points (n, 3) m, normals (n, 3) outward unit, sharp (n,) bool, spacing m.
-    Fine cells: cell_start (c + 1,) offsets of each cell's points, cell_center (c, 3) and
-    cell_radius (c,) a bounding sphere of its points. Coarse cells (3 x 3 x 3 fine cells):
-    coarse_start (k + 1,) offsets of each one's fine cells, coarse_center (k, 3),
-    coarse_radius (k,).
+    Attributes
+    ----------
+    points : (n, 3) float64 ndarray
+        m.
+    normals : (n, 3) float64 ndarray
+        Outward unit normals.
+    sharp : (n,) bool ndarray
+        Samples on sharp edges or corners.
+    spacing : float
+        m.
+    cell_start : (c + 1,) int ndarray
+        Offsets of each fine cell's points.
+    cell_center, cell_radius : (c, 3), (c,) float64 ndarray
+        A bounding sphere of each fine cell's points, m.
+    coarse_start : (k + 1,) int ndarray
+        Offsets of each coarse cell's (3 x 3 x 3) fine cells.
+    coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
+        A bounding sphere of each coarse cell, m.
     """
 
     points: np.ndarray
@@ -85,8 +98,20 @@ def _spheres(p: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     """Order of the points by coarse then fine cell, and both levels' offsets and spheres.
 
-    returns : order (n,), fine (start, center, radius), coarse (start into the fine cells,
-        center, radius)
+    Parameters
+    ----------
+    points : (n, 3) float64 ndarray
+        m.
+    size : float
+        Fine cell edge, m.
+
+    Returns
+    -------
+    order : (n,) int ndarray
+    fine : tuple
+        (start, center, radius) of the fine cells.
+    coarse : tuple
+        (start into the fine cells, center, radius) of the coarse cells.
     """
     fine = np.floor((points - points.min(axis=0)) / size).astype(np.int64)
     coarse = fine // 3
@@ -139,9 +164,26 @@ def _face_lattice(tri: np.ndarray, spacing: float):
 def sample_count_bound(
     tri: np.ndarray, edge_len: np.ndarray, n_vertices: int, spacing: float
 ) -> float:
-    """An upper bound on the number of samples at ``spacing``, computed without building
-    them (floats, O(triangles)): vertices + edge interiors + n1 n2 / 2 per triangle, n1 and
-    n2 its lattice steps along its two shorter sides (see ``_face_lattice``)."""
+    """An upper bound on the number of samples at ``spacing``, computed without building them.
+
+    Floats, O(triangles): vertices + edge interiors + n1 n2 / 2 per triangle, n1 and n2 its
+    lattice steps along its two shorter sides (see ``_face_lattice``).
+
+    Parameters
+    ----------
+    tri : (m, 3, 3) float64 ndarray
+        Triangle corners, m.
+    edge_len : (e,) float64 ndarray
+        Lengths of the mesh's unique edges, m.
+    n_vertices : int
+        Mesh vertices.
+    spacing : float
+        m.
+
+    Returns
+    -------
+    float
+    """
     side = np.sort(np.linalg.norm(tri[:, [2, 0, 1]] - tri[:, [1, 2, 0]], axis=2), axis=1)
     n1 = np.maximum(np.ceil(side[:, 0] / spacing), 1.0)
     n2 = np.maximum(np.ceil(side[:, 1] / spacing), 1.0)
@@ -152,12 +194,25 @@ def sample_count_bound(
 def capped_spacing(
     tri: np.ndarray, edge_len: np.ndarray, n_vertices: int, spacing: float, max_points: int
 ) -> float:
-    """The requested spacing, or the smallest one tried (steps of 1.25x, from a first jump
-    by the square root of the excess) at which :func:`sample_count_bound` is <= max_points.
+    """The requested spacing, or the smallest one tried at which the sample count fits.
 
-    Memory is bounded by construction: no sample array is built before the count fits, so
-    a mesh in the wrong units (a 100 mm cube read as 100 m) costs seconds, not 228 GiB.
-    A mesh with more than ``max_points`` vertices keeps only its vertices and edges' ends.
+    Tried in steps of 1.25x, from a first jump by the square root of the excess, until
+    :func:`sample_count_bound` is <= max_points. Memory is bounded by construction: no sample
+    array is built before the count fits, so a mesh in the wrong units (a 100 mm cube read as
+    100 m) costs seconds, not 228 GiB. A mesh with more than ``max_points`` vertices keeps
+    only its vertices and edges' ends.
+
+    Parameters
+    ----------
+    tri, edge_len, n_vertices, spacing
+        As for :func:`sample_count_bound`.
+    max_points : int
+        The cap.
+
+    Returns
+    -------
+    float
+        Spacing, m.
     """
     count = sample_count_bound(tri, edge_len, n_vertices, spacing)
     if count <= max_points:
@@ -176,7 +231,21 @@ def capped_spacing(
 def sample_surface(
     mesh: trimesh.Trimesh, spacing: float = DEFAULT_SPACING, max_points: int = MAX_POINTS
 ) -> SurfaceSample:
-    """Deterministic dense sample of the surface; the spacing grows if ``max_points`` is hit."""
+    """Deterministic dense sample of the surface; the spacing grows if ``max_points`` is hit.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object, m.
+    spacing : float
+        Requested spacing, m.
+    max_points : int
+        Cap on the number of samples (memory bound).
+
+    Returns
+    -------
+    SurfaceSample
+    """
     requested = spacing
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces, dtype=np.int64)
