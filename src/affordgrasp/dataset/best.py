@@ -38,9 +38,21 @@ RANK_COLUMN = "rank"
 class BestGrasps:
     """The top rows of a dataset for a task.
 
-    table : the rows (every dataset column) best first, plus ``rank`` (1 = best) and
-        ``affordance`` (F_T)
-    rows_scanned : rows scored; finite : rows whose F_T is above −∞
+    Attributes
+    ----------
+    task : str
+        The task name.
+    mode : str
+        The threshold mode.
+    table : pyarrow.Table
+        The rows (every dataset column) best first, plus ``rank`` (1 = best) and
+        ``affordance`` (F_T).
+    rows_scanned : int
+        Rows scored.
+    finite : int
+        Rows whose F_T is above −∞.
+    objects : list of str
+        The objects scanned.
     """
 
     task: str
@@ -77,7 +89,16 @@ class BestGrasps:
 
 
 def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
-    """The numeric scalar columns of a table as float64 arrays (what tasks read)."""
+    """The numeric scalar columns of a table as float64 arrays (what tasks read).
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+
+    Returns
+    -------
+    dict of str to (n,) float64 ndarray
+    """
     out = {}
     for f in table.schema:
         if pa.types.is_integer(f.type) or pa.types.is_floating(f.type):
@@ -86,7 +107,24 @@ def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
 
 
 def task_values(task, columns, mode: str = "default", thresholds: Mapping | None = None):
-    """F_T for every row of ``columns`` (an Arrow table or a mapping of (n,) arrays)."""
+    """F_T for every row of ``columns``.
+
+    Parameters
+    ----------
+    task : Task
+        The task.
+    columns : pyarrow.Table or mapping of str to (n,) ndarray
+        The metric columns.
+    mode : str
+        Threshold mode.
+    thresholds : mapping of str to float, optional
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        −∞ where a requirement fails.
+    """
     if isinstance(columns, pa.Table):
         # Only the numeric columns: the task reads names, not strings like `object`.
         columns = numeric_columns(columns)
@@ -100,6 +138,13 @@ class TopRows:
     Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks). Ties go to the
     smaller first key, then the smaller second key..., so the result does not depend on the
     order in which rows arrive.
+
+    Parameters
+    ----------
+    k : int
+        How many rows to keep.
+    n_keys : int
+        Number of tie-breaking key arrays given to ``add``.
     """
 
     def __init__(self, k: int, n_keys: int):
@@ -231,7 +276,19 @@ def _fetch_rows(
 
 
 def write_best(result: BestGrasps, path: str | os.PathLike) -> Path:
-    """Write the top rows as one Parquet file (the viewer reads it), task and mode in metadata."""
+    """Write the top rows as one Parquet file (the viewer reads it), task and mode in metadata.
+
+    Parameters
+    ----------
+    result : BestGrasps
+    path : path
+        The file to write.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     path = Path(path)
     if path.suffix != ".parquet":
         raise bad_parameter("path", f"must name a .parquet file, got {str(path)!r}")

@@ -43,6 +43,10 @@ def open_dataset(
         Check every shard against the checksum recorded when it was written (reads each
         file once per process; see docs/dataset.md for the cost).
 
+    Returns
+    -------
+    pyarrow.dataset.Dataset
+
     Raises
     ------
     DatasetError
@@ -71,7 +75,15 @@ def open_dataset(
 
 @contextlib.contextmanager
 def read_errors(where: str | os.PathLike):
-    """Turn an Arrow or OS error while reading into a DatasetError naming the damaged file."""
+    """Turn an Arrow or OS error while reading into a DatasetError naming the damaged file.
+
+    A context manager.
+
+    Parameters
+    ----------
+    where : path
+        Named in the message when the error does not name a file.
+    """
     try:
         yield
     except (pa.ArrowException, OSError) as exc:
@@ -116,14 +128,39 @@ def _open_loose_files(directory: Path) -> pads.Dataset:
 
 
 def dataset_objects(directory: str | os.PathLike) -> list[str]:
-    """Names of the objects of a dataset, in the order they were given."""
+    """Names of the objects of a dataset, in the order they were given.
+
+    Parameters
+    ----------
+    directory : path
+        A dataset directory.
+
+    Returns
+    -------
+    list of str
+    """
     return [o["name"] for o in read_manifest(directory)["objects"]]
 
 
 def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -> list[str] | None:
     """Object names in the dataset matching ``wanted`` (``knife`` matches ``knife:0``).
 
-    None or empty selects every object. Raises DatasetError naming the objects available.
+    Parameters
+    ----------
+    directory : path
+        A dataset directory.
+    wanted : sequence of str or None
+        Names or families; None or empty selects every object.
+
+    Returns
+    -------
+    list of str or None
+        None when every object is selected.
+
+    Raises
+    ------
+    DatasetError
+        For a name that matches nothing (the message names the objects available).
     """
     if not wanted:
         return None
@@ -145,6 +182,17 @@ def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -
 
 
 def object_filter(objects: Sequence[str] | None) -> pads.Expression | None:
+    """An Arrow filter keeping the rows of some objects.
+
+    Parameters
+    ----------
+    objects : sequence of str or None
+        Object names; None or empty keeps every row.
+
+    Returns
+    -------
+    pyarrow.dataset.Expression or None
+    """
     if not objects:
         return None
     return pads.field("object").isin(list(objects))
@@ -157,7 +205,23 @@ def iter_batches(
     objects: Sequence[str] | None = None,
     batch_size: int = 65536,
 ) -> Iterator[pa.RecordBatch]:
-    """Stream the rows of a dataset (optionally some columns, some objects) in batches."""
+    """Stream the rows of a dataset (optionally some columns, some objects) in batches.
+
+    Parameters
+    ----------
+    directory : path
+        A dataset directory (checksums verified first).
+    columns : sequence of str, optional
+        Columns to read; all when None.
+    objects : sequence of str, optional
+        Objects to read (as for :func:`select_objects`); all when None.
+    batch_size : int
+        Rows per batch at most.
+
+    Yields
+    ------
+    pyarrow.RecordBatch
+    """
     dataset = open_dataset(directory)
     scanner = dataset.scanner(
         columns=list(columns) if columns is not None else None,
@@ -199,6 +263,22 @@ def read_dataset(
 
 
 def dataset_dir(path: str | os.PathLike) -> Path:
+    """``path`` as a Path, after checking that it holds a dataset manifest.
+
+    Parameters
+    ----------
+    path : path
+        A dataset directory.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    DatasetError
+        When it is not a dataset.
+    """
     path = Path(path)
     read_manifest(path)
     return path
