@@ -130,7 +130,6 @@ PENDING: set[str] = {
     "objects/families/parts.py",
     "objects/families/striking.py",
     "optimize.py",
-    "pairs.py",
     "physics/decompose.py",
     "physics/report.py",
     "physics/run.py",

@@ -58,10 +58,28 @@ _SCREEN_IMPACT = 0.0
 def pair_lp_metrics(points, normals, mu, offsets, center, grasp, use_point, use_normal, axis):
     """E_i and U_τ of pairs (grasp[i], use i), compiled.
 
-    points, normals (K, 3), mu (K,): contacts of all grasps, grasp g owning rows
-    ``offsets[g]:offsets[g + 1]``; center (3,); grasp (p,) grasp index of each pair;
-    use_point, use_normal (outward), axis (the grasp's wrist axis): (p, 3).
-    Returns (impact (p,), force (p,), redo (p,) bool: a compiled LP gave up).
+    Parameters
+    ----------
+    points, normals : (K, 3) float64 ndarray
+        Contacts of all grasps (m; outward unit normals), grasp g owning rows
+        ``offsets[g]:offsets[g + 1]``.
+    mu : (K,) float64 ndarray
+    offsets : (G + 1,) int64 ndarray
+    center : (3,) float64 ndarray
+        Centre of mass, m.
+    grasp : (p,) int64 ndarray
+        Grasp index of each pair.
+    use_point, use_normal, axis : (p, 3) float64 ndarray
+        Use point (m), its outward unit normal and the grasp's unit wrist axis.
+
+    Returns
+    -------
+    impact : (p,) float64 ndarray
+        E_i, N per N·m.
+    force : (p,) float64 ndarray
+        U_τ, N.
+    redo : (p,) bool ndarray
+        A compiled LP gave up (the caller recomputes with HiGHS).
     """
     p = grasp.shape[0]
     impact = np.empty(p)
@@ -90,8 +108,17 @@ def pair_lp_metrics(points, normals, mu, offsets, center, grasp, use_point, use_
 class UsePoints:
     """Use points of m use directions on one object.
 
-    use_dir (m, 2); point, normal (m, 3) (outward); triangle (m,) int (-1: no hit);
-    use_edge (m,) U_g; use_edge_angle (m,) rad.
+    Attributes
+    ----------
+    use_dir : (m, 2) float64 ndarray
+    point, normal : (m, 3) float64 ndarray
+        m; outward unit normals.
+    triangle : (m,) int ndarray
+        Face index, -1 for no hit.
+    use_edge : (m,) float64 ndarray
+        U_g, m⁻².
+    use_edge_angle : (m,) float64 ndarray
+        rad.
     """
 
     use_dir: np.ndarray
@@ -147,10 +174,27 @@ def pair_scores(
 ) -> dict[str, np.ndarray]:
     """F_T and Φ of every pair (grasp row, use point) that the screen keeps.
 
-    grasps : evaluated rows (``evaluate``/``evaluate_samples`` output, metrics included)
-    uses : the use points
-    Returns columns: ``grasp`` (row in ``grasps``), ``use`` (index in ``uses``), ``value``
-    (F_T), and the metric columns of the pairs (float64), for the kept pairs only.
+    Parameters
+    ----------
+    obj : GraspObject
+    grasps : pyarrow.Table
+        Evaluated rows (``evaluate``/``evaluate_samples`` output, metrics included).
+    uses : UsePoints
+        The use points.
+    task : str
+        A registered task.
+    mode : str
+        Threshold mode.
+    screen : bool
+        Skip the LPs of pairs that the grasp-only metrics already rule out.
+    **overrides : float
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``grasp`` (row in ``grasps``), ``use`` (index in ``uses``), ``value`` (F_T), and the
+        metric columns of the pairs (float64), for the kept pairs only.
     """
     obj = load_object(obj)
     t = get_task(task)
@@ -214,10 +258,17 @@ def pair_scores(
 class PairSearch:
     """Result of :func:`best_pairs`.
 
-    table : the top pairs as ordinary evaluated rows (p0 of the grasp, d of the use point),
-        best first, with a ``value`` column
-    grasps, uses : how many grasps were simulated and use points cast
-    candidates : pairs with a finite F_T; lp_pairs : pairs that needed the LPs
+    Attributes
+    ----------
+    table : pyarrow.Table
+        The top pairs as ordinary evaluated rows (p0 of the grasp, d of the use point), best
+        first, with a ``value`` column.
+    grasps, uses : int
+        How many grasps were simulated and use points cast.
+    candidates : int
+        Pairs with a finite F_T.
+    lp_pairs : int
+        Pairs that needed the LPs.
     """
 
     table: pa.Table
@@ -247,6 +298,31 @@ def best_pairs(
     ``seed + 1`` so that they are independent of the rows' own d. The top pairs are
     re-simulated with :func:`affordgrasp.pipeline.evaluate_inputs`, so the returned rows carry
     every column of the dataset schema; a pair's value is recomputed on that row.
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+        The object or its spec.
+    task : str
+        A registered task.
+    mode : str
+        Threshold mode.
+    grasps, uses : int
+        Sample counts.
+    seed : int
+        Run seed.
+    top : int
+        Pairs returned.
+    hand : str or Hand
+        The hand.
+    grasp_table : pyarrow.Table, optional
+        Evaluated rows to reuse instead of simulating.
+    **overrides : float
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    PairSearch
     """
     obj = load_object(obj)
     if grasp_table is None:
@@ -290,7 +366,18 @@ def _top_rows(obj, p0, use_dir, task, mode, hand, seed, overrides) -> pa.Table:
 def best_use_per_grasp(scores: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Each grasp's best F_T over the scored pairs and the use index that gives it.
 
-    Returns (values (n,), use (n,) int, -1 where no pair of the grasp is finite).
+    Parameters
+    ----------
+    scores : dict
+        Output of :func:`pair_scores`.
+    n : int
+        Number of grasps.
+
+    Returns
+    -------
+    values : (n,) float64 ndarray
+    use : (n,) int ndarray
+        -1 where no pair of the grasp is finite.
     """
     best = np.full(n, -np.inf)
     use = np.full(n, -1, dtype=np.int64)
@@ -324,8 +411,31 @@ def optimize_pairs(
     The search space splits as the metrics do: CEM (:func:`affordgrasp.optimize.cem_maximize`)
     moves the pregrasp, and each simulated grasp takes the best use point of a fixed
     uniform sample of ``uses`` directions (run ``seed + 1``), found as in
-    :func:`pair_scores`. ``budget`` counts simulations, as for ``optimize``. Returns the
-    ``top`` best distinct (grasp, use point) pairs met during the search, re-simulated.
+    :func:`pair_scores`. ``budget`` counts simulations, as for ``optimize``.
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+    task : str
+    mode : str
+    budget : int
+        Simulations.
+    uses : int
+        Use directions sampled once.
+    seed : int
+    top : int
+        Distinct pairs returned.
+    population : int, optional
+        CEM population; chosen from the budget when None.
+    hand : str or Hand
+    **overrides : float
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    PairSearch
+        The ``top`` best distinct (grasp, use point) pairs met during the search,
+        re-simulated.
     """
     from .optimize import cem_maximize, default_population, guidance
 
