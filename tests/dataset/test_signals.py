@@ -74,7 +74,7 @@ def _alive(pid: int) -> bool:
 )
 def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum, to_group):
     out = tmp_path / "ds"
-    args = ["generate", str(box_mesh), "--samples", "64", "--out", str(out)]
+    args = ["generate", str(box_mesh), "--samples", "512", "--out", str(out)]
     args += ["--seed", str(SEED), "--shard-size", "8", "--chunk-size", "8", "--workers", "2"]
     proc = _start(args)
     deadline = time.monotonic() + 120
@@ -109,8 +109,8 @@ def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum
     assert again.returncode == 0, err
     summary = json.loads(stdout)
     assert summary["complete"]
-    assert summary["shards_skipped"] + summary["shards_written"] == len(plan_shards(1, 64, 8))
-    assert read_dataset(out)["sample"].to_pylist() == list(range(64))
+    assert summary["shards_skipped"] + summary["shards_written"] == len(plan_shards(1, 512, 8))
+    assert read_dataset(out)["sample"].to_pylist() == list(range(512))
 
 
 @pytest.fixture
