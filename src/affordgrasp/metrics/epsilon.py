@@ -68,10 +68,15 @@ SLIVER_TOL = 1e-8  # a facet simplex thinner than this (relative) is a sliver
 class EpsilonResult:
     """ε and the GWS volume of one grasp.
 
-    epsilon : float, >= 0, distance from the origin to the nearest GWS facet
-        (units of a normalised wrench: N, with torques divided by r_max)
-    volume : float, >= 0, 6-volume of the GWS for force-closure grasps, else 0
-    reason : str, "" when ε > 0, else "no contact", "not force closure" or "degenerate"
+    Attributes
+    ----------
+    epsilon : float
+        >= 0, distance from the origin to the nearest GWS facet (units of a normalised
+        wrench: N, with torques divided by r_max).
+    volume : float
+        >= 0, 6-volume of the GWS for force-closure grasps, else 0.
+    reason : str
+        ``""`` when ε > 0, else ``"no contact"``, ``"not force closure"`` or ``"degenerate"``.
     """
 
     epsilon: float
@@ -81,7 +86,20 @@ class EpsilonResult:
 
 @njit(cache=True)
 def wrench_rank(W, rel_tol):
-    """Numerical rank of ``W`` (6, N): column-pivoted Gram-Schmidt, relative tolerance."""
+    """Numerical rank of a wrench matrix: column-pivoted Gram-Schmidt, relative tolerance.
+
+    Parameters
+    ----------
+    W : (6, N) float64 ndarray
+        Wrench matrix.
+    rel_tol : float
+        Tolerance relative to the largest column norm.
+
+    Returns
+    -------
+    int
+        0 to 6.
+    """
     m, n = W.shape
     R = W.copy()
     big = 0.0
@@ -123,10 +141,21 @@ def wrench_rank(W, rel_tol):
 
 @njit(cache=True)
 def closure_margin(W):
-    """LP margin ``t*`` of the origin inside conv(columns of W) (6, N).
+    """LP margin ``t*`` of the origin inside conv(columns of W).
 
     ``max t  s.t.  Σ λ_i w_i = 0, Σ λ_i = 1, λ_i >= t`` with λ_i = μ_i + t, μ, t >= 0.
-    Returns ``(status, t*)``; status INFEASIBLE means the origin is outside the hull.
+
+    Parameters
+    ----------
+    W : (6, N) float64 ndarray
+        Wrench matrix.
+
+    Returns
+    -------
+    status : int
+        An LP status; INFEASIBLE means the origin is outside the hull.
+    margin : float
+        t*.
     """
     m, n = W.shape
     A = np.zeros((m + 1, n + 1))
@@ -152,10 +181,22 @@ def closure_margin(W):
 
 @njit(cache=True)
 def epsilon_kernel(W):
-    """ε of a normalised wrench matrix ``W`` (6, N); returns ``(code, epsilon, volume)``.
+    """ε of a normalised wrench matrix, compiled.
 
-    code is CLOSURE, NO_CONTACT, NOT_FORCE_CLOSURE, DEGENERATE, HULL_FALLBACK or
-    LP_FALLBACK (the last two ask the caller to recompute with qhull / HiGHS).
+    Parameters
+    ----------
+    W : (6, N) float64 ndarray
+        Wrench matrix, torques divided by r_max.
+
+    Returns
+    -------
+    code : int
+        CLOSURE, NO_CONTACT, NOT_FORCE_CLOSURE, DEGENERATE, HULL_FALLBACK or LP_FALLBACK
+        (the last two ask the caller to recompute with qhull / HiGHS).
+    epsilon : float
+        >= 0.
+    volume : float
+        6-volume of the GWS, >= 0.
     """
     n = W.shape[1]
     if n == 0:
@@ -182,7 +223,17 @@ def epsilon_kernel(W):
 
 @njit(cache=True)
 def nearest_facet(offsets):
-    """Index of the facet with the smallest offset (the one that gives ε)."""
+    """Index of the facet with the smallest offset (the one that gives ε).
+
+    Parameters
+    ----------
+    offsets : (F,) float64 ndarray
+        Distances of the facets' hyperplanes from the origin.
+
+    Returns
+    -------
+    int
+    """
     best = 0
     for f in range(1, offsets.shape[0]):
         if offsets[f] < offsets[best]:
@@ -192,9 +243,25 @@ def nearest_facet(offsets):
 
 @njit(cache=True)
 def facet_supports(P, normal, offset, vertices):
-    """Whether the hyperplane ``normal . x = offset`` supports the wrench set ``P`` (N, 6):
-    every wrench beneath it and its facet's six vertices on it, to ``SUPPORT_TOL`` of the
-    data scale, and the six vertices spanning a 5-flat (not a zero-volume sliver).
+    """Whether the hyperplane ``normal . x = offset`` supports the wrench set ``P``.
+
+    Every wrench beneath it and its facet's six vertices on it, to ``SUPPORT_TOL`` of the data
+    scale, and the six vertices spanning a 5-flat (not a zero-volume sliver).
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Wrenches.
+    normal : (6,) float64 ndarray
+        Unit normal.
+    offset : float
+        Hyperplane offset.
+    vertices : (6,) int64 ndarray
+        Row indices into ``P`` of the facet's vertices.
+
+    Returns
+    -------
+    bool
     """
     scale = 0.0
     for i in range(P.shape[0]):
@@ -218,8 +285,21 @@ def facet_supports(P, normal, offset, vertices):
 
 @njit(cache=True)
 def facet_spread(P, vertices):
-    """Smallest Gram-Schmidt residual of the five edge vectors of a facet simplex: its
-    "thinness" (0 when the six vertices lie in a 4-flat)."""
+    """Smallest Gram-Schmidt residual of the five edge vectors of a facet simplex.
+
+    Its "thinness": 0 when the six vertices lie in a 4-flat.
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Wrenches.
+    vertices : (6,) int64 ndarray
+        Row indices into ``P`` of the facet's vertices.
+
+    Returns
+    -------
+    float
+    """
     E = np.empty((5, 6))
     for r in range(5):
         for c in range(6):
@@ -246,9 +326,17 @@ def facet_spread(P, vertices):
 
 
 def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
-    """ε and volume of wrench matrix ``W`` (6, N) with scipy's qhull (the slow reference).
+    """ε and volume of a wrench matrix with scipy's qhull (the slow reference).
 
-    Returns ``(code, epsilon, volume)`` like :func:`epsilon_kernel`.
+    Parameters
+    ----------
+    W : (6, N) float64 ndarray
+        Wrench matrix, torques divided by r_max.
+
+    Returns
+    -------
+    code, epsilon, volume
+        As for :func:`epsilon_kernel`.
     """
     from scipy.spatial import ConvexHull, QhullError
 
@@ -277,11 +365,21 @@ def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
 def epsilon(contacts, center, r_max: float, *, soft: bool = False) -> EpsilonResult:
     """GraspIt!'s L1 epsilon and the GWS volume of a contact set (conventions: Metrics).
 
-    contacts : ContactSet (points (k, 3) m, outward normals (k, 3), mu (k,))
-    center : (3,) float, reference point of the torques (the centre of mass), m
-    r_max : float, torque normalisation length (largest COM-to-vertex distance), m
-    soft : use soft-finger cones (see :mod:`affordgrasp.metrics.cones`)
-    Returns :class:`EpsilonResult` (ε >= 0, volume >= 0, reason).
+    Parameters
+    ----------
+    contacts : ContactSet
+        Points (k, 3) m, outward normals (k, 3), mu (k,).
+    center : (3,) float
+        Reference point of the torques (the centre of mass), m.
+    r_max : float
+        Torque normalisation length (largest COM-to-vertex distance), m.
+    soft : bool
+        Use soft-finger cones (see :mod:`affordgrasp.metrics.cones`).
+
+    Returns
+    -------
+    EpsilonResult
+        ε >= 0, volume >= 0, reason.
     """
     points, normals, mu = contact_arrays(contacts)
     center = point3(center, "center")
@@ -298,7 +396,16 @@ def gws_volume(contacts, center, r_max: float, *, soft: bool = False) -> float:
     """6-volume of the grasp wrench space whether or not the grasp is force closure.
 
     This is GraspIt!'s "volume" quality; 0 when the wrench set is flat (affine rank < 6).
-    Arguments as for :func:`epsilon`.
+
+    Parameters
+    ----------
+    contacts, center, r_max, soft
+        As for :func:`epsilon`.
+
+    Returns
+    -------
+    float
+        >= 0, in normalised wrench units to the sixth power.
     """
     points, normals, mu = contact_arrays(contacts)
     center = point3(center, "center")

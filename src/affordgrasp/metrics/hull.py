@@ -222,12 +222,25 @@ def _initial_simplex(P, out, rank_tol):
 class FacetStore(NamedTuple):
     """Every facet the hull has built, alive or retired, one row each (the one facet store).
 
-    vertices (cap, 6) int64 point indices; neighbours (cap, 6) int64 the facet across the
-    ridge opposite each vertex; normal (cap, 6) outward unit normal; offset (cap,) so that
-    points beneath satisfy normal @ p <= offset; alive (cap,) bool; outside (cap,) head of
-    the facet's outside-point list (-1: none); far_point (cap,), far_dist (cap,) its
-    farthest outside point; mark (cap,) visit stamp of the visibility search (sign: visible
-    + / not -); apex_dist (cap,) height of the current apex above each visited facet.
+    Attributes
+    ----------
+    vertices : (cap, 6) int64 ndarray
+        Point indices.
+    neighbours : (cap, 6) int64 ndarray
+        The facet across the ridge opposite each vertex.
+    normal : (cap, 6) float64 ndarray
+        Outward unit normal.
+    offset : (cap,) float64 ndarray
+        Points beneath satisfy ``normal @ p <= offset``.
+    alive : (cap,) bool ndarray
+    outside : (cap,) int64 ndarray
+        Head of the facet's outside-point list (-1: none).
+    far_point, far_dist : (cap,) ndarray
+        Its farthest outside point and that point's distance.
+    mark : (cap,) ndarray
+        Visit stamp of the visibility search (sign: visible + / not -).
+    apex_dist : (cap,) float64 ndarray
+        Height of the current apex above each visited facet.
     """
 
     vertices: np.ndarray
@@ -337,11 +350,23 @@ def _det6(A):
 
 @njit(cache=True)
 def convex_hull_6d(P):
-    """Facets of the convex hull of ``P`` (N, 6).
+    """Facets of the convex hull of a 6-D point set.
 
-    Returns ``(status, vertices (F, 6) int64, normals (F, 6), offsets (F,), interior (6,))``
-    with outward unit normals: every point satisfies ``normals @ p <= offsets + tol``.
-    status is HULL_OK, HULL_DEGENERATE (affine rank < 6) or HULL_FAILED.
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Points.
+
+    Returns
+    -------
+    status : int
+        HULL_OK, HULL_DEGENERATE (affine rank < 6) or HULL_FAILED.
+    vertices : (F, 6) int64 ndarray
+    normals : (F, 6) float64 ndarray
+        Outward unit normals: every point satisfies ``normals @ p <= offsets + tol``.
+    offsets : (F,) float64 ndarray
+    interior : (6,) float64 ndarray
+        A point inside the hull.
     """
     N = P.shape[0]
     scale = 0.0
@@ -607,7 +632,21 @@ def convex_hull_6d(P):
 
 @njit(cache=True)
 def hull_volume(P, vertices, interior):
-    """6-volume of a hull given by simplicial facets ``vertices`` (F, 6) and an interior point."""
+    """6-volume of a hull given by simplicial facets and an interior point.
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Points.
+    vertices : (F, 6) int64 ndarray
+        Facets as row indices into ``P``.
+    interior : (6,) float64 ndarray
+        A point inside the hull.
+
+    Returns
+    -------
+    float
+    """
     A = np.empty((DIM, DIM))
     vol = 0.0
     for f in range(vertices.shape[0]):

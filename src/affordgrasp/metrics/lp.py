@@ -66,9 +66,13 @@ class LPStatus(enum.Enum):
 class LPResult:
     """Solution of ``min c @ x, A @ x = b, x >= 0``.
 
+    Attributes
+    ----------
     status : LPStatus
-    objective : float, the optimum (``nan`` unless optimal)
-    x : (n,) float64, an optimal point (``nan`` unless optimal)
+    objective : float
+        The optimum (``nan`` unless optimal).
+    x : (n,) float64 ndarray
+        An optimal point (``nan`` unless optimal).
     """
 
     status: LPStatus
@@ -177,10 +181,21 @@ def _iterate(T, basis, n_enter, cost_tol, max_iter):
 
 @njit(cache=True)
 def simplex_standard(A, b, c, x_out):
-    """Solve ``min c @ x, A @ x = b, x >= 0`` (compiled; A (m, n), b (m,), c (n,)).
+    """Solve ``min c @ x, A @ x = b, x >= 0``, compiled.
 
-    Writes an optimal point into ``x_out`` (n,) and returns ``(status, objective)`` with
-    status OPTIMAL / INFEASIBLE / UNBOUNDED / FAILED (FAILED: use another solver).
+    Parameters
+    ----------
+    A : (m, n) float64 ndarray
+    b : (m,) float64 ndarray
+    c : (n,) float64 ndarray
+    x_out : (n,) float64 ndarray
+        Written with an optimal point.
+
+    Returns
+    -------
+    status : int
+        OPTIMAL / INFEASIBLE / UNBOUNDED / FAILED (FAILED: use another solver).
+    objective : float
     """
     m, n = A.shape
     for j in range(n):
@@ -318,7 +333,10 @@ class HighsStandardLP:
     Building the model once and changing only ``b`` between solves (e.g. the six gravity
     directions of the hold effort) costs about a third of a fresh build.
 
-    A : (m, n) float, c : (n,) float
+    Parameters
+    ----------
+    A : (m, n) float ndarray
+    c : (n,) float ndarray
     """
 
     def __init__(self, A: np.ndarray, c: np.ndarray):
@@ -399,7 +417,13 @@ BACKENDS = ("simplex", "highs")
 
 
 def check_backend(backend: str) -> None:
-    """Refuse an unknown solver name with the list of valid ones."""
+    """Refuse an unknown solver name with the list of valid ones.
+
+    Parameters
+    ----------
+    backend : str
+        ``"simplex"`` or ``"highs"``; anything else raises InputError.
+    """
     if backend not in BACKENDS:
         raise InputError(f"unknown LP backend {backend!r}; use one of {', '.join(BACKENDS)}")
 
@@ -409,9 +433,18 @@ def solve_standard_lp(
 ) -> LPResult:
     """Solve ``min c @ x  s.t.  A @ x = b,  x >= 0`` exactly (to optimality).
 
-    c : (n,) float, A : (m, n) float, b : (m,) float
-    backend : "simplex" (compiled dense simplex, HiGHS fallback) or "highs"
-    Returns an :class:`LPResult`; infeasibility and unboundedness are statuses, not values.
+    Parameters
+    ----------
+    c : (n,) float ndarray
+    A : (m, n) float ndarray
+    b : (m,) float ndarray
+    backend : {"simplex", "highs"}
+        Compiled dense simplex with HiGHS fallback, or HiGHS.
+
+    Returns
+    -------
+    LPResult
+        Infeasibility and unboundedness are statuses, not values.
     """
     check_backend(backend)
     A = np.ascontiguousarray(A, dtype=np.float64)
