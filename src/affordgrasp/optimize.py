@@ -52,8 +52,14 @@ Objective = Callable[[np.ndarray], np.ndarray]
 class CEMTrace:
     """Every point CEM evaluated, in order, and what each generation did.
 
-    x : (budget, 8) inputs; values : (budget,) objective values (−inf allowed)
-    generations : per generation: evaluations so far, best so far, finite fraction, mean std
+    Attributes
+    ----------
+    x : (budget, 8) float64 ndarray
+        Inputs (p0 (6), d (2)).
+    values : (budget,) float64 ndarray
+        Objective values (−inf allowed).
+    generations : list of dict
+        Per generation: evaluations so far, best so far, finite fraction, mean std.
     """
 
     x: np.ndarray
@@ -72,7 +78,17 @@ class CEMTrace:
 
 
 def default_population(budget: int) -> int:
-    """About 20 generations, each between 32 and 1000 samples."""
+    """About 20 generations, each between 32 and 1000 samples.
+
+    Parameters
+    ----------
+    budget : int
+        Total evaluations.
+
+    Returns
+    -------
+    int
+    """
     return int(np.clip(budget // 20, 32, 1000))
 
 
@@ -97,6 +113,18 @@ def _sample(rng: np.random.Generator, mean: np.ndarray, std: np.ndarray, n: int)
 
 
 def uniform_inputs(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Uniform samples of the (p0, d) box.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    n : int
+
+    Returns
+    -------
+    (n, 8) float64 ndarray
+        p0 in [-1, 1]^5 × [0, 1], d in [-1, 1]^2.
+    """
     return LOW + WIDTH * rng.random((n, DIM))
 
 
@@ -115,16 +143,35 @@ def cem_maximize(
 ) -> CEMTrace:
     """Maximise ``objective`` over the (p0, d) box with the cross-entropy method.
 
-    objective : (m, 8) inputs → (m,) values; −inf for infeasible, NaN counts as −inf. It
-        may return (values, guidance) instead: among infeasible points, a larger guidance
-        (finite) ranks first, so the search heads for the feasible region while no or few
-        feasible points are known; guidance never ranks an infeasible point above a feasible.
-    budget : total evaluations; population : per generation (default ``default_population``)
-    min_std : floor of the std, as a fraction of each coordinate's range
-    explore_fraction : share of every later generation drawn uniformly from the box (at
-        least half while no feasible point is known)
-    initial : (m, 8) the first generation (default: uniform from ``seed``)
-    on_generation : called with the number of evaluations of each generation
+    Parameters
+    ----------
+    objective : callable
+        (m, 8) inputs → (m,) values; −inf for infeasible, NaN counts as −inf. It may return
+        (values, guidance) instead: among infeasible points, a larger guidance (finite)
+        ranks first, so the search heads for the feasible region while no or few feasible
+        points are known; guidance never ranks an infeasible point above a feasible.
+    budget : int
+        Total evaluations.
+    seed : int
+    population : int, optional
+        Per generation (default :func:`default_population`).
+    elite_fraction : float
+        Share of a generation that refits the distribution.
+    smoothing : float
+        Weight of the new fit against the old one.
+    min_std : float
+        Floor of the std, as a fraction of each coordinate's range.
+    explore_fraction : float
+        Share of every later generation drawn uniformly from the box (at least half while
+        no feasible point is known).
+    initial : (m, 8) float64 ndarray, optional
+        The first generation (default: uniform from ``seed``).
+    on_generation : callable, optional
+        Called with the number of evaluations of each generation.
+
+    Returns
+    -------
+    CEMTrace
     """
     if not isinstance(budget, int) or budget < 1:
         raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
@@ -214,7 +261,19 @@ def cem_maximize(
 
 @dataclass
 class Found:
-    """A grasp found by a search: its F_T, inputs and full row (every column of evaluate)."""
+    """A grasp found by a search: its F_T, inputs and full row (every column of evaluate).
+
+    Attributes
+    ----------
+    value : float
+        F_T.
+    p0 : (6,) float64 ndarray
+    use_dir : (2,) float64 ndarray
+    evaluations : int
+        How many simulations the search had run when it found it.
+    row : dict
+        The evaluated row.
+    """
 
     value: float
     p0: np.ndarray
@@ -235,7 +294,20 @@ class Found:
 
 @dataclass
 class OptimizationResult:
-    """CEM against uniform random sampling at the same simulation budget."""
+    """CEM against uniform random sampling at the same simulation budget.
+
+    Attributes
+    ----------
+    object, task, mode : str
+    budget, seed : int
+    cem, random : Found or None
+        The best grasp of each method (None: no finite F_T).
+    cem_trace : CEMTrace
+    random_values : (budget,) float64 ndarray or None
+        F_T of the random samples (None without the baseline).
+    elapsed_s : float
+        Wall time, s.
+    """
 
     object: str
     task: str
@@ -377,14 +449,25 @@ def _found(values: np.ndarray, table: pa.Table, offset: int) -> Found | None:
 
 
 def guidance(table: pa.Table, requires=()) -> np.ndarray:
-    """How close each grasp came to a usable one: contacts made, plus 100 ε, plus, for a
-    task that reads them (``requires``), how sharp the use point is (3 (1 - angle / π))
-    and how well it discharges the swing (3 δ).
+    """How close each grasp came to a usable one.
 
+    Contacts made, plus 100 ε, plus, for a task that reads them (``requires``), how sharp
+    the use point is (3 (1 - angle / π)) and how well it discharges the swing (3 δ).
     Ranks infeasible (−∞) samples among themselves while CEM has too few feasible ones: more
     links touching and force closure make every task's thresholds likelier to pass, and
     the use terms lead the use direction towards an edge or a discharging point, which
     uniform use directions rarely hit (a knife's cutting edge: 0.1 % of them).
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        Evaluated rows.
+    requires : iterable of str
+        Metric columns the task reads.
+
+    Returns
+    -------
+    (n,) float64 ndarray
     """
     n = table["n_contacts"].to_numpy().astype(np.float64)
     eps = table["epsilon"].to_numpy() if "epsilon" in table.column_names else 0.0
@@ -425,14 +508,42 @@ def optimize(
 ) -> OptimizationResult:
     """Maximise F_T of ``task`` on ``obj`` with CEM; also uniform random sampling, same budget.
 
-    obj : an object spec or GraspObject; budget : simulations for each method
-    baseline : also run random sampling (samples 0..budget-1 of the run ``seed``, the rows
-        ``generate --seed`` writes; CEM's first generation is their first part, reused)
-    progress : ``progress(total)`` returns a context manager yielding ``advance(n)``
-    uses : if > 0, each simulated grasp (of CEM and of the baseline) is scored with its
-        best use point among ``uses`` uniform use directions (run ``seed + 1``), as in
+    Parameters
+    ----------
+    obj : str or GraspObject
+        An object spec or object.
+    task : str
+        A registered task.
+    mode : str
+        Threshold mode.
+    budget : int
+        Simulations for each method.
+    seed : int
+    thresholds : mapping of str to float, optional
+        Threshold values that replace the mode's.
+    hand : Hand or str
+    workers : int, optional
+        Simulation processes.
+    engine : str
+        ``"local"`` or ``"ray"``.
+    address : str, optional
+        Ray cluster address.
+    population : int, optional
+        CEM population per generation.
+    baseline : bool
+        Also run random sampling (samples 0..budget-1 of the run ``seed``, the rows
+        ``generate --seed`` writes; CEM's first generation is their first part, reused).
+    progress : callable, optional
+        ``progress(total)`` returns a context manager yielding ``advance(n)``.
+    uses : int
+        If > 0, each simulated grasp (of CEM and of the baseline) is scored with its best
+        use point among ``uses`` uniform use directions (run ``seed + 1``), as in
         :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
-        is found by ray casts, which cost no simulation
+        is found by ray casts, which cost no simulation.
+
+    Returns
+    -------
+    OptimizationResult
     """
     from .dataset.engines import (
         ObjectPayload,

@@ -31,6 +31,16 @@ log = logging.getLogger(__name__)
 
 
 def hand_description(hand) -> dict:
+    """The hand's card entry: name, DOFs (limits in rad or m), links and fingers.
+
+    Parameters
+    ----------
+    hand : Hand
+
+    Returns
+    -------
+    dict
+    """
     return {
         "name": hand.name,
         "description": hand.description,
@@ -49,6 +59,16 @@ def hand_description(hand) -> dict:
 
 
 def object_description(obj) -> dict:
+    """The object's card entry: identity, mesh size and mass properties (SI units).
+
+    Parameters
+    ----------
+    obj : GraspObject
+
+    Returns
+    -------
+    dict
+    """
     m = obj.mass
     return {
         "name": obj.name,
@@ -68,6 +88,12 @@ def object_description(obj) -> dict:
 
 
 def simulation_settings() -> dict:
+    """The grasp simulator's settings (distances in m) and the friction cone edges.
+
+    Returns
+    -------
+    dict
+    """
     from ..grasp import policy
     from ..materials import DEFAULT_OBJECT_MATERIAL
 
@@ -87,7 +113,14 @@ def simulation_settings() -> dict:
 
 
 def task_thresholds() -> dict:
-    """The thresholds of every registered task in every mode, as far as the tasks say."""
+    """The thresholds of every registered task in every mode, as far as the tasks say.
+
+    Returns
+    -------
+    dict
+        Task name → mode → threshold name → value (in the unit of the metric it bounds);
+        a task that cannot say is left out.
+    """
     try:
         from .. import tasks
     except ImportError:
@@ -138,6 +171,18 @@ def _plain(value):
 
 
 def schema_description(metrics: bool, depth: bool = False) -> list[dict]:
+    """Every field of the shards' schema with its Arrow type.
+
+    Parameters
+    ----------
+    metrics, depth : bool
+        As for :func:`affordgrasp.schema.dataset_schema`.
+
+    Returns
+    -------
+    list of dict
+        ``{"name": ..., "type": ...}``.
+    """
     from ..schema import dataset_schema
 
     schema = dataset_schema(metrics, depth)
@@ -154,6 +199,28 @@ def build_card(
     previous: dict | None,
     run: dict,
 ) -> dict:
+    """The dataset card of a run as a JSON-ready document.
+
+    Parameters
+    ----------
+    manifest : dict
+        The run's plan.
+    objects : sequence of GraspObject
+    hand : Hand
+    shards : dict
+        The shards written so far.
+    plan : sequence
+        The planned shards.
+    previous : dict or None
+        The card of an earlier run in the same directory.
+    run : dict
+        This run's facts (command, engine, workers, start, elapsed s, rows written,
+        complete).
+
+    Returns
+    -------
+    dict
+    """
     from ..materials import friction_table
 
     per_object: dict[str, Counter] = {o.name: Counter() for o in objects}
@@ -202,7 +269,17 @@ def build_card(
 
 
 def card_markdown(card: dict) -> str:
-    """The card as a short Markdown page."""
+    """The card as a short Markdown page.
+
+    Parameters
+    ----------
+    card : dict
+        From :func:`build_card`.
+
+    Returns
+    -------
+    str
+    """
     state = "complete" if card["complete"] else "INCOMPLETE (run the same command to finish it)"
     lines = [
         "# affordgrasp dataset",
@@ -303,6 +380,17 @@ def _command_text(command) -> str:
 
 
 def read_card(directory: str | Path) -> dict | None:
+    """The card of a dataset directory.
+
+    Parameters
+    ----------
+    directory : path
+
+    Returns
+    -------
+    dict or None
+        None when there is none or it cannot be read.
+    """
     path = Path(directory) / CARD_JSON_NAME
     if not path.is_file():
         return None
@@ -313,7 +401,20 @@ def read_card(directory: str | Path) -> dict | None:
 
 
 def write_card(directory: Path, **kwargs) -> dict:
-    """Build the card from the run's facts and write both files atomically."""
+    """Build the card from the run's facts and write both files atomically.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+        The dataset directory.
+    **kwargs
+        As for :func:`build_card`.
+
+    Returns
+    -------
+    dict
+        The card.
+    """
     card = build_card(previous=read_card(directory), **kwargs)
     write_json_atomic(directory / CARD_JSON_NAME, card)
     write_bytes_atomic(directory / CARD_MD_NAME, card_markdown(card).encode("utf-8"))

@@ -67,7 +67,22 @@ ProgressFactory = Callable[[int], AbstractContextManager[Callable[[int], None]]]
 
 @dataclass
 class GenerationSummary:
-    """What a call to :func:`generate` did and what the dataset now holds."""
+    """What a call to :func:`generate` did and what the dataset now holds.
+
+    Attributes
+    ----------
+    directory : str
+    complete : bool
+        Every planned shard is written.
+    samples_per_object : int
+    shards_total, shards_written, shards_skipped : int
+        Planned, written by this call, already there.
+    samples_written : int
+    elapsed_s : float
+        Wall time, s.
+    engine : str
+    workers : int
+    """
 
     directory: str
     complete: bool
@@ -114,7 +129,27 @@ def build_manifest(
     command: Sequence[str] | None,
     depth: bool = False,
 ) -> dict:
-    """The plan of a run as a JSON document (``_manifest.json``)."""
+    """The plan of a run as a JSON document (``_manifest.json``).
+
+    Parameters
+    ----------
+    objects : sequence of GraspObject
+    samples : int
+        Samples per object.
+    seed : int
+    hand : str
+        The hand's name.
+    shard_size : int
+        Rows per shard.
+    metrics, soft, depth : bool
+        Metric columns, soft-finger cones, depth images.
+    command : sequence of str or None
+        The command line, recorded.
+
+    Returns
+    -------
+    dict
+    """
     manifest = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
@@ -146,7 +181,17 @@ def build_manifest(
 
 
 def load_objects(specs: Sequence) -> list:
-    """Resolve object specs once, refusing duplicates (they would duplicate rows)."""
+    """Resolve object specs once, refusing duplicates (they would duplicate rows).
+
+    Parameters
+    ----------
+    specs : sequence
+        Object specs or GraspObjects.
+
+    Returns
+    -------
+    list of GraspObject
+    """
     from ..objects import load_object
 
     if not specs:
