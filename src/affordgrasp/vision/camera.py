@@ -31,7 +31,15 @@ from ..grasp.pregrasp import hand_rotations, validate_pregrasps
 
 @dataclass(frozen=True)
 class DepthCamera:
-    """Intrinsics of the camera in the hand: ``size`` × ``size`` pixels, ``fov_deg`` wide."""
+    """Intrinsics of the camera in the hand: ``size`` × ``size`` pixels, ``fov_deg`` wide.
+
+    Attributes
+    ----------
+    size : int
+        Pixels per side, >= 2.
+    fov_deg : float
+        Field of view, degrees.
+    """
 
     size: int = 128
     fov_deg: float = 60.0
@@ -76,7 +84,14 @@ class DepthCamera:
 class ObjectFrame:
     """What the camera pose needs from an object: its vertices, box centre and length.
 
-    vertices : (v, 3) float64, m (convex-hull vertices suffice: only extents are used)
+    Attributes
+    ----------
+    vertices : (v, 3) float64 ndarray
+        m (convex-hull vertices suffice: only extents are used).
+    centre : (3,) float64 ndarray
+        Bounding-box centre, m.
+    length : float
+        m.
     """
 
     vertices: np.ndarray
@@ -91,9 +106,20 @@ class ObjectFrame:
 
 
 def camera_poses(frame: ObjectFrame, p0) -> np.ndarray:
-    """Camera → object transforms (n, 4, 4) for pregrasps p0 (n, 6), m.
+    """Camera → object transforms for pregrasps.
 
     Columns of the rotation: the hand's x, y and approach z (see the module docstring).
+
+    Parameters
+    ----------
+    frame : ObjectFrame
+    p0 : (n, 6) array_like of float
+        Pregrasps.
+
+    Returns
+    -------
+    (n, 4, 4) float64 ndarray
+        Translations in m.
     """
     p0 = validate_pregrasps(p0)
     rot = hand_rotations(p0)

@@ -30,7 +30,12 @@ DEPTH_MM_MAX = 65.535  # the largest depth uint16 millimetres can hold, m
 class DepthRenderer:
     """Renders D(p0, O) for one object; holds its Embree scene (build once, render often).
 
-    mesh : trimesh.Trimesh in the object's mesh frame, m
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object in its mesh frame, m.
+    camera : DepthCamera, optional
+        Intrinsics; the default camera when None.
     """
 
     def __init__(self, mesh, camera: DepthCamera | None = None):
@@ -82,7 +87,17 @@ _RENDERER_CACHE_SIZE = 8
 
 
 def renderer_for(obj, camera: DepthCamera | None = None) -> DepthRenderer:
-    """A cached renderer of a GraspObject (keyed by mesh hash and camera)."""
+    """A cached renderer of a GraspObject (keyed by mesh hash and camera).
+
+    Parameters
+    ----------
+    obj : GraspObject
+    camera : DepthCamera, optional
+
+    Returns
+    -------
+    DepthRenderer
+    """
     camera = camera or DepthCamera()
     key = (obj.mesh_hash, camera)
     renderer = _RENDERERS.get(key)
@@ -97,10 +112,20 @@ def renderer_for(obj, camera: DepthCamera | None = None) -> DepthRenderer:
 
 
 def render_depth(obj, p0, camera: DepthCamera | None = None) -> np.ndarray:
-    """D(p0, O): depth images (n, size, size) float32 of an object spec or GraspObject.
+    """D(p0, O): the depth images an in-hand camera sees at each pregrasp.
 
-    obj : "knife", "knife:7", a mesh path, a GraspObject, or a trimesh.Trimesh
-    p0 : (n, 6) or (6,) pregrasps in [-1, 1]^5 × [0, 1]
+    Parameters
+    ----------
+    obj : str, path, GraspObject or trimesh.Trimesh
+        ``"knife"``, ``"knife:7"``, a mesh path, an object or a mesh (m).
+    p0 : (n, 6) or (6,) array_like of float
+        Pregrasps in [-1, 1]^5 × [0, 1].
+    camera : DepthCamera, optional
+
+    Returns
+    -------
+    (n, size, size) float32 ndarray
+        Depth, m; 0 where the ray hits nothing (no return).
     """
     import trimesh
 
@@ -114,7 +139,20 @@ def render_depth(obj, p0, camera: DepthCamera | None = None) -> np.ndarray:
 def depth_to_mm(depth: np.ndarray) -> np.ndarray:
     """Depth in m (float) → uint16 millimetres, rounded to nearest; 0 stays 0 (no return).
 
-    Raises InputError for depths beyond 65.535 m (what uint16 mm can hold).
+    Parameters
+    ----------
+    depth : float ndarray
+        Any shape, m.
+
+    Returns
+    -------
+    uint16 ndarray
+        Same shape, mm.
+
+    Raises
+    ------
+    InputError
+        For depths beyond 65.535 m (what uint16 mm can hold).
     """
     depth = np.asarray(depth, dtype=np.float64)
     if depth.size and float(np.nanmax(depth)) > DEPTH_MM_MAX:
@@ -126,7 +164,18 @@ def depth_to_mm(depth: np.ndarray) -> np.ndarray:
 
 
 def depth_from_mm(depth_mm: np.ndarray) -> np.ndarray:
-    """uint16 millimetres → float32 metres (0 stays 0)."""
+    """uint16 millimetres → float32 metres (0 stays 0).
+
+    Parameters
+    ----------
+    depth_mm : uint16 ndarray
+        Any shape, mm.
+
+    Returns
+    -------
+    float32 ndarray
+        Same shape, m.
+    """
     return np.asarray(depth_mm, dtype=np.float32) / np.float32(1000.0)
 
 
@@ -138,8 +187,19 @@ def _colormap():
 
 
 def depth_to_rgb(depth: np.ndarray) -> np.ndarray:
-    """A colour-mapped view (h, w, 3) uint8 of one depth image: near bright, far dark, no
-    return black. The range is the image's own min..max depth."""
+    """A colour-mapped view of one depth image: near bright, far dark, no return black.
+
+    The range is the image's own min..max depth.
+
+    Parameters
+    ----------
+    depth : (h, w) float ndarray
+        m.
+
+    Returns
+    -------
+    (h, w, 3) uint8 ndarray
+    """
     depth = np.asarray(depth, dtype=np.float64)
     if depth.ndim != 2:
         raise InputError(f"one depth image (h, w) expected, got shape {depth.shape}")
@@ -154,7 +214,17 @@ def depth_to_rgb(depth: np.ndarray) -> np.ndarray:
 
 
 def save_depth_png(path, depth: np.ndarray, *, scale: int = 1) -> None:
-    """Write the colour-mapped view of one depth image as a PNG (``scale``× nearest)."""
+    """Write the colour-mapped view of one depth image as a PNG (``scale``× nearest).
+
+    Parameters
+    ----------
+    path : path
+        The PNG file.
+    depth : (h, w) float ndarray
+        m.
+    scale : int
+        Integer upscaling factor.
+    """
     from matplotlib import image as mpimg
 
     rgb = depth_to_rgb(depth)
@@ -164,7 +234,17 @@ def save_depth_png(path, depth: np.ndarray, *, scale: int = 1) -> None:
 
 
 def depth_manifest(camera: DepthCamera | None = None) -> dict:
-    """How a dataset's ``depth_mm`` column was made (recorded in its manifest)."""
+    """How a dataset's ``depth_mm`` column was made (recorded in its manifest).
+
+    Parameters
+    ----------
+    camera : DepthCamera, optional
+
+    Returns
+    -------
+    dict
+        Camera size and field of view, units, encoding.
+    """
     camera = camera or DepthCamera()
     return {
         "column": "depth_mm",
@@ -175,7 +255,20 @@ def depth_manifest(camera: DepthCamera | None = None) -> dict:
 
 
 def depth_column(obj, table):
-    """The ``depth_mm`` column (Arrow binary, one image per row) of a table's pregrasps."""
+    """The ``depth_mm`` column of a table's pregrasps.
+
+    Parameters
+    ----------
+    obj : GraspObject
+    table : pyarrow.Table
+        Rows with a ``p0`` column (n, 6).
+
+    Returns
+    -------
+    field : pyarrow.Field
+    column : pyarrow.Array
+        Binary, one uint16 mm image per row.
+    """
     import pyarrow as pa
 
     p0 = np.asarray(table.column("p0").combine_chunks().flatten(), dtype=np.float64)
@@ -186,7 +279,18 @@ def depth_column(obj, table):
 
 
 def decode_depth_column(column) -> np.ndarray:
-    """A ``depth_mm`` column (Arrow binary) → (n, size, size) float32 metres."""
+    """A ``depth_mm`` column (Arrow binary) → depth images in metres.
+
+    Parameters
+    ----------
+    column : pyarrow.Array or pyarrow.ChunkedArray
+        n binary values.
+
+    Returns
+    -------
+    (n, size, size) float32 ndarray
+        m.
+    """
     import pyarrow as pa
 
     if isinstance(column, pa.ChunkedArray):

@@ -22,9 +22,18 @@ from .camera import DepthCamera
 
 
 def depth_to_points(depth: np.ndarray, camera: DepthCamera | None = None) -> np.ndarray:
-    """All valid pixels of one depth image (h, w) as camera-frame points (k, 3) float32, m.
+    """All valid pixels of one depth image as camera-frame points, in row-major pixel order.
 
-    Points are in row-major pixel order.
+    Parameters
+    ----------
+    depth : (h, w) float ndarray
+        m (0 = no return).
+    camera : DepthCamera, optional
+
+    Returns
+    -------
+    (k, 3) float32 ndarray
+        m.
     """
     depth = np.asarray(depth)
     camera = camera or DepthCamera(size=depth.shape[-1])
@@ -46,11 +55,26 @@ def point_clouds(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Fixed-size point clouds of depth images.
 
-    depth : (b, h, w) or (h, w) depth, m (0 = no return)
-    n_points : N, points per cloud
-    seed : image i is subsampled with ``default_rng(SeedSequence([seed, i]))``
-    returns : points (b, N, 3) float32 (camera frame, m; padding at the origin) and
-        counts (b,) int64, the number of real points before subsampling/padding
+    Parameters
+    ----------
+    depth : (b, h, w) or (h, w) float ndarray
+        m (0 = no return).
+    n_points : int
+        N, points per cloud.
+    seed : int
+        Image i is subsampled with ``default_rng(SeedSequence([seed, i]))``.
+    camera : DepthCamera, optional
+    crop_radius : float, optional
+        Keep only points within this distance of the optical axis, m.
+    centre_depth : bool
+        Subtract the smallest depth of each cloud from z.
+
+    Returns
+    -------
+    points : (b, N, 3) float32 ndarray
+        Camera frame, m; padding at the origin.
+    counts : (b,) int64 ndarray
+        The number of real points before subsampling/padding.
     """
     depth = np.asarray(depth)
     if depth.ndim == 2:
