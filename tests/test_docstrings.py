@@ -124,7 +124,6 @@ PENDING: set[str] = {
     "objects/families/handtools.py",
     "objects/families/parts.py",
     "objects/families/striking.py",
-    "physics/decompose.py",
     "physics/report.py",
     "physics/run.py",
     "physics/scene.py",

@@ -31,7 +31,12 @@ __all__ = ["cache_dir", "convex_parts"]
 
 
 def cache_dir() -> Path:
-    """The user cache directory of affordgrasp (created on first write)."""
+    """The user cache directory of affordgrasp (created on first write).
+
+    Returns
+    -------
+    pathlib.Path
+    """
     env = os.environ.get("AFFORDGRASP_CACHE_DIR")
     if env:
         return Path(env).expanduser()
@@ -54,9 +59,21 @@ def convex_parts(
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Convex parts of a closed mesh, in its frame.
 
-    mesh : trimesh.Trimesh, watertight, metres
-    mesh_hash : str, the mesh's :func:`affordgrasp.objects.mesh_hash` (the cache key)
-    returns : list of (vertices (n, 3) float64, faces (m, 3) int64), each a convex hull
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Watertight, metres.
+    mesh_hash : str
+        The mesh's :func:`affordgrasp.objects.mesh_hash` (the cache key).
+    settings : PhysicsSettings, optional
+        The decomposition settings; the defaults when None.
+    use_cache : bool
+        Read and write the decomposition in :func:`cache_dir`.
+
+    Returns
+    -------
+    list of (vertices, faces)
+        vertices (n, 3) float64 m, faces (m, 3) int64; each a convex hull.
     """
     settings = settings or PhysicsSettings()
     path = _cache_path(mesh_hash, settings)
