@@ -20,7 +20,21 @@ FORMAT_VERSION = 1
 
 
 def save_model(path: str | os.PathLike, model, config: dict) -> Path:
-    """Write ``model``'s weights and ``config`` to ``path`` (a .safetensors file)."""
+    """Write ``model``'s weights and ``config`` to ``path`` (a .safetensors file).
+
+    Parameters
+    ----------
+    path : path
+        The model file.
+    model : torch.nn.Module
+    config : dict
+        JSON-ready description that rebuilds the model (stored in the file's metadata).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     st = require_safetensors()
     path = Path(path)
     if path.suffix != ".safetensors":
@@ -35,7 +49,17 @@ def save_model(path: str | os.PathLike, model, config: dict) -> Path:
 
 
 def read_config(path: str | os.PathLike) -> dict:
-    """The config stored in a model file (no weights loaded)."""
+    """The config stored in a model file (no weights loaded).
+
+    Parameters
+    ----------
+    path : path
+        A file written by :func:`save_model`.
+
+    Returns
+    -------
+    dict
+    """
     require_torch()
     from safetensors import safe_open
 
@@ -59,7 +83,18 @@ def read_config(path: str | os.PathLike) -> dict:
 
 
 def load_model(path: str | os.PathLike):
-    """(model in eval mode, config) from a model file, without unpickling anything."""
+    """The model of a model file in eval mode and its config, without unpickling anything.
+
+    Parameters
+    ----------
+    path : path
+        A file written by :func:`save_model`.
+
+    Returns
+    -------
+    model : torch.nn.Module
+    config : dict
+    """
     st = require_safetensors()
     from .models import build_model
 

@@ -36,7 +36,23 @@ HOLD_EFFORT_MAX = 250.0  # N, the viability bound on ΣE_h (paper §IV-D)
 
 @dataclass(frozen=True)
 class Target:
-    """A learning target: ``name``, ``kind`` (classification/regression), rows, scaling."""
+    """A learning target: what is learned, on which rows, and its scaling.
+
+    Attributes
+    ----------
+    name : str
+        A metric column, task or derived target.
+    kind : str
+        ``"classification"`` or ``"regression"``.
+    rows : str
+        ``"all"``, ``"viable"`` or ``"finite"``: the rows learned and evaluated on.
+    low, high : float
+        Range mapped to [0, 1] for regression (after the log when ``log``).
+    log : bool
+        Learn log(value).
+    lower_is_better : bool
+        Rank low values first (efforts).
+    """
 
     name: str
     kind: str  # "classification" or "regression"
@@ -74,7 +90,18 @@ class Target:
 
 
 def target_values(name: str, columns) -> np.ndarray:
-    """The raw value of a target on the rows of a table of metric columns (n,)."""
+    """The raw value of a target on the rows of a table of metric columns.
+
+    Parameters
+    ----------
+    name : str
+        The target's name.
+    columns : pyarrow.Table or mapping of str to ndarray
+
+    Returns
+    -------
+    (n,) float64 ndarray
+    """
     from ..tasks import MetricColumns, evaluate_task, is_viable
 
     metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
@@ -86,7 +113,17 @@ def target_values(name: str, columns) -> np.ndarray:
 
 
 def target_rows(target: Target, columns) -> np.ndarray:
-    """Boolean mask of the rows a target is learned and evaluated on."""
+    """Boolean mask of the rows a target is learned and evaluated on.
+
+    Parameters
+    ----------
+    target : Target
+    columns : pyarrow.Table or mapping of str to ndarray
+
+    Returns
+    -------
+    (n,) bool ndarray
+    """
     from ..tasks import MetricColumns, is_viable
 
     metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
@@ -98,7 +135,22 @@ def target_rows(target: Target, columns) -> np.ndarray:
 
 
 def make_target(name: str, train_values: np.ndarray | None = None, *, log: bool = False):
-    """The Target called ``name``; a generic column's scale comes from its training values."""
+    """The Target called ``name``; a generic column's scale comes from its training values.
+
+    Parameters
+    ----------
+    name : str
+        A task, a metric column or a derived target.
+    train_values : (n,) float ndarray, optional
+        Training values of a generic column: their finite minimum and 99th percentile
+        set ``low``/``high``.
+    log : bool
+        Learn log(value).
+
+    Returns
+    -------
+    Target
+    """
     if not name or not isinstance(name, str):
         raise InputError("--target must name 'viable', 'hold_effort_sum', a column or task:NAME")
     lower = name in LOWER_IS_BETTER

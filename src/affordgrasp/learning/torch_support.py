@@ -8,7 +8,12 @@ INSTALL_HINT = 'pip install "affordgrasp[learn]"'
 
 
 def require_torch():
-    """``torch``, or a MissingDependencyError that names the extra to install."""
+    """``torch``, or a MissingDependencyError that names the extra to install.
+
+    Returns
+    -------
+    module
+    """
     try:
         import torch
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -19,6 +24,12 @@ def require_torch():
 
 
 def require_safetensors():
+    """``safetensors.torch``, or a MissingDependencyError that names the extra to install.
+
+    Returns
+    -------
+    module
+    """
     try:
         import safetensors.torch as st
     except ImportError as exc:  # pragma: no cover - depends on the environment

@@ -24,12 +24,25 @@ def grid_image(
     title: str = "",
     legend: bool = True,
 ) -> np.ndarray:
-    """Assemble square cell images into one labelled image, (h, w, 3) uint8.
+    """Assemble square cell images into one labelled image.
 
-    cells : rows of cells; a cell is an (s, s, 3) uint8 image (all the same size), a string
-        (a message drawn in an empty cell) or None (left blank)
-    row_labels : one per row, written vertically on the left
-    col_labels : one per column, written on top
+    Parameters
+    ----------
+    cells : sequence of sequences
+        Rows of cells; a cell is an (s, s, 3) uint8 image (all the same size), a string (a
+        message drawn in an empty cell) or None (left blank).
+    row_labels : sequence of str
+        One per row, written vertically on the left.
+    col_labels : sequence of str
+        One per column, written on top.
+    title : str
+        Written above the grid.
+    legend : bool
+        Add the legend of the overlays below.
+
+    Returns
+    -------
+    (h, w, 3) uint8 ndarray
     """
     from .figure import figure_pixels, new_figure
 
@@ -179,7 +192,22 @@ def save_grid(
     legend: bool = True,
     colors: int | None = None,
 ) -> Path:
-    """:func:`grid_image` written as PNG (``colors``: reduce to a palette for small files)."""
+    """:func:`grid_image` written as PNG.
+
+    Parameters
+    ----------
+    cells, row_labels, col_labels, title, legend
+        As for :func:`grid_image`.
+    path : path
+        The PNG file.
+    colors : int, optional
+        Reduce to a palette of this many colours for small files.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     from .figure import save_image
 
     image = grid_image(
