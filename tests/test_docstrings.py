@@ -107,7 +107,6 @@ PENDING: set[str] = {
     "dataset/engines.py",
     "dataset/layout.py",
     "grasp/kernels.py",
-    "grasp/policy.py",
     "learning/api.py",
     "learning/data.py",
     "learning/evaluation.py",

@@ -49,7 +49,30 @@ STATUSES = ("missed", "touched", "grasped")
 
 @dataclass(frozen=True)
 class FingerArrays:
-    """One finger's closing chain, flattened for the closing kernel."""
+    """One finger's closing chain, flattened for the closing kernel.
+
+    Attributes
+    ----------
+    dofs : (m,) int ndarray
+        DOF index of each chain joint, proximal first.
+    speeds : (m,) float64 ndarray
+        Closing speed of each DOF.
+    upper : (m,) float64 ndarray
+        Upper limit of each DOF, rad or m.
+    parent : int
+        Link index of the chain's parent (does not move while the finger closes).
+    origins : (m, 4, 4) float64 ndarray
+        Joint frames in their parent links.
+    kinds : (m,) int ndarray
+        Joint kinds.
+    axes : (m, 3) float64 ndarray
+        Unit joint axes.
+    ratios : (m,) float64 ndarray
+        Joint value per unit of DOF.
+    shapes : tuple
+        Per first active joint j0, the shapes of the links it moves (chain links >= j0): the
+        chain index of each (k,) and a ShapeSet posed in their links.
+    """
 
     dofs: np.ndarray  # (m,) DOF index of each chain joint, proximal first
     speeds: np.ndarray  # (m,) closing speed of each DOF
@@ -66,7 +89,20 @@ class FingerArrays:
 
 @dataclass(frozen=True)
 class HandArrays:
-    """A hand flattened for the kernels."""
+    """A hand flattened for the kernels.
+
+    Attributes
+    ----------
+    hand : Hand
+    tree : KinematicTree
+    shape_link : (s,) int ndarray
+        Link index of each shape.
+    shapes : ShapeSet
+        Every shape, posed in its link.
+    materials : tuple of str
+        Per link.
+    fingers : tuple of FingerArrays
+    """
 
     hand: Hand
     tree: KinematicTree
@@ -91,7 +127,16 @@ _HAND_ARRAYS: IdentityCache[HandArrays] = IdentityCache()
 
 
 def hand_arrays(hand: Hand) -> HandArrays:
-    """The hand as flat arrays for the compiled kernels, built once per Hand object."""
+    """The hand as flat arrays for the compiled kernels, built once per Hand object.
+
+    Parameters
+    ----------
+    hand : Hand
+
+    Returns
+    -------
+    HandArrays
+    """
     return _HAND_ARRAYS.get(hand, lambda: _build_hand_arrays(hand))
 
 
@@ -159,12 +204,22 @@ def _build_hand_arrays(hand: Hand) -> HandArrays:
 class ObjectGeometry:
     """What the simulator needs of an object, computed once per object.
 
-    Everything here is in the object's *centred* frame: the mesh frame shifted by
-    ``origin`` (3,), the centre of the mesh's bounding box. The simulation runs in that
-    frame and its results are mapped back by adding ``origin``, so an object far from its
-    mesh origin (10 m, 1e6 m) is simulated on the same numbers as at the origin: no digits
-    lost to the offset, the same sample grid, the same search order. ``mesh`` is the
-    centred mesh (for the use-point rays, cast in float32 by the ray engine).
+    Everything here is in the object's *centred* frame: the mesh frame shifted by ``origin``,
+    the centre of the mesh's bounding box. The simulation runs in that frame and its results
+    are mapped back by adding ``origin``, so an object far from its mesh origin (10 m, 1e6 m)
+    is simulated on the same numbers as at the origin: no digits lost to the offset, the same
+    sample grid, the same search order.
+
+    Attributes
+    ----------
+    samples : SurfaceSample
+        Surface samples, centred frame.
+    hull_vertices : (v, 3) float64 ndarray
+        Convex-hull vertices, centred frame, m.
+    origin : (3,) float64 ndarray
+        The centred frame's origin in the mesh frame, m.
+    mesh : trimesh.Trimesh
+        The centred mesh (for the use-point rays, cast in float32 by the ray engine).
     """
 
     samples: SurfaceSample
@@ -177,12 +232,32 @@ _GEOMETRY: IdentityCache[ObjectGeometry] = IdentityCache()
 
 
 def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
-    """Origin (3,) of the frame the simulation runs in: the bounding-box centre."""
+    """Origin of the frame the simulation runs in: the bounding-box centre.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float ndarray
+        m.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        m.
+    """
     return 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
 
 
 def object_geometry(obj) -> ObjectGeometry:
-    """Surface samples and hull of ``obj`` (a GraspObject), cached for the object's lifetime."""
+    """Surface samples and hull of an object, cached for the object's lifetime.
+
+    Parameters
+    ----------
+    obj : GraspObject
+
+    Returns
+    -------
+    ObjectGeometry
+    """
 
     def build() -> ObjectGeometry:
         vertices = np.asarray(obj.mesh.vertices, dtype=np.float64)
@@ -200,9 +275,14 @@ def object_geometry(obj) -> ObjectGeometry:
 class GraspResult:
     """The outcome of the policy for one pregrasp, in the object frame.
 
-    status : str, one of STATUSES
-    hand_pose : (4, 4) final hand → object transform (palm centre at the origin)
-    joints : (n_dofs,) final DOF values (rad / m), in the hand's DOF order
+    Attributes
+    ----------
+    status : str
+        One of STATUSES.
+    hand_pose : (4, 4) float64 ndarray
+        Final hand → object transform (palm centre at the origin), m.
+    joints : (n_dofs,) float64 ndarray
+        Final DOF values (rad / m), in the hand's DOF order.
     contacts : ContactSet
     """
 
@@ -216,10 +296,28 @@ class GraspResult:
 class SimulationBatch:
     """Simulated grasps of one object: struct of arrays, one row per sample.
 
-    p0 (n, 6), use_dir (n, 2), status (n,) str, hand_pose (n, 4, 4), joints (n, n_dofs),
-    contacts list of n ContactSet, use_point (n, 3), use_normal (n, 3) outward,
-    use_triangle (n,) int64 (-1: no hit), wrist_point (n, 3) palm centre, wrist_axis (n, 3)
-    approach direction; seconds: wall time spent simulating.
+    Attributes
+    ----------
+    p0 : (n, 6) float64 ndarray
+    use_dir : (n, 2) float64 ndarray
+    status : (n,) str ndarray
+    hand_pose : (n, 4, 4) float64 ndarray
+        Hand → object, m.
+    joints : (n, n_dofs) float64 ndarray
+        rad / m.
+    contacts : list of n ContactSet
+    use_point : (n, 3) float64 ndarray
+        m (NaN: no use point).
+    use_normal : (n, 3) float64 ndarray
+        Outward unit normals.
+    use_triangle : (n,) int64 ndarray
+        -1: no hit.
+    wrist_point : (n, 3) float64 ndarray
+        Palm centre, m.
+    wrist_axis : (n, 3) float64 ndarray
+        Approach direction.
+    seconds : float
+        Wall time spent simulating, s.
     """
 
     p0: np.ndarray
@@ -240,7 +338,19 @@ class SimulationBatch:
 
 
 def hand_reach(hand: Hand, dofs: np.ndarray) -> float:
-    """How far in front of the palm face (z) the hand reaches at ``dofs``, m."""
+    """How far in front of the palm face (z) the hand reaches at ``dofs``.
+
+    Parameters
+    ----------
+    hand : Hand
+    dofs : (n_dofs,) float ndarray
+        rad / m.
+
+    Returns
+    -------
+    float
+        m.
+    """
     arrays = hand_arrays(hand)
     poses = arrays.shape_poses(dofs)
     reach = 0.0
@@ -254,8 +364,20 @@ def close_fingers(
 ) -> np.ndarray:
     """Close every finger with breakaway until it touches or reaches its limits.
 
-    samples : the object's surface samples; pose : (4, 4) hand → object;
-    dofs : (n_dofs,) start values. returns : final DOF values (n_dofs,)
+    Parameters
+    ----------
+    hand : Hand
+    samples : SurfaceSample
+        The object's surface samples.
+    pose : (4, 4) float64 ndarray
+        Hand → object.
+    dofs : (n_dofs,) float64 ndarray
+        Start values.
+
+    Returns
+    -------
+    (n_dofs,) float64 ndarray
+        Final DOF values.
     """
     rot = np.ascontiguousarray(pose[:3, :3])
     trans = np.ascontiguousarray(pose[:3, 3])
@@ -336,7 +458,24 @@ def grasp_once(
     s: float,
     object_material: str = DEFAULT_OBJECT_MATERIAL,
 ) -> GraspResult:
-    """Run the policy for one start pose (hand → object, (4, 4)) and pregrasp DOF value s."""
+    """Run the policy for one start pose and pregrasp DOF value.
+
+    Parameters
+    ----------
+    hand : Hand
+    geom : ObjectGeometry
+    start_pose : (4, 4) float64 ndarray
+        Hand → object (mesh frame), m.
+    travel : float
+        Approach length to try, m.
+    s : float
+        Pregrasp DOF parameter in [0, 1].
+    object_material : str
+
+    Returns
+    -------
+    GraspResult
+    """
     centred = start_pose.copy()
     centred[:3, 3] -= geom.origin
     return _to_object_frame(
@@ -394,9 +533,21 @@ def simulate(
 ) -> SimulationBatch:
     """Simulate the policy for a batch of pregrasps on one object.
 
-    obj : GraspObject (see ``affordgrasp.objects.load_object``)
-    p0 : (n, 6) pregrasps in [-1, 1]^5 x [0, 1]
-    use_dir : (n, 2) use directions in [-1, 1]^2, or None (then no use point: NaN)
+    Parameters
+    ----------
+    obj : GraspObject
+        See :func:`affordgrasp.objects.load_object`.
+    p0 : (n, 6) array_like of float
+        Pregrasps in [-1, 1]^5 x [0, 1].
+    use_dir : (n, 2) array_like of float, optional
+        Use directions in [-1, 1]^2; None: no use point (NaN).
+    hand : Hand or str
+    object_material : str
+        The object's surface material (friction).
+
+    Returns
+    -------
+    SimulationBatch
     """
     hand = get_hand(hand) if isinstance(hand, str) else hand
     p0 = validate_pregrasps(p0)
