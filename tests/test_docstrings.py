@@ -106,7 +106,6 @@ PENDING: set[str] = {
     "commands/train.py",
     "dataset/engines.py",
     "dataset/layout.py",
-    "grasp/kernels.py",
     "learning/api.py",
     "learning/data.py",
     "learning/evaluation.py",

@@ -33,9 +33,18 @@ CYLINDER = 1
 class SampleCloud(NamedTuple):
     """Object surface samples grouped into two levels of cells (see ``surface``).
 
-    points (n, 3) by cell; cell_start (c + 1,) offsets of each fine cell's points,
-    cell_center (c, 3), cell_radius (c,) a bounding sphere per cell; coarse_start (k + 1,)
-    offsets of each coarse cell's fine cells, coarse_center (k, 3), coarse_radius (k,).
+    Attributes
+    ----------
+    points : (n, 3) float64 ndarray
+        m, ordered by cell.
+    cell_start : (c + 1,) int ndarray
+        Offsets of each fine cell's points.
+    cell_center, cell_radius : (c, 3), (c,) float64 ndarray
+        A bounding sphere per fine cell, m.
+    coarse_start : (k + 1,) int ndarray
+        Offsets of each coarse cell's fine cells.
+    coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
+        A bounding sphere per coarse cell, m.
     """
 
     points: np.ndarray
@@ -48,9 +57,19 @@ class SampleCloud(NamedTuple):
 
 
 class ShapeSet(NamedTuple):
-    """Rounded hand shapes: local (k, 4, 4) pose (in the hand frame, or in the chain link
-    that carries each), kinds (k,) BOX / CYLINDER, halves (k, 3) half extents of the core,
-    radii (k,) rounding radius, m."""
+    """Rounded hand shapes.
+
+    Attributes
+    ----------
+    local : (k, 4, 4) float64 ndarray
+        Pose in the hand frame, or in the chain link that carries each.
+    kinds : (k,) int ndarray
+        BOX / CYLINDER.
+    halves : (k, 3) float64 ndarray
+        Half extents of the core, m.
+    radii : (k,) float64 ndarray
+        Rounding radius, m.
+    """
 
     local: np.ndarray
     kinds: np.ndarray
@@ -59,10 +78,24 @@ class ShapeSet(NamedTuple):
 
 
 class Chain(NamedTuple):
-    """A moving kinematic chain: base (4, 4) frame of the first joint's parent in the hand
-    frame; per joint origins (m, 4, 4), kinds (m,), axes (m, 3), q0 (m,) start values and
-    speeds (m,) (q = q0 + speeds * s); shape_joint (k,) the joint whose link carries each of
-    ``shapes``."""
+    """A moving kinematic chain: joint j moves as q_j = q0_j + speeds_j * s.
+
+    Attributes
+    ----------
+    base : (4, 4) float64 ndarray
+        Frame of the first joint's parent in the hand frame.
+    origins : (m, 4, 4) float64 ndarray
+        Joint frames in their parent links.
+    kinds : (m,) int ndarray
+    axes : (m, 3) float64 ndarray
+        Unit joint axes.
+    q0 : (m,) float64 ndarray
+        Start values, rad / m.
+    speeds : (m,) float64 ndarray
+    shape_joint : (k,) int ndarray
+        The joint whose link carries each of ``shapes``.
+    shapes : ShapeSet
+    """
 
     base: np.ndarray
     origins: np.ndarray
@@ -75,7 +108,21 @@ class Chain(NamedTuple):
 
 
 class ChainFrames(NamedTuple):
-    """Per-search constants of a Chain (see ``_chain_frames``)."""
+    """Per-search constants of a Chain (see ``_chain_frames``).
+
+    Attributes
+    ----------
+    inv_base : (3, 4) float64 ndarray
+        Inverse of the chain's base frame.
+    inv_origin : (m, 3, 4) float64 ndarray
+        Inverses of the joint frames.
+    inv_shape : (k, 3, 4) float64 ndarray
+        Inverses of the shapes' local poses.
+    chain_len : (m,) float64 ndarray
+        Bound on the distance from the first joint to each joint, m.
+    slide : (m,) float64 ndarray
+        Largest extension of each prismatic joint over the search, m.
+    """
 
     inv_base: np.ndarray
     inv_origin: np.ndarray
@@ -99,7 +146,24 @@ MASK_BITS = 62
 
 @njit(cache=True, fastmath=False)
 def sdf_local(x, y, z, kind, hx, hy, hz, r):
-    """Signed distance of a point in a shape's frame to the rounded core (m)."""
+    """Signed distance of a point in a shape's frame to the rounded core.
+
+    Parameters
+    ----------
+    x, y, z : float
+        The point in the shape frame, m.
+    kind : int
+        BOX or CYLINDER.
+    hx, hy, hz : float
+        Core half extents, m.
+    r : float
+        Rounding radius, m.
+
+    Returns
+    -------
+    float
+        m; negative inside.
+    """
     if kind == BOX:
         qx = abs(x) - hx
         qy = abs(y) - hy
@@ -120,7 +184,24 @@ def sdf_local(x, y, z, kind, hx, hy, hz, r):
 
 @njit(cache=True)
 def sdf_world(px, py, pz, pose, kind, half, r):
-    """Signed distance of a hand-frame point to a shape with hand-frame ``pose`` (4, 4)."""
+    """Signed distance of a hand-frame point to a shape with hand-frame ``pose``.
+
+    Parameters
+    ----------
+    px, py, pz : float
+        The point, hand frame, m.
+    pose : (4, 4) float64 ndarray
+    kind : int
+    half : (3,) float64 ndarray
+        Core half extents, m.
+    r : float
+        Rounding radius, m.
+
+    Returns
+    -------
+    float
+        m; negative inside.
+    """
     dx = px - pose[0, 3]
     dy = py - pose[1, 3]
     dz = pz - pose[2, 3]
@@ -132,7 +213,18 @@ def sdf_world(px, py, pz, pose, kind, half, r):
 
 @njit(cache=True)
 def outward_normal_world(px, py, pz, pose, kind, half, r):
-    """Unit normal of the shape surface closest to the point, pointing out of the shape."""
+    """Unit normal of the shape surface closest to the point, pointing out of the shape.
+
+    Parameters
+    ----------
+    px, py, pz, pose, kind, half, r
+        As for :func:`sdf_world`.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        Hand frame.
+    """
     dx = px - pose[0, 3]
     dy = py - pose[1, 3]
     dz = pz - pose[2, 3]
@@ -458,12 +550,6 @@ def _still_ahead(c, radius, mask, shape_buf, rho, axis, s):
 def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     """Motion parameter at which a moving shape of ``chain`` first touches a sample point.
 
-    cloud : SampleCloud (object frame); rot, trans : the hand pose (object frame = rot @
-    hand + trans); chain : Chain, whose joints move as q_j = q0_j + speeds_j * s (joint
-    frames: ``origins`` in their parent link, the first one's parent at ``base`` in the
-    hand frame; ``shape_joint`` (k,) the chain link carrying each shape of ``shapes``).
-    returns : (s, point index, shape index); (inf, -1, -1) when nothing is touched by s_max.
-
     A point's speed relative to link j is bounded by sum over joints i <= j of
     |speed_i| * (|p - o_0| + chain length to joint i) for revolute joints and |speed_i| for
     prismatic ones (o_0, the first joint's origin, does not move); every step is a distance
@@ -476,6 +562,29 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     its children (coarse -> fine cells -> points), and the search stops once no entry can
     beat the best hit. The first crossing is then refined by bisection
     (:func:`_refine_first_hit`).
+
+    Parameters
+    ----------
+    cloud : SampleCloud
+        Surface samples, object frame.
+    rot : (3, 3) float64 ndarray
+    trans : (3,) float64 ndarray
+        The hand pose: object frame = rot @ hand + trans (m).
+    chain : Chain
+        The moving joints and the shapes they carry.
+    s_max : float
+        Largest motion parameter searched.
+    hit_eps : float
+        Contact distance, m.
+
+    Returns
+    -------
+    s : float
+        inf when nothing is touched by s_max.
+    point : int
+        Sample index (-1: none).
+    shape : int
+        Shape index (-1: none).
     """
     m = chain.origins.shape[0]
     k = chain.shape_joint.shape[0]
@@ -680,10 +789,30 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
 def approach_until_contact(cloud, rot, trans, shapes, t_max, hit_eps):
     """Distance the hand can travel along its +z before a link touches a sample point.
 
-    cloud : SampleCloud (object frame); rot, trans : the start pose of the hand (object
-    frame = rot @ hand + trans); shapes : ShapeSet with hand-frame poses.
-    returns : (t, point index, shape index); (inf, -1, -1) if nothing is touched by t_max.
     The hand stops with a gap in [hit_eps / 2, hit_eps] to the closest sample.
+
+    Parameters
+    ----------
+    cloud : SampleCloud
+        Surface samples, object frame.
+    rot : (3, 3) float64 ndarray
+    trans : (3,) float64 ndarray
+        The hand pose: object frame = rot @ hand + trans (m).
+    shapes : ShapeSet
+        Hand-frame poses.
+    t_max : float
+        Longest travel searched, m.
+    hit_eps : float
+        Contact distance, m.
+
+    Returns
+    -------
+    t : float
+        m; inf if nothing is touched by t_max.
+    point : int
+        Sample index (-1: none).
+    shape : int
+        Shape index (-1: none).
     """
     k = shapes.kinds.shape[0]
     chain = Chain(
@@ -701,11 +830,30 @@ def approach_until_contact(cloud, rot, trans, shapes, t_max, hit_eps):
 
 @njit(cache=True)
 def touching_points(cloud, rot, trans, shapes, tol):
-    """Samples of ``cloud`` within ``tol`` of any of ``shapes`` (hand-frame poses) at a fixed
-    hand pose (rot, trans: object frame = rot @ hand + trans).
+    """Samples of ``cloud`` within ``tol`` of any of ``shapes`` at a fixed hand pose.
 
-    returns : point indices (k,), shape indices (k,), signed distances (k,) and the shape's
-        outward unit normal at its closest point (k, 3) in the hand frame (it points from the
+    Parameters
+    ----------
+    cloud : SampleCloud
+        Surface samples, object frame.
+    rot : (3, 3) float64 ndarray
+    trans : (3,) float64 ndarray
+        The hand pose: object frame = rot @ hand + trans (m).
+    shapes : ShapeSet
+        Hand-frame poses.
+    tol : float
+        m.
+
+    Returns
+    -------
+    points : (k,) int ndarray
+        Sample indices.
+    shapes : (k,) int ndarray
+        Shape indices.
+    dist : (k,) float64 ndarray
+        Signed distances, m.
+    normals : (k, 3) float64 ndarray
+        The shape's outward unit normal at its closest point, hand frame (it points from the
         link towards the sample).
     """
     points = cloud.points
@@ -822,7 +970,25 @@ def merge_contacts(points, normals, dist, link, radius, cos_patch):
     carries exactly the wrenches of its 2-D convex hull, so only the hull's vertices stay.
     Then, closest first, a sample within ``radius`` of a kept one of the same link is merged
     into it (as GraspIt! merges contacts within 3 mm).
-    points (k, 3), normals (k, 3) unit, dist (k,), link (k,) int
+
+    Parameters
+    ----------
+    points : (k, 3) float64 ndarray
+        m.
+    normals : (k, 3) float64 ndarray
+        Unit.
+    dist : (k,) float64 ndarray
+        Signed distances, m.
+    link : (k,) int ndarray
+    radius : float
+        Merge radius, m.
+    cos_patch : float
+        Cosine of the patch angle.
+
+    Returns
+    -------
+    (j,) int ndarray
+        Indices of the samples kept.
     """
     k = points.shape[0]
     order = np.argsort(dist, kind="mergesort")
