@@ -124,13 +124,10 @@ PENDING: set[str] = {
     "physics/scene.py",
     "physics/settings.py",
     "physics/trials.py",
-    "viz/camera.py",
     "viz/figure.py",
     "viz/html.py",
     "viz/overlays.py",
     "viz/plots.py",
-    "viz/raycast.py",
-    "viz/scene.py",
     "viz/showcase.py",
     "viz/sources.py",
 }

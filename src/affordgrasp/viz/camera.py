@@ -25,9 +25,14 @@ from .scene import GraspScene, scene_bounds, scene_points
 class Camera:
     """A pinhole camera.
 
-    eye, target, up : (3,) float, metres (``up`` need not be orthogonal to the view)
-    fov_deg : vertical field of view, degrees
-    width, height : image size, pixels
+    Attributes
+    ----------
+    eye, target, up : (3,) float ndarray
+        Metres (``up`` need not be orthogonal to the view).
+    fov_deg : float
+        Vertical field of view, degrees.
+    width, height : int
+        Image size, pixels.
     """
 
     eye: np.ndarray
@@ -97,10 +102,32 @@ class Camera:
 
 
 def unit(v: np.ndarray) -> np.ndarray:
+    """``v`` scaled to unit length.
+
+    Parameters
+    ----------
+    v : (3,) float ndarray
+        Non-zero.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+    """
     return v / np.linalg.norm(v)
 
 
 def any_perpendicular(v: np.ndarray) -> np.ndarray:
+    """A unit vector perpendicular to ``v``.
+
+    Parameters
+    ----------
+    v : (3,) float ndarray
+        Unit.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+    """
     a = np.array([1.0, 0.0, 0.0]) if abs(v[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     return unit(np.cross(v, a))
 
@@ -130,8 +157,26 @@ def framed_camera(
     height: int = 512,
     margin: float = 0.06,
 ) -> Camera:
-    """A camera on the side ``view_dir`` (from the scene towards the eye) that frames the
-    object and the hand with ``margin`` (a fraction of the image) free on each side."""
+    """A camera on the side ``view_dir`` that frames the object and the hand.
+
+    Parameters
+    ----------
+    scene : GraspScene
+    view_dir : (3,) float ndarray
+        From the scene towards the eye.
+    up : (3,) float ndarray, optional
+        Image up; any perpendicular direction when None.
+    fov_deg : float
+        Vertical field of view, degrees.
+    width, height : int
+        Pixels.
+    margin : float
+        Fraction of the image left free on each side.
+
+    Returns
+    -------
+    Camera
+    """
     v = unit(np.asarray(view_dir, dtype=np.float64))
     up = _image_up(scene) if up is None else np.asarray(up, dtype=np.float64)
     if np.linalg.norm(np.cross(v, up)) < 1e-3:
@@ -169,8 +214,25 @@ def auto_camera(
     fov_deg: float = 30.0,
     candidates: int = 64,
 ) -> Camera:
-    """The default camera: the one of ``candidates`` fixed directions that sees the most of
-    both the object and the hand (and the use point), framed; image up is ``-wrist_axis``."""
+    """The default camera: the fixed direction that sees the most of the object and the hand.
+
+    Of ``candidates`` fixed directions, the one that sees the most of both the object and the
+    hand (and the use point), framed; image up is ``-wrist_axis``.
+
+    Parameters
+    ----------
+    scene : GraspScene
+    width, height : int
+        Pixels.
+    fov_deg : float
+        Vertical field of view, degrees.
+    candidates : int
+        Directions tried.
+
+    Returns
+    -------
+    Camera
+    """
     from .raycast import BACKGROUND_PART, HAND_PART, OBJECT_PART, visible_from
 
     caster = scene.caster

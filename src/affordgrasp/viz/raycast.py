@@ -39,10 +39,15 @@ SMOOTH_ANGLE_DEG = 35.0
 class Render:
     """A ray-cast image.
 
-    rgb : (h, w, 3) uint8
-    depth : (h, w) float, distance from the eye to the surface, inf on the background
-    part : (h, w) int8, BACKGROUND_PART / OBJECT_PART / HAND_PART
-    camera : the camera, at the image's size
+    Attributes
+    ----------
+    rgb : (h, w, 3) uint8 ndarray
+    depth : (h, w) float ndarray
+        Distance from the eye to the surface, m; inf on the background.
+    part : (h, w) int8 ndarray
+        BACKGROUND_PART / OBJECT_PART / HAND_PART.
+    camera : Camera
+        The camera, at the image's size.
     """
 
     rgb: np.ndarray
@@ -56,6 +61,20 @@ class RayCaster:
     """The scene's triangles in one embree scene, with shading data per face corner.
 
     Rays are cast in float32 relative to ``origin`` (the scene's centre) to keep precision.
+    Build one with :meth:`RayCaster.of_scene`.
+
+    Attributes
+    ----------
+    scene : object
+        The embree scene.
+    origin : (3,) float64 ndarray
+        m.
+    corner_normals : (f, 3, 3) float ndarray
+        Shading normals per face corner.
+    face_color : (f, 3) float ndarray
+        RGB per face.
+    face_part : (f,) int8 ndarray
+        OBJECT_PART / HAND_PART per face.
     """
 
     scene: object
@@ -80,8 +99,21 @@ class RayCaster:
 
 
 def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -> np.ndarray:
-    """Shading normals at each face corner, (f, 3, 3): the area-weighted mean of the normals
-    of the faces around the corner's vertex that are within ``angle_deg`` of the face."""
+    """Shading normals at each face corner.
+
+    The area-weighted mean of the normals of the faces around the corner's vertex that are
+    within ``angle_deg`` of the face.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+    angle_deg : float
+        Smoothing angle, degrees.
+
+    Returns
+    -------
+    (f, 3, 3) float64 ndarray
+    """
     faces = np.asarray(mesh.faces)
     fn = np.asarray(mesh.face_normals)
     weighted = fn * np.asarray(mesh.area_faces)[:, None]
@@ -134,7 +166,19 @@ def _build_caster(scene: GraspScene) -> RayCaster:
 
 
 def render_image(scene: GraspScene, camera: Camera, *, supersample: int = 2) -> Render:
-    """Ray-cast the object and the hand: shaded colours, depth and part per pixel."""
+    """Ray-cast the object and the hand: shaded colours, depth and part per pixel.
+
+    Parameters
+    ----------
+    scene : GraspScene
+    camera : Camera
+    supersample : int
+        Rays per pixel side (antialiasing).
+
+    Returns
+    -------
+    Render
+    """
     return scene.caster.render(camera, supersample=supersample)
 
 
@@ -203,7 +247,21 @@ def _outline(depth: np.ndarray, part: np.ndarray, tol: float) -> np.ndarray:
 
 
 def visible(caster: RayCaster, camera: Camera, points: np.ndarray, tol: float = 2e-3) -> np.ndarray:
-    """Whether each point (n, 3) is seen by the camera (nothing nearer along its ray)."""
+    """Whether each point is seen by the camera (nothing nearer along its ray).
+
+    Parameters
+    ----------
+    caster : RayCaster
+    camera : Camera
+    points : (n, 3) float ndarray
+        m.
+    tol : float
+        m.
+
+    Returns
+    -------
+    (n,) bool ndarray
+    """
     points = np.asarray(points, dtype=np.float64)
     return visible_from(caster, np.broadcast_to(camera.eye, points.shape), points, tol)
 
@@ -211,7 +269,22 @@ def visible(caster: RayCaster, camera: Camera, points: np.ndarray, tol: float = 
 def visible_from(
     caster: RayCaster, eyes: np.ndarray, points: np.ndarray, tol: float = 2e-3
 ) -> np.ndarray:
-    """Whether each point (n, 3) is seen from its eye (n, 3)."""
+    """Whether each point is seen from its eye.
+
+    Parameters
+    ----------
+    caster : RayCaster
+    eyes : (n, 3) float ndarray
+        m.
+    points : (n, 3) float ndarray
+        m.
+    tol : float
+        m.
+
+    Returns
+    -------
+    (n,) bool ndarray
+    """
     d = np.asarray(points, dtype=np.float64) - eyes
     dist = np.linalg.norm(d, axis=1)
     d = d / dist[:, None]

@@ -25,16 +25,26 @@ if TYPE_CHECKING:
 class GraspScene:
     """Everything drawn for one grasp, in the object frame (metres).
 
-    object_mesh : the object
-    hand : the posed hand mesh, or None to draw the object alone
-    contact_points, contact_normals : (k, 3) float (normals: the object's outward normal)
-    contact_mu : (k,) float; contact_link : (k,) str
-    use_point, use_normal : (3,) float, NaN when the sample has no use point
-    wrist_point, wrist_axis : (3,) float (the axis is the approach direction), NaN if unknown
-    center_of_mass : (3,) float
-    title : a short caption
-    hand_model, link_poses : the hand and its link poses (n_links, 4, 4) in the object frame,
-        for the interactive viewer (which draws the links, not the merged mesh)
+    Attributes
+    ----------
+    object_mesh : trimesh.Trimesh
+        The object.
+    hand : HandMesh or None
+        The posed hand mesh, or None to draw the object alone.
+    contact_points, contact_normals : (k, 3) float ndarray
+        Normals: the object's outward normal.
+    contact_mu : (k,) float ndarray
+    contact_link : (k,) str ndarray
+    use_point, use_normal : (3,) float ndarray
+        NaN when the sample has no use point.
+    wrist_point, wrist_axis : (3,) float ndarray
+        The axis is the approach direction; NaN if unknown.
+    center_of_mass : (3,) float ndarray
+    title : str
+        A short caption.
+    hand_model : Hand or None
+    link_poses : (n_links, 4, 4) float ndarray or None
+        Link → object, for the interactive viewer (which draws the links, not the merged mesh).
     """
 
     object_mesh: trimesh.Trimesh
@@ -84,11 +94,23 @@ def _points(row: Mapping, name: str) -> np.ndarray:
 def grasp_scene(
     obj, row: Mapping, *, hand: Hand | str | None = None, title: str = ""
 ) -> GraspScene:
-    """The scene of one sample row: a mapping of the sample columns (conventions: Sample
-    columns), e.g. ``table.slice(i, 1).to_pylist()[0]``.
+    """The scene of one sample row.
 
-    obj : GraspObject (its mesh and centre of mass are drawn)
-    hand : the hand that made the grasp; by default the row's ``hand`` column, else "barrett"
+    Parameters
+    ----------
+    obj : GraspObject
+        Its mesh and centre of mass are drawn.
+    row : mapping
+        The sample columns (conventions: Sample columns), e.g.
+        ``table.slice(i, 1).to_pylist()[0]``.
+    hand : Hand or str, optional
+        The hand that made the grasp; by default the row's ``hand`` column, else "barrett".
+    title : str
+        A short caption.
+
+    Returns
+    -------
+    GraspScene
     """
     for name in ("hand_pose", "joints"):
         if row.get(name) is None:
@@ -131,7 +153,17 @@ def grasp_scene(
 
 
 def scene_points(scene: GraspScene) -> np.ndarray:
-    """Points whose projection bounds the scene's: the object's hull and the hand's vertices."""
+    """Points whose projection bounds the scene's: the object's hull and the hand's vertices.
+
+    Parameters
+    ----------
+    scene : GraspScene
+
+    Returns
+    -------
+    (n, 3) float64 ndarray
+        m.
+    """
     pts = [np.asarray(scene.object_mesh.convex_hull.vertices)]
     if scene.hand is not None:
         pts.append(np.asarray(scene.hand.mesh.vertices))
@@ -139,6 +171,17 @@ def scene_points(scene: GraspScene) -> np.ndarray:
 
 
 def scene_bounds(scene: GraspScene) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds of the object and the hand.
+
+    Parameters
+    ----------
+    scene : GraspScene
+
+    Returns
+    -------
+    lo, hi : (3,) float64 ndarray
+        m.
+    """
     lo = np.asarray(scene.object_mesh.bounds[0], dtype=np.float64)
     hi = np.asarray(scene.object_mesh.bounds[1], dtype=np.float64)
     if scene.hand is not None:
