@@ -36,11 +36,23 @@ def single_edge_blade(
 ) -> manifold3d.Manifold:
     """Single-edged blade swept along x with a flat-ground, secondary-bevelled section.
 
-    xs, y_edge, y_spine, spine_thickness : (n,) float, m, per station.
-    bevel : width of the edge bevel perpendicular to the edge, m.
-    edge_angle : inclusive angle of the cutting edge, rad.
-    pointed : close the last station in a point (its y_edge must equal its y_spine).
     Section (y, z), five vertices: edge (z = 0), two bevel shoulders, two spine corners.
+
+    Parameters
+    ----------
+    xs, y_edge, y_spine, spine_thickness : (n,) float ndarray
+        Per station, m.
+    bevel : float
+        Width of the edge bevel perpendicular to the edge, m.
+    edge_angle : float
+        Inclusive angle of the cutting edge, rad.
+    pointed : bool
+        Close the last station in a point (its y_edge must equal its y_spine).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Metres.
     """
     slope = np.gradient(y_edge, xs)
     cos_t = 1.0 / np.sqrt(1.0 + slope**2)
@@ -78,9 +90,24 @@ def double_edge_blade(
 ) -> manifold3d.Manifold:
     """Double-edged blade, symmetric about y = 0 and z = 0, swept along x.
 
-    xs, half_width : (n,) float, m.  flat_fraction : half-width of the central flat
-    (ridge) over the blade's half-width.  Section: a flattened hexagon whose edge bevels
-    run from the flat to the edges, so the thickness follows from the edge angle.
+    Section: a flattened hexagon whose edge bevels run from the flat to the edges, so the
+    thickness follows from the edge angle.
+
+    Parameters
+    ----------
+    xs, half_width : (n,) float ndarray
+        Stations and half-widths, m.
+    flat_fraction : float
+        Half-width of the central flat (ridge) over the blade's half-width.
+    edge_angle : float
+        Inclusive angle of the edges, rad.
+    pointed : bool
+        Close the last station in a point.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Metres.
     """
     slope = np.gradient(half_width, xs)
     cos_t = 1.0 / np.sqrt(1.0 + slope**2)
@@ -128,7 +155,19 @@ def _tip_stations(x0: float, x1: float, n: int, power: float = 1.6) -> np.ndarra
 
 
 def knife(p: ParameterDraw) -> manifold3d.Manifold:
-    """Kitchen knife: chef's, utility, santoku-like variants; 0.20-0.33 m long."""
+    """Kitchen knife: chef's, utility, santoku-like variants; 0.20-0.33 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     handle_len = p.uniform("handle_length_m", 0.095, 0.135, 0.115)
     blade_len = p.uniform("blade_length_m", 0.10, 0.21, 0.165)
     blade_len = float(np.clip(blade_len, 0.205 - handle_len, 0.325 - handle_len))
@@ -186,7 +225,19 @@ def knife(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def meat_cleaver(p: ParameterDraw) -> manifold3d.Manifold:
-    """Meat cleaver: tall rectangular blade with a hanging hole; 0.27-0.35 m long."""
+    """Meat cleaver: tall rectangular blade with a hanging hole; 0.27-0.35 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     handle_len = p.uniform("handle_length_m", 0.11, 0.14, 0.125)
     blade_len = p.uniform("blade_length_m", 0.15, 0.20, 0.175)
     blade_len = float(np.clip(blade_len, 0.275 - handle_len, 0.345 - handle_len))
@@ -336,7 +387,19 @@ def _hilted_double_edge(p: ParameterDraw, r: dict) -> manifold3d.Manifold:
 
 
 def dagger(p: ParameterDraw) -> manifold3d.Manifold:
-    """Double-edged dagger with cross-guard and pommel; 0.22-0.35 m long."""
+    """Double-edged dagger with cross-guard and pommel; 0.22-0.35 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     return _hilted_double_edge(
         p,
         {
@@ -361,7 +424,19 @@ def dagger(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def sword(p: ParameterDraw) -> manifold3d.Manifold:
-    """Double-edged straight sword (arming sword); 0.70-1.00 m long."""
+    """Double-edged straight sword (arming sword); 0.70-1.00 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     return _hilted_double_edge(
         p,
         {

@@ -27,7 +27,19 @@ def _smoothstep(t: np.ndarray) -> np.ndarray:
 
 
 def bottle(p: ParameterDraw) -> manifold3d.Manifold:
-    """Glass bottle (wine to beer shapes) with a punt and a lip bead; 0.20-0.32 m tall."""
+    """Glass bottle (wine to beer shapes) with a punt and a lip bead; 0.20-0.32 m tall.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     height = p.uniform("height_m", 0.20, 0.32, 0.29)
     radius = p.uniform("body_radius_m", 0.030, 0.042, 0.037)
     body = p.uniform("body_fraction", 0.45, 0.65, 0.58)
@@ -70,7 +82,19 @@ def bottle(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def wine_glass(p: ParameterDraw) -> manifold3d.Manifold:
-    """Stemmed wine glass: foot, stem, tulip bowl; 0.15-0.22 m tall."""
+    """Stemmed wine glass: foot, stem, tulip bowl; 0.15-0.22 m tall.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     height = p.uniform("height_m", 0.15, 0.22, 0.20)
     foot_r = p.uniform("foot_radius_m", 0.032, 0.040, 0.036)
     foot_t = p.uniform("foot_thickness_m", 0.003, 0.005, 0.004)
@@ -110,7 +134,19 @@ def wine_glass(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def tumbler(p: ParameterDraw) -> manifold3d.Manifold:
-    """Straight-sided drinking glass with a thick base; 0.08-0.15 m tall."""
+    """Straight-sided drinking glass with a thick base; 0.08-0.15 m tall.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     height = p.uniform("height_m", 0.08, 0.15, 0.11)
     top_r = p.uniform("rim_radius_m", 0.033, 0.043, 0.038)
     taper = p.uniform("base_to_rim_ratio", 0.78, 1.0, 0.88)
@@ -128,7 +164,19 @@ def tumbler(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def mug(p: ParameterDraw) -> manifold3d.Manifold:
-    """Coffee mug with a loop handle (a finger fits through it); 90-110 mm tall."""
+    """Coffee mug with a loop handle (a finger fits through it); 90-110 mm tall.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     height = p.uniform("height_m", 0.09, 0.11, 0.097)
     radius = p.uniform("radius_m", 0.0375, 0.0435, 0.041)
     wall = p.uniform("wall_m", 0.003, 0.004, 0.0035)
@@ -170,7 +218,19 @@ def mug(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def ice_cream_cone(p: ParameterDraw) -> manifold3d.Manifold:
-    """Hollow wafer cone with a rim band; 0.10-0.15 m tall."""
+    """Hollow wafer cone with a rim band; 0.10-0.15 m tall.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     height = p.uniform("height_m", 0.102, 0.15, 0.125)
     top_r = p.uniform("rim_radius_m", 0.022, 0.030, 0.026)
     band = p.uniform("rim_band_height_m", 0.008, 0.016, 0.012)

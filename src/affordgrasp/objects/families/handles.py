@@ -33,12 +33,33 @@ def straight_grip(
 ) -> manifold3d.Manifold:
     """A grip from x0 (butt) to x1 (front) with a superellipse section.
 
-    half_y, half_z : section semi-axes, m; exponent : 2 oval, ~3-4 rounded rectangle.
-    bulge : relative swell in the middle of the grip (palm swell).
-    butt_flare : relative widening of the last 20 % before the butt (stops the hand sliding).
-    butt_drop : how far the butt hooks towards -y, m (a pistol-grip curve).
-    butt_round, front_round : length of the domed end zones, m (None: 60 % of the smaller
-    semi-axis at the butt).
+    Parameters
+    ----------
+    x0, x1 : float
+        Butt and front, m.
+    half_y, half_z : float
+        Section semi-axes, m.
+    exponent : float
+        2 oval, ~3-4 rounded rectangle.
+    bulge : float
+        Relative swell in the middle of the grip (palm swell).
+    butt_flare : float
+        Relative widening of the last 20 % before the butt (stops the hand sliding).
+    butt_drop : float
+        How far the butt hooks towards -y, m (a pistol-grip curve).
+    y_center : float
+        Offset of the grip's axis along y, m.
+    butt_round, front_round : float
+        Length of the domed end zones, m (butt_round None: 60 % of the smaller semi-axis).
+    points : int
+        Vertices per section.
+    middle : int
+        Stations between the end zones.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Metres.
     """
     if butt_round is None:
         butt_round = 0.6 * min(half_y, half_z)
@@ -64,10 +85,25 @@ def curved_bar(
 ) -> manifold3d.Manifold:
     """A bar swept along a planar path.
 
-    path : (n, 3) float, m; plane_normal : (3,) float, normal of the path's plane.
-    half_u : (n,) float, semi-axis in the plane, perpendicular to the path, m.
-    half_v : (n,) float, semi-axis along the plane normal, m.
-    exponent : scalar or (n,) float, superellipse exponent per station.
+    Parameters
+    ----------
+    path : (n, 3) float ndarray
+        m.
+    plane_normal : (3,) float ndarray
+        Normal of the path's plane.
+    half_u : (n,) float ndarray
+        Semi-axis in the plane, perpendicular to the path, m.
+    half_v : (n,) float ndarray
+        Semi-axis along the plane normal, m.
+    exponent : float or (n,) float ndarray
+        Superellipse exponent per station.
+    points : int
+        Vertices per section.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Metres.
     """
     normal, binormal = planar_frames(path, plane_normal)
     n = path.shape[0]

@@ -28,7 +28,19 @@ __all__ = ["screwdriver", "spatula"]
 
 
 def screwdriver(p: ParameterDraw) -> manifold3d.Manifold:
-    """Slotted or Phillips screwdriver with a fluted handle; 0.15-0.30 m long."""
+    """Slotted or Phillips screwdriver with a fluted handle; 0.15-0.30 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     tip_style = p.choice("tip", ("slotted", "phillips"), "slotted")
     handle_len = p.uniform("handle_length_m", 0.085, 0.12, 0.10)
     handle_r = p.uniform("handle_radius_m", 0.013, 0.018, 0.0155)
@@ -84,7 +96,19 @@ def screwdriver(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def spatula(p: ParameterDraw) -> manifold3d.Manifold:
-    """Kitchen turner with a slotted, front-bevelled blade; 0.25-0.35 m long."""
+    """Kitchen turner with a slotted, front-bevelled blade; 0.25-0.35 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     handle_len = p.uniform("handle_length_m", 0.11, 0.15, 0.13)
     grip_hy = p.uniform("handle_half_width_m", 0.011, 0.014, 0.0125)
     grip_hz = p.uniform("handle_half_thickness_m", 0.008, 0.011, 0.0095)

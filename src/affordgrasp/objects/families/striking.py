@@ -55,7 +55,19 @@ def _arc(start: np.ndarray, length: float, bend: float, n: int) -> np.ndarray:
 
 
 def hammer(p: ParameterDraw) -> manifold3d.Manifold:
-    """Claw or ball-peen hammer; 0.26-0.34 m long, head 0.09-0.13 m across."""
+    """Claw or ball-peen hammer; 0.26-0.34 m long, head 0.09-0.13 m across.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     style = p.choice("style", ("claw", "ball_peen"), "claw")
     length = p.uniform("handle_length_m", 0.26, 0.335, 0.31)
     face_r = p.uniform("face_radius_m", 0.012, 0.016, 0.0145)
@@ -125,7 +137,19 @@ def hammer(p: ParameterDraw) -> manifold3d.Manifold:
 
 
 def axe(p: ParameterDraw) -> manifold3d.Manifold:
-    """Hatchet to camp axe with a bearded, curved bit; 0.36-0.70 m long."""
+    """Hatchet to camp axe with a bearded, curved bit; 0.36-0.70 m long.
+
+    Parameters
+    ----------
+    p : ParameterDraw
+        The instance's parameter draws (seed 0: the typical instance).
+
+    Returns
+    -------
+    manifold3d.Manifold
+        The solid, metres, in the family frame (module docstring of
+        :mod:`affordgrasp.objects.families`).
+    """
     length = p.uniform("haft_length_m", 0.36, 0.68, 0.48)
     edge_len = p.uniform("edge_length_m", 0.075, 0.12, 0.095)
     bit_reach = p.uniform("bit_reach_m", 0.085, 0.13, 0.10)
