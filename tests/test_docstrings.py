@@ -114,8 +114,6 @@ PENDING: set[str] = {
     "learning/training.py",
     "objects/families/geometry.py",
     "objects/families/parts.py",
-    "physics/report.py",
-    "physics/run.py",
     "physics/scene.py",
     "physics/settings.py",
     "physics/trials.py",

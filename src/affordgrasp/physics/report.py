@@ -48,8 +48,15 @@ DESIGNED_FOR = {
 def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
     """ROC-AUC of ``score`` for binary ``label`` (ties count 1/2); NaN if one class is empty.
 
-    score : (n,) float, larger = more likely positive (±inf allowed, NaN rows dropped)
-    label : (n,) bool
+    Parameters
+    ----------
+    score : (n,) float ndarray
+        Larger = more likely positive (±inf allowed, NaN rows dropped).
+    label : (n,) bool ndarray
+
+    Returns
+    -------
+    float
     """
     score = np.asarray(score, dtype=np.float64)
     label = np.asarray(label, dtype=bool)
@@ -63,7 +70,18 @@ def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
 
 
 def roc_curve(score: np.ndarray, label: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(false positive rate, true positive rate) at every distinct threshold, from (0, 0)."""
+    """The ROC curve at every distinct threshold, from (0, 0).
+
+    Parameters
+    ----------
+    score : (n,) float ndarray
+    label : (n,) bool ndarray
+
+    Returns
+    -------
+    fpr, tpr : float64 ndarray
+        False and true positive rates.
+    """
     score = np.asarray(score, dtype=np.float64)
     label = np.asarray(label, dtype=bool)
     keep = ~np.isnan(score)
@@ -79,7 +97,16 @@ def roc_curve(score: np.ndarray, label: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def spearman(x: np.ndarray, y: np.ndarray) -> float:
-    """Spearman's ρ (average ranks; ±inf rank at the ends); NaN pairs dropped."""
+    """Spearman's ρ (average ranks; ±inf rank at the ends); NaN pairs dropped.
+
+    Parameters
+    ----------
+    x, y : (n,) float ndarray
+
+    Returns
+    -------
+    float
+    """
     x = np.asarray(x, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
     keep = ~(np.isnan(x) | np.isnan(y))
@@ -167,8 +194,17 @@ def _stats(preds, outs, mask) -> dict:
 def physics_report(outcomes: pa.Table, directory: str | os.PathLike | None = None) -> dict:
     """AUC and Spearman of every predictor against every outcome, overall and per family.
 
-    outcomes : the table of :func:`affordgrasp.physics.run.read_outcomes`
-    directory : if given, write report.json, report.md and PNG plots there
+    Parameters
+    ----------
+    outcomes : pyarrow.Table
+        The table of :func:`affordgrasp.physics.run.read_outcomes`.
+    directory : path, optional
+        If given, write report.json, report.md and PNG plots there.
+
+    Returns
+    -------
+    dict
+        The report (JSON-ready).
     """
     preds = _predictors(outcomes)
     outs = _outcomes(outcomes)
@@ -199,6 +235,17 @@ def _f(v: float) -> str:
 
 
 def report_markdown(report: dict) -> str:
+    """The report as a Markdown page.
+
+    Parameters
+    ----------
+    report : dict
+        From :func:`physics_report`.
+
+    Returns
+    -------
+    str
+    """
     lines = ["# Physics validation report", ""]
     lines += _markdown_block(report, "")
     if "settled" in report:

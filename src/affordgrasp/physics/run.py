@@ -48,6 +48,20 @@ REPORTED_METRICS = (*(c for c in METRIC_COLUMNS if c != "epsilon_reason"), "n_co
 
 @dataclass
 class PhysicsSummary:
+    """What a call to :func:`run_physics` did.
+
+    Attributes
+    ----------
+    directory : str
+    rows : int
+        Rows planned.
+    shards_written, shards_skipped : int
+        Written by this call, already there.
+    rows_written : int
+    elapsed_s : float
+        Wall time, s.
+    workers : int
+    """
     directory: str
     rows: int
     shards_written: int
@@ -182,6 +196,18 @@ def _prepare_out(out: Path, plan: dict) -> None:
 
 
 def shard_path(out: Path, k: int) -> Path:
+    """The file of shard ``k`` of a physics run.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The run's directory.
+    k : int
+
+    Returns
+    -------
+    pathlib.Path
+    """
     return out / f"part-{k:05d}.parquet"
 
 
@@ -207,7 +233,32 @@ def run_physics(
 ) -> PhysicsSummary:
     """Validate the grasps of a dataset in MuJoCo; write the outcomes as Parquet shards.
 
-    Returns a PhysicsSummary. ``progress(total)`` is a context manager yielding advance(n).
+    Parameters
+    ----------
+    dataset_dir : path
+        A dataset written by ``affordgrasp generate``.
+    out : path
+        The output directory (a finished shard is skipped when run again).
+    settings : PhysicsSettings, optional
+        The protocol; the defaults when None.
+    workers : int, optional
+        Processes.
+    shard_size : int
+        Rows per shard.
+    objects : sequence of str, optional
+        Objects to validate; all when None.
+    statuses : sequence of str
+        Grasp statuses validated.
+    max_per_object : int, optional
+        Validate the first rows of each object only.
+    progress : callable, optional
+        ``progress(total)`` is a context manager yielding ``advance(n)``.
+    log_message : callable, optional
+        Receives one-line messages.
+
+    Returns
+    -------
+    PhysicsSummary
     """
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
@@ -320,7 +371,22 @@ def _scene(hand: str, entry: dict, settings: PhysicsSettings):
 
 
 def validate_rows(rows: pa.Table, hand: str, objects: list[dict], settings) -> pa.Table:
-    """The outcome table of some dataset rows (their key and metric columns + outcomes)."""
+    """The outcome table of some dataset rows (their key and metric columns + outcomes).
+
+    Parameters
+    ----------
+    rows : pyarrow.Table
+        Dataset rows.
+    hand : str
+        The hand's name.
+    objects : list of dict
+        The dataset manifest's object entries.
+    settings : PhysicsSettings
+
+    Returns
+    -------
+    pyarrow.Table
+    """
     from .trials import validate_grasp
 
     by_name = {o["name"]: o for o in objects}
@@ -355,6 +421,22 @@ def _outcome_type(name: str) -> pa.DataType:
 
 
 def validate_shard(out, k, rows, hand, objects, settings) -> dict:
+    """Validate one shard's rows and write its Parquet file atomically.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The run's directory.
+    k : int
+        Shard index.
+    rows, hand, objects, settings
+        As for :func:`validate_rows`.
+
+    Returns
+    -------
+    dict
+        ``rows``, simulation ``steps``, wall ``seconds`` and ``cpu_seconds``.
+    """
     started, cpu = time.perf_counter(), time.process_time()
     table = validate_rows(rows, hand, objects, settings)
     seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
@@ -373,7 +455,17 @@ def validate_shard(out, k, rows, hand, objects, settings) -> dict:
 
 
 def read_outcomes(out: str | os.PathLike) -> pa.Table:
-    """Every shard of a physics run as one table (plan order)."""
+    """Every shard of a physics run as one table (plan order).
+
+    Parameters
+    ----------
+    out : path
+        The run's directory.
+
+    Returns
+    -------
+    pyarrow.Table
+    """
     out = Path(out)
     if not (out / MANIFEST).is_file():
         raise DatasetError(
