@@ -62,6 +62,7 @@ class PhysicsSummary:
         Wall time, s.
     workers : int
     """
+
     directory: str
     rows: int
     shards_written: int
