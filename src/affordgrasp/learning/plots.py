@@ -20,7 +20,21 @@ def _figure():
 
 
 def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], positive_rate: float):
-    """curves: label → (labels, scores). The dashed line is the predict-the-mean baseline."""
+    """Precision-recall curves; the dashed line is the predict-the-mean baseline.
+
+    Parameters
+    ----------
+    path : path
+        The PNG file.
+    curves : dict of str to (labels, scores)
+        Label → ((n,) bool truth, (n,) float scores).
+    positive_rate : float
+        Share of positives (the baseline's precision).
+
+    Returns
+    -------
+    pathlib.Path
+    """
     plt = _figure()
     fig, ax = plt.subplots(figsize=(5, 4), dpi=120)
     for label, (y, s) in curves.items():
@@ -37,7 +51,21 @@ def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], posit
 
 
 def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_is_better=True):
-    """runs: label → (truth, predictions). Cumulative GMS distributions, E[GMS] as lines."""
+    """Cumulative GMS distributions, E[GMS] as lines.
+
+    Parameters
+    ----------
+    path : path
+        The PNG file.
+    runs : dict of str to (truth, predictions)
+        Label → ((n,) float, (n,) float).
+    lower_is_better : bool
+        The target ranks low values first.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     plt = _figure()
     fig, ax = plt.subplots(figsize=(5, 4), dpi=120)
     for label, (t, p) in runs.items():
@@ -54,6 +82,20 @@ def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_
 
 
 def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
+    """Predicted against true values (normalised), with the diagonal.
+
+    Parameters
+    ----------
+    path : path
+        The PNG file.
+    truth, pred : (n,) float ndarray
+    label : str
+        The title.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     plt = _figure()
     fig, ax = plt.subplots(figsize=(4.5, 4.5), dpi=120)
     ax.scatter(truth, pred, s=4, alpha=0.4)

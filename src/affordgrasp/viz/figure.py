@@ -11,7 +11,19 @@ DPI = 100
 
 
 def new_figure(width_px: int, height_px: int, *, axes: bool = True):
-    """A figure of exactly ``width_px`` x ``height_px`` pixels (and one full-size axes)."""
+    """A figure of exactly ``width_px`` x ``height_px`` pixels (and one full-size axes).
+
+    Parameters
+    ----------
+    width_px, height_px : int
+    axes : bool
+        Add one axes covering the figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure or (Figure, Axes)
+        The figure, with its axes when ``axes``.
+    """
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(width_px / DPI, height_px / DPI), dpi=DPI)
@@ -24,7 +36,19 @@ def new_figure(width_px: int, height_px: int, *, axes: bool = True):
 
 
 def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
-    """Write a figure as PNG with no time stamp in it (the same inputs give the same bytes)."""
+    """Write a figure as PNG with no time stamp in it (the same inputs give the same bytes).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : path
+    tight : bool
+        Trim the white margins.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     FigureCanvasAgg(fig)
@@ -36,7 +60,16 @@ def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
 
 
 def figure_pixels(fig) -> np.ndarray:
-    """The figure drawn on the Agg canvas, as an (h, w, 3) uint8 array."""
+    """The figure drawn on the Agg canvas.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+
+    Returns
+    -------
+    (h, w, 3) uint8 ndarray
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     canvas = FigureCanvasAgg(fig)
@@ -45,8 +78,19 @@ def figure_pixels(fig) -> np.ndarray:
 
 
 def save_image(rgb: np.ndarray, path: str | os.PathLike, *, colors: int | None = None) -> Path:
-    """Write an (h, w, 3) uint8 image as PNG, optionally reduced to a palette of ``colors``
-    (smaller files; the reduction is deterministic)."""
+    """Write an image as PNG, optionally reduced to a palette (smaller files, deterministic).
+
+    Parameters
+    ----------
+    rgb : (h, w, 3) uint8 ndarray
+    path : path
+    colors : int, optional
+        Palette size.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     from PIL import Image
 
     path = Path(path)
@@ -61,7 +105,18 @@ def save_image(rgb: np.ndarray, path: str | os.PathLike, *, colors: int | None =
 
 
 def png_bytes(rgb: np.ndarray, *, max_px: int | None = None) -> bytes:
-    """PNG bytes of an (h, w, 3) uint8 image, downscaled to fit ``max_px`` if given."""
+    """PNG bytes of an image, downscaled to fit ``max_px`` if given.
+
+    Parameters
+    ----------
+    rgb : (h, w, 3) uint8 ndarray
+    max_px : int, optional
+        Largest side, pixels.
+
+    Returns
+    -------
+    bytes
+    """
     import io
 
     from PIL import Image

@@ -17,7 +17,19 @@ from .scene import GraspScene
 
 @dataclass(frozen=True)
 class OverlayStyle:
-    """What is drawn over the image, and how big (sizes in points at 100 dpi)."""
+    """What is drawn over the image, and how big (sizes in points at 100 dpi).
+
+    Attributes
+    ----------
+    contacts, normals, cones, use_point, wrist_axis, center_of_mass : bool
+        Which overlays are drawn.
+    marker_size : float
+        Points.
+    line_width : float
+        Points.
+    normal_length : float
+        Length of the normal arrows, a fraction of the scene size.
+    """
 
     contacts: bool = True
     normals: bool = True
@@ -47,7 +59,24 @@ def draw_grasp(
     height: int = 512,
     supersample: int = 2,
 ) -> Render:
-    """Render ``scene`` into the matplotlib axes ``ax`` (image + overlays); returns the render."""
+    """Render ``scene`` into the matplotlib axes ``ax`` (image + overlays).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    scene : GraspScene
+    camera : Camera, optional
+        :func:`affordgrasp.viz.camera.auto_camera` when None.
+    style : OverlayStyle
+    width, height : int
+        Pixels.
+    supersample : int
+        Rays per pixel side.
+
+    Returns
+    -------
+    Render
+    """
     caster = scene.caster
     if camera is None:
         camera = auto_camera(scene, width=width, height=height)
@@ -63,7 +92,18 @@ def draw_grasp(
 def draw_overlays(
     ax, scene: GraspScene, render: Render, *, caster=None, style: OverlayStyle = OverlayStyle()
 ) -> None:
-    """Draw contacts, normals, cones, use point, wrist axis and centre of mass over ``render``."""
+    """Draw contacts, normals, cones, use point, wrist axis and centre of mass over ``render``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    scene : GraspScene
+    render : Render
+        The image drawn in ``ax`` (its camera projects the overlays).
+    caster : RayCaster, optional
+        For hiding occluded marks; the scene's when None.
+    style : OverlayStyle
+    """
     camera = render.camera
     caster = scene.caster if caster is None else caster
     length = style.normal_length * scene.size
@@ -195,9 +235,22 @@ def grasp_image(
     style: OverlayStyle = OverlayStyle(),
     caption: str | None = None,
 ) -> tuple[np.ndarray, Camera]:
-    """One grasp drawn in a square image: (rgb (size, size, 3) uint8, the camera used).
+    """One grasp drawn in a square image.
 
-    ``caption`` (default: the scene's title) is written in the top-left corner.
+    Parameters
+    ----------
+    scene : GraspScene
+    size_px : int
+    camera : Camera, optional
+    style : OverlayStyle
+    caption : str, optional
+        Written in the top-left corner (default: the scene's title).
+
+    Returns
+    -------
+    rgb : (size, size, 3) uint8 ndarray
+    camera : Camera
+        The camera used.
     """
     from .figure import figure_pixels, new_figure
 
@@ -236,7 +289,21 @@ def save_grasp_png(
     style: OverlayStyle = OverlayStyle(),
     caption: str | None = None,
 ) -> Camera:
-    """Render one grasp (image, overlays, caption) to a square PNG; returns the camera used."""
+    """Render one grasp (image, overlays, caption) to a square PNG.
+
+    Parameters
+    ----------
+    scene : GraspScene
+    path : path
+        The PNG file.
+    size_px, camera, style, caption
+        As for :func:`grasp_image`.
+
+    Returns
+    -------
+    Camera
+        The camera used.
+    """
     from .figure import save_image
 
     rgb, camera = grasp_image(scene, size_px=size_px, camera=camera, style=style, caption=caption)
