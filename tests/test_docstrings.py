@@ -117,9 +117,7 @@ PENDING: set[str] = {
     "physics/settings.py",
     "physics/trials.py",
     "viz/html.py",
-    "viz/plots.py",
     "viz/showcase.py",
-    "viz/sources.py",
 }
 
 

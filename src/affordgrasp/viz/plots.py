@@ -29,7 +29,25 @@ NOT_METRICS = ("sample", "seed", "use_triangle", "n_contacts")
 
 @dataclass
 class Summary:
-    """Counts and range of one numeric column (pass 1), then its histogram (pass 2)."""
+    """Counts and range of one numeric column (pass 1), then its histogram (pass 2).
+
+    Attributes
+    ----------
+    n, nan, pos_inf, neg_inf, zeros : int
+        Values seen, and how many of them are NaN, +inf, −inf, 0.
+    lo, hi : float
+        Finite range.
+    min_abs_nonzero : float
+        Smallest finite non-zero magnitude (for a symmetric log scale).
+    edges : ndarray or None
+        Histogram bin edges (pass 2).
+    scale : str
+        ``"linear"``, ``"log"`` or ``"symlog"``.
+    linthresh : float
+        Linear range of the symlog scale.
+    counts : ndarray or None
+        Histogram counts (pass 2).
+    """
 
     n: int = 0
     nan: int = 0
@@ -159,7 +177,22 @@ def _draw_hist(ax, s: Summary, color: str = "#4c72b0") -> None:
 
 @dataclass
 class DatasetSummary:
-    """Everything the plots need, gathered in two passes."""
+    """Everything the plots need, gathered in two passes.
+
+    Attributes
+    ----------
+    rows : int
+    metrics : dict of str to Summary
+        Per numeric metric column.
+    status : dict of str to dict
+        Object -> policy status -> rows.
+    reasons : dict of str to int
+        ``epsilon_reason`` -> rows.
+    affordances : dict of str to dict
+        Task -> object -> Summary of its finite scores.
+    task_ranges : dict of str to Summary
+        Per task, over every object.
+    """
 
     rows: int = 0
     metrics: dict[str, Summary] = field(default_factory=dict)
@@ -180,7 +213,24 @@ def summarize(
 ) -> DatasetSummary:
     """Two passes over ``scan(columns)`` (an iterable of tables) for :func:`save_plots`.
 
-    tasks : Task objects whose scores are plotted per object
+    Parameters
+    ----------
+    scan : callable
+        ``scan(columns)`` yields pyarrow Tables of those columns.
+    schema : pyarrow.Schema
+        The rows' schema.
+    tasks : sequence of Task
+        Tasks whose scores are plotted per object.
+    mode : str
+        Threshold mode.
+    thresholds : dict of str to dict, optional
+        Task name -> threshold overrides.
+    bins : int
+        Histogram bins.
+
+    Returns
+    -------
+    DatasetSummary
     """
     from .sources import numeric_columns
 
@@ -253,7 +303,18 @@ def summarize(
 
 
 def plot_metric_distributions(summary: DatasetSummary, path: str | os.PathLike) -> Path:
-    """One histogram per numeric metric column, with the share of ±inf and NaN."""
+    """One histogram per numeric metric column, with the share of ±inf and NaN.
+
+    Parameters
+    ----------
+    summary : DatasetSummary
+    path : path
+        The PNG file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     names = list(summary.metrics)
     ncols = 4
     nrows = max(1, -(-len(names) // ncols))
@@ -280,7 +341,18 @@ def plot_metric_distributions(summary: DatasetSummary, path: str | os.PathLike) 
 
 
 def plot_status_counts(summary: DatasetSummary, path: str | os.PathLike) -> Path:
-    """Outcome of the grasp policy per object (stacked shares), and why ε = 0."""
+    """Outcome of the grasp policy per object (stacked shares), and why ε = 0.
+
+    Parameters
+    ----------
+    summary : DatasetSummary
+    path : path
+        The PNG file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     objects = sorted(summary.status)
     statuses = [s for s in STATUS_COLORS if any(s in c for c in summary.status.values())]
     statuses += sorted({k for c in summary.status.values() for k in c} - set(statuses))
@@ -337,8 +409,22 @@ def plot_status_counts(summary: DatasetSummary, path: str | os.PathLike) -> Path
 def plot_affordances(
     summary: DatasetSummary, path: str | os.PathLike, *, mode: str = "default"
 ) -> Path:
-    """Per task, the distribution of finite scores of each object (same bins for all) and the
-    share of samples the task accepts (score > −∞)."""
+    """Per task, the distribution of finite scores of each object and the share accepted.
+
+    The same bins for all objects; accepted means score > −∞.
+
+    Parameters
+    ----------
+    summary : DatasetSummary
+    path : path
+        The PNG file.
+    mode : str
+        Threshold mode (shown in the title).
+
+    Returns
+    -------
+    pathlib.Path
+    """
     tasks = list(summary.affordances)
     objects = sorted({o for per in summary.affordances.values() for o in per})
     if not tasks:
@@ -411,7 +497,22 @@ def plot_affordances(
 def save_plots(
     summary: DatasetSummary, out_dir: str | os.PathLike, *, mode: str = "default", prefix: str = ""
 ) -> dict[str, Path]:
-    """Write metrics.png, status.png and (with tasks) affordances.png; returns the paths."""
+    """Write metrics.png, status.png and (with tasks) affordances.png.
+
+    Parameters
+    ----------
+    summary : DatasetSummary
+    out_dir : path
+    mode : str
+        Threshold mode (shown in the titles).
+    prefix : str
+        Prepended to the file names.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Plot name -> path written.
+    """
     out_dir = Path(out_dir)
     files = {
         "metrics": plot_metric_distributions(summary, out_dir / f"{prefix}metrics.png"),

@@ -27,7 +27,13 @@ BATCH_ROWS = 65536
 
 
 class GraspSource:
-    """Rows of grasps: scanned in batches, fetched by key."""
+    """Rows of grasps: scanned in batches, fetched by key.
+
+    Attributes
+    ----------
+    name : str
+        Shown in captions.
+    """
 
     name: str
 
@@ -57,7 +63,17 @@ def _order_rows(rows: list[dict], keys: Sequence[tuple[int, int]]) -> list[dict]
 
 @dataclass
 class TableSource(GraspSource):
-    """Rows held in memory (e.g. samples just evaluated)."""
+    """Rows held in memory (e.g. samples just evaluated).
+
+    Attributes
+    ----------
+    table : pyarrow.Table
+        Sample rows.
+    name : str
+        Shown in captions.
+    objects : dict of str to GraspObject
+        The rows' objects, when known (saves loading them again).
+    """
 
     table: pa.Table
     name: str = "samples"
@@ -82,7 +98,17 @@ class TableSource(GraspSource):
 
 @dataclass
 class DatasetSource(GraspSource):
-    """Every Parquet file under a directory, as one dataset."""
+    """Every Parquet file under a directory, as one dataset.
+
+    Attributes
+    ----------
+    directory : pathlib.Path
+        A dataset, or any directory of sample-row Parquet files (read loosely).
+    name : str
+        Shown in captions (the directory when empty).
+    files : list of str
+        The Parquet files found (filled in on construction).
+    """
 
     directory: Path
     name: str = ""
@@ -114,7 +140,19 @@ class DatasetSource(GraspSource):
 
 @dataclass(frozen=True)
 class RankedGrasp:
-    """One of the best grasps of an object for a task (rank 1 is the best)."""
+    """One of the best grasps of an object for a task (rank 1 is the best).
+
+    Attributes
+    ----------
+    object, task : str
+    rank : int
+    score : float
+        F_T.
+    seed, sample : int
+        The row's key.
+    row : dict
+        The full sample row.
+    """
 
     object: str
     task: str
@@ -127,7 +165,18 @@ class RankedGrasp:
 
 @dataclass
 class TaskRanking:
-    """The best grasps of one object for one task, and how many rows were scored."""
+    """The best grasps of one object for one task, and how many rows were scored.
+
+    Attributes
+    ----------
+    object, task : str
+    scored : int
+        Rows scored.
+    accepted : int
+        Rows with a score above -inf.
+    best : list of RankedGrasp
+        Best first.
+    """
 
     object: str
     task: str
@@ -145,12 +194,28 @@ def top_grasps(
     thresholds: dict[str, dict[str, float]] | None = None,
     progress=None,
 ) -> dict[tuple[str, str], TaskRanking]:
-    """The ``top`` best rows per (object, task) by the tasks' scores (higher is better;
-    -inf and NaN never count).
+    """The ``top`` best rows per (object, task) by the tasks' scores.
 
-    tasks : Task objects (``affordgrasp.tasks.get_task``)
-    thresholds : task name -> threshold overrides
-    progress : optional callable(n_rows) called after each batch
+    Higher is better; -inf and NaN never count.
+
+    Parameters
+    ----------
+    source : GraspSource
+    tasks : sequence of Task
+        Task objects (:func:`affordgrasp.get_task`).
+    mode : str
+        Threshold mode.
+    top : int
+        Rows kept per (object, task).
+    thresholds : dict of str to dict, optional
+        Task name -> threshold overrides.
+    progress : callable, optional
+        Called with the number of rows after each batch.
+
+    Returns
+    -------
+    dict of (str, str) to TaskRanking
+        Keyed by (object, task).
     """
     if top < 1:
         raise bad_parameter("top", f"must be at least 1, got {top}")
@@ -197,4 +262,14 @@ def top_grasps(
 
 
 def is_dataset_path(spec: str | os.PathLike) -> bool:
+    """Whether ``spec`` names a directory (read as a dataset) rather than an object.
+
+    Parameters
+    ----------
+    spec : str or os.PathLike
+
+    Returns
+    -------
+    bool
+    """
     return Path(spec).expanduser().is_dir()
