@@ -37,11 +37,20 @@ from .scene import GraspScene
 class ViewerEntry:
     """One grasp in the viewer.
 
-    scene : what to draw (needs ``hand_model`` and ``link_poses``, as ``grasp_scene`` sets)
-    camera : the initial view (e.g. the camera of the grasp's PNG)
-    title : its caption; group : the heading it is listed under (e.g. "knife:0 · cut")
-    facts : (name, value) pairs shown beside the view
-    thumbnail : PNG bytes of the rendered grasp (listed, and shown when WebGL is missing)
+    Attributes
+    ----------
+    scene : GraspScene
+        What to draw (needs ``hand_model`` and ``link_poses``, as ``grasp_scene`` sets).
+    camera : Camera
+        The initial view (e.g. the camera of the grasp's PNG).
+    title : str
+        Its caption.
+    group : str
+        The heading it is listed under (e.g. "knife:0 · cut").
+    facts : list of (str, str)
+        (name, value) pairs shown beside the view.
+    thumbnail : bytes or None
+        PNG bytes of the rendered grasp (listed, and shown when WebGL is missing).
     """
 
     scene: GraspScene
@@ -57,7 +66,19 @@ def _b64(array: np.ndarray) -> str:
 
 
 def mesh_payload(mesh: trimesh.Trimesh) -> dict:
-    """A mesh for the viewer: vertices split at sharp edges so normals shade like the PNGs."""
+    """A mesh for the viewer: vertices split at sharp edges so normals shade like the PNGs.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        m.
+
+    Returns
+    -------
+    dict
+        Positions (float32), quantised normals (int8) and triangle indices (uint16 or
+        uint32), each little-endian and base64-encoded (JSON-ready).
+    """
     faces = np.asarray(mesh.faces, dtype=np.int64)
     normals = np.clip(np.round(corner_normals(mesh) * 127.0), -127, 127).astype(np.int8)
     # One viewer vertex per distinct (vertex, quantised normal) pair.
@@ -86,7 +107,16 @@ def _points(a: np.ndarray) -> list:
 
 
 def viewer_document(entries: list[ViewerEntry]) -> dict:
-    """The JSON document the page embeds (objects, hands, grasps)."""
+    """The JSON document the page embeds (objects, hands, grasps).
+
+    Parameters
+    ----------
+    entries : list of ViewerEntry
+
+    Returns
+    -------
+    dict
+    """
     if not entries:
         raise ValueError("the viewer needs at least one grasp")
     objects: list[dict] = []
@@ -163,7 +193,19 @@ def _code_in_script(code: str, name: str) -> str:
 def viewer_html(
     entries: list[ViewerEntry], *, title: str = "affordgrasp", subtitle: str = ""
 ) -> str:
-    """The page as a string."""
+    """The page as a string.
+
+    Parameters
+    ----------
+    entries : list of ViewerEntry
+    title, subtitle : str
+        The page's heading.
+
+    Returns
+    -------
+    str
+        Self-contained HTML (scripts and data inline; no network).
+    """
     document = viewer_document(entries)
     data = json.dumps(document, separators=(",", ":"), allow_nan=False)
     parts = {
@@ -185,7 +227,21 @@ def write_viewer(
     title: str = "affordgrasp",
     subtitle: str = "",
 ) -> Path:
-    """Write the self-contained viewer page; returns its path."""
+    """Write the self-contained viewer page.
+
+    Parameters
+    ----------
+    path : path
+        The HTML file.
+    entries : list of ViewerEntry
+    title, subtitle : str
+        The page's heading.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(viewer_html(entries, title=title, subtitle=subtitle), encoding="utf-8")
@@ -193,7 +249,17 @@ def write_viewer(
 
 
 def fmt_value(value) -> str:
-    """A metric value as the viewer lists it."""
+    """A metric value as the viewer lists it.
+
+    Parameters
+    ----------
+    value : object
+        A number (finite, ±inf or NaN: shown as ∞, −∞, —) or anything else.
+
+    Returns
+    -------
+    str
+    """
     if isinstance(value, (float, np.floating)):
         v = float(value)
         if math.isnan(v):
