@@ -116,7 +116,6 @@ PENDING: set[str] = {
     "physics/scene.py",
     "physics/settings.py",
     "physics/trials.py",
-    "viz/showcase.py",
 }
 
 

@@ -43,7 +43,19 @@ METRIC_FACTS = (
 
 @dataclass
 class ShowResult:
-    """What :func:`draw_best` wrote."""
+    """What :func:`draw_best` wrote.
+
+    Attributes
+    ----------
+    grid : pathlib.Path or None
+        The grid PNG.
+    html : pathlib.Path or None
+        The viewer page.
+    grasps : list of pathlib.Path
+        One PNG per grasp (with ``each``).
+    best : list of dict
+        :func:`best_record` of every grasp drawn.
+    """
 
     grid: Path | None = None
     html: Path | None = None
@@ -52,11 +64,32 @@ class ShowResult:
 
 
 def safe_name(text: str) -> str:
-    """A file-name-safe version of an object or task name (``knife:3`` → ``knife-3``)."""
+    """A file-name-safe version of an object or task name (``knife:3`` → ``knife-3``).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    str
+    """
     return re.sub(r"[^A-Za-z0-9_.-]+", "-", text).strip("-") or "object"
 
 
 def grasp_facts(g: RankedGrasp, mode: str) -> list[tuple[str, str]]:
+    """The (name, value) pairs listed beside a grasp: object, task, rank, score, key, metrics.
+
+    Parameters
+    ----------
+    g : RankedGrasp
+    mode : str
+        Threshold mode (shown with the task).
+
+    Returns
+    -------
+    list of (str, str)
+    """
     row = g.row
     facts = [
         ("object", g.object),
@@ -86,7 +119,18 @@ def grasp_facts(g: RankedGrasp, mode: str) -> list[tuple[str, str]]:
 
 
 def best_record(g: RankedGrasp, mode: str) -> dict:
-    """One best grasp for JSON output."""
+    """One best grasp for JSON output.
+
+    Parameters
+    ----------
+    g : RankedGrasp
+    mode : str
+        Threshold mode.
+
+    Returns
+    -------
+    dict
+    """
     row = g.row
     rec = {
         "object": g.object,
@@ -123,12 +167,44 @@ def draw_best(
     palette: int | None = 256,
     progress: Callable[[int], None] | None = None,
 ) -> ShowResult:
-    """Render the ranked grasps and write ``<name>.png``, ``<name>.html`` and, with
-    ``each``, ``grasps/<object>_<task>_<rank>.png`` under ``out_dir``.
+    """Render the ranked grasps and write the grid PNG, the viewer page and single PNGs.
 
-    rankings : one per (object, task), in the order to show
-    objects : object name -> GraspObject (the meshes the rows were simulated on)
-    palette : reduce the grid PNG to this many colours (None keeps full colour)
+    Writes ``<name>.png``, ``<name>.html`` and, with ``each``,
+    ``grasps/<object>_<task>_<rank>.png`` under ``out_dir``.
+
+    Parameters
+    ----------
+    rankings : sequence of TaskRanking
+        One per (object, task), in the order to show.
+    objects : dict of str to GraspObject
+        Object name -> the mesh the rows were simulated on.
+    out_dir : path
+    mode : str
+        Threshold mode (captions).
+    top : int
+        Grasps per ranking.
+    cell_px : int
+        Side of a grid cell, pixels.
+    grasp_px : int
+        Side of a single-grasp PNG, pixels.
+    each : bool
+        Also write one PNG per grasp.
+    html : bool
+        Also write the viewer page.
+    cones : bool
+        Draw the friction cones.
+    name : str
+        Base name of the files.
+    title : str
+        Heading (default: from the tasks and mode).
+    palette : int or None
+        Reduce the grid PNG to this many colours (None keeps full colour).
+    progress : callable, optional
+        Called with 1 after each grasp drawn.
+
+    Returns
+    -------
+    ShowResult
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
