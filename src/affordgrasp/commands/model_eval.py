@@ -12,6 +12,13 @@ from ..errors import InputError
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp model-eval`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("model", metavar="MODEL", help="a .safetensors model, or classifier/regressor")
     p.add_argument("dataset", metavar="DATASET", help="a directory written by 'generate'")
     p.add_argument(
@@ -33,6 +40,15 @@ def add_arguments(p) -> None:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp model-eval``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..learning.api import evaluate_on_dataset
     from ..learning.targets import Target
     from .predict import load_models

@@ -11,6 +11,13 @@ from .common import add_scale_arguments, load_objects
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp objects`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     sub = p.add_subparsers(dest="action", metavar="ACTION")
     listing = sub.add_parser("list", help="list the families (the default)")
     e = sub.add_parser("export", help="write one object as a mesh file (OBJ, STL, PLY, GLB, OFF)")
@@ -27,6 +34,15 @@ def add_arguments(p) -> None:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp objects``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..objects import FAMILIES
 
     if getattr(args, "action", None) == "export":

@@ -13,6 +13,13 @@ from .common import (
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp optimize`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("object", metavar="OBJECT", help="knife, knife:7 or a mesh path")
     add_task_arguments(p, several=False)
     p.add_argument("--budget", type=int, default=20000, help="simulations (default 20000)")
@@ -45,6 +52,15 @@ def add_arguments(p) -> None:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp optimize``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..optimize import optimize
 
     (obj,) = load_objects([args.object], args)

@@ -11,6 +11,13 @@ from ..physics.settings import PhysicsSettings
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp physics`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     d = PhysicsSettings()
     p.add_argument(
         "dataset", metavar="DATASET", help="a directory written by 'affordgrasp generate'"
@@ -76,6 +83,15 @@ def _settings(args) -> PhysicsSettings:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp physics``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..physics import deps
     from ..physics.report import DESIGNED_FOR, physics_report
     from ..physics.run import read_outcomes, run_physics

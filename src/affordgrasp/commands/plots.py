@@ -14,6 +14,13 @@ DEFAULT_TASKS = "beat,cut,pick"
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp plots`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     add_source_arguments(p)
     add_task_arguments(p, required=False)
     p.add_argument("--bins", type=int, default=40, help="histogram bins (default 40)")
@@ -46,6 +53,15 @@ def _combined(sources):
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp plots``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..errors import InputError
     from ..viz.plots import save_plots, summarize
 

@@ -14,10 +14,26 @@ from .common import (
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp simulate`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     add_sampling_arguments(p)
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp simulate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..objects import load_object
 
     check_counts(args)

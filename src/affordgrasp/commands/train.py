@@ -8,6 +8,13 @@ from ..errors import InputError, MissingDependencyError
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp train`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("dataset", metavar="DATASET", help="a directory written by 'generate'")
     p.add_argument(
         "--model",
@@ -75,6 +82,15 @@ def _bar(out, settings):
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp train``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..learning.training import TrainSettings
 
     if not args.out.endswith(".safetensors"):
