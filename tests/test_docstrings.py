@@ -90,13 +90,7 @@ MODULES = sorted(
 PENDING: set[str] = {
     "commands/best.py",
     "commands/common.py",
-    "commands/depth.py",
-    "commands/evaluate.py",
-    "commands/generate.py",
-    "commands/output.py",
-    "commands/predict.py",
     "commands/show.py",
-    "commands/tasks.py",
     "dataset/engines.py",
     "dataset/layout.py",
     "learning/api.py",

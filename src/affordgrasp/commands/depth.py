@@ -8,6 +8,13 @@ from ..errors import InputError
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp depth`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
     which = p.add_mutually_exclusive_group()
     which.add_argument(
@@ -37,6 +44,22 @@ def add_arguments(p) -> None:
 
 
 def parse_p0(text: str) -> np.ndarray:
+    """The ``--p0`` option: six comma-separated numbers.
+
+    Parameters
+    ----------
+    text : str
+        ``"u1,u2,u3,u4,u5,s"``.
+
+    Returns
+    -------
+    (1, 6) float64 ndarray
+
+    Raises
+    ------
+    InputError
+        When it is not six numbers.
+    """
     try:
         values = [float(v) for v in text.replace(" ", "").split(",")]
     except ValueError:
@@ -47,6 +70,15 @@ def parse_p0(text: str) -> np.ndarray:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp depth``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..grasp.pregrasp import sample_inputs
     from ..objects import load_object
     from ..vision import DepthCamera, renderer_for, save_depth_png

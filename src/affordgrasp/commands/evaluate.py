@@ -30,6 +30,13 @@ SHOWN_METRICS = (
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp evaluate`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     add_sampling_arguments(p)
     add_task_arguments(
         p,
@@ -41,7 +48,23 @@ def add_arguments(p) -> None:
 
 
 def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict]:
-    """The best sample of every task, as table rows and a JSON-ready dict."""
+    """The best sample of every task, as table rows and a JSON-ready dict.
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        Evaluated rows.
+    task_names : list of str
+    mode : str
+        Threshold mode.
+
+    Returns
+    -------
+    rows : list of list
+        One table row per task (metrics in their table units).
+    doc : dict
+        Task name -> the best sample (None when no row scores above −inf).
+    """
     from ..columns import display_value
     from ..schema import metric_arrays
     from ..tasks import MetricColumns, get_task
@@ -71,6 +94,15 @@ def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp evaluate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..objects import load_object
     from ..tasks import MetricColumns, get_task, is_viable, list_tasks, load_task_file
 

@@ -11,6 +11,13 @@ from .common import HAND_HELP, add_scale_arguments, load_objects, scale_options
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp generate`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("objects", nargs="+", metavar="OBJECT", help="knife, knife:7 or a mesh path")
     p.add_argument("--samples", type=int, required=True, metavar="N", help="samples per object")
     p.add_argument("--out", required=True, metavar="DIR", help="dataset directory (resumable)")
@@ -54,7 +61,18 @@ def add_arguments(p) -> None:
 
 
 def command_line(args) -> list[str]:
-    """The command as a user would type it, every option that shapes the output explicit."""
+    """The command as a user would type it, every option that shapes the output explicit.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of ``affordgrasp generate``.
+
+    Returns
+    -------
+    list of str
+        Recorded in the manifest and the dataset card.
+    """
     cmd = ["affordgrasp", "generate", *args.objects, "--samples", str(args.samples)]
     cmd += ["--out", str(args.out), "--seed", str(args.seed), "--hand", args.hand]
     cmd += ["--shard-size", str(args.shard_size)]
@@ -76,6 +94,15 @@ def command_line(args) -> list[str]:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp generate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     cmd = command_line(args)
     objects = args.objects
     if any(v is not None for v in scale_options(args).values()):

@@ -11,7 +11,17 @@ import numpy as np
 
 
 def to_jsonable(value):
-    """Numbers, arrays and nested containers as JSON; inf/NaN as the strings JSON lacks."""
+    """Numbers, arrays and nested containers as JSON; inf/NaN as the strings JSON lacks.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    object
+        dicts, lists, ints, floats and strs only; NaN becomes None, ±inf ``"inf"``/``"-inf"``.
+    """
     if isinstance(value, dict):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -31,6 +41,16 @@ def to_jsonable(value):
 
 
 def fmt(value) -> str:
+    """A value as the text tables show it (4 significant digits, scientific when tiny or huge).
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    str
+    """
     if isinstance(value, (float, np.floating)):
         v = float(value)
         if math.isinf(v) or math.isnan(v):
@@ -42,7 +62,13 @@ def fmt(value) -> str:
 
 
 class Output:
-    """Collects what a command reports and prints it the way the user asked."""
+    """Collects what a command reports and prints it the way the user asked.
+
+    Parameters
+    ----------
+    json_mode : bool
+        Print one JSON document at the end instead of text tables.
+    """
 
     def __init__(self, json_mode: bool = False):
         self.json_mode = json_mode

@@ -6,6 +6,13 @@ from ..errors import InputError, MissingDependencyError
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp predict`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument(
         "model",
         metavar="MODEL",
@@ -17,6 +24,23 @@ def add_arguments(p) -> None:
 
 
 def load_models(spec: str):
+    """The models named by ``--model``, each with its config.
+
+    Parameters
+    ----------
+    spec : str
+        ``default`` (the shipped classifier and regressor), a shipped model's name or a
+        model file (see :func:`affordgrasp.learning.api.resolve_models`).
+
+    Returns
+    -------
+    list of (torch.nn.Module, dict)
+
+    Raises
+    ------
+    InputError
+        When torch or safetensors is missing (the message says how to install them).
+    """
     try:
         from ..learning.api import resolve_models
         from ..learning.io import load_model
@@ -30,6 +54,15 @@ def load_models(spec: str):
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp predict``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     import pyarrow.parquet as pq
 
     from ..dataset.reading import read_manifest

@@ -15,7 +15,19 @@ THRESHOLD_COLUMNS = {
 
 
 def threshold_text(name: str, value: float) -> str:
-    """``tau_angle=45°``, ``tau_ug=30000 m⁻²``, ``tau_eps=0.3``: the value in its table unit."""
+    """``tau_angle=45°``, ``tau_ug=30000 m⁻²``, ``tau_eps=0.3``: the value in its table unit.
+
+    Parameters
+    ----------
+    name : str
+        The threshold's name.
+    value : float
+        Its value (in the unit of the metric it bounds).
+
+    Returns
+    -------
+    str
+    """
     from ..columns import display_unit, display_value
 
     column = THRESHOLD_COLUMNS.get(name)
@@ -29,10 +41,26 @@ def threshold_text(name: str, value: float) -> str:
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp tasks`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("--tasks-file", default=None, help="TOML file declaring more tasks")
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp tasks``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..tasks import get_task, list_tasks, load_task_file
 
     if args.tasks_file:
