@@ -20,6 +20,13 @@ METRICS_SHOWN = (
 
 
 def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp best`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
     p.add_argument("directory", metavar="DIR", help="a dataset written by 'affordgrasp generate'")
     add_task_arguments(p, several=False)
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
@@ -28,7 +35,17 @@ def add_arguments(p) -> None:
 
 
 def shown_metrics(task_name: str) -> list[tuple[str, str]]:
-    """(label, column) of the metrics a task reads, ε first; all of them if it does not say."""
+    """(label, column) of the metrics a task reads, ε first; all of them if it does not say.
+
+    Parameters
+    ----------
+    task_name : str
+        A registered task.
+
+    Returns
+    -------
+    list of (str, str)
+    """
     from ..columns import HOLD_EFFORT_COLUMNS
     from ..tasks import get_task
 
@@ -42,6 +59,20 @@ def shown_metrics(task_name: str) -> list[tuple[str, str]]:
 
 
 def metric_cells(row: dict, shown=METRICS_SHOWN) -> list:
+    """The table cells of one row's metrics, in their table units.
+
+    Parameters
+    ----------
+    row : dict
+        A sample row (a missing metric shows as NaN).
+    shown : sequence of (str, str)
+        (label, column) pairs, as :func:`shown_metrics` gives.
+
+    Returns
+    -------
+    list
+        One value per shown metric (ΣE_h computed from the six hold efforts).
+    """
     from ..columns import HOLD_EFFORT_SUM, display_value, hold_effort_sum
 
     cells = []
@@ -54,11 +85,30 @@ def metric_cells(row: dict, shown=METRICS_SHOWN) -> list:
 
 
 def metric_headings(shown=METRICS_SHOWN) -> list[str]:
-    """Table headings of ``shown`` with their units (the edge angle in degrees)."""
+    """Table headings of ``shown`` with their units (the edge angle in degrees).
+
+    Parameters
+    ----------
+    shown : sequence of (str, str)
+        (label, column) pairs.
+
+    Returns
+    -------
+    list of str
+    """
     return [column_heading(name, label) for label, name in shown]
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp best``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
     from ..dataset.best import best_grasps, write_best
     from ..errors import InputError
 
