@@ -84,9 +84,9 @@ def hold_effort_kernel(W, out):
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     out : (6,) float64 ndarray
         Written with E_h along +x, −x, +y, −y, +z, −z, N (+inf where infeasible).
 
@@ -120,9 +120,9 @@ def impact_lp(W, w_use, axis):
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     w_use : (6,) float64 ndarray
         Wrench of the unit use force (:func:`use_wrench`).
     axis : (3,) float64 ndarray
@@ -154,9 +154,9 @@ def impact_effort_kernel(W, w_use, axis):
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     w_use : (6,) float64 ndarray
         Wrench of the unit use force.
     axis : (3,) float64 ndarray
@@ -213,9 +213,9 @@ def hold_effort_highs(W: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
 
     Returns
     -------
@@ -296,9 +296,9 @@ def impact_effort_highs(W: np.ndarray, w_use: np.ndarray, axis: np.ndarray) -> f
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     w_use : (6,) float64 ndarray
         Wrench of the unit use force.
     axis : (3,) float64 ndarray

@@ -38,9 +38,9 @@ def use_force_lp(W, w_use, n_contacts):
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     w_use : (6,) float64 ndarray
         Wrench of the unit use force.
     n_contacts : int
@@ -75,9 +75,9 @@ def use_force_kernel(W, w_use, n_contacts):
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     w_use : (6,) float64 ndarray
         Wrench of the unit use force.
     n_contacts : int
@@ -153,9 +153,9 @@ def use_force_highs(W: np.ndarray, w_use: np.ndarray, n_contacts: int) -> float:
 
     Parameters
     ----------
-        W : (6, N) float64 ndarray
-            Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
-            N = k * E columns, contact-major.
+    W : (6, N) float64 ndarray
+        Wrench matrix of the cone edges (:func:`affordgrasp.metrics.cones.contact_wrenches`),
+        N = k * E columns, contact-major.
     w_use : (6,) float64 ndarray
         Wrench of the unit use force.
     n_contacts : int
