@@ -29,7 +29,7 @@ def stage_split(objects: list[str], n: int, seed: int) -> dict:
     for spec in objects:
         obj = load_object(spec)
         evaluate_samples(obj, 8, seed=seed, start=10**6)  # warm caches and compiled kernels
-        _, timing = evaluate_samples(obj, n, seed=seed)
+        timing = evaluate_samples(obj, n, seed=seed).timings
         out[obj.name] = {k: v / n * 1e3 for k, v in timing.items()}
     return out
 

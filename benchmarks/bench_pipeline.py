@@ -43,7 +43,8 @@ def main() -> None:
         object_geometry(obj)
         prepare = time.perf_counter() - t0
         t0 = time.perf_counter()
-        table, spent = evaluate_samples(obj, args.samples, seed=args.seed, hand=args.hand)
+        result = evaluate_samples(obj, args.samples, seed=args.seed, hand=args.hand)
+        table, spent = result.table, result.timings
         wall = time.perf_counter() - t0
         total = sum(spent.values())
         rate = args.samples / wall

@@ -37,8 +37,17 @@ def test_evaluate_samples_and_inputs_agree():
     for column in ("joints", "epsilon", "hold_effort_px", "use_force"):
         assert given.table[column].to_pylist() == drawn.table[column].to_pylist(), column
     np.testing.assert_array_equal(drawn.scores("pick"), ag.get_task("pick").evaluate(drawn.table))
-    table, timings = drawn  # unpacks like the (table, timings) of 0.1
-    assert table is drawn.table and timings == dict(drawn.timings)
+
+
+def test_an_evaluation_does_not_unpack():
+    result = ag.Evaluation(ag.evaluate("knife:1", samples=2, seed=0).table, {"simulate": 1.0})
+    assert result.seconds == 1.0 and len(result) == 2
+    with pytest.raises(TypeError, match=r"does not unpack.*result\.table and result\.timings"):
+        table, timings = result
+    with pytest.raises(TypeError, match="not subscriptable"):
+        result[0]
+    with pytest.raises(TypeError, match="does not unpack"):
+        list(result)
 
 
 @pytest.mark.parametrize(

@@ -177,7 +177,7 @@ _FRESH_ENV_SCRIPT = textwrap.dedent(
     other.apply_translation((0.02, 0, 0))
     soup = trimesh.util.concatenate([box, other])
     prepare_mesh(soup, source="overlapping")
-    table, _ = evaluate_samples("mug", 16, seed=0)
+    table = evaluate_samples("mug", 16, seed=0).table
     assert table.num_rows == 16
     print(json.dumps(sorted(blocked)))
     """

@@ -39,7 +39,7 @@ def test_pair_metrics_equal_the_rows_they_stand_for(hammer_grasps):
     rng = np.random.default_rng(0)
     pick = rng.choice(len(scores["grasp"]), size=40, replace=False)
     p0 = np.asarray(table.column("p0").to_pylist())[scores["grasp"][pick]]
-    rows, _ = evaluate_inputs("hammer", p0, d[scores["use"][pick]])
+    rows = evaluate_inputs("hammer", p0, d[scores["use"][pick]]).table
     for name in CHECKED:
         np.testing.assert_allclose(
             scores[name][pick], rows.column(name).to_numpy(), rtol=1e-9, atol=1e-12, err_msg=name

@@ -410,7 +410,7 @@ class _Simulator:
 
         i = int(np.argmax(values))
         d = self.use_points.use_dir[self.best_use[i]]
-        rows, _ = evaluate_inputs(self.obj, best.p0[None], d[None], seed=self.seed)
+        rows = evaluate_inputs(self.obj, best.p0[None], d[None], seed=self.seed).table
         row = rows.to_pylist()[0]
         return Found(best.value, best.p0, np.asarray(d, dtype=np.float64), best.evaluations, row)
 

@@ -326,7 +326,7 @@ def best_pairs(
     """
     obj = load_object(obj)
     if grasp_table is None:
-        grasp_table, _ = evaluate_samples(obj, grasps, seed=seed, hand=hand)
+        grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand).table
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
@@ -356,9 +356,9 @@ def best_pairs(
 
 def _top_rows(obj, p0, use_dir, task, mode, hand, seed, overrides) -> pa.Table:
     """The pairs (p0, d) re-simulated as ordinary rows, with their F_T as ``value``."""
-    rows, _ = evaluate_inputs(
+    rows = evaluate_inputs(
         obj, np.reshape(p0, (-1, 6)), np.reshape(use_dir, (-1, 2)), hand=hand, seed=seed
-    )
+    ).table
     value = get_task(task).evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
     return rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
 
@@ -449,7 +449,7 @@ def optimize_pairs(
     counts = {"lp": 0, "finite": 0}
 
     def objective(x: np.ndarray):
-        rows, _ = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed)
+        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed).table
         scores = pair_scores(obj, rows, use, task, mode, **overrides)
         best, best_use = best_use_per_grasp(scores, len(x))
         counts["lp"] += len(scores["value"])

@@ -42,8 +42,9 @@ class Evaluation:
 
     Notes
     -----
-    An ``Evaluation`` also unpacks as ``table, timings`` (the return value of affordgrasp
-    0.1), so ``table, timings = evaluate_samples(...)`` keeps working.
+    An ``Evaluation`` does not unpack: ``table, timings = result`` (the return value of
+    affordgrasp 0.1) raises a ``TypeError`` that names ``result.table`` and
+    ``result.timings``.
     """
 
     table: pa.Table
@@ -53,8 +54,10 @@ class Evaluation:
         return int(self.table.num_rows)
 
     def __iter__(self) -> Iterator[Any]:
-        yield self.table
-        yield dict(self.timings)
+        raise TypeError(
+            "an Evaluation does not unpack into (table, timings): "
+            "use result.table and result.timings"
+        )
 
     @property
     def seconds(self) -> float:

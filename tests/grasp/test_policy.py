@@ -277,8 +277,8 @@ def test_results_do_not_depend_on_where_the_object_sits(offset_m):
 
     offset = np.array([1.0, -0.5, 1 / 3]) * offset_m
     n = 120
-    base, _ = evaluate_samples(cube_at(np.zeros(3)), n, seed=0)
-    moved, _ = evaluate_samples(cube_at(offset), n, seed=0)
+    base = evaluate_samples(cube_at(np.zeros(3)), n, seed=0).table
+    moved = evaluate_samples(cube_at(offset), n, seed=0).table
     eps0 = np.array(base.column("epsilon").to_pylist())
     eps1 = np.array(moved.column("epsilon").to_pylist())
     assert np.mean(np.abs(eps0 - eps1) <= 1e-6) >= 0.97

@@ -9,6 +9,7 @@ import pytest
 from PIL import Image
 
 from affordgrasp.cli import main
+from affordgrasp.pipeline import Evaluation
 from affordgrasp.viz.grid import LABEL_PX, TITLE_PX
 
 from .conftest import write_dataset
@@ -144,7 +145,7 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
 
     def fake_evaluate_samples(obj, n, *, seed=0, start=0, hand="barrett", **kwargs):
         calls.append((obj.name, n, seed, start, hand))
-        return table.slice(start, n), {}
+        return Evaluation(table.slice(start, n), {})
 
     monkeypatch.setattr(affordgrasp.pipeline, "evaluate_samples", fake_evaluate_samples)
     rc, stdout, stderr = run_json(

@@ -118,14 +118,14 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
             continue
         obj = objects[spec]
         with out.progress(f"evaluating {obj.name}", args.samples) as advance:
-            table, _ = evaluate_samples(
+            table = evaluate_samples(
                 obj,
                 args.samples,
                 seed=args.seed,
                 hand=args.hand,
                 batch_size=EVALUATION_BATCH,
                 progress=advance,
-            )
+            ).table
         if getattr(args, "uses", 0):
             table = with_best_pairs(obj, table, tasks, thresholds or {}, args)
         sources.append(TableSource(table, name=obj.name, objects={obj.name: obj}))

@@ -147,7 +147,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
     ctx = _CONTEXT
     obj = _object(job.object_index)
     if job.p0 is None:
-        table, _ = evaluate_samples(
+        table = evaluate_samples(
             obj,
             job.n,
             seed=ctx.seed,
@@ -155,9 +155,9 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             hand=ctx.hand,
             soft=ctx.soft,
             metrics=ctx.metrics,
-        )
+        ).table
     else:
-        table, _ = evaluate_inputs(
+        table = evaluate_inputs(
             obj,
             job.p0,
             job.use_dir,
@@ -166,7 +166,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             sample_start=job.start,
             soft=ctx.soft,
             metrics=ctx.metrics,
-        )
+        ).table
     if ctx.depth:
         from ..vision.depth import depth_column
 
