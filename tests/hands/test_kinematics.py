@@ -5,6 +5,7 @@ import pytest
 
 from affordgrasp.errors import HandError
 from affordgrasp.hands import Hand, Link, Shape, get_hand, list_hands
+from affordgrasp.hands.kinematics import joint_poses, kinematic_tree
 from affordgrasp.hands.model import axis_angle
 
 MM = 1e-3
@@ -147,3 +148,26 @@ def test_hand_validation_refuses_what_the_closing_search_cannot_sweep():
         _jaw_hand(axis=np.array([2.0, 0, 0]))
     with pytest.raises(HandError, match="exactly one link"):
         _jaw_hand(b_dof="close_a")  # one DOF mirrored onto both jaws
+
+
+@pytest.mark.parametrize("name", ["barrett", "parallel_jaw"])
+def test_joint_poses_compose_to_the_link_poses(name):
+    hand = get_hand(name)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q = np.array([rng.uniform(d.lower, d.upper) for d in hand.dofs])
+        links = hand.forward_kinematics(q)
+        local = joint_poses(q, kinematic_tree(hand))
+        np.testing.assert_array_equal(local[0], np.eye(4))
+        for i, link in enumerate(hand.links[1:], start=1):
+            parent = links[hand.link_names.index(link.parent)]
+            np.testing.assert_allclose(parent @ local[i], links[i], atol=1e-15)
+            j = link.joint
+            value = j.ratio * q[hand.dof_index(j.dof)]
+            if j.kind == "revolute":
+                motion = np.eye(4)
+                motion[:3, :3] = axis_angle(j.axis, value)
+            else:
+                motion = np.eye(4)
+                motion[:3, 3] = np.asarray(j.axis) / np.linalg.norm(j.axis) * value
+            np.testing.assert_allclose(local[i], j.origin @ motion, atol=1e-15)

@@ -147,6 +147,40 @@ def link_poses(q, tree):
 
 
 @njit(cache=True)
+def joint_poses(q, tree):
+    """Pose of every link in its parent link's frame: the joint origin times its motion.
+
+    The factors :func:`link_poses` multiplies along the chain, for a consumer that composes
+    the chain itself (the MuJoCo scene of :mod:`affordgrasp.physics` sets the bodies it
+    models without a joint this way).
+
+    Parameters
+    ----------
+    q : (n_dofs,) float64 ndarray
+        DOF values (rad or m), in the hand's DOF order.
+    tree : KinematicTree
+        The hand's links (:func:`kinematic_tree`).
+
+    Returns
+    -------
+    (l, 4, 4) float64 ndarray
+        Link frame to parent link frame, translations in m; the identity for the root.
+    """
+    n = tree.parent.shape[0]
+    out = np.empty((n, 4, 4))
+    mot = np.empty((4, 4))
+    for i in range(n):
+        if tree.parent[i] < 0:
+            for a in range(4):
+                for b in range(4):
+                    out[i, a, b] = 1.0 if a == b else 0.0
+            continue
+        joint_motion_into(tree.kind[i], tree.axis[i], tree.ratio[i] * q[tree.dof[i]], mot)
+        mul4_into(tree.origin[i], mot, out[i])
+    return out
+
+
+@njit(cache=True)
 def shape_poses(links, shape_link, shape_local):
     """Pose of every shape from the link poses.
 

@@ -212,30 +212,6 @@ class Hand:
         return np.array(out)
 
 
-def joint_motion(kind: str, axis: np.ndarray, value: float) -> np.ndarray:
-    """The motion of a joint at ``value``.
-
-    Parameters
-    ----------
-    kind : str
-        ``"revolute"`` or ``"prismatic"``.
-    axis : (3,) float ndarray
-        Unit axis in the joint frame.
-    value : float
-        Joint value, rad or m.
-
-    Returns
-    -------
-    (4, 4) float64 ndarray
-    """
-    m = np.eye(4)
-    if kind == "revolute":
-        m[:3, :3] = axis_angle(axis, value)
-    else:
-        m[:3, 3] = np.asarray(axis) * value
-    return m
-
-
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation matrix of ``angle`` about the unit ``axis`` (right-hand rule).
 

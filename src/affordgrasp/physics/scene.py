@@ -106,7 +106,7 @@ class Scene:
     object_body: int
     object_qpos: int  # address of the free joint's 7 qpos
     object_dof: int  # address of its 6 dofs
-    fixed_links: list  # (body id, link index, dof index, ratio, joint kind, origin, axis)
+    fixed_links: list  # (body id, link index) of every link MuJoCo models without a joint
     fingers: list  # (actuator id, joint id, direction, [(eq id, joint id, ratio), ...])
     closing_joints: list  # (MuJoCo joint id, DOF index, ratio) of every closing joint
     joint_range: np.ndarray  # (njnt, 2) the model's joint limits as built (the ratchet moves them)
@@ -154,10 +154,7 @@ def build_scene(
 
     obj_body = body("object")
     obj_joint = model.body_jntadr[obj_body]
-    fixed = [
-        (body(f"link_{li}"), li, di, ratio, kind, origin, axis)
-        for li, di, ratio, kind, origin, axis in info["fixed"]
-    ]
+    fixed = [(body(f"link_{li}"), li) for li in info["fixed"]]
     fingers = []
     for act_name, jname, direction, followers in info["fingers"]:
         act = mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, act_name)
@@ -226,9 +223,7 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
                 joint_name_of_dof[j.dof] = (f"j_{i}", j.ratio)
                 info["closing_links"].append((i, hand.dof_index(j.dof), j.ratio))
             else:
-                info["fixed"].append(
-                    (i, hand.dof_index(j.dof), j.ratio, j.kind, j.origin.copy(), j.axis.copy())
-                )
+                info["fixed"].append(i)
         lines.append(f'{indent}<body name="link_{i}"{attrs}>\n')
         lines.append(joint_xml)
         for k, shape in enumerate(link.shapes):

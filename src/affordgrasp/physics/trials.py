@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..hands.model import joint_motion
+from ..hands.kinematics import joint_poses, kinematic_tree
 from . import deps
 from .scene import FAR, Scene
 from .settings import G
@@ -90,8 +90,9 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
     joints = np.asarray(joints, dtype=np.float64)
     mj.mj_resetData(m, d)
     m.jnt_range[:] = scene.joint_range
-    for body, _li, di, ratio, kind, origin, axis in scene.fixed_links:
-        t = origin @ joint_motion(kind, axis, ratio * joints[di])
+    local = joint_poses(np.ascontiguousarray(joints), kinematic_tree(scene.hand))
+    for body, li in scene.fixed_links:
+        t = local[li]
         m.body_pos[body] = t[:3, 3]
         m.body_quat[body] = _rigid_to_qpos(t)[3:]
     for jid, di, ratio in scene.closing_joints:
