@@ -151,3 +151,22 @@ def test_hand_option_takes_a_hand_file(tmp_path, capsys):
     assert {len(j) for j in table.column("joints").to_pylist()} == {len(jaw.dofs)}
     assert main(["simulate", "mug", "--samples", "2", "--hand", str(tmp_path / "no.toml")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_resuming_with_another_hand_of_the_same_name_is_refused(tmp_path, capsys):
+    import dataclasses
+
+    from affordgrasp.hands import get_hand, save_hand
+
+    custom = save_hand(
+        dataclasses.replace(get_hand("parallel_jaw"), name="barrett"), tmp_path / "hand.json"
+    )
+    out = tmp_path / "data"
+    argv = ["generate", "mug", "--samples", "4", "--workers", "1", "--out", str(out)]
+    assert main([*argv, "--hand", str(custom)]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--hand", "barrett"]) == 2
+    err = capsys.readouterr().err
+    assert "--hand 'barrett' is not the hand the dataset" in err
+    assert "same name, different" in err and "_manifest.json" in err
+    assert main([*argv, "--hand", str(out / "_manifest.json")]) == 0

@@ -197,3 +197,51 @@ def test_generate_uses_the_hand_object_it_is_given(tmp_path, box_mesh):
     expected = evaluate_samples(str(box_mesh), 6, seed=3, hand=custom).table
     assert got["joints"].to_pylist() == expected["joints"].to_pylist()
     assert got["epsilon"].to_pylist() == expected["epsilon"].to_pylist()
+
+
+def test_the_manifest_records_the_whole_hand(tmp_path, box_mesh):
+    # A custom hand named like a built-in one: the name alone cannot tell them apart.
+    import dataclasses
+
+    from affordgrasp.dataset.reading import dataset_hand
+    from affordgrasp.hands import get_hand, hand_to_dict
+
+    custom = dataclasses.replace(get_hand("parallel_jaw"), name="barrett")
+    out = tmp_path / "custom"
+    generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand=custom)
+    manifest = json.loads((out / "_manifest.json").read_text())
+    assert manifest["hand"] == "barrett"
+    assert manifest["hand_spec"] == json.loads(json.dumps(hand_to_dict(custom)))
+    assert hand_to_dict(dataset_hand(out)) == hand_to_dict(custom)
+
+    with pytest.raises(DatasetError) as refused:
+        generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="barrett")
+    message = str(refused.value)
+    assert refused.value.parameter == "hand"
+    assert "hand 'barrett' is not the hand the dataset" in message
+    assert "same name, different dofs, fingers, links, pregrasp_dof" in message
+    assert "_manifest.json" in message and "new output directory" in message
+
+    # The fix the message names: the manifest reads as a hand file.
+    again = generate(
+        [str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand=out / "_manifest.json"
+    )
+    assert again.shards_skipped == 2 and again.samples_written == 0
+
+
+def test_a_manifest_without_the_hand_spec_still_reads_and_resumes(tmp_path, box_mesh):
+    from affordgrasp.dataset.reading import dataset_hand
+    from affordgrasp.hands import get_hand, hand_to_dict
+
+    out = tmp_path / "old"
+    generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="parallel_jaw")
+    path = out / "_manifest.json"
+    manifest = json.loads(path.read_text())
+    del manifest["hand_spec"]  # as written before hands were recorded whole
+    path.write_text(json.dumps(manifest))
+    assert hand_to_dict(dataset_hand(out)) == hand_to_dict(get_hand("parallel_jaw"))
+    assert read_dataset(out).num_rows == 4
+    again = generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="parallel_jaw")
+    assert again.shards_skipped == 2
+    with pytest.raises(DatasetError, match="hand 'parallel_jaw' there vs 'barrett' here"):
+        generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="barrett")

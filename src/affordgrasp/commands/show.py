@@ -95,6 +95,7 @@ def add_arguments(p) -> None:
 def open_sources(args, out, tasks=(), thresholds=None) -> list:
     """One GraspSource per SOURCE: datasets as they are, objects evaluated now (with, when
     ``--uses`` is set, the best pairs of their grasps and ``--uses`` use points per task)."""
+    from ..hands import get_hand
     from ..objects import load_object
     from ..objects.resolve import is_family_spec
     from ..pipeline import evaluate_samples
@@ -128,7 +129,9 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
             ).table
         if getattr(args, "uses", 0):
             table = with_best_pairs(obj, table, tasks, thresholds or {}, args)
-        sources.append(TableSource(table, name=obj.name, objects={obj.name: obj}))
+        sources.append(
+            TableSource(table, name=obj.name, objects={obj.name: obj}, hand=get_hand(args.hand))
+        )
     return sources
 
 
@@ -276,6 +279,7 @@ def run(args, out) -> None:
             name=args.name,
             title=args.title,
             progress=advance,
+            hands={o: s.hand for o, s in sources_by_object.items() if s.hand is not None},
         )
     out.table(
         f"best grasps ({args.mode})",

@@ -32,7 +32,7 @@ import pyarrow.compute as pc
 
 from .. import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
-from ..hands import Hand
+from ..hands import Hand, hand_to_dict
 from . import card as card_module
 from .engines import (
     Engine,
@@ -122,7 +122,7 @@ def build_manifest(
     *,
     samples: int,
     seed: int,
-    hand: str,
+    hand: Hand,
     shard_size: int,
     metrics: bool,
     soft: bool,
@@ -137,8 +137,10 @@ def build_manifest(
     samples : int
         Samples per object.
     seed : int
-    hand : str
-        The hand's name.
+    hand : Hand
+        The hand: its name under ``hand``, its whole specification (the document of
+        :func:`~affordgrasp.hands.hand_to_dict`, as a hand file holds it) under
+        ``hand_spec``.
     shard_size : int
         Rows per shard.
     metrics, soft, depth : bool
@@ -157,7 +159,8 @@ def build_manifest(
         "seed": seed,
         "samples": samples,
         "shard_size": shard_size,
-        "hand": hand,
+        "hand": hand.name,
+        "hand_spec": hand_to_dict(hand),
         "metrics": metrics,
         "soft": soft,
         "objects": [
@@ -301,7 +304,7 @@ def generate(
         resolved,
         samples=samples,
         seed=seed,
-        hand=hand_model.name,
+        hand=hand_model,
         shard_size=shard_size,
         metrics=metrics,
         soft=soft,

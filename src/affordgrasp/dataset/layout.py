@@ -61,6 +61,7 @@ PLAN_KEYS = (
     "samples",
     "shard_size",
     "hand",
+    "hand_spec",
     "metrics",
     "soft",
     "depth",
@@ -193,7 +194,13 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
     diffs = []
     for key in PLAN_KEYS:
         a, b = existing.get(key), requested.get(key)
-        if key == "objects":
+        if key == "hand_spec":
+            changed = hand_spec_differences(a, b)
+            if changed and existing.get("hand") == requested.get("hand"):
+                diffs.append(
+                    f"hand {existing.get('hand')!r}: same name, different {', '.join(changed)}"
+                )
+        elif key == "objects":
             a = [(o.get("name"), o.get("mesh_hash")) for o in a or []]
             b = [(o.get("name"), o.get("mesh_hash")) for o in b or []]
             if a != b:
@@ -210,6 +217,20 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
     return diffs
 
 
+def hand_spec_differences(there: dict | None, here: dict | None) -> list[str]:
+    """The parts of two recorded hands that differ (``links``, ``dofs``, ...).
+
+    A manifest written before hands were recorded whole (no ``hand_spec``) is compared by
+    the hand's name alone, so it yields no difference here; the description is not compared
+    (it does not change a single row).
+    """
+    if there is None or here is None:
+        return []
+    there, here = json.loads(json.dumps(there)), json.loads(json.dumps(here))
+    keys = sorted((set(there) | set(here)) - {"description"})
+    return [k for k in keys if there.get(k) != here.get(k)]
+
+
 def prepare_directory(directory: Path, manifest: dict) -> dict:
     """Create the dataset directory with its manifest, or check it matches for a resume.
 
@@ -221,6 +242,17 @@ def prepare_directory(directory: Path, manifest: dict) -> dict:
     if path.exists():
         existing = read_manifest(directory)
         diffs = manifest_differences(existing, manifest)
+        if existing.get("hand") == manifest.get("hand") and hand_spec_differences(
+            existing.get("hand_spec"), manifest.get("hand_spec")
+        ):
+            raise DatasetError(
+                f"hand {manifest.get('hand')!r} is not the hand the dataset in "
+                f"{str(directory)!r} was generated with (same name, different "
+                + ", ".join(hand_spec_differences(existing["hand_spec"], manifest["hand_spec"]))
+                + f"); resume it with that hand, {str(directory / MANIFEST_NAME)!r} "
+                "records it and reads as a hand file, or write to a new output directory",
+                parameter="hand",
+            )
         if diffs:
             raise DatasetError(
                 f"{str(directory)!r} holds a dataset made by a different command ("

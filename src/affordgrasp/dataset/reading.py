@@ -20,6 +20,7 @@ import pyarrow.dataset as pads
 import pyarrow.parquet as pq
 
 from ..errors import DatasetError
+from ..hands.model import Hand
 from .layout import read_manifest, shard_paths, verify_shards
 
 # Columns without which Parquet files are not affordgrasp samples (see docs/conventions.md).
@@ -125,6 +126,44 @@ def _open_loose_files(directory: Path) -> pads.Dataset:
             "they do not look like an affordgrasp dataset (see docs/conventions.md)"
         )
     return dataset
+
+
+def manifest_hand(manifest: dict) -> Hand:
+    """The hand a dataset was generated with, rebuilt from its manifest.
+
+    Parameters
+    ----------
+    manifest : dict
+        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.layout.read_manifest`).
+
+    Returns
+    -------
+    Hand
+        The hand recorded whole under ``hand_spec``; for a manifest written before hands
+        were recorded whole (``hand`` holds only a name), the registered hand of that name.
+    """
+    from ..hands import get_hand, hand_from_dict
+
+    spec = manifest.get("hand_spec")
+    if isinstance(spec, dict):
+        return hand_from_dict(spec)
+    return get_hand(str(manifest.get("hand") or "barrett"))
+
+
+def dataset_hand(directory: str | os.PathLike) -> Hand:
+    """The hand a dataset directory was generated with (custom hands included).
+
+    Parameters
+    ----------
+    directory : path
+        A directory written by ``affordgrasp generate``.
+
+    Returns
+    -------
+    Hand
+        See :func:`manifest_hand`.
+    """
+    return manifest_hand(read_manifest(directory))
 
 
 def dataset_objects(directory: str | os.PathLike) -> list[str]:

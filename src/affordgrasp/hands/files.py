@@ -20,7 +20,9 @@ lists, row-major)::
     [[fingers]]
     name = "f1"; dofs = ["f1"]; speeds = [1.0]
 
-:func:`save_hand` writes ``.json`` or ``.toml``; :func:`load_hand` reads either.
+:func:`save_hand` writes ``.json`` or ``.toml``; :func:`load_hand` reads either, and also a
+dataset's ``_manifest.json`` (the hand it records under ``hand_spec``), so that a dataset
+is resumed with ``--hand DIR/_manifest.json``.
 """
 
 from __future__ import annotations
@@ -274,7 +276,8 @@ def load_hand(path: str | os.PathLike) -> Hand:
     Parameters
     ----------
     path : path
-        A file written by :func:`save_hand` (or by hand, in the same form).
+        A file written by :func:`save_hand` (or by hand, in the same form), or a dataset's
+        ``_manifest.json``: the hand recorded under its ``hand_spec`` key.
 
     Returns
     -------
@@ -292,4 +295,6 @@ def load_hand(path: str | os.PathLike) -> Hand:
         doc = json.loads(raw) if path.suffix == ".json" else tomllib.loads(raw.decode("utf-8"))
     except (ValueError, tomllib.TOMLDecodeError) as exc:
         raise HandError(f"hand file {str(path)!r} is not valid {path.suffix[1:]}: {exc}") from None
+    if isinstance(doc, dict) and isinstance(doc.get("hand_spec"), dict):
+        doc = doc["hand_spec"]  # a dataset manifest: the hand it was generated with
     return hand_from_dict(doc)

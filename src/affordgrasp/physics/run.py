@@ -28,6 +28,7 @@ import pyarrow.parquet as pq
 from .. import __version__
 from ..columns import METRIC_COLUMNS
 from ..errors import DatasetError, InputError
+from ..hands.model import Hand
 from .settings import PhysicsSettings
 
 log = logging.getLogger(__name__)
@@ -281,6 +282,9 @@ def run_physics(
         dataset_dir, manifest, settings, statuses, objects, max_per_object, n, shard_size
     )
     _prepare_out(out, plan)
+    from ..dataset.reading import manifest_hand
+
+    hand = manifest_hand(manifest)  # the dataset's own hand, custom ones included
     for stale in out.glob(".part-*.tmp-*"):
         stale.unlink(missing_ok=True)
     shards = [(k, s, min(s + shard_size, n)) for k, s in enumerate(range(0, n, shard_size))]
@@ -295,8 +299,7 @@ def run_physics(
     started = time.perf_counter()
     summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
     jobs = [
-        (str(out), k, rows.slice(s, e - s), plan["hand"], plan["objects"], settings)
-        for k, s, e in pending
+        (str(out), k, rows.slice(s, e - s), hand, plan["objects"], settings) for k, s, e in pending
     ]
     total = sum(e - s for _, s, e in pending)
     with progress(total) if progress else _null_progress() as advance:
@@ -361,25 +364,26 @@ def _scene_object(entry: dict, settings: PhysicsSettings):
     return _OBJECTS[key]
 
 
-def _scene(hand: str, entry: dict, settings: PhysicsSettings):
+def _scene(hand: Hand, hand_key: str, entry: dict, settings: PhysicsSettings):
     from .scene import build_scene
 
-    key = (hand, entry["mesh_hash"], settings.digest())
+    key = (hand_key, entry["mesh_hash"], settings.digest())
     if key not in _SCENES:
         obj, parts = _scene_object(entry, settings)
         _SCENES[key] = build_scene(hand, obj, settings, parts=parts)
     return _SCENES[key]
 
 
-def validate_rows(rows: pa.Table, hand: str, objects: list[dict], settings) -> pa.Table:
+def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], settings) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
     Parameters
     ----------
     rows : pyarrow.Table
         Dataset rows.
-    hand : str
-        The hand's name.
+    hand : Hand or str
+        The hand the dataset was generated with
+        (:func:`affordgrasp.dataset.reading.dataset_hand`), or a registered name.
     objects : list of dict
         The dataset manifest's object entries.
     settings : PhysicsSettings
@@ -388,8 +392,11 @@ def validate_rows(rows: pa.Table, hand: str, objects: list[dict], settings) -> p
     -------
     pyarrow.Table
     """
+    from ..hands import get_hand, hand_to_dict
     from .trials import validate_grasp
 
+    hand = get_hand(hand)
+    hand_key = json.dumps(hand_to_dict(hand), sort_keys=True)
     by_name = {o["name"]: o for o in objects}
     names = rows.column("object").to_pylist()
     poses = rows.column("hand_pose").to_pylist()
@@ -398,7 +405,7 @@ def validate_rows(rows: pa.Table, hand: str, objects: list[dict], settings) -> p
     uns = rows.column("use_normal").to_pylist()
     outcomes = []
     for i in range(rows.num_rows):
-        scene = _scene(hand, by_name[names[i]], settings)
+        scene = _scene(hand, hand_key, by_name[names[i]], settings)
         up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
         un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
         outcome = validate_grasp(

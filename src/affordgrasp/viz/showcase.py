@@ -13,13 +13,14 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..columns import hold_effort_sum
+from ..hands.model import Hand
 from .figure import png_bytes, save_image
 from .grid import save_grid
 from .html import ViewerEntry, fmt_value, write_viewer
@@ -166,6 +167,7 @@ def draw_best(
     title: str = "",
     palette: int | None = 256,
     progress: Callable[[int], None] | None = None,
+    hands: Mapping[str, Hand] | None = None,
 ) -> ShowResult:
     """Render the ranked grasps and write the grid PNG, the viewer page and single PNGs.
 
@@ -201,6 +203,9 @@ def draw_best(
         Reduce the grid PNG to this many colours (None keeps full colour).
     progress : callable, optional
         Called with 1 after each grasp drawn.
+    hands : mapping of str to Hand, optional
+        The hand that made each object's rows (e.g. a dataset's custom hand); an object
+        not in it is drawn with the hand its rows' ``hand`` column names.
 
     Returns
     -------
@@ -216,7 +221,12 @@ def draw_best(
         obj = objects[ranking.object]
         for g in ranking.best:
             caption = f"#{g.rank}  F={fmt_value(g.score)}"
-            scene = grasp_scene(obj, g.row, title=f"{g.object} · {g.task} #{g.rank}")
+            scene = grasp_scene(
+                obj,
+                g.row,
+                hand=(hands or {}).get(ranking.object),
+                title=f"{g.object} · {g.task} #{g.rank}",
+            )
             image, camera = grasp_image(scene, size_px=cell_px, style=style, caption=caption)
             images[(ranking.object, ranking.task, g.rank)] = image
             if each:

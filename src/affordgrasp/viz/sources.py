@@ -20,8 +20,10 @@ import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
 from ..dataset.best import TopRows, numeric_columns, task_values
-from ..dataset.reading import open_dataset, read_errors
-from ..errors import bad_parameter
+from ..dataset.layout import read_manifest
+from ..dataset.reading import manifest_hand, open_dataset, read_errors
+from ..errors import DatasetError, bad_parameter
+from ..hands.model import Hand
 
 BATCH_ROWS = 65536
 
@@ -33,9 +35,13 @@ class GraspSource:
     ----------
     name : str
         Shown in captions.
+    hand : Hand or None
+        The hand that made the rows, when the source knows it; None: the rows' ``hand``
+        column names a registered hand.
     """
 
     name: str
+    hand: Hand | None = None
 
     def schema(self) -> pa.Schema:
         raise NotImplementedError
@@ -73,11 +79,15 @@ class TableSource(GraspSource):
         Shown in captions.
     objects : dict of str to GraspObject
         The rows' objects, when known (saves loading them again).
+    hand : Hand or None
+        The hand that made the rows (a custom one included); None: the rows' ``hand``
+        column names a registered hand.
     """
 
     table: pa.Table
     name: str = "samples"
     objects: dict = field(default_factory=dict)  # name -> GraspObject, when known
+    hand: Hand | None = None
 
     def schema(self) -> pa.Schema:
         return self.table.schema
@@ -108,17 +118,28 @@ class DatasetSource(GraspSource):
         Shown in captions (the directory when empty).
     files : list of str
         The Parquet files found (filled in on construction).
+    hand : Hand or None
+        The hand the dataset's manifest records (filled in on construction; None for a
+        directory without a manifest).
     """
 
     directory: Path
     name: str = ""
     files: list[str] = field(default_factory=list)
+    hand: Hand | None = None
 
     def __post_init__(self) -> None:
         self.directory = Path(self.directory)
         self.name = self.name or str(self.directory)
         self._dataset = open_dataset(self.directory, loose=True)
         self.files = list(self._dataset.files)
+        if self.hand is None:
+            try:
+                manifest = read_manifest(self.directory)
+            except DatasetError:
+                manifest = None  # loose Parquet files: the rows' hand column names the hand
+            if manifest is not None:
+                self.hand = manifest_hand(manifest)
 
     def schema(self) -> pa.Schema:
         return self._dataset.schema
