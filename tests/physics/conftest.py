@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 pytest.importorskip("mujoco")
@@ -36,14 +35,3 @@ def box_object():
     import trimesh
 
     return make_object(trimesh.creation.box([0.04, 0.04, 0.06]))
-
-
-def jaw_grasp(q_left: float, q_right: float, height: float = 0.035):
-    """Parallel-jaw grasp of the box: hand → object pose and joint values.
-
-    The box sits on the approach axis, its centre ``height`` above the palm face; the jaw
-    travel 0.0225 m brings a jaw's pad to the box face (x = ±0.02).
-    """
-    pose = np.eye(4)
-    pose[2, 3] = -height
-    return pose, np.array([q_left, q_right])

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import jaw_grasp
+from physics_support import jaw_grasp
 
 from affordgrasp.physics import PhysicsSettings
 from affordgrasp.physics.scene import build_scene
