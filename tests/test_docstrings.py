@@ -97,8 +97,6 @@ PENDING: set[str] = {
     "learning/evaluation.py",
     "learning/models.py",
     "learning/training.py",
-    "objects/families/geometry.py",
-    "objects/families/parts.py",
     "physics/scene.py",
     "physics/settings.py",
     "physics/trials.py",

@@ -41,11 +41,28 @@ def superellipse(
 ) -> np.ndarray:
     """Closed superellipse |u/a|^n + |v/b|^n = 1, counter-clockwise from +u.
 
-    half_u, half_v : semi-axes, m; exponent : 2 is an ellipse, 4 a rounded rectangle.
-    half_step : start half a step after +u, so that no vertex lies on the u axis (v = 0);
-    parts that are united with others symmetric about the same plane use it, because
-    vertices exactly on a shared symmetry plane make booleans leave zero-height slivers.
-    Returns (points, 2) float, exactly symmetric about the u axis.
+    Parameters
+    ----------
+    half_u, half_v : float
+        Semi-axes along u and v, m.
+    exponent : float
+        n: 2 is an ellipse, 4 a rounded rectangle.
+    points : int
+        Number of vertices, even and >= 4.
+    half_step : bool
+        Start half a step after +u, so that no vertex lies on the u axis (v = 0). Parts united
+        with others symmetric about the same plane use it: vertices exactly on a shared
+        symmetry plane make booleans leave zero-height slivers.
+
+    Returns
+    -------
+    (points, 2) float64 ndarray
+        The (u, v) vertices, m, exactly symmetric about the u axis.
+
+    Raises
+    ------
+    ValueError
+        When ``points`` is odd or below 4.
     """
     if points < 4 or points % 2:
         raise ValueError(f"superellipse needs an even number of points >= 4, got {points}")
@@ -74,10 +91,21 @@ def superellipse(
 def planar_frames(path: np.ndarray, plane_normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Section frames for a path that lies in a plane.
 
-    path : (n, 3) float, points of the path, m; plane_normal : (3,) float.
-    Returns (normals, binormals), each (n, 3) unit: normals lie in the plane, perpendicular to
-    the path; binormals are the plane normal.  A planar path needs no parallel transport,
-    and these frames never twist.
+    A planar path needs no parallel transport, and these frames never twist.
+
+    Parameters
+    ----------
+    path : (n, 3) float ndarray
+        Points of the path, m.
+    plane_normal : (3,) float ndarray
+        Normal of the path's plane.
+
+    Returns
+    -------
+    normals : (n, 3) float64 ndarray
+        Unit vectors in the plane, perpendicular to the path.
+    binormals : (n, 3) float64 ndarray
+        The plane normal at every point.
     """
     tangent = np.gradient(path, axis=0)
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
@@ -98,10 +126,28 @@ def rounded_stations(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Stations along [x0, x1] for a bar whose ends are rounded like a dome.
 
-    radius0, radius1 : length of the rounded zone at each end, m (0 for a square end).
-    Returns (xs, factor), each (k,) float: scale the section by ``factor`` at ``xs``; the
-    factor follows a quarter circle from ``min_factor`` at the tips to 1 in the middle, so
+    The factor follows a quarter circle from ``min_factor`` at the tips to 1 in the middle, so
     a handle gets a domed butt with a small flat cap instead of a pinched apex.
+
+    Parameters
+    ----------
+    x0, x1 : float
+        Ends of the bar along x, m.
+    radius0, radius1 : float
+        Length of the rounded zone at each end, m (0 for a square end).
+    middle : int
+        Stations in the straight middle part.
+    arc : int
+        Stations in each rounded zone.
+    min_factor : float
+        Section scale at the tips, in (0, 1].
+
+    Returns
+    -------
+    xs : (k,) float64 ndarray
+        Increasing stations, m.
+    factor : (k,) float64 ndarray
+        Scale the section by ``factor`` at ``xs``.
     """
     phi_min = np.arcsin(min_factor)
     xs_parts, f_parts = [], []
@@ -127,11 +173,26 @@ def _ring_area(ring: np.ndarray) -> float:
 def sweep(rings: np.ndarray) -> manifold3d.Manifold:
     """Closed solid through a sequence of cross-section rings.
 
-    rings : (n, m, 3) float, m.  Ring i and ring i + 1 are joined vertex k to vertex k; every
-    ring must run the same way round.  Ends with area are closed by a fan from their centroid.
-    A ring whose vertices coincide (exactly, same floats) collapses: to a point it closes
-    the solid in an apex, to a segment it closes it in a ridge, which is how blades get a
-    true edge line rather than a blunt cap.
+    Ring i and ring i + 1 are joined vertex k to vertex k; every ring must run the same way
+    round. Ends with area are closed by a fan from their centroid. A ring whose vertices
+    coincide (exactly, same floats) collapses: to a point it closes the solid in an apex, to a
+    segment it closes it in a ridge, which is how blades get a true edge line rather than a
+    blunt cap.
+
+    Parameters
+    ----------
+    rings : (n, m, 3) float ndarray
+        n rings of m vertices, m.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Closed and consistently oriented (outward normals).
+
+    Raises
+    ------
+    AffordgraspError
+        When the rings do not bound a closed manifold.
     """
     rings = np.ascontiguousarray(rings, dtype=np.float64)
     n, m, _ = rings.shape
@@ -181,10 +242,20 @@ def sweep_along_x(
     y_center: np.ndarray | float = 0.0,
     z_center: np.ndarray | float = 0.0,
 ) -> manifold3d.Manifold:
-    """Sweep (y, z) sections along the x axis.
+    """Sweep (y, z) sections along the x axis (:func:`sweep`).
 
-    xs : (n,) float, increasing stations, m; sections : (n, m, 2) float, (y, z) offsets, m;
-    y_center, z_center : scalar or (n,) float, m, section origin at each station.
+    Parameters
+    ----------
+    xs : (n,) float ndarray
+        Increasing stations, m.
+    sections : (n, m, 2) float ndarray
+        (y, z) offsets of each section's vertices from its origin, m.
+    y_center, z_center : float or (n,) float ndarray
+        Section origin at each station, m.
+
+    Returns
+    -------
+    manifold3d.Manifold
     """
     xs = np.asarray(xs, dtype=float)
     n = xs.shape[0]
@@ -216,15 +287,34 @@ def _manifold_from_arrays(verts: np.ndarray, tris: np.ndarray) -> manifold3d.Man
 
 
 def section(polygon: np.ndarray) -> manifold3d.CrossSection:
-    """Planar region bounded by one closed polygon, (k, 2) float, m."""
+    """Planar region bounded by one closed polygon.
+
+    Parameters
+    ----------
+    polygon : (k, 2) float ndarray
+        Vertices, m.
+
+    Returns
+    -------
+    manifold3d.CrossSection
+    """
     return manifold3d.CrossSection([np.ascontiguousarray(polygon, dtype=np.float64)])
 
 
 def silhouette(radius: np.ndarray, z: np.ndarray) -> np.ndarray:
     """Closed, axis-symmetric (r, z) polygon of a solid whose outer radius is radius(z).
 
-    radius, z : (k,) float, m, z increasing.  Returns (2k, 2) float, counter-clockwise; the
-    first and last z close it with flat ends.
+    Parameters
+    ----------
+    radius : (k,) float ndarray
+        Outer radius at each height, m.
+    z : (k,) float ndarray
+        Increasing heights, m.
+
+    Returns
+    -------
+    (2k, 2) float64 ndarray
+        Counter-clockwise (r, z) vertices; the first and last z close it with flat ends.
     """
     right = np.stack([radius, z], axis=1)
     left = np.stack([-radius[::-1], z[::-1]], axis=1)
@@ -237,8 +327,24 @@ def cavity_section(
     floor_z: float | None = None,
     arc_segments: int = 32,
 ) -> manifold3d.CrossSection:
-    """The (r, z) cavity of :func:`hollow_lathe`: ``cavity_from`` offset inwards by ``wall``,
-    cut at ``floor_z`` if given."""
+    """The (r, z) cavity of :func:`hollow_lathe`.
+
+    Parameters
+    ----------
+    cavity_from : manifold3d.CrossSection
+        Symmetric (r, z) silhouette, m.
+    wall : float
+        Inward offset, m (the wall thickness).
+    floor_z : float, optional
+        Cut the cavity below this height, m (a thick base).
+    arc_segments : int
+        Segments per full turn on the rounded corners of the offset.
+
+    Returns
+    -------
+    manifold3d.CrossSection
+        ``cavity_from`` offset inwards by ``wall``, cut at ``floor_z`` if given.
+    """
     cavity = cavity_from.offset(-wall, manifold3d.JoinType.Round, 2.0, arc_segments)
     if floor_z is not None:
         big = 10.0
@@ -258,16 +364,29 @@ def hollow_lathe(
 ) -> manifold3d.Manifold:
     """Container wall of revolution about +z, open at the top.
 
-    outer : symmetric (r, z) silhouette of the full solid, m.
-    cavity_from : symmetric (r, z) silhouette whose inward offset by ``wall`` is the cavity;
-    it must reach above the rim so that the cavity opens there (it may differ from
-    ``outer``, so that the cavity follows a glass's bowl and not its stem).
-    wall : wall thickness, m, measured along the surface normal (an offset, not a radial
-    step, so a sloping shoulder is as thick as a vertical side).
-    floor_z : if given, the cavity stops at this height (a thick base).
-    lip_round : radius with which convex corners of the wall section are rounded, m.
-    arc_segments : segments per full turn on the rounded corners of the section.
-    segments : segments around the axis.
+    Parameters
+    ----------
+    outer : manifold3d.CrossSection
+        Symmetric (r, z) silhouette of the full solid, m.
+    cavity_from : manifold3d.CrossSection
+        Symmetric (r, z) silhouette whose inward offset by ``wall`` is the cavity. It must
+        reach above the rim so that the cavity opens there (it may differ from ``outer``, so
+        that the cavity follows a glass's bowl and not its stem).
+    wall : float
+        Wall thickness, m, measured along the surface normal (an offset, not a radial step,
+        so a sloping shoulder is as thick as a vertical side).
+    floor_z : float, optional
+        The cavity stops at this height, m (a thick base).
+    lip_round : float, optional
+        Radius with which convex corners of the wall section are rounded, m.
+    segments : int
+        Segments around the axis.
+    arc_segments : int
+        Segments per full turn on the rounded corners of the section.
+
+    Returns
+    -------
+    manifold3d.Manifold
     """
     cavity = cavity_section(cavity_from, wall, floor_z, arc_segments)
     wall_section = outer - cavity
@@ -299,15 +418,41 @@ def _clear_axis(region: manifold3d.CrossSection, radius: float = 2e-4) -> manifo
 
 
 def union(parts: list[manifold3d.Manifold]) -> manifold3d.Manifold:
-    """Boolean union of solids."""
+    """Boolean union of solids.
+
+    Parameters
+    ----------
+    parts : list of manifold3d.Manifold
+
+    Returns
+    -------
+    manifold3d.Manifold
+    """
     return manifold3d.Manifold.batch_boolean(parts, manifold3d.OpType.Add)
 
 
 def to_trimesh(solid: manifold3d.Manifold, center: bool = True) -> trimesh.Trimesh:
-    """Convert a solid to a float64 ``trimesh.Trimesh``, origin at the bounding-box centre.
+    """Convert a solid to a float64 ``trimesh.Trimesh``.
 
     The conversion goes through manifold's double-precision mesh, so the same solid always
-    gives the same bytes.
+    gives the same bytes; vertices no triangle uses (left on the axis by revolving) are
+    dropped.
+
+    Parameters
+    ----------
+    solid : manifold3d.Manifold
+    center : bool
+        Move the origin to the bounding-box centre.
+
+    Returns
+    -------
+    trimesh.Trimesh
+        Built with ``process=False``, m.
+
+    Raises
+    ------
+    AffordgraspError
+        When the solid is empty or invalid.
     """
     if solid.status() != manifold3d.Error.NoError or solid.is_empty():
         raise AffordgraspError(f"procedural solid is empty or invalid ({solid.status()})")

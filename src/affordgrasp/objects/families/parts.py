@@ -65,15 +65,43 @@ _RECORDER: contextvars.ContextVar[dict[int, str] | None] = contextvars.ContextVa
 
 
 def part_index(name: str) -> int:
-    """Index of a part name in :data:`PART_NAMES`."""
+    """Index of a part name in :data:`PART_NAMES`.
+
+    Parameters
+    ----------
+    name : str
+        A part name.
+
+    Returns
+    -------
+    int
+        The label that stands for it in ``face_parts`` arrays.
+    """
     return _INDEX[name]
 
 
 def tag(solid: manifold3d.Manifold, part: str) -> manifold3d.Manifold:
-    """Record that the triangles of ``solid`` belong to ``part``; returns ``solid`` as is.
+    """Record that the triangles of ``solid`` belong to ``part``.
 
     Outside :func:`recording` this does nothing. A triangle keeps the first part recorded
     for its source solid, so tag a piece before uniting it with others.
+
+    Parameters
+    ----------
+    solid : manifold3d.Manifold
+        A piece of a family's object, before the booleans.
+    part : str
+        One of :data:`PART_NAMES`.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        ``solid`` itself, unchanged.
+
+    Raises
+    ------
+    ValueError
+        When ``part`` is not in :data:`PART_NAMES`.
     """
     if part not in _INDEX:
         raise ValueError(f"unknown part {part!r}; parts: {', '.join(PART_NAMES)}")
@@ -86,7 +114,14 @@ def tag(solid: manifold3d.Manifold, part: str) -> manifold3d.Manifold:
 
 @contextlib.contextmanager
 def recording() -> Iterator[dict[int, str]]:
-    """Collect the :func:`tag` calls of one family build: source id -> part name."""
+    """Collect the :func:`tag` calls of one family build (a context manager).
+
+    Yields
+    ------
+    dict of int to str
+        Source solid id (manifold's ``run_original_id``) -> part name, filled by the
+        :func:`tag` calls made inside the ``with`` block.
+    """
     recorder: dict[int, str] = {}
     token = _RECORDER.set(recorder)
     try:
@@ -96,9 +131,20 @@ def recording() -> Iterator[dict[int, str]]:
 
 
 def face_parts_of(solid: manifold3d.Manifold, recorder: Mapping[int, str]) -> np.ndarray:
-    """(n_faces,) int8 part index of each triangle of ``solid.to_mesh64()``, in its order.
+    """The part label of each triangle of ``solid.to_mesh64()``, in its order.
 
-    Triangles whose source solid was not tagged get ``"body"``.
+    Parameters
+    ----------
+    solid : manifold3d.Manifold
+        The family's united solid.
+    recorder : mapping of int to str
+        What :func:`recording` collected.
+
+    Returns
+    -------
+    (n_faces,) int8 ndarray
+        Indices into :data:`PART_NAMES`; triangles whose source solid was not tagged get
+        ``"body"``.
     """
     mesh = solid.to_mesh64()
     run_ids = np.asarray(mesh.run_original_id, dtype=np.int64)
@@ -118,12 +164,23 @@ def face_parts_of(solid: manifold3d.Manifold, recorder: Mapping[int, str]) -> np
 
 
 def sharp_edge_faces(mesh: trimesh.Trimesh, band_m: float = EDGE_BAND_M) -> np.ndarray:
-    """(n_faces,) bool: the band of faces along the sharp edges.
+    """The band of faces along the sharp edges.
 
     A face is in the band when it borders a convex edge sharper than 45°, or when it has a
     vertex on such an edge and none of its vertices is farther than ``band_m`` from the
     vertices of those edges: the edge bevels of the blades and the axe, but not an end cap
     that merely ends at the edge.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object's mesh, m.
+    band_m : float
+        Widest band, m.
+
+    Returns
+    -------
+    (n_faces,) bool ndarray
     """
     angles = np.asarray(mesh.face_adjacency_angles)  # between normals: π - interior angle
     sharp = np.asarray(mesh.face_adjacency_convex) & (np.pi - angles < SHARP_EDGE_RAD)
@@ -278,6 +335,24 @@ REFINERS: dict[str, Callable] = {
 
 
 def refine_parts(family: str, mesh: trimesh.Trimesh, labels: np.ndarray, params) -> np.ndarray:
-    """Split a family's tagged pieces into functional parts (see the module docstring)."""
+    """Split a family's tagged pieces into functional parts (see the module docstring).
+
+    Parameters
+    ----------
+    family : str
+        The family's name; a family without a refinement keeps its labels.
+    mesh : trimesh.Trimesh
+        The object's mesh in the family's frame, m.
+    labels : (n_faces,) int8 ndarray
+        The labels of :func:`face_parts_of`; not modified.
+    params : mapping of str to float
+        The object's family parameters (some refinements read sizes from them, e.g.
+        ``tip_length_m``).
+
+    Returns
+    -------
+    (n_faces,) int8 ndarray
+        A new label array.
+    """
     refine = REFINERS.get(family)
     return refine(mesh, labels.copy(), params) if refine is not None else labels
