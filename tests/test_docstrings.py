@@ -97,9 +97,6 @@ PENDING: set[str] = {
     "learning/evaluation.py",
     "learning/models.py",
     "learning/training.py",
-    "physics/scene.py",
-    "physics/settings.py",
-    "physics/trials.py",
 }
 
 

@@ -64,10 +64,25 @@ _DIRECTIONS = _fibonacci_directions(600)
 
 
 def rounded_shape_points(kind: str, half_extents, radius: float) -> np.ndarray:
-    """Support points of a sphere-swept box or cylinder (shape frame), (n, 3) float.
+    """Support points of a sphere-swept box or cylinder, in the shape frame.
 
     Their convex hull is inscribed in the rounded shape and touches it in every sampled
     direction (flat faces exactly, rounded parts within 1.5 % of the radius).
+
+    Parameters
+    ----------
+    kind : str
+        ``"box"`` or ``"cylinder"`` (axis z).
+    half_extents : (3,) array_like of float
+        Half extents of the core, m (a cylinder uses the first as its radius and the third
+        as its half height).
+    radius : float
+        Rounding radius, m.
+
+    Returns
+    -------
+    (n, 3) float64 ndarray
+        Distinct points, m (n <= 626).
     """
     h = np.asarray(half_extents, dtype=np.float64)
     d = _DIRECTIONS
@@ -94,7 +109,41 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
 
 @dataclass
 class Scene:
-    """A compiled model with the indices the trials need. Not thread-safe (one per process)."""
+    """A compiled model with the indices the trials need. Not thread-safe (one per process).
+
+    Attributes
+    ----------
+    model : mujoco.MjModel
+    data : mujoco.MjData
+    hand : Hand
+        The hand modelled.
+    settings : PhysicsSettings
+    mass : MassProperties
+        Of the original mesh at ``settings.density``.
+    object_name : str
+    n_parts : int
+        Convex parts the object collides as.
+    object_body : int
+        MuJoCo body id of the object.
+    object_qpos, object_dof : int
+        Addresses of the object's free joint: its 7 qpos (position, quaternion) and its 6
+        dofs.
+    fixed_links : list of (int, int)
+        (body id, link index) of every link MuJoCo models without a joint (its DOF does
+        not close, e.g. the Barrett spread), placed per grasp by
+        :func:`~affordgrasp.physics.trials.set_grasp`.
+    fingers : list of tuple
+        (actuator id, joint id, closing direction ±1, [(equality id, follower joint id,
+        speed ratio), ...]) per finger: the servo on its first joint and the couplings.
+    closing_joints : list of (int, int, float)
+        (MuJoCo joint id, DOF index, ratio) of every closing joint.
+    joint_range : (njnt, 2) float64 ndarray
+        The joint limits as built (the non-backdrivable ratchet moves the model's).
+    anvil_mocap : int
+        Mocap index of the anvil.
+    plate_body, plate_joint, plate_actuator : int
+        Body, slide joint and force actuator of the press plate.
+    """
 
     model: Any  # mujoco.MjModel (the extra is optional: no import at type-check time)
     data: Any  # mujoco.MjData
@@ -117,6 +166,7 @@ class Scene:
 
     @property
     def object_mass(self) -> float:
+        """The object's mass, kg."""
         return self.mass.mass
 
 
@@ -128,10 +178,25 @@ def build_scene(
     object_material: str = DEFAULT_OBJECT_MATERIAL,
     parts: list | None = None,
 ) -> Scene:
-    """Compile the MuJoCo model of ``hand`` and ``obj`` (a GraspObject).
+    """Compile the MuJoCo model of ``hand`` and ``obj`` (see the module docstring).
 
-    parts : optional list of (vertices, faces) convex parts; default: the cached CoACD
-        decomposition of ``obj.mesh``.
+    Parameters
+    ----------
+    hand : Hand or str
+        A Hand, a registered name or a hand file.
+    obj : GraspObject
+        The object, in its own frame.
+    settings : PhysicsSettings, optional
+        The protocol; the defaults when None.
+    object_material : str
+        The object's material in the friction table.
+    parts : list of (vertices, faces), optional
+        Convex parts of the object, m; default: the cached CoACD decomposition of
+        ``obj.mesh``.
+
+    Returns
+    -------
+    Scene
     """
     mj = deps.mujoco()
     settings = settings or PhysicsSettings()

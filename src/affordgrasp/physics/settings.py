@@ -20,8 +20,66 @@ G = 9.81  # m/s^2
 class PhysicsSettings:
     """The validation protocol: simulation, grip, the three trials and their pass limits.
 
-    Units are SI (s, m, rad, N, N·m, kg/m^3). ``load_factor`` is k of the hold test: a force
-    of k·m·g at the centre of mass along each of ±x, ±y, ±z of the object frame.
+    Units are SI (s, m, rad, N, N·m, kg/m^3). Every value must be finite, and positive except
+    ``seed``, ``settle_time`` and ``impact_settle`` (>= 0); ``hold_ramp < hold_time``. A bad
+    value raises :class:`~affordgrasp.errors.InputError` naming the setting.
+
+    Attributes
+    ----------
+    timestep : float
+        Simulation step, s.
+    density : float
+        kg/m^3; the object's mass is density × the volume of the original mesh.
+    gravity : bool
+        Gravity along -z of the hand frame; off by default (the six hold loads stand in for
+        gravity in every direction).
+    impratio : float
+        MuJoCo's friction-to-normal impedance ratio (stiffer friction, less creep).
+    contact_timeconst : float
+        Time constant of contacts, joint limits and couplings, s.
+    grip_torque : float
+        Saturated effort of a revolute closing servo, N·m.
+    grip_force : float
+        Saturated effort of a prismatic closing servo, N.
+    overshoot_rad, overshoot_m : float
+        How far past the grasp's joint value the servo target ends, rad (revolute) or m
+        (prismatic).
+    backdrivable : bool
+        False: the load cannot push a finger open (worm drive, lead screw); True: a
+        torque-limited servo the load can backdrive.
+    squeeze_time, settle_time : float
+        The servo target ramps over ``squeeze_time`` s, then is held ``settle_time`` s.
+    settled_speed, settled_spin : float
+        At rest after the squeeze: linear speed below this, m/s, and angular speed below
+        this, rad/s.
+    load_factor : float
+        k of the hold test: a force k·m·g at the centre of mass along ±x, ±y, ±z of the
+        object frame.
+    hold_ramp, hold_time : float
+        The load rises linearly over ``hold_ramp`` s, then stays; ``hold_time`` s per
+        direction, ramp included.
+    max_shift_m, max_angle_rad : float
+        A direction holds when the object moved less than this, m, and turned less than
+        this, rad.
+    impact_factor : float
+        Peak torque of the impact pulse about the wrist axis = factor · m·g · (distance of the
+        use point from the axis).
+    impact_time, impact_settle : float
+        Half-sine pulse duration and the wait after it, s.
+    impact_max_angle_rad : float
+        The impact passes when the object turned less than this, rad.
+    press_rate : float
+        The press plate's force rises at this rate, N/s.
+    press_max_force : float
+        The press stops here, N (the grasp did not slip).
+    press_slip_m : float
+        Slip: the use point moved this far relative to the hand, m.
+    coacd_threshold, coacd_max_hulls, coacd_resolution : float, int, int
+        Convex decomposition (coacd): concavity threshold, most hulls, voxel resolution.
+    coacd_mcts_iterations, coacd_mcts_nodes, coacd_mcts_depth : int
+        coacd's tree search.
+    seed : int
+        coacd's random search.
     """
 
     # Simulation.
@@ -87,12 +145,31 @@ class PhysicsSettings:
             )
 
     def to_dict(self) -> dict:
+        """Every setting by name.
+
+        Returns
+        -------
+        dict of str to float, int or bool
+        """
         return asdict(self)
 
     def digest(self) -> str:
-        """A short stable hash of every setting (outputs record it, resume checks it)."""
+        """A short stable hash of every setting (outputs record it, resume checks it).
+
+        Returns
+        -------
+        str
+            16 hex digits of the SHA-256 of the sorted settings as JSON.
+        """
         text = json.dumps(self.to_dict(), sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def decomposition_key(self) -> dict:
+        """The settings the convex decomposition depends on (part of its cache key).
+
+        Returns
+        -------
+        dict of str to float or int
+            The ``coacd_*`` settings and ``seed``.
+        """
         return {k: v for k, v in self.to_dict().items() if k.startswith("coacd_") or k == "seed"}

@@ -28,11 +28,33 @@ _TOOL_GAP = 2e-4  # m: the press plate starts this far from the use point
 class GraspOutcome:
     """What the physics engine saw for one grasp (SI units; NaN: the trial did not apply).
 
-    hold_shift_m, hold_angle_rad : (6,) largest displacement of the centre of mass and
-        largest rotation of the object during the hold test, per load direction
-        (``HOLD_DIRECTIONS``: +x, -x, +y, -y, +z, -z of the object frame)
-    hold_ok : the object settled in the hand after the squeeze and every direction held
-        (shift and angle under the limits)
+    Attributes
+    ----------
+    contacts : int
+        Hand-object contacts after the squeeze.
+    squeeze_shift_m : float
+        How far the squeeze moved the object's centre of mass, m.
+    settled : bool
+        After the squeeze the object touches the hand and is at rest.
+    hold_shift_m, hold_angle_rad : (6,) float64 ndarray
+        Largest displacement of the centre of mass, m, and largest rotation of the object,
+        rad, during the hold test, per load direction (``HOLD_DIRECTIONS``: +x, -x, +y, -y,
+        +z, -z of the object frame).
+    hold_ok : bool
+        The object settled in the hand and every direction held (shift and angle under the
+        limits of :class:`~affordgrasp.physics.settings.PhysicsSettings`).
+    hold_directions_ok : int
+        How many of the six directions held.
+    impact_angle_rad : float
+        Largest rotation of the object during the impact pulse, rad.
+    impact_ok : bool or None
+        The rotation stayed under the limit; None without a use point.
+    press_force_n : float
+        Largest plate force on the use point before it slipped, N (0: not settled).
+    press_held : bool or None
+        The grasp never slipped up to the largest press force; None without a use point.
+    steps : int
+        Simulation steps spent.
     """
 
     contacts: int  # hand-object contacts after the squeeze
@@ -49,6 +71,14 @@ class GraspOutcome:
     steps: int  # simulation steps spent
 
     def to_row(self) -> dict:
+        """The outcome as one flat row of the physics table.
+
+        Returns
+        -------
+        dict
+            The scalar attributes, and ``hold_shift_{d}`` / ``hold_angle_{d}`` for each ``d`` of
+            ``HOLD_DIRECTIONS`` in place of the two arrays.
+        """
         row = asdict(self)
         for k, d in enumerate(HOLD_DIRECTIONS):
             row[f"hold_shift_{d}"] = float(self.hold_shift_m[k])
@@ -81,8 +111,18 @@ def _frame_quat(z_axis: np.ndarray) -> np.ndarray:
 def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
     """Put the scene in the grasp's state: hand joints, object pose, servos at rest.
 
-    hand_pose : (4, 4) float, hand → object transform (the dataset's ``hand_pose``)
-    joints : (n_dofs,) float, DOF values in the hand's order (the dataset's ``joints``)
+    The links MuJoCo models without a joint (the Barrett spread) are placed with the hand's
+    :func:`~affordgrasp.hands.kinematics.joint_poses`; the closing joints get their values,
+    the finger servos hold them, and the couplings start from them.
+
+    Parameters
+    ----------
+    scene : Scene
+        The compiled model (:func:`~affordgrasp.physics.scene.build_scene`).
+    hand_pose : (4, 4) float ndarray
+        Hand → object transform, m (the dataset's ``hand_pose``).
+    joints : (n_dofs,) float ndarray
+        DOF values in the hand's order, rad or m (the dataset's ``joints``).
     """
     mj = deps.mujoco()
     m, d = scene.model, scene.data
@@ -216,7 +256,21 @@ def _use_in_world(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray):
 
 
 def place_anvil(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> np.ndarray:
-    """Fix the anvil against U (object frame), outside the object; returns U in the world."""
+    """Fix the anvil against the use point U, outside the object.
+
+    Parameters
+    ----------
+    scene : Scene
+    use_point : (3,) float ndarray
+        U in the object frame, m.
+    use_normal : (3,) float ndarray
+        Outward unit normal at U, object frame.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        U in the world frame, m, at the object's current pose.
+    """
     mj = deps.mujoco()
     u, n_u = _use_in_world(scene, use_point, use_normal)
     scene.data.mocap_pos[scene.anvil_mocap] = u
@@ -227,7 +281,21 @@ def place_anvil(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> 
 
 
 def place_plate(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> np.ndarray:
-    """Put the press plate just beyond U (its motor pushes along -z, the inward normal)."""
+    """Put the press plate just beyond U (its motor pushes along -z, the inward normal).
+
+    Parameters
+    ----------
+    scene : Scene
+    use_point : (3,) float ndarray
+        U in the object frame, m.
+    use_normal : (3,) float ndarray
+        Outward unit normal at U, object frame.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        U in the world frame, m, at the object's current pose.
+    """
     mj = deps.mujoco()
     u, n_u = _use_in_world(scene, use_point, use_normal)
     scene.model.body_pos[scene.plate_body] = u + _TOOL_GAP * n_u
@@ -286,8 +354,24 @@ def validate_grasp(
 ) -> GraspOutcome:
     """Squeeze the grasp, then run the hold test and (given a use point) impact and press.
 
-    hand_pose : (4, 4) float, hand → object; joints : (n_dofs,) float
-    use_point, use_normal : (3,) float in the object frame (normal outward), or None/NaN
+    Every trial starts from the same squeezed state, so the results do not depend on the
+    order of the trials.
+
+    Parameters
+    ----------
+    scene : Scene
+        The compiled model of the hand and the object.
+    hand_pose : (4, 4) float ndarray
+        Hand → object transform, m.
+    joints : (n_dofs,) float ndarray
+        DOF values in the hand's order, rad or m.
+    use_point, use_normal : (3,) float ndarray, optional
+        U and its outward unit normal in the object frame, m; None or NaN: no use point
+        (impact and press are skipped).
+
+    Returns
+    -------
+    GraspOutcome
     """
     s = scene.settings
     set_grasp(scene, hand_pose, joints)
