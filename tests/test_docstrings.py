@@ -92,11 +92,6 @@ PENDING: set[str] = {
     "commands/show.py",
     "dataset/engines.py",
     "dataset/layout.py",
-    "learning/api.py",
-    "learning/data.py",
-    "learning/evaluation.py",
-    "learning/models.py",
-    "learning/training.py",
 }
 
 

@@ -38,7 +38,24 @@ PRETRAINED = {
 
 
 def pretrained_path(kind: str) -> Path:
-    """Path of a shipped model: ``classifier`` (viable) or ``regressor`` (ΣE_h)."""
+    """Path of a shipped model.
+
+    Parameters
+    ----------
+    kind : str
+        ``"classifier"`` (viable) or ``"regressor"`` (ΣE_h).
+
+    Returns
+    -------
+    pathlib.Path
+        The ``.safetensors`` file inside the package.
+
+    Raises
+    ------
+    InputError
+        For another kind, or when the file is missing (the message names the script that
+        rebuilds it).
+    """
     if kind not in PRETRAINED:
         raise InputError(f"unknown pretrained model {kind!r}; choose classifier or regressor")
     path = Path(str(resources.files("affordgrasp.learning") / "pretrained" / PRETRAINED[kind]))
@@ -51,7 +68,18 @@ def pretrained_path(kind: str) -> Path:
 
 
 def resolve_models(spec: str | os.PathLike) -> list[Path]:
-    """'default' → the shipped classifier and regressor; else the one model file named."""
+    """The model files a model option names.
+
+    Parameters
+    ----------
+    spec : str or path
+        ``"default"`` (the shipped classifier and regressor), ``"classifier"``,
+        ``"regressor"``, or a model file.
+
+    Returns
+    -------
+    list of pathlib.Path
+    """
     if str(spec) == "default":
         return [pretrained_path("classifier"), pretrained_path("regressor")]
     if str(spec) in PRETRAINED:
@@ -79,10 +107,34 @@ def prepare_split(
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
-    Classification keeps every training/validation positive and at most ``negatives_ratio``
-    × as many negatives (each epoch then draws a balanced subset); the test rows keep the
-    natural class balance (a uniform subsample of at most ``max_eval`` rows). Returns
-    (train, val, test, target, split).
+    Classification keeps every training/validation positive (at most ``max_train // 2`` or
+    ``max_eval // 2``) and at most ``negatives_ratio`` × as many negatives (each epoch then
+    draws a balanced subset); the test rows keep the natural class balance (a uniform
+    subsample of at most ``max_eval`` rows). Regression rows are subsampled uniformly.
+
+    Parameters
+    ----------
+    dataset : path
+        A dataset generated with metrics.
+    target : str or Target
+        What to learn (:func:`~affordgrasp.learning.data.read_rows`).
+    split : str
+        ``"object"`` (instances held out, families shared) or ``"family"``.
+    test_families : sequence of str, optional
+        The held-out families of a split by family.
+    seed : int
+        Seeds the split and the subsamples.
+    max_train, max_eval : int or None
+        Caps on the training rows and on each of validation and test (None: no cap).
+    negatives_ratio : float
+        Negatives kept per positive for training and validation.
+
+    Returns
+    -------
+    train, val, test : Samples
+        With depth images.
+    target : Target
+    split : Split
     """
     samples, target = read_rows(dataset, target)
     if len(samples) == 0:
@@ -129,7 +181,47 @@ def train_on_dataset(
     progress: Callable[[dict], None] | None = None,
     prepared=None,
 ):
-    """Train a model on a dataset; returns (model, config) and writes ``out`` if given."""
+    """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
+
+    Parameters
+    ----------
+    dataset : path
+        A dataset generated with metrics.
+    arch : str
+        One of :data:`~affordgrasp.learning.models.ARCHITECTURES`.
+    target : str
+        What to learn (:func:`~affordgrasp.learning.data.read_rows`).
+    out : path, optional
+        Where to save the model (a ``.safetensors`` file; the config in its metadata).
+    split : str
+        ``"object"`` or ``"family"`` (:func:`prepare_split`).
+    test_families : sequence of str, optional
+        The held-out families of a split by family.
+    settings : TrainSettings, optional
+        Optimisation settings; the defaults when None.
+    log_target : bool
+        Learn a regression target on a log scale.
+    canonical : bool
+        Depth relative to the nearest point (:func:`~affordgrasp.learning.models.depth_input`).
+    max_train : int or None
+        Cap on the training rows.
+    progress : callable, optional
+        Called after every batch (:func:`~affordgrasp.learning.training.train_model`).
+    prepared : tuple, optional
+        The result of :func:`prepare_split`, to train several models on the same rows.
+
+    Returns
+    -------
+    model : torch.nn.Module
+    config : dict
+        The model config with ``training`` (dataset, split, rows, history, ...) and, when
+        there are test rows, ``test`` (:func:`report`).
+
+    Raises
+    ------
+    InputError
+        When there are too few rows or positives to train on.
+    """
     from .io import save_model
 
     settings = settings or TrainSettings()
@@ -175,7 +267,25 @@ def train_on_dataset(
 def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None) -> dict:
     """The metrics of a model on samples (with depth), beside predict-the-mean.
 
-    scores : the model's outputs on the samples when already computed
+    Parameters
+    ----------
+    model : torch.nn.Module
+    config : dict
+        The model's config.
+    samples : Samples
+        With depth images unless the model is ``"pose"``.
+    seed : int
+        Seeds the random pairs, subsets and balanced draws of the metrics.
+    scores : (n,) ndarray, optional
+        The model's outputs on the samples when already computed.
+
+    Returns
+    -------
+    dict
+        :func:`~affordgrasp.learning.evaluation.classification_report` plus
+        ``baseline_average_precision`` (the positive rate), or
+        :func:`~affordgrasp.learning.evaluation.regression_report` on the [0, 1] scale plus
+        ``baseline_mean_mse`` (predicting the training mean).
     """
     tgt = Target.from_dict(config["target"])
     if scores is None:
@@ -192,20 +302,70 @@ def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None)
 
 
 def predictions_of(model, config: dict, samples: Samples) -> np.ndarray:
-    """Predictions in target units (a probability for a classifier)."""
+    """Predictions of a model for samples, in target units.
+
+    Parameters
+    ----------
+    model : torch.nn.Module
+    config : dict
+        The model's config.
+    samples : Samples
+        With depth images unless the model is ``"pose"``.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        A probability for a classifier, the target's units for a regressor.
+    """
     tgt = Target.from_dict(config["target"])
     return tgt.denormalise(predict_scores(model, config, Inputs(config, samples)))
 
 
 def prediction_column(config: dict) -> str:
+    """The name of a model's prediction column in :func:`predict_dataset`'s table.
+
+    Parameters
+    ----------
+    config : dict
+        The model's config.
+
+    Returns
+    -------
+    str
+        ``"viable_prob"`` for a classifier, ``"pred_<target>"`` for a regressor.
+    """
     tgt = config["target"]
     return "viable_prob" if tgt["kind"] == "classification" else f"pred_{tgt['name']}"
 
 
 def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, progress=None):
-    """One row per sample of ``dataset``: object, sample and each model's prediction.
+    """One row per sample of a dataset: object, sample and each model's prediction.
 
-    models : list of (model, config); streams the dataset in batches (memory-bounded).
+    The dataset is streamed in batches (memory-bounded); depth images are read when stored,
+    else rendered.
+
+    Parameters
+    ----------
+    models : list of (torch.nn.Module, dict)
+        Models and their configs.
+    dataset : path
+        A generated dataset.
+    objects : sequence of str, optional
+        Predict only these objects.
+    batch_size : int
+        Rows per batch.
+    progress : callable, optional
+        Called with the number of rows after each batch.
+
+    Returns
+    -------
+    pyarrow.Table
+        ``object``, ``sample`` and one column per model (:func:`prediction_column`).
+
+    Raises
+    ------
+    InputError
+        When there is no row to predict.
     """
     import pyarrow as pa
 
@@ -253,8 +413,34 @@ def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, pr
 def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0, max_rows=None):
     """Metrics of a model on a dataset's rows of its target.
 
-    objects : "test" (the model's held-out test objects, when the dataset has them), "all",
-        or a list of object names. Returns (report, samples, predictions in [0, 1] scale).
+    Parameters
+    ----------
+    model : torch.nn.Module
+    config : dict
+        The model's config.
+    dataset : path
+        A dataset generated with metrics.
+    objects : "test", "all" or sequence of str
+        The model's held-out test objects (when the dataset has them), every object, or the
+        objects named.
+    seed : int
+        Seeds the subsample and the metrics.
+    max_rows : int, optional
+        Evaluate a uniform subsample of at most this many rows.
+
+    Returns
+    -------
+    report : dict
+        :func:`report`.
+    samples : Samples
+        The rows evaluated.
+    scores : (n,) float64 ndarray
+        The model's outputs on them, on the [0, 1] scale.
+
+    Raises
+    ------
+    InputError
+        When none of the chosen objects is in the dataset.
     """
     tgt = Target.from_dict(config["target"])
     samples, _ = read_rows(dataset, tgt)

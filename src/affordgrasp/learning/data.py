@@ -42,10 +42,24 @@ METRIC_INPUTS = (
 class Samples:
     """Rows chosen for learning: inputs and target, one entry per row.
 
-    object : (n,) str; family : (n,) str; sample : (n,) int64
-    p0 : (n, 6) float64; use_dir : (n, 2) float64
-    y : (n,) float64, the target in its own units (NaN when not known, e.g. predicting)
-    depth_mm : (n, size, size) uint16 or None until loaded (see :func:`load_depth`)
+    Attributes
+    ----------
+    object : (n,) object ndarray of str
+        Object names.
+    family : (n,) object ndarray of str
+        Their families (categories).
+    sample : (n,) int64 ndarray
+        Sample numbers in the dataset.
+    p0 : (n, 6) float64 ndarray
+        Pregrasps, each entry in [0, 1].
+    use_dir : (n, 2) float64 ndarray
+        Use directions, in [0, 1].
+    y : (n,) float64 ndarray
+        The target in its own units (NaN when not known, e.g. when predicting).
+    depth_mm : (n, size, size) uint16 ndarray or None
+        Depth images, mm; None until loaded (:func:`load_depth`).
+    meta : dict
+        Where the rows come from (``directory``).
     """
 
     object: np.ndarray
@@ -61,6 +75,17 @@ class Samples:
         return len(self.sample)
 
     def take(self, idx: np.ndarray) -> Samples:
+        """The samples at some indices.
+
+        Parameters
+        ----------
+        idx : (k,) int or (n,) bool ndarray
+
+        Returns
+        -------
+        Samples
+            Copies of the selected entries (``meta`` copied too).
+        """
         idx = np.asarray(idx)
         return Samples(
             self.object[idx],
@@ -81,8 +106,29 @@ def _families(manifest: dict) -> dict[str, str]:
 def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None = None):
     """The rows of a dataset a target is defined on, with their inputs and target values.
 
-    Returns (Samples, Target). For a generic column the target's scale is set from these rows
-    (pass the training rows' Target to other splits).
+    Parameters
+    ----------
+    directory : path
+        A dataset generated with metrics.
+    target : str or Target
+        ``"viable"``, ``"hold_effort_sum"``, a metric column or ``"task:NAME"``; a Target
+        keeps its scale. For a generic column given by name, the scale is set from these rows
+        (pass the training rows' Target to the other splits).
+    objects : sequence of str, optional
+        Read only these objects.
+
+    Returns
+    -------
+    samples : Samples
+        Rows where the target is defined, without depth images.
+    target : Target
+
+    Raises
+    ------
+    DatasetError
+        When the dataset was generated with ``--no-metrics``.
+    InputError
+        When the target is not a column of the dataset.
     """
     from ..dataset.layout import read_manifest
     from ..dataset.reading import read_dataset
@@ -141,10 +187,21 @@ def _fixed(table, name: str, width: int) -> np.ndarray:
 
 
 def load_depth(samples: Samples, directory=None) -> np.ndarray:
-    """The depth images (n, 128, 128) uint16 mm of the samples, read or rendered.
+    """The depth images of the samples, read from the dataset or rendered.
 
     Stored images are read in streamed batches keeping only the chosen rows, so memory is
-    that of the result.
+    that of the result. The images are also stored in ``samples.depth_mm``.
+
+    Parameters
+    ----------
+    samples : Samples
+    directory : path, optional
+        The dataset; default: ``samples.meta["directory"]``.
+
+    Returns
+    -------
+    (n, 128, 128) uint16 ndarray
+        Depth, mm, 0 for no return.
     """
     from ..dataset.layout import read_manifest
 
@@ -192,7 +249,24 @@ def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
 
 
 def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
-    """Render D(p0, O) of every sample from its object (resolved as the manifest says)."""
+    """Render D(p0, O) of every sample from its object (resolved as the manifest says).
+
+    Parameters
+    ----------
+    samples : Samples
+    manifest : dict
+        The dataset's manifest (objects, sources and mesh hashes).
+
+    Returns
+    -------
+    (n, 128, 128) uint16 ndarray
+        Depth, mm, 0 for no return.
+
+    Raises
+    ------
+    DatasetError
+        When an object's mesh is gone or is not the one the dataset was made with.
+    """
     from ..vision.depth import depth_to_mm
 
     out = np.zeros((len(samples), 128, 128), dtype=np.uint16)
@@ -235,7 +309,15 @@ def _renderer_of(entry: dict | None, name: str):
 
 @dataclass(frozen=True)
 class Split:
-    """Object names of each part of a split (disjoint)."""
+    """Object names of each part of a split (disjoint).
+
+    Attributes
+    ----------
+    train, val, test : tuple of str
+        Sorted object names.
+    kind : str
+        ``"object"`` (instances held out) or ``"family"`` (whole families held out).
+    """
 
     train: tuple[str, ...]
     val: tuple[str, ...]
@@ -243,6 +325,13 @@ class Split:
     kind: str = "object"
 
     def to_dict(self) -> dict:
+        """The split as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``kind``, ``train``, ``val``, ``test`` (lists).
+        """
         return {
             "kind": self.kind,
             "train": list(self.train),
@@ -251,6 +340,18 @@ class Split:
         }
 
     def part_of(self, objects: np.ndarray, part: str) -> np.ndarray:
+        """Which objects belong to one part of the split.
+
+        Parameters
+        ----------
+        objects : (n,) ndarray of str
+        part : str
+            ``"train"``, ``"val"`` or ``"test"``.
+
+        Returns
+        -------
+        (n,) bool ndarray
+        """
         return np.isin(objects, list(getattr(self, part)))
 
 
@@ -259,8 +360,26 @@ def split_by_object(
 ) -> Split:
     """Hold out object instances, family by family, so that categories overlap.
 
-    A family with n ≥ 3 instances gives max(1, round(f·n)) to validation and to test; one with
-    2 gives one to test; one with 1 goes to training. Seeded.
+    A family with n >= 3 instances gives max(1, round(f·n)) to validation and to test; one
+    with 2 gives one to test; one with 1 goes to training.
+
+    Parameters
+    ----------
+    objects, families : sequence of str
+        Object of each row and its family (repeats allowed).
+    seed : int
+        Seeds the shuffle within each family.
+    fraction : (float, float)
+        f of validation and of test.
+
+    Returns
+    -------
+    Split
+
+    Raises
+    ------
+    InputError
+        When no family has two instances (nothing to test on).
     """
     by_family: dict[str, list[str]] = defaultdict(list)
     for o, f in sorted(set(zip(objects, families, strict=True))):
@@ -286,7 +405,26 @@ def split_by_object(
 def split_by_family(
     objects: Sequence[str], families: Sequence[str], test_families: Sequence[str], *, seed=0
 ) -> Split:
-    """Hold out whole families for test; validation takes one instance per remaining family."""
+    """Hold out whole families for test; validation takes instances of the remaining families.
+
+    Parameters
+    ----------
+    objects, families : sequence of str
+        Object of each row and its family.
+    test_families : sequence of str
+        Families of the test set.
+    seed : int
+        Seeds the validation draw (:func:`split_by_object` with no test fraction).
+
+    Returns
+    -------
+    Split
+
+    Raises
+    ------
+    InputError
+        When a test family is not in the data, or nothing is left to train or test on.
+    """
     pairs = sorted(set(zip(objects, families, strict=True)))
     known = {f for _, f in pairs}
     unknown = sorted(set(test_families) - known)
@@ -304,7 +442,22 @@ def split_by_family(
 
 
 def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np.ndarray:
-    """All positives and ``ratio`` × as many negatives drawn without replacement (seeded)."""
+    """All positives and ``ratio`` × as many negatives drawn without replacement.
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        Classes; positive when > 0.5.
+    seed : int
+        Seeds the draw of the negatives.
+    ratio : float
+        Negatives per positive (fewer when there are not enough).
+
+    Returns
+    -------
+    (k,) int64 ndarray
+        Sorted row indices.
+    """
     labels = np.asarray(labels) > 0.5
     pos = np.flatnonzero(labels)
     neg = np.flatnonzero(~labels)

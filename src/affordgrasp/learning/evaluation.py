@@ -32,12 +32,44 @@ def _pair(y_true, y_pred) -> tuple[np.ndarray, np.ndarray]:
 
 
 def mse(y_true, y_pred) -> float:
+    """Mean squared error of predictions against true values.
+
+    Parameters
+    ----------
+    y_true, y_pred : (n,) array_like of float
+        True values and predictions, in the target's unit.
+
+    Returns
+    -------
+    float
+        In the target's unit squared; NaN for n = 0.
+
+    Raises
+    ------
+    InputError
+        When the two lengths differ.
+    """
     t, p = _pair(y_true, y_pred)
     return float(np.mean((t - p) ** 2)) if len(t) else float("nan")
 
 
 def comparison_accuracy(y_true, y_pred, *, pairs: int | None = None, seed: int = 0) -> float:
-    """Share of pairs whose predicted order is their true order (see the module docstring)."""
+    """Share of pairs whose predicted order is their true order (see the module docstring).
+
+    Parameters
+    ----------
+    y_true, y_pred : (n,) array_like of float
+        True values and predictions.
+    pairs : int, optional
+        Random pairs to draw; None: every pair when n <= 4000, else 200 000 random pairs.
+    seed : int
+        Seed of the random pairs.
+
+    Returns
+    -------
+    float
+        In [0, 1]; a predicted tie counts one half. NaN when n < 2 or every true value ties.
+    """
     t, p = _pair(y_true, y_pred)
     n = len(t)
     if n < 2:
@@ -59,7 +91,22 @@ def comparison_accuracy(y_true, y_pred, *, pairs: int | None = None, seed: int =
 
 
 def global_min_score(y_true, y_pred, *, lower_is_better: bool = True) -> float:
-    """GMS of one set: the share of the set truly worse than the model's choice."""
+    """GMS of one set: the share of the set truly worse than the model's choice.
+
+    Parameters
+    ----------
+    y_true, y_pred : (n,) array_like of float
+        True values and predictions.
+    lower_is_better : bool
+        The target is better when lower (ΣE_h): the smallest prediction is chosen and the
+        share with a strictly greater true value counted; else the largest prediction and a
+        strictly smaller true value.
+
+    Returns
+    -------
+    float
+        In [0, 1); NaN for n = 0.
+    """
     t, p = _pair(y_true, y_pred)
     if len(t) == 0:
         return float("nan")
@@ -79,7 +126,26 @@ def gms_distribution(
     seed: int = 0,
     lower_is_better: bool = True,
 ) -> np.ndarray:
-    """GMS over ``n_subsets`` random subsets of ``fraction`` of the samples (n_subsets,)."""
+    """GMS over random subsets of the samples.
+
+    Parameters
+    ----------
+    y_true, y_pred : (n,) array_like of float
+        True values and predictions.
+    fraction : float
+        Subset size as a share of n (at least 2 samples, drawn without replacement).
+    n_subsets : int
+        Subsets drawn.
+    seed : int
+        Seed of the draws.
+    lower_is_better : bool
+        As for :func:`global_min_score`.
+
+    Returns
+    -------
+    (n_subsets,) float64 ndarray
+        GMS of each subset; empty when n < 2.
+    """
     t, p = _pair(y_true, y_pred)
     n = len(t)
     if n < 2:
@@ -96,7 +162,24 @@ def gms_distribution(
 def precision_recall(labels, scores) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Precision, recall and thresholds, one per distinct score (highest threshold first).
 
-    Predicting positive at score ≥ threshold.
+    A sample is predicted positive when its score >= the threshold.
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    scores : (n,) array_like of float
+        Predicted scores.
+
+    Returns
+    -------
+    precision, recall, thresholds : (k,) float64 ndarray
+        k distinct scores, descending; recall is 0 throughout without a positive label.
+
+    Raises
+    ------
+    InputError
+        When the two lengths differ.
     """
     y = np.asarray(labels, dtype=np.float64).ravel() > 0.5
     s = np.asarray(scores, dtype=np.float64).ravel()
@@ -114,7 +197,20 @@ def precision_recall(labels, scores) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def average_precision(labels, scores) -> float:
-    """AP = Σ (R_k − R_{k−1}) P_k over the distinct thresholds."""
+    """AP = Σ_k (R_k − R_{k−1}) P_k over the distinct thresholds.
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    scores : (n,) array_like of float
+        Predicted scores.
+
+    Returns
+    -------
+    float
+        In [0, 1]; NaN without a positive label.
+    """
     if not np.any(np.asarray(labels) > 0.5):
         return float("nan")
     precision, recall, _ = precision_recall(labels, scores)
@@ -124,7 +220,25 @@ def average_precision(labels, scores) -> float:
 def regression_report(
     y_true, y_pred, *, lower_is_better: bool = True, seed: int = 0, n_subsets: int = 1000
 ) -> dict:
-    """MSE, comparison accuracy, E[GMS] (and its quartiles) of predictions vs truth."""
+    """MSE, comparison accuracy and E[GMS] (with its quartiles) of predictions vs truth.
+
+    Parameters
+    ----------
+    y_true, y_pred : (n,) array_like of float
+        True values and predictions.
+    lower_is_better : bool
+        As for :func:`global_min_score`.
+    seed : int
+        Seed of the random pairs and subsets.
+    n_subsets : int
+        Subsets of the GMS distribution (10 % of the samples each).
+
+    Returns
+    -------
+    dict
+        ``n``, ``mse``, ``comparison_accuracy``, ``expected_gms`` and ``gms_quartiles``
+        (25th, 50th, 75th percentiles; empty when n < 2).
+    """
     g = gms_distribution(
         y_true, y_pred, seed=seed, n_subsets=n_subsets, lower_is_better=lower_is_better
     )
@@ -138,7 +252,24 @@ def regression_report(
 
 
 def classification_report(labels, scores, *, seed: int = 0) -> dict:
-    """AP on the natural class balance and on a balanced subset, accuracy at 0.5."""
+    """AP on the natural class balance and on a balanced subset, accuracy at 0.5.
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    scores : (n,) array_like of float
+        Predicted probabilities.
+    seed : int
+        Seed of the balanced subset (as many negatives as positives, or the reverse).
+
+    Returns
+    -------
+    dict
+        ``n``, ``positives``, ``positive_rate``, ``average_precision``,
+        ``average_precision_balanced``, ``accuracy_at_0.5`` and ``balanced_accuracy_at_0.5``
+        (NaN where a class is missing).
+    """
     y = np.asarray(labels, dtype=np.float64) > 0.5
     s = np.asarray(scores, dtype=np.float64)
     pos, neg = np.flatnonzero(y), np.flatnonzero(~y)

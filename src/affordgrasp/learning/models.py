@@ -19,8 +19,21 @@ DEPTH_SCALE = 2.0  # network input = depth in m × 2 (objects of 0.1–0.4 m sit
 
 
 def pose_features(p0: np.ndarray, use_dir: np.ndarray) -> np.ndarray:
-    """(n, 14) float32 fused features: p0 (6), d (2), and cos/sin of the three angles that
-    wrap around (approach azimuth π·u1, roll π·u3, use azimuth π·d1)."""
+    """The fused pose features of each sample.
+
+    Parameters
+    ----------
+    p0 : (n, 6) float ndarray
+        Pregrasps (conventions: Pregrasp), each entry in [0, 1].
+    use_dir : (n, 2) float ndarray
+        Use directions d, in [0, 1].
+
+    Returns
+    -------
+    (n, 14) float32 ndarray
+        p0 (6), d (2), then the cosine and the sine of the three angles that wrap around
+        (approach azimuth π·u1, roll π·u3, use azimuth π·d1).
+    """
     p0 = np.asarray(p0, dtype=np.float64)
     d = np.asarray(use_dir, dtype=np.float64)
     ang = np.pi * np.stack([p0[:, 0], p0[:, 2], d[:, 0]], axis=1)
@@ -31,11 +44,24 @@ N_POSE = 14
 
 
 def depth_input(depth_mm: np.ndarray, canonical: bool) -> np.ndarray:
-    """Network image input (b, c, h, w) float32 from uint16 mm images.
+    """The network's image input from depth images.
 
-    Plain: one channel, depth × 2 (m), 0 = no return. Canonical: two channels, the depth
-    relative to the image's nearest point × 10 (0 at the first surface) and the hit mask; the
-    nearest depth itself goes to the fused features.
+    Plain: one channel, the depth in m × 2, 0 where the ray missed. Canonical: two
+    channels, the depth relative to the image's nearest point in m × 10 (0 at the first
+    surface) and the hit mask; the nearest depth itself goes to the fused features
+    (:func:`nearest_depth`).
+
+    Parameters
+    ----------
+    depth_mm : (b, h, w) uint16 ndarray
+        Depth images, mm, 0 for no return.
+    canonical : bool
+        Two channels relative to the nearest point, else one absolute channel.
+
+    Returns
+    -------
+    (b, c, h, w) float32 ndarray
+        c = 2 when canonical, else 1.
     """
     d = np.asarray(depth_mm, dtype=np.float32) / 1000.0
     if not canonical:
@@ -48,14 +74,44 @@ def depth_input(depth_mm: np.ndarray, canonical: bool) -> np.ndarray:
 
 
 def nearest_depth(depth_mm: np.ndarray) -> np.ndarray:
-    """(b, 1) float32: the nearest hit depth × 2 (m), 0 for an empty image."""
+    """The nearest hit depth of each image, scaled as the network's depth input.
+
+    Parameters
+    ----------
+    depth_mm : (b, h, w) uint16 ndarray
+        Depth images, mm, 0 for no return.
+
+    Returns
+    -------
+    (b, 1) float32 ndarray
+        Nearest depth in m × 2 (``DEPTH_SCALE``); 0 for an image without a hit.
+    """
     d = np.asarray(depth_mm, dtype=np.float32) / 1000.0
     near = np.where(d > 0, d, np.inf).reshape(len(d), -1).min(axis=1)
     return (np.where(np.isfinite(near), near, 0.0) * DEPTH_SCALE).astype(np.float32)[:, None]
 
 
 def build_model(config: dict):
-    """The torch module a config describes (see ``default_config``)."""
+    """The torch module a config describes (:func:`.training.default_config` makes one).
+
+    Parameters
+    ----------
+    config : dict
+        ``arch`` (one of ``ARCHITECTURES``), ``width`` (16), ``dropout`` (0.3) and
+        ``canonical`` (two-channel depth and the nearest depth as an extra pose feature).
+
+    Returns
+    -------
+    torch.nn.Module
+        Its forward pass takes (image or points, pose features) — for ``"pose"`` the pose
+        features alone — and returns (b,) outputs: a logit (classifier) or a value on the
+        target's [0, 1] scale (regressor).
+
+    Raises
+    ------
+    InputError
+        For an unknown ``arch``.
+    """
     torch = require_torch()
     nn = torch.nn
     arch = config["arch"]
@@ -174,4 +230,15 @@ def build_model(config: dict):
 
 
 def count_parameters(model) -> int:
+    """Number of parameters of a torch module.
+
+    Parameters
+    ----------
+    model : torch.nn.Module
+
+    Returns
+    -------
+    int
+        Trainable and frozen alike.
+    """
     return int(sum(p.numel() for p in model.parameters()))

@@ -34,7 +34,27 @@ log = logging.getLogger(__name__)
 
 @dataclass(frozen=True)
 class TrainSettings:
-    """Optimisation settings (the paper's where it states them)."""
+    """Optimisation settings (the paper's where it states them).
+
+    Attributes
+    ----------
+    epochs : int
+        Most epochs.
+    batch_size : int
+        Samples per batch.
+    lr : float
+        Adam's learning rate of the first epoch; epoch k uses lr / k.
+    patience : int
+        Stop after this many epochs without a lower validation loss.
+    seed : int
+        Seeds the weights, the batch order and the balanced draws.
+    rank_weight : float
+        Weight of the pairwise ranking loss added to a regressor's MSE (0: none).
+    max_seconds : float or None
+        Stop after the epoch that passes this wall time, s.
+    threads : int
+        torch threads.
+    """
 
     epochs: int = 40
     batch_size: int = 64
@@ -47,7 +67,23 @@ class TrainSettings:
 
 
 def default_config(arch: str, target: Target, **options) -> dict:
-    """A model config: architecture, sizes, inputs and target."""
+    """A model config: architecture, sizes, inputs and target.
+
+    Parameters
+    ----------
+    arch : str
+        One of :data:`~affordgrasp.learning.models.ARCHITECTURES`.
+    target : Target
+        What the model learns.
+    **options
+        Overrides of the defaults (``dropout`` 0.3, ``width`` 16, ``n_points`` 256,
+        ``canonical`` False, ``camera`` 128 px at 60°); None values are ignored.
+
+    Returns
+    -------
+    dict
+        JSON-ready; saved with the weights so that a model rebuilds itself exactly.
+    """
     config = {
         "arch": arch,
         "target": target.to_dict(),
@@ -63,7 +99,31 @@ def default_config(arch: str, target: Target, **options) -> dict:
 
 
 class Inputs:
-    """The network inputs of a set of samples, built once (images are made per batch)."""
+    """The network inputs of a set of samples, built once (images are made per batch).
+
+    Parameters
+    ----------
+    config : dict
+        The model config (:func:`default_config`).
+    samples : Samples
+        With depth images unless the architecture is ``"pose"``.
+
+    Attributes
+    ----------
+    arch : str
+    canonical : bool
+    pose : (n, 14) or (n, 15) float32 ndarray
+        Pose features; the 15th is the nearest depth of canonical image models.
+    depth_mm : (n, h, w) uint16 ndarray or None
+        Depth images, mm (the CNN only).
+    points : (n, n_points, 3) float32 ndarray or None
+        Point clouds in the camera frame, m (PointNet only).
+
+    Raises
+    ------
+    InputError
+        When an image model gets samples without depth images.
+    """
 
     def __init__(self, config: dict, samples: Samples):
         from ..vision.points import point_clouds
@@ -92,6 +152,19 @@ class Inputs:
         return len(self.pose)
 
     def batch(self, idx: np.ndarray):
+        """The model's input tensors for some samples.
+
+        Parameters
+        ----------
+        idx : (b,) int ndarray
+            Sample indices.
+
+        Returns
+        -------
+        tuple of torch.Tensor
+            (image (b, c, h, w), pose) for the CNN, (points (b, n, 3), pose) for PointNet,
+            (pose,) for the pose-only model.
+        """
         torch = require_torch()
         pose = torch.from_numpy(self.pose[idx])
         if self.arch == "cnn":
@@ -106,7 +179,24 @@ def _forward(model, inputs: Inputs, idx: np.ndarray):
 
 
 def predict_scores(model, config: dict, inputs: Inputs, batch_size: int = 256) -> np.ndarray:
-    """Model outputs (n,): probabilities (classifier) or the [0, 1] target scale (regressor)."""
+    """Model outputs for every sample, in batches, without gradients.
+
+    Parameters
+    ----------
+    model : torch.nn.Module
+        From :func:`~affordgrasp.learning.models.build_model`.
+    config : dict
+        Its config.
+    inputs : Inputs
+        The samples' inputs.
+    batch_size : int
+        Samples per forward pass.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Probabilities (classifier) or values on the target's [0, 1] scale (regressor).
+    """
     torch = require_torch()
     classification = config["target"]["kind"] == "classification"
     model.eval()
@@ -136,10 +226,27 @@ def train_model(
     settings: TrainSettings | None = None,
     progress: Callable[[dict], None] | None = None,
 ):
-    """Train the network a config describes; returns (model with the best weights, history).
+    """Train the network a config describes (see the module docstring).
 
-    train, val : Samples with ``y`` in target units (and depth images unless arch = pose)
-    progress : called after every batch with a dict (epoch, batch, batches, loss, eta_s)
+    Parameters
+    ----------
+    config : dict
+        The model config (:func:`default_config`).
+    train, val : Samples
+        ``y`` in target units, with depth images unless the architecture is ``"pose"``.
+    settings : TrainSettings, optional
+        The defaults when None.
+    progress : callable, optional
+        Called after every batch with a dict: ``epoch``, ``epochs``, ``batch``, ``batches``,
+        ``loss`` (running mean of the epoch) and ``eta_s``.
+
+    Returns
+    -------
+    model : torch.nn.Module
+        With the weights of the epoch of lowest validation loss, in eval mode.
+    summary : dict
+        ``settings``, ``history`` (per epoch: ``train_loss``, ``val_loss``, ``lr``),
+        ``best_epoch``, ``best_val_loss``, ``seconds``, ``train_samples``, ``parameters``.
     """
     settings = settings or TrainSettings()
     torch = require_torch()
