@@ -90,7 +90,6 @@ MODULES = sorted(
 PENDING: set[str] = {
     "commands/common.py",
     "commands/show.py",
-    "dataset/engines.py",
     "dataset/layout.py",
 }
 

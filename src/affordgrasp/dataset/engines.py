@@ -38,8 +38,21 @@ ENGINES = ("local", "ray")
 class ObjectPayload:
     """What a worker needs to rebuild a resolved object exactly.
 
-    vertices : (v, 3) float64, m; faces : (f, 3) int64 — the prepared mesh as resolved.
-    face_parts : (f,) int8 or None, part_names : tuple of str — its semantic parts.
+    Attributes
+    ----------
+    name, category, source : str
+        As the object's (:class:`~affordgrasp.objects.GraspObject`).
+    density : float
+        kg/m^3.
+    mesh_hash : str
+        Checked again by the worker.
+    vertices : (v, 3) float64 ndarray
+        The prepared mesh as resolved, m.
+    faces : (f, 3) int64 ndarray
+    face_parts : (f,) int8 ndarray or None
+        Semantic part of each face (procedural families).
+    part_names : tuple of str
+        The names the part labels index.
     """
 
     name: str
@@ -54,6 +67,16 @@ class ObjectPayload:
 
     @classmethod
     def from_object(cls, obj) -> ObjectPayload:
+        """The payload of a resolved object.
+
+        Parameters
+        ----------
+        obj : GraspObject
+
+        Returns
+        -------
+        ObjectPayload
+        """
         return cls(
             name=obj.name,
             category=obj.category,
@@ -67,7 +90,17 @@ class ObjectPayload:
         )
 
     def build(self):
-        """The GraspObject again, with the same mesh bytes (checked by hash)."""
+        """The GraspObject again, with the same mesh bytes (checked by hash).
+
+        Returns
+        -------
+        GraspObject
+
+        Raises
+        ------
+        InternalError
+            When the mesh arrived changed.
+        """
         import trimesh
 
         from ..objects import GraspObject, mass_properties, mesh_hash
@@ -90,7 +123,22 @@ class ObjectPayload:
 
 @dataclass(frozen=True)
 class RunContext:
-    """The settings every job of a run shares."""
+    """The settings every job of a run shares (sent once to each worker).
+
+    Attributes
+    ----------
+    objects : tuple of ObjectPayload
+        The run's objects, by index.
+    hand : Hand or str
+        The Hand itself, not its name: a custom hand travels to the workers as it is (a name
+        would be looked up again there, and a custom hand named "barrett" replaced).
+    seed : int
+        The run's seed.
+    metrics, soft, depth : bool
+        Metric columns, soft-finger contacts, depth images.
+    key : str
+        Identifies the run, so that a worker process rebuilds its objects once per run.
+    """
 
     objects: tuple[ObjectPayload, ...]
     # The Hand itself, not its name: a custom hand travels to the workers as it is (a name
@@ -107,8 +155,19 @@ class RunContext:
 class Job:
     """Samples ``start .. start+n-1`` of object ``object_index``.
 
-    With ``p0`` (n, 6) and ``use_dir`` (n, 2) the inputs are these (the optimiser); without
-    them they are the run's seeded uniform samples (the generator).
+    Attributes
+    ----------
+    object_index : int
+        Index into :attr:`RunContext.objects`.
+    start : int
+        Number of the first sample.
+    n : int
+        Samples in the job.
+    p0 : (n, 6) float ndarray or None
+        Given pregrasps (the optimiser); None: the run's seeded uniform samples (the
+        generator).
+    use_dir : (n, 2) float ndarray or None
+        Given use directions, with ``p0``.
     """
 
     object_index: int
@@ -139,7 +198,19 @@ def _object(index: int):
 
 
 def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
-    """Evaluate one job in this process; the same function on every engine."""
+    """Evaluate one job in this process; the same function on every engine.
+
+    Parameters
+    ----------
+    job : Job
+    context : RunContext, optional
+        Installed first when given (a worker started without it, or the inline engine).
+
+    Returns
+    -------
+    pyarrow.Table
+        One row per sample (``dataset_schema``), with ``depth_mm`` when the run renders depth.
+    """
     from ..pipeline import evaluate_inputs, evaluate_samples
 
     if context is not None:
@@ -188,12 +259,17 @@ STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 
 @contextlib.contextmanager
 def stop_on_signals(signals=STOP_SIGNALS):
-    """Within this block, SIGTERM and SIGHUP stop the run as Ctrl-C does.
+    """Within this block, SIGTERM and SIGHUP stop the run as Ctrl-C does (a context manager).
 
     The handler raises :class:`~affordgrasp.errors.Interrupted` (a KeyboardInterrupt) in
     the main thread, so the engine's ``close(cancel=True)`` stops the worker processes and
     the finished work is kept. Outside the main thread it does nothing (Python delivers
     signals to the main thread only).
+
+    Parameters
+    ----------
+    signals : tuple of signal.Signals
+        The signals handled; the previous handlers come back on exit.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -211,7 +287,13 @@ def stop_on_signals(signals=STOP_SIGNALS):
 
 
 def default_workers() -> int:
-    """Every core this process may use."""
+    """Every core this process may use.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
@@ -225,16 +307,56 @@ class Engine:
     name: str = ""
 
     def submit(self, job: Job):
+        """Start a job.
+
+        Parameters
+        ----------
+        job : Job
+
+        Returns
+        -------
+        object
+            A hashable handle for :meth:`wait` and :meth:`result`.
+        """
         raise NotImplementedError
 
     def wait(self, handles: list) -> list:
-        """Block until at least one of ``handles`` is done; return the done ones."""
+        """Block until at least one of ``handles`` is done.
+
+        Parameters
+        ----------
+        handles : list
+            Handles of :meth:`submit`.
+
+        Returns
+        -------
+        list
+            The handles that are done.
+        """
         raise NotImplementedError
 
     def result(self, handle) -> pa.Table:
+        """The table of a finished job.
+
+        Parameters
+        ----------
+        handle : object
+            A done handle.
+
+        Returns
+        -------
+        pyarrow.Table
+        """
         raise NotImplementedError
 
     def close(self, cancel: bool = False) -> None:
+        """Stop the engine.
+
+        Parameters
+        ----------
+        cancel : bool
+            Stop running jobs now (their results are lost) instead of waiting for them.
+        """
         pass
 
     def __enter__(self):
@@ -245,7 +367,12 @@ class Engine:
 
 
 class InlineEngine(Engine):
-    """Jobs run in this process when submitted (one worker: no process to start)."""
+    """Jobs run in this process when submitted (one worker: no process to start).
+
+    Parameters
+    ----------
+    context : RunContext
+    """
 
     name = "local"
 
@@ -273,7 +400,15 @@ class _Done:
 
 
 class LocalEngine(Engine):
-    """A pool of worker processes on this machine (started with 'spawn': safe with threads)."""
+    """A pool of worker processes on this machine (started with 'spawn': safe with threads).
+
+    Parameters
+    ----------
+    context : RunContext
+        Sent once to each worker.
+    workers : int
+        Processes.
+    """
 
     name = "local"
 
@@ -348,6 +483,18 @@ def check_ray_address(address: str | None, timeout_s: float | None = None) -> No
     ``ray.init`` retries an unreachable or silent address for minutes inside native code,
     where it cannot even be stopped by SIGTERM; this check is a socket exchange with a
     deadline, interruptible at any time. ``auto`` and ``local`` are left to Ray.
+
+    Parameters
+    ----------
+    address : str or None
+        ``HOST:PORT`` or ``ray://HOST:PORT``; None, ``auto`` or ``local``: not checked.
+    timeout_s : float, optional
+        Seconds to wait; default ``AFFORDGRASP_RAY_CONNECT_TIMEOUT`` or 15 s.
+
+    Raises
+    ------
+    InputError
+        When the address is malformed, unreachable, silent or not a gRPC server.
     """
     if address is None or address.strip().lower() in ("auto", "local", ""):
         return
@@ -439,7 +586,17 @@ def _ray_run_job(context: RunContext, job: Job) -> pa.Table:
 
 
 class RayEngine(Engine):
-    """Jobs as Ray tasks, one CPU each, on a local Ray or an existing cluster (``address``)."""
+    """Jobs as Ray tasks, one CPU each, on a local Ray or an existing cluster (``address``).
+
+    Parameters
+    ----------
+    context : RunContext
+        Put in Ray's object store once.
+    workers : int or None
+        CPUs of a local Ray (default: every core); a cluster's CPUs otherwise.
+    address : str or None
+        An existing cluster; None starts a local Ray, shut down by :meth:`close`.
+    """
 
     name = "ray"
 
@@ -492,7 +649,22 @@ class RayEngine(Engine):
 
 
 def check_engine(engine: str, workers: int | None, address: str | None) -> None:
-    """Refuse bad engine options before any work (or any directory) is made."""
+    """Refuse bad engine options before any work (or any directory) is made.
+
+    Parameters
+    ----------
+    engine : str
+        ``"local"`` or ``"ray"``.
+    workers : int or None
+        At least 1 when given.
+    address : str or None
+        Only with ``engine="ray"``.
+
+    Raises
+    ------
+    InputError
+        Naming the bad parameter, or the missing ``cluster`` extra.
+    """
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of: {', '.join(ENGINES)}")
     if workers is not None and (isinstance(workers, bool) or workers < 1):
@@ -515,7 +687,24 @@ def make_engine(
     workers: int | None = None,
     address: str | None = None,
 ) -> Engine:
-    """The engine asked for: ``local`` (``workers`` processes; 1: this process) or ``ray``."""
+    """The engine asked for: ``local`` (``workers`` processes; 1: this process) or ``ray``.
+
+    Parameters
+    ----------
+    context : RunContext
+    engine : str
+        ``"local"`` or ``"ray"``.
+    workers : int, optional
+        Processes (local) or CPUs (local Ray); default: every core.
+    address : str, optional
+        A Ray cluster.
+
+    Returns
+    -------
+    Engine
+        :class:`InlineEngine`, :class:`LocalEngine` or :class:`RayEngine`; a context
+        manager that closes it (cancelling on an exception).
+    """
     check_engine(engine, workers, address)
     if engine == "ray":
         return RayEngine(context, workers, address)
