@@ -88,7 +88,6 @@ MODULES = sorted(
 # Modules whose docstrings are still in the compact "name : shape" style, converted package
 # by package. A converted module leaves this list (the test below says when).
 PENDING: set[str] = {
-    "commands/common.py",
     "commands/show.py",
     "dataset/layout.py",
 }

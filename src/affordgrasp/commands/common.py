@@ -18,6 +18,16 @@ HAND_HELP = "barrett (default), parallel_jaw or a .json/.toml hand file"
 
 
 def add_sampling_arguments(p) -> None:
+    """The object and sampling options of ``simulate`` and ``evaluate``.
+
+    ``OBJECT``, ``--samples``, ``--seed``, ``--hand``, the scale options, ``--out`` and the
+    hidden ``--batch``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, extended in place.
+    """
     p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
     p.add_argument("--samples", type=int, default=1000, help="number of grasps (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
@@ -28,7 +38,13 @@ def add_sampling_arguments(p) -> None:
 
 
 def add_scale_arguments(p) -> None:
-    """``--size-m`` / ``--units`` for every command that takes an object (mesh files only)."""
+    """``--size-m`` / ``--units`` for every command that takes an object (mesh files only).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        Extended in place.
+    """
     p.add_argument(
         "--size-m",
         type=float,
@@ -42,6 +58,17 @@ def add_scale_arguments(p) -> None:
 
 
 def scale_options(args) -> dict:
+    """The scale options of a parsed command line as keyword arguments of ``load_object``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+
+    Returns
+    -------
+    dict
+        ``size_m`` and ``units``, None where not given (or the command has no such option).
+    """
     return {"size_m": getattr(args, "size_m", None), "units": getattr(args, "units", None)}
 
 
@@ -50,6 +77,23 @@ def load_objects(specs, args) -> list:
 
     Families are built at their real size; the options apply to the mesh files among
     ``specs`` and are refused when there is none.
+
+    Parameters
+    ----------
+    specs : sequence of str
+        Families, ``family:seed`` or mesh paths.
+    args : argparse.Namespace
+        The parsed command line (its scale options).
+
+    Returns
+    -------
+    list of GraspObject
+        In the order of ``specs``.
+
+    Raises
+    ------
+    InputError
+        When a scale option is given and every spec is a family.
     """
     from ..objects import load_object
     from ..objects.resolve import is_family_spec
@@ -71,7 +115,19 @@ MAX_SEED = 2**63 - 1
 
 
 def check_counts(args) -> None:
-    """Sample count, seed and batch size, before any work is done."""
+    """Sample count, seed and batch size, before any work is done.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``samples``, ``seed`` and optionally ``batch``.
+
+    Raises
+    ------
+    InputError
+        Naming the option: ``--samples`` and ``--batch`` must be positive, ``--seed`` in
+        [0, 2**63 - 1].
+    """
     if args.samples <= 0:
         raise InputError(f"--samples must be a positive integer, got {args.samples}")
     if not 0 <= args.seed <= MAX_SEED:
@@ -81,7 +137,20 @@ def check_counts(args) -> None:
 
 
 def check_output_file(path: str, option: str) -> None:
-    """Refuse an output file that cannot be written, before the work that fills it."""
+    """Refuse an output file that cannot be written, before the work that fills it.
+
+    Parameters
+    ----------
+    path : str
+        The file.
+    option : str
+        The option that named it (``--out``), for the message.
+
+    Raises
+    ------
+    InputError
+        When ``path`` is a directory, or its folder is missing or not writable.
+    """
     import os
 
     if os.path.isdir(path):
@@ -98,12 +167,32 @@ def check_output_file(path: str, option: str) -> None:
 
 
 def run_batches(args, out, obj, metrics: bool):
-    """Evaluate in batches with a progress bar; returns (table, seconds per stage, wall).
+    """Evaluate in batches with a progress bar.
 
     The one-time costs come first and are timed apart, so that the stages' seconds (and the
-    throughput computed from them) are the steady state: ``spent["kernels"]`` (loading the
-    compiled kernels, or compiling them on a machine without caches; ``spent["compiled"]``
-    is 1.0 then) and ``spent["prepare"]`` (the object's surface samples).
+    throughput computed from them) are the steady state: ``kernels`` (loading the compiled
+    kernels, or compiling them on a machine without caches; ``compiled`` is 1.0 then) and
+    ``prepare`` (the object's surface samples).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``samples``, ``seed``, ``hand`` and ``batch``.
+    out : Output
+        The command's output (progress bar).
+    obj : GraspObject
+    metrics : bool
+        Compute the metric columns.
+
+    Returns
+    -------
+    table : pyarrow.Table
+        One row per sample.
+    spent : dict of str to float
+        Seconds per stage (``simulate``, ``metrics``, ``table``) and the one-time costs
+        (``kernels``, ``compiled``, ``prepare``).
+    wall : float
+        Wall time of the evaluation, s.
     """
     from ..compiled import warm_up
     from ..grasp.policy import object_geometry
@@ -133,7 +222,17 @@ def run_batches(args, out, obj, metrics: bool):
 
 
 def one_time_text(spent: dict) -> str:
-    """The one-time costs of :func:`run_batches`, in words, for the summary line."""
+    """The one-time costs of :func:`run_batches`, in words, for the summary line.
+
+    Parameters
+    ----------
+    spent : dict
+        The ``spent`` of :func:`run_batches`.
+
+    Returns
+    -------
+    str
+    """
     how = "compiled, cached for later runs" if spent.get("compiled") else "loaded from cache"
     return (
         f"one-time costs, not counted: kernels {spent['kernels']:.1f} s ({how}), "
@@ -142,6 +241,20 @@ def one_time_text(spent: dict) -> str:
 
 
 def status_summary(table) -> tuple[list[list], dict]:
+    """How many grasps ended in each status, and their mean contact count.
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        Sample rows (``status``, ``n_contacts``).
+
+    Returns
+    -------
+    rows : list of list
+        Per status of ``STATUSES``: name, count, share as text, mean contacts.
+    doc : dict
+        Status -> ``{"count", "mean_contacts"}`` for ``--json``.
+    """
     from ..grasp.policy import STATUSES
 
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
@@ -157,6 +270,21 @@ def status_summary(table) -> tuple[list[list], dict]:
 
 
 def write_table(table, path: str | None, out) -> None:
+    """Write rows to a Parquet file, whole or not at all, and say so.
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+    path : str or None
+        The file; nothing is written when None or empty.
+    out : Output
+        The command's output.
+
+    Raises
+    ------
+    InputError
+        When the file cannot be written.
+    """
     if not path:
         return
     import os
@@ -176,7 +304,22 @@ def write_table(table, path: str | None, out) -> None:
 
 
 def parse_thresholds(items: list[str]) -> dict[str, float]:
-    """``["tau_eps=0.1", ...]`` as a dict; bad items raise an InputError naming them."""
+    """``--threshold`` values as a dict.
+
+    Parameters
+    ----------
+    items : list of str
+        ``NAME=VALUE`` items, e.g. ``["tau_eps=0.1"]``.
+
+    Returns
+    -------
+    dict of str to float
+
+    Raises
+    ------
+    InputError
+        Naming the first item that is not ``NAME=VALUE`` with a number.
+    """
     out = {}
     for item in items:
         name, sep, value = item.partition("=")
@@ -202,8 +345,19 @@ def add_task_arguments(
 ) -> None:
     """The task options of every command: ``--task``, ``--mode`` and ``--threshold``.
 
-    several : ``--task`` is repeatable and takes comma lists (``--task beat,cut``); else one
-        task name. thresholds : add ``--threshold NAME=VALUE``.
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        Extended in place.
+    several : bool
+        ``--task`` is repeatable and takes comma lists (``--task beat,cut``); else one task
+        name.
+    required : bool
+        ``--task`` must be given.
+    thresholds : bool
+        Add ``--threshold NAME=VALUE``.
+    help : str, optional
+        Help text of ``--task``.
     """
     if several:
         p.add_argument(
@@ -234,7 +388,18 @@ def add_task_arguments(
 
 
 def task_names(values: list[str] | str | None) -> list[str]:
-    """Task names from ``--task`` values (repeated and/or comma-separated), first kept."""
+    """Task names from ``--task`` values (repeated and/or comma-separated).
+
+    Parameters
+    ----------
+    values : list of str, str or None
+        The option's values.
+
+    Returns
+    -------
+    list of str
+        In order, the first of duplicates kept.
+    """
     if isinstance(values, str):
         values = [values]
     names: list[str] = []
@@ -244,7 +409,29 @@ def task_names(values: list[str] | str | None) -> list[str]:
 
 
 def parse_tasks(values: list[str] | None, mode: str, threshold_items: list[str]):
-    """Task objects, and per-task threshold overrides, from the command line."""
+    """Task objects, and per-task threshold overrides, from the command line.
+
+    Parameters
+    ----------
+    values : list of str or None
+        ``--task`` values.
+    mode : str
+        ``--mode`` (checked against every task now).
+    threshold_items : list of str
+        ``--threshold`` items.
+
+    Returns
+    -------
+    tasks : list of Task
+    per_task : dict of str to dict of str to float
+        Task name -> the overrides of its thresholds.
+
+    Raises
+    ------
+    InputError
+        Without a task name, or for a threshold no task has; a TaskError for an unknown
+        task or mode.
+    """
     from ..tasks import get_task
 
     names = task_names(values)
