@@ -71,7 +71,15 @@ PLAN_KEYS = (
 
 @dataclass(frozen=True)
 class Shard:
-    """One planned shard: samples ``start .. stop-1`` of object number ``object_index``."""
+    """One planned shard: samples ``start .. stop-1`` of object number ``object_index``.
+
+    Attributes
+    ----------
+    object_index : int
+        Index of the object in the manifest.
+    start, stop : int
+        First sample and one past the last.
+    """
 
     object_index: int
     start: int
@@ -79,15 +87,35 @@ class Shard:
 
     @property
     def name(self) -> str:
+        """The shard's file name, ``part-OOOOO-SSSSSSSSSSSS.parquet``."""
         return f"part-{self.object_index:05d}-{self.start:012d}.parquet"
 
     @property
     def rows(self) -> int:
+        """Rows in the shard."""
         return self.stop - self.start
 
 
 def plan_shards(n_objects: int, samples: int, shard_size: int) -> list[Shard]:
-    """Every shard of a run, objects in order, then samples in order."""
+    """Every shard of a run, objects in order, then samples in order.
+
+    Parameters
+    ----------
+    n_objects : int
+    samples : int
+        Samples per object.
+    shard_size : int
+        Rows per shard (the last shard of an object may be shorter).
+
+    Returns
+    -------
+    list of Shard
+
+    Raises
+    ------
+    DatasetError
+        When ``shard_size`` < 1.
+    """
     if shard_size < 1:
         raise DatasetError(f"shard size must be a positive integer, got {shard_size}")
     return [
@@ -98,7 +126,16 @@ def plan_shards(n_objects: int, samples: int, shard_size: int) -> list[Shard]:
 
 
 def shard_paths(directory: str | os.PathLike) -> list[Path]:
-    """The shard files of a dataset directory, in plan order."""
+    """The shard files of a dataset directory, in plan order.
+
+    Parameters
+    ----------
+    directory : path
+
+    Returns
+    -------
+    list of pathlib.Path
+    """
     directory = Path(directory)
     return sorted(p for p in directory.iterdir() if _SHARD_RE.match(p.name))
 
@@ -107,7 +144,14 @@ def shard_paths(directory: str | os.PathLike) -> list[Path]:
 
 
 def write_json_atomic(path: Path, document: dict) -> None:
-    """Write a JSON file so that readers see the old or the new version, never a mix."""
+    """Write a JSON file so that readers see the old or the new version, never a mix.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    document : dict
+        JSON-ready; written indented, keys in their order.
+    """
     text = json.dumps(document, indent=2, sort_keys=False) + "\n"
     write_bytes_atomic(path, text.encode("utf-8"))
 
@@ -115,8 +159,16 @@ def write_json_atomic(path: Path, document: dict) -> None:
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write a file whole or not at all: a hidden temporary file, synced, then renamed.
 
-    Raises a DatasetError naming ``path`` when it cannot be written (no space left, no
-    permission, read-only file system); nothing half-written is left behind.
+    Parameters
+    ----------
+    path : pathlib.Path
+    data : bytes
+
+    Raises
+    ------
+    DatasetError
+        Naming ``path`` when it cannot be written (no space left, no permission, read-only
+        file system); nothing half-written is left behind.
     """
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
@@ -129,7 +181,13 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
 
 
 def write_file(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` and sync it to the disk (the one place files are written)."""
+    """Write ``data`` to ``path`` and sync it to the disk (the one place files are written).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    data : bytes
+    """
     with open(path, "wb") as f:
         f.write(data)
         f.flush()
@@ -137,7 +195,20 @@ def write_file(path: Path, data: bytes) -> None:
 
 
 def write_error(path: Path, exc: OSError) -> DatasetError:
-    """A one-line DatasetError for a failed write, naming the path and what to do."""
+    """A one-line DatasetError for a failed write, naming the path and what to do.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        What could not be written.
+    exc : OSError
+        Why (no space, no permission, ...).
+
+    Returns
+    -------
+    DatasetError
+        Not raised.
+    """
     reason = exc.strerror or str(exc)
     if exc.errno in (errno.ENOSPC, errno.EDQUOT):
         fix = "free some space (finished shards are kept) or choose another --out"
@@ -149,7 +220,19 @@ def write_error(path: Path, exc: OSError) -> DatasetError:
 
 
 def check_writable(directory: Path) -> None:
-    """Refuse an output directory that cannot be written, before any work is done."""
+    """Refuse an output directory that cannot be written, before any work is done.
+
+    The directory is created (with its parents) and a probe file written and removed.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+
+    Raises
+    ------
+    DatasetError
+        From :func:`write_error`.
+    """
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -167,7 +250,22 @@ def check_writable(directory: Path) -> None:
 
 
 def read_manifest(directory: str | os.PathLike) -> dict:
-    """The manifest of a dataset directory, or a DatasetError saying why there is none."""
+    """The manifest of a dataset directory.
+
+    Parameters
+    ----------
+    directory : path
+
+    Returns
+    -------
+    dict
+        The parsed ``_manifest.json``.
+
+    Raises
+    ------
+    DatasetError
+        Saying why there is none: no directory, no manifest, unreadable or foreign JSON.
+    """
     directory = Path(directory)
     path = directory / MANIFEST_NAME
     if not directory.is_dir():
@@ -190,7 +288,20 @@ def read_manifest(directory: str | os.PathLike) -> dict:
 
 
 def manifest_differences(existing: dict, requested: dict) -> list[str]:
-    """Readable differences between two manifests' plans (empty when they agree)."""
+    """Readable differences between two manifests' plans (``PLAN_KEYS``).
+
+    Parameters
+    ----------
+    existing : dict
+        The manifest on disk.
+    requested : dict
+        The manifest of the run asked for.
+
+    Returns
+    -------
+    list of str
+        One phrase per difference, e.g. ``"seed 0 there vs 1 here"``; empty when they agree.
+    """
     diffs = []
     for key in PLAN_KEYS:
         a, b = existing.get(key), requested.get(key)
@@ -223,6 +334,16 @@ def hand_spec_differences(there: dict | None, here: dict | None) -> list[str]:
     A manifest written before hands were recorded whole (no ``hand_spec``) is compared by
     the hand's name alone, so it yields no difference here; the description is not compared
     (it does not change a single row).
+
+    Parameters
+    ----------
+    there, here : dict or None
+        ``hand_spec`` of two manifests (:func:`~affordgrasp.hands.hand_to_dict`).
+
+    Returns
+    -------
+    list of str
+        Sorted top-level keys whose values differ.
     """
     if there is None or here is None:
         return []
@@ -234,8 +355,23 @@ def hand_spec_differences(there: dict | None, here: dict | None) -> list[str]:
 def prepare_directory(directory: Path, manifest: dict) -> dict:
     """Create the dataset directory with its manifest, or check it matches for a resume.
 
-    Returns the manifest in force (the existing one when resuming). Raises DatasetError when
-    the directory belongs to another command or to something else.
+    Parameters
+    ----------
+    directory : pathlib.Path
+    manifest : dict
+        The manifest of the run asked for.
+
+    Returns
+    -------
+    dict
+        The manifest in force (the existing one when resuming).
+
+    Raises
+    ------
+    DatasetError
+        When the directory holds a dataset of another plan (what differs is named; a
+        different hand of the same name with ``parameter="hand"``), or is not empty and not
+        a dataset.
     """
     check_writable(directory)
     path = directory / MANIFEST_NAME
@@ -280,6 +416,20 @@ def prepare_directory(directory: Path, manifest: dict) -> dict:
 
 
 def shard_metadata(shard: Shard, object_name: str, status_counts: dict[str, int]) -> dict:
+    """The facts a shard records in its Parquet footer.
+
+    Parameters
+    ----------
+    shard : Shard
+    object_name : str
+    status_counts : dict of str to int
+        Rows per grasp status.
+
+    Returns
+    -------
+    dict
+        ``object``, ``object_index``, ``start``, ``stop``, ``status_counts``.
+    """
     return {
         "object": object_name,
         "object_index": shard.object_index,
@@ -290,7 +440,31 @@ def shard_metadata(shard: Shard, object_name: str, status_counts: dict[str, int]
 
 
 def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> Path:
-    """Write one complete shard: a hidden temporary file, synced, then renamed into place."""
+    """Write one complete shard: a hidden temporary file, synced, then renamed into place.
+
+    Its checksum is recorded before the rename, so a shard in place always has one.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+    shard : Shard
+    table : pyarrow.Table
+        Exactly ``shard.rows`` rows.
+    info : dict
+        Footer facts (:func:`shard_metadata`).
+
+    Returns
+    -------
+    pathlib.Path
+        The shard file.
+
+    Raises
+    ------
+    DatasetError
+        When it cannot be written.
+    InternalError
+        When the table does not have the planned row count.
+    """
     if table.num_rows != shard.rows:
         raise InternalError(f"shard {shard.name} has {table.num_rows} rows, expected {shard.rows}")
     metadata = dict(table.schema.metadata or {})
@@ -317,12 +491,31 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
 
 
 def file_checksum(data: bytes | memoryview) -> str:
-    """BLAKE2b (128-bit) hex digest of a file's bytes (``CHECKSUM_ALGORITHM``)."""
+    """BLAKE2b (128-bit) hex digest of a file's bytes (``CHECKSUM_ALGORITHM``).
+
+    Parameters
+    ----------
+    data : bytes or memoryview
+
+    Returns
+    -------
+    str
+        32 hex digits.
+    """
     return hashlib.blake2b(data, digest_size=16).hexdigest()
 
 
 def record_checksum(directory: Path, name: str, data: bytes) -> None:
-    """Append a shard's size and checksum to ``_checksums.jsonl`` (synced)."""
+    """Append a shard's size and checksum to ``_checksums.jsonl`` (synced).
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+    name : str
+        The shard's file name.
+    data : bytes
+        The shard's bytes.
+    """
     line = json.dumps(
         {"name": name, "bytes": len(data), CHECKSUM_ALGORITHM: file_checksum(data)},
         sort_keys=True,
@@ -334,7 +527,23 @@ def record_checksum(directory: Path, name: str, data: bytes) -> None:
 
 
 def read_checksums(directory: Path) -> dict[str, dict]:
-    """Shard name -> {"bytes", checksum} as last recorded (a torn last line is skipped)."""
+    """The checksums recorded in a dataset directory (a torn last line is skipped).
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+
+    Returns
+    -------
+    dict of str to dict
+        Shard name -> ``{"name", "bytes", CHECKSUM_ALGORITHM}`` as last recorded; empty
+        without a checksum file.
+
+    Raises
+    ------
+    DatasetError
+        When the checksum file exists but cannot be read.
+    """
     path = Path(directory) / CHECKSUMS_NAME
     try:
         text = path.read_bytes().decode("utf-8", errors="replace")
@@ -357,9 +566,21 @@ _VERIFIED: set[tuple[str, int, int, str]] = set()
 
 
 def shard_damage(path: Path, record: dict | None) -> str | None:
-    """Why the shard file at ``path`` is not the one written (None when it is).
+    """Why the shard file at ``path`` is not the one written.
 
-    ``record`` is its entry of ``read_checksums``; None means no checksum was recorded.
+    A file verified once in this process (same size, modification time and checksum) is not
+    read again.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    record : dict or None
+        Its entry of :func:`read_checksums`; None: no checksum was recorded.
+
+    Returns
+    -------
+    str or None
+        The reason, as a phrase; None when the file is as written.
     """
     if record is None:
         return "no checksum was recorded for it (it was not written by this dataset's runs)"
@@ -384,7 +605,24 @@ def shard_damage(path: Path, record: dict | None) -> str | None:
 
 
 def verify_shards(directory: Path, paths: list[Path], manifest: dict) -> None:
-    """Refuse shards changed since they were written, naming each damaged file and the fix."""
+    """Refuse shards changed since they were written, naming each damaged file and the fix.
+
+    Datasets older than checksums (format version 1) are not checked (a warning says so).
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+    paths : list of pathlib.Path
+        The shards to check.
+    manifest : dict
+        The dataset's manifest (its format version and command).
+
+    Raises
+    ------
+    DatasetError
+        Naming the first damaged shard, how many more there are and the command that
+        rewrites them.
+    """
     if manifest.get("format_version", 1) < 2:
         log.warning(
             "dataset %s predates shard checksums: damaged shards cannot be detected", directory
@@ -410,7 +648,18 @@ def verify_shards(directory: Path, paths: list[Path], manifest: dict) -> None:
 
 
 def read_shard_info(path: Path) -> dict | None:
-    """The shard's footer facts (rows, plan range, status counts), or None if unreadable."""
+    """The shard's footer facts.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+
+    Returns
+    -------
+    dict or None
+        :func:`shard_metadata`'s facts plus ``num_rows`` and the Arrow ``schema``; None when
+        the file or its footer cannot be read.
+    """
     try:
         meta = pq.read_metadata(path)
     except (OSError, pa.ArrowException):
@@ -431,10 +680,24 @@ def read_shard_info(path: Path) -> dict | None:
 def valid_shard_info(
     directory: Path, shard: Shard, schema: pa.Schema, checksums: dict[str, dict] | None = None
 ) -> dict | None:
-    """The footer facts of a shard already on disk when it is whole and as planned, else None.
+    """The footer facts of a shard already on disk when it is whole and as planned.
 
-    ``checksums`` (``read_checksums``; read here when not given) must hold the shard's
-    checksum as written and the file must match it.
+    A shard that is damaged (:func:`shard_damage`) or not as planned (rows, range, object,
+    schema) is deleted, so that it is written again.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+    shard : Shard
+    schema : pyarrow.Schema
+        The run's row schema.
+    checksums : dict, optional
+        :func:`read_checksums` (read here when not given).
+
+    Returns
+    -------
+    dict or None
+        :func:`read_shard_info`'s facts; None when the shard must be (re)written.
     """
     path = directory / shard.name
     if not path.exists():
@@ -464,7 +727,17 @@ def valid_shard_info(
 
 
 def remove_stale_temporaries(directory: Path) -> int:
-    """Delete half-written shards left by a run that was killed; returns how many."""
+    """Delete half-written files left by a run that was killed.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+
+    Returns
+    -------
+    int
+        How many were removed.
+    """
     removed = 0
     for p in directory.iterdir():
         if _TMP_RE.match(p.name):
