@@ -85,20 +85,11 @@ MODULES = sorted(
     if not any(part.startswith("_") and part != "__init__.py" for part in p.relative_to(SRC).parts)
 )
 
-# Modules whose docstrings are still in the compact "name : shape" style, converted package
-# by package. A converted module leaves this list (the test below says when).
-PENDING: set[str] = {
-    "commands/show.py",
-}
-
 
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(SRC)))
 def test_every_public_name_of_every_module_has_numpydoc_sections(path):
     name = str(path.relative_to(SRC))
     problems = numpydoc_problems(path.read_text(encoding="utf-8"), name)
-    if name in PENDING:
-        assert problems, f"{name} is converted: remove it from PENDING"
-        return
     assert not problems, "\n".join(problems)
 
 

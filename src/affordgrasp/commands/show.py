@@ -26,6 +26,16 @@ EVALUATION_BATCH = 250
 
 
 def add_source_arguments(p) -> None:
+    """The source options ``show`` and ``plots`` share.
+
+    ``SOURCE...``, ``--samples``, ``--seed``, ``--uses``, ``--hand``, ``--mesh``, the scale
+    options and ``--out``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        Extended in place.
+    """
     p.add_argument(
         "source",
         nargs="+",
@@ -67,6 +77,13 @@ def add_source_arguments(p) -> None:
 
 
 def add_arguments(p) -> None:
+    """The options of ``affordgrasp show``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, extended in place.
+    """
     add_source_arguments(p)
     add_task_arguments(p)
     p.add_argument("--top", type=int, default=4, help="grasps per object and task (default 4)")
@@ -93,8 +110,34 @@ def add_arguments(p) -> None:
 
 
 def open_sources(args, out, tasks=(), thresholds=None) -> list:
-    """One GraspSource per SOURCE: datasets as they are, objects evaluated now (with, when
-    ``--uses`` is set, the best pairs of their grasps and ``--uses`` use points per task)."""
+    """One GraspSource per SOURCE.
+
+    Datasets are read as they are; objects are evaluated now (with, when ``--uses`` is set,
+    the best pairs of their grasps and ``--uses`` use points per task), and the source keeps
+    the hand they were evaluated with.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    out : Output
+        The command's output (progress bars).
+    tasks : sequence of Task
+        The tasks the pairs are searched for.
+    thresholds : dict, optional
+        Task name -> threshold overrides.
+
+    Returns
+    -------
+    list of GraspSource
+        :class:`~affordgrasp.viz.sources.DatasetSource` or
+        :class:`~affordgrasp.viz.sources.TableSource`, in the order of the sources.
+
+    Raises
+    ------
+    InputError
+        When ``--units`` / ``--size-m`` are given without a mesh file to apply them to.
+    """
     from ..hands import get_hand
     from ..objects import load_object
     from ..objects.resolve import is_family_spec
@@ -136,8 +179,33 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
 
 
 def with_best_pairs(obj, table, tasks, thresholds, args):
-    """``table`` plus, per task, its best (grasp, use point) pairs over the table's grasps
-    and ``args.uses`` uniform use points, as ordinary rows numbered after the samples."""
+    """A table plus, per task, its best (grasp, use point) pairs.
+
+    The pairs are searched over the table's grasps and ``args.uses`` uniform use points
+    (:func:`affordgrasp.pairs.best_pairs`) and appended as ordinary rows, numbered after the
+    samples. Tasks that do not read the use point add nothing.
+
+    Parameters
+    ----------
+    obj : GraspObject
+    table : pyarrow.Table
+        The object's evaluated samples.
+    tasks : sequence of Task
+    thresholds : dict
+        Task name -> threshold overrides.
+    args : argparse.Namespace
+        ``uses``, ``mode``, ``seed``, ``top`` and ``hand``.
+
+    Returns
+    -------
+    pyarrow.Table
+        With the table's schema.
+
+    Raises
+    ------
+    InputError
+        When ``--uses`` is negative.
+    """
     import pyarrow as pa
 
     from ..pairs import USE_COLUMNS, best_pairs
@@ -173,9 +241,35 @@ def with_best_pairs(obj, table, tasks, thresholds, args):
 def resolve_dataset_object(
     name: str, object_hash: str | None, source, meshes: list[str], out, scale: dict | None = None
 ):
-    """The GraspObject a dataset's rows were simulated on, found by name (and checked by hash).
+    """The GraspObject a dataset's rows were simulated on, found by name and checked by hash.
 
-    ``scale`` (``size_m`` / ``units``) applies to mesh files, as when the dataset was made.
+    Candidates, in order: the ``--mesh`` files of that name, files of that name under the
+    dataset directory, then the name itself (a family or a path).
+
+    Parameters
+    ----------
+    name : str
+        The object's name in the rows.
+    object_hash : str or None
+        The rows' ``object_hash``; a candidate with another mesh is skipped (a family that
+        now builds another mesh is drawn anyway, with a warning).
+    source : GraspSource
+        Where the rows come from (its ``directory``, when it has one).
+    meshes : list of str
+        ``--mesh`` paths.
+    out : Output
+        For the warning.
+    scale : dict, optional
+        ``size_m`` / ``units`` for mesh files, as when the dataset was made.
+
+    Returns
+    -------
+    GraspObject
+
+    Raises
+    ------
+    InputError
+        When no candidate loads with the right mesh; the message names ``--mesh``.
     """
     from ..objects import load_object
     from ..objects.resolve import is_family_spec
@@ -216,6 +310,23 @@ def resolve_dataset_object(
 
 
 def objects_of(rankings, sources_by_object, args, out) -> dict:
+    """The object of every ranking, loaded once each.
+
+    Parameters
+    ----------
+    rankings : list of TaskRanking
+    sources_by_object : dict of str to GraspSource
+        Where each object's rows come from.
+    args : argparse.Namespace
+        ``mesh`` and the scale options.
+    out : Output
+
+    Returns
+    -------
+    dict of str to GraspObject
+        Object name -> object, from the source when it holds it, else
+        :func:`resolve_dataset_object`.
+    """
     objects = {}
     for r in rankings:
         if r.object in objects:
@@ -236,6 +347,20 @@ def objects_of(rankings, sources_by_object, args, out) -> dict:
 
 
 def run(args, out) -> None:
+    """Run ``affordgrasp show``: rank, draw, write the grid, the page and the summary.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`add_arguments`).
+    out : Output
+        Where text, tables and the ``--json`` result go.
+
+    Raises
+    ------
+    InputError
+        For bad options or sources without rows.
+    """
     from ..viz.showcase import draw_best
     from ..viz.sources import top_grasps
 
