@@ -213,6 +213,9 @@ def test_the_manifest_records_the_whole_hand(tmp_path, box_mesh):
     assert manifest["hand"] == "barrett"
     assert manifest["hand_spec"] == json.loads(json.dumps(hand_to_dict(custom)))
     assert hand_to_dict(dataset_hand(out)) == hand_to_dict(custom)
+    from affordgrasp.viz.sources import DatasetSource
+
+    assert hand_to_dict(DatasetSource(out).hand) == hand_to_dict(custom)  # show draws it
 
     with pytest.raises(DatasetError) as refused:
         generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="barrett")

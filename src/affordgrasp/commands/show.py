@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from .common import (
+    HAND_HELP,
     add_scale_arguments,
     add_task_arguments,
     check_counts,
@@ -63,7 +64,7 @@ def add_source_arguments(p) -> None:
     p.add_argument(
         "--hand",
         default="barrett",
-        help="hand for an object SOURCE: barrett (default) or parallel_jaw",
+        help="hand for an object SOURCE: " + HAND_HELP,
     )
     p.add_argument(
         "--mesh",
