@@ -112,13 +112,48 @@ class HandArrays:
     fingers: tuple[FingerArrays, ...]
 
     def link_poses(self, dofs: np.ndarray) -> np.ndarray:
+        """Pose of every link in the hand frame (:func:`~affordgrasp.hands.kinematics.link_poses`).
+
+        Parameters
+        ----------
+        dofs : (n_dofs,) float ndarray
+            DOF values, rad or m.
+
+        Returns
+        -------
+        (l, 4, 4) float64 ndarray
+            Link frame to hand frame, m.
+        """
         return kinematics.link_poses(np.asarray(dofs, dtype=np.float64), self.tree)
 
     def shape_poses(self, dofs: np.ndarray) -> np.ndarray:
+        """Pose of every shape in the hand frame.
+
+        Parameters
+        ----------
+        dofs : (n_dofs,) float ndarray
+            DOF values, rad or m.
+
+        Returns
+        -------
+        (s, 4, 4) float64 ndarray
+            Shape frame to hand frame, m.
+        """
         return kinematics.shape_poses(self.link_poses(dofs), self.shape_link, self.shapes.local)
 
     def posed_shapes(self, dofs: np.ndarray) -> kernels.ShapeSet:
-        """Every shape with its hand-frame pose at ``dofs``."""
+        """Every shape with its hand-frame pose at ``dofs``.
+
+        Parameters
+        ----------
+        dofs : (n_dofs,) float ndarray
+            DOF values, rad or m.
+
+        Returns
+        -------
+        ShapeSet
+            The shapes' kinds, half extents and radii with their hand-frame poses.
+        """
         s = self.shapes
         return kernels.ShapeSet(self.shape_poses(dofs), s.kinds, s.halves, s.radii)
 

@@ -42,7 +42,24 @@ class HandRegistry:
         self._hands: dict[str, Hand] = {}
 
     def register(self, hand: Hand, *, replace: bool = False) -> Hand:
-        """Add ``hand`` under ``hand.name``; ``replace`` allows replacing a hand of that name."""
+        """Add ``hand`` under ``hand.name``.
+
+        Parameters
+        ----------
+        hand : Hand
+        replace : bool
+            Allow replacing a hand registered under that name.
+
+        Returns
+        -------
+        Hand
+            ``hand`` itself.
+
+        Raises
+        ------
+        HandError
+            For something other than a Hand, or a taken name without ``replace``.
+        """
         if not isinstance(hand, Hand):
             raise HandError(f"expected a Hand, got {type(hand).__name__}")
         if hand.name in self._factories and not replace:
@@ -54,14 +71,38 @@ class HandRegistry:
         return hand
 
     def unregister(self, name: str) -> None:
-        """Remove a hand (built-in ones included)."""
+        """Remove a hand (built-in ones included).
+
+        Parameters
+        ----------
+        name : str
+
+        Raises
+        ------
+        HandError
+            When no hand has that name.
+        """
         if name not in self._factories:
             raise HandError(f"unknown hand {name!r}; hands: {', '.join(self._factories)}")
         del self._factories[name]
         self._hands.pop(name, None)
 
     def get(self, name: str) -> Hand:
-        """The hand registered as ``name``."""
+        """The hand registered as ``name`` (a built-in one is built on first use).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        Hand
+
+        Raises
+        ------
+        HandError
+            For an unknown name; the message lists the registered hands.
+        """
         hand = self._hands.get(name) if isinstance(name, str) else None
         if hand is None:
             try:
@@ -75,7 +116,12 @@ class HandRegistry:
         return hand
 
     def names(self) -> list[str]:
-        """Names of the registered hands, built-in first."""
+        """Names of the registered hands, built-in first.
+
+        Returns
+        -------
+        list of str
+        """
         return list(self._factories)
 
     def __contains__(self, name: object) -> bool:

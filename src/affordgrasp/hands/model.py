@@ -178,17 +178,46 @@ class Hand:
 
     @property
     def dof_names(self) -> list[str]:
+        """Names of the DOFs, in the order of ``dofs`` (and of DOF value arrays)."""
         return [d.name for d in self.dofs]
 
     @property
     def link_names(self) -> list[str]:
+        """Names of the links, in the order of ``links`` (root first)."""
         return [link.name for link in self.links]
 
     def dof_index(self, name: str) -> int:
+        """Position of a DOF in the hand's DOF order.
+
+        Parameters
+        ----------
+        name : str
+            A DOF name.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        ValueError
+            For a name that is not a DOF of the hand.
+        """
         return self.dof_names.index(name)
 
     def open_dofs(self, s: float = 0.0) -> np.ndarray:
-        """DOF values at the pregrasp: closing DOFs at their lower limit, the pregrasp DOF at s."""
+        """DOF values at the pregrasp: closing DOFs at their lower limit, the pregrasp DOF at ``s``.
+
+        Parameters
+        ----------
+        s : float
+            Position of the pregrasp DOF between its lower (0) and upper (1) limit.
+
+        Returns
+        -------
+        (n_dofs,) float64 ndarray
+            rad or m.
+        """
         q = np.array([d.lower for d in self.dofs], dtype=np.float64)
         if self.pregrasp_dof is not None:
             d = self.dofs[self.dof_index(self.pregrasp_dof)]
@@ -198,15 +227,38 @@ class Hand:
     def forward_kinematics(self, dof_values: np.ndarray) -> np.ndarray:
         """Pose of every link in the hand frame (:mod:`affordgrasp.hands.kinematics`).
 
-        dof_values : (n_dofs,) float
-        returns : (n_links, 4, 4) float
+        Parameters
+        ----------
+        dof_values : (n_dofs,) float ndarray
+            DOF values, rad or m, in ``dof_names`` order.
+
+        Returns
+        -------
+        (n_links, 4, 4) float64 ndarray
+            Link frame to hand frame, m.
+
+        Raises
+        ------
+        HandError
+            When ``dof_values`` does not hold one value per DOF.
         """
         from .kinematics import forward_kinematics
 
         return forward_kinematics(self, dof_values)
 
     def shape_poses(self, dof_values: np.ndarray) -> np.ndarray:
-        """Pose of every collision shape in the hand frame, (n_shapes, 4, 4)."""
+        """Pose of every collision shape in the hand frame.
+
+        Parameters
+        ----------
+        dof_values : (n_dofs,) float ndarray
+            DOF values, rad or m.
+
+        Returns
+        -------
+        (n_shapes, 4, 4) float64 ndarray
+            Shape frame to hand frame, m; shapes link by link, in each link's order.
+        """
         link_poses = self.forward_kinematics(dof_values)
         out = [link_poses[i] @ s.pose for i, link in enumerate(self.links) for s in link.shapes]
         return np.array(out)
