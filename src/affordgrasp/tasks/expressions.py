@@ -157,6 +157,19 @@ class Expression:
             )
 
     def evaluate(self, names: Mapping[str, Any]) -> Any:
+        """The expression's value with ``names`` bound.
+
+        Parameters
+        ----------
+        names : mapping of str to float or ndarray
+            A value for every name of :attr:`names` (metric columns as (n,) arrays, thresholds
+            as floats); numpy broadcasting applies.
+
+        Returns
+        -------
+        float, bool or ndarray
+            Of the broadcast shape of the inputs.
+        """
         return self._eval(self._tree, names)
 
     def _eval(self, node: ast.AST, env: Mapping[str, Any]) -> Any:

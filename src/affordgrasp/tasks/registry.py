@@ -49,8 +49,13 @@ class TaskRegistry:
     def load_environment(self) -> list[str]:
         """Register the tasks of every file in ``AFFORDGRASP_TASKS`` (``os.pathsep``-separated).
 
-        Returns the names registered. Called once by the first lookup; call it again after
-        changing the variable.
+        Called once by the first lookup; call it again after changing the variable. A task of
+        a file replaces a registered task of the same name.
+
+        Returns
+        -------
+        list of str
+            The names registered.
         """
         self._environment_pending = False
         names: list[str] = []
@@ -60,7 +65,24 @@ class TaskRegistry:
         return names
 
     def register(self, task: Task, *, replace: bool = False) -> Task:
-        """Add a :class:`Task`; ``replace`` allows replacing a task of the same name."""
+        """Add a :class:`Task`.
+
+        Parameters
+        ----------
+        task : Task
+        replace : bool
+            Allow replacing a task of the same name.
+
+        Returns
+        -------
+        Task
+            ``task`` itself.
+
+        Raises
+        ------
+        TaskError
+            For something other than a Task, or a taken name without ``replace``.
+        """
         if not isinstance(task, Task):
             raise TaskError(f"expected a Task, got {type(task).__name__}")
         self._ensure_environment()
@@ -72,7 +94,17 @@ class TaskRegistry:
         return task
 
     def unregister(self, name: str) -> None:
-        """Remove a task (built-in ones included)."""
+        """Remove a task (built-in ones included).
+
+        Parameters
+        ----------
+        name : str
+
+        Raises
+        ------
+        TaskError
+            When no task has that name.
+        """
         self._ensure_environment()
         if name not in self._tasks:
             raise TaskError(
@@ -82,7 +114,21 @@ class TaskRegistry:
         del self._tasks[name]
 
     def get(self, name: str) -> Task:
-        """The task ``name``; an unknown name raises a TaskError listing the known ones."""
+        """The task registered as ``name``.
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        Task
+
+        Raises
+        ------
+        TaskError
+            For an unknown name, listing the known ones (and a close match, if any).
+        """
         self._ensure_environment()
         try:
             return self._tasks[name]
@@ -93,12 +139,36 @@ class TaskRegistry:
             ) from None
 
     def names(self) -> list[str]:
-        """Names of the registered tasks, sorted."""
+        """Names of the registered tasks, sorted.
+
+        Returns
+        -------
+        list of str
+        """
         self._ensure_environment()
         return sorted(self._tasks)
 
     def load_file(self, path: str | os.PathLike, *, replace: bool = False) -> list[str]:
-        """Register every task of a TOML file; returns their names (none if one is bad)."""
+        """Register every task of a TOML task file (all or none: a bad task registers none).
+
+        Parameters
+        ----------
+        path : path
+            A TOML file of ``[tasks.<name>]`` tables (:func:`~.toml.read_task_file`; the README
+            shows one).
+        replace : bool
+            Allow replacing registered tasks of the same names.
+
+        Returns
+        -------
+        list of str
+            The names registered, in the file's order.
+
+        Raises
+        ------
+        TaskError
+            For a bad file or task, or a taken name without ``replace``.
+        """
         found = read_task_file(path)
         if not replace:
             for task in found:

@@ -45,7 +45,25 @@ class Task:
     requires: tuple[str, ...] = ()
 
     def thresholds_for(self, mode: str = "default", **overrides: float) -> dict[str, float]:
-        """Threshold values in ``mode`` with call-time ``overrides`` applied."""
+        """Threshold values in ``mode`` with call-time ``overrides`` applied.
+
+        Parameters
+        ----------
+        mode : str
+            One of the task's modes.
+        **overrides : float
+            New values of some of its thresholds.
+
+        Returns
+        -------
+        dict of str to float
+            Every threshold of the task.
+
+        Raises
+        ------
+        TaskError
+            For an unknown mode or threshold, or a value that is not a number.
+        """
         if mode not in self.modes:
             raise TaskError(
                 f"task {self.name!r} has no mode {mode!r}{did_you_mean(mode, self.modes)}; "
@@ -66,7 +84,13 @@ class Task:
         return values
 
     def thresholds_by_mode(self) -> dict[str, dict[str, float]]:
-        """Every mode's threshold values (for dataset cards and listings)."""
+        """Every mode's threshold values (for dataset cards and listings).
+
+        Returns
+        -------
+        dict of str to dict of str to float
+            Mode -> :meth:`thresholds_for` of that mode.
+        """
         return {mode: self.thresholds_for(mode) for mode in self.modes}
 
     def evaluate(self, columns: Any, mode: str = "default", **overrides: float) -> np.ndarray:
