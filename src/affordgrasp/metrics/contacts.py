@@ -36,7 +36,13 @@ class ContactSet:
 
     @classmethod
     def empty(cls) -> ContactSet:
-        """A set with no contacts."""
+        """A set with no contacts.
+
+        Returns
+        -------
+        ContactSet
+            k = 0.
+        """
         return cls(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=object))
 
     @classmethod
@@ -52,6 +58,11 @@ class ContactSet:
             Friction coefficients (a scalar: the same for every contact).
         link : (k,) sequence of str, optional
             Link names; default ``"c0", "c1", ...``.
+
+        Returns
+        -------
+        ContactSet
+            Unit normals, float64 arrays.
 
         Raises
         ------

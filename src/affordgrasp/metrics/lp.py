@@ -81,6 +81,7 @@ class LPResult:
 
     @property
     def optimal(self) -> bool:
+        """The program was solved to optimality (``objective`` and ``x`` are finite)."""
         return self.status is LPStatus.OPTIMAL
 
 
@@ -366,6 +367,22 @@ class HighsStandardLP:
         self._status_enum = highspy.HighsModelStatus
 
     def solve(self, b: np.ndarray) -> LPResult:
+        """Solve the program for one right-hand side.
+
+        A program the simplex method cannot decide (numerical trouble on a nearly degenerate
+        program) is solved again by the interior-point method; "unbounded or infeasible" is
+        decided by a phase-1 solve.
+
+        Parameters
+        ----------
+        b : (m,) float ndarray
+            The right-hand side.
+
+        Returns
+        -------
+        LPResult
+            ``UNDECIDED`` (with a warning) when HiGHS cannot decide it.
+        """
         b = np.ascontiguousarray(b, dtype=np.float64)
         idx = np.arange(self._m, dtype=np.int32)
         self._highs.changeRowsBounds(self._m, idx, b, b)
