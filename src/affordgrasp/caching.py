@@ -41,7 +41,22 @@ class IdentityCache(Generic[T]):
         self._entries: dict[int, tuple[weakref.ref, Any, T]] = {}
 
     def get(self, obj: Any, build: Callable[[], T], *, version: Hashable = _UNVERSIONED) -> T:
-        """The value cached for ``obj`` (same ``version``), else ``build()``, cached."""
+        """The value cached for ``obj`` (same ``version``), else ``build()``, cached.
+
+        Parameters
+        ----------
+        obj : object
+            The key, by identity; its entry goes when ``obj`` is garbage-collected.
+        build : callable
+            Makes the value (no arguments) when none is cached.
+        version : hashable, optional
+            A value cached with another version is built again.
+
+        Returns
+        -------
+        object
+            The cached or new value.
+        """
         key = id(obj)
         entry = self._entries.get(key)
         if entry is not None and entry[0]() is obj and entry[1] == version:

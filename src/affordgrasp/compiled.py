@@ -34,6 +34,13 @@ class KernelLoad:
     compiled: bool
 
     def describe(self) -> str:
+        """The load in words, for a summary line.
+
+        Returns
+        -------
+        str
+            E.g. ``"kernels 0.4 s (loaded from cache)"``.
+        """
         how = "compiled, now cached for later runs" if self.compiled else "loaded from cache"
         return f"kernels {self.seconds:.1f} s ({how})"
 

@@ -130,7 +130,20 @@ class UsePoints:
 
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
-        """Cast the use rays of ``use_dir`` (m, 2) on ``obj`` (an object or a spec)."""
+        """Cast the use rays of ``use_dir`` on an object.
+
+        Parameters
+        ----------
+        obj : GraspObject or str
+            An object or a spec (``knife:3``, a mesh path).
+        use_dir : (m, 2) array_like of float
+            Use directions, in [0, 1].
+
+        Returns
+        -------
+        UsePoints
+            NaN edge metrics where a ray misses the object.
+        """
         obj = load_object(obj)
         use_dir = np.asarray(use_dir, dtype=np.float64).reshape(-1, 2)
         P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)

@@ -65,7 +65,16 @@ class Evaluation:
         return float(sum(self.timings.values()))
 
     def scores(self, task: Any, mode: str = "default", **thresholds: float) -> np.ndarray:
-        """F_T of every grasp for ``task`` (a name or a :class:`~affordgrasp.tasks.Task`).
+        """F_T of every grasp for a task.
+
+        Parameters
+        ----------
+        task : str or Task
+            A registered name or a :class:`~affordgrasp.tasks.Task`.
+        mode : str
+            Threshold mode (``"default"``, ``"no-robustness"``, ...).
+        **thresholds : float
+            Overrides of the task's thresholds.
 
         Returns
         -------

@@ -76,9 +76,17 @@ class GraspObject:
     part_names: tuple[str, ...] = ()
 
     def parts_of_faces(self, faces) -> np.ndarray:
-        """Part name of each face index (object array of str; "" for -1 or no labels).
+        """Part name of each face index.
 
-        faces : (n,) int, face indices of ``mesh`` (-1: none)
+        Parameters
+        ----------
+        faces : (n,) array_like of int
+            Face indices of ``mesh`` (-1: none).
+
+        Returns
+        -------
+        (n,) object ndarray of str
+            ``""`` for -1 or an object without part labels.
         """
         faces = np.asarray(faces, dtype=np.int64).reshape(-1)
         out = np.full(len(faces), "", dtype=object)
@@ -90,12 +98,25 @@ class GraspObject:
         return out
 
     def faces_at(self, points, normals, offset_m: float = 5e-4) -> np.ndarray:
-        """Face under each surface point: the first face hit by a ray that starts
-        ``offset_m`` outside the point along its outward normal and looks back at it.
+        """Face under each surface point.
 
-        points, normals : (n, 3) m, outward unit normals. Returns (n,) int64. A ray that
-        misses (a contact on a sharp edge, whose normal is the edge's) takes the closest
-        face instead.
+        The first face hit by a ray that starts ``offset_m`` outside the point along its outward
+        normal and looks back at it. A ray that misses (a contact on a sharp edge, whose normal
+        is the edge's) takes the closest face instead.
+
+        Parameters
+        ----------
+        points : (n, 3) array_like of float
+            Surface points, m, in the object frame.
+        normals : (n, 3) array_like of float
+            Outward unit normals there.
+        offset_m : float
+            Start of the rays outside the surface, m.
+
+        Returns
+        -------
+        (n,) int64 ndarray
+            Face indices of ``mesh``.
         """
         points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)

@@ -27,19 +27,61 @@ class ParameterDraw:
         self.values: dict[str, Any] = {}
 
     def uniform(self, name: str, low: float, high: float, typical: float) -> float:
-        """A real parameter in [low, high]; ``typical`` for seed 0."""
+        """A real parameter in [low, high]; ``typical`` for seed 0.
+
+        Parameters
+        ----------
+        name : str
+            Recorded in :attr:`values`.
+        low, high : float
+            The range (m, rad or a ratio, as the family states).
+        typical : float
+            The value of the typical instance.
+
+        Returns
+        -------
+        float
+        """
         value = typical if self.typical else float(self.rng.uniform(low, high))
         self.values[name] = value
         return value
 
     def choice(self, name: str, options: tuple[str, ...], typical: str) -> str:
-        """One of ``options``; ``typical`` for seed 0."""
+        """One of ``options``; ``typical`` for seed 0.
+
+        Parameters
+        ----------
+        name : str
+            Recorded in :attr:`values`.
+        options : tuple of str
+            Drawn with equal probability.
+        typical : str
+            The value of the typical instance.
+
+        Returns
+        -------
+        str
+        """
         value = typical if self.typical else str(options[int(self.rng.integers(len(options)))])
         self.values[name] = value
         return value
 
     def integer(self, name: str, low: int, high: int, typical: int) -> int:
-        """An integer in [low, high] inclusive; ``typical`` for seed 0."""
+        """An integer in [low, high] inclusive; ``typical`` for seed 0.
+
+        Parameters
+        ----------
+        name : str
+            Recorded in :attr:`values`.
+        low, high : int
+            The range, both ends included.
+        typical : int
+            The value of the typical instance.
+
+        Returns
+        -------
+        int
+        """
         value = typical if self.typical else int(self.rng.integers(low, high + 1))
         self.values[name] = value
         return value
