@@ -68,12 +68,19 @@ class CEMTrace:
 
     @property
     def best_index(self) -> int | None:
+        """Index of the best evaluation (the first of ties), None when none is finite."""
         if not np.any(self.values > -np.inf):
             return None
         return int(np.argmax(self.values))
 
     def best_so_far(self) -> np.ndarray:
-        """(budget,) the best value among the first i+1 evaluations."""
+        """The best value among the first i + 1 evaluations, for every i.
+
+        Returns
+        -------
+        (budget,) float64 ndarray
+            Non-decreasing; NaN counts as −inf.
+        """
         return np.maximum.accumulate(np.where(np.isnan(self.values), -np.inf, self.values))
 
 
@@ -282,6 +289,14 @@ class Found:
     row: dict
 
     def to_dict(self) -> dict:
+        """The grasp found as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``value``, ``p0``, ``use_dir``, ``found_after`` (evaluations) and ``row`` (the
+            sample row without its per-contact columns).
+        """
         keep = {k: v for k, v in self.row.items() if not k.startswith("contact_")}
         return {
             "value": self.value,
@@ -336,6 +351,16 @@ class OptimizationResult:
         return float(np.mean(self.random_values >= self.cem.value))
 
     def to_dict(self) -> dict:
+        """The result as JSON-ready data (``optimize --json``).
+
+        Returns
+        -------
+        dict
+            ``object``, ``task``, ``mode``, ``budget``, ``seed``; ``cem`` and ``random``
+            (:meth:`Found.to_dict` or None); ``cem_finite`` and ``random_finite`` (finite
+            evaluations); ``cem_evaluations_to_match_random``,
+            ``random_fraction_at_least_cem``; ``generations``; ``elapsed_s``.
+        """
         return {
             "object": self.object,
             "task": self.task,

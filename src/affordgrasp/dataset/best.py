@@ -63,6 +63,15 @@ class BestGrasps:
     objects: list[str]
 
     def to_dict(self) -> dict:
+        """The result as JSON-ready data (``best --json``).
+
+        Returns
+        -------
+        dict
+            ``task``, ``mode``, ``rows_scanned``, ``finite``, ``objects`` and ``best``: one dict
+            per ranked row (rank, object, sample, affordance, status, p0, use_dir, the metric
+            columns and the hold-effort sum).
+        """
         rows = []
         for r in self.table.to_pylist():
             row = {
@@ -153,7 +162,20 @@ class TopRows:
         self.keys = tuple(np.empty(0, dtype=np.int64) for _ in range(n_keys))
 
     def add(self, values: np.ndarray, *keys: np.ndarray) -> int:
-        """Offer rows (values (n,), each key (n,) int); returns how many can rank (> −∞)."""
+        """Offer rows; the best ``k`` of all rows offered so far are kept.
+
+        Parameters
+        ----------
+        values : (n,) float ndarray
+            F_T of each row; −∞ and NaN never rank.
+        *keys : (n,) int ndarray
+            The ``n_keys`` tie-breaking keys of each row.
+
+        Returns
+        -------
+        int
+            How many of these rows can rank (value > −∞).
+        """
         keep = values > -np.inf  # False for NaN too
         n = int(keep.sum())
         if n:

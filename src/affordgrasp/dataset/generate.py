@@ -98,9 +98,17 @@ class GenerationSummary:
 
     @property
     def grasps_per_s(self) -> float:
+        """Samples written per second of wall time (0 when no time passed)."""
         return self.samples_written / self.elapsed_s if self.elapsed_s > 0 else 0.0
 
     def to_dict(self) -> dict:
+        """The summary as JSON-ready data (``generate --json``).
+
+        Returns
+        -------
+        dict
+            Every attribute and ``grasps_per_s``.
+        """
         return {
             "directory": self.directory,
             "complete": self.complete,

@@ -78,6 +78,7 @@ class PhysicsSummary:
 
     @property
     def validations_per_s(self) -> float:
+        """Rows validated per second of wall time (0 when no time passed)."""
         return self.rows_written / self.elapsed_s if self.elapsed_s > 0 else 0.0
 
     @property
@@ -86,6 +87,14 @@ class PhysicsSummary:
         return 3600.0 * self.rows_written / self.cpu_s if self.cpu_s > 0 else 0.0
 
     def to_dict(self) -> dict:
+        """The summary as JSON-ready data (``physics --json``).
+
+        Returns
+        -------
+        dict
+            Every attribute (the worker times as ``worker_wall_s`` and ``worker_cpu_s``) plus
+            ``validations_per_s`` and ``validations_per_core_hour``.
+        """
         return {
             "directory": self.directory,
             "rows": self.rows,
