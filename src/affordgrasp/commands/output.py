@@ -79,6 +79,16 @@ class Output:
         self.err = Console(file=sys.stderr)
 
     def table(self, title: str, columns: list[str], rows: list[list]) -> None:
+        """Print a table (nothing in JSON mode).
+
+        Parameters
+        ----------
+        title : str
+        columns : list of str
+            Headers; text columns are left-aligned, numbers right-aligned.
+        rows : list of list
+            Cells, formatted by :func:`fmt`.
+        """
         if self.json_mode:
             return
         from rich.table import Table
@@ -92,17 +102,41 @@ class Output:
         self.console.print(t)
 
     def text(self, message: str) -> None:
+        """Print a line of text, with rich markup (nothing in JSON mode).
+
+        Parameters
+        ----------
+        message : str
+        """
         if not self.json_mode:
             self.console.print(message)
 
     def result(self, document: dict) -> None:
-        """The command's result; printed only in JSON mode (the tables already said it)."""
+        """The command's result; printed only in JSON mode (the tables already said it).
+
+        Parameters
+        ----------
+        document : dict
+            Made JSON-ready by :func:`to_jsonable` (NaN as null, ±inf as strings).
+        """
         if self.json_mode:
             print(json.dumps(to_jsonable(document), indent=2, allow_nan=False))
 
     @contextmanager
     def progress(self, description: str, total: int):
-        """A progress bar with rate and ETA on stderr; yields advance(n)."""
+        """A progress bar with rate and ETA on stderr (a context manager; hidden in JSON mode).
+
+        Parameters
+        ----------
+        description : str
+        total : int
+            Units of work.
+
+        Yields
+        ------
+        callable
+            ``advance(n=1)``: n more units done.
+        """
         from rich.progress import (
             BarColumn,
             MofNCompleteColumn,

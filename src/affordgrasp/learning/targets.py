@@ -63,14 +63,43 @@ class Target:
     lower_is_better: bool = False
 
     def to_dict(self) -> dict:
+        """The target as JSON-ready data (stored in a model's config).
+
+        Returns
+        -------
+        dict
+            Every attribute.
+        """
         return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict) -> Target:
+        """The target a :meth:`to_dict` document describes.
+
+        Parameters
+        ----------
+        d : dict
+
+        Returns
+        -------
+        Target
+        """
         return cls(**d)
 
     def normalise(self, values: np.ndarray) -> np.ndarray:
-        """Target units → the model's [0, 1] scale (regression) or {0, 1} (classification)."""
+        """Target units → the model's [0, 1] scale (regression) or {0, 1} (classification).
+
+        Parameters
+        ----------
+        values : (n,) array_like of float
+            In the target's units.
+
+        Returns
+        -------
+        (n,) float32 ndarray
+            (v − low) / (high − low), or log1p(v − low) / log1p(high − low) when ``log``
+            (values below ``low`` clipped there); classes as 0/1.
+        """
         v = np.asarray(values, dtype=np.float64)
         if self.kind == "classification":
             return v.astype(np.float32)
@@ -80,7 +109,18 @@ class Target:
         return ((v - self.low) / (self.high - self.low)).astype(np.float32)
 
     def denormalise(self, scores: np.ndarray) -> np.ndarray:
-        """The model's output → target units (a probability for classification)."""
+        """The model's output → target units (a probability for classification).
+
+        Parameters
+        ----------
+        scores : (n,) array_like of float
+            On the [0, 1] scale (probabilities for a classifier).
+
+        Returns
+        -------
+        (n,) float64 ndarray
+            The inverse of :meth:`normalise`; probabilities unchanged.
+        """
         s = np.asarray(scores, dtype=np.float64)
         if self.kind == "classification":
             return s

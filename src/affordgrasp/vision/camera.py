@@ -68,12 +68,24 @@ class DepthCamera:
         return (self.size - 1) / 2.0
 
     def intrinsics(self) -> np.ndarray:
-        """The OpenCV 3×3 matrix K (pixel coordinates of pixel centres are integers)."""
+        """The OpenCV intrinsic matrix (pixel coordinates of pixel centres are integers).
+
+        Returns
+        -------
+        (3, 3) float64 ndarray
+            K = [[f, 0, c], [0, f, c], [0, 0, 1]], f and c in pixels.
+        """
         f, c = self.focal_px, self.principal_px
         return np.array([[f, 0.0, c], [0.0, f, c], [0.0, 0.0, 1.0]])
 
     def ray_directions(self) -> np.ndarray:
-        """(size, size, 3) float64 camera-frame ray per pixel, z component 1 (row, column)."""
+        """The camera-frame ray of every pixel.
+
+        Returns
+        -------
+        (size, size, 3) float64 ndarray
+            Indexed (row, column); z component 1, so a ray's parameter is the depth.
+        """
         k = self.pixel_scale
         coord = (np.arange(self.size) + 0.5 - self.size / 2.0) * k
         x, y = np.meshgrid(coord, coord)  # x varies along columns, y along rows
@@ -100,6 +112,18 @@ class ObjectFrame:
 
     @classmethod
     def of(cls, mesh) -> ObjectFrame:
+        """The frame of a mesh.
+
+        Parameters
+        ----------
+        mesh : trimesh.Trimesh
+            The object, m.
+
+        Returns
+        -------
+        ObjectFrame
+            From the vertices of its convex hull.
+        """
         vertices = np.asarray(mesh.convex_hull.vertices, dtype=np.float64)
         lo, hi = vertices.min(axis=0), vertices.max(axis=0)
         return cls(vertices=vertices, centre=(lo + hi) / 2.0, length=float(np.max(hi - lo)))

@@ -51,16 +51,58 @@ class DepthRenderer:
         self._rays_cam = self.camera.ray_directions().reshape(-1, 3).astype(np.float32)
 
     def poses(self, p0) -> np.ndarray:
-        """Camera → object transforms (n, 4, 4) of the pregrasps p0 (n, 6)."""
+        """Camera poses of pregrasps.
+
+        Parameters
+        ----------
+        p0 : (n, 6) array_like of float
+            Pregrasps, each entry in [0, 1].
+
+        Returns
+        -------
+        (n, 4, 4) float64 ndarray
+            Camera → object transforms, m.
+        """
         return camera_poses(self.frame, p0)
 
     def render(self, p0, *, images_per_call: int = IMAGES_PER_CALL) -> np.ndarray:
-        """Depth images (n, size, size) float32, m along the optical axis, 0 = no return."""
+        """Depth images of the object seen from pregrasps.
+
+        Parameters
+        ----------
+        p0 : (n, 6) array_like of float
+            Pregrasps, each entry in [0, 1] (checked).
+        images_per_call : int
+            Images cast per ray-tracing call (memory vs speed).
+
+        Returns
+        -------
+        (n, size, size) float32 ndarray
+            Depth along the optical axis, m; 0 = no return.
+        """
         p0 = validate_pregrasps(p0)
         return self.render_poses(self.poses(p0), images_per_call=images_per_call)
 
     def render_poses(self, poses: np.ndarray, *, images_per_call: int = IMAGES_PER_CALL):
-        """Depth images (n, size, size) float32 from camera → object poses (n, 4, 4)."""
+        """Depth images from camera poses.
+
+        Parameters
+        ----------
+        poses : (n, 4, 4) float ndarray
+            Camera → object transforms, m.
+        images_per_call : int
+            Images cast per ray-tracing call.
+
+        Returns
+        -------
+        (n, size, size) float32 ndarray
+            Depth along the optical axis, m; 0 = no return.
+
+        Raises
+        ------
+        InputError
+            When ``poses`` is not (n, 4, 4).
+        """
         poses = np.asarray(poses, dtype=np.float64)
         if poses.ndim != 3 or poses.shape[1:] != (4, 4):
             raise InputError(f"camera poses must have shape (n, 4, 4), got {poses.shape}")

@@ -58,7 +58,14 @@ class Camera:
             raise InputError("camera eye and target must differ")
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(right, up, forward), orthonormal, in the world frame."""
+        """The camera's axes in the world frame.
+
+        Returns
+        -------
+        right, up, forward : (3,) float64 ndarray
+            Orthonormal; ``forward`` points from the eye to the target, ``up`` is the given up
+            made perpendicular to it (any perpendicular when they are parallel).
+        """
         forward = self.target - self.eye
         forward = forward / np.linalg.norm(forward)
         right = np.cross(forward, self.up)
@@ -70,13 +77,33 @@ class Camera:
 
     @property
     def focal_px(self) -> float:
+        """The focal length in pixels, from the vertical field of view and the height."""
         return 0.5 * self.height / np.tan(np.deg2rad(self.fov_deg) / 2.0)
 
     def with_size(self, width: int, height: int) -> Camera:
+        """The same camera at another image size (same field of view).
+
+        Parameters
+        ----------
+        width, height : int
+            Pixels.
+
+        Returns
+        -------
+        Camera
+        """
         return replace(self, width=int(width), height=int(height))
 
     def rays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Origins (h*w, 3) and unit directions (h*w, 3) through pixel centres, row-major."""
+        """The ray through every pixel centre, row-major.
+
+        Returns
+        -------
+        origins : (h*w, 3) float64 ndarray
+            The eye, m.
+        directions : (h*w, 3) float64 ndarray
+            Unit directions in the world frame.
+        """
         right, up, forward = self.basis()
         x = (np.arange(self.width) + 0.5 - 0.5 * self.width) / self.focal_px
         y = (np.arange(self.height) + 0.5 - 0.5 * self.height) / self.focal_px
@@ -86,9 +113,19 @@ class Camera:
         return np.broadcast_to(self.eye, d.shape).copy(), d
 
     def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pixel coordinates (n, 2) (x right, y down) and distance from the eye (n,).
+        """Pixel coordinates of points and their distance from the eye.
 
-        Points behind the camera get NaN pixel coordinates.
+        Parameters
+        ----------
+        points : (n, 3) array_like of float
+            World frame, m.
+
+        Returns
+        -------
+        uv : (n, 2) float64 ndarray
+            Pixel coordinates (x right, y down); NaN for points behind the camera.
+        distance : (n,) float64 ndarray
+            From the eye, m.
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3) - self.eye
         right, up, forward = self.basis()

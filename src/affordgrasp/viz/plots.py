@@ -64,9 +64,17 @@ class Summary:
 
     @property
     def finite(self) -> int:
+        """How many values seen were finite."""
         return self.n - self.nan - self.pos_inf - self.neg_inf
 
     def see(self, values: np.ndarray) -> None:
+        """Pass 1: count the values and widen the range.
+
+        Parameters
+        ----------
+        values : array_like of float
+            A batch of the column (NaN and infinities are counted, not ranged).
+        """
         v = np.asarray(values, dtype=np.float64)
         self.n += v.size
         self.nan += int(np.isnan(v).sum())
@@ -82,7 +90,17 @@ class Summary:
                 self.min_abs_nonzero = min(self.min_abs_nonzero, float(nz.min()))
 
     def fix_bins(self, bins: int = BINS) -> None:
-        """Choose the scale and the bin edges from what pass 1 saw."""
+        """Choose the scale and the bin edges from what pass 1 saw.
+
+        Log when the finite values are positive and span more than 10^3, symlog when the range
+        is more than 10^4 times the smallest non-zero magnitude, else linear; no bins without a
+        finite value.
+
+        Parameters
+        ----------
+        bins : int
+            Number of bins.
+        """
         if self.finite == 0:
             self.edges = None
             return
@@ -112,6 +130,12 @@ class Summary:
         self.counts = np.zeros(bins, dtype=np.int64)
 
     def add(self, values: np.ndarray) -> None:
+        """Pass 2: add the finite values of a batch to the histogram.
+
+        Parameters
+        ----------
+        values : array_like of float
+        """
         if self.edges is None:
             return
         v = np.asarray(values, dtype=np.float64)
@@ -120,7 +144,14 @@ class Summary:
         self.counts += c
 
     def note(self) -> str:
-        """What the histogram leaves out, e.g. "+inf 12%, nan 3%"."""
+        """What the histogram leaves out, e.g. ``"+∞ 12%, NaN 3%"``.
+
+        Returns
+        -------
+        str
+            The shares of +∞, −∞ and NaN values, and of exact zeros when they are at least 20 %
+            (a spike at 0 hides the rest); empty when nothing is left out.
+        """
         parts = []
         for label, k in (("+∞", self.pos_inf), ("−∞", self.neg_inf), ("NaN", self.nan)):
             if k:

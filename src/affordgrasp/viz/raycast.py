@@ -84,17 +84,51 @@ class RayCaster:
     face_part: np.ndarray  # (f,) int8
 
     def cast(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
-        """First hits: primID (n,) (-1: miss), tfar (n,) distance, u, v barycentrics."""
+        """First hits of rays.
+
+        Parameters
+        ----------
+        origins : (n, 3) array_like of float
+            World frame, m.
+        dirs : (n, 3) array_like of float
+            Directions (unit length for ``tfar`` in m).
+
+        Returns
+        -------
+        dict
+            embree's ``primID`` (n,) (-1: miss), ``tfar`` (n,) distance along the ray, ``u`` and
+            ``v`` (n,) barycentric coordinates of the hit.
+        """
         o = (np.asarray(origins, dtype=np.float64) - self.origin).astype(np.float32)
         return self.scene.run(o, np.asarray(dirs, dtype=np.float32), output=1)
 
     @classmethod
     def of_scene(cls, scene: GraspScene) -> RayCaster:
-        """The caster of a grasp scene (use :attr:`GraspScene.caster`: it is built once)."""
+        """The caster of a grasp scene (use :attr:`GraspScene.caster`: it is built once).
+
+        Parameters
+        ----------
+        scene : GraspScene
+
+        Returns
+        -------
+        RayCaster
+        """
         return _build_caster(scene)
 
     def render(self, camera: Camera, *, supersample: int = 2) -> Render:
-        """Shaded colours, depth and part per pixel, seen by ``camera``."""
+        """Shaded colours, depth and part per pixel, seen by ``camera``.
+
+        Parameters
+        ----------
+        camera : Camera
+        supersample : int
+            Rays per pixel along each axis (anti-aliasing).
+
+        Returns
+        -------
+        Render
+        """
         return _render(self, camera, supersample=supersample)
 
 

@@ -44,17 +44,52 @@ class GraspSource:
     hand: Hand | None = None
 
     def schema(self) -> pa.Schema:
+        """The rows' Arrow schema.
+
+        Returns
+        -------
+        pyarrow.Schema
+        """
         raise NotImplementedError
 
     def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
+        """The rows in batches, some columns only.
+
+        Parameters
+        ----------
+        columns : sequence of str
+
+        Yields
+        ------
+        pyarrow.Table
+            A batch of rows.
+        """
         raise NotImplementedError
 
     def fetch(self, obj: str, keys: Sequence[tuple[int, int]]) -> list[dict]:
-        """Full rows of object ``obj`` with (seed, sample) in ``keys``, in the order of keys."""
+        """Full rows of object ``obj`` with (seed, sample) in ``keys``, in the order of keys.
+
+        Parameters
+        ----------
+        obj : str
+            Object name.
+        keys : sequence of (int, int)
+            (seed, sample) of each row wanted.
+
+        Returns
+        -------
+        list of dict
+            One per key found (a missing key is skipped).
+        """
         raise NotImplementedError
 
     def scalar_columns(self) -> list[str]:
-        """Columns that are not lists (metrics, status, ids): cheap to scan."""
+        """Columns that are not lists (metrics, status, ids): cheap to scan.
+
+        Returns
+        -------
+        list of str
+        """
         return [
             f.name
             for f in self.schema()
