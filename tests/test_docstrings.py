@@ -54,28 +54,70 @@ def _returns_something(node: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
     return ret is not None and not (isinstance(ret, ast.Constant) and ret.value is None)
 
 
-def numpydoc_problems(source: str, module: str) -> list[str]:
-    """What a module's public functions and classes miss of numpydoc."""
+def _is_property(node: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
+    """A property documents what it is in its summary line, as an attribute does."""
+    names = [ast.unparse(d) for d in node.decorator_list]
+    return any(n.split(".")[-1] in ("property", "cached_property", "setter") for n in names)
+
+
+def _function_problems(node: ast.FunctionDef | ast.AsyncFunctionDef, where: str) -> list[str]:
+    doc = ast.get_docstring(node) or ""
+    if not doc.strip():
+        return [f"{where}: no docstring"]
+    if _is_property(node):
+        return []
     problems = []
-    for node in ast.parse(source).body:
+    if _parameters(node) and "Parameters\n----------" not in doc:
+        problems.append(f"{where}: no Parameters section")
+    if _returns_something(node) and not ("Returns\n-------" in doc or "Yields\n------" in doc):
+        problems.append(f"{where}: no Returns section")
+    return problems
+
+
+def _inherited_methods(node: ast.ClassDef, classes: dict[str, ast.ClassDef]) -> set[str]:
+    """Methods a class gets from its bases defined in the same module (their docs apply)."""
+    names: set[str] = set()
+    for base in node.bases:
+        parent = classes.get(ast.unparse(base))
+        if parent is not None and parent is not node:
+            names |= {f.name for f in parent.body if isinstance(f, ast.FunctionDef)}
+            names |= _inherited_methods(parent, classes)
+    return names
+
+
+def numpydoc_problems(source: str, module: str) -> list[str]:
+    """What a module's public functions, classes and their public methods miss of numpydoc.
+
+    A method without a docstring passes when it overrides a method of a base class of the
+    same module (it inherits that documentation); a property needs a summary only.
+    """
+    problems = []
+    body = ast.parse(source).body
+    classes = {n.name: n for n in body if isinstance(n, ast.ClassDef)}
+    for node in body:
         if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             continue
         if node.name.startswith("_"):
             continue
-        doc = ast.get_docstring(node) or ""
         where = f"{module}:{node.name}"
+        if not isinstance(node, ast.ClassDef):
+            problems += _function_problems(node, where)
+            continue
+        doc = ast.get_docstring(node) or ""
         if not doc.strip():
             problems.append(f"{where}: no docstring")
-            continue
-        sections = "Parameters\n----------" in doc or "Attributes\n----------" in doc
-        if isinstance(node, ast.ClassDef):
-            if (_is_record(node) or _init_parameters(node)) and not sections:
+        elif _is_record(node) or _init_parameters(node):
+            if "Parameters\n----------" not in doc and "Attributes\n----------" not in doc:
                 problems.append(f"{where}: no Parameters or Attributes section")
-            continue
-        if _parameters(node) and "Parameters\n----------" not in doc:
-            problems.append(f"{where}: no Parameters section")
-        if _returns_something(node) and not ("Returns\n-------" in doc or "Yields\n------" in doc):
-            problems.append(f"{where}: no Returns section")
+        inherited = _inherited_methods(node, classes)
+        for item in node.body:
+            if not isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            if item.name.startswith("_"):
+                continue
+            if item.name in inherited and not (ast.get_docstring(item) or "").strip():
+                continue
+            problems += _function_problems(item, f"{where}.{item.name}")
     return problems
 
 
@@ -97,11 +139,23 @@ def test_the_checker_finds_what_is_missing():
     source = (
         'def f(x: int) -> int:\n    """Summary only."""\n\n\n'
         "def _private(x):\n    pass\n\n\n"
-        'class C:\n    """Summary."""\n\n    def __init__(self, a):\n        pass\n\n\n'
+        'class C:\n    """Summary."""\n\n    def __init__(self, a):\n        pass\n\n'
+        '    def run(self, n: int) -> int:\n        """Summary only."""\n\n'
+        "    def bare(self):\n        pass\n\n"
+        "    def _helper(self, n):\n        pass\n\n"
+        "    @property\n"
+        '    def size(self) -> int:\n        """The size, m."""\n\n\n'
+        "class D(C):\n"
+        '    """Summary.\n\n    Parameters\n    ----------\n    a : int\n    """\n\n'
+        "    def __init__(self, a):\n        pass\n\n"
+        "    def run(self, n: int) -> int:\n        return n\n\n\n"
         'class E(Exception):\n    """An error without parameters of its own."""\n'
     )
     assert numpydoc_problems(source, "m.py") == [
         "m.py:f: no Parameters section",
         "m.py:f: no Returns section",
         "m.py:C: no Parameters or Attributes section",
+        "m.py:C.run: no Parameters section",
+        "m.py:C.run: no Returns section",
+        "m.py:C.bare: no docstring",
     ]
