@@ -56,3 +56,35 @@ def test_the_physics_outcomes_report_the_numeric_metrics_and_the_contact_count()
     assert set(REPORTED_METRICS) == (set(columns.METRIC_COLUMNS) - {"epsilon_reason"}) | {
         "n_contacts"
     }
+
+
+def spelled_out_columns(tree: ast.Module) -> set[str]:
+    """Column names of the owned lists written out as string literals, and sums over them."""
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and node.value in set(columns.HOLD_EFFORT_COLUMNS):
+            found.add(node.value)
+        if isinstance(node, ast.Call) and ast.unparse(node.func).split(".")[-1] == "sum":
+            if "HOLD_EFFORT_COLUMNS" in ast.unparse(node):
+                found.add("a sum over HOLD_EFFORT_COLUMNS (use hold_effort_sum)")
+    return found
+
+
+def test_no_module_spells_out_the_hold_efforts_or_sums_them_itself():
+    found = []
+    for path in sorted(SRC.rglob("*.py")):
+        if path == SRC / "columns.py":
+            continue
+        names = spelled_out_columns(ast.parse(path.read_text(encoding="utf-8")))
+        found += [f"{path.relative_to(SRC)}: {n}" for n in sorted(names)]
+    assert not found, "use affordgrasp.columns instead: " + "; ".join(found)
+
+
+def test_the_spelled_out_check_catches_both_habits():
+    tree = ast.parse(
+        "A = ('hold_effort_px', 'x')\nB = sum(col(c) for c in HOLD_EFFORT_COLUMNS)\nC = 'px'\n"
+    )
+    assert spelled_out_columns(tree) == {
+        "hold_effort_px",
+        "a sum over HOLD_EFFORT_COLUMNS (use hold_effort_sum)",
+    }

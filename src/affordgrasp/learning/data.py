@@ -20,22 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import DatasetError, InputError
 from .targets import Target, make_target, target_rows, target_values
 
 log = logging.getLogger(__name__)
 
 INPUT_COLUMNS = ("object", "sample", "p0", "use_dir")
-METRIC_INPUTS = (
-    "epsilon",
-    "hold_effort_px",
-    "hold_effort_nx",
-    "hold_effort_py",
-    "hold_effort_ny",
-    "hold_effort_pz",
-    "hold_effort_nz",
-    "impact_effort",
-)
+METRIC_INPUTS = ("epsilon", *HOLD_EFFORT_COLUMNS, "impact_effort")
 
 
 @dataclass

@@ -18,19 +18,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM
 from ..errors import InputError
 
 # Columns where a smaller value is the better grasp (efforts); the rest are better larger.
-LOWER_IS_BETTER = {
-    "hold_effort_sum",
-    "hold_effort_px",
-    "hold_effort_nx",
-    "hold_effort_py",
-    "hold_effort_ny",
-    "hold_effort_pz",
-    "hold_effort_nz",
-    "impact_effort",
-}
+LOWER_IS_BETTER = {HOLD_EFFORT_SUM, *HOLD_EFFORT_COLUMNS, "impact_effort"}
 HOLD_EFFORT_MAX = 250.0  # N, the viability bound on ΣE_h (paper §IV-D)
 
 

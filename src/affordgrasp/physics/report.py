@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 from scipy.stats import rankdata
 
-from ..columns import HOLD_EFFORT_COLUMNS
+from ..columns import HOLD_EFFORT_COLUMNS, hold_effort_sum
 
 __all__ = ["physics_report", "roc_auc", "roc_curve", "spearman"]
 
@@ -125,7 +125,7 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
     def col(name):
         return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=np.float64)
 
-    hold = sum(col(c) for c in HOLD_EFFORT_COLUMNS)
+    hold = hold_effort_sum({c: col(c) for c in HOLD_EFFORT_COLUMNS})
     preds = {
         "epsilon": col("epsilon"),
         "neg_hold_effort_sum": -hold,
