@@ -2,10 +2,18 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from metrics_support import cube_face_contacts, random_contacts, ref_wrenches
 from scipy.spatial import ConvexHull
 
-from affordgrasp.metrics.hull import HULL_DEGENERATE, HULL_OK, convex_hull_6d, hull_volume
+from affordgrasp.metrics.hull import (
+    HULL_DEGENERATE,
+    HULL_FAILED,
+    HULL_OK,
+    convex_hull_6d,
+    hull_volume,
+)
 
 
 def _compare_with_qhull(P):
@@ -63,3 +71,59 @@ def test_flat_sets_are_degenerate_not_errors():
     assert convex_hull_6d(flat)[0] == HULL_DEGENERATE
     assert convex_hull_6d(rng.normal(size=(5, 6)))[0] == HULL_DEGENERATE
     assert convex_hull_6d(np.zeros((10, 6)))[0] == HULL_DEGENERATE
+
+
+def _near_coplanar_set(rng, noise):
+    """Generic 6-D points plus clusters on random 2- to 5-flats, moved off them by ``noise``."""
+    parts = [rng.normal(size=(int(rng.integers(7, 20)), 6))]
+    for _ in range(int(rng.integers(1, 4))):
+        dim = int(rng.integers(2, 6))
+        base = rng.normal(size=6)
+        span = rng.normal(size=(dim, 6))
+        k = int(rng.integers(4, 12))
+        cluster = base + rng.uniform(-1, 1, size=(k, dim)) @ span
+        parts.append(cluster + noise * rng.normal(size=cluster.shape))
+    P = np.concatenate(parts)
+    if rng.random() < 0.3:
+        P = np.concatenate([P, P[: int(rng.integers(1, 5))]])  # exact duplicates
+    return np.ascontiguousarray(P)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1), noise_exp=st.integers(-13, -8))
+def test_near_coplanar_sets_match_qhull_or_give_up(seed, noise_exp):
+    # Points a hair off a common flat are the case that needs the coplanar-apex rule; the
+    # compiled hull must either agree with qhull or say HULL_FAILED (then ε uses qhull).
+    P = _near_coplanar_set(np.random.default_rng(seed), 10.0**noise_exp)
+    status, verts, normals, offsets, interior = convex_hull_6d(P)
+    assert status in (HULL_OK, HULL_FAILED)
+    if status == HULL_FAILED:
+        return
+    ref = ConvexHull(P, qhull_options="Qt Qx")
+    scale = np.abs(P).max()
+    assert np.min(offsets) == pytest.approx(np.min(-ref.equations[:, -1]), abs=1e-8 * scale)
+    assert hull_volume(P, verts, interior) == pytest.approx(ref.volume, rel=1e-7)
+
+
+def _ring_contacts(k, seed):
+    """A palm flat on a round foot: k contacts on a 64-gon ring, normals tilted alike, 2e-5 m
+    steps in height, plus three contacts underneath (the wine-glass foot grasp, scaled down)."""
+    rng = np.random.default_rng(seed)
+    th = 2 * np.pi * (np.arange(k) + 0.5 * rng.random()) / 64
+    pts = np.stack(
+        [0.0277 * np.cos(th), 0.0277 * np.sin(th), 0.0841 + 2e-5 * rng.integers(0, 2, k)]
+    )
+    tilt = rng.choice([0.085, 0.158], size=k)
+    nrm = np.stack([tilt * np.cos(th), tilt * np.sin(th), np.ones(k)])
+    under = [[0.005, 0.0005, -0.023], [-0.004, -0.02, -0.005], [-0.002, 0.025, -0.003]]
+    normals_under = [[0.995, 0.098, 0.028], [-0.096, -0.48, -0.872], [-0.056, 0.568, -0.821]]
+    points = np.concatenate([pts.T, under])
+    normals = np.concatenate([nrm.T, normals_under])
+    return points, normals / np.linalg.norm(normals, axis=1)[:, None]
+
+
+def test_many_nearly_coplanar_contacts_stay_compiled_and_match_qhull():
+    # Before the coplanar-apex rule, sets like the foot grasp gave up to qhull (seconds).
+    points, normals = _ring_contacts(10, 5)
+    W = ref_wrenches(points, normals, 0.4, np.array([0.0, 0.0, 0.03]), 1 / 0.09)
+    _compare_with_qhull(np.ascontiguousarray(W.T))

@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 
 from .cones import contact_wrenches, wrench_matrix_kernel
-from .hull import HULL_DEGENERATE, HULL_OK, convex_hull_6d, hull_volume
+from .hull import HULL_DEGENERATE, HULL_OK, convex_hull_6d, facet_spread, hull_volume
 from .kernel_cache import install_package_stamp
 from .lp import FAILED, OPTIMAL, simplex_standard
 from .validation import contact_arrays, point3, positive_length
@@ -281,48 +281,6 @@ def facet_supports(P, normal, offset, vertices):
         if abs(s - offset) > tol:
             return False
     return facet_spread(P, vertices) > SLIVER_TOL * scale
-
-
-@njit(cache=True)
-def facet_spread(P, vertices):
-    """Smallest Gram-Schmidt residual of the five edge vectors of a facet simplex.
-
-    Its "thinness": 0 when the six vertices lie in a 4-flat.
-
-    Parameters
-    ----------
-    P : (N, 6) float64 ndarray
-        Wrenches.
-    vertices : (6,) int64 ndarray
-        Row indices into ``P`` of the facet's vertices.
-
-    Returns
-    -------
-    float
-    """
-    E = np.empty((5, 6))
-    for r in range(5):
-        for c in range(6):
-            E[r, c] = P[vertices[r + 1], c] - P[vertices[0], c]
-    smallest = np.inf
-    for r in range(5):
-        for _ in range(2):
-            for q in range(r):
-                d = 0.0
-                for c in range(6):
-                    d += E[r, c] * E[q, c]
-                for c in range(6):
-                    E[r, c] -= d * E[q, c]
-        nrm = 0.0
-        for c in range(6):
-            nrm += E[r, c] * E[r, c]
-        nrm = np.sqrt(nrm)
-        smallest = min(smallest, nrm)
-        if nrm == 0.0:
-            return 0.0
-        for c in range(6):
-            E[r, c] /= nrm
-    return smallest
 
 
 def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:

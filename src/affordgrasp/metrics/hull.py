@@ -11,11 +11,18 @@ only when it is more than ``tol = 1e-12 * max|coordinate|`` above the facet's hy
 so points that are coplanar with a facet (the eight edges of one friction cone lie on a
 common 2-flat, symmetric grasps have many coplanar wrenches) are never added as thin
 slivers. Facet orientation is fixed by an interior point (the centroid of the initial
-simplex), not by adjacency, so round-off cannot flip a facet. Combinatorial consistency
-(each ridge in exactly two facets) is maintained and checked; any violation returns
-``HULL_FAILED`` and the caller falls back to qhull. The result has been checked against
-qhull (options ``Qt Qx``) on random and symmetric wrench sets:
-``tests/metrics/test_hull.py``.
+simplex), not by adjacency, so round-off cannot flip a facet. Nearly coplanar wrenches
+(equal normals with 1e-10 of noise, a palm flat on a round foot: dozens of contacts a
+hair off one plane) put an apex barely above some facets: a facet the apex is at most
+``COPLANAR_TOL`` (relative) above is treated as coplanar with it, not visible, so the new
+facet on that ridge makes a fold of at most that height instead of a sliver whose
+hyperplane is round-off; an apex that is only that little above every facet is dropped.
+A hull built with such a rule is verified at the end (every point beneath every facet
+that is not itself a sliver, to ``VERIFY_TOL``), and ε's own facet test stays exact (see
+:mod:`affordgrasp.metrics.epsilon`). Combinatorial consistency (each ridge in exactly two
+facets) is maintained and checked; any violation returns ``HULL_FAILED`` and the caller
+falls back to qhull. The result has been checked against qhull (options ``Qt Qx``) on
+random, symmetric and nearly coplanar wrench sets: ``tests/metrics/test_hull.py``.
 """
 
 from __future__ import annotations
@@ -35,7 +42,9 @@ HULL_FAILED = 2  # a numerical or topological inconsistency: use qhull instead
 
 DIM = 6
 HULL_TOL = 1e-12  # beyond-test tolerance, relative to the largest |coordinate|
-SLIVER_TOL = 1e-9  # an apex lower than this above a visible facet (relative) makes slivers
+COPLANAR_TOL = 1e-9  # an apex at most this far above a facet (relative) is coplanar with it
+VERIFY_TOL = 1e-8  # after a coplanar apex: every point within this (relative) beneath every facet
+THIN_TOL = 1e-6  # ... except facets thinner than this (relative), whose hyperplanes are round-off
 RANK_TOL = 1e-10  # affine independence tolerance of the initial simplex, relative
 
 
@@ -349,6 +358,114 @@ def _det6(A):
 
 
 @njit(cache=True)
+def facet_spread(P, vertices):
+    """Smallest Gram-Schmidt residual of the five edge vectors of a facet simplex.
+
+    Its "thinness": 0 when the six vertices lie in a 4-flat.
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Wrenches.
+    vertices : (6,) int64 ndarray
+        Row indices into ``P`` of the facet's vertices.
+
+    Returns
+    -------
+    float
+    """
+    E = np.empty((5, 6))
+    for r in range(5):
+        for c in range(6):
+            E[r, c] = P[vertices[r + 1], c] - P[vertices[0], c]
+    smallest = np.inf
+    for r in range(5):
+        for _ in range(2):
+            for q in range(r):
+                d = 0.0
+                for c in range(6):
+                    d += E[r, c] * E[q, c]
+                for c in range(6):
+                    E[r, c] -= d * E[q, c]
+        nrm = 0.0
+        for c in range(6):
+            nrm += E[r, c] * E[r, c]
+        nrm = np.sqrt(nrm)
+        smallest = min(smallest, nrm)
+        if nrm == 0.0:
+            return 0.0
+        for c in range(6):
+            E[r, c] /= nrm
+    return smallest
+
+
+@njit(cache=True)
+def _visible(F, f0, p, P, thr, stamp, vis, hv, hk, hg):
+    """Facets more than ``thr`` below apex ``p``, breadth-first from ``f0``, and the horizon.
+
+    Marks visited facets (``stamp``: visible, ``-stamp``: not) and stores the apex's height
+    above each in ``F.apex_dist``. Returns ``(nvis, nh, vis, hv, hk, hg)``: the visible facets
+    and the horizon ridges (visible facet, the vertex slot opposite the ridge, the
+    neighbour across it); the arrays are grown as needed.
+    """
+    nvis = 1
+    vis[0] = f0
+    F.mark[f0] = stamp
+    nh = 0
+    i = 0
+    while i < nvis:
+        v = vis[i]
+        i += 1
+        for k in range(DIM):
+            g = F.neighbours[v, k]
+            if F.mark[g] == stamp:
+                continue
+            if F.mark[g] != -stamp:
+                dg = _dist(F, g, P, p)
+                F.apex_dist[g] = dg
+                if dg > thr:
+                    F.mark[g] = stamp
+                    if nvis == vis.shape[0]:
+                        vis = _grow_1(vis, 2 * nvis, -1)
+                    vis[nvis] = g
+                    nvis += 1
+                    continue
+                F.mark[g] = -stamp
+            if nh == hv.shape[0]:
+                hv = _grow_1(hv, 2 * nh, -1)
+                hk = _grow_1(hk, 2 * nh, -1)
+                hg = _grow_1(hg, 2 * nh, -1)
+            hv[nh] = v
+            hk[nh] = k
+            hg[nh] = g
+            nh += 1
+    return nvis, nh, vis, hv, hk, hg
+
+
+@njit(cache=True)
+def _unlink(F, nxt, f, p, P):
+    """Remove point ``p`` from facet ``f``'s outside set and refresh its farthest point."""
+    prev = -1
+    pt = F.outside[f]
+    F.far_point[f] = -1
+    F.far_dist[f] = 0.0
+    while pt >= 0:
+        pn = nxt[pt]
+        if pt == p:
+            if prev < 0:
+                F.outside[f] = pn
+            else:
+                nxt[prev] = pn
+        else:
+            dist = _dist(F, f, P, pt)
+            if F.far_point[f] < 0 or dist > F.far_dist[f]:
+                F.far_dist[f] = dist
+                F.far_point[f] = pt
+            prev = pt
+        pt = pn
+
+
+@njit(cache=True)
 def convex_hull_6d(P):
     """Facets of the convex hull of a 6-D point set.
 
@@ -383,7 +500,9 @@ def convex_hull_6d(P):
         return status, empty_i, empty_f, np.zeros(0), q0
     tol = HULL_TOL * scale
     chk_tol = 1e-14 * scale
-    sliver_tol = SLIVER_TOL * scale
+    vis_tol = COPLANAR_TOL * scale
+    verify_tol = VERIFY_TOL * scale
+    thin_tol = THIN_TOL * scale
     simplex = np.empty(DIM + 1, dtype=np.int64)
     if not _initial_simplex(P, simplex, RANK_TOL * scale):
         return HULL_DEGENERATE, empty_i, empty_f, np.zeros(0), q0
@@ -448,53 +567,46 @@ def convex_hull_6d(P):
     hk = np.empty(64, dtype=np.int64)
     hg = np.empty(64, dtype=np.int64)
     stamp = 0
+    thick = False  # a nearly coplanar apex was met: verify the finished hull
     while nstack > 0:
         nstack -= 1
         f0 = stack[nstack]
         if not F.alive[f0] or F.outside[f0] < 0:
             continue
         p = F.far_point[f0]
+        if F.far_dist[f0] <= vis_tol:
+            # p is barely above f0: start from the facet it is farthest above, if that one
+            # is clearly below p; otherwise p is coplanar with the hull (within vis_tol)
+            # and is dropped, to be checked against the finished hull.
+            thick = True
+            stamp += 1
+            F.apex_dist[f0] = F.far_dist[f0]
+            nvis, nh, vis, hv, hk, hg = _visible(F, f0, p, P, tol, stamp, vis, hv, hk, hg)
+            best = f0
+            for i in range(nvis):
+                if F.apex_dist[vis[i]] > F.apex_dist[best]:
+                    best = vis[i]
+            _unlink(F, nxt, f0, p, P)
+            if F.outside[f0] >= 0:
+                if nstack == stack.shape[0]:
+                    stack = _grow_1(stack, 2 * nstack, -1)
+                stack[nstack] = f0
+                nstack += 1
+            if F.apex_dist[best] <= vis_tol:
+                continue
+            f0 = best
+            F.far_dist[f0] = F.apex_dist[best]
         stamp += 1
-        # visible facets: breadth-first from f0 over the facet adjacency
-        nvis = 1
-        vis[0] = f0
-        F.mark[f0] = stamp
+        # Visible facets: breadth-first from f0 over the facet adjacency. A facet that p is
+        # barely above (<= vis_tol: nearly coplanar wrenches, e.g. equal normals with 1e-10
+        # of noise) is not visible: the new facet on that ridge makes a fold of at most
+        # vis_tol instead of a sliver whose hyperplane is round-off.
         F.apex_dist[f0] = F.far_dist[f0]
-        nh = 0
-        i = 0
-        while i < nvis:
-            v = vis[i]
-            i += 1
-            for k in range(DIM):
-                g = F.neighbours[v, k]
-                if F.mark[g] == stamp:
-                    continue
-                if F.mark[g] != -stamp:
-                    dg = _dist(F, g, P, p)
-                    F.apex_dist[g] = dg
-                    if dg > tol:
-                        F.mark[g] = stamp
-                        if nvis == vis.shape[0]:
-                            vis = _grow_1(vis, 2 * nvis, -1)
-                        vis[nvis] = g
-                        nvis += 1
-                        continue
-                    F.mark[g] = -stamp
-                if nh == hv.shape[0]:
-                    hv = _grow_1(hv, 2 * nh, -1)
-                    hk = _grow_1(hk, 2 * nh, -1)
-                    hg = _grow_1(hg, 2 * nh, -1)
-                hv[nh] = v
-                hk[nh] = k
-                hg[nh] = g
-                nh += 1
-        # A new facet's apex stands above its ridge by at least the apex's height above the
-        # visible facet. Barely above (nearly coplanar wrenches, e.g. equal normals with
-        # 1e-10 of noise), the facet is a sliver whose hyperplane is round-off: give up
-        # rather than build a wrong hull (the caller falls back to qhull, which merges).
+        nvis, nh, vis, hv, hk, hg = _visible(F, f0, p, P, vis_tol, stamp, vis, hv, hk, hg)
         for h in range(nh):
-            if F.apex_dist[hv[h]] <= sliver_tol:
-                return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+            if F.apex_dist[hg[h]] > tol:
+                thick = True
+                break
         if nF + nh > cap:
             newcap = max(2 * cap, nF + nh + 64)
             F = _grown(F, nF, newcap)
@@ -526,6 +638,13 @@ def convex_hull_6d(P):
             d, ok = _pencil_plane(
                 F, v, g, F.apex_dist[v], F.apex_dist[g], P, F.vertices[nf], nvec, chk_tol
             )
+            if ok:
+                # p barely above g (a coplanar neighbour) makes one pencil weight positive:
+                # keep the interior point beneath
+                s = -d
+                for c in range(DIM):
+                    s += nvec[c] * q0[c]
+                ok = s < 0.0
             if not ok:
                 d, ok = _hyperplane(P, F.vertices[nf], q0, nvec, scratch, perm, yvec)
                 if not ok:
@@ -617,6 +736,16 @@ def convex_hull_6d(P):
     for f in range(nF):
         if F.alive[f]:
             count += 1
+            if thick:
+                # Coplanar apexes were met (folds of <= vis_tol, dropped points): the surface
+                # is the hull only if every point is beneath every facet, to verify_tol.
+                # A facet thinner than thin_tol has a round-off hyperplane (and no volume):
+                # its test says nothing.
+                excess = 0.0
+                for p in range(N):
+                    excess = max(excess, _dist(F, f, P, p))
+                if excess > verify_tol and facet_spread(P, F.vertices[f]) > thin_tol:
+                    return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
     out_v = np.empty((count, DIM), dtype=np.int64)
     out_n = np.empty((count, DIM))
     out_d = np.empty(count)
