@@ -32,6 +32,7 @@ import pyarrow as pa
 from numba import njit
 
 from .columns import GRASP_METRICS, USE_METRICS
+from .dataset.best import TopRows
 from .grasp.pregrasp import sample_inputs, use_points
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
@@ -343,10 +344,11 @@ def best_pairs(
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
+    # The one ranker of the package: highest F_T first, ties to the smaller grasp, then use.
     values = scores["value"]
-    finite = np.flatnonzero(values > -np.inf)
-    order = finite[np.lexsort((scores["use"][finite], scores["grasp"][finite], -values[finite]))]
-    pick = order[:top]
+    best = TopRows(top, 3)
+    candidates = best.add(values, scores["grasp"], scores["use"], np.arange(len(values)))
+    pick = best.keys[2]
     p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
     rows = _top_rows(
         obj,
@@ -362,7 +364,7 @@ def best_pairs(
         table=rows,
         grasps=grasp_table.num_rows,
         uses=len(d),
-        candidates=int(len(finite)),
+        candidates=candidates,
         lp_pairs=int(len(values)),
     )
 
