@@ -19,6 +19,20 @@ name                              value     meaning
                                             orthonormal by more than this is refused
 ``CONTACT_DISTANCE_M``            2e-4      hand links within 0.2 mm of the object touch
 ``STOP_DISTANCE_M``               5e-5      a moving link stops within 0.05 mm of the surface
+``JOINT_AT_LIMIT``                1e-12     a closing DOF this close to its upper limit (rad
+                                            or m) has reached it and stops
+``ZERO_AREA``                     1e-12     a mesh whose area is below this fraction of its
+                                            longest extent squared has no area
+``MIN_RELATIVE_VOLUME``           1e-9      a solid whose volume is below this fraction of its
+                                            bounding cube encloses nothing (a flat sheet
+                                            closed onto itself; a knife blade is ~1e-4)
+``UNION_RTOL``                    1e-9      relative volume mismatch below which a union of
+                                            bodies equals their sum (no overlap)
+``STRAIGHT_TURN``                 1e-12     a polygon corner turning the wrong way by less
+                                            than this fraction of the product of its edge
+                                            lengths is straight (OFF faces)
+``FULL_TURN_RAD``                 1e-6      a polygon whose corners turn by 2π within this
+                                            goes round once (OFF faces)
 ================================  ========  ==================================================
 
 The compiled hull and LP solvers keep their own pivot and facet tolerances next to the code
@@ -35,3 +49,9 @@ FLAT_DIHEDRAL = 1e-9
 ORTHONORMAL = 1e-9
 CONTACT_DISTANCE_M = 2e-4
 STOP_DISTANCE_M = 5e-5
+JOINT_AT_LIMIT = 1e-12
+ZERO_AREA = 1e-12
+MIN_RELATIVE_VOLUME = 1e-9
+UNION_RTOL = 1e-9
+STRAIGHT_TURN = 1e-12
+FULL_TURN_RAD = 1e-6

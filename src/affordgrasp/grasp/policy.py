@@ -32,7 +32,7 @@ from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..metrics.contacts import ContactSet
-from ..tolerances import CONTACT_DISTANCE_M, STOP_DISTANCE_M
+from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
 from .surface import SurfaceSample, sample_surface
@@ -444,7 +444,7 @@ def close_fingers(
                 active = [j for j in active if j > blocked]
             else:
                 # A joint reached its limit: it stops, the others go on.
-                active = [j for j in active if dofs[f.dofs[j]] < f.upper[j] - 1e-12]
+                active = [j for j in active if dofs[f.dofs[j]] < f.upper[j] - JOINT_AT_LIMIT]
     return dofs
 
 

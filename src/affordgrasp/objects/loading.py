@@ -33,6 +33,7 @@ import trimesh
 
 from affordgrasp.errors import InputError, MeshError
 from affordgrasp.objects.off import read_off, triangulate_polygon
+from affordgrasp.tolerances import MIN_RELATIVE_VOLUME, UNION_RTOL, ZERO_AREA
 
 __all__ = [
     "SUPPORTED_EXTENSIONS",
@@ -52,13 +53,6 @@ UNITS_TO_M: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254,
 # Longest extent of an object a hand can grasp. Outside it, metres are probably not the
 # file's unit (a 100 mm cube read as metres is 100 m long), and mesh files are refused.
 PLAUSIBLE_SIZE_M: tuple[float, float] = (0.005, 3.0)
-
-# A solid whose volume is below this fraction of its bounding cube encloses nothing: it is
-# a flat sheet closed onto itself (a knife blade is ~1e-4, far above).
-_MIN_RELATIVE_VOLUME = 1e-9
-
-# Relative volume mismatch below which a union of bodies equals their sum (no overlap).
-_UNION_RTOL = 1e-9
 
 
 def load_mesh(
@@ -168,7 +162,7 @@ def prepare_mesh(
 
     extent = float(work.extents.max())
     volume = _signed_volume(work)
-    if not volume > _MIN_RELATIVE_VOLUME * extent**3:
+    if not volume > MIN_RELATIVE_VOLUME * extent**3:
         raise MeshError(
             f"{source} encloses no volume (volume {volume:.3g} for a longest extent of "
             f"{extent:.3g}): it is a flat or open surface; close it in a mesh editor, or "
@@ -339,7 +333,7 @@ def _clean(
     mesh.remove_unreferenced_vertices()
     extent = float(np.ptp(vertices, axis=0).max())
     # Area is compared with the bounding box so that the test does not depend on units.
-    if len(mesh.faces) == 0 or not mesh.area > 1e-12 * extent**2:
+    if len(mesh.faces) == 0 or not mesh.area > ZERO_AREA * extent**2:
         raise MeshError(
             f"{source} is degenerate: all {len(faces)} faces have zero area; pass a mesh "
             "that encloses a volume"
@@ -394,7 +388,7 @@ def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> tr
             open_faces = len(body.faces)
             loops = _fill_holes(body)
             _fix_normals(body)
-            if abs(_signed_volume(body)) <= _MIN_RELATIVE_VOLUME * scale**3:
+            if abs(_signed_volume(body)) <= MIN_RELATIVE_VOLUME * scale**3:
                 # An open sheet (a fin hanging off an edge, a stray triangle): it encloses
                 # nothing and is dropped with the flat parts.
                 fins += 1
@@ -479,7 +473,7 @@ def _combine_bodies(
     it is when nothing overlaps, so a clean mesh keeps its vertex order.
     """
     scale = max(float(np.ptp(b.bounds, axis=0).max()) for b in bodies)
-    solid_bodies = [b for b in bodies if abs(_signed_volume(b)) > _MIN_RELATIVE_VOLUME * scale**3]
+    solid_bodies = [b for b in bodies if abs(_signed_volume(b)) > MIN_RELATIVE_VOLUME * scale**3]
     if len(solid_bodies) < len(bodies):
         # Flat parts (a fin, a label) closed onto themselves add nothing to the solid.
         flat = len(bodies) - len(solid_bodies) - quiet_flat  # fins are reported already
@@ -528,7 +522,7 @@ def _combine_bodies(
             solid.status(),
         )
         return _oriented(trimesh.util.concatenate([*outer, *cavities]))
-    if abs(solid.volume() - expected) <= _UNION_RTOL * abs(expected):
+    if abs(solid.volume() - expected) <= UNION_RTOL * abs(expected):
         # Disjoint bodies: keep the input's own vertices and faces.
         if whole is not None and not flipped:
             return _oriented(whole)

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from affordgrasp.errors import MeshError
+from affordgrasp.tolerances import FULL_TURN_RAD, STRAIGHT_TURN
 
 __all__ = ["read_off", "triangulate_polygon"]
 
@@ -36,9 +37,6 @@ log = logging.getLogger(__name__)
 # [ST][C][N][4][n]OFF; matched on the first token only, so "OFF490" (counts glued to the
 # header by a known broken exporter) still parses.
 _HEADER = re.compile(r"^(?P<prefix>(?:ST)?C?N?4?N?)OFF(?P<rest>.*)$", re.IGNORECASE)
-
-# Tolerance on the sum of turning angles of a polygon (2*pi for a simple convex one).
-_TURNING_TOL = 1e-6
 
 
 def read_off(source: str | os.PathLike | bytes) -> tuple[np.ndarray, np.ndarray]:
@@ -379,9 +377,9 @@ def _convex_mask(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     turn = np.einsum("pkj,pj->pk", np.cross(prev, edges), normals)
     along = np.einsum("pkj,pkj->pk", prev, edges)
     scale = np.linalg.norm(prev, axis=2) * np.linalg.norm(edges, axis=2)
-    left = turn >= -1e-12 * scale
+    left = turn >= -STRAIGHT_TURN * scale
     total = np.arctan2(turn, along).sum(axis=1)
-    one_turn = np.abs(total - 2.0 * np.pi) < _TURNING_TOL
+    one_turn = np.abs(total - 2.0 * np.pi) < FULL_TURN_RAD
     degenerate = ~normals.any(axis=1)
     return degenerate | (left.all(axis=1) & one_turn)
 

@@ -32,6 +32,7 @@ from ..errors import InputError, InternalError
 from ..hands import Hand, get_hand
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..objects.mass import MassProperties, mass_properties
+from ..tolerances import ZERO_LENGTH
 from . import deps
 from .decompose import convex_parts
 from .settings import G, PhysicsSettings
@@ -91,7 +92,7 @@ def rounded_shape_points(kind: str, half_extents, radius: float) -> np.ndarray:
     else:  # cylinder: core radius h[0], half height h[2], axis z
         xy = d[:, :2]
         norm = np.linalg.norm(xy, axis=1, keepdims=True)
-        rim = np.where(norm > 1e-12, xy / np.maximum(norm, 1e-12), 0.0) * h[0]
+        rim = np.where(norm > ZERO_LENGTH, xy / np.maximum(norm, ZERO_LENGTH), 0.0) * h[0]
         core = np.concatenate([rim, np.sign(d[:, 2:]) * h[2]], axis=1)
     return np.unique(np.round(core + radius * d, 12), axis=0)
 
