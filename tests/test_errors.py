@@ -42,3 +42,25 @@ def test_library_raises_no_bare_runtime_error_and_has_no_assert():
             if bare or isinstance(node, ast.Assert):
                 found.append(f"{path.relative_to(package)}:{node.lineno}")
     assert not found, found
+
+
+@pytest.mark.parametrize(
+    "call, parameter",
+    [
+        (lambda: _physics(shard_size=0), "shard_size"),
+        (lambda: _physics(max_per_object=0), "max_per_object"),
+        (lambda: _physics(workers=-1), "workers"),
+    ],
+)
+def test_physics_errors_name_the_python_parameter(call, parameter):
+    with pytest.raises(InputError) as err:
+        call()
+    assert str(err.value).startswith(f"{parameter} must be a positive integer")
+    flag = "--" + parameter.replace("_", "-")
+    assert cli_message(err.value).startswith(f"{flag} must be a positive integer")
+
+
+def _physics(**kwargs):
+    from affordgrasp.physics.run import run_physics
+
+    return run_physics("no-such-dataset", "no-such-out", **kwargs)

@@ -507,8 +507,9 @@ def check_ray_address(address: str | None, timeout_s: float | None = None) -> No
     host = host.strip("[]")
     if not sep or not host or not port.isdigit():
         raise InputError(
-            f"--address {address!r} is not HOST:PORT, ray://HOST:PORT or auto; give the "
-            "address 'ray start --head' printed"
+            f"address {address!r} is not HOST:PORT, ray://HOST:PORT or auto; give the "
+            "address 'ray start --head' printed",
+            parameter="address",
         )
     where = f"the Ray cluster at {address!r}"
     deadline = time.monotonic() + timeout_s

@@ -143,7 +143,10 @@ def prepare_split(
         sp = split_by_object(samples.object, samples.family, seed=seed)
     elif split == "family":
         if not test_families:
-            raise InputError("--split family needs --test-families (e.g. axe,mug)")
+            raise InputError(
+                "split 'family' needs test_families, the families to hold out (e.g. axe,mug)",
+                parameter="test_families",
+            )
         sp = split_by_family(samples.object, samples.family, test_families, seed=seed)
     else:
         raise InputError(f"unknown split {split!r}; choose object or family")
@@ -449,8 +452,9 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
         mask = np.isin(samples.object, held)
         if not mask.any():
             raise InputError(
-                f"none of the model's test objects ({', '.join(held) or 'none'}) is in "
-                f"{str(dataset)!r}; pass --objects all or name objects"
+                f"objects: none of the model's test objects ({', '.join(held) or 'none'}) is "
+                f"in {str(dataset)!r}; pass 'all' or name objects",
+                parameter="objects",
             )
     elif objects == "all":
         mask = np.ones(len(samples), dtype=bool)

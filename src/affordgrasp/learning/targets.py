@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM
-from ..errors import InputError
+from ..errors import InputError, bad_parameter
 
 # Columns where a smaller value is the better grasp (efforts); the rest are better larger.
 LOWER_IS_BETTER = {HOLD_EFFORT_SUM, *HOLD_EFFORT_COLUMNS, "impact_effort"}
@@ -184,7 +184,9 @@ def make_target(name: str, train_values: np.ndarray | None = None, *, log: bool 
     Target
     """
     if not name or not isinstance(name, str):
-        raise InputError("--target must name 'viable', 'hold_effort_sum', a column or task:NAME")
+        raise bad_parameter(
+            "target", "must name 'viable', 'hold_effort_sum', a column or task:NAME"
+        )
     lower = name in LOWER_IS_BETTER
     if name == "viable":
         return Target("viable", "classification", "all")

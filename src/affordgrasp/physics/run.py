@@ -27,7 +27,7 @@ import pyarrow.parquet as pq
 
 from .. import __version__
 from ..columns import METRIC_COLUMNS
-from ..errors import DatasetError, InputError
+from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
 from .settings import PhysicsSettings
 
@@ -273,12 +273,12 @@ def run_physics(
     """
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
-        raise InputError(f"--shard-size must be a positive integer, got {shard_size}")
+        raise bad_parameter("shard_size", f"must be a positive integer, got {shard_size}")
     if max_per_object is not None and max_per_object <= 0:
-        raise InputError(f"--max-per-object must be a positive integer, got {max_per_object}")
+        raise bad_parameter("max_per_object", f"must be a positive integer, got {max_per_object}")
     workers = workers or len(os.sched_getaffinity(0))
     if workers <= 0:
-        raise InputError(f"--workers must be a positive integer, got {workers}")
+        raise bad_parameter("workers", f"must be a positive integer, got {workers}")
     out = Path(out)
     rows, manifest = _plan_rows(dataset_dir, statuses, objects, max_per_object)
     n = rows.num_rows
