@@ -45,7 +45,10 @@ WORKER = textwrap.dedent(
     except ImportError:  # releases before the pipeline module
         from affordgrasp.evaluate import evaluate_samples
     from affordgrasp.grasp.policy import object_geometry
-    from affordgrasp.objects import load_object
+    try:
+        from affordgrasp.objects import load_object
+    except ImportError:  # releases before the rename
+        from affordgrasp.objects import resolve_object as load_object
     import pyarrow.parquet as pq
 
     spec, n = sys.argv[1], int(sys.argv[2])

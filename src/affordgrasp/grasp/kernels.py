@@ -138,10 +138,13 @@ PROBE = 1e-7
 # Step of a point inside the hit level that is not pressed: with speed bounds of a few
 # tenths of a metre per radian it moves a few micrometres.
 SLIDE_STEP = 2e-5
-# A search entry carries the set of shapes it may touch as a bit mask (all when the hand
-# has more shapes than bits).
-ALL_SHAPES = -1
-MASK_BITS = 62
+# Counters of one search (see first_contact_counted): heap pops, heap pushes, distance
+# queries of the search, distance queries of the first-hit refinement.
+POPS = 0
+PUSHES = 1
+QUERIES = 2
+REFINE_QUERIES = 3
+N_COUNTS = 4
 
 
 @njit(cache=True, fastmath=False)
@@ -281,18 +284,25 @@ def _bounding_radius(kind, half, r):
 
 
 @njit(cache=True)
-def _in_sweep(c, rr, pose, axis, t_max):
-    """Whether a sphere (hand-frame centre c, radius rr grown by a shape's bounding radius)
-    meets the shape's bounding sphere while the shape translates by 0..t_max along axis."""
+def _sweep_entry(c, rr, pose, axis, t_max):
+    """For a sphere (hand-frame centre c, radius rr grown by a shape's bounding radius) and
+    the shape translating by 0..t_max along axis: the travel at which the sphere enters
+    the shape's swept bounding sphere (0 if it is in already), or -1 if it never does."""
     dx = c[0] - pose[0, 3]
     dy = c[1] - pose[1, 3]
     dz = c[2] - pose[2, 3]
     along = dx * axis[0] + dy * axis[1] + dz * axis[2]
-    d2 = dx * dx + dy * dy + dz * dz - along * along
+    # the part across the axis (for the approach's axis, +z: exactly (dx, dy, 0))
+    ex = dx - along * axis[0]
+    ey = dy - along * axis[1]
+    ez = dz - along * axis[2]
+    d2 = ex * ex + ey * ey + ez * ez
     if d2 > rr * rr:
-        return False
+        return -1.0
     half_chord = np.sqrt(rr * rr - d2)
-    return along + half_chord >= 0.0 and along - half_chord <= t_max
+    if along + half_chord < 0.0 or along - half_chord > t_max:
+        return -1.0
+    return max(along - np.sqrt(rr * rr - ex * ex - ey * ey - ez * ez), 0.0)
 
 
 @njit(cache=True)
@@ -358,20 +368,14 @@ def _chain_frames(chain, s_max):
 
 
 @njit(cache=True)
-def _has_shape(mask, q):
-    """Whether shape q is in a search entry's bit mask of the shapes it may touch."""
-    return mask == ALL_SHAPES or (q < MASK_BITS and ((mask >> q) & 1) == 1)
-
-
-@njit(cache=True)
-def _chain_touch(px, py, pz, s, r, chain, frames, margin, mask=ALL_SHAPES):
+def _chain_touch(px, py, pz, s, r, chain, frames, margin):
     """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
     of composing the links' poses: a few dozen operations per joint.
     r is the point's distance from the first joint origin (plus a cell's radius when the
     point is a cell centre); with a margin below the hit level the steps reach the hit level
-    in finitely many steps. Only the shapes in ``mask`` count (see ``_has_shape``).
+    in finitely many steps.
     returns : (smallest distance, its shape, a safe step in s: min over shapes of
         (distance - margin) / (the point's speed bound relative to that shape's link))
     """
@@ -412,7 +416,7 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, mask=ALL_SHAPES):
             z -= az * q
             bound += abs(chain.speeds[j])
         for sq in range(chain.shape_joint.shape[0]):
-            if chain.shape_joint[sq] != j or not _has_shape(mask, sq):
+            if chain.shape_joint[sq] != j:
                 continue
             t = frames.inv_shape[sq]
             lx = t[0, 0] * x + t[0, 1] * y + t[0, 2] * z + t[0, 3]
@@ -429,14 +433,29 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, mask=ALL_SHAPES):
 
 
 @njit(cache=True)
-def _heap_push(heap, size, k, i, p, m):
-    """Push (key k, entity i, bracket low p, shape mask m) on the binary heap."""
-    key, ident, prev, mask = heap
+def _swept_distance(px, py, pz, u, q, shapes, shape_pose, axis):
+    """For a translation: distance of a hand-frame point to shape q (at ``shape_pose`` when
+    the motion starts) after it has travelled u along axis. Only the point moves (by -u
+    along axis), so for the approach (axis +z) this is exactly sdf(px, py, pz - u)."""
+    return sdf_world(
+        px - axis[0] * u,
+        py - axis[1] * u,
+        pz - axis[2] * u,
+        shape_pose[q],
+        shapes.kinds[q],
+        shapes.halves[q],
+        shapes.radii[q],
+    )
+
+
+@njit(cache=True)
+def _heap_push(heap, size, k, i, p):
+    """Push (key k, entry i, bracket low p) on the binary heap (key, ident, prev)."""
+    key, ident, prev = heap
     j = size
     key[j] = k
     ident[j] = i
     prev[j] = p
-    mask[j] = m
     while j > 0:
         parent = (j - 1) // 2
         if key[parent] <= key[j]:
@@ -444,24 +463,21 @@ def _heap_push(heap, size, k, i, p, m):
         key[parent], key[j] = key[j], key[parent]
         ident[parent], ident[j] = ident[j], ident[parent]
         prev[parent], prev[j] = prev[j], prev[parent]
-        mask[parent], mask[j] = mask[j], mask[parent]
         j = parent
     return size + 1
 
 
 @njit(cache=True)
 def _heap_pop(heap, size):
-    """Pop the smallest key: (key, entity, bracket low, shape mask, new size)."""
-    key, ident, prev, mask = heap
+    """Pop the smallest key: (key, entry, bracket low, new size)."""
+    key, ident, prev = heap
     k = key[0]
     i = ident[0]
     p = prev[0]
-    m = mask[0]
     size -= 1
     key[0] = key[size]
     ident[0] = ident[size]
     prev[0] = prev[size]
-    mask[0] = mask[size]
     j = 0
     while True:
         left = 2 * j + 1
@@ -475,41 +491,53 @@ def _heap_pop(heap, size):
         key[child], key[j] = key[j], key[child]
         ident[child], ident[j] = ident[j], ident[child]
         prev[child], prev[j] = prev[j], prev[child]
-        mask[child], mask[j] = mask[j], mask[child]
         j = child
-    return k, i, p, m, size
+    return k, i, p, size
 
 
 @njit(cache=True)
-def _refine_first_hit(cloud, rot, trans, chain, frames, hits, n_hits, best, hit_eps):
+def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hits, best, hit_eps,
+                      counts):  # fmt: skip
     """The first crossing of the hit level among the hits whose bracket starts before the
-    best one, each refined by bisection on its bracket [s_prev, s].
+    best one, each refined by bisection on its bracket [lo, hi].
 
-    hits : (h, 3) rows (point index, bracket low, bracket high) as float
-    returns : (s, point index, shape index); (inf, -1, -1) when there is no hit.
+    hits : (h, 4) rows (point index, shape slot, bracket low, bracket high) as float; slot
+        q + 1 is a (point, shape q) pair of a translation, whose bracket is in travel (m),
+        slot 0 a point against every shape of the chain, bracket in the motion parameter.
+    swept : (k, 4, 4) the shapes' hand-frame poses when a translation starts.
+    returns : (bracket value, point index, shape index); (inf, -1, -1) when there is no hit.
     """
     ph = np.empty(3)
     first = np.inf
     first_p = -1
     first_q = -1
     for h in range(n_hits):
-        lo = hits[h, 1]
+        lo = hits[h, 2]
         if lo > best:
             continue
         i = int(hits[h, 0])
-        hi = hits[h, 2]
+        slot = int(hits[h, 1])
+        hi = hits[h, 3]
         _to_hand(cloud.points[i], rot, trans, ph)
         for _ in range(BISECTIONS):
             if hi - lo <= 1e-13:
                 break
             mid = 0.5 * (lo + hi)
-            dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps)
+            counts[REFINE_QUERIES] += 1
+            if slot > 0:
+                dm = _swept_distance(ph[0], ph[1], ph[2], mid, slot - 1, chain.shapes, swept, axis)
+            else:
+                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps)
             if dm <= hit_eps:
                 hi = mid
             else:
                 lo = mid
         if hi < first:
-            _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps)
+            if slot > 0:
+                q_hi = slot - 1
+            else:
+                counts[REFINE_QUERIES] += 1
+                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps)
             first = hi
             first_p = i
             first_q = q_hi
@@ -519,31 +547,256 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, hits, n_hits, best, hit_
 
 
 @njit(cache=True)
-def _sweep_mask(c, radius, within, shape_buf, rho, axis, t_max):
-    """For a translation: the shapes among ``within`` whose swept column meets the sphere
-    (hand-frame centre c, radius) — the only ones it may touch; 0 when none."""
-    bits = 0
-    for q in range(min(shape_buf.shape[0], MASK_BITS)):
-        if _has_shape(within, q) and _in_sweep(c, radius + rho[q], shape_buf[q], axis, t_max):
-            bits |= 1 << q
-    return bits
+def _ahead(c, pose, axis, u, extent):
+    """For a translation: whether a shape (start pose ``pose``, bounding radius grown by the
+    hit level and a cell's radius: ``extent``) that has travelled u along axis has not yet
+    passed the point or cell centre c."""
+    along = (
+        (c[0] - pose[0, 3]) * axis[0]
+        + (c[1] - pose[1, 3]) * axis[1]
+        + (c[2] - pose[2, 3]) * axis[2]
+    )
+    return along - u > -extent
 
 
 @njit(cache=True)
-def _still_ahead(c, radius, mask, shape_buf, rho, axis, s):
-    """For a translation at parameter s: whether a shape of ``mask`` has not yet passed the
-    sphere (hand-frame centre c, radius) along the axis."""
-    for q in range(shape_buf.shape[0]):
-        if not _has_shape(mask, q):
-            continue
-        along = (
-            (c[0] - shape_buf[q, 0, 3]) * axis[0]
-            + (c[1] - shape_buf[q, 1, 3]) * axis[1]
-            + (c[2] - shape_buf[q, 2, 3]) * axis[2]
+def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
+    """:func:`first_contact`, adding the work it did to ``counts``.
+
+    counts : (N_COUNTS,) int64 ndarray, indexed by POPS, PUSHES, QUERIES, REFINE_QUERIES.
+    """
+    m = chain.origins.shape[0]
+    k = chain.shape_joint.shape[0]
+    shapes = chain.shapes
+    link_buf = np.empty((m, 4, 4))
+    shape_buf = np.empty((k, 4, 4))
+    _chain_poses_into(0.0, chain, link_buf, shape_buf)
+    frames = _chain_frames(chain, s_max)
+    tmp_a = np.empty((4, 4))
+    tmp_b = np.empty((4, 4))
+    mul4_into(chain.base, chain.origins[0], tmp_a)
+    o0 = tmp_a[:3, 3].copy()
+    a0 = _rotate(tmp_a, chain.axes[0])
+    rho = np.empty(k)
+    for q in range(k):
+        # grown by the hit level: a point can come within hit_eps of a rounded corner while
+        # still outside the exact bounding sphere
+        rho[q] = (
+            _bounding_radius(shapes.kinds[q], shapes.halves[q], shapes.radii[q]) + 2.0 * hit_eps
         )
-        if along - s > -(rho[q] + radius):
-            return True
-    return False
+    # A pure translation (the approach, a sliding jaw) moves every shape along one column:
+    # its entries are (cell or point, shape) pairs, keyed and stepped in travel (m), and
+    # a pair leaves the queue once the shape has passed it. Otherwise an entry is a cell or
+    # point against the whole chain, keyed in the motion parameter.
+    translation = m == 1 and chain.kinds[0] == PRISMATIC
+    speed = abs(chain.speeds[0])
+    # the direction the shapes travel (a slide may close along -axis)
+    a_move = a0 * (1.0 if chain.speeds[0] >= 0.0 else -1.0)
+    slots = k + 1 if translation else 1
+    limit = speed * s_max if translation else s_max
+    reach = 0.0
+    for q in range(k):
+        j = chain.shape_joint[q]
+        dx = shape_buf[q, 0, 3] - link_buf[j, 0, 3]
+        dy = shape_buf[q, 1, 3] - link_buf[j, 1, 3]
+        dz = shape_buf[q, 2, 3] - link_buf[j, 2, 3]
+        ext = _bounding_radius(shapes.kinds[q], shapes.halves[q], shapes.radii[q])
+        reach = max(reach, frames.chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
+    reach += 2.0 * hit_eps
+    # The shapes were placed at s = 0; slides can carry them further out, by at most the
+    # slide's travel from where it is now.
+    for j in range(m):
+        if chain.kinds[j] == PRISMATIC:
+            reach += abs(chain.speeds[j]) * s_max + frames.slide[j]
+    # When every joint is revolute about parallel axes (a planar finger, like the Barrett's),
+    # the links sweep a slab across that axis: nothing outside it can be touched.
+    planar = True
+    for j in range(m):
+        if chain.kinds[j] != REVOLUTE:
+            planar = False
+            break
+        if j > 0:
+            mul4_into(link_buf[j - 1], chain.origins[j], tmp_b)
+            aj = _rotate(tmp_b, chain.axes[j])
+            if abs(aj[0] * a0[0] + aj[1] * a0[1] + aj[2] * a0[2]) < 1.0 - 1e-9:
+                planar = False
+                break
+    slab = np.inf
+    if planar:
+        slab = 0.0
+        for q in range(k):
+            along = (
+                (shape_buf[q, 0, 3] - o0[0]) * a0[0]
+                + (shape_buf[q, 1, 3] - o0[1]) * a0[1]
+                + (shape_buf[q, 2, 3] - o0[2]) * a0[2]
+            )
+            slab = max(slab, abs(along) + rho[q])
+    # Heap entries: entry = code * slots + slot, code a point i (< n), the fine cell n + f or
+    # the coarse cell n + nf + c; slot 0 the whole chain, q + 1 the shape q of a translation.
+    # prev is the last key at which the entry was known not to touch (the low end of the
+    # bracket of a crossing).
+    n = cloud.points.shape[0]
+    nf = cloud.cell_center.shape[0]
+    nk = cloud.coarse_center.shape[0]
+    kc = np.empty((nk, 3))
+    kr = np.empty(nk)
+    tmp = np.empty(3)
+    cap = 1
+    for c in range(nk):
+        _to_hand(cloud.coarse_center[c], rot, trans, tmp)
+        kc[c, 0] = tmp[0]
+        kc[c, 1] = tmp[1]
+        kc[c, 2] = tmp[2]
+        kr[c] = -1.0
+        radius = cloud.coarse_radius[c]
+        f0 = cloud.coarse_start[c]
+        f1 = cloud.coarse_start[c + 1]
+        below = 1 + f1 - f0 + cloud.cell_start[f1] - cloud.cell_start[f0]
+        if translation:
+            for q in range(k):
+                if _sweep_entry(tmp, radius + rho[q], shape_buf[q], a_move, limit) >= 0.0:
+                    cap += below
+            continue
+        dx = tmp[0] - o0[0]
+        dy = tmp[1] - o0[1]
+        dz = tmp[2] - o0[2]
+        r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if r0 - radius > reach:
+            continue
+        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - radius > slab:
+            continue
+        kr[c] = r0 + radius
+        cap += below
+    heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap))
+    size = 0
+    margin = 0.5 * hit_eps
+    for c in range(nk):
+        code = n + nf + c
+        radius = cloud.coarse_radius[c]
+        if translation:
+            for q in range(k):
+                t_in = _sweep_entry(kc[c], radius + rho[q], shape_buf[q], a_move, limit)
+                if t_in >= 0.0:
+                    counts[PUSHES] += 1
+                    size = _heap_push(heap, size, t_in, code * slots + q + 1, t_in)
+            continue
+        if kr[c] < 0.0:
+            continue
+        counts[QUERIES] += 1
+        _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
+                                  margin + radius)  # fmt: skip
+        if step < s_max:
+            counts[PUSHES] += 1
+            size = _heap_push(heap, size, step, code * slots, 0.0)
+    best = limit  # an upper bound on the first crossing, lowered by every hit
+    hits = np.empty((64, 4))
+    nh = 0
+    ph = np.empty(3)
+    for _ in range(100_000_000):
+        if size == 0:
+            break
+        s, e, s_prev, size = _heap_pop(heap, size)
+        counts[POPS] += 1
+        if s >= best:
+            break
+        code = e // slots
+        slot = e - code * slots
+        q = slot - 1
+        if code >= n:
+            coarse = code >= n + nf
+            c = code - n - nf if coarse else code - n
+            radius = cloud.coarse_radius[c] if coarse else cloud.cell_radius[c]
+            center = cloud.coarse_center[c] if coarse else cloud.cell_center[c]
+            _to_hand(center, rot, trans, ph)
+            counts[QUERIES] += 1
+            if translation:
+                d = _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move) - radius
+                touching = d <= hit_eps
+                nxt = s + d - margin
+            else:
+                dx = ph[0] - o0[0]
+                dy = ph[1] - o0[1]
+                dz = ph[2] - o0[2]
+                r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
+                d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames,
+                                          margin + radius)  # fmt: skip
+                touching = d - radius <= hit_eps
+                nxt = s + step
+            if touching:
+                # Everything inside is still clear at s_prev and goes on from s, one level
+                # down: fine cells of a coarse cell, points of a fine cell.
+                if coarse:
+                    f0 = cloud.coarse_start[c]
+                    f1 = cloud.coarse_start[c + 1]
+                    counts[PUSHES] += f1 - f0
+                    for f in range(f0, f1):
+                        size = _heap_push(heap, size, s, (n + f) * slots + slot, s_prev)
+                else:
+                    i0 = cloud.cell_start[c]
+                    i1 = cloud.cell_start[c + 1]
+                    counts[PUSHES] += i1 - i0
+                    for i in range(i0, i1):
+                        size = _heap_push(heap, size, s, i * slots + slot, s_prev)
+            elif nxt < best:
+                # A translation's pair is dropped once the shape has passed the cell.
+                if not translation or _ahead(ph, shape_buf[q], a_move, nxt, rho[q] + radius):
+                    counts[PUSHES] += 1
+                    size = _heap_push(heap, size, nxt, e, s)
+            continue
+        _to_hand(cloud.points[code], rot, trans, ph)
+        counts[QUERIES] += 1
+        if translation:
+            d = _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move)
+            pressing = False
+            if d <= hit_eps:
+                # Within the hit level, a point blocks the motion only if the motion presses
+                # into it: a link left touching by an earlier phase that moves away from the
+                # object is free to move, as in GraspIt!.
+                counts[QUERIES] += 1
+                d_next = _swept_distance(
+                    ph[0], ph[1], ph[2], s + speed * PROBE, q, shapes, shape_buf, a_move
+                )
+                pressing = d_next < d
+            # d > hit_eps = 2 margin: a step of at least margin
+            nxt = s + d - margin if d > hit_eps else s + speed * SLIDE_STEP
+            still = _ahead(ph, shape_buf[q], a_move, nxt, rho[q])
+        else:
+            dx = ph[0] - o0[0]
+            dy = ph[1] - o0[1]
+            dz = ph[2] - o0[2]
+            r = np.sqrt(dx * dx + dy * dy + dz * dz)
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin)
+            pressing = False
+            if d <= hit_eps:
+                counts[QUERIES] += 1
+                d_next, _, _ = _chain_touch(
+                    ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin
+                )
+                pressing = d_next < d
+            # A point inside the hit level that is not pressed (receding or sliding) has no
+            # safe step from its distance; it moves on by a small fixed one (a few µm of
+            # motion) until it is clear or pressed.
+            nxt = s + (step if d > hit_eps else SLIDE_STEP)
+            still = True
+        if pressing:
+            if nh == hits.shape[0]:
+                grown = np.empty((2 * nh, 4))
+                grown[:nh] = hits
+                hits = grown
+            hits[nh, 0] = code
+            hits[nh, 1] = slot
+            hits[nh, 2] = s_prev
+            hits[nh, 3] = s
+            nh += 1
+            best = min(best, s)
+        elif nxt < best and still:
+            counts[PUSHES] += 1
+            size = _heap_push(heap, size, nxt, e, s)
+    first, p, q = _refine_first_hit(cloud, rot, trans, chain, frames, shape_buf, a_move, hits,
+                                    nh, best, hit_eps, counts)  # fmt: skip
+    if translation and p >= 0:
+        first = first / speed
+    return first, p, q
 
 
 @njit(cache=True)
@@ -560,8 +813,10 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     spheres) and points sit in one priority queue keyed by a lower bound on when they can
     first touch; the smallest is advanced by one step at a time, a touching cell releases
     its children (coarse -> fine cells -> points), and the search stops once no entry can
-    beat the best hit. The first crossing is then refined by bisection
-    (:func:`_refine_first_hit`).
+    beat the best hit. A pure translation (the approach) queues (cell or point, shape) pairs
+    instead: each shape sweeps a column, a coarse cell enters the queue for the shapes whose
+    column it crosses, keyed by when it enters it, and a pair is dropped once its shape has
+    passed it. The first crossing is then refined by bisection (:func:`_refine_first_hit`).
 
     Parameters
     ----------
@@ -586,203 +841,9 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     shape : int
         Shape index (-1: none).
     """
-    m = chain.origins.shape[0]
-    k = chain.shape_joint.shape[0]
-    shapes = chain.shapes
-    link_buf = np.empty((m, 4, 4))
-    shape_buf = np.empty((k, 4, 4))
-    _chain_poses_into(0.0, chain, link_buf, shape_buf)
-    frames = _chain_frames(chain, s_max)
-    tmp_a = np.empty((4, 4))
-    tmp_b = np.empty((4, 4))
-    mul4_into(chain.base, chain.origins[0], tmp_a)
-    o0 = tmp_a[:3, 3].copy()
-    a0 = _rotate(tmp_a, chain.axes[0])
-    reach = 0.0
-    for q in range(k):
-        j = chain.shape_joint[q]
-        dx = shape_buf[q, 0, 3] - link_buf[j, 0, 3]
-        dy = shape_buf[q, 1, 3] - link_buf[j, 1, 3]
-        dz = shape_buf[q, 2, 3] - link_buf[j, 2, 3]
-        ext = _bounding_radius(shapes.kinds[q], shapes.halves[q], shapes.radii[q])
-        reach = max(reach, frames.chain_len[j] + np.sqrt(dx * dx + dy * dy + dz * dz) + ext)
-    reach += 2.0 * hit_eps
-    # The shapes were placed at s = 0; slides can carry them further out, by at most the
-    # slide's travel from where it is now.
-    for j in range(m):
-        if chain.kinds[j] == PRISMATIC:
-            reach += abs(chain.speeds[j]) * s_max + frames.slide[j]
-    # A pure translation (the approach) sweeps each shape along a column: nothing outside
-    # every column can be touched.
-    translation = m == 1 and chain.kinds[0] == PRISMATIC
-    t_sweep = abs(chain.speeds[0]) * s_max
-    # the direction the shapes travel (a slide may close along -axis)
-    a_move = a0 * (1.0 if chain.speeds[0] >= 0.0 else -1.0)
-    v_move = abs(chain.speeds[0])
-    rho = np.empty(k)
-    for q in range(k):
-        # grown by the hit level: a point can come within hit_eps of a rounded corner while
-        # still outside the exact bounding sphere
-        rho[q] = (
-            _bounding_radius(shapes.kinds[q], shapes.halves[q], shapes.radii[q]) + 2.0 * hit_eps
-        )
-    # When every joint is revolute about parallel axes (a planar finger, like the Barrett's),
-    # the links sweep a slab across that axis: nothing outside it can be touched.
-    planar = True
-    for j in range(m):
-        if chain.kinds[j] != REVOLUTE:
-            planar = False
-            break
-        if j > 0:
-            mul4_into(link_buf[j - 1], chain.origins[j], tmp_b)
-            aj = _rotate(tmp_b, chain.axes[j])
-            if abs(aj[0] * a0[0] + aj[1] * a0[1] + aj[2] * a0[2]) < 1.0 - 1e-9:
-                planar = False
-                break
-    slab = np.inf
-    if planar:
-        slab = 0.0
-        for q in range(k):
-            along = (
-                (shape_buf[q, 0, 3] - o0[0]) * a0[0]
-                + (shape_buf[q, 1, 3] - o0[1]) * a0[1]
-                + (shape_buf[q, 2, 3] - o0[2]) * a0[2]
-            )
-            slab = max(slab, abs(along) + rho[q])
-    # Heap entries: id >= 0 a point, -1 - f the fine cell f, -1 - nf - c the coarse cell c;
-    # prev is the last key at which the entry was known not to touch (the low end of the
-    # bracket of a crossing).
-    nf = cloud.cell_center.shape[0]
-    nk = cloud.coarse_center.shape[0]
-    kc = np.empty((nk, 3))
-    kr = np.empty(nk)
-    kmask = np.full(nk, ALL_SHAPES, dtype=np.int64)
-    tmp = np.empty(3)
-    cap = nk + 1
-    for c in range(nk):
-        _to_hand(cloud.coarse_center[c], rot, trans, tmp)
-        kc[c, 0] = tmp[0]
-        kc[c, 1] = tmp[1]
-        kc[c, 2] = tmp[2]
-        kr[c] = -1.0
-        radius = cloud.coarse_radius[c]
-        dx = tmp[0] - o0[0]
-        dy = tmp[1] - o0[1]
-        dz = tmp[2] - o0[2]
-        r0 = np.sqrt(dx * dx + dy * dy + dz * dz)
-        if r0 - radius > reach:
-            continue
-        if abs(dx * a0[0] + dy * a0[1] + dz * a0[2]) - radius > slab:
-            continue
-        if translation:
-            # the shapes whose swept column the cell crosses: the only ones it may touch
-            bits = 0
-            swept = False
-            for q in range(k):
-                if _in_sweep(tmp, radius + rho[q], shape_buf[q], a_move, t_sweep):
-                    swept = True
-                    if q < MASK_BITS:
-                        bits |= 1 << q
-            if not swept:
-                continue
-            kmask[c] = bits if k <= MASK_BITS else ALL_SHAPES
-        kr[c] = r0 + radius
-        f0 = cloud.coarse_start[c]
-        f1 = cloud.coarse_start[c + 1]
-        cap += f1 - f0 + cloud.cell_start[f1] - cloud.cell_start[f0]
-    heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap),
-            np.empty(cap, dtype=np.int64))  # fmt: skip
-    size = 0
-    margin = 0.5 * hit_eps
-    for c in range(nk):
-        if kr[c] < 0.0:
-            continue
-        radius = cloud.coarse_radius[c]
-        _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
-                                  margin + radius, kmask[c])  # fmt: skip
-        if step < s_max:
-            size = _heap_push(heap, size, step, -1 - nf - c, 0.0, kmask[c])
-    best = s_max  # an upper bound on the first crossing, lowered by every hit
-    hits = np.empty((64, 3))
-    nh = 0
-    ph = np.empty(3)
-    for _ in range(10_000_000):
-        if size == 0:
-            break
-        s, e, s_prev, mask, size = _heap_pop(heap, size)
-        if s >= best:
-            break
-        if e < 0:
-            coarse = -1 - e >= nf
-            c = -1 - e - nf if coarse else -1 - e
-            radius = cloud.coarse_radius[c] if coarse else cloud.cell_radius[c]
-            center = cloud.coarse_center[c] if coarse else cloud.cell_center[c]
-            _to_hand(center, rot, trans, ph)
-            dx = ph[0] - o0[0]
-            dy = ph[1] - o0[1]
-            dz = ph[2] - o0[2]
-            r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
-            d, _, step = _chain_touch(
-                ph[0], ph[1], ph[2], s, r, chain, frames, margin + radius, mask
-            )
-            if d - radius <= hit_eps:
-                # Everything inside is still clear at s_prev and goes on from s, one level
-                # down: fine cells of a coarse cell, points of a fine cell.
-                if coarse:
-                    for f in range(cloud.coarse_start[c], cloud.coarse_start[c + 1]):
-                        sub = mask
-                        if translation and k <= MASK_BITS:
-                            _to_hand(cloud.cell_center[f], rot, trans, tmp)
-                            sub = _sweep_mask(tmp, cloud.cell_radius[f], mask, shape_buf, rho,
-                                              a_move, t_sweep)  # fmt: skip
-                            if sub == 0:
-                                continue
-                        size = _heap_push(heap, size, s, -1 - f, s_prev, sub)
-                else:
-                    for i in range(cloud.cell_start[c], cloud.cell_start[c + 1]):
-                        size = _heap_push(heap, size, s, i, s_prev, mask)
-            elif s + step < best:
-                ahead = not translation or _still_ahead(
-                    ph, radius, mask, shape_buf, rho, a_move, v_move * (s + step)
-                )
-                if ahead:
-                    size = _heap_push(heap, size, s + step, e, s, mask)
-            continue
-        _to_hand(cloud.points[e], rot, trans, ph)
-        dx = ph[0] - o0[0]
-        dy = ph[1] - o0[1]
-        dz = ph[2] - o0[2]
-        r = np.sqrt(dx * dx + dy * dy + dz * dz)
-        d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, mask)
-        pressing = False
-        if d <= hit_eps:
-            # Within the hit level, a point blocks the motion only if the motion presses into
-            # it: a link left touching by the approach (or an earlier phase) that closes away
-            # from the object is free to move, as in GraspIt!.
-            d_next, _, _ = _chain_touch(
-                ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin, mask
-            )
-            pressing = d_next < d
-        if pressing:
-            if nh == hits.shape[0]:
-                grown = np.empty((2 * nh, 3))
-                grown[:nh] = hits
-                hits = grown
-            hits[nh, 0] = e
-            hits[nh, 1] = s_prev
-            hits[nh, 2] = s
-            nh += 1
-            best = min(best, s)
-        else:
-            # A point inside the hit level that is not pressed (receding or sliding) has no
-            # safe step from its distance; it moves on by a small fixed one (a few µm of
-            # motion) until it is clear or pressed.
-            nxt = s + (step if d > hit_eps else SLIDE_STEP)
-            if nxt < best and (
-                not translation or _still_ahead(ph, 0.0, mask, shape_buf, rho, a_move, v_move * nxt)
-            ):
-                size = _heap_push(heap, size, nxt, e, s, mask)
-    return _refine_first_hit(cloud, rot, trans, chain, frames, hits, nh, best, hit_eps)
+    return first_contact_counted(
+        cloud, rot, trans, chain, s_max, hit_eps, np.zeros(N_COUNTS, dtype=np.int64)
+    )
 
 
 @njit(cache=True)
