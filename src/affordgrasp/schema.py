@@ -16,6 +16,7 @@ from .columns import METRIC_COLUMNS
 
 _f64 = pa.float64()
 _vec3 = pa.list_(_f64, 3)
+_NUMPY_TYPES = {_f64: np.float64, pa.int64(): np.int64, pa.int32(): np.int32}
 
 SAMPLE_FIELDS = [
     pa.field("object", pa.string()),
@@ -72,9 +73,34 @@ def dataset_schema(metrics: bool = True, depth: bool = False) -> pa.Schema:
     return schema.append(DEPTH_FIELD) if depth else schema
 
 
+# The columns are built from numpy buffers, not with pa.array: pyarrow imports pandas on the
+# first pa.array call (about half a second of a worker's start-up) and nothing here needs it.
+
+
+def _numbers(values, typ: pa.DataType = _f64) -> pa.Array:
+    """A primitive Arrow array (float64, int64 or int32) over a numpy array's buffer."""
+    v = np.ascontiguousarray(values, dtype=_NUMPY_TYPES[typ]).reshape(-1)
+    return pa.Array.from_buffers(typ, len(v), [None, pa.py_buffer(v)])
+
+
+def _strings(values) -> pa.Array:
+    """A string Arrow array of str values (None: null)."""
+    items = list(values)
+    encoded = [b"" if v is None else str(v).encode() for v in items]
+    offsets = np.zeros(len(items) + 1, dtype=np.int32)
+    np.cumsum([len(e) for e in encoded], out=offsets[1:])
+    valid = np.array([v is not None for v in items], dtype=bool)
+    bitmap = None if valid.all() else pa.py_buffer(np.packbits(valid, bitorder="little"))
+    return pa.Array.from_buffers(
+        pa.string(),
+        len(items),
+        [bitmap, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))],
+        null_count=int(len(items) - valid.sum()),
+    )
+
+
 def _fixed(values: np.ndarray, width: int) -> pa.Array:
-    flat = pa.array(np.ascontiguousarray(values, dtype=np.float64).reshape(-1))
-    return pa.FixedSizeListArray.from_arrays(flat, width)
+    return pa.FixedSizeListArray.from_arrays(_numbers(values), width)
 
 
 def _ragged_vec3(chunks: list[np.ndarray]) -> pa.Array:
@@ -83,8 +109,8 @@ def _ragged_vec3(chunks: list[np.ndarray]) -> pa.Array:
     flat = np.concatenate(
         [np.zeros((0, 3))] + [np.asarray(c, dtype=np.float64).reshape(-1, 3) for c in chunks]
     )
-    inner = pa.FixedSizeListArray.from_arrays(pa.array(flat.reshape(-1)), 3)
-    return pa.ListArray.from_arrays(pa.array(offsets), inner)
+    inner = pa.FixedSizeListArray.from_arrays(_numbers(flat), 3)
+    return pa.ListArray.from_arrays(_numbers(offsets, pa.int32()), inner)
 
 
 def _ragged(chunks: list[np.ndarray], typ: pa.DataType) -> pa.Array:
@@ -93,7 +119,8 @@ def _ragged(chunks: list[np.ndarray], typ: pa.DataType) -> pa.Array:
     flat: list | np.ndarray = (
         np.concatenate([np.asarray(c).reshape(-1) for c in chunks]) if chunks else []
     )
-    return pa.ListArray.from_arrays(pa.array(offsets), pa.array(list(flat), type=typ))
+    values = _strings(flat) if typ == pa.string() else _numbers(np.asarray(flat), typ)
+    return pa.ListArray.from_arrays(_numbers(offsets, pa.int32()), values)
 
 
 def _parts_of(obj, faces: np.ndarray) -> np.ndarray:
@@ -145,29 +172,29 @@ def batch_to_table(
     n = len(batch)
     contacts = batch.contacts
     cols = {
-        "object": pa.array([obj.name] * n, pa.string()),
-        "object_hash": pa.array([obj.mesh_hash] * n, pa.string()),
-        "hand": pa.array([hand] * n, pa.string()),
-        "sample": pa.array(np.arange(sample_start, sample_start + n, dtype=np.int64)),
-        "seed": pa.array(np.full(n, seed, dtype=np.int64)),
+        "object": _strings([obj.name] * n),
+        "object_hash": _strings([obj.mesh_hash] * n),
+        "hand": _strings([hand] * n),
+        "sample": _numbers(np.arange(sample_start, sample_start + n), pa.int64()),
+        "seed": _numbers(np.full(n, seed), pa.int64()),
         "p0": _fixed(batch.p0, 6),
         "use_dir": _fixed(batch.use_dir, 2),
-        "status": pa.array(list(batch.status), pa.string()),
+        "status": _strings(batch.status),
         "hand_pose": _fixed(batch.hand_pose.reshape(n, 16), 16),
         "joints": pa.ListArray.from_arrays(
-            pa.array(np.arange(0, n + 1, dtype=np.int32) * batch.joints.shape[1]),
-            pa.array(batch.joints.reshape(-1)),
+            _numbers(np.arange(0, n + 1) * batch.joints.shape[1], pa.int32()),
+            _numbers(batch.joints),
         ),
         "contact_points": _ragged_vec3([c.points for c in contacts]),
         "contact_normals": _ragged_vec3([c.normals for c in contacts]),
         "contact_mu": _ragged([c.mu for c in contacts], _f64),
         "contact_link": _ragged([c.link for c in contacts], pa.string()),
         "contact_parts": _ragged(_contact_parts(obj, contacts), pa.string()),
-        "n_contacts": pa.array(np.array([len(c) for c in contacts], dtype=np.int32)),
+        "n_contacts": _numbers([len(c) for c in contacts], pa.int32()),
         "use_point": _fixed(batch.use_point, 3),
         "use_normal": _fixed(batch.use_normal, 3),
-        "use_triangle": pa.array(batch.use_triangle.astype(np.int64)),
-        "use_part": pa.array(list(_parts_of(obj, batch.use_triangle)), pa.string()),
+        "use_triangle": _numbers(batch.use_triangle, pa.int64()),
+        "use_part": _strings(_parts_of(obj, batch.use_triangle)),
         "wrist_point": _fixed(batch.wrist_point, 3),
         "wrist_axis": _fixed(batch.wrist_axis, 3),
     }
@@ -176,9 +203,9 @@ def batch_to_table(
         for name in METRIC_COLUMNS:
             values = metrics[name]
             if name == "epsilon_reason":
-                cols[name] = pa.array([str(v) for v in values], pa.string())
+                cols[name] = _strings([str(v) for v in values])
             else:
-                cols[name] = pa.array(np.asarray(values, dtype=np.float64))
+                cols[name] = _numbers(values)
         schema = SCHEMA
     return pa.Table.from_pydict(cols, schema=schema)
 
