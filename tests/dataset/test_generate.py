@@ -17,7 +17,7 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 from affordgrasp.dataset.generate import generate
 from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
-from affordgrasp.errors import DatasetError
+from affordgrasp.errors import DatasetError, HandError
 
 
 def rows_of(table: pa.Table, obj: str, start: int, stop: int) -> pa.Table:
@@ -248,3 +248,5 @@ def test_a_manifest_without_the_hand_spec_still_reads_and_resumes(tmp_path, box_
     assert again.shards_skipped == 2
     with pytest.raises(DatasetError, match="hand 'parallel_jaw' there vs 'barrett' here"):
         generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="barrett")
+    with pytest.raises(HandError, match="records its hand by name only .'parallel_jaw'"):
+        get_hand(path)

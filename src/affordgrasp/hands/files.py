@@ -297,4 +297,10 @@ def load_hand(path: str | os.PathLike) -> Hand:
         raise HandError(f"hand file {str(path)!r} is not valid {path.suffix[1:]}: {exc}") from None
     if isinstance(doc, dict) and isinstance(doc.get("hand_spec"), dict):
         doc = doc["hand_spec"]  # a dataset manifest: the hand it was generated with
+    elif isinstance(doc, dict) and doc.get("format") == "affordgrasp-dataset":
+        raise HandError(
+            f"dataset manifest {str(path)!r} records its hand by name only "
+            f"({doc.get('hand')!r}, written before hands were recorded whole); "
+            "pass that name or the hand's own file"
+        )
     return hand_from_dict(doc)
