@@ -568,11 +568,28 @@ def convex_hull_6d(P):
     hg = np.empty(64, dtype=np.int64)
     stamp = 0
     thick = False  # a nearly coplanar apex was met: verify the finished hull
+    free = np.empty(64, dtype=np.int64)  # retired facet slots, reused by new facets
+    nfree = 0
+    newf = np.empty(64, dtype=np.int64)
     while nstack > 0:
+        # the farthest outside point of all first: fewer facets built and retired
+        # (stale entries: retired slots, emptied outside sets, are dropped on the way)
+        bi = -1
+        j = 0
+        while j < nstack:
+            fj = stack[j]
+            if not F.alive[fj] or F.outside[fj] < 0:
+                nstack -= 1
+                stack[j] = stack[nstack]
+                continue
+            if bi < 0 or F.far_dist[fj] > F.far_dist[stack[bi]]:
+                bi = j
+            j += 1
+        if bi < 0:
+            break
+        f0 = stack[bi]
         nstack -= 1
-        f0 = stack[nstack]
-        if not F.alive[f0] or F.outside[f0] < 0:
-            continue
+        stack[bi] = stack[nstack]
         p = F.far_point[f0]
         if F.far_dist[f0] <= vis_tol:
             # p is barely above f0: start from the facet it is farthest above, if that one
@@ -607,16 +624,24 @@ def convex_hull_6d(P):
             if F.apex_dist[hg[h]] > tol:
                 thick = True
                 break
-        if nF + nh > cap:
-            newcap = max(2 * cap, nF + nh + 64)
-            F = _grown(F, nF, newcap)
-            cap = newcap
+        if nh > newf.shape[0]:
+            newf = np.empty(2 * nh, dtype=np.int64)
+        for h in range(nh):
+            if nfree > 0:
+                nfree -= 1
+                newf[h] = free[nfree]
+            else:
+                if nF == cap:
+                    cap = max(2 * cap, nF + nh + 64)
+                    F = _grown(F, nF, cap)
+                newf[h] = nF
+                nF += 1
         # cone of new facets from p over the horizon ridges
         for h in range(nh):
             v = hv[h]
             k = hk[h]
             g = hg[h]
-            nf = nF + h
+            nf = newf[h]
             for c in range(DIM):
                 F.vertices[nf, c] = F.vertices[v, c]
                 F.neighbours[nf, c] = -1
@@ -670,7 +695,7 @@ def convex_hull_6d(P):
             table_key[t] = -1
         npaired = 0
         for h in range(nh):
-            nf = nF + h
+            nf = newf[h]
             kp = hk[h]
             for j in range(DIM):
                 if j == kp:
@@ -713,7 +738,7 @@ def convex_hull_6d(P):
                 pn = nxt[pt]
                 if pt != p:
                     for h in range(nh):
-                        nf = nF + h
+                        nf = newf[h]
                         dist = _dist(F, nf, P, pt)
                         if dist > tol:
                             nxt[pt] = F.outside[nf]
@@ -724,13 +749,17 @@ def convex_hull_6d(P):
                             break
                 pt = pn
         for h in range(nh):
-            nf = nF + h
+            nf = newf[h]
             if F.outside[nf] >= 0:
                 if nstack == stack.shape[0]:
                     stack = _grow_1(stack, 2 * nstack, -1)
                 stack[nstack] = nf
                 nstack += 1
-        nF += nh
+        if nfree + nvis > free.shape[0]:
+            free = _grow_1(free, 2 * (nfree + nvis), -1)
+        for i in range(nvis):
+            free[nfree] = vis[i]
+            nfree += 1
 
     count = 0
     for f in range(nF):
