@@ -563,7 +563,23 @@ def _ahead(c, pose, axis, u, extent):
 def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     """:func:`first_contact`, adding the work it did to ``counts``.
 
-    counts : (N_COUNTS,) int64 ndarray, indexed by POPS, PUSHES, QUERIES, REFINE_QUERIES.
+    Parameters
+    ----------
+    cloud, rot, trans, chain, s_max, hit_eps
+        As for :func:`first_contact`.
+    counts : (N_COUNTS,) int64 ndarray
+        Incremented in place, indexed by ``POPS``, ``PUSHES``, ``QUERIES``,
+        ``REFINE_QUERIES`` (queue pops, queue pushes, distance queries of the search and of
+        the refinement).
+
+    Returns
+    -------
+    s : float
+        inf when nothing is touched by s_max.
+    point : int
+        Sample index (-1: none).
+    shape : int
+        Shape index (-1: none).
     """
     m = chain.origins.shape[0]
     k = chain.shape_joint.shape[0]
