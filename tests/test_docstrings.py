@@ -159,3 +159,8 @@ def test_the_checker_finds_what_is_missing():
         "m.py:C.run: no Returns section",
         "m.py:C.bare: no docstring",
     ]
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(SRC)))
+def test_every_module_says_what_it_holds(path):
+    assert (ast.get_docstring(ast.parse(path.read_text(encoding="utf-8"))) or "").strip()
