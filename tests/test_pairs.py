@@ -70,7 +70,9 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
 
 
 def test_optimizer_over_grasps_with_their_best_use_point():
-    found = optimize_pairs("dagger", "cut", budget=200, uses=1500, seed=0, top=5, population=50)
+    found = optimize_pairs(
+        "meat_cleaver", "cut", budget=200, uses=1500, seed=0, top=5, population=50
+    )
     values = found.table.column("value").to_numpy()
     assert found.grasps == 200 and found.candidates >= 1
     assert 1 <= len(values) <= 5 and np.all(np.isfinite(values))
@@ -103,7 +105,7 @@ def test_optimize_command_finds_a_default_mode_cut_with_use_points(capsys):
 
     from affordgrasp.cli import main
 
-    argv = ["optimize", "dagger", "--task", "cut", "--budget", "100", "--population", "50"]
+    argv = ["optimize", "meat_cleaver", "--task", "cut", "--budget", "100", "--population", "50"]
     code = main([*argv, "--uses", "1000", "--workers", "1", "--json"])
     doc = json.loads(capsys.readouterr().out)
     assert code == 0

@@ -153,7 +153,7 @@ class UsePoints:
         ang = np.full(len(T), np.nan)
         if hit.any():
             ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
-            ang[hit] = use_edge_angle(obj.mesh, P[hit])
+            ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
         return cls(use_dir, P, N, T, ug, ang)
 
 

@@ -117,6 +117,56 @@ def test_edge_angle_radius_and_concave_edges():
     assert np.degrees(use_edge_angle(ell, outer_corner)) == pytest.approx(90.0)
 
 
+def test_edge_angle_counts_only_edges_that_face_the_use_normal():
+    deg = 30.0
+    half = np.radians(deg) / 2
+    mesh = wedge_prism(np.radians(deg))
+    flank_normal = np.array([0.0, -np.sin(half), np.cos(half)])
+    on_flank = [0.0, 0.001, 0.001 * np.tan(half)]  # 1 mm up the +z flank
+    # a point on a flank, with the flank's normal, and the apex with the bisector: the edge
+    for p, n in ((on_flank, flank_normal), ([0.0, 0.0, 0.0], [0.0, -1.0, 0.0])):
+        assert np.degrees(use_edge_angle(mesh, p, use_normal=n)) == pytest.approx(deg)
+    # a normal tilted along the edge by less than the tolerance (4°) still faces it
+    tilted = np.cos(np.radians(4.0)) * flank_normal + [np.sin(np.radians(4.0)), 0.0, 0.0]
+    assert np.degrees(use_edge_angle(mesh, on_flank, use_normal=tilted)) == pytest.approx(deg)
+    # the end cap beside the edge: without a normal it counts, its normal runs along the
+    # edge (90° off the edge's normal fan), so the edge does not face it: only the cap's
+    # own 90° corners with the flanks do
+    cap = [0.025, 0.001, 0.0]
+    assert np.degrees(use_edge_angle(mesh, cap)) == pytest.approx(deg)
+    assert np.degrees(use_edge_angle(mesh, cap, use_normal=[1.0, 0.0, 0.0])) == pytest.approx(90)
+    # a flat beside the edge whose normal is half the edge angle (15°) off the fan
+    assert use_edge_angle(mesh, on_flank, use_normal=[0.0, 0.0, 1.0]) == pytest.approx(np.pi)
+    batch = use_edge_angle(mesh, [on_flank, cap], use_normal=[flank_normal, [1.0, 0.0, 0.0]])
+    assert np.degrees(batch) == pytest.approx([deg, 90.0])
+    with pytest.raises(InputError):
+        use_edge_angle(mesh, [on_flank, cap], use_normal=[flank_normal])
+
+
+def test_dagger_guard_beside_the_blade_root_is_not_a_cutting_edge():
+    from affordgrasp.objects import load_object
+
+    obj = load_object("dagger:0")
+    mesh = obj.mesh
+    names = np.asarray(obj.part_names, dtype=object)[obj.face_parts]
+    points, faces = trimesh.sample.sample_surface(mesh, 20000, seed=0)
+    normals = mesh.face_normals[faces]
+    bare = use_edge_angle(mesh, points)
+    facing = use_edge_angle(mesh, points, use_normal=normals)
+    guard = names[faces] == "guard"
+    near_guard = guard & (bare <= np.radians(45.0))
+    assert near_guard.sum() >= 5  # guard points within 3 mm of the blade's edge exist ...
+    # ... and no sharp edge faces them (only blunt facets of the guard itself)
+    assert np.all(facing[near_guard] > np.radians(90.0))
+    # on the cutting edge's flanks, near the edge line, the edge faces the use normal
+    edge = (names[faces] == "cutting_edge") & (bare <= np.radians(45.0))
+    assert edge.sum() >= 100
+    assert np.mean(facing[edge] <= np.radians(45.0)) > 0.99
+    # and what faces an edge is on the cutting edge (or the tip where two edges meet)
+    cut = facing <= np.radians(45.0)
+    assert set(names[faces[cut]]) <= {"cutting_edge", "tip"}
+
+
 def test_batches_and_bad_input():
     mesh = _plane()
     ug = use_edge(mesh, np.arange(10))

@@ -249,7 +249,9 @@ def compute_phi_batch(
         np.asarray(use_edge(mesh, use_triangle, use_point), dtype=float) if n else np.zeros(0)
     )
     out["use_edge_angle"] = (
-        np.asarray(use_edge_angle(mesh, use_point, radius=edge_radius), dtype=float)
+        np.asarray(
+            use_edge_angle(mesh, use_point, radius=edge_radius, use_normal=use_normal), dtype=float
+        )
         if n
         else np.zeros(0)
     )

@@ -26,6 +26,14 @@ numbers in :data:`affordgrasp.tasks.TAU_UG_DEFAULT`); the edge angle below does.
 the convex mesh edges within ``radius`` (default 3 mm) of U; π when there is none.
 Concave edges are ignored (they cannot cut). Units: rad.
 
+Given the use normal n (outward), an edge counts only when it *faces* the use direction:
+n lies within ``facing_tol`` (default 5°) of the edge's normal fan, the arc of outward
+normals between its two flank normals. A point on either flank of the edge has n on the
+fan's end; a face that merely ends next to the edge does not: a dagger guard's front face
+beside the blade root (n along the edge, 90° off the fan) or a blade's flat beside a
+narrow bevel (n half the edge angle, 7-13°, off the fan). Without a normal every edge
+within ``radius`` counts, as before.
+
 Validated on known geometries (``tests/metrics/test_use_geometry.py``): plane (U_g = 0),
 finely meshed cylinder (U_g = 1/R²), sphere (U_g ≈ 0), wedges of known opening angle.
 Per-mesh data (vertex-face incidence, convex edge segments and their search tree) are
@@ -39,9 +47,10 @@ import numpy as np
 from ..caching import IdentityCache
 from ..errors import InputError
 from ..tolerances import FLAT_DIHEDRAL
-from .validation import points_n3
+from .validation import points_n3, units_n3
 
 EDGE_RADIUS_M = 0.003  # default search radius of the sharpest-edge angle
+EDGE_FACING_TOL_RAD = float(np.radians(5.0))  # use normal off an edge's normal fan, at most
 _FLAT_ANGLE = FLAT_DIHEDRAL  # dihedral angles below this (rad) are flat, not edges
 _FIT_RCOND = 1e-10  # relative singular-value cutoff of the quadratic fit
 _CHUNK = 2048  # use points per batched fit
@@ -220,6 +229,11 @@ def _edge_index(mesh, radius: float):
     A = V[edges[:, 0]] if len(edges) else np.zeros((0, 3))
     B = V[edges[:, 1]] if len(edges) else np.zeros((0, 3))
     interior = np.pi - angles[keep]
+    # the two flank normals of each edge (for the facing test)
+    pairs = np.asarray(mesh.face_adjacency, dtype=np.int64)[keep]
+    FN = np.asarray(mesh.face_normals, dtype=np.float64)
+    N1 = FN[pairs[:, 0]] if len(pairs) else np.zeros((0, 3))
+    N2 = FN[pairs[:, 1]] if len(pairs) else np.zeros((0, 3))
     # sample every edge at a spacing <= radius: a point within `radius` of a segment is
     # then within radius + spacing / 2 of one of its samples, and long edges (a blade's
     # edge can be one segment) still sit in a compact tree
@@ -234,7 +248,7 @@ def _edge_index(mesh, radius: float):
     t = (np.arange(owner.size) - start) / np.maximum(n_samples[owner] - 1, 1)
     samples = A[owner] + t[:, None] * (B - A)[owner]
     tree = cKDTree(samples) if owner.size else None
-    data[key] = (tree, owner, A, B, interior, spacing)
+    data[key] = (tree, owner, A, B, interior, spacing, N1, N2)
     return data[key]
 
 
@@ -245,7 +259,35 @@ def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray
     return np.linalg.norm(P - (A + t[:, None] * AB), axis=1)
 
 
-def use_edge_angle(mesh, use_point, *, radius: float = EDGE_RADIUS_M) -> float | np.ndarray:
+def _off_fan(n: np.ndarray, A, B, N1, N2) -> np.ndarray:
+    """Angle (rad) from unit normals ``n`` to the normal fan of edges (A, B; flanks N1, N2)."""
+    e = B - A
+    e /= np.maximum(np.linalg.norm(e, axis=1, keepdims=True), 1e-300)
+    along = np.einsum("ij,ij->i", n, e)
+    perp = n - along[:, None] * e
+    # within the fan's wedge (between the flank normals, seen along the edge): the angle
+    # is the tilt along the edge; outside it, the angle to the nearer flank normal
+    bis = N1 + N2
+    half = 0.5 * np.arccos(np.clip(np.einsum("ij,ij->i", N1, N2), -1.0, 1.0))
+    bis /= np.maximum(np.linalg.norm(bis, axis=1, keepdims=True), 1e-300)
+    perp_len = np.linalg.norm(perp, axis=1)
+    cos_perp = np.einsum("ij,ij->i", perp, bis) / np.maximum(perp_len, 1e-300)
+    inside = (perp_len > 1e-12) & (cos_perp >= np.cos(half) - 1e-12)
+    tilt = np.arcsin(np.clip(np.abs(along), 0.0, 1.0))
+    to_flank = np.arccos(
+        np.clip(np.maximum(np.einsum("ij,ij->i", n, N1), np.einsum("ij,ij->i", n, N2)), -1.0, 1.0)
+    )
+    return np.where(inside, tilt, to_flank)
+
+
+def use_edge_angle(
+    mesh,
+    use_point,
+    *,
+    radius: float = EDGE_RADIUS_M,
+    use_normal=None,
+    facing_tol: float = EDGE_FACING_TOL_RAD,
+) -> float | np.ndarray:
     """Smallest interior dihedral angle of a convex edge within ``radius`` of U, rad.
 
     Parameters
@@ -256,19 +298,31 @@ def use_edge_angle(mesh, use_point, *, radius: float = EDGE_RADIUS_M) -> float |
         The use point(s), m.
     radius : float
         Search radius, m (default :data:`EDGE_RADIUS_M`).
+    use_normal : (3,) or (n, 3) float, optional
+        Outward unit normal(s) at U. When given, only edges that face the use direction
+        count (the normal within ``facing_tol`` of the edge's normal fan; module docstring).
+    facing_tol : float
+        rad (default :data:`EDGE_FACING_TOL_RAD`, 5°).
 
     Returns
     -------
     float or (n,) float64 ndarray
-        π where no convex edge is that close; a float for a single point.
+        π where no (facing) convex edge is that close; a float for a single point.
     """
     single = np.ndim(use_point) == 1
     P = points_n3(use_point, "use_point")
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0):
         raise InputError(f"radius must be a positive length in metres, got {radius}")
+    normals = None
+    if use_normal is not None:
+        normals = units_n3(use_normal, "use_normal")
+        if normals.shape[0] != P.shape[0]:
+            raise InputError(
+                f"use_normal has {normals.shape[0]} rows, expected one per use point ({P.shape[0]})"
+            )
     out = np.full(P.shape[0], np.pi)
-    tree, owner, A, B, interior, spacing = _edge_index(mesh, radius)
+    tree, owner, A, B, interior, spacing, N1, N2 = _edge_index(mesh, radius)
     if tree is not None and P.shape[0]:
         hits = tree.query_ball_point(P, radius + 0.5 * spacing, return_sorted=False)
         lengths = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
@@ -278,5 +332,9 @@ def use_edge_angle(mesh, use_point, *, radius: float = EDGE_RADIUS_M) -> float |
             pair = np.unique(query * len(A) + edge)
             query, edge = pair // len(A), pair % len(A)
             close = _segment_distance(P[query], A[edge], B[edge]) <= radius
+            if normals is not None:
+                close &= (
+                    _off_fan(normals[query], A[edge], B[edge], N1[edge], N2[edge]) <= facing_tol
+                )
             np.minimum.at(out, query[close], interior[edge[close]])
     return float(out[0]) if single else out

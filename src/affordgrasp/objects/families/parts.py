@@ -164,12 +164,14 @@ def face_parts_of(solid: manifold3d.Manifold, recorder: Mapping[int, str]) -> np
 
 
 def sharp_edge_faces(mesh: trimesh.Trimesh, band_m: float = EDGE_BAND_M) -> np.ndarray:
-    """The band of faces along the sharp edges.
+    """The band of faces along the sharp edges (the edge's flanks).
 
-    A face is in the band when it borders a convex edge sharper than 45°, or when it has a
-    vertex on such an edge and none of its vertices is farther than ``band_m`` from the
-    vertices of those edges: the edge bevels of the blades and the axe, but not an end cap
-    that merely ends at the edge.
+    The faces that border a convex edge sharper than 45° are the flanks' first row; the
+    band grows from them across smooth edges (dihedral below 3°, so along a flank's plane
+    and a gently curved bevel, never over the shoulder onto the blade's flat or round an
+    end cap) to the faces whose vertices all lie within ``band_m`` of the sharp edge
+    segments or that touch the edge line: the whole bevel, also where it is meshed in
+    several rows or in long slivers.
 
     Parameters
     ----------
@@ -183,17 +185,36 @@ def sharp_edge_faces(mesh: trimesh.Trimesh, band_m: float = EDGE_BAND_M) -> np.n
     (n_faces,) bool ndarray
     """
     angles = np.asarray(mesh.face_adjacency_angles)  # between normals: π - interior angle
+    adjacency = np.asarray(mesh.face_adjacency)
     sharp = np.asarray(mesh.face_adjacency_convex) & (np.pi - angles < SHARP_EDGE_RAD)
-    line = np.unique(np.asarray(mesh.face_adjacency_edges)[sharp].ravel())
     faces = np.asarray(mesh.faces)
-    if len(line) == 0:
-        return np.zeros(len(faces), dtype=bool)
-    on_edge = np.zeros(len(mesh.vertices), dtype=bool)
-    on_edge[line] = True
-    near, _ = cKDTree(np.asarray(mesh.vertices)[line]).query(np.asarray(mesh.vertices))
-    band = on_edge[faces].any(axis=1) & (near[faces] <= band_m).all(axis=1)
-    band[np.asarray(mesh.face_adjacency)[sharp].ravel()] = True
-    return band
+    band = np.zeros(len(faces), dtype=bool)
+    if not sharp.any():
+        return band
+    V = np.asarray(mesh.vertices)
+    seg = V[np.asarray(mesh.face_adjacency_edges)[sharp]]  # (k, 2, 3)
+    # distance of every vertex to the nearest sharp segment, by a dense sampling of the
+    # segments (spacing 0.5 mm) refined exactly on the nearest few samples
+    a, ab = seg[:, 0], seg[:, 1] - seg[:, 0]
+    n_s = np.ceil(np.linalg.norm(ab, axis=1) / 5e-4).astype(np.int64) + 1
+    owner = np.repeat(np.arange(len(seg)), n_s)
+    t = (np.arange(owner.size) - np.repeat(np.cumsum(n_s) - n_s, n_s)) / (n_s[owner] - 1)
+    tree = cKDTree(a[owner] + t[:, None] * ab[owner])
+    near, _ = tree.query(V, distance_upper_bound=band_m + 1e-3)
+    on_line = np.zeros(len(V), dtype=bool)
+    on_line[np.asarray(mesh.face_adjacency_edges)[sharp].ravel()] = True
+    # a face of the flank plane that reaches the edge line is on the bevel however far its
+    # other corners lie (a long sliver across a double-edged blade's flank)
+    inside = (near <= band_m + 2.5e-4)[faces].all(axis=1) | on_line[faces].any(axis=1)
+    band[adjacency[sharp].ravel()] = True
+    smooth = (angles < np.radians(3.0)) & ~sharp
+    pairs = adjacency[smooth]
+    pairs = pairs[inside[pairs].all(axis=1)]
+    while True:  # flood fill over smooth edges inside the band
+        grow = band[pairs[:, 0]] ^ band[pairs[:, 1]]
+        if not grow.any():
+            return band
+        band[pairs[grow].ravel()] = True
 
 
 def _set(labels: np.ndarray, mask: np.ndarray, part: str) -> None:
