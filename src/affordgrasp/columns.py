@@ -41,7 +41,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
 DERIVED_COLUMNS: tuple[str, ...] = (HOLD_EFFORT_SUM,)
 
 # Unit of each metric column as stored (SI; "" when dimensionless). E_i is per 1 N·m of
-# swing torque; I and the masses behind it are at unit density.
+# swing torque; I follows the object's mass (a family's materials, a mesh file's unit density).
 METRIC_UNITS: dict[str, str] = {
     "epsilon": "",
     "gws_volume": "",

@@ -310,7 +310,7 @@ def card_markdown(card: dict) -> str:
         "",
         "## Objects",
         "",
-        "| object | category | mass (kg, unit density) | volume (m³) | r_max (m) | mesh hash |",
+        "| object | category | mass (kg) | volume (m³) | r_max (m) | mesh hash |",
         "|---|---|---:|---:|---:|---|",
     ]
     for o in card["objects"]:

@@ -43,7 +43,7 @@ class ObjectPayload:
     name, category, source : str
         As the object's (:class:`~affordgrasp.objects.GraspObject`).
     density : float
-        kg/m^3.
+        kg/m^3 (mean density).
     mesh_hash : str
         Checked again by the worker.
     vertices : (v, 3) float64 ndarray
@@ -53,6 +53,8 @@ class ObjectPayload:
         Semantic part of each face (procedural families).
     part_names : tuple of str
         The names the part labels index.
+    mass : MassProperties or None
+        As resolved (a family's follow its materials); None: uniform at ``density``.
     """
 
     name: str
@@ -64,6 +66,8 @@ class ObjectPayload:
     faces: np.ndarray
     face_parts: np.ndarray | None = None
     part_names: tuple[str, ...] = ()
+    # the resolved mass properties (a family's follow its materials, not one density)
+    mass: object | None = None
 
     @classmethod
     def from_object(cls, obj) -> ObjectPayload:
@@ -87,6 +91,7 @@ class ObjectPayload:
             faces=np.ascontiguousarray(obj.mesh.faces, dtype=np.int64),
             face_parts=getattr(obj, "face_parts", None),
             part_names=tuple(getattr(obj, "part_names", ())),
+            mass=obj.mass,
         )
 
     def build(self):
@@ -113,7 +118,9 @@ class ObjectPayload:
             name=self.name,
             category=self.category,
             mesh=mesh,
-            mass=mass_properties(mesh, density=self.density),
+            mass=self.mass
+            if self.mass is not None
+            else mass_properties(mesh, density=self.density),
             mesh_hash=digest,
             source=self.source,
             face_parts=self.face_parts,

@@ -6,10 +6,10 @@ parallel-axis theorem::
 
     I = aᵀ I_com a + m d²,   d = distance from the centre of mass to the line,
 
-with ``I_com`` the inertia tensor about the centre of mass and ``m`` the mass at the
-object's density (unit density by default, as in the paper). Units: kg m². Scales as
-s⁵ under a uniform scaling at constant density. Validated against the closed forms of a
-box and a rod in ``tests/metrics/test_inertia.py``.
+with ``I_com`` the inertia tensor about the centre of mass and ``m`` the mass, both from
+the object's mass properties (a built-in family's materials, a mesh file's unit density).
+Units: kg m². Scales as s⁵ under a uniform scaling at constant density. Validated
+against the closed forms of a box and a rod in ``tests/metrics/test_inertia.py``.
 """
 
 from __future__ import annotations

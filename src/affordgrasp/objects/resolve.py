@@ -24,7 +24,7 @@ import trimesh
 
 from affordgrasp.errors import InputError, did_you_mean
 from affordgrasp.objects.loading import load_mesh, prepare_mesh
-from affordgrasp.objects.mass import MassProperties, mass_properties
+from affordgrasp.objects.mass import MassProperties, mass_properties, material_mass_properties
 
 __all__ = [
     "GraspObject",
@@ -187,7 +187,10 @@ def load_object(
     units : str, optional
         Length unit of a mesh file (``m``, ``cm``, ``mm``, ``in``, ``ft``).
     density : float, optional
-        kg/m^3 for the mass properties; 1.0 (the paper's unit density) when not given.
+        kg/m^3, one uniform density for the mass properties. When not given, a built-in
+        family's mass follows its materials (steel head, wooden handle, ...:
+        :mod:`affordgrasp.objects.families.materials`) and a mesh file has the paper's unit
+        density (1.0); ``density=1.0`` gives a family the paper's homogeneous unit density.
 
     Returns
     -------
@@ -202,9 +205,10 @@ def load_object(
     """
     if isinstance(spec, GraspObject):
         return _reuse(spec, size_m=size_m, units=units, density=density)
-    density = 1.0 if density is None else _check_density(density)
+    # families default to their materials (density None), mesh files to unit density
+    density = None if density is None else _check_density(density)
     if isinstance(spec, os.PathLike):
-        return _resolve_file(Path(spec), size_m=size_m, units=units, density=density)
+        return _resolve_file(Path(spec), size_m=size_m, units=units, density=density or 1.0)
     if not isinstance(spec, str):
         raise InputError(
             f"an object spec must be a family name, 'family:seed' or a mesh path, got "
@@ -228,7 +232,7 @@ def load_object(
         return _resolve_family(family, seed, density, size_m, units)
     path = Path(text).expanduser()
     if path.exists():
-        return _resolve_file(path, size_m=size_m, units=units, density=density)
+        return _resolve_file(path, size_m=size_m, units=units, density=density or 1.0)
     raise InputError(_unknown_spec_message(text))
 
 
@@ -325,7 +329,7 @@ def _resolve_file(
 
 @functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
 def _resolve_family(
-    family: str, seed: int, density: float, size_m: float | None, units: str | None
+    family: str, seed: int, density: float | None, size_m: float | None, units: str | None
 ) -> GraspObject:
     families = _families()
     name = f"{family}:{seed}"
@@ -336,14 +340,16 @@ def _resolve_family(
         # preparing changed the triangles: each keeps the part of the raw face under it
         _, _, under = trimesh.proximity.closest_point(raw, mesh.triangles_center)
         face_parts = np.asarray(face_parts)[under]
+    regions = raw.metadata.get("materials") if density is None else None
     return _build(
         name,
         families.FAMILIES[family].category,
         mesh,
-        density,
+        1.0 if density is None else density,
         "family",
         face_parts=face_parts,
         part_names=tuple(raw.metadata.get("part_names", ())) if face_parts is not None else (),
+        regions=regions,
     )
 
 
@@ -356,8 +362,12 @@ def _build(
     *,
     face_parts: np.ndarray | None = None,
     part_names: tuple[str, ...] = (),
+    regions: list | None = None,
 ) -> GraspObject:
-    mass = mass_properties(mesh, density=density)
+    if regions:
+        mass = material_mass_properties(mesh, regions)
+    else:
+        mass = mass_properties(mesh, density=density)
     return GraspObject(
         name=name,
         category=category,

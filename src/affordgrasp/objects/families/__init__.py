@@ -43,10 +43,18 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import manifold3d
+import numpy as np
 import trimesh
 
 from affordgrasp.errors import InputError
-from affordgrasp.objects.families import blades, containers, handtools, parts, striking
+from affordgrasp.objects.families import (
+    blades,
+    containers,
+    handtools,
+    materials,
+    parts,
+    striking,
+)
 from affordgrasp.objects.families.geometry import to_trimesh
 from affordgrasp.objects.families.parameters import ParameterDraw
 
@@ -214,8 +222,10 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
         Watertight, in metres, in the frame described in this module's docstring, with
         ``metadata`` keys ``family``, ``category``, ``seed``, ``params`` (the parameter
         values drawn, SI units as their names say), ``face_parts`` ((n_faces,) int8, each
-        face's semantic part) and ``part_names`` (the names those indices refer to,
-        :data:`~affordgrasp.objects.families.parts.PART_NAMES`).
+        face's semantic part), ``part_names`` (the names those indices refer to,
+        :data:`~affordgrasp.objects.families.parts.PART_NAMES`) and ``materials`` (a list
+        of ``(material, density kg/m³, closed trimesh)``: disjoint regions whose union is
+        the mesh, :mod:`~affordgrasp.objects.families.materials`).
 
     Raises
     ------
@@ -232,6 +242,13 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
     face_parts = parts.refine_parts(
         key, mesh, parts.face_parts_of(solid, recorder), dict(draw.values)
     )
+    # the mesh frame's origin is the bounding-box centre: move the regions with it
+    offset = np.asarray(to_trimesh(solid, center=False).bounds).mean(axis=0)
+    regions = []
+    for material, region in materials.material_regions(key, solid, recorder.pieces):
+        region_mesh = to_trimesh(region, center=False)
+        region_mesh.apply_translation(-offset)
+        regions.append((material, materials.DENSITY_KG_M3[material], region_mesh))
     mesh.metadata.update(
         {
             "family": key,
@@ -240,6 +257,7 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
             "params": dict(draw.values),
             "face_parts": face_parts,
             "part_names": parts.PART_NAMES,
+            "materials": regions,
         }
     )
     logger.debug("built %s:%d with %d triangles", key, seed, len(mesh.faces))

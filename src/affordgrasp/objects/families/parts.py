@@ -59,7 +59,7 @@ SHARP_EDGE_RAD = np.radians(45.0)
 # widest cutting-edge band: blade bevels are 1.5-7 mm wide, the axe's about 10 mm
 EDGE_BAND_M = 0.012
 
-_RECORDER: contextvars.ContextVar[dict[int, str] | None] = contextvars.ContextVar(
+_RECORDER: contextvars.ContextVar[Recorder | None] = contextvars.ContextVar(
     "affordgrasp_part_recorder", default=None
 )
 
@@ -109,20 +109,34 @@ def tag(solid: manifold3d.Manifold, part: str) -> manifold3d.Manifold:
     if recorder is not None:
         for run_id in np.asarray(solid.to_mesh64().run_original_id).tolist():
             recorder.setdefault(int(run_id), part)
+        recorder.pieces.append((part, solid))
     return solid
 
 
+class Recorder(dict):
+    """Source id -> part name of the tagged triangles, and the tagged solids themselves.
+
+    ``pieces`` lists ``(part, solid)`` in tagging order, in the frame they were tagged in
+    (the families tag pieces where they end up, so the pieces give the parts' volumes).
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.pieces: list[tuple[str, manifold3d.Manifold]] = []
+
+
 @contextlib.contextmanager
-def recording() -> Iterator[dict[int, str]]:
+def recording() -> Iterator[Recorder]:
     """Collect the :func:`tag` calls of one family build (a context manager).
 
     Yields
     ------
-    dict of int to str
+    Recorder
         Source solid id (manifold's ``run_original_id``) -> part name, filled by the
-        :func:`tag` calls made inside the ``with`` block.
+        :func:`tag` calls made inside the ``with`` block, and the tagged solids
+        (``pieces``).
     """
-    recorder: dict[int, str] = {}
+    recorder = Recorder()
     token = _RECORDER.set(recorder)
     try:
         yield recorder
