@@ -303,6 +303,7 @@ def best_pairs(
     top: int = 10,
     hand: str = "barrett",
     grasp_table: pa.Table | None = None,
+    per_grasp: bool = False,
     **overrides: float,
 ) -> PairSearch:
     """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` × ``uses`` uniform samples.
@@ -331,6 +332,10 @@ def best_pairs(
         The hand.
     grasp_table : pyarrow.Table, optional
         Evaluated rows to reuse instead of simulating.
+    per_grasp : bool
+        Top ``top`` distinct grasps, each with its best use point (F_T of a grasp is its
+        maximum over U), instead of the top pairs (which may repeat one grasp with
+        several use points).
     **overrides : float
         Threshold values that replace the mode's.
 
@@ -346,14 +351,19 @@ def best_pairs(
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
     # The one ranker of the package: highest F_T first, ties to the smaller grasp, then use.
     values = scores["value"]
-    best = TopRows(top, 3)
-    candidates = best.add(values, scores["grasp"], scores["use"], np.arange(len(values)))
-    pick = best.keys[2]
+    best = TopRows(top, 2)
+    if per_grasp:  # each grasp once, with its best use point (ties: the lowest use index)
+        best_value, best_use = best_use_per_grasp(scores, grasp_table.num_rows)
+        best.add(best_value, np.arange(grasp_table.num_rows), best_use)
+        candidates = int(np.count_nonzero(values > -np.inf))
+    else:
+        candidates = best.add(values, scores["grasp"], scores["use"])
+    grasp_index, use_index = best.keys
     p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
     rows = _top_rows(
         obj,
-        p0[scores["grasp"][pick]],
-        use.use_dir[scores["use"][pick]],
+        p0[grasp_index],
+        use.use_dir[use_index],
         task,
         mode,
         hand,
