@@ -10,11 +10,20 @@ SCANNED = ["src", "docs", "examples", "benchmarks", "README.md"]
 WORD = re.compile(r"\bSPEC\b")  # case-sensitive: "spec" (an object spec) is a word of the API
 
 
+def is_build_output(path: Path) -> bool:
+    """Files the build or the interpreter writes (a stale egg-info copies an old README)."""
+    return any(
+        part == "__pycache__" or part.endswith(".egg-info") or part == "build"
+        for part in path.relative_to(ROOT).parts
+    )
+
+
 def scanned_files() -> list[Path]:
     files: list[Path] = []
     for name in SCANNED:
         path = ROOT / name
-        files.extend(sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path])
+        found = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+        files.extend(p for p in found if not is_build_output(p))
     return files
 
 
@@ -38,6 +47,12 @@ def test_no_reference_to_an_outside_spec(name):
             if WORD.search(line):
                 hits.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()[:80]}")
     assert not hits, "say it in docs/conventions.md instead:\n" + "\n".join(hits)
+
+
+def test_build_outputs_are_not_scanned():
+    assert is_build_output(ROOT / "src" / "affordgrasp.egg-info" / "PKG-INFO")
+    assert is_build_output(ROOT / "src" / "affordgrasp" / "__pycache__" / "x.pyc")
+    assert not is_build_output(ROOT / "src" / "affordgrasp" / "metrics" / "epsilon.py")
 
 
 def test_the_pattern_catches_a_reference_and_spares_the_word_spec():
