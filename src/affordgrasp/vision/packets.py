@@ -1,0 +1,238 @@
+"""Depth rays cast by Embree in packets of 16 (4 × 4 pixel tiles) from a compiled loop.
+
+``embreex`` exposes one ray per call (``rtcIntersect1``) behind a Python wrapper; on a
+compact object such as the mug (about 40 % of the pixels hit) that path renders ~600
+images per CPU-second. Here the Embree library that ``embreex`` ships is called directly:
+``ctypes`` builds the scene, and a numba loop over 4 × 4 pixel tiles (it links
+``rtcIntersect16`` by name) casts 16 coherent primary rays per call, which traverse the
+tree together. Only the tiles meeting the bounding box of the projected convex hull are
+cast. Measured in the same run: 1.4× (mug) to 3.5× (knife) faster than one ray per call.
+
+The scene is robust (watertight), as ``embreex``'s; the packet kernel rounds differently,
+so depths can differ from the one-ray path by float32 rounding (~1e-7 relative) and, where
+a ray grazes an edge, by which surface is hit (a few pixels in ten million;
+``tests/vision/test_depth.py`` bounds both). When the library cannot be loaded,
+:func:`available` is False and the renderer uses ``embreex``.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import glob
+import os
+
+import numpy as np
+from numba import njit, types
+
+from ..metrics.kernel_cache import install_package_stamp
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
+
+K = 16  # rays per packet: a 4 x 4 tile of pixels
+TILE = 4
+_FLOATS = 512  # RTCRayHit16 (ray 12 x 16 floats, hit >= 9 x 16) with room to spare
+_TFAR = 8 * K  # offsets in floats of the fields used (Embree 4 rtcore_ray.h)
+_GEOM_ID = 12 * K + 6 * K
+_INVALID = 0xFFFFFFFF
+
+# Embree 4 enums (rtcore_buffer.h, rtcore_geometry.h, rtcore_device.h).
+_GEOMETRY_TRIANGLE = 0
+_BUFFER_INDEX, _BUFFER_VERTEX = 0, 1
+_FORMAT_UINT3, _FORMAT_FLOAT3 = 0x5003, 0x9003
+_PROPERTY_VERSION_MAJOR = 1
+_BUILD_QUALITY_HIGH = 2
+_SCENE_FLAG_ROBUST = 1 << 2
+
+# rtcIntersect16(valid, scene, rayhit, args), linked by name once the library is loaded
+# (:func:`engine`); pointers are passed as integers (same calling convention).
+_rtc_intersect16 = types.ExternalFunction(
+    "rtcIntersect16", types.void(types.intp, types.intp, types.intp, types.intp)
+)
+
+
+def _find_library():
+    """The Embree 4 shared library embreex was built against (its wheel bundles it)."""
+    try:
+        import embreex
+    except ImportError:  # pragma: no cover - embreex is a dependency
+        return None
+    here = os.path.dirname(os.path.dirname(os.path.abspath(embreex.__file__)))
+    candidates = sorted(glob.glob(os.path.join(here, "embreex.libs", "libembree4*")))
+    import ctypes.util
+
+    system = ctypes.util.find_library("embree4")
+    if system:
+        candidates.append(system)
+    for path in candidates:
+        try:
+            lib = ctypes.CDLL(path)
+            import llvmlite.binding
+
+            llvmlite.binding.load_library_permanently(path)  # for the compiled kernel
+            return lib
+        except (OSError, RuntimeError):
+            continue
+    return None
+
+
+class _Embree:
+    """The library, one single-threaded device, and the compiled tile loop."""
+
+    def __init__(self, lib):
+        p = ctypes.c_void_p
+        self.lib = lib
+        lib.rtcNewDevice.restype = p
+        lib.rtcNewDevice.argtypes = [ctypes.c_char_p]
+        lib.rtcGetDeviceError.restype = ctypes.c_int
+        lib.rtcGetDeviceError.argtypes = [p]
+        lib.rtcGetDeviceProperty.restype = ctypes.c_ssize_t
+        lib.rtcGetDeviceProperty.argtypes = [p, ctypes.c_int]
+        lib.rtcNewScene.restype = p
+        lib.rtcNewScene.argtypes = [p]
+        lib.rtcNewGeometry.restype = p
+        lib.rtcNewGeometry.argtypes = [p, ctypes.c_int]
+        lib.rtcSetNewGeometryBuffer.restype = p
+        lib.rtcSetNewGeometryBuffer.argtypes = [
+            p,
+            ctypes.c_int,
+            ctypes.c_uint,
+            ctypes.c_int,
+            ctypes.c_size_t,
+            ctypes.c_size_t,
+        ]
+        for name in ("rtcCommitGeometry", "rtcReleaseGeometry", "rtcCommitScene"):
+            getattr(lib, name).argtypes = [p]
+        lib.rtcReleaseScene.argtypes = [p]
+        lib.rtcSetSceneBuildQuality.argtypes = [p, ctypes.c_int]
+        lib.rtcSetSceneFlags.argtypes = [p, ctypes.c_int]
+        lib.rtcAttachGeometry.argtypes = [p, p]
+        lib.rtcAttachGeometry.restype = ctypes.c_uint
+        self.device = lib.rtcNewDevice(b"threads=1")
+        if not self.device:
+            raise OSError("Embree device could not be created")
+        if lib.rtcGetDeviceProperty(self.device, _PROPERTY_VERSION_MAJOR) != 4:
+            raise OSError("Embree 4 expected")
+        self.kernel = render_tiles
+
+    def scene(self, triangles: np.ndarray) -> int:
+        """A committed scene of float32 triangles (t, 3, 3); returns its handle."""
+        lib = self.lib
+        triangles = np.ascontiguousarray(triangles, dtype=np.float32).reshape(-1, 3)
+        count = len(triangles) // 3
+        scene = lib.rtcNewScene(self.device)
+        # A higher-quality tree (spatial splits): ~8 % faster rendering, built once per object.
+        lib.rtcSetSceneBuildQuality(scene, _BUILD_QUALITY_HIGH)
+        # Robust (watertight) intersection, as embreex's scene: Embree's default test lets a
+        # ray through an edge shared by two triangles slip between them (holes in a flat
+        # face seen square on), at ~15 % more speed on the mug.
+        lib.rtcSetSceneFlags(scene, _SCENE_FLAG_ROBUST)
+        geometry = lib.rtcNewGeometry(self.device, _GEOMETRY_TRIANGLE)
+        vertices = lib.rtcSetNewGeometryBuffer(
+            geometry, _BUFFER_VERTEX, 0, _FORMAT_FLOAT3, 12, 3 * count
+        )
+        indices = lib.rtcSetNewGeometryBuffer(geometry, _BUFFER_INDEX, 0, _FORMAT_UINT3, 12, count)
+        if not vertices or not indices:
+            lib.rtcReleaseGeometry(geometry)
+            lib.rtcReleaseScene(scene)
+            raise OSError("Embree could not allocate the geometry buffers")
+        ctypes.memmove(vertices, triangles.ctypes.data, triangles.nbytes)
+        index = np.arange(3 * count, dtype=np.uint32)
+        ctypes.memmove(indices, index.ctypes.data, index.nbytes)
+        lib.rtcCommitGeometry(geometry)
+        lib.rtcAttachGeometry(scene, geometry)
+        lib.rtcReleaseGeometry(geometry)
+        lib.rtcCommitScene(scene)
+        if lib.rtcGetDeviceError(self.device) != 0:
+            lib.rtcReleaseScene(scene)
+            raise OSError("Embree could not build the scene")
+        return int(scene)
+
+    def release(self, scene: int) -> None:
+        self.lib.rtcReleaseScene(ctypes.c_void_p(scene))
+
+
+@njit(cache=True, nogil=True)
+def render_tiles(
+    scene, rays_cam, rot, origin, hull, focal, centre, size, out
+):  # pragma: no cover - compiled
+    """Depth of every pixel of each image (tiles meeting the hull's projection only)."""
+    # 64-byte aligned ray packet and valid mask, as rtcIntersect16 requires.
+    raw = np.zeros(_FLOATS + 16, np.float32)
+    start = ((64 - raw.ctypes.data % 64) % 64) // 4
+    buf = raw[start : start + _FLOATS]
+    ints = buf.view(np.uint32)
+    raw_valid = np.zeros(K + 16, np.int32)
+    start = ((64 - raw_valid.ctypes.data % 64) % 64) // 4
+    valid = raw_valid[start : start + K]
+    address, valid_address = buf.ctypes.data, valid.ctypes.data
+    for i in range(rot.shape[0]):
+        r00, r01, r02 = rot[i, 0, 0], rot[i, 0, 1], rot[i, 0, 2]
+        r10, r11, r12 = rot[i, 1, 0], rot[i, 1, 1], rot[i, 1, 2]
+        r20, r21, r22 = rot[i, 2, 0], rot[i, 2, 1], rot[i, 2, 2]
+        ox, oy, oz = origin[i, 0], origin[i, 1], origin[i, 2]
+        # Rays that can hit pass through the projection of the convex hull: only the
+        # tiles meeting its bounding box (one pixel of margin) are cast.
+        umin, umax, vmin, vmax = np.inf, -np.inf, np.inf, -np.inf
+        whole = False
+        for j in range(hull.shape[0]):
+            dx, dy, dz = hull[j, 0] - ox, hull[j, 1] - oy, hull[j, 2] - oz
+            zc = r02 * dx + r12 * dy + r22 * dz
+            if zc <= 1e-9:
+                whole = True
+                break
+            u = focal * (r00 * dx + r10 * dy + r20 * dz) / zc + centre
+            v = focal * (r01 * dx + r11 * dy + r21 * dz) / zc + centre
+            umin, umax = min(umin, u), max(umax, u)
+            vmin, vmax = min(vmin, v), max(vmax, v)
+        if whole:
+            rlo, rhi, clo, chi = 0, size, 0, size
+        else:
+            rlo = max(0, int(np.floor(vmin - 1.0)))
+            rhi = min(size, int(np.ceil(vmax + 1.0)) + 1)
+            clo = max(0, int(np.floor(umin - 1.0)))
+            chi = min(size, int(np.ceil(umax + 1.0)) + 1)
+        if rlo >= rhi or clo >= chi:
+            continue
+        for row0 in range(rlo - rlo % TILE, rhi, TILE):
+            for col0 in range(clo - clo % TILE, chi, TILE):
+                for k in range(K):
+                    row, col = row0 + k // TILE, col0 + k % TILE
+                    if row >= size or col >= size:
+                        valid[k] = 0
+                        continue
+                    valid[k] = -1
+                    p = row * size + col
+                    x, y, z = rays_cam[p, 0], rays_cam[p, 1], rays_cam[p, 2]
+                    buf[k], buf[K + k], buf[2 * K + k] = ox, oy, oz
+                    buf[3 * K + k] = 0.0  # tnear
+                    buf[4 * K + k] = x * r00 + y * r01 + z * r02
+                    buf[5 * K + k] = x * r10 + y * r11 + z * r12
+                    buf[6 * K + k] = x * r20 + y * r21 + z * r22
+                    buf[7 * K + k] = 0.0  # time
+                    buf[_TFAR + k] = np.inf
+                    ints[9 * K + k] = _INVALID  # mask
+                    ints[10 * K + k] = 0  # id
+                    ints[11 * K + k] = 0  # flags
+                    ints[_GEOM_ID + k] = _INVALID
+                _rtc_intersect16(valid_address, scene, address, 0)
+                for k in range(K):
+                    if valid[k] != 0 and ints[_GEOM_ID + k] != _INVALID:
+                        out[i, row0 + k // TILE, col0 + k % TILE] = buf[_TFAR + k]
+
+
+@functools.lru_cache(maxsize=1)
+def engine() -> _Embree | None:
+    """The packet engine of this process, or None where Embree 4 cannot be loaded."""
+    lib = _find_library()
+    if lib is None:
+        return None
+    try:
+        return _Embree(lib)
+    except (OSError, AttributeError):
+        return None
+
+
+def available() -> bool:
+    """True when depth rays can be cast in packets (Embree 4 library found)."""
+    return engine() is not None
