@@ -62,6 +62,8 @@ def test_bad_inputs_exit_2(tiny_dataset, tmp_path, capsys):
         ["train", str(tiny_dataset), "--target", "nope", "-o", str(tmp_path / "m.safetensors")]
     )
     assert rc == 2 and "nope" in capsys.readouterr().err
+    rc = main(["train", str(tiny_dataset), "--members", "0", "-o", str(tmp_path / "m.safetensors")])
+    assert rc == 2 and "--members" in capsys.readouterr().err
     assert (
         main(
             [

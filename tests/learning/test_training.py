@@ -106,3 +106,25 @@ def test_pose_only_baseline_needs_no_images():
     config = default_config("pose", make_target("viable"))
     model, summary = train_model(config, train, val, TrainSettings(epochs=2, batch_size=16))
     assert len(summary["history"]) == 2
+
+
+def test_ensemble_is_the_mean_of_its_members_and_round_trips(tmp_path):
+    train, val = _samples(48, 8), _samples(16, 9)
+    target = make_target("hold_effort_sum")
+    train.y, val.y = 250.0 * train.y, 250.0 * val.y
+    settings = TrainSettings(epochs=2, batch_size=16, seed=3)
+    config = default_config("cnn", target, width=8, members=2)
+    ensemble, summary = train_model(config, train, val, settings)
+    assert len(summary["members"]) == 2 and len(ensemble.members) == 2
+    x = Inputs(config, val)
+    single = dict(config, members=1)
+    one, _ = train_model(single, train, val, settings)  # member 0: seed 3
+    two, _ = train_model(single, train, val, TrainSettings(epochs=2, batch_size=16, seed=4))
+    mean = (predict_scores(one, single, x) + predict_scores(two, single, x)) / 2
+    np.testing.assert_allclose(predict_scores(ensemble, config, x), mean, rtol=1e-5, atol=1e-6)
+    path = save_model(tmp_path / "e.safetensors", ensemble, config)
+    loaded, cfg = load_model(path)
+    assert cfg["members"] == 2
+    np.testing.assert_array_equal(
+        predict_scores(loaded, cfg, x), predict_scores(ensemble, config, x)
+    )

@@ -50,6 +50,13 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--max-train", type=int, default=20000, help="most training rows kept (default 20000)"
     )
+    p.add_argument(
+        "--members",
+        type=int,
+        default=1,
+        help="train an ensemble of this many networks (seeds SEED, SEED+1, ...) whose "
+        "outputs are averaged (default 1)",
+    )
     p.add_argument("--max-minutes", type=float, default=None, help="stop after this long")
 
 
@@ -95,7 +102,7 @@ def run(args, out) -> None:
 
     if not args.out.endswith(".safetensors"):
         raise InputError(f"--out {args.out!r} must end in .safetensors")
-    for name in ("epochs", "batch_size", "patience", "max_train"):
+    for name in ("epochs", "batch_size", "patience", "max_train", "members"):
         if getattr(args, name) < 1:
             raise InputError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     try:
@@ -128,6 +135,7 @@ def run(args, out) -> None:
             canonical=args.canonical,
             max_train=args.max_train,
             progress=update,
+            members=args.members,
         )
     tr = config["training"]
     out.table(

@@ -183,6 +183,7 @@ def train_on_dataset(
     max_train: int | None = 20000,
     progress: Callable[[dict], None] | None = None,
     prepared=None,
+    members: int = 1,
 ):
     """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
 
@@ -212,6 +213,9 @@ def train_on_dataset(
         Called after every batch (:func:`~affordgrasp.learning.training.train_model`).
     prepared : tuple, optional
         The result of :func:`prepare_split`, to train several models on the same rows.
+    members : int
+        More than 1: an ensemble of that many networks (seeds seed, seed + 1, ...) whose
+        outputs are averaged, saved as one model.
 
     Returns
     -------
@@ -250,7 +254,9 @@ def train_on_dataset(
             f"too few rows to train on ({len(train)} train, {len(val)} validation); generate "
             "more samples, or objects with at least 3 instances per family"
         )
-    config = default_config(arch, tgt, canonical=canonical)
+    if not isinstance(members, int) or isinstance(members, bool) or members < 1:
+        raise InputError(f"members must be an integer >= 1, got {members!r}")
+    config = default_config(arch, tgt, canonical=canonical, members=members)
     model, summary = train_model(config, train, val, settings, progress=progress)
     config["training"] = {
         "dataset": str(dataset),

@@ -98,7 +98,9 @@ def build_model(config: dict):
     ----------
     config : dict
         ``arch`` (one of ``ARCHITECTURES``), ``width`` (16), ``dropout`` (0.3) and
-        ``canonical`` (two-channel depth and the nearest depth as an extra pose feature).
+        ``canonical`` (two-channel depth and the nearest depth as an extra pose feature),
+        ``members`` (1; more gives an ensemble: that many networks of the same
+        architecture, trained with different seeds, whose outputs are averaged).
 
     Returns
     -------
@@ -114,6 +116,25 @@ def build_model(config: dict):
     """
     torch = require_torch()
     nn = torch.nn
+    members = int(config.get("members", 1))
+    if members > 1:
+        single = dict(config, members=1)
+
+        class Ensemble(nn.Module):
+            """The mean output of ``members`` networks."""
+
+            def __init__(self):
+                super().__init__()
+                self.members = nn.ModuleList([build_model(single) for _ in range(members)])
+
+            @property
+            def last_feature_transform(self):
+                return None
+
+            def forward(self, *inputs):
+                return torch.stack([m(*inputs) for m in self.members]).mean(dim=0)
+
+        return Ensemble()
     arch = config["arch"]
     dropout = float(config.get("dropout", 0.3))
     width = int(config.get("width", 16))

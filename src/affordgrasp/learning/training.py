@@ -91,6 +91,7 @@ def default_config(arch: str, target: Target, **options) -> dict:
         "width": 16,
         "n_points": 256,
         "canonical": False,
+        "members": 1,
         "camera": {"size": 128, "fov_deg": 60.0},
         "affordgrasp_version": __version__,
     }
@@ -249,6 +250,9 @@ def train_model(
         ``best_epoch``, ``best_val_loss``, ``seconds``, ``train_samples``, ``parameters``.
     """
     settings = settings or TrainSettings()
+    members = int(config.get("members", 1))
+    if members > 1:
+        return _train_ensemble(config, train, val, settings, progress, members)
     torch = require_torch()
     # One thread by default: small batches gain little from more, and on a shared machine
     # torch's spinning worker threads cost far more than they give (measured: 5x slower).
@@ -354,6 +358,40 @@ def train_model(
         "parameters": count_parameters(model),
     }
     return model, summary
+
+
+def _train_ensemble(config, train, val, settings, progress, members: int):
+    """Train ``members`` networks with seeds seed, seed + 1, ... and assemble them."""
+    from dataclasses import replace
+
+    single = dict(config, members=1)
+    trained, summaries = [], []
+    for k in range(members):
+        model, summary = train_model(
+            single, train, val, replace(settings, seed=settings.seed + k), progress
+        )
+        trained.append(model)
+        summaries.append(summary)
+    ensemble = build_model(config)
+    for slot, model in zip(ensemble.members, trained, strict=True):
+        slot.load_state_dict(model.state_dict())
+    ensemble.eval()
+    first = summaries[0]
+    summary = {
+        "settings": asdict(settings),
+        "history": first["history"],
+        "best_epoch": first["best_epoch"],
+        "best_val_loss": first["best_val_loss"],
+        "members": [
+            {k: s[k] for k in ("best_epoch", "best_val_loss", "seconds")}
+            | {"epochs": len(s["history"])}
+            for s in summaries
+        ],
+        "seconds": sum(s["seconds"] for s in summaries),
+        "train_samples": len(train),
+        "parameters": count_parameters(ensemble),
+    }
+    return ensemble, summary
 
 
 def _validation_outputs(model, inputs: Inputs, idx: np.ndarray):
