@@ -156,7 +156,27 @@ class _Embree:
 def render_tiles(
     scene, rays_cam, rot, origin, hull, focal, centre, size, out
 ):  # pragma: no cover - compiled
-    """Depth of every pixel of each image (tiles meeting the hull's projection only)."""
+    """Depth of every pixel of each image (tiles meeting the hull's projection only).
+
+    Parameters
+    ----------
+    scene : int
+        Embree scene handle (:meth:`_Embree.scene`).
+    rays_cam : (size*size, 3) float32 ndarray
+        Camera-frame ray per pixel, row-major, z = 1.
+    rot : (n, 3, 3) float32 ndarray
+        Camera → object rotations.
+    origin : (n, 3) float32 ndarray
+        Camera positions in the scene's frame (the object's box centre at 0), m.
+    hull : (h, 3) float64 ndarray
+        Convex-hull vertices in the scene's frame, m.
+    focal, centre : float
+        OpenCV fx = fy and cx = cy, pixels.
+    size : int
+        Pixels per side.
+    out : (n, size, size) float32 ndarray
+        Zeroed; receives the depth (m) of every pixel whose ray hits, in place.
+    """
     # 64-byte aligned ray packet and valid mask, as rtcIntersect16 requires.
     raw = np.zeros(_FLOATS + 16, np.float32)
     start = ((64 - raw.ctypes.data % 64) % 64) // 4
@@ -223,7 +243,12 @@ def render_tiles(
 
 @functools.lru_cache(maxsize=1)
 def engine() -> _Embree | None:
-    """The packet engine of this process, or None where Embree 4 cannot be loaded."""
+    """The packet engine of this process, or None where Embree 4 cannot be loaded.
+
+    Returns
+    -------
+    _Embree or None
+    """
     lib = _find_library()
     if lib is None:
         return None
@@ -234,5 +259,11 @@ def engine() -> _Embree | None:
 
 
 def available() -> bool:
-    """True when depth rays can be cast in packets (Embree 4 library found)."""
+    """Whether depth rays can be cast in packets.
+
+    Returns
+    -------
+    bool
+        True when the Embree 4 library was found and a device created.
+    """
     return engine() is not None
