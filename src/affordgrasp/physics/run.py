@@ -11,6 +11,7 @@ a directory with another plan refuses and says what differs.
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import multiprocessing
@@ -304,7 +305,7 @@ def run_physics(
     for entry in entries:
         if log_message:
             log_message(f"convex decomposition of {entry['name']} (cached after the first run)")
-        _scene_object(entry, settings)
+        _entry_object(entry, settings)
     started = time.perf_counter()
     summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
     jobs = [
@@ -350,37 +351,38 @@ def _validate_job(job) -> dict:
     return validate_shard(*job)
 
 
-_SCENES: dict = {}
-_OBJECTS: dict = {}
+@functools.cache
+def _scene_object(name: str, source: str, mesh_hash: str, settings: PhysicsSettings):
+    """The GraspObject of a manifest entry (checked against its hash) and its parts.
 
-
-def _scene_object(entry: dict, settings: PhysicsSettings):
-    """The GraspObject of a manifest entry (checked against its hash) and its parts."""
+    Cached per process (the idiom of :mod:`affordgrasp.caching` for hashable values): the
+    decomposition depends on the settings, so they are part of the key.
+    """
     from ..objects import load_object
     from .decompose import convex_parts
 
-    key = entry["mesh_hash"]
-    if key not in _OBJECTS:
-        spec = entry["name"] if entry["source"] == "family" else entry["source"]
-        obj = load_object(spec)
-        if obj.mesh_hash != entry["mesh_hash"]:
-            raise DatasetError(
-                f"object {entry['name']!r} resolves to another mesh than the dataset's "
-                f"(hash {obj.mesh_hash[:12]} here vs {entry['mesh_hash'][:12]} there); "
-                "validate on the machine and software version that generated it"
-            )
-        _OBJECTS[key] = (obj, convex_parts(obj.mesh, obj.mesh_hash, settings))
-    return _OBJECTS[key]
+    obj = load_object(name if source == "family" else source)
+    if obj.mesh_hash != mesh_hash:
+        raise DatasetError(
+            f"object {name!r} resolves to another mesh than the dataset's "
+            f"(hash {obj.mesh_hash[:12]} here vs {mesh_hash[:12]} there); "
+            "validate on the machine and software version that generated it"
+        )
+    return obj, convex_parts(obj.mesh, obj.mesh_hash, settings)
 
 
-def _scene(hand: Hand, hand_key: str, entry: dict, settings: PhysicsSettings):
+def _entry_object(entry: dict, settings: PhysicsSettings):
+    return _scene_object(entry["name"], entry["source"], entry["mesh_hash"], settings)
+
+
+@functools.cache
+def _scene(hand_spec: str, name: str, source: str, mesh_hash: str, settings: PhysicsSettings):
+    """The compiled scene of a hand (its JSON document) and an object, one per process."""
+    from ..hands import hand_from_dict
     from .scene import build_scene
 
-    key = (hand_key, entry["mesh_hash"], settings.digest())
-    if key not in _SCENES:
-        obj, parts = _scene_object(entry, settings)
-        _SCENES[key] = build_scene(hand, obj, settings, parts=parts)
-    return _SCENES[key]
+    obj, parts = _scene_object(name, source, mesh_hash, settings)
+    return build_scene(hand_from_dict(json.loads(hand_spec)), obj, settings, parts=parts)
 
 
 def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], settings) -> pa.Table:
@@ -414,7 +416,8 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     uns = rows.column("use_normal").to_pylist()
     outcomes = []
     for i in range(rows.num_rows):
-        scene = _scene(hand, hand_key, by_name[names[i]], settings)
+        entry = by_name[names[i]]
+        scene = _scene(hand_key, entry["name"], entry["source"], entry["mesh_hash"], settings)
         up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
         un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
         outcome = validate_grasp(
