@@ -140,7 +140,7 @@ def main() -> None:
     Un = nU / np.linalg.norm(nU, axis=1)[:, None]
     an = a / np.linalg.norm(a, axis=1)[:, None]
     t0 = time.perf_counter()
-    contact_metrics_batch(points, normals, mu, offsets, c, r, U, Un, an, False)
+    contact_metrics_batch(points, normals, mu, offsets, c, r, U, Un, an, False, True)
     t["kernel: all contact metrics (batch)"] = (time.perf_counter() - t0) / n * 1e6
     t0 = time.perf_counter()
     use_edge(mesh, T, U)

@@ -213,3 +213,20 @@ def test_normal_noise_on_coplanar_contacts_moves_epsilon_continuously(seed):
         rel=1e-9,
         abs=1e-11,
     )
+
+
+def test_epsilon_without_volume_is_the_same_epsilon():
+    rng = np.random.default_rng(21)
+    closure = 0
+    for _ in range(60):
+        cs = random_contacts(rng, int(rng.integers(2, 9)), spread=0.4)
+        full = epsilon(cs, np.zeros(3), 0.06)
+        fast = epsilon(cs, np.zeros(3), 0.06, volume=False)
+        assert fast.reason == full.reason
+        assert fast.epsilon == pytest.approx(full.epsilon, rel=1e-9, abs=1e-12)
+        if full.epsilon > 0:
+            closure += 1
+            assert np.isnan(fast.volume)
+        else:
+            assert fast.volume == 0.0
+    assert closure >= 10

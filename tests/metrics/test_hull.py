@@ -13,6 +13,7 @@ from affordgrasp.metrics.hull import (
     HULL_OK,
     convex_hull_6d,
     hull_volume,
+    nearest_facet_hull,
 )
 
 
@@ -127,3 +128,53 @@ def test_many_nearly_coplanar_contacts_stay_compiled_and_match_qhull():
     points, normals = _ring_contacts(10, 5)
     W = ref_wrenches(points, normals, 0.4, np.array([0.0, 0.0, 0.03]), 1 / 0.09)
     _compare_with_qhull(np.ascontiguousarray(W.T))
+
+
+def _nearest_matches_qhull(P):
+    """nearest_facet_hull's smallest offset is qhull's ε when the origin is inside."""
+    ref = ConvexHull(P, qhull_options="Qt Qx")
+    eps = np.min(-ref.equations[:, -1])
+    status, verts, normals, offsets, _ = nearest_facet_hull(P)
+    if status == HULL_FAILED:
+        return False  # the caller falls back to the full hull, then qhull
+    assert status == HULL_OK
+    if eps <= 1e-9 * np.abs(P).max():
+        return True  # origin outside or on the boundary: ε is 0 from the closure LP
+    f = int(np.argmin(offsets))
+    # a facet of the full hull: every point beneath it, its vertices on it
+    assert np.max(P @ normals[f] - offsets[f]) <= 1e-10 * np.abs(P).max()
+    assert offsets[f] == pytest.approx(eps, rel=1e-9, abs=1e-12)
+    return True
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1), k=st.integers(2, 8))
+def test_nearest_facet_of_random_wrench_sets_is_qhulls(seed, k):
+    rng = np.random.default_rng(seed)
+    cs = random_contacts(rng, k, spread=0.5)
+    W = ref_wrenches(cs.points, cs.normals, cs.mu, rng.normal(size=3) * 0.01, 1 / 0.06)
+    if np.linalg.matrix_rank(W) < 6:
+        return
+    assert _nearest_matches_qhull(np.ascontiguousarray(W.T))
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1), noise_exp=st.integers(-13, -8))
+def test_nearest_facet_of_near_coplanar_sets_is_qhulls(seed, noise_exp):
+    P = _near_coplanar_set(np.random.default_rng(seed), 10.0**noise_exp)
+    P = np.ascontiguousarray(P - P.mean(axis=0))  # the origin inside
+    _nearest_matches_qhull(P)
+
+
+def test_nearest_facet_of_degenerate_and_many_contact_sets_is_qhulls():
+    cs = cube_face_contacts(0.05, 0.5)
+    W = ref_wrenches(cs.points, cs.normals, cs.mu, np.zeros(3), 1 / 0.0866)
+    assert _nearest_matches_qhull(np.ascontiguousarray(W.T))
+    cube = np.array(np.meshgrid(*[[-1.0, 1.0]] * 6)).reshape(6, -1).T.copy()
+    assert _nearest_matches_qhull(cube)
+    points, normals = _ring_contacts(10, 5)
+    W = ref_wrenches(points, normals, 0.4, np.array([0.0, 0.0, 0.03]), 1 / 0.09)
+    P = np.ascontiguousarray(W.T)
+    assert _nearest_matches_qhull(P)
+    # a fraction of the full hull's facets
+    assert len(nearest_facet_hull(P)[1]) < len(convex_hull_6d(P)[1]) / 5

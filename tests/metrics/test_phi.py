@@ -196,3 +196,17 @@ def test_soft_contacts_and_input_checks(scene):
     empty = compute_phi_batch(mass, mesh, [], np.zeros((0, 3)), np.zeros((0, 3)), [],
                               np.zeros((0, 3)), np.zeros((0, 3)))  # fmt: skip
     assert list(empty) == EXPECTED_COLUMNS and all(len(v) == 0 for v in empty.values())
+
+
+def test_without_volume_every_other_column_is_the_same(scene):
+    full = _phi(scene)
+    fast = _phi(scene, volume=False)
+    closure = full["epsilon"] > 0
+    assert closure.any()
+    assert np.all(np.isnan(fast["gws_volume"][closure]))
+    assert np.all(fast["gws_volume"][~closure] == 0.0)
+    for name in full:
+        if name == "epsilon":
+            np.testing.assert_allclose(fast[name], full[name], rtol=1e-9, atol=1e-12)
+        elif name != "gws_volume":
+            np.testing.assert_array_equal(fast[name], full[name])

@@ -34,7 +34,14 @@ import numpy as np
 from numba import njit
 
 from .cones import contact_wrenches, wrench_matrix_kernel
-from .hull import HULL_DEGENERATE, HULL_OK, convex_hull_6d, facet_spread, hull_volume
+from .hull import (
+    HULL_DEGENERATE,
+    HULL_OK,
+    convex_hull_6d,
+    facet_spread,
+    hull_volume,
+    nearest_facet_hull,
+)
 from .kernel_cache import install_package_stamp
 from .lp import FAILED, OPTIMAL, simplex_standard
 from .validation import contact_arrays, point3, positive_length
@@ -181,7 +188,7 @@ def closure_margin(W):
 
 @njit(cache=True)
 def epsilon_kernel(W):
-    """ε of a normalised wrench matrix, compiled.
+    """ε and the GWS volume of a normalised wrench matrix, compiled.
 
     Parameters
     ----------
@@ -190,13 +197,35 @@ def epsilon_kernel(W):
 
     Returns
     -------
+    code, epsilon, volume
+        As for :func:`epsilon_volume_kernel` with ``volume=True``.
+    """
+    return epsilon_volume_kernel(W, True)
+
+
+@njit(cache=True)
+def epsilon_volume_kernel(W, volume):
+    """ε of a normalised wrench matrix, and the GWS volume if asked, compiled.
+
+    The volume needs the full hull; ε alone needs only the facets that the best-first
+    :func:`~affordgrasp.metrics.hull.nearest_facet_hull` builds (a fraction of them).
+
+    Parameters
+    ----------
+    W : (6, N) float64 ndarray
+        Wrench matrix, torques divided by r_max.
+    volume : bool
+        Compute the volume (else it is NaN for force-closure grasps).
+
+    Returns
+    -------
     code : int
         CLOSURE, NO_CONTACT, NOT_FORCE_CLOSURE, DEGENERATE, HULL_FALLBACK or LP_FALLBACK
         (the last two ask the caller to recompute with qhull / HiGHS).
     epsilon : float
         >= 0.
-    volume : float
-        6-volume of the GWS, >= 0.
+    gws_volume : float
+        6-volume of the GWS, >= 0 (NaN for force closure when not asked).
     """
     n = W.shape[1]
     if n == 0:
@@ -209,7 +238,10 @@ def epsilon_kernel(W):
     if status != OPTIMAL or t <= CLOSURE_TOL:
         return NOT_FORCE_CLOSURE, 0.0, 0.0
     P = np.ascontiguousarray(W.T)
-    hs, verts, normals, offsets, interior = convex_hull_6d(P)
+    if volume:
+        hs, verts, normals, offsets, interior = convex_hull_6d(P)
+    else:
+        hs, verts, normals, offsets, interior = nearest_facet_hull(P)
     if hs != HULL_OK:
         # The LP proved the origin strictly inside a full-rank hull: never "degenerate".
         return HULL_FALLBACK, 0.0, 0.0
@@ -218,6 +250,8 @@ def epsilon_kernel(W):
         # A facet that some wrench lies above (a sliver built from nearly coplanar
         # wrenches) cannot give ε: recompute exactly.
         return HULL_FALLBACK, 0.0, 0.0
+    if not volume:
+        return CLOSURE, offsets[f], np.nan
     return CLOSURE, offsets[f], hull_volume(P, verts, interior)
 
 
@@ -320,7 +354,9 @@ def epsilon_from_wrenches_qhull(W: np.ndarray) -> tuple[int, float, float]:
     return CLOSURE, eps, float(hull.volume)
 
 
-def epsilon(contacts, center, r_max: float, *, soft: bool = False) -> EpsilonResult:
+def epsilon(
+    contacts, center, r_max: float, *, soft: bool = False, volume: bool = True
+) -> EpsilonResult:
     """GraspIt!'s L1 epsilon and the GWS volume of a contact set (conventions: Metrics).
 
     Parameters
@@ -333,20 +369,26 @@ def epsilon(contacts, center, r_max: float, *, soft: bool = False) -> EpsilonRes
         Torque normalisation length (largest COM-to-vertex distance), m.
     soft : bool
         Use soft-finger cones (see :mod:`affordgrasp.metrics.cones`).
+    volume : bool
+        Also compute the GWS volume (the full hull). False: ε only, from the facets
+        nearest the origin (the same ε, often tens of times faster); the volume of a
+        force-closure grasp is then NaN.
 
     Returns
     -------
     EpsilonResult
-        ε >= 0, volume >= 0, reason.
+        ε >= 0, volume >= 0 (NaN when not asked, for force closure), reason.
     """
     points, normals, mu = contact_arrays(contacts)
     center = point3(center, "center")
     r_max = positive_length(r_max, "r_max")
     W = wrench_matrix_kernel(points, normals, mu, center, 1.0 / r_max, bool(soft))
-    code, eps, vol = epsilon_kernel(W)
+    code, eps, vol = epsilon_volume_kernel(W, bool(volume))
     if code in (HULL_FALLBACK, LP_FALLBACK):
         log.debug("compiled ε path gave up (code %d); using qhull", code)
         code, eps, vol = epsilon_from_wrenches_qhull(W)
+        if code == CLOSURE and not volume:
+            vol = np.nan
     return EpsilonResult(float(eps), float(vol), REASONS[code])
 
 

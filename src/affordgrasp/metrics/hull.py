@@ -133,29 +133,31 @@ def _hyperplane(P, verts, q0, out_n, scratch, perm, y):
     return d, True
 
 
-@njit(cache=True)
-def _pencil_plane(F, v, g, dist_v, dist_g, P, verts, out_n, chk_tol):
+@njit(cache=True, inline="always")
+def _pencil_plane(normal, offset, v, g, dist_v, dist_g, P, vertices, nf, out_n, chk_tol):
     """Hyperplane through the ridge shared by facets v, g and the apex p (dist_v > 0 above
     v, dist_g <= tol above g): ``-dist_g * (n_v, d_v) + dist_v * (n_g, d_g)``, normalised.
 
+    Takes the facet store's ``normal``, ``offset`` and ``vertices`` arrays, not the store
+    (one call per new facet: passing ten arrays costs ten reference counts each way).
     The interior point stays beneath (both weights are >= 0 up to tol). Returns
-    ``(d, ok)``; ok is False when the result does not pass through ``P[verts]``.
+    ``(d, ok)``; ok is False when the result does not pass through ``P[vertices[nf]]``.
     """
     a = -dist_g
     b = dist_v
     norm = 0.0
     for c in range(DIM):
-        x = a * F.normal[v, c] + b * F.normal[g, c]
+        x = a * normal[v, c] + b * normal[g, c]
         out_n[c] = x
         norm += x * x
     if norm <= 0.0:
         return 0.0, False
     norm = np.sqrt(norm)
-    d = (a * F.offset[v] + b * F.offset[g]) / norm
+    d = (a * offset[v] + b * offset[g]) / norm
     for c in range(DIM):
         out_n[c] /= norm
     for r in range(DIM):
-        x = verts[r]
+        x = vertices[nf, r]
         s = 0.0
         for c in range(DIM):
             s += out_n[c] * P[x, c]
@@ -314,6 +316,14 @@ def _dist(F, f, P, p):
 
 
 @njit(cache=True)
+def _dist_nd(normal, offset, f, P, p):
+    s = 0.0
+    for c in range(DIM):
+        s += normal[f, c] * P[p, c]
+    return s - offset[f]
+
+
+@njit(cache=True)
 def _sorted_key4(a, b, c, d):
     """Order-independent int64 key of four vertex indices (each < 32768)."""
     if a > b:
@@ -408,29 +418,35 @@ def _visible(F, f0, p, P, thr, stamp, vis, hv, hk, hg):
     and the horizon ridges (visible facet, the vertex slot opposite the ridge, the
     neighbour across it); the arrays are grown as needed.
     """
+    # the store's fields as locals: the loop touches them tens of thousands of times
+    neighbours = F.neighbours
+    mark = F.mark
+    apex_dist = F.apex_dist
+    normal = F.normal
+    offset = F.offset
     nvis = 1
     vis[0] = f0
-    F.mark[f0] = stamp
+    mark[f0] = stamp
     nh = 0
     i = 0
     while i < nvis:
         v = vis[i]
         i += 1
         for k in range(DIM):
-            g = F.neighbours[v, k]
-            if F.mark[g] == stamp:
+            g = neighbours[v, k]
+            if mark[g] == stamp:
                 continue
-            if F.mark[g] != -stamp:
-                dg = _dist(F, g, P, p)
-                F.apex_dist[g] = dg
+            if mark[g] != -stamp:
+                dg = _dist_nd(normal, offset, g, P, p)
+                apex_dist[g] = dg
                 if dg > thr:
-                    F.mark[g] = stamp
+                    mark[g] = stamp
                     if nvis == vis.shape[0]:
                         vis = _grow_1(vis, 2 * nvis, -1)
                     vis[nvis] = g
                     nvis += 1
                     continue
-                F.mark[g] = -stamp
+                mark[g] = -stamp
             if nh == hv.shape[0]:
                 hv = _grow_1(hv, 2 * nh, -1)
                 hk = _grow_1(hk, 2 * nh, -1)
@@ -466,25 +482,8 @@ def _unlink(F, nxt, f, p, P):
 
 
 @njit(cache=True)
-def convex_hull_6d(P):
-    """Facets of the convex hull of a 6-D point set.
-
-    Parameters
-    ----------
-    P : (N, 6) float64 ndarray
-        Points.
-
-    Returns
-    -------
-    status : int
-        HULL_OK, HULL_DEGENERATE (affine rank < 6) or HULL_FAILED.
-    vertices : (F, 6) int64 ndarray
-    normals : (F, 6) float64 ndarray
-        Outward unit normals: every point satisfies ``normals @ p <= offsets + tol``.
-    offsets : (F,) float64 ndarray
-    interior : (6,) float64 ndarray
-        A point inside the hull.
-    """
+def _hull(P, nearest_only):
+    """:func:`convex_hull_6d` (``nearest_only`` False) or :func:`nearest_facet_hull` (True)."""
     N = P.shape[0]
     scale = 0.0
     for i in range(N):
@@ -514,6 +513,16 @@ def convex_hull_6d(P):
 
     cap = 512
     F = _facet_store(cap)
+    F_vertices = F.vertices
+    F_neighbours = F.neighbours
+    F_normal = F.normal
+    F_offset = F.offset
+    F_alive = F.alive
+    F_outside = F.outside
+    F_far_point = F.far_point
+    F_far_dist = F.far_dist
+    F_mark = F.mark
+    F_apex_dist = F.apex_dist
     nxt = np.full(N, -1, dtype=np.int64)
     scratch = np.empty((DIM - 1, DIM))
     nvec = np.empty(DIM)
@@ -524,15 +533,15 @@ def convex_hull_6d(P):
         s = 0
         for j in range(DIM + 1):
             if j != i:
-                F.vertices[i, s] = simplex[j]
-                F.neighbours[i, s] = j
+                F_vertices[i, s] = simplex[j]
+                F_neighbours[i, s] = j
                 s += 1
-        d, ok = _hyperplane(P, F.vertices[i], q0, nvec, scratch, perm, yvec)
+        d, ok = _hyperplane(P, F_vertices[i], q0, nvec, scratch, perm, yvec)
         if not ok:
             return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
-        F.normal[i] = nvec
-        F.offset[i] = d
-        F.alive[i] = True
+        F_normal[i] = nvec
+        F_offset[i] = d
+        F_alive[i] = True
     nF = DIM + 1
 
     in_simplex = np.zeros(N, dtype=np.bool_)
@@ -544,18 +553,18 @@ def convex_hull_6d(P):
         if in_simplex[p]:
             continue
         for f in range(nF):
-            dist = _dist(F, f, P, p)
+            dist = _dist_nd(F_normal, F_offset, f, P, p)
             if dist > tol:
-                if F.outside[f] < 0:
+                if F_outside[f] < 0:
                     if nstack == stack.shape[0]:
                         stack = _grow_1(stack, 2 * nstack, -1)
                     stack[nstack] = f
                     nstack += 1
-                nxt[p] = F.outside[f]
-                F.outside[f] = p
-                if dist > F.far_dist[f]:
-                    F.far_dist[f] = dist
-                    F.far_point[f] = p
+                nxt[p] = F_outside[f]
+                F_outside[f] = p
+                if dist > F_far_dist[f]:
+                    F_far_dist[f] = dist
+                    F_far_point[f] = p
                 break
 
     vis = np.empty(64, dtype=np.int64)
@@ -571,57 +580,80 @@ def convex_hull_6d(P):
     free = np.empty(64, dtype=np.int64)  # retired facet slots, reused by new facets
     nfree = 0
     newf = np.empty(64, dtype=np.int64)
-    while nstack > 0:
-        # the farthest outside point of all first: fewer facets built and retired
-        # (stale entries: retired slots, emptied outside sets, are dropped on the way)
-        bi = -1
-        j = 0
-        while j < nstack:
-            fj = stack[j]
-            if not F.alive[fj] or F.outside[fj] < 0:
-                nstack -= 1
-                stack[j] = stack[nstack]
-                continue
-            if bi < 0 or F.far_dist[fj] > F.far_dist[stack[bi]]:
-                bi = j
-            j += 1
-        if bi < 0:
-            break
-        f0 = stack[bi]
-        nstack -= 1
-        stack[bi] = stack[nstack]
-        p = F.far_point[f0]
-        if F.far_dist[f0] <= vis_tol:
+    while nstack > 0 or nearest_only:
+        if nearest_only:
+            # Best first: the facet nearest the origin. If no point is above it, it is a
+            # facet of the full hull, and no facet is nearer: the partial hull lies inside
+            # the full one, so the origin's distance to the full boundary is at least its
+            # distance to the partial boundary, the nearest facet's offset.
+            fm = -1
+            for f in range(nF):
+                if F_alive[f] and (fm < 0 or F_offset[f] < F_offset[fm]):
+                    fm = f
+            p = -1
+            far = tol
+            for q in range(N):
+                dq = _dist_nd(F_normal, F_offset, fm, P, q)
+                if dq > far:
+                    far = dq
+                    p = q
+            if p < 0:
+                break
+            f0 = fm
+            F_far_dist[f0] = far
+        else:
+            # the farthest outside point of all first: fewer facets built and retired
+            # (stale entries: retired slots, emptied outside sets, are dropped on the way)
+            bi = -1
+            j = 0
+            while j < nstack:
+                fj = stack[j]
+                if not F_alive[fj] or F_outside[fj] < 0:
+                    nstack -= 1
+                    stack[j] = stack[nstack]
+                    continue
+                if bi < 0 or F_far_dist[fj] > F_far_dist[stack[bi]]:
+                    bi = j
+                j += 1
+            if bi < 0:
+                break
+            f0 = stack[bi]
+            nstack -= 1
+            stack[bi] = stack[nstack]
+            p = F_far_point[f0]
+        if F_far_dist[f0] <= vis_tol:
             # p is barely above f0: start from the facet it is farthest above, if that one
             # is clearly below p; otherwise p is coplanar with the hull (within vis_tol)
             # and is dropped, to be checked against the finished hull.
             thick = True
             stamp += 1
-            F.apex_dist[f0] = F.far_dist[f0]
+            F_apex_dist[f0] = F_far_dist[f0]
             nvis, nh, vis, hv, hk, hg = _visible(F, f0, p, P, tol, stamp, vis, hv, hk, hg)
             best = f0
             for i in range(nvis):
-                if F.apex_dist[vis[i]] > F.apex_dist[best]:
+                if F_apex_dist[vis[i]] > F_apex_dist[best]:
                     best = vis[i]
             _unlink(F, nxt, f0, p, P)
-            if F.outside[f0] >= 0:
+            if F_outside[f0] >= 0:
                 if nstack == stack.shape[0]:
                     stack = _grow_1(stack, 2 * nstack, -1)
                 stack[nstack] = f0
                 nstack += 1
-            if F.apex_dist[best] <= vis_tol:
+            if F_apex_dist[best] <= vis_tol:
+                if nearest_only:  # the same apex would come back
+                    return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
                 continue
             f0 = best
-            F.far_dist[f0] = F.apex_dist[best]
+            F_far_dist[f0] = F_apex_dist[best]
         stamp += 1
         # Visible facets: breadth-first from f0 over the facet adjacency. A facet that p is
         # barely above (<= vis_tol: nearly coplanar wrenches, e.g. equal normals with 1e-10
         # of noise) is not visible: the new facet on that ridge makes a fold of at most
         # vis_tol instead of a sliver whose hyperplane is round-off.
-        F.apex_dist[f0] = F.far_dist[f0]
+        F_apex_dist[f0] = F_far_dist[f0]
         nvis, nh, vis, hv, hk, hg = _visible(F, f0, p, P, vis_tol, stamp, vis, hv, hk, hg)
         for h in range(nh):
-            if F.apex_dist[hg[h]] > tol:
+            if F_apex_dist[hg[h]] > tol:
                 thick = True
                 break
         if nh > newf.shape[0]:
@@ -634,6 +666,16 @@ def convex_hull_6d(P):
                 if nF == cap:
                     cap = max(2 * cap, nF + nh + 64)
                     F = _grown(F, nF, cap)
+                    F_vertices = F.vertices
+                    F_neighbours = F.neighbours
+                    F_normal = F.normal
+                    F_offset = F.offset
+                    F_alive = F.alive
+                    F_outside = F.outside
+                    F_far_point = F.far_point
+                    F_far_dist = F.far_dist
+                    F_mark = F.mark
+                    F_apex_dist = F.apex_dist
                 newf[h] = nF
                 nF += 1
         # cone of new facets from p over the horizon ridges
@@ -643,14 +685,14 @@ def convex_hull_6d(P):
             g = hg[h]
             nf = newf[h]
             for c in range(DIM):
-                F.vertices[nf, c] = F.vertices[v, c]
-                F.neighbours[nf, c] = -1
-            F.vertices[nf, k] = p
-            F.neighbours[nf, k] = g
+                F_vertices[nf, c] = F_vertices[v, c]
+                F_neighbours[nf, c] = -1
+            F_vertices[nf, k] = p
+            F_neighbours[nf, k] = g
             found = False
             for kk in range(DIM):
-                if F.neighbours[g, kk] == v:
-                    F.neighbours[g, kk] = nf
+                if F_neighbours[g, kk] == v:
+                    F_neighbours[g, kk] = nf
                     found = True
                     break
             if not found:
@@ -661,7 +703,17 @@ def convex_hull_6d(P):
             # ill-conditioned, so it is accepted only if it passes through all six
             # vertices to 1e-14 of the data scale; otherwise the plane is solved afresh.
             d, ok = _pencil_plane(
-                F, v, g, F.apex_dist[v], F.apex_dist[g], P, F.vertices[nf], nvec, chk_tol
+                F_normal,
+                F_offset,
+                v,
+                g,
+                F_apex_dist[v],
+                F_apex_dist[g],
+                P,
+                F_vertices,
+                nf,
+                nvec,
+                chk_tol,
             )
             if ok:
                 # p barely above g (a coplanar neighbour) makes one pencil weight positive:
@@ -671,16 +723,17 @@ def convex_hull_6d(P):
                     s += nvec[c] * q0[c]
                 ok = s < 0.0
             if not ok:
-                d, ok = _hyperplane(P, F.vertices[nf], q0, nvec, scratch, perm, yvec)
+                d, ok = _hyperplane(P, F_vertices[nf], q0, nvec, scratch, perm, yvec)
                 if not ok:
                     return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
-            F.normal[nf] = nvec
-            F.offset[nf] = d
-            F.alive[nf] = True
-            F.outside[nf] = -1
-            F.far_point[nf] = -1
-            F.far_dist[nf] = 0.0
-            F.mark[nf] = 0
+            for c in range(DIM):
+                F_normal[nf, c] = nvec[c]
+            F_offset[nf] = d
+            F_alive[nf] = True
+            F_outside[nf] = -1
+            F_far_point[nf] = -1
+            F_far_dist[nf] = 0.0
+            F_mark[nf] = 0
         # neighbours among the new facets: they share p and a 4-face of the horizon,
         # paired through an open-addressing hash table on the sorted 4-face
         nkeys = nh * (DIM - 1)
@@ -703,7 +756,7 @@ def convex_hull_6d(P):
                 t = 0
                 for c in range(DIM):
                     if c != kp and c != j:
-                        four[t] = F.vertices[nf, c]
+                        four[t] = F_vertices[nf, c]
                         t += 1
                 key = _sorted_key4(four[0], four[1], four[2], four[3])
                 # multiplicative hashing; int64 overflow wraps, the mask keeps it >= 0
@@ -719,8 +772,8 @@ def convex_hull_6d(P):
                         if table_f[slot] < 0:  # a third facet on one 4-face
                             return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
                         of = table_f[slot]
-                        F.neighbours[of, table_s[slot]] = nf
-                        F.neighbours[nf, j] = of
+                        F_neighbours[of, table_s[slot]] = nf
+                        F_neighbours[nf, j] = of
                         table_f[slot] = -1
                         npaired += 1
                         break
@@ -729,28 +782,28 @@ def convex_hull_6d(P):
             return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
         # retire the visible facets and hand their outside points to the new facets
         for i in range(nvis):
-            F.alive[vis[i]] = False
+            F_alive[vis[i]] = False
         for i in range(nvis):
             v = vis[i]
-            pt = F.outside[v]
-            F.outside[v] = -1
+            pt = F_outside[v]
+            F_outside[v] = -1
             while pt >= 0:
                 pn = nxt[pt]
                 if pt != p:
                     for h in range(nh):
                         nf = newf[h]
-                        dist = _dist(F, nf, P, pt)
+                        dist = _dist_nd(F_normal, F_offset, nf, P, pt)
                         if dist > tol:
-                            nxt[pt] = F.outside[nf]
-                            F.outside[nf] = pt
-                            if dist > F.far_dist[nf]:
-                                F.far_dist[nf] = dist
-                                F.far_point[nf] = pt
+                            nxt[pt] = F_outside[nf]
+                            F_outside[nf] = pt
+                            if dist > F_far_dist[nf]:
+                                F_far_dist[nf] = dist
+                                F_far_point[nf] = pt
                             break
                 pt = pn
         for h in range(nh):
             nf = newf[h]
-            if F.outside[nf] >= 0:
+            if F_outside[nf] >= 0:
                 if nstack == stack.shape[0]:
                     stack = _grow_1(stack, 2 * nstack, -1)
                 stack[nstack] = nf
@@ -763,29 +816,76 @@ def convex_hull_6d(P):
 
     count = 0
     for f in range(nF):
-        if F.alive[f]:
+        if F_alive[f]:
             count += 1
-            if thick:
+            if thick and not nearest_only:
                 # Coplanar apexes were met (folds of <= vis_tol, dropped points): the surface
                 # is the hull only if every point is beneath every facet, to verify_tol.
                 # A facet thinner than thin_tol has a round-off hyperplane (and no volume):
                 # its test says nothing.
                 excess = 0.0
                 for p in range(N):
-                    excess = max(excess, _dist(F, f, P, p))
-                if excess > verify_tol and facet_spread(P, F.vertices[f]) > thin_tol:
+                    excess = max(excess, _dist_nd(F_normal, F_offset, f, P, p))
+                if excess > verify_tol and facet_spread(P, F_vertices[f]) > thin_tol:
                     return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
     out_v = np.empty((count, DIM), dtype=np.int64)
     out_n = np.empty((count, DIM))
     out_d = np.empty(count)
     j = 0
     for f in range(nF):
-        if F.alive[f]:
-            out_v[j] = F.vertices[f]
-            out_n[j] = F.normal[f]
-            out_d[j] = F.offset[f]
+        if F_alive[f]:
+            out_v[j] = F_vertices[f]
+            out_n[j] = F_normal[f]
+            out_d[j] = F_offset[f]
             j += 1
     return HULL_OK, out_v, out_n, out_d, q0
+
+
+@njit(cache=True)
+def convex_hull_6d(P):
+    """Facets of the convex hull of a 6-D point set.
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Points.
+
+    Returns
+    -------
+    status : int
+        HULL_OK, HULL_DEGENERATE (affine rank < 6) or HULL_FAILED.
+    vertices : (F, 6) int64 ndarray
+    normals : (F, 6) float64 ndarray
+        Outward unit normals: every point satisfies ``normals @ p <= offsets + tol``.
+    offsets : (F,) float64 ndarray
+    interior : (6,) float64 ndarray
+        A point inside the hull.
+    """
+    return _hull(P, False)
+
+
+@njit(cache=True)
+def nearest_facet_hull(P):
+    """The hull grown only until its facet nearest the origin is final (ε without volume).
+
+    Best first: the facet with the smallest offset takes the point farthest above it, until
+    no point is above it; that facet is then a facet of the full hull with the smallest
+    offset of all (the partial hull lies inside the full one). Exact like
+    :func:`convex_hull_6d`, with a fraction of the facets when the origin is inside.
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Points.
+
+    Returns
+    -------
+    status, vertices, normals, offsets, interior
+        As for :func:`convex_hull_6d`, but the facets are those of a partial hull: the one
+        with the smallest offset is a facet of the full hull, and no full-hull facet has a
+        smaller offset (when that offset is > 0, it is ε). Not for the volume.
+    """
+    return _hull(P, True)
 
 
 @njit(cache=True)

@@ -41,7 +41,7 @@ from .effort import (
     impact_effort_kernel,
     use_wrench,
 )
-from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_kernel
+from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_kernel
 from .inertia import rotational_inertia
 from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
@@ -56,7 +56,7 @@ log = logging.getLogger(__name__)
 
 @njit(cache=True)
 def contact_metrics_batch(
-    points, normals, mu, offsets, center, r_max, use_point, use_normal, wrist_axis, soft
+    points, normals, mu, offsets, center, r_max, use_point, use_normal, wrist_axis, soft, volume
 ):
     """ε, GWS volume, E_h, E_i and U_τ of many grasps on one object, compiled.
 
@@ -77,6 +77,8 @@ def contact_metrics_batch(
         Use points (m), their outward unit normals, unit wrist axes.
     soft : bool
         Soft-finger cones.
+    volume : bool
+        Compute the GWS volume (the full hull; else NaN for force-closure grasps).
 
     Returns
     -------
@@ -108,7 +110,7 @@ def contact_metrics_batch(
         N = np.ascontiguousarray(normals[s:e])
         M = np.ascontiguousarray(mu[s:e])
         Wn = wrench_matrix_kernel(P, N, M, center, inv_r, soft)
-        c, eps[i], vol[i] = epsilon_kernel(Wn)
+        c, eps[i], vol[i] = epsilon_volume_kernel(Wn, volume)
         code[i] = c
         W = wrench_matrix_kernel(P, N, M, center, 1.0, soft)
         ok_hold = hold_effort_kernel(W, hold[i])
@@ -153,6 +155,7 @@ def compute_phi_batch(
     *,
     soft: bool = False,
     edge_radius: float = EDGE_RADIUS_M,
+    volume: bool = True,
 ) -> dict[str, np.ndarray]:
     """Φ for n grasps of one object (conventions: Metrics), columns :data:`METRIC_COLUMNS`.
 
@@ -174,6 +177,10 @@ def compute_phi_batch(
         Soft-finger cones for every contact metric.
     edge_radius : float
         Search radius of ``use_edge_angle``, m.
+    volume : bool
+        Compute ``gws_volume`` (the full 6-D hull of every force-closure grasp, most of the
+        metric cost on enveloping grasps). False: ε from the facets nearest the origin only
+        (the same ε) and ``gws_volume`` NaN for force-closure grasps (0 otherwise).
 
     Returns
     -------
@@ -211,6 +218,7 @@ def compute_phi_batch(
         use_normal,
         wrist_axis,
         bool(soft),
+        bool(volume),
     )
     reason_of_code = np.array([REASONS[c] for c in sorted(REASONS)], dtype=object)
     reason = reason_of_code[np.clip(code, 0, len(reason_of_code) - 1)]
@@ -219,7 +227,7 @@ def compute_phi_batch(
         # functions retry with HiGHS / qhull
         log.debug("grasp %d: recomputing contact metrics with the reference solvers", i)
         cs = contacts[i]
-        res = epsilon(cs, center, r_max, soft=soft)
+        res = epsilon(cs, center, r_max, soft=soft, volume=volume)
         eps[i], vol[i] = res.epsilon, res.volume
         reason[i] = res.reason
         hold[i] = hold_effort(cs, center, soft=soft, backend="highs")
