@@ -450,34 +450,43 @@ def _swept_distance(px, py, pz, u, q, shapes, shape_pose, axis):
 
 @njit(cache=True)
 def _heap_push(heap, size, k, i, p):
-    """Push (key k, entry i, bracket low p) on the binary heap (key, ident, prev)."""
+    """Push (key k, entry i, bracket low p) on the binary heap (key, ident, prev).
+
+    The parents above the new key move down one level and the entry is written once where
+    it stops (the same arrangement as swapping it up, with a third of the writes).
+    """
     key, ident, prev = heap
     j = size
+    while j > 0:
+        parent = (j - 1) >> 1
+        kp = key[parent]
+        if kp <= k:
+            break
+        key[j] = kp
+        ident[j] = ident[parent]
+        prev[j] = prev[parent]
+        j = parent
     key[j] = k
     ident[j] = i
     prev[j] = p
-    while j > 0:
-        parent = (j - 1) // 2
-        if key[parent] <= key[j]:
-            break
-        key[parent], key[j] = key[j], key[parent]
-        ident[parent], ident[j] = ident[j], ident[parent]
-        prev[parent], prev[j] = prev[j], prev[parent]
-        j = parent
     return size + 1
 
 
 @njit(cache=True)
 def _heap_pop(heap, size):
-    """Pop the smallest key: (key, entry, bracket low, new size)."""
+    """Pop the smallest key: (key, entry, bracket low, new size).
+
+    The last entry sifts down from the root as a hole (the same arrangement as swapping it
+    down).
+    """
     key, ident, prev = heap
-    k = key[0]
-    i = ident[0]
-    p = prev[0]
+    k0 = key[0]
+    i0 = ident[0]
+    p0 = prev[0]
     size -= 1
-    key[0] = key[size]
-    ident[0] = ident[size]
-    prev[0] = prev[size]
+    k = key[size]
+    i = ident[size]
+    p = prev[size]
     j = 0
     while True:
         left = 2 * j + 1
@@ -486,13 +495,17 @@ def _heap_pop(heap, size):
         child = left
         if left + 1 < size and key[left + 1] < key[left]:
             child = left + 1
-        if key[j] <= key[child]:
+        kc = key[child]
+        if k <= kc:
             break
-        key[child], key[j] = key[j], key[child]
-        ident[child], ident[j] = ident[j], ident[child]
-        prev[child], prev[j] = prev[j], prev[child]
+        key[j] = kc
+        ident[j] = ident[child]
+        prev[j] = prev[child]
         j = child
-    return k, i, p, size
+    key[j] = k
+    ident[j] = i
+    prev[j] = p
+    return k0, i0, p0, size
 
 
 @njit(cache=True)
@@ -860,6 +873,85 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     return first_contact_counted(
         cloud, rot, trans, chain, s_max, hit_eps, np.zeros(N_COUNTS, dtype=np.int64)
     )
+
+
+@njit(cache=True)
+def close_chain(cloud, rot, trans, base, origins, kinds, axes, ratios, speeds, upper, dof_index,
+                shape_sets, dofs, hit_eps, at_limit):  # fmt: skip
+    """Close one finger with breakaway until it touches or reaches its limits.
+
+    Every joint below its upper limit closes at its speed; when a link touches, the joints
+    up to it stop and those beyond go on; when a joint reaches its limit, it stops and the
+    others go on (GraspIt!'s autograsp).
+
+    Parameters
+    ----------
+    cloud : SampleCloud
+        Surface samples, object frame.
+    rot : (3, 3) float64 ndarray
+    trans : (3,) float64 ndarray
+        The hand pose: object frame = rot @ hand + trans (m).
+    base : (4, 4) float64 ndarray
+        Pose of the chain's parent link in the hand frame (no closing DOF moves it).
+    origins, kinds, axes : (m, 4, 4), (m,), (m, 3) ndarray
+        The chain's joints, proximal first (see :class:`Chain`).
+    ratios : (m,) float64 ndarray
+        Joint value per unit of its DOF.
+    speeds : (m,) float64 ndarray
+        Closing speed of each joint's DOF.
+    upper : (m,) float64 ndarray
+        Upper limit of each joint's DOF, rad or m.
+    dof_index : (m,) int ndarray
+        Index in ``dofs`` of each joint's DOF.
+    shape_sets : tuple
+        Per first moving joint j0, (chain joint of each shape (k,), ShapeSet posed in
+        those links): the shapes the motion carries.
+    dofs : (n_dofs,) float64 ndarray
+        DOF values, updated in place.
+    hit_eps : float
+        Contact distance, m.
+    at_limit : float
+        A DOF this close below its upper limit has reached it.
+    """
+    m = origins.shape[0]
+    active = np.empty(m, dtype=np.bool_)
+    for j in range(m):
+        active[j] = dofs[dof_index[j]] < upper[j]
+    q0 = np.empty(m)
+    joint_speeds = np.empty(m)
+    while True:
+        j0 = -1
+        for j in range(m):
+            if active[j]:
+                j0 = j
+                break
+        if j0 < 0:
+            return
+        # Largest s before an active DOF reaches its upper limit.
+        s_max = np.inf
+        for j in range(m):
+            q0[j] = ratios[j] * dofs[dof_index[j]]
+            joint_speeds[j] = ratios[j] * speeds[j] if active[j] else 0.0
+            if active[j]:
+                s_max = min(s_max, (upper[j] - dofs[dof_index[j]]) / speeds[j])
+        s_max = max(s_max, 0.0)
+        chain_index, shapes = shape_sets[j0]
+        chain = Chain(base, origins, kinds, axes, q0, joint_speeds, chain_index, shapes)
+        s_hit, _, q_hit = first_contact(cloud, rot, trans, chain, s_max, hit_eps)
+        s = min(s_hit, s_max)
+        for j in range(m):
+            if active[j]:
+                dofs[dof_index[j]] = min(dofs[dof_index[j]] + speeds[j] * s, upper[j])
+        if np.isfinite(s_hit) and s_hit <= s_max:
+            # Breakaway: the joints up to the blocked link stop, those beyond go on.
+            blocked = chain_index[q_hit]
+            for j in range(blocked + 1):
+                active[j] = False
+        else:
+            # A joint reached its limit: it stops, the others go on.
+            for j in range(m):
+                if active[j] and not dofs[dof_index[j]] < upper[j] - at_limit:
+                    active[j] = False
 
 
 @njit(cache=True)

@@ -423,28 +423,10 @@ def close_fingers(
     # knuckle turned by the spread), so its pose is fixed while the fingers close.
     links = arrays.link_poses(dofs)
     for f in arrays.fingers:
-        active = [j for j in range(len(f.dofs)) if dofs[f.dofs[j]] < f.upper[j]]
-        while active:
-            q0 = f.ratios * dofs[f.dofs]
-            speeds = np.zeros(len(f.dofs))
-            speeds[active] = f.ratios[active] * f.speeds[active]
-            chain_index, shapes = f.shapes[active[0]]
-            # Largest s before an active DOF reaches its upper limit.
-            s_max = max(min((f.upper[j] - dofs[f.dofs[j]]) / f.speeds[j] for j in active), 0.0)
-            chain = kernels.Chain(
-                links[f.parent], f.origins, f.kinds, f.axes, q0, speeds, chain_index, shapes
-            )
-            s_hit, _, q_hit = kernels.first_contact(cloud, rot, trans, chain, s_max, HIT_EPS)
-            s = min(s_hit, s_max)
-            for j in active:
-                dofs[f.dofs[j]] = min(dofs[f.dofs[j]] + f.speeds[j] * s, f.upper[j])
-            if np.isfinite(s_hit) and s_hit <= s_max:
-                # Breakaway: the joints up to the blocked link stop, those beyond go on.
-                blocked = int(chain_index[q_hit])
-                active = [j for j in active if j > blocked]
-            else:
-                # A joint reached its limit: it stops, the others go on.
-                active = [j for j in active if dofs[f.dofs[j]] < f.upper[j] - JOINT_AT_LIMIT]
+        kernels.close_chain(
+            cloud, rot, trans, links[f.parent], f.origins, f.kinds, f.axes, f.ratios, f.speeds,
+            f.upper, f.dofs, f.shapes, dofs, HIT_EPS, JOINT_AT_LIMIT,
+        )  # fmt: skip
     return dofs
 
 
