@@ -8,16 +8,19 @@ finger (two coupled revolute joints) and each jaw of the parallel gripper (a sli
 them along -axis).
 """
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from grasp_support import shape_sdf
 from scipy.spatial.transform import Rotation
 
 from affordgrasp.grasp import kernels
-from affordgrasp.grasp.policy import HIT_EPS, hand_arrays
+from affordgrasp.grasp.policy import HIT_EPS, close_fingers, hand_arrays
 from affordgrasp.grasp.surface import group_into_cells
 from affordgrasp.hands import get_hand
 from affordgrasp.hands.kinematics import REVOLUTE
+from affordgrasp.tolerances import JOINT_AT_LIMIT
 
 HIT = 1e-3  # m: coarse enough for a 2000-step reference grid to resolve the stopping gap
 # The work of the fixed searches of test_the_search_does_no_more_work_than_measured, as
@@ -196,3 +199,50 @@ def test_the_search_does_no_more_work_than_measured():
     assert closing[kernels.POPS] <= 1.05 * CLOSING_POPS
     assert closing[kernels.QUERIES] <= 1.05 * CLOSING_QUERIES
     assert closing[kernels.REFINE_QUERIES] <= 1.05 * CLOSING_REFINE
+
+
+def breakaway_reference(hand, cloud, rot, trans, dofs):
+    """GraspIt!'s autograsp written out in Python on top of the one search: every finger closes
+    until a link touches (the joints up to it stop, those beyond go on) or a joint reaches its
+    limit (it stops, the others go on)."""
+    arrays = hand_arrays(hand)
+    dofs = dofs.copy()
+    links = arrays.link_poses(dofs)
+    for f in arrays.fingers:
+        active = [j for j in range(len(f.dofs)) if dofs[f.dofs[j]] < f.upper[j]]
+        while active:
+            speeds = np.zeros(len(f.dofs))
+            speeds[active] = f.ratios[active] * f.speeds[active]
+            chain_index, shapes = f.shapes[active[0]]
+            s_max = max(min((f.upper[j] - dofs[f.dofs[j]]) / f.speeds[j] for j in active), 0.0)
+            chain = kernels.Chain(
+                links[f.parent], f.origins, f.kinds, f.axes, f.ratios * dofs[f.dofs], speeds,
+                chain_index, shapes,
+            )  # fmt: skip
+            s_hit, _, q_hit = kernels.first_contact(cloud, rot, trans, chain, s_max, HIT_EPS)
+            s = min(s_hit, s_max)
+            for j in active:
+                dofs[f.dofs[j]] = min(dofs[f.dofs[j]] + f.speeds[j] * s, f.upper[j])
+            if np.isfinite(s_hit) and s_hit <= s_max:
+                active = [j for j in active if j > chain_index[q_hit]]
+            else:
+                active = [j for j in active if dofs[f.dofs[j]] < f.upper[j] - JOINT_AT_LIMIT]
+    return dofs
+
+
+@pytest.mark.parametrize("hand_name", ["barrett", "parallel_jaw"])
+def test_closing_every_finger_is_the_breakaway_loop(hand_name):
+    hand = get_hand(hand_name)
+    rng = np.random.default_rng(11)
+    for _ in range(6):
+        cloud, _ = sphere_cloud(
+            np.array([*rng.uniform(-0.03, 0.03, 2), rng.uniform(0.04, 0.1)]),
+            rng.uniform(0.01, 0.04),
+            3000,
+            rng,
+        )
+        dofs = hand.open_dofs(rng.uniform())
+        pose = np.eye(4)
+        got = close_fingers(hand, SimpleNamespace(cloud=cloud), pose, dofs)
+        want = breakaway_reference(hand, cloud, np.eye(3), np.zeros(3), dofs)
+        np.testing.assert_array_equal(got, want)

@@ -47,7 +47,7 @@ from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
 from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
-from .validation import contact_arrays, points_n3, units_n3
+from .validation import points_n3, stacked_contact_arrays, units_n3
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 
@@ -128,19 +128,8 @@ def contact_metrics_batch(
 
 
 def _stack_contacts(contacts: Sequence) -> tuple[np.ndarray, ...]:
-    """All contacts of all grasps, concatenated, and each grasp's row offsets."""
-    arrays = [contact_arrays(cs) for cs in contacts]
-    counts = np.array([a[0].shape[0] for a in arrays], dtype=np.int64)
-    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    if arrays and counts.sum():
-        points = np.ascontiguousarray(np.concatenate([a[0] for a in arrays]))
-        normals = np.ascontiguousarray(np.concatenate([a[1] for a in arrays]))
-        mu = np.ascontiguousarray(np.concatenate([a[2] for a in arrays]))
-    else:
-        points = np.zeros((0, 3))
-        normals = np.zeros((0, 3))
-        mu = np.zeros(0)
-    return points, normals, mu, offsets
+    """All contacts of all grasps, checked and concatenated, and each grasp's row offsets."""
+    return stacked_contact_arrays(contacts)
 
 
 def compute_phi_batch(

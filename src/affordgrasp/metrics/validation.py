@@ -36,6 +36,73 @@ def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return check_contact_arrays(points, normals, mu)
 
 
+def stacked_contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The contacts of many grasps, checked and concatenated (row offsets per grasp).
+
+    The same checks, messages and normalisation as :func:`contact_arrays` on each grasp
+    (a grasp's normals are rescaled when one of *its* normals is off), done once on the
+    stacked arrays instead of grasp by grasp.
+
+    Parameters
+    ----------
+    contacts : sequence of ContactSet
+        n grasps.
+
+    Returns
+    -------
+    points : (k, 3) float64 ndarray
+        m.
+    normals : (k, 3) float64 ndarray
+        Outward unit normals.
+    mu : (k,) float64 ndarray
+    offsets : (n + 1,) int64 ndarray
+        Grasp g's contacts are rows offsets[g]:offsets[g + 1].
+    """
+    try:
+        raw = [(c.points, c.normals, c.mu) for c in contacts]
+    except AttributeError as exc:
+        raise InputError(
+            "contacts must be a ContactSet (build one from raw arrays with "
+            "ContactSet.from_arrays(points, normals, mu))"
+        ) from exc
+    parts = [
+        (
+            np.asarray(p, dtype=np.float64).reshape(-1, 3),
+            np.asarray(nrm, dtype=np.float64).reshape(-1, 3),
+            np.asarray(m, dtype=np.float64).reshape(-1),
+        )
+        for p, nrm, m in raw
+    ]
+    for p, nrm, m in parts:
+        if not (p.shape == nrm.shape and m.shape[0] == p.shape[0]):
+            raise InputError(
+                f"inconsistent contact arrays: points {p.shape}, normals {nrm.shape}, mu {m.shape}"
+            )
+    counts = np.array([p.shape[0] for p, _, _ in parts], dtype=np.int64)
+    offsets = np.zeros(len(parts) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    if not counts.sum():
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), offsets
+    points = np.ascontiguousarray(np.concatenate([p for p, _, _ in parts]))
+    normals = np.ascontiguousarray(np.concatenate([nrm for _, nrm, _ in parts]))
+    mu = np.ascontiguousarray(np.concatenate([m for _, _, m in parts]))
+    if not (np.all(np.isfinite(points)) and np.all(np.isfinite(normals))):
+        raise InputError("contact points and normals must be finite (found NaN or inf)")
+    bad = ~np.isfinite(mu) | (mu < 0)
+    if np.any(bad):
+        g = int(np.searchsorted(offsets, np.argmax(bad), side="right")) - 1
+        raise InputError(f"friction coefficients must be finite and >= 0, got {parts[g][2]}")
+    length = np.linalg.norm(normals, axis=1)
+    if np.any(length < ZERO_LENGTH):
+        raise InputError("every contact normal must be non-zero")
+    off = np.abs(length - 1.0) > UNIT_NORMAL
+    if np.any(off):
+        owner = np.repeat(np.arange(len(parts)), counts)
+        rows = np.isin(owner, owner[off])
+        normals[rows] = normals[rows] / length[rows, None]
+    return points, normals, mu, offsets
+
+
 def check_contact_arrays(
     points: np.ndarray, normals: np.ndarray, mu: np.ndarray, *, normalise: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
