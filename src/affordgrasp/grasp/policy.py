@@ -19,6 +19,7 @@ Statuses, per sample:
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from dataclasses import dataclass
@@ -458,13 +459,23 @@ def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
         )
     ]  # fmt: skip
     link_idx = arrays.shape_link[si[keep]]
-    mu = np.array([friction_coefficient(m, object_material) for m in arrays.materials])
     return ContactSet(
         samples.points[pi[keep]],
         n_obj[keep],
-        mu[link_idx],
-        np.array(hand.link_names, dtype=object)[link_idx],
+        _link_mu(arrays.materials, object_material)[link_idx],
+        _LINK_NAMES.get(hand, lambda: np.array(hand.link_names, dtype=object))[link_idx],
     )
+
+
+_LINK_NAMES: IdentityCache[np.ndarray] = IdentityCache()
+
+
+@functools.lru_cache(maxsize=64)
+def _link_mu(materials: tuple[str, ...], object_material: str) -> np.ndarray:
+    """Friction coefficient of each link against the object (read-only: indexed per grasp)."""
+    mu = np.array([friction_coefficient(m, object_material) for m in materials])
+    mu.flags.writeable = False
+    return mu
 
 
 def grasp_once(
