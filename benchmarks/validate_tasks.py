@@ -24,6 +24,10 @@ It also renders one figure per task with the best grasp of each family in each m
 (paper Figs. 3-6), and the paper's threshold-mode comparison on the knife (Fig. 7).
 Results go to ``--out`` (JSON + PNG); intermediate tables are cached in ``--cache``.
 
+Mass properties: uniform unit density by default (the paper's, and the library's default);
+``--materials`` gives the families their per-part materials (steel, wood, ...), which moves
+the centre of mass (pick's judge) and I, E_h, E_i.
+
 Run: ``python benchmarks/validate_tasks.py --seeds 5 --out /tmp/validation``.
 """
 
@@ -102,12 +106,14 @@ def judge(task: str, family: str, rows: pa.Table, com: np.ndarray) -> list[bool]
     return out
 
 
-def grasp_table(cache: Path, family: str, seed: int, n: int) -> pa.Table:
+def grasp_table(cache: Path, family: str, seed: int, n: int, materials: bool = False) -> pa.Table:
     """The uniform grasps of one object (cached: they serve every task)."""
-    path = cache / f"{family}_{seed}_{n}.parquet"
+    mass = "materials" if materials else "unit"
+    path = cache / f"{family}_{seed}_{n}_{mass}.parquet"
     if path.exists():
         return pq.read_table(path)
-    table = evaluate_samples(f"{family}:{seed}", n, seed=0).table
+    obj = load_object(f"{family}:{seed}", materials=materials)
+    table = evaluate_samples(obj, n, seed=0).table
     pq.write_table(table, path)
     return table
 
@@ -144,6 +150,11 @@ def main() -> None:
     parser.add_argument("--cell", type=int, default=220)
     parser.add_argument("--cache", default="/tmp/affordgrasp-validation")
     parser.add_argument("--out", default="validation-out")
+    parser.add_argument(
+        "--materials",
+        action="store_true",
+        help="the families' per-part materials instead of uniform unit density (the default)",
+    )
     args = parser.parse_args()
     cache, out = Path(args.cache), Path(args.out)
     cache.mkdir(parents=True, exist_ok=True)
@@ -158,11 +169,11 @@ def main() -> None:
                 continue
             entry = {"brute_force": [], "optimizer": [], "candidates": [], "seeds": []}
             for seed in range(args.seeds):
-                obj = load_object(f"{family}:{seed}")
+                obj = load_object(f"{family}:{seed}", materials=args.materials)
                 com = obj.mass.center_of_mass
                 entry["seeds"].append(seed)
                 if not args.no_brute_force:
-                    table = grasp_table(cache, family, seed, args.grasps)
+                    table = grasp_table(cache, family, seed, args.grasps, args.materials)
                     found = best_pairs(
                         obj,
                         task,
@@ -220,8 +231,8 @@ def figures(args, out: Path, cache: Path, report: dict) -> None:
         families = TASK_FAMILIES[task][:5]
         rows = []
         for family in families:
-            obj = load_object(f"{family}:0")
-            table = grasp_table(cache, family, 0, args.grasps)
+            obj = load_object(f"{family}:0", materials=args.materials)
+            table = grasp_table(cache, family, 0, args.grasps, args.materials)
             cells = []
             for mode in MODES:
                 found = best_pairs(
@@ -247,8 +258,8 @@ def figures(args, out: Path, cache: Path, report: dict) -> None:
             out / f"validation_{task}.png",
         )
     # Fig. 7: beat and cut on the knife, three robustness requirements
-    obj = load_object("knife:0")
-    table = grasp_table(cache, "knife", 0, args.grasps)
+    obj = load_object("knife:0", materials=args.materials)
+    table = grasp_table(cache, "knife", 0, args.grasps, args.materials)
     rows, numbers = [], {}
     for task in ("beat", "cut"):
         cells = []

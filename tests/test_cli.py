@@ -170,3 +170,31 @@ def test_resuming_with_another_hand_of_the_same_name_is_refused(tmp_path, capsys
     assert "--hand 'barrett' is not the hand the dataset" in err
     assert "same name, different" in err and "_manifest.json" in err
     assert main([*argv, "--hand", str(out / "_manifest.json")]) == 0
+
+
+def test_materials_flag_gives_the_families_their_materials_mass(tmp_path, capsys):
+    # default: uniform unit density, as in the paper; --materials: per-part materials
+    paths = {}
+    for flag in ((), ("--materials",)):
+        out = tmp_path / f"rows{len(flag)}.parquet"
+        argv = ["evaluate", "hammer", "--samples", "12", "--seed", "1", "--out", str(out)]
+        assert main([*argv, *flag]) == 0
+        paths[flag] = pq.read_table(out).to_pandas()
+    capsys.readouterr()
+    uniform, materials = paths[()], paths[("--materials",)]
+    assert (uniform["status"] == materials["status"]).all()
+    both = uniform["inertia"].notna() & materials["inertia"].notna()
+    assert both.any()
+    # steel and wood against 1 kg/m³: the same grasps, far heavier
+    assert (materials["inertia"][both] > 300 * uniform["inertia"][both]).all()
+
+
+def test_materials_flag_refused_for_a_mesh_file(tmp_path, capsys):
+    mesh = tmp_path / "box.stl"
+    import trimesh
+
+    trimesh.creation.box((0.05, 0.03, 0.02)).export(mesh)
+    code = main(["evaluate", str(mesh), "--samples", "4", "--materials"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "mesh file" in err and "Drop the option" in err

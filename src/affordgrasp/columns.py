@@ -41,7 +41,8 @@ METRIC_COLUMNS: tuple[str, ...] = (
 DERIVED_COLUMNS: tuple[str, ...] = (HOLD_EFFORT_SUM,)
 
 # Unit of each metric column as stored (SI; "" when dimensionless). E_i is per 1 N·m of
-# swing torque; I follows the object's mass (a family's materials, a mesh file's unit density).
+# swing torque; I is at the object's mass properties: unit density by default, as in the
+# paper, or a family's per-part materials when resolved with materials=True.
 METRIC_UNITS: dict[str, str] = {
     "epsilon": "",
     "gws_volume": "",

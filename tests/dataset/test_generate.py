@@ -250,3 +250,39 @@ def test_a_manifest_without_the_hand_spec_still_reads_and_resumes(tmp_path, box_
         generate([str(box_mesh)], 4, out, seed=3, workers=1, shard_size=2, hand="barrett")
     with pytest.raises(HandError, match="records its hand by name only .'parallel_jaw'"):
         get_hand(path)
+
+
+def test_the_manifest_records_the_materials_and_a_resume_must_match(tmp_path):
+    from affordgrasp.dataset.card import read_card
+
+    out = tmp_path / "materials"
+    generate(["knife"], 2, out, seed=3, workers=1, shard_size=2, metrics=False, materials=True)
+    manifest = json.loads((out / "_manifest.json").read_text())
+    assert manifest["materials"] is True
+    card = read_card(out)
+    assert card["materials"] is True and card["objects"][0]["materials"] is True
+    assert card["objects"][0]["density_kg_m3"] > 1000  # steel and plastic
+    with pytest.raises(DatasetError, match="per-part materials .--materials. there vs unit"):
+        generate(["knife"], 2, out, seed=3, workers=1, shard_size=2, metrics=False)
+    again = generate(
+        ["knife"], 2, out, seed=3, workers=1, shard_size=2, metrics=False, materials=True
+    )
+    assert again.shards_skipped == 1
+
+    # the default is unit density; a manifest from before the key reads as unit density
+    plain = tmp_path / "plain"
+    generate(["knife"], 2, plain, seed=3, workers=1, shard_size=2, metrics=False)
+    path = plain / "_manifest.json"
+    manifest = json.loads(path.read_text())
+    assert manifest["materials"] is False
+    assert read_card(plain)["objects"][0]["density_kg_m3"] == 1.0
+    del manifest["materials"]
+    path.write_text(json.dumps(manifest))
+    assert (
+        generate(["knife"], 2, plain, seed=3, workers=1, shard_size=2, metrics=False).shards_skipped
+        == 1
+    )
+    with pytest.raises(DatasetError, match="unit density there vs per-part materials"):
+        generate(
+            ["knife"], 2, plain, seed=3, workers=1, shard_size=2, metrics=False, materials=True
+        )

@@ -203,7 +203,7 @@ def test_built_in_families_resolve(real_families):
     assert load_object("knife:0") is obj
     assert objects.make_family is real_families.make_family
     assert objects.FAMILIES is real_families.FAMILIES
-    again = resolve_module._resolve_family.__wrapped__("knife", 0, 1.0, None, None)
+    again = resolve_module._resolve_family.__wrapped__("knife", 0, 1.0, False, None, None)
     assert again.mesh_hash == obj.mesh_hash  # deterministic, not only cached
 
 

@@ -38,7 +38,8 @@ def add_sampling_arguments(p) -> None:
 
 
 def add_scale_arguments(p) -> None:
-    """``--size-m`` / ``--units`` for every command that takes an object (mesh files only).
+    """``--size-m`` / ``--units`` (mesh files only) and ``--materials`` (families only) for
+    every command that takes an object.
 
     Parameters
     ----------
@@ -54,6 +55,12 @@ def add_scale_arguments(p) -> None:
     )
     p.add_argument(
         "--units", default=None, help="length unit of mesh files: m (default), cm, mm, in, ft"
+    )
+    p.add_argument(
+        "--materials",
+        action="store_true",
+        help="mass properties of the built-in families from their per-part materials (steel, "
+        "wood, ...) instead of uniform unit density, the paper's default",
     )
 
 
@@ -72,11 +79,28 @@ def scale_options(args) -> dict:
     return {"size_m": getattr(args, "size_m", None), "units": getattr(args, "units", None)}
 
 
-def load_objects(specs, args) -> list:
-    """Resolve object specs with ``--size-m`` / ``--units`` applied to the mesh files.
+def materials_option(args) -> bool:
+    """Whether the parsed command line asks for per-part materials (``--materials``).
 
-    Families are built at their real size; the options apply to the mesh files among
-    ``specs`` and are refused when there is none.
+    Parameters
+    ----------
+    args : argparse.Namespace
+
+    Returns
+    -------
+    bool
+        False when not given (or the command has no such option).
+    """
+    return bool(getattr(args, "materials", False))
+
+
+def load_objects(specs, args) -> list:
+    """Resolve object specs with ``--size-m`` / ``--units`` applied to the mesh files and
+    ``--materials`` to the families.
+
+    Families are built at their real size; the scale options apply to the mesh files among
+    ``specs`` and are refused when there is none; ``--materials`` is refused when every
+    spec is a mesh file.
 
     Parameters
     ----------
@@ -98,9 +122,12 @@ def load_objects(specs, args) -> list:
     from ..objects import load_object
     from ..objects.resolve import is_family_spec
 
+    materials = materials_option(args)
+    if materials and not any(is_family_spec(s) for s in specs):
+        load_object(specs[0], materials=True)  # refused for a mesh file, saying why
     scale = scale_options(args)
     if all(v is None for v in scale.values()):
-        return [load_object(s) for s in specs]
+        return [load_object(s, materials=materials and is_family_spec(s)) for s in specs]
     if all(is_family_spec(s) for s in specs):
         given = " and ".join(f"--{k.replace('_', '-')}" for k, v in scale.items() if v is not None)
         raise InputError(
@@ -108,7 +135,10 @@ def load_objects(specs, args) -> list:
             + ("is a built-in family" if len(specs) == 1 else "are built-in families")
             + " (made at real size in metres); drop the option or name a mesh file"
         )
-    return [load_object(s) if is_family_spec(s) else load_object(s, **scale) for s in specs]
+    return [
+        load_object(s, materials=materials) if is_family_spec(s) else load_object(s, **scale)
+        for s in specs
+    ]
 
 
 MAX_SEED = 2**63 - 1

@@ -114,7 +114,7 @@ def run(args, out) -> None:
     names = task_names(args.task) or [t for t in list_tasks() if t != "viable"]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
-    obj = load_object(args.object, size_m=args.size_m, units=args.units)
+    obj = load_object(args.object, size_m=args.size_m, units=args.units, materials=args.materials)
     table, spent, wall = run_batches(args, out, obj, metrics=True)
     from ..schema import metric_arrays
 

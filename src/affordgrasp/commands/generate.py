@@ -105,7 +105,7 @@ def run(args, out) -> None:
     """
     cmd = command_line(args)
     objects = args.objects
-    if any(v is not None for v in scale_options(args).values()):
+    if any(v is not None for v in scale_options(args).values()) or args.materials:
         objects = load_objects(args.objects, args)
     try:
         summary = generate(
@@ -121,6 +121,7 @@ def run(args, out) -> None:
             chunk_size=args.chunk_size,
             metrics=not args.no_metrics,
             depth=args.depth,
+            materials=args.materials,
             command=cmd,
             progress=lambda total: out.progress("generating", total),
         )

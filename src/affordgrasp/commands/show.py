@@ -11,7 +11,7 @@ import math
 import os
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import DatasetError, InputError
 from .common import (
     HAND_HELP,
     add_scale_arguments,
@@ -156,7 +156,14 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
             "--units / --size-m rescale mesh files, and no SOURCE or --mesh is one; drop "
             "the option, or pass the dataset's mesh with --mesh PATH"
         )
-    objects = {s: load_object(s, **({} if is_family_spec(s) else scale)) for s in specs}
+    if getattr(args, "materials", False) and specs:
+        load_objects(specs, args)  # refuses --materials when every spec is a mesh file
+    objects = {
+        s: load_object(s, materials=bool(getattr(args, "materials", False)))
+        if is_family_spec(s)
+        else load_object(s, **scale)
+        for s in specs
+    }
     for spec in args.source:
         if is_dataset_path(spec):
             sources.append(DatasetSource(Path(spec).expanduser()))
@@ -240,7 +247,13 @@ def with_best_pairs(obj, table, tasks, thresholds, args):
 
 
 def resolve_dataset_object(
-    name: str, object_hash: str | None, source, meshes: list[str], out, scale: dict | None = None
+    name: str,
+    object_hash: str | None,
+    source,
+    meshes: list[str],
+    out,
+    scale: dict | None = None,
+    materials: bool = False,
 ):
     """The GraspObject a dataset's rows were simulated on, found by name and checked by hash.
 
@@ -262,6 +275,9 @@ def resolve_dataset_object(
         For the warning.
     scale : dict, optional
         ``size_m`` / ``units`` for mesh files, as when the dataset was made.
+    materials : bool
+        Per-part materials for a family (``--materials``); a dataset directory's manifest
+        says so itself.
 
     Returns
     -------
@@ -281,12 +297,18 @@ def resolve_dataset_object(
             candidates.append(m)
     directory = getattr(source, "directory", None)
     if directory is not None:
+        from ..dataset.layout import read_manifest
+
+        try:
+            materials = materials or bool(read_manifest(directory).get("materials", False))
+        except DatasetError:
+            pass  # no manifest to read: the rows say nothing of the mass
         candidates.extend(str(p) for p in sorted(Path(directory).rglob(name)) if p.is_file())
     candidates.append(name)
     last_error = None
     for spec in candidates:
         try:
-            options = {} if is_family_spec(spec) else (scale or {})
+            options = {"materials": materials} if is_family_spec(spec) else (scale or {})
             obj = load_object(spec, **options)
         except InputError as exc:
             last_error = exc
@@ -339,7 +361,13 @@ def objects_of(rankings, sources_by_object, args, out) -> dict:
             continue
         row = r.best[0].row if r.best else {}
         objects[r.object] = resolve_dataset_object(
-            r.object, row.get("object_hash"), source, args.mesh, out, scale_options(args)
+            r.object,
+            row.get("object_hash"),
+            source,
+            args.mesh,
+            out,
+            scale_options(args),
+            materials=bool(getattr(args, "materials", False)),
         )
     return objects
 

@@ -39,7 +39,7 @@ def run(args, out) -> None:
     check_counts(args)
     if args.out:
         check_output_file(args.out, "--out")
-    obj = load_object(args.object, size_m=args.size_m, units=args.units)
+    obj = load_object(args.object, size_m=args.size_m, units=args.units, materials=args.materials)
     table, spent, wall = run_batches(args, out, obj, metrics=False)
     rows, doc = status_summary(table)
     rate = args.samples / spent["simulate"] if spent["simulate"] > 0 else float("inf")

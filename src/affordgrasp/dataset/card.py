@@ -77,6 +77,7 @@ def object_description(obj) -> dict:
         "mesh_hash": obj.mesh_hash,
         "vertices": int(len(obj.mesh.vertices)),
         "faces": int(len(obj.mesh.faces)),
+        "materials": bool(getattr(obj, "materials", False)),
         "density_kg_m3": float(m.density),
         "volume_m3": float(m.volume),
         "mass_kg": float(m.mass),
@@ -250,6 +251,7 @@ def build_card(
         "shard_size": manifest["shard_size"],
         "metrics": manifest["metrics"],
         "soft_contacts": manifest["soft"],
+        "materials": bool(manifest.get("materials", False)),
         "command": manifest.get("command"),
         "created": manifest.get("created"),
         "runs": runs,
@@ -290,6 +292,12 @@ def card_markdown(card: dict) -> str:
         f"* seed {card['seed']}, {card['samples_per_object']:,} samples per object, "
         f"shards of {card['shard_size']} rows, metrics: {'yes' if card['metrics'] else 'no'}, "
         f"soft contacts: {'yes' if card['soft_contacts'] else 'no'}",
+        "* mass properties: "
+        + (
+            "per-part materials of the built-in families (--materials)"
+            if card.get("materials")
+            else "uniform unit density (1 kg/m³), as in the paper"
+        ),
         f"* created {card.get('created')} by: `{_command_text(card.get('command'))}`",
         "",
         "## Status counts",

@@ -54,7 +54,9 @@ class ObjectPayload:
     part_names : tuple of str
         The names the part labels index.
     mass : MassProperties or None
-        As resolved (a family's follow its materials); None: uniform at ``density``.
+        As resolved (unit density, or a family's materials); None: uniform at ``density``.
+    materials : bool
+        Whether ``mass`` follows the family's per-part materials.
     """
 
     name: str
@@ -66,8 +68,9 @@ class ObjectPayload:
     faces: np.ndarray
     face_parts: np.ndarray | None = None
     part_names: tuple[str, ...] = ()
-    # the resolved mass properties (a family's follow its materials, not one density)
+    # the resolved mass properties, so that the workers use the same ones
     mass: object | None = None
+    materials: bool = False
 
     @classmethod
     def from_object(cls, obj) -> ObjectPayload:
@@ -92,6 +95,7 @@ class ObjectPayload:
             face_parts=getattr(obj, "face_parts", None),
             part_names=tuple(getattr(obj, "part_names", ())),
             mass=obj.mass,
+            materials=bool(getattr(obj, "materials", False)),
         )
 
     def build(self):
@@ -125,6 +129,7 @@ class ObjectPayload:
             source=self.source,
             face_parts=self.face_parts,
             part_names=self.part_names,
+            materials=self.materials,
         )
 
 

@@ -136,6 +136,7 @@ def build_manifest(
     soft: bool,
     command: Sequence[str] | None,
     depth: bool = False,
+    materials: bool = False,
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``).
 
@@ -153,6 +154,9 @@ def build_manifest(
         Rows per shard.
     metrics, soft, depth : bool
         Metric columns, soft-finger cones, depth images.
+    materials : bool
+        Whether the families' mass properties follow their per-part materials (recorded
+        always: a resume must use the same mass properties).
     command : sequence of str or None
         The command line, recorded.
 
@@ -171,6 +175,7 @@ def build_manifest(
         "hand_spec": hand_to_dict(hand),
         "metrics": metrics,
         "soft": soft,
+        "materials": bool(materials),
         "objects": [
             {
                 "index": i,
@@ -191,23 +196,35 @@ def build_manifest(
     return manifest
 
 
-def load_objects(specs: Sequence) -> list:
+def load_objects(specs: Sequence, materials: bool = False) -> list:
     """Resolve object specs once, refusing duplicates (they would duplicate rows).
 
     Parameters
     ----------
     specs : sequence
         Object specs or GraspObjects.
+    materials : bool
+        Per-part materials for the built-in families (``load_object(..., materials=True)``);
+        mesh files among ``specs`` keep their uniform density, and all mesh files is an
+        error.
 
     Returns
     -------
     list of GraspObject
     """
-    from ..objects import load_object
+    from ..objects import GraspObject, load_object
+    from ..objects.resolve import is_family_spec
 
     if not specs:
         raise InputError("no objects given; name at least one object (e.g. 'knife', 'knife:7')")
-    objects = [load_object(s) for s in specs]
+
+    def family(s) -> bool:
+        return is_family_spec(s) or (isinstance(s, GraspObject) and s.source == "family")
+
+    if materials and not any(family(s) for s in specs):
+        load_object(specs[0], materials=True)  # refused: names the problem and the fix
+    # materials apply to the families; mesh files keep their uniform density
+    objects = [load_object(s, materials=materials and family(s)) for s in specs]
     seen: dict[str, int] = {}
     for i, o in enumerate(objects):
         if o.name in seen:
@@ -245,6 +262,7 @@ def generate(
     metrics: bool = True,
     soft: bool = False,
     depth: bool = False,
+    materials: bool = False,
     command: Sequence[str] | None = None,
     progress: ProgressFactory | None = None,
 ) -> GenerationSummary:
@@ -279,6 +297,9 @@ def generate(
         Soft-finger contacts.
     depth : bool
         Also store the depth image D(p0, O) of every row (column ``depth_mm``).
+    materials : bool
+        Mass properties of the built-in families from their per-part materials instead of
+        the paper's uniform unit density (recorded in the manifest; a resume must match).
     command : sequence of str, optional
         The command line, recorded in the manifest and the card.
     progress : callable, optional
@@ -304,7 +325,7 @@ def generate(
     _check_counts(samples, seed, shard_size, chunk_size)
     check_engine(engine, workers, address)
     hand_model = get_hand(hand)
-    resolved = load_objects(list(objects))
+    resolved = load_objects(list(objects), materials=materials)
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
         raise bad_parameter("out", f"{str(directory)!r} is a file; give a directory", DatasetError)
@@ -318,6 +339,7 @@ def generate(
         soft=soft,
         command=command,
         depth=depth,
+        materials=materials or any(o.materials for o in resolved),
     )
     manifest = prepare_directory(directory, manifest)
     removed = remove_stale_temporaries(directory)

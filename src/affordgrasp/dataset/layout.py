@@ -65,6 +65,7 @@ PLAN_KEYS = (
     "metrics",
     "soft",
     "depth",
+    "materials",
     "objects",
 )
 
@@ -322,6 +323,17 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                         if [n for n, _ in a] == [n for n, _ in b]
                         else ""
                     )
+                )
+        elif key == "materials":
+            # absent from manifests written before it was recorded: unit density
+            a, b = bool(a), bool(b)
+            if a != b:
+                diffs.append(
+                    "mass properties from "
+                    + ("per-part materials (--materials)" if a else "unit density")
+                    + " there vs "
+                    + ("per-part materials (--materials)" if b else "unit density")
+                    + " here"
                 )
         elif a != b:
             diffs.append(f"{key} {a!r} there vs {b!r} here")

@@ -7,7 +7,8 @@ parallel-axis theorem::
     I = aᵀ I_com a + m d²,   d = distance from the centre of mass to the line,
 
 with ``I_com`` the inertia tensor about the centre of mass and ``m`` the mass, both from
-the object's mass properties (a built-in family's materials, a mesh file's unit density).
+the object's mass properties (uniform unit density by default, as in the paper; a built-in
+family's per-part materials with ``load_object(spec, materials=True)``).
 Units: kg m². Scales as s⁵ under a uniform scaling at constant density. Validated
 against the closed forms of a box and a rod in ``tests/metrics/test_inertia.py``.
 """

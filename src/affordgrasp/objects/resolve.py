@@ -53,7 +53,8 @@ class GraspObject:
         Watertight, outward-oriented, metres, in the object's mesh frame. Shared between
         callers (family objects are cached): treat it as read-only, ``copy()`` it to edit.
     mass : MassProperties
-        At the density the object was resolved with.
+        At the density the object was resolved with (unit density by default), or from
+        its per-part materials when resolved with ``materials=True``.
     mesh_hash : str
         :func:`mesh_hash` of ``mesh``: stable across runs and machines.
     source : str
@@ -64,6 +65,9 @@ class GraspObject:
     part_names : tuple of str
         Names of the parts (``"handle"``, ``"blade"``, ``"cutting_edge"``, ...); empty
         without labels.
+    materials : bool
+        Whether ``mass`` follows the family's per-part materials (``materials=True``)
+        rather than one uniform density.
     """
 
     name: str
@@ -74,6 +78,7 @@ class GraspObject:
     source: str
     face_parts: np.ndarray | None = None
     part_names: tuple[str, ...] = ()
+    materials: bool = False
 
     def parts_of_faces(self, faces) -> np.ndarray:
         """Part name of each face index.
@@ -174,6 +179,7 @@ def load_object(
     size_m: float | None = None,
     units: str | None = None,
     density: float | None = None,
+    materials: bool = False,
 ) -> GraspObject:
     """Resolve a family name, ``family:seed`` or mesh path into a :class:`GraspObject`.
 
@@ -181,16 +187,20 @@ def load_object(
     ----------
     spec : str, os.PathLike or GraspObject
         See the module docstring for the grammar. A GraspObject is returned as it is, or
-        with its mass recomputed when another ``density`` is asked for.
+        with its mass recomputed when another ``density`` (or ``materials=True``) is
+        asked for.
     size_m : float, optional
         Rescale so that the longest bounding-box extent is this many metres.
     units : str, optional
         Length unit of a mesh file (``m``, ``cm``, ``mm``, ``in``, ``ft``).
     density : float, optional
-        kg/m^3, one uniform density for the mass properties. When not given, a built-in
-        family's mass follows its materials (steel head, wooden handle, ...:
-        :mod:`affordgrasp.objects.families.materials`) and a mesh file has the paper's unit
-        density (1.0); ``density=1.0`` gives a family the paper's homogeneous unit density.
+        kg/m^3, one uniform density for the mass properties; default 1.0 (uniform unit
+        density, as in the paper), for families and mesh files alike.
+    materials : bool
+        A built-in family's mass properties from its per-part materials instead (steel
+        head, wooden handle, ...: :mod:`affordgrasp.objects.families.materials`), so that
+        the centre of mass and the mass lie where they do in the real tool. Not with
+        ``density``, and not for a mesh file (it has no parts to give materials to).
 
     Returns
     -------
@@ -203,12 +213,13 @@ def load_object(
         Unknown family or missing file (the message lists the families), a bad seed, or
         bad options; :class:`~affordgrasp.errors.MeshError` for an unusable mesh.
     """
+    materials = _check_materials(materials, density)
     if isinstance(spec, GraspObject):
-        return _reuse(spec, size_m=size_m, units=units, density=density)
-    # families default to their materials (density None), mesh files to unit density
-    density = None if density is None else _check_density(density)
+        return _reuse(spec, size_m=size_m, units=units, density=density, materials=materials)
+    density = 1.0 if density is None else _check_density(density)
     if isinstance(spec, os.PathLike):
-        return _resolve_file(Path(spec), size_m=size_m, units=units, density=density or 1.0)
+        _refuse_materials_for_file(str(spec), materials)
+        return _resolve_file(Path(spec), size_m=size_m, units=units, density=density)
     if not isinstance(spec, str):
         raise InputError(
             f"an object spec must be a family name, 'family:seed' or a mesh path, got "
@@ -229,10 +240,11 @@ def load_object(
                 "export' and rescale the file if you need another size)"
             )
         seed = _parse_seed(seed_text, family, text)
-        return _resolve_family(family, seed, density, size_m, units)
+        return _resolve_family(family, seed, density, materials, size_m, units)
     path = Path(text).expanduser()
     if path.exists():
-        return _resolve_file(path, size_m=size_m, units=units, density=density or 1.0)
+        _refuse_materials_for_file(text, materials)
+        return _resolve_file(path, size_m=size_m, units=units, density=density)
     raise InputError(_unknown_spec_message(text))
 
 
@@ -259,6 +271,26 @@ def _check_density(density: float) -> float:
     if not (math.isfinite(value) and value > 0):
         raise InputError(f"density must be a finite number > 0 (kg/m^3), got {density!r}")
     return value
+
+
+def _check_materials(materials: object, density: float | None) -> bool:
+    if not isinstance(materials, (bool, np.bool_)):
+        raise InputError(f"materials must be True or False, got {materials!r}")
+    if materials and density is not None:
+        raise InputError(
+            f"materials=True gives each part its material's density, and density={density!r} "
+            "gives the whole object one density; pass one of the two"
+        )
+    return bool(materials)
+
+
+def _refuse_materials_for_file(spec: str, materials: bool) -> None:
+    if materials:
+        raise InputError(
+            f"{spec!r} is a mesh file, which has no parts to give materials to; per-part "
+            "materials (materials=True, --materials) apply to the built-in families only. "
+            "Drop the option (a mesh file has uniform density, 1.0 by default, or density=...)"
+        )
 
 
 def _families():
@@ -329,7 +361,12 @@ def _resolve_file(
 
 @functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
 def _resolve_family(
-    family: str, seed: int, density: float | None, size_m: float | None, units: str | None
+    family: str,
+    seed: int,
+    density: float,
+    materials: bool,
+    size_m: float | None,
+    units: str | None,
 ) -> GraspObject:
     families = _families()
     name = f"{family}:{seed}"
@@ -340,12 +377,12 @@ def _resolve_family(
         # preparing changed the triangles: each keeps the part of the raw face under it
         _, _, under = trimesh.proximity.closest_point(raw, mesh.triangles_center)
         face_parts = np.asarray(face_parts)[under]
-    regions = raw.metadata.get("materials") if density is None else None
+    regions = raw.metadata.get("materials") if materials else None
     return _build(
         name,
         families.FAMILIES[family].category,
         mesh,
-        1.0 if density is None else density,
+        density,
         "family",
         face_parts=face_parts,
         part_names=tuple(raw.metadata.get("part_names", ())) if face_parts is not None else (),
@@ -377,18 +414,38 @@ def _build(
         source=source,
         face_parts=face_parts,
         part_names=part_names,
+        materials=bool(regions),
     )
 
 
 def _reuse(
-    obj: GraspObject, *, size_m: float | None, units: str | None, density: float | None
+    obj: GraspObject,
+    *,
+    size_m: float | None,
+    units: str | None,
+    density: float | None,
+    materials: bool,
 ) -> GraspObject:
     if size_m is not None or units is not None:
         raise InputError(
             f"object {obj.name!r} is already resolved, so size_m/units cannot apply; pass "
             "its spec (family or path) with size_m/units instead"
         )
-    if density is None or _check_density(density) == obj.mass.density:
+    if materials:
+        if obj.materials:
+            return obj
+        if obj.source != "family":
+            _refuse_materials_for_file(obj.name, materials)
+        family, seed_text = _split_family(obj.name)
+        if family is None:
+            raise InputError(
+                f"object {obj.name!r} is not a built-in family, so it has no materials; drop "
+                "materials=True"
+            )
+        return _resolve_family(
+            family, _parse_seed(seed_text, family, obj.name), 1.0, True, None, None
+        )
+    if density is None or (not obj.materials and _check_density(density) == obj.mass.density):
         return obj
     return GraspObject(
         name=obj.name,

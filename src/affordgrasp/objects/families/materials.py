@@ -1,8 +1,10 @@
 """What each part of a procedural family is made of, and the densities of those materials.
 
-A family's mass properties (centre of mass, inertia) follow its materials: a hammer is a
+With ``load_object(spec, materials=True)`` (``--materials`` on the command line) a
+family's mass properties (centre of mass, inertia) follow its materials: a hammer is a
 steel head on a wooden handle, so its centre of mass lies near the head, as in the real
-tool. Densities are typical handbook values at room temperature, kg/m³:
+tool. The default stays the paper's uniform unit density. Densities are typical
+handbook values at room temperature, kg/m³:
 
 ==========  ======  ==============================================================
 material    ρ       what
@@ -18,8 +20,7 @@ wafer       500     baked wafer of an ice-cream cone (a 12 g cone of about 25 cm
 Each family names a material per tagged piece (:data:`FAMILY_MATERIALS`); a piece the
 table does not name, and volume no tagged piece covers, is the family's ``"*"`` material.
 Where pieces of different materials overlap (a blade's tang inside its handle), the denser
-material takes the volume. The uniform density of the paper stays available:
-``load_object(spec, density=1.0)``.
+material takes the volume.
 """
 
 from __future__ import annotations
