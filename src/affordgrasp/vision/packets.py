@@ -149,7 +149,10 @@ class _Embree:
         return int(scene)
 
     def release(self, scene: int) -> None:
-        self.lib.rtcReleaseScene(ctypes.c_void_p(scene))
+        try:
+            self.lib.rtcReleaseScene(scene)
+        except Exception:  # noqa: BLE001 - at interpreter exit ctypes may be torn down
+            pass
 
 
 @njit(cache=True, nogil=True)
