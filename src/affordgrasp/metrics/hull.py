@@ -17,11 +17,12 @@ hair off one plane) put an apex barely above some facets: a facet the apex is at
 ``COPLANAR_TOL`` (relative) above is treated as coplanar with it, not visible, so the new
 facet on that ridge makes a fold of at most that height instead of a sliver whose
 hyperplane is round-off; an apex that is only that little above every facet is dropped.
-A hull built with such a rule is verified at the end (every point beneath every facet
-that is not itself a sliver, to ``VERIFY_TOL``), and ε's own facet test stays exact (see
-:mod:`affordgrasp.metrics.epsilon`). Combinatorial consistency (each ridge in exactly two
-facets) is maintained and checked; any violation returns ``HULL_FAILED`` and the caller
-falls back to qhull. The result has been checked against qhull (options ``Qt Qx``) on
+A hull built with such a rule is verified at the end (every point beneath every facet to
+``VERIFY_TOL``, and the same volume from two interior points: a surface folded over itself
+by round-off slivers passes the first test but not the second), and ε's own facet test
+stays exact (see :mod:`affordgrasp.metrics.epsilon`). Combinatorial consistency (each ridge
+in exactly two facets) is maintained and checked; any violation returns ``HULL_FAILED`` and
+the caller falls back to qhull. The result has been checked against qhull (options ``Qt Qx``) on
 random, symmetric and nearly coplanar wrench sets: ``tests/metrics/test_hull.py``.
 """
 
@@ -44,7 +45,7 @@ DIM = 6
 HULL_TOL = 1e-12  # beyond-test tolerance, relative to the largest |coordinate|
 COPLANAR_TOL = 1e-9  # an apex at most this far above a facet (relative) is coplanar with it
 VERIFY_TOL = 1e-8  # after a coplanar apex: every point within this (relative) beneath every facet
-THIN_TOL = 1e-6  # ... except facets thinner than this (relative), whose hyperplanes are round-off
+VOLUME_CHECK_TOL = 1e-9  # ... and its volume the same from two interior points (relative)
 RANK_TOL = 1e-10  # affine independence tolerance of the initial simplex, relative
 
 
@@ -501,7 +502,6 @@ def _hull(P, nearest_only):
     chk_tol = 1e-14 * scale
     vis_tol = COPLANAR_TOL * scale
     verify_tol = VERIFY_TOL * scale
-    thin_tol = THIN_TOL * scale
     simplex = np.empty(DIM + 1, dtype=np.int64)
     if not _initial_simplex(P, simplex, RANK_TOL * scale):
         return HULL_DEGENERATE, empty_i, empty_f, np.zeros(0), q0
@@ -820,14 +820,11 @@ def _hull(P, nearest_only):
             count += 1
             if thick and not nearest_only:
                 # Coplanar apexes were met (folds of <= vis_tol, dropped points): the surface
-                # is the hull only if every point is beneath every facet, to verify_tol.
-                # A facet thinner than thin_tol has a round-off hyperplane (and no volume):
-                # its test says nothing.
-                excess = 0.0
+                # is the hull only if every point is beneath every facet, to verify_tol
+                # (and see the volume test below).
                 for p in range(N):
-                    excess = max(excess, _dist_nd(F_normal, F_offset, f, P, p))
-                if excess > verify_tol and facet_spread(P, F_vertices[f]) > thin_tol:
-                    return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                    if _dist_nd(F_normal, F_offset, f, P, p) > verify_tol:
+                        return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
     out_v = np.empty((count, DIM), dtype=np.int64)
     out_n = np.empty((count, DIM))
     out_d = np.empty(count)
@@ -838,6 +835,19 @@ def _hull(P, nearest_only):
             out_n[j] = F_normal[f]
             out_d[j] = F_offset[f]
             j += 1
+    if thick and not nearest_only:
+        # The boundary of a convex body gives the same sum of |cone volumes| from any
+        # interior point; a surface folded over itself (slivers whose hyperplanes are
+        # round-off) does not. Checked from the initial simplex's centroid and from the
+        # centroid of all points.
+        centroid = np.zeros(DIM)
+        for i in range(N):
+            for c in range(DIM):
+                centroid[c] += P[i, c] / N
+        v1 = hull_volume(P, out_v, q0)
+        v2 = hull_volume(P, out_v, centroid)
+        if abs(v1 - v2) > VOLUME_CHECK_TOL * v1:
+            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
     return HULL_OK, out_v, out_n, out_d, q0
 
 
