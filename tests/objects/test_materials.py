@@ -13,7 +13,7 @@ from affordgrasp.objects.families.materials import DENSITY_KG_M3, FAMILY_MATERIA
 
 @pytest.mark.parametrize("name", list_families())
 def test_material_regions_split_the_object_exactly(name):
-    mesh = make_family(name, 1)
+    mesh = make_family(name, 1, materials=True)
     regions = mesh.metadata["materials"]
     assert regions, "every family has at least one material region"
     volumes = []
@@ -33,7 +33,7 @@ def test_material_regions_split_the_object_exactly(name):
 def test_mass_is_the_sum_over_materials_and_the_centre_of_mass_their_lever_rule():
     obj = load_object("hammer:2", materials=True)
     assert obj.materials
-    regions = make_family("hammer", 2).metadata["materials"]
+    regions = make_family("hammer", 2, materials=True).metadata["materials"]
     masses = np.array([rho * r.volume for _, rho, r in regions])
     centres = np.array([r.center_mass for _, _, r in regions])
     assert obj.mass.mass == pytest.approx(masses.sum(), rel=1e-9)

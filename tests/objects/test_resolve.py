@@ -28,7 +28,7 @@ def fake_families() -> types.SimpleNamespace:
     """A stand-in for objects.families: boxes whose length depends on the seed."""
     calls = []
 
-    def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
+    def make_family(name: str, seed: int = 0, *, materials: bool = False) -> trimesh.Trimesh:
         calls.append((name, seed))
         return trimesh.creation.box(extents=(0.1 + 0.01 * seed, 0.02, 0.01))
 

@@ -370,7 +370,7 @@ def _resolve_family(
 ) -> GraspObject:
     families = _families()
     name = f"{family}:{seed}"
-    raw = families.make_family(family, seed=seed)
+    raw = families.make_family(family, seed=seed, materials=materials)
     mesh = prepare_mesh(raw, size_m=size_m, units=units, source=name)
     face_parts = raw.metadata.get("face_parts")
     if face_parts is not None and not np.array_equal(raw.faces, mesh.faces):

@@ -206,7 +206,7 @@ def _check_seed(seed: object) -> int:
     return int(seed)
 
 
-def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
+def make_family(name: str, seed: int = 0, *, materials: bool = False) -> trimesh.Trimesh:
     """Build one instance of a procedural family.
 
     Parameters
@@ -215,6 +215,9 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
         A family name from :func:`affordgrasp.list_families` (or an alias, ``"cleaver"``).
     seed : int
         Non-negative; 0 is the family's typical instance.
+    materials : bool
+        Also split the solid into its material regions (exact booleans, about a third of
+        the build time): only needed for per-part mass properties.
 
     Returns
     -------
@@ -223,9 +226,9 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
         ``metadata`` keys ``family``, ``category``, ``seed``, ``params`` (the parameter
         values drawn, SI units as their names say), ``face_parts`` ((n_faces,) int8, each
         face's semantic part), ``part_names`` (the names those indices refer to,
-        :data:`~affordgrasp.objects.families.parts.PART_NAMES`) and ``materials`` (a list
-        of ``(material, density kg/m³, closed trimesh)``: disjoint regions whose union is
-        the mesh, :mod:`~affordgrasp.objects.families.materials`).
+        :data:`~affordgrasp.objects.families.parts.PART_NAMES`) and, with ``materials=True``,
+        ``materials`` (a list of ``(material, density kg/m³, closed trimesh)``: disjoint
+        regions whose union is the mesh, :mod:`~affordgrasp.objects.families.materials`).
 
     Raises
     ------
@@ -242,13 +245,6 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
     face_parts = parts.refine_parts(
         key, mesh, parts.face_parts_of(solid, recorder), dict(draw.values)
     )
-    # the mesh frame's origin is the bounding-box centre: move the regions with it
-    offset = np.asarray(to_trimesh(solid, center=False).bounds).mean(axis=0)
-    regions = []
-    for material, region in materials.material_regions(key, solid, recorder.pieces):
-        region_mesh = to_trimesh(region, center=False)
-        region_mesh.apply_translation(-offset)
-        regions.append((material, materials.DENSITY_KG_M3[material], region_mesh))
     mesh.metadata.update(
         {
             "family": key,
@@ -257,8 +253,21 @@ def make_family(name: str, seed: int = 0) -> trimesh.Trimesh:
             "params": dict(draw.values),
             "face_parts": face_parts,
             "part_names": parts.PART_NAMES,
-            "materials": regions,
         }
     )
+    if materials:
+        mesh.metadata["materials"] = _material_regions(key, solid, recorder.pieces)
     logger.debug("built %s:%d with %d triangles", key, seed, len(mesh.faces))
     return mesh
+
+
+def _material_regions(key: str, solid, pieces) -> list:
+    """``(material, density kg/m³, closed trimesh)`` regions in the mesh frame."""
+    # the mesh frame's origin is the bounding-box centre: move the regions with it
+    offset = np.asarray(to_trimesh(solid, center=False).bounds).mean(axis=0)
+    regions = []
+    for material, region in materials.material_regions(key, solid, pieces):
+        region_mesh = to_trimesh(region, center=False)
+        region_mesh.apply_translation(-offset)
+        regions.append((material, materials.DENSITY_KG_M3[material], region_mesh))
+    return regions
