@@ -16,6 +16,10 @@ classifiers, then prints
 3. K-candidate ranking, per task: on each held-out object, K candidate (p0, d) with their
    depth images; the models choose one; its simulated task score is compared with a random
    choice and with the simulation oracle (the best of the K).
+
+``--shipped`` adds the shipped models (``affordgrasp predict default``) as rows and uses them
+for the K-candidate choice (they must have been trained on this dataset and split).
+``--skip`` leaves recipes out (e.g. the 12-epoch copy of the shipped regressor's recipe).
 """
 
 from __future__ import annotations
@@ -65,8 +69,8 @@ def trained(models_dir: Path, name: str, target: str, recipe: dict, prepared, da
             and bool(config.get("canonical")) == recipe.get("canonical", False)
         )
         if same:
-            return model, config, 0.0
-    started = time.perf_counter()
+            return model, config, 0.0, 0.0
+    started, cpu = time.perf_counter(), time.process_time()
     settings = TrainSettings(epochs=epochs, seed=0, rank_weight=recipe.get("rank_weight", 0.0))
     model, config = train_on_dataset(
         data,
@@ -77,7 +81,16 @@ def trained(models_dir: Path, name: str, target: str, recipe: dict, prepared, da
         prepared=prepared,
         canonical=recipe.get("canonical", False),
     )
-    return model, config, time.perf_counter() - started
+    return model, config, time.perf_counter() - started, time.process_time() - cpu
+
+
+def _check_split(config: dict, split, name: str) -> None:
+    """Refuse a model whose held-out objects are not this split's (its test would leak)."""
+    if config["training"]["split"]["test"] != list(split.test):
+        raise SystemExit(
+            f"the {name} model was trained with other test objects than this dataset's split; "
+            "run without --shipped or on its dataset"
+        )
 
 
 def k_candidates(data, split, classifier, regressor, *, k=32, trials=40, rows=600, seed=0):
@@ -169,6 +182,10 @@ def main() -> None:
     parser.add_argument("--epochs", type=int, default=40)
     parser.add_argument("--only", default=None, help="comma-separated regressors/classifiers")
     parser.add_argument("--k", type=int, default=32)
+    parser.add_argument("--skip", default=None, help="comma-separated recipes to leave out")
+    parser.add_argument(
+        "--shipped", action="store_true", help="add the shipped models; use them for K candidates"
+    )
     parser.add_argument("-v", "--verbose", action="store_true", help="log every epoch")
     args = parser.parse_args()
     if args.verbose:
@@ -177,6 +194,13 @@ def main() -> None:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     args.models.mkdir(parents=True, exist_ok=True)
     only = set(args.only.split(",")) if args.only else None
+    skip = set(args.skip.split(",")) if args.skip else set()
+    shipped = {}
+    if args.shipped:
+        from affordgrasp.learning.api import pretrained_path
+        from affordgrasp.learning.io import load_model
+
+        shipped = {k: load_model(pretrained_path(k)) for k in ("classifier", "regressor")}
     results: dict = {"regressors": {}, "classifiers": {}, "seconds": {}}
 
     t0 = time.perf_counter()
@@ -186,17 +210,26 @@ def main() -> None:
         f"test objects {', '.join(reg[4].test)} ({time.perf_counter() - t0:.0f} s to load)"
     )
     runs = {}
-    for name, recipe in REGRESSORS.items():
-        if only and name not in only:
-            continue
-        model, config, secs = trained(
-            args.models, f"reg_{name}", "hold_effort_sum", recipe, reg, args.data, args.epochs
-        )
+    reg_recipes = {k: v for k, v in REGRESSORS.items() if (not only or k in only) and k not in skip}
+    if "regressor" in shipped:
+        reg_recipes["shipped"] = None
+    for name, recipe in reg_recipes.items():
+        if recipe is None:
+            model, config = shipped["regressor"]
+            _check_split(config, reg[4], name)
+            secs = cpu = 0.0
+        else:
+            model, config, secs, cpu = trained(
+                args.models, f"reg_{name}", "hold_effort_sum", recipe, reg, args.data, args.epochs
+            )
         from affordgrasp.learning.api import Inputs, predict_scores, report
 
         runs[name] = predict_scores(model, config, Inputs(config, reg[2]))
         results["regressors"][name] = report(model, config, reg[2], scores=runs[name])
         results["seconds"][f"reg_{name}"] = secs or config["training"]["seconds"]
+        if cpu:
+            results.setdefault("cpu_seconds", {})[f"reg_{name}"] = cpu
+            print(f"  trained {name} in {secs:.0f} s ({cpu:.0f} CPU-s)", flush=True)
         print(f"  {name}: {json.dumps(results['regressors'][name])}", flush=True)
     truth = reg[3].normalise(reg[2].y)
     print("\nTable II (ΣE_h regressors, held-out objects; paper's values in brackets)")
@@ -221,17 +254,28 @@ def main() -> None:
         f"test {len(cls[2])} ({int(cls[2].y.sum())} viable)"
     )
     cls_runs, cls_models = {}, {}
-    for name, recipe in CLASSIFIERS.items():
-        if only and name not in only:
-            continue
-        model, config, secs = trained(
-            args.models, f"cls_{name}", "viable", recipe, cls, args.data, args.epochs
-        )
+    cls_recipes = {
+        k: v for k, v in CLASSIFIERS.items() if (not only or k in only) and k not in skip
+    }
+    if "classifier" in shipped:
+        cls_recipes["shipped"] = None
+    for name, recipe in cls_recipes.items():
+        if recipe is None:
+            model, config = shipped["classifier"]
+            _check_split(config, cls[4], name)
+            secs = cpu = 0.0
+        else:
+            model, config, secs, cpu = trained(
+                args.models, f"cls_{name}", "viable", recipe, cls, args.data, args.epochs
+            )
         from affordgrasp.learning.api import Inputs, predict_scores, report
 
         cls_runs[name] = predict_scores(model, config, Inputs(config, cls[2]))
         results["classifiers"][name] = t = report(model, config, cls[2], scores=cls_runs[name])
         results["seconds"][f"cls_{name}"] = secs or config["training"]["seconds"]
+        if cpu:
+            results.setdefault("cpu_seconds", {})[f"cls_{name}"] = cpu
+            print(f"  trained {name} in {secs:.0f} s ({cpu:.0f} CPU-s)", flush=True)
         cls_models[name] = (model, config)
         print(
             f"  {name}: AP {t['average_precision']:.3f} (positive rate "
@@ -249,12 +293,16 @@ def main() -> None:
             float(np.mean(cls[2].y)),
         )
 
-    cls_for_k = "cnn-canonical" if "cnn-canonical" in cls_models else "cnn"
-    if cls_for_k in cls_models and {"cnn+rank+canonical", "cnn+rank", "cnn"} & set(runs):
+    cls_for_k = next((n for n in ("shipped", "cnn-canonical", "cnn") if n in cls_models), None)
+    reg_for_k = ("shipped", "cnn+rank+canonical", "cnn+rank", "cnn")
+    if cls_for_k is not None and set(reg_for_k) & set(runs):
         from affordgrasp.learning.io import load_model
 
-        reg_name = next(n for n in ("cnn+rank+canonical", "cnn+rank", "cnn") if n in runs)
-        regressor = load_model(args.models / f"reg_{reg_name}.safetensors")
+        reg_name = next(n for n in reg_for_k if n in runs)
+        if reg_name == "shipped":
+            regressor = shipped["regressor"]
+        else:
+            regressor = load_model(args.models / f"reg_{reg_name}.safetensors")
         t0 = time.perf_counter()
         kc = k_candidates(args.data, reg[4], cls_models[cls_for_k], regressor, k=args.k)
         results["k_candidates"] = {

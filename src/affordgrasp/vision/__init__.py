@@ -1,7 +1,9 @@
 """Vision (conventions: Vision, paper §III-B): the camera in the hand, depth images, point clouds.
 
 * ``camera``: intrinsics (``DepthCamera``) and the camera pose of a pregrasp;
-* ``depth``: D(p0, O) by ray casting with Embree, uint16-millimetre encoding, PNG views;
+* ``depth``: D(p0, O) (``DepthRenderer``), uint16-millimetre encoding, PNG views;
+* ``raster``: the default engine, z-buffer rasterisation of the triangles;
+* ``packets``: Embree rays in 16-ray packets (the reference ``embreex`` casts one per call);
 * ``points``: the equivalent fixed-size point clouds.
 
 See docs/vision.md for every convention.

@@ -1,9 +1,12 @@
 """Depth images D(p0, O) from the camera in the hand (conventions: Vision, paper §III-B).
 
-Rays are cast with Embree (``embreex``), many images per call. Depth is the distance along
-the optical axis (the camera-frame z of the first hit), metres, float32; a pixel whose ray
-misses the object is 0 (no return, as real depth cameras report). See ``camera`` for the
-conventions and docs/vision.md for a description precise enough to re-render the pixels.
+Depth is the distance along the optical axis (the camera-frame z of the first surface a
+pixel's ray meets), metres, float32; a pixel whose ray misses the object is 0 (no return,
+as real depth cameras report). See ``camera`` for the conventions and docs/vision.md for a
+description precise enough to re-render the pixels. By default the triangles are
+rasterised with a z-buffer (:mod:`affordgrasp.vision.raster`, the same pixels up to
+rounding); rays cast by Embree (:mod:`affordgrasp.vision.packets`, ``embreex``) are the
+reference and the fallback.
 
 Validated against analytic cases (a plane and a sphere at known distances) in
 ``tests/vision/test_depth.py``.
@@ -24,13 +27,18 @@ from .camera import DepthCamera, ObjectFrame, camera_poses
 IMAGES_PER_CALL = 64
 _MISS = 1e30  # Embree reports a miss as tfar = 1e37
 
-ENGINES = ("auto", "packets", "embreex")
+ENGINES = ("auto", "raster", "packets", "embreex")
+
+# The raster engine leaves to the ray caster an image from a camera nearer to a vertex than
+# this fraction of the object's length (projection loses precision there; pregrasp cameras
+# are one length before the centre, so at least 0.13 length from every vertex).
+NEAR_FRACTION = 0.01
 
 DEPTH_MM_MAX = 65.535  # the largest depth uint16 millimetres can hold, m
 
 
 class DepthRenderer:
-    """Renders D(p0, O) for one object; holds its Embree scene (build once, render often).
+    """Renders D(p0, O) for one object; holds its mesh data (build once, render often).
 
     Parameters
     ----------
@@ -38,39 +46,66 @@ class DepthRenderer:
         The object in its mesh frame, m.
     camera : DepthCamera, optional
         Intrinsics; the default camera when None.
-    engine : {"auto", "packets", "embreex"}
-        How rays are cast: ``"packets"`` (16-ray packets from a compiled loop, see
-        :mod:`affordgrasp.vision.packets`), ``"embreex"`` (one ray per call, Embree's robust
-        scene: the reference) or ``"auto"`` (packets where available).
+    engine : {"auto", "raster", "packets", "embreex"}
+        How the image is made: ``"raster"`` (z-buffered triangles, see
+        :mod:`affordgrasp.vision.raster`; images it cannot make, from a camera almost
+        touching the object, are ray cast), ``"packets"`` (Embree rays in 16-ray packets
+        from a compiled loop, see :mod:`affordgrasp.vision.packets`), ``"embreex"`` (one
+        Embree ray per call, robust scene: the reference) or ``"auto"`` (``"raster"``, the
+        fastest on every built-in object).
     """
 
     def __init__(self, mesh, camera: DepthCamera | None = None, *, engine: str = "auto"):
-        from . import packets
-
         if engine not in ENGINES:
             raise InputError(f"depth engine must be one of {', '.join(ENGINES)}, got {engine!r}")
         self.camera = camera or DepthCamera()
         self.frame = ObjectFrame.of(mesh)
-        # Embree is float32: cast relative to the object's centre to keep the precision.
-        triangles = np.asarray(mesh.triangles, dtype=np.float64) - self.frame.centre
-        triangles = np.ascontiguousarray(triangles, dtype=np.float32)
+        self.engine = "raster" if engine == "auto" else engine
         self._rays_cam = self.camera.ray_directions().reshape(-1, 3).astype(np.float32)
-        self._packets = packets.engine() if engine in ("auto", "packets") else None
-        if engine == "packets" and self._packets is None:
-            raise InputError(
-                "the packet depth engine needs the Embree 4 library of embreex; "
-                "use engine='embreex'"
+        # Embree is float32: cast relative to the object's centre to keep the precision.
+        self._triangles = np.ascontiguousarray(
+            np.asarray(mesh.triangles, dtype=np.float64) - self.frame.centre, dtype=np.float32
+        )
+        self._packets = None
+        if self.engine == "packets":
+            from . import packets
+
+            self._packets = packets.engine()
+            if self._packets is None:
+                raise InputError(
+                    "the packet depth engine needs the Embree 4 library of embreex; "
+                    "use engine='embreex' or 'raster'"
+                )
+        self._scene_handle = None
+        self._scene = None
+        self._hull = np.ascontiguousarray(self.frame.vertices - self.frame.centre)
+        if self.engine == "raster":
+            from .raster import closed_outward
+
+            self._vertices = np.ascontiguousarray(
+                np.asarray(mesh.vertices, dtype=np.float64) - self.frame.centre
             )
-        self.engine = "packets" if self._packets is not None else "embreex"
+            self._faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
+            self._cull = closed_outward(mesh)
+        else:
+            self._ray_scene()
+
+    def _ray_scene(self) -> None:
+        """Build the Embree scene (once; the raster engine needs it only for its fallback)."""
+        if self._scene_handle is not None or self._scene is not None:
+            return
+        if self.engine == "raster":  # packets where the library loads (1-2 s, once)
+            from . import packets
+
+            self._packets = packets.engine()
         if self._packets is not None:
-            self._scene_handle = self._packets.scene(triangles)
-            self._hull = np.ascontiguousarray(self.frame.vertices - self.frame.centre)
+            self._scene_handle = self._packets.scene(self._triangles)
         else:
             from embreex import rtcore_scene
             from embreex.mesh_construction import TriangleMesh
 
             self._scene = rtcore_scene.EmbreeScene()
-            TriangleMesh(self._scene, triangles)
+            TriangleMesh(self._scene, self._triangles)
 
     def __del__(self):
         handle = getattr(self, "_scene_handle", None)
@@ -138,6 +173,33 @@ class DepthRenderer:
         out = np.zeros((n, size, size), dtype=np.float32)
         if n == 0:
             return out
+        if self.engine == "raster":
+            from .raster import rasterise
+
+            done = np.ones(n, dtype=np.bool_)
+            rasterise(
+                self._vertices,
+                self._faces,
+                np.ascontiguousarray(poses[:, :3, :3]),
+                np.ascontiguousarray(poses[:, :3, 3] - self.frame.centre),
+                self.camera.focal_px,
+                self.camera.principal_px,
+                size,
+                NEAR_FRACTION * self.frame.length,
+                self._cull,
+                out,
+                done,
+            )
+            if not done.all():
+                self._ray_scene()
+                out[~done] = self._cast(poses[~done], images_per_call)
+            return out
+        return self._cast(poses, images_per_call)
+
+    def _cast(self, poses: np.ndarray, images_per_call: int) -> np.ndarray:
+        """Depth images by Embree rays (packets, else one ray per call)."""
+        n, size = len(poses), self.camera.size
+        out = np.zeros((n, size, size), dtype=np.float32)
         if self._packets is not None:
             rot = np.ascontiguousarray(poses[:, :3, :3], dtype=np.float32)
             origin = np.ascontiguousarray(poses[:, :3, 3] - self.frame.centre, dtype=np.float32)
