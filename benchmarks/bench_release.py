@@ -72,6 +72,40 @@ WORKER = textwrap.dedent(
 )
 
 
+def previous_checkout(commit: str) -> Path:
+    """A checkout of ``commit`` (a detached ``git worktree`` in the temporary directory).
+
+    Kept between runs, its compiled kernels with it (see :func:`remove_previous_checkout`).
+
+    Parameters
+    ----------
+    commit : str
+        The previous release's commit.
+
+    Returns
+    -------
+    pathlib.Path
+        The checkout's root; its sources are under ``src``.
+    """
+    previous = Path(tempfile.gettempdir()) / f"affordgrasp-previous-{commit}"
+    if not (previous / "src").is_dir():
+        subprocess.run(
+            ["git", "-C", str(REPO), "worktree", "add", "--detach", str(previous), commit],
+            check=True,
+            capture_output=True,
+        )
+    return previous
+
+
+def remove_previous_checkout(previous: Path) -> None:
+    """Remove a checkout made by :func:`previous_checkout`."""
+    subprocess.run(
+        ["git", "-C", str(REPO), "worktree", "remove", "--force", str(previous)],
+        check=False,
+        capture_output=True,
+    )
+
+
 def run_worker(src: Path, spec: str, n: int) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src))
     env.pop("NUMBA_CACHE_DIR", None)
@@ -101,14 +135,7 @@ def main() -> None:
     args = parser.parse_args()
 
     tmp = Path(tempfile.mkdtemp(prefix="affordgrasp-bench-"))
-    # Kept between runs (its compiled kernels with it) unless --remove-previous.
-    previous = Path(tempfile.gettempdir()) / f"affordgrasp-previous-{args.previous}"
-    if not (previous / "src").is_dir():
-        subprocess.run(
-            ["git", "-C", str(REPO), "worktree", "add", "--detach", str(previous), args.previous],
-            check=True,
-            capture_output=True,
-        )
+    previous = previous_checkout(args.previous)
     import trimesh
 
     sphere = tmp / "sphere.stl"
@@ -155,11 +182,7 @@ def main() -> None:
         )
     finally:
         if args.remove_previous:
-            subprocess.run(
-                ["git", "-C", str(REPO), "worktree", "remove", "--force", str(previous)],
-                check=False,
-                capture_output=True,
-            )
+            remove_previous_checkout(previous)
 
 
 if __name__ == "__main__":

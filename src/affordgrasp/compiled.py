@@ -52,7 +52,7 @@ def _dispatchers() -> list:
 
     return [
         kernels.approach_until_contact,
-        kernels.first_contact,
+        kernels.close_chain,
         kernels.touching_points,
         kernels.merge_contacts,
         kinematics.link_poses,

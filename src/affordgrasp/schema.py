@@ -83,6 +83,32 @@ def _numbers(values, typ: pa.DataType = _f64) -> pa.Array:
     return pa.Array.from_buffers(typ, len(v), [None, pa.py_buffer(v)])
 
 
+def column_numbers(column) -> np.ndarray:
+    """A numeric Arrow column as a numpy array, read from its buffers.
+
+    ``to_numpy`` would import pandas (a quarter of a second of a command's start-up); a
+    column with nulls or of another type still goes through it.
+
+    Parameters
+    ----------
+    column : pyarrow.ChunkedArray or pyarrow.Array
+        float64, int64 or int32 values.
+
+    Returns
+    -------
+    (n,) ndarray
+        A copy, of the column's numpy dtype.
+    """
+    chunks = column.chunks if isinstance(column, pa.ChunkedArray) else [column]
+    dtype = _NUMPY_TYPES.get(column.type)
+    if dtype is None or any(c.null_count for c in chunks):
+        return column.to_numpy(zero_copy_only=False)
+    parts = [
+        np.frombuffer(c.buffers()[1], dtype=dtype)[c.offset : c.offset + len(c)] for c in chunks
+    ]
+    return np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
+
+
 def _strings(values) -> pa.Array:
     """A string Arrow array of str values (None: null)."""
     items = list(values)
@@ -231,6 +257,6 @@ def metric_arrays(table: pa.Table) -> dict[str, np.ndarray]:
             out[name] = (
                 np.array(col.to_pylist(), dtype=object)
                 if name == "epsilon_reason"
-                else col.to_numpy(zero_copy_only=False).astype(np.float64)
+                else column_numbers(col).astype(np.float64)
             )
     return out

@@ -286,9 +286,10 @@ def status_summary(table) -> tuple[list[list], dict]:
         Status -> ``{"count", "mean_contacts"}`` for ``--json``.
     """
     from ..grasp.policy import STATUSES
+    from ..schema import column_numbers
 
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
-    n_contacts = table.column("n_contacts").to_numpy()
+    n_contacts = column_numbers(table.column("n_contacts"))
     rows, doc = [], {}
     for s in STATUSES:
         sel = status == s

@@ -101,13 +101,47 @@ def _make_locator_class():
     return PackageStampLocator
 
 
+def _install_light_loading(locator: type) -> None:
+    """Load this package's cached kernels without refreshing numba's compiler registries.
+
+    numba's ``Cache.load_overload`` first calls ``target_context.refresh()``, which imports
+    and installs every typing and lowering registry of numba (about 0.2 s, most of a warm
+    start-up's kernel loading). Loading machine code needs none of it: only numba's runtime
+    (NRT: the kernels allocate arrays) and the symbols the generated code links against,
+    which numba's context installs when it is created, except the hash secrets (installed
+    here by importing ``numba.cpython.hashing``). A cache miss compiles, and numba's
+    compiler refreshes the registries itself. Functions from anywhere else load as numba
+    loads them.
+    """
+    from numba.core import caching
+    from numba.core.runtime import rtsys
+
+    original = caching.Cache.load_overload
+
+    def load_overload(self, sig, target_context):
+        if not isinstance(getattr(self._impl, "locator", None), locator):
+            return original(self, sig, target_context)
+        import numba.cpython.hashing  # noqa: F401 - installs the hash-secret symbols
+
+        rtsys.initialize(target_context)
+        with self._guard_against_spurious_io_errors():
+            return self._load_overload(sig, target_context)
+
+    load_overload.__wrapped__ = original  # type: ignore[attr-defined]
+    caching.Cache.load_overload = load_overload
+
+
 _installed: list[type] = []
 
 
 def install_package_stamp() -> None:
-    """Make numba validate this package's cached kernels against all their sources (once)."""
+    """Make numba validate this package's cached kernels against all their sources (once).
+
+    Also makes loading them from the cache light (:func:`_install_light_loading`).
+    """
     if _installed:
         return
     locator = _make_locator_class()
     _cache_impl()._locator_classes.insert(0, locator)
+    _install_light_loading(locator)
     _installed.append(locator)
