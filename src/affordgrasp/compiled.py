@@ -51,10 +51,7 @@ def _dispatchers() -> list:
     from .metrics import phi
 
     return [
-        kernels.approach_until_contact,
-        kernels.close_chain,
-        kernels.touching_points,
-        kernels.merge_contacts,
+        kernels.simulate_batch,
         kinematics.link_poses,
         kinematics.shape_poses,
         phi.contact_metrics_batch,

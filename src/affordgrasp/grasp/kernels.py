@@ -20,7 +20,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..hands.kinematics import PRISMATIC, REVOLUTE, joint_motion_into, mul4_into
+from ..hands.kinematics import (
+    PRISMATIC,
+    REVOLUTE,
+    KinematicTree,
+    joint_motion_into,
+    link_poses,
+    mul4_into,
+    shape_poses,
+)
 from ..metrics.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
@@ -122,6 +130,9 @@ class ChainFrames(NamedTuple):
         Bound on the distance from the first joint to each joint, m.
     slide : (m,) float64 ndarray
         Largest extension of each prismatic joint over the search, m.
+    drift : (m,) float64 ndarray
+        Bound on the speed of each joint's origin (the joints before it carry it), m per
+        unit of the motion parameter.
     """
 
     inv_base: np.ndarray
@@ -129,6 +140,64 @@ class ChainFrames(NamedTuple):
     inv_shape: np.ndarray
     chain_len: np.ndarray
     slide: np.ndarray
+    drift: np.ndarray
+
+
+class HandKernel(NamedTuple):
+    """A hand flattened for :func:`simulate_batch`: its tree, its shapes and its fingers.
+
+    Finger f owns the joints ``joint_start[f]:joint_start[f + 1]`` (proximal first); chain
+    joint j of the whole array has the shape subset ``subset_start[j]:subset_start[j + 1]``:
+    the shapes that move when the finger's first active joint is j (those of the links from
+    j on), each with its joint's index in the finger (``subset_joint``), posed in its link.
+
+    Attributes
+    ----------
+    tree : KinematicTree
+    shape_link : (s,) int64 ndarray
+        Link index of each shape.
+    shapes : ShapeSet
+        Every shape, posed in its link.
+    finger_parent : (f,) int64 ndarray
+        Link each finger's chain hangs from (no closing DOF moves it).
+    joint_start : (f + 1,) int64 ndarray
+        Offsets of each finger's joints.
+    origins : (j, 4, 4) float64 ndarray
+        Joint frames in their parent links.
+    kinds : (j,) int64 ndarray
+    axes : (j, 3) float64 ndarray
+        Unit joint axes.
+    ratios : (j,) float64 ndarray
+        Joint value per unit of its DOF.
+    speeds : (j,) float64 ndarray
+        Closing speed of each joint's DOF.
+    upper : (j,) float64 ndarray
+        Upper limit of each joint's DOF, rad or m.
+    dof_index : (j,) int64 ndarray
+        Index of each joint's DOF.
+    subset_start : (j + 1,) int64 ndarray
+        Offsets of each joint's shape subset.
+    subset_joint : (t,) int64 ndarray
+        Finger joint index of each subset shape.
+    subset_shapes : ShapeSet
+        The subsets' shapes, posed in their links.
+    """
+
+    tree: KinematicTree
+    shape_link: np.ndarray
+    shapes: ShapeSet
+    finger_parent: np.ndarray
+    joint_start: np.ndarray
+    origins: np.ndarray
+    kinds: np.ndarray
+    axes: np.ndarray
+    ratios: np.ndarray
+    speeds: np.ndarray
+    upper: np.ndarray
+    dof_index: np.ndarray
+    subset_start: np.ndarray
+    subset_joint: np.ndarray
+    subset_shapes: ShapeSet
 
 
 BISECTIONS = 48
@@ -364,20 +433,36 @@ def _chain_frames(chain, s_max):
         chain_len[j] = (
             chain_len[j - 1] + slide[j - 1] + np.sqrt(o[0, 3] ** 2 + o[1, 3] ** 2 + o[2, 3] ** 2)
         )
-    return ChainFrames(inv_base, inv_origin, inv_shape, chain_len, slide)
+    drift = np.zeros(m)
+    for j in range(1, m):
+        for i in range(j):
+            if chain.kinds[i] == PRISMATIC:
+                drift[j] += abs(chain.speeds[i])
+            else:
+                drift[j] += abs(chain.speeds[i]) * (chain_len[j] - chain_len[i])
+    return ChainFrames(inv_base, inv_origin, inv_shape, chain_len, slide, drift)
 
 
-@njit(cache=True)
-def _chain_touch(px, py, pz, s, r, chain, frames, margin):
+@njit(cache=True, inline="always", error_model="numpy")
+def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow):
     """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
     of composing the links' poses: a few dozen operations per joint.
-    r is the point's distance from the first joint origin (plus a cell's radius when the
-    point is a cell centre); with a margin below the hit level the steps reach the hit level
-    in finitely many steps.
-    returns : (smallest distance, its shape, a safe step in s: min over shapes of
-        (distance - margin) / (the point's speed bound relative to that shape's link))
+    r is the point's distance from the first joint origin and grow a cell's radius when the
+    point is a cell centre (r includes it; 0 for a sample point); with a margin below the
+    hit level the steps reach the hit level in finitely many steps.
+
+    The safe step h against the shapes of link j is the larger of two bounds, each valid
+    over the whole step: the distance over the speed bound sum_i<=j |w_i| (r + chain
+    length to joint i), and the root of lin h + quad h^2 / 2 = distance, where lin =
+    sum_i<=j |w_i| (|p - o_i(s)| + grow) is the point's speed bound now and quad =
+    sum_i<=j |w_i| drift_i bounds how fast it grows as the joint origins o_i move. The
+    second is several times tighter when the first moving joint is not the chain's first
+    (a distal link closing alone: its origin does not move at all).
+    (error_model="numpy": no zero-division branches in the search's innermost arithmetic;
+    every division here is guarded.)
+    returns : (smallest distance, its shape, the safe step in s)
     """
     ib = frames.inv_base
     x = ib[0, 0] * px + ib[0, 1] * py + ib[0, 2] * pz + ib[0, 3]
@@ -388,6 +473,8 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin):
     step = np.inf
     shapes = chain.shapes
     bound = 0.0
+    lin = 0.0
+    quad = 0.0
     for j in range(chain.origins.shape[0]):
         o = frames.inv_origin[j]
         x, y, z = (
@@ -399,6 +486,13 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin):
         ax = chain.axes[j, 0]
         ay = chain.axes[j, 1]
         az = chain.axes[j, 2]
+        w = abs(chain.speeds[j])
+        if chain.kinds[j] != REVOLUTE:
+            lin += w
+        elif w > 0.0:
+            # (x, y, z) is the point relative to joint j's origin
+            lin += w * (np.sqrt(x * x + y * y + z * z) + grow)
+            quad += w * frames.drift[j]
         if chain.kinds[j] == REVOLUTE:
             # Rotate by -q about the axis (Rodrigues): into the moving link's frame.
             c = np.cos(q)
@@ -415,6 +509,7 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin):
             y -= ay * q
             z -= az * q
             bound += abs(chain.speeds[j])
+        d_joint = np.inf
         for sq in range(chain.shape_joint.shape[0]):
             if chain.shape_joint[sq] != j:
                 continue
@@ -424,11 +519,17 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin):
             lz = t[2, 0] * x + t[2, 1] * y + t[2, 2] * z + t[2, 3]
             h = shapes.halves[sq]
             d = sdf_local(lx, ly, lz, shapes.kinds[sq], h[0], h[1], h[2], shapes.radii[sq])
+            d_joint = min(d_joint, d)
             if d < d_min:
                 d_min = d
                 q_min = sq
-            if bound > 0.0:
-                step = min(step, max(d - margin, 0.0) / bound)
+        if bound > 0.0 and d_joint < np.inf:
+            gap = max(d_joint - margin, 0.0)
+            h_far = gap / bound
+            # lin h + quad h^2 / 2 <= gap at h = gap / (lin + quad (gap / lin) / 2), since
+            # gap / lin bounds h from above
+            h_near = gap / (lin + 0.5 * quad * gap / lin) if lin > 0.0 else h_far
+            step = min(step, max(h_far, h_near))
     return d_min, q_min, step
 
 
@@ -540,7 +641,7 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
             if slot > 0:
                 dm = _swept_distance(ph[0], ph[1], ph[2], mid, slot - 1, chain.shapes, swept, axis)
             else:
-                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps)
+                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps, 0.0)
             if dm <= hit_eps:
                 hi = mid
             else:
@@ -550,7 +651,7 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
                 q_hi = slot - 1
             else:
                 counts[REFINE_QUERIES] += 1
-                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps)
+                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps, 0.0)
             first = hi
             first_p = i
             first_q = q_hi
@@ -572,7 +673,7 @@ def _ahead(c, pose, axis, u, extent):
     return along - u > -extent
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     """:func:`first_contact`, adding the work it did to ``counts``.
 
@@ -713,7 +814,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             continue
         counts[QUERIES] += 1
         _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
-                                  margin + radius)  # fmt: skip
+                                  margin + radius, radius)  # fmt: skip
         if step < s_max:
             counts[PUSHES] += 1
             size = _heap_push(heap, size, step, code * slots, 0.0)
@@ -748,7 +849,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 dz = ph[2] - o0[2]
                 r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
                 d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames,
-                                          margin + radius)  # fmt: skip
+                                          margin + radius, radius)  # fmt: skip
                 touching = d - radius <= hit_eps
                 nxt = s + step
             if touching:
@@ -794,12 +895,12 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz)
-            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin)
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, 0.0)
             pressing = False
             if d <= hit_eps:
                 counts[QUERIES] += 1
                 d_next, _, _ = _chain_touch(
-                    ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin
+                    ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin, 0.0
                 )
                 pressing = d_next < d
             # A point inside the hit level that is not pressed (receding or sliding) has no
@@ -833,9 +934,10 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     """Motion parameter at which a moving shape of ``chain`` first touches a sample point.
 
     A point's speed relative to link j is bounded by sum over joints i <= j of
-    |speed_i| * (|p - o_0| + chain length to joint i) for revolute joints and |speed_i| for
-    prismatic ones (o_0, the first joint's origin, does not move); every step is a distance
-    over that bound, so no point can pass through a link, however thin the object part.
+    |speed_i| * |p - o_i| for revolute joints and |speed_i| for prismatic ones, where the
+    joint origins o_i move at most as fast as the joints before them carry them; every step
+    is at most what that bound allows over the step (see ``_chain_touch``), so no point can
+    pass through a link, however thin the object part.
 
     The approach is the chain of one prismatic joint along +z carrying every shape; a
     finger's closing is its chain of revolute (or prismatic) joints. Cells (as bounding
@@ -876,9 +978,8 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
 
 
 @njit(cache=True)
-def close_chain(cloud, rot, trans, base, origins, kinds, axes, ratios, speeds, upper, dof_index,
-                shape_sets, dofs, hit_eps, at_limit):  # fmt: skip
-    """Close one finger with breakaway until it touches or reaches its limits.
+def close_finger(cloud, rot, trans, base, hk, f, dofs, hit_eps, at_limit):
+    """Close finger f of a hand with breakaway until it touches or reaches its limits.
 
     Every joint below its upper limit closes at its speed; when a link touches, the joints
     up to it stop and those beyond go on; when a joint reaches its limit, it stops and the
@@ -892,20 +993,10 @@ def close_chain(cloud, rot, trans, base, origins, kinds, axes, ratios, speeds, u
     trans : (3,) float64 ndarray
         The hand pose: object frame = rot @ hand + trans (m).
     base : (4, 4) float64 ndarray
-        Pose of the chain's parent link in the hand frame (no closing DOF moves it).
-    origins, kinds, axes : (m, 4, 4), (m,), (m, 3) ndarray
-        The chain's joints, proximal first (see :class:`Chain`).
-    ratios : (m,) float64 ndarray
-        Joint value per unit of its DOF.
-    speeds : (m,) float64 ndarray
-        Closing speed of each joint's DOF.
-    upper : (m,) float64 ndarray
-        Upper limit of each joint's DOF, rad or m.
-    dof_index : (m,) int ndarray
-        Index in ``dofs`` of each joint's DOF.
-    shape_sets : tuple
-        Per first moving joint j0, (chain joint of each shape (k,), ShapeSet posed in
-        those links): the shapes the motion carries.
+        Pose of the finger's parent link in the hand frame (no closing DOF moves it).
+    hk : HandKernel
+    f : int
+        Finger index.
     dofs : (n_dofs,) float64 ndarray
         DOF values, updated in place.
     hit_eps : float
@@ -913,7 +1004,17 @@ def close_chain(cloud, rot, trans, base, origins, kinds, axes, ratios, speeds, u
     at_limit : float
         A DOF this close below its upper limit has reached it.
     """
-    m = origins.shape[0]
+    j_a = hk.joint_start[f]
+    j_b = hk.joint_start[f + 1]
+    m = j_b - j_a
+    origins = hk.origins[j_a:j_b]
+    kinds = hk.kinds[j_a:j_b]
+    axes = hk.axes[j_a:j_b]
+    ratios = hk.ratios[j_a:j_b]
+    speeds = hk.speeds[j_a:j_b]
+    upper = hk.upper[j_a:j_b]
+    dof_index = hk.dof_index[j_a:j_b]
+    sub = hk.subset_shapes
     active = np.empty(m, dtype=np.bool_)
     for j in range(m):
         active[j] = dofs[dof_index[j]] < upper[j]
@@ -935,7 +1036,11 @@ def close_chain(cloud, rot, trans, base, origins, kinds, axes, ratios, speeds, u
             if active[j]:
                 s_max = min(s_max, (upper[j] - dofs[dof_index[j]]) / speeds[j])
         s_max = max(s_max, 0.0)
-        chain_index, shapes = shape_sets[j0]
+        t_a = hk.subset_start[j_a + j0]
+        t_b = hk.subset_start[j_a + j0 + 1]
+        chain_index = hk.subset_joint[t_a:t_b]
+        shapes = ShapeSet(sub.local[t_a:t_b], sub.kinds[t_a:t_b], sub.halves[t_a:t_b],
+                          sub.radii[t_a:t_b])  # fmt: skip
         chain = Chain(base, origins, kinds, axes, q0, joint_speeds, chain_index, shapes)
         s_hit, _, q_hit = first_contact(cloud, rot, trans, chain, s_max, hit_eps)
         s = min(s_hit, s_max)
@@ -952,6 +1057,188 @@ def close_chain(cloud, rot, trans, base, origins, kinds, axes, ratios, speeds, u
             for j in range(m):
                 if active[j] and not dofs[dof_index[j]] < upper[j] - at_limit:
                     active[j] = False
+
+
+@njit(cache=True)
+def close_fingers(cloud, rot, trans, hk, dofs, hit_eps, at_limit):
+    """Close every finger of a hand, one after the other (see :func:`close_finger`).
+
+    Parameters
+    ----------
+    cloud, rot, trans, hk, hit_eps, at_limit
+        As for :func:`close_finger`.
+    dofs : (n_dofs,) float64 ndarray
+        DOF values, updated in place.
+    """
+    # A finger's chain hangs from a link that no closing DOF moves (the palm, or a Barrett
+    # knuckle turned by the spread), so its pose is fixed while the fingers close.
+    links = link_poses(dofs, hk.tree)
+    for f in range(hk.finger_parent.shape[0]):
+        close_finger(cloud, rot, trans, links[hk.finger_parent[f]], hk, f, dofs, hit_eps,
+                     at_limit)  # fmt: skip
+
+
+@njit(cache=True)
+def _posed(hk, dofs):
+    """Every shape of the hand with its hand-frame pose at ``dofs``."""
+    sh = hk.shapes
+    return ShapeSet(
+        shape_poses(link_poses(dofs, hk.tree), hk.shape_link, sh.local),
+        sh.kinds,
+        sh.halves,
+        sh.radii,
+    )
+
+
+@njit(cache=True)
+def grasp_contacts(cloud, normals, sharp, rot, trans, hk, dofs, tol, merge_radius, cos_patch):
+    """The contacts of a hand at rest: touching samples, facing the link, merged per link.
+
+    Parameters
+    ----------
+    cloud : SampleCloud
+        Surface samples, object frame.
+    normals : (n, 3) float64 ndarray
+        The samples' outward unit normals.
+    sharp : (n,) bool ndarray
+        Samples on sharp features (no object normal: the link's is taken).
+    rot, trans, hk
+        As for :func:`close_finger`.
+    dofs : (n_dofs,) float64 ndarray
+    tol : float
+        Contact distance, m.
+    merge_radius, cos_patch : float
+        As for :func:`merge_contacts`.
+
+    Returns
+    -------
+    point : (k,) int64 ndarray
+        Sample index of each contact.
+    shape : (k,) int64 ndarray
+        Shape index of each contact.
+    normal : (k, 3) float64 ndarray
+        The object's outward unit normal at each contact, object frame.
+    """
+    pi, si, dist, ln = touching_points(cloud, rot, trans, _posed(hk, dofs), tol)
+    m = pi.shape[0]
+    n_obj = np.empty((m, 3))
+    sel = np.empty(m, dtype=np.int64)
+    ns = 0
+    for t in range(m):
+        # The link's normal in the object frame, reversed (it points into the link).
+        lx = -(ln[t, 0] * rot[0, 0] + ln[t, 1] * rot[0, 1] + ln[t, 2] * rot[0, 2])
+        ly = -(ln[t, 0] * rot[1, 0] + ln[t, 1] * rot[1, 1] + ln[t, 2] * rot[1, 2])
+        lz = -(ln[t, 0] * rot[2, 0] + ln[t, 1] * rot[2, 1] + ln[t, 2] * rot[2, 2])
+        # Object outward normal: the surface normal on smooth samples; on sharp features
+        # (where the object has no normal) the normal of the touching link surface, reversed.
+        if sharp[pi[t]]:
+            n_obj[t, 0] = lx
+            n_obj[t, 1] = ly
+            n_obj[t, 2] = lz
+        else:
+            n_obj[t, :] = normals[pi[t]]
+        # A sample facing away from the link lies on the far side of a part thinner than
+        # the tolerance; it is not in contact.
+        if n_obj[t, 0] * lx + n_obj[t, 1] * ly + n_obj[t, 2] * lz > 0.0:
+            sel[ns] = t
+            ns += 1
+    sel = sel[:ns]
+    pts = np.empty((ns, 3))
+    for t in range(ns):
+        pts[t, :] = cloud.points[pi[sel[t]]]
+    keep = sel[
+        merge_contacts(pts, n_obj[sel], dist[sel], hk.shape_link[si[sel]], merge_radius, cos_patch)
+    ]
+    return pi[keep], si[keep], n_obj[keep]
+
+
+@njit(cache=True)
+def simulate_batch(cloud, normals, sharp, starts, travel, dofs, hk, hit_eps, at_limit, tol,
+                   merge_radius, cos_patch):  # fmt: skip
+    """The grasp policy for a batch of start poses: approach, close, contacts.
+
+    Parameters
+    ----------
+    cloud, normals, sharp
+        The object's surface samples (see :func:`grasp_contacts`), object frame.
+    starts : (n, 4, 4) float64 ndarray
+        Hand -> object start poses, m.
+    travel : (n,) float64 ndarray
+        Approach length to try, m.
+    dofs : (n, n_dofs) float64 ndarray
+        Open DOF values of each grasp; overwritten with the final ones.
+    hk : HandKernel
+    hit_eps : float
+        A moving link stops within this distance of the surface, m.
+    at_limit : float
+        A DOF this close below its upper limit has reached it.
+    tol, merge_radius, cos_patch : float
+        As for :func:`grasp_contacts`.
+
+    Returns
+    -------
+    poses : (n, 4, 4) float64 ndarray
+        Final hand -> object poses.
+    touched : (n,) bool ndarray
+        False where the approach missed the object.
+    offsets : (n + 1,) int64 ndarray
+        Contact rows of each grasp in the arrays below.
+    point, shape : (k,) int64 ndarray
+        Sample and shape index of each contact.
+    normal : (k, 3) float64 ndarray
+        Object outward unit normal at each contact.
+    """
+    n = starts.shape[0]
+    k = hk.shape_link.shape[0]
+    poses = starts.copy()
+    touched = np.zeros(n, dtype=np.bool_)
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    cap = 16 * n + 16
+    c_point = np.empty(cap, dtype=np.int64)
+    c_shape = np.empty(cap, dtype=np.int64)
+    c_normal = np.empty((cap, 3))
+    nc = 0
+    # the approach: one slide along the hand's +z carrying every shape
+    eye = np.eye(4)
+    slide_origin = np.eye(4).reshape(1, 4, 4)
+    slide_kind = np.array([PRISMATIC])
+    slide_axis = np.array([[0.0, 0.0, 1.0]])
+    slide_q0 = np.zeros(1)
+    slide_speed = np.ones(1)
+    slide_joint = np.zeros(k, dtype=np.int64)
+    rot = np.empty((3, 3))
+    trans = np.empty(3)
+    for i in range(n):
+        rot[:, :] = poses[i, :3, :3]
+        trans[:] = poses[i, :3, 3]
+        q = dofs[i]
+        chain = Chain(eye, slide_origin, slide_kind, slide_axis, slide_q0, slide_speed,
+                      slide_joint, _posed(hk, q))  # fmt: skip
+        t, _, _ = first_contact(cloud, rot, trans, chain, travel[i], hit_eps)
+        if np.isfinite(t):
+            touched[i] = True
+            for a in range(3):
+                trans[a] += t * rot[a, 2]
+            poses[i, :3, 3] = trans
+            close_fingers(cloud, rot, trans, hk, q, hit_eps, at_limit)
+            p, s, nrm = grasp_contacts(cloud, normals, sharp, rot, trans, hk, q, tol,
+                                       merge_radius, cos_patch)  # fmt: skip
+            m = p.shape[0]
+            if nc + m > cap:
+                cap = 2 * (nc + m)
+                grown_p = np.empty(cap, dtype=np.int64)
+                grown_s = np.empty(cap, dtype=np.int64)
+                grown_n = np.empty((cap, 3))
+                grown_p[:nc] = c_point[:nc]
+                grown_s[:nc] = c_shape[:nc]
+                grown_n[:nc] = c_normal[:nc]
+                c_point, c_shape, c_normal = grown_p, grown_s, grown_n
+            c_point[nc : nc + m] = p
+            c_shape[nc : nc + m] = s
+            c_normal[nc : nc + m] = nrm
+            nc += m
+        offsets[i + 1] = nc
+    return poses, touched, offsets, c_point[:nc], c_shape[:nc], c_normal[:nc]
 
 
 @njit(cache=True)

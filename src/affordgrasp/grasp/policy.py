@@ -103,6 +103,8 @@ class HandArrays:
     materials : tuple of str
         Per link.
     fingers : tuple of FingerArrays
+    kernel : HandKernel
+        The same, flattened for :func:`~affordgrasp.grasp.kernels.simulate_batch`.
     """
 
     hand: Hand
@@ -111,6 +113,7 @@ class HandArrays:
     shapes: kernels.ShapeSet  # every shape, posed in its link
     materials: tuple[str, ...]  # per link
     fingers: tuple[FingerArrays, ...]
+    kernel: kernels.HandKernel
 
     def link_poses(self, dofs: np.ndarray) -> np.ndarray:
         """Pose of every link in the hand frame (:func:`~affordgrasp.hands.kinematics.link_poses`).
@@ -225,15 +228,51 @@ def _build_hand_arrays(hand: Hand) -> HandArrays:
                 tuple(subsets),
             )
         )
-    arrays = HandArrays(
+    shapes = kernels.ShapeSet(all_local, all_kinds, all_halves, all_radii)
+    return HandArrays(
         hand,
         tree,
         shape_link,
-        kernels.ShapeSet(all_local, all_kinds, all_halves, all_radii),
+        shapes,
         tuple(link.material for link in hand.links),
         tuple(fingers),
+        _hand_kernel(tree, shape_link, shapes, fingers),
     )
-    return arrays
+
+
+def _hand_kernel(tree, shape_link, shapes, fingers) -> kernels.HandKernel:
+    """The fingers' arrays concatenated (offsets per finger and per first joint)."""
+    subsets = [sub for f in fingers for sub in f.shapes]
+
+    def cat(arrays, dtype, tail):
+        arrays = [np.asarray(a, dtype=dtype).reshape(-1, *tail) for a in arrays]
+        return np.ascontiguousarray(np.concatenate(arrays) if arrays else np.zeros((0, *tail)))
+
+    def offsets(counts):
+        return np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+
+    return kernels.HandKernel(
+        tree,
+        shape_link,
+        shapes,
+        np.array([f.parent for f in fingers], dtype=np.int64),
+        offsets([len(f.dofs) for f in fingers]),
+        cat([f.origins for f in fingers], np.float64, (4, 4)),
+        cat([f.kinds for f in fingers], np.int64, ()),
+        cat([f.axes for f in fingers], np.float64, (3,)),
+        cat([f.ratios for f in fingers], np.float64, ()),
+        cat([f.speeds for f in fingers], np.float64, ()),
+        cat([f.upper for f in fingers], np.float64, ()),
+        cat([f.dofs for f in fingers], np.int64, ()),
+        offsets([len(idx) for idx, _ in subsets]),
+        cat([idx for idx, _ in subsets], np.int64, ()),
+        kernels.ShapeSet(
+            cat([sh.local for _, sh in subsets], np.float64, (4, 4)),
+            cat([sh.kinds for _, sh in subsets], np.int64, ()),
+            cat([sh.halves for _, sh in subsets], np.float64, (3,)),
+            cat([sh.radii for _, sh in subsets], np.float64, ()),
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -415,56 +454,17 @@ def close_fingers(
     (n_dofs,) float64 ndarray
         Final DOF values.
     """
-    rot = np.ascontiguousarray(pose[:3, :3])
-    trans = np.ascontiguousarray(pose[:3, 3])
-    arrays = hand_arrays(hand)
-    cloud = samples.cloud
-    dofs = dofs.copy()
-    # A finger's chain hangs from a link that no closing DOF moves (the palm, or a Barrett
-    # knuckle turned by the spread), so its pose is fixed while the fingers close.
-    links = arrays.link_poses(dofs)
-    for f in arrays.fingers:
-        kernels.close_chain(
-            cloud, rot, trans, links[f.parent], f.origins, f.kinds, f.axes, f.ratios, f.speeds,
-            f.upper, f.dofs, f.shapes, dofs, HIT_EPS, JOINT_AT_LIMIT,
-        )  # fmt: skip
-    return dofs
-
-
-def _contacts(hand, arrays, geom, dofs, pose, object_material) -> ContactSet:
-    samples = geom.samples
-    rot = np.ascontiguousarray(pose[:3, :3])
-    pi, si, dist, link_normal = kernels.touching_points(
+    dofs = np.array(dofs, dtype=np.float64)
+    kernels.close_fingers(
         samples.cloud,
-        rot,
-        np.ascontiguousarray(pose[:3, 3]),
-        arrays.posed_shapes(dofs),
-        CONTACT_TOL,
+        np.ascontiguousarray(pose[:3, :3], dtype=np.float64),
+        np.ascontiguousarray(pose[:3, 3], dtype=np.float64),
+        hand_arrays(hand).kernel,
+        dofs,
+        HIT_EPS,
+        JOINT_AT_LIMIT,
     )
-    if len(pi) == 0:
-        return ContactSet.empty()
-    # Object outward normal: the surface normal on smooth samples; on sharp features (where
-    # the object has no normal) the normal of the touching link surface, reversed.
-    n_link_obj = -(link_normal @ rot.T)
-    n_obj = np.where(samples.sharp[pi, None], n_link_obj, samples.normals[pi])
-    # A sample facing away from the link lies on the far side of a part thinner than the
-    # tolerance; it is not in contact.
-    facing = np.einsum("ij,ij->i", n_obj, n_link_obj) > 0.0
-    sel = np.nonzero(facing)[0]
-    link_idx = arrays.shape_link[si[sel]]
-    keep = sel[
-        kernels.merge_contacts(
-            samples.points[pi[sel]], n_obj[sel], dist[sel], link_idx, MERGE_RADIUS,
-            np.cos(PATCH_ANGLE),
-        )
-    ]  # fmt: skip
-    link_idx = arrays.shape_link[si[keep]]
-    return ContactSet(
-        samples.points[pi[keep]],
-        n_obj[keep],
-        _link_mu(arrays.materials, object_material)[link_idx],
-        _LINK_NAMES.get(hand, lambda: np.array(hand.link_names, dtype=object))[link_idx],
-    )
+    return dofs
 
 
 _LINK_NAMES: IdentityCache[np.ndarray] = IdentityCache()
@@ -504,51 +504,70 @@ def grasp_once(
     -------
     GraspResult
     """
-    centred = start_pose.copy()
-    centred[:3, 3] -= geom.origin
-    return _to_object_frame(
-        _grasp_centred(hand, geom, centred, travel, s, object_material), geom.origin
+    centred = np.array(start_pose, dtype=np.float64).reshape(1, 4, 4)
+    centred[0, :3, 3] -= geom.origin
+    status, poses, joints, contacts = _simulate_centred(
+        hand, geom, centred, np.array([travel], dtype=np.float64), np.array([s]), object_material
     )
+    return GraspResult(str(status[0]), poses[0], joints[0], contacts[0])
 
 
-def _to_object_frame(r: GraspResult, origin: np.ndarray) -> GraspResult:
-    pose = r.hand_pose.copy()
-    pose[:3, 3] += origin
-    c = r.contacts
-    contacts = ContactSet(c.points + origin, c.normals, c.mu, c.link) if len(c.mu) else c
-    return GraspResult(r.status, pose, r.joints, contacts)
+def _open_dofs(hand: Hand, s: np.ndarray) -> np.ndarray:
+    """:meth:`Hand.open_dofs` of every pregrasp DOF parameter in ``s`` (n,): (n, n_dofs)."""
+    q = np.tile(hand.open_dofs(0.0), (len(s), 1))
+    if hand.pregrasp_dof is not None:
+        j = hand.dof_index(hand.pregrasp_dof)
+        d = hand.dofs[j]
+        q[:, j] = d.lower + np.asarray(s, dtype=np.float64) * (d.upper - d.lower)
+    return q
 
 
-def _grasp_centred(
+def _simulate_centred(
     hand: Hand,
     geom: ObjectGeometry,
-    start_pose: np.ndarray,
-    travel: float,
-    s: float,
+    starts: np.ndarray,
+    travel: np.ndarray,
+    s: np.ndarray,
     object_material: str,
-) -> GraspResult:
-    """:func:`grasp_once` in the centred frame of ``geom`` (poses and contacts)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """The policy for start poses in the centred frame of ``geom``, in one compiled call;
+    poses and contacts returned in the object frame."""
     arrays = hand_arrays(hand)
-    dofs = hand.open_dofs(s)
-    rot = np.ascontiguousarray(start_pose[:3, :3])
     samples = geom.samples
-    t, _, _ = kernels.approach_until_contact(
+    joints = _open_dofs(hand, s)
+    poses, touched, offsets, point, shape, normal = kernels.simulate_batch(
         samples.cloud,
-        rot,
-        np.ascontiguousarray(start_pose[:3, 3]),
-        arrays.posed_shapes(dofs),
-        travel,
+        samples.normals,
+        samples.sharp,
+        np.ascontiguousarray(starts, dtype=np.float64),
+        np.ascontiguousarray(travel, dtype=np.float64),
+        joints,
+        arrays.kernel,
         HIT_EPS,
+        JOINT_AT_LIMIT,
+        CONTACT_TOL,
+        MERGE_RADIUS,
+        np.cos(PATCH_ANGLE),
     )
-    if not np.isfinite(t):
-        return GraspResult("missed", start_pose.copy(), dofs, ContactSet.empty())
-    pose = start_pose.copy()
-    pose[:3, 3] += t * rot[:, 2]
-    dofs = close_fingers(hand, samples, pose, dofs)
-    contacts = _contacts(hand, arrays, geom, dofs, pose, object_material)
-    n_links = len(set(contacts.link.tolist()))
-    status = "grasped" if n_links >= 2 else "touched"
-    return GraspResult(status, pose, dofs, contacts)
+    poses[:, :3, 3] += geom.origin
+    link = arrays.shape_link[shape]
+    points = samples.points[point] + geom.origin
+    mu = _link_mu(arrays.materials, object_material)[link]
+    names = _LINK_NAMES.get(hand, lambda: np.array(hand.link_names, dtype=object))[link]
+    n = len(starts)
+    status = np.empty(n, dtype=object)
+    contacts = []
+    bounds = offsets.tolist()
+    for i in range(n):
+        a, b = bounds[i], bounds[i + 1]
+        if not touched[i]:
+            status[i] = "missed"
+            contacts.append(ContactSet.empty())
+            continue
+        # two or more links touching: grasped (whether it holds is for the metrics)
+        status[i] = "grasped" if len(set(link[a:b].tolist())) >= 2 else "touched"
+        contacts.append(ContactSet(points[a:b], normal[a:b], mu[a:b], names[a:b]))
+    return status, poses, joints, contacts
 
 
 def simulate(
@@ -593,23 +612,12 @@ def simulate(
         upts, unrm, utri = use_points(geom.mesh, obj.mass.center_of_mass - geom.origin, use_dir)
         upts += geom.origin
     started = time.perf_counter()
-    hand_arrays(hand)
-    status = np.empty(n, dtype=object)
-    poses = np.zeros((n, 4, 4))
-    joints = np.zeros((n, len(hand.dofs)))
-    contacts = []
     # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all.
     reach = max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
     starts, travel = start_poses(p0, geom.hull_vertices, reach)
-    for i in range(n):
-        r = _to_object_frame(
-            _grasp_centred(hand, geom, starts[i], travel[i], p0[i, 5], object_material),
-            geom.origin,
-        )
-        status[i] = r.status
-        poses[i] = r.hand_pose
-        joints[i] = r.joints
-        contacts.append(r.contacts)
+    status, poses, joints, contacts = _simulate_centred(
+        hand, geom, starts, travel, p0[:, 5], object_material
+    )
     seconds = time.perf_counter() - started
     return SimulationBatch(
         p0,
