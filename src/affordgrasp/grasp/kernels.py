@@ -798,6 +798,13 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         kr[c] = r0 + radius
         cap += below
     heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap))
+    # The children a touching cell releases share its key, the smallest of all (every key
+    # pushed later is at least that): they wait on a stack, popped before the heap, instead
+    # of each sifting through it.
+    stack_e = np.empty(cap, dtype=np.int64)
+    stack_p = np.empty(cap)
+    stack_key = 0.0
+    n_stack = 0
     size = 0
     margin = 0.5 * hit_eps
     for c in range(nk):
@@ -823,9 +830,15 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     nh = 0
     ph = np.empty(3)
     for _ in range(100_000_000):
-        if size == 0:
+        if n_stack > 0:
+            n_stack -= 1
+            s = stack_key
+            e = stack_e[n_stack]
+            s_prev = stack_p[n_stack]
+        elif size == 0:
             break
-        s, e, s_prev, size = _heap_pop(heap, size)
+        else:
+            s, e, s_prev, size = _heap_pop(heap, size)
         counts[POPS] += 1
         if s >= best:
             break
@@ -859,14 +872,20 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                     f0 = cloud.coarse_start[c]
                     f1 = cloud.coarse_start[c + 1]
                     counts[PUSHES] += f1 - f0
-                    for f in range(f0, f1):
-                        size = _heap_push(heap, size, s, (n + f) * slots + slot, s_prev)
+                    stack_key = s
+                    for f in range(f1 - 1, f0 - 1, -1):
+                        stack_e[n_stack] = (n + f) * slots + slot
+                        stack_p[n_stack] = s_prev
+                        n_stack += 1
                 else:
                     i0 = cloud.cell_start[c]
                     i1 = cloud.cell_start[c + 1]
                     counts[PUSHES] += i1 - i0
-                    for i in range(i0, i1):
-                        size = _heap_push(heap, size, s, i * slots + slot, s_prev)
+                    stack_key = s
+                    for i in range(i1 - 1, i0 - 1, -1):
+                        stack_e[n_stack] = i * slots + slot
+                        stack_p[n_stack] = s_prev
+                        n_stack += 1
             elif nxt < best:
                 # A translation's pair is dropped once the shape has passed the cell.
                 if not translation or _ahead(ph, shape_buf[q], a_move, nxt, rho[q] + radius):
