@@ -52,7 +52,7 @@ CLASSIFIERS = {
 }
 
 
-def trained(models_dir: Path, name: str, target: str, recipe: dict, prepared, data, epochs):
+def trained(models_dir: Path, name: str, target: str, recipe: dict, prepared, data, epochs, seed=0):
     """Load models_dir/name.safetensors if it is this recipe on this data, else train it."""
     from affordgrasp.learning.api import train_on_dataset
     from affordgrasp.learning.io import load_model
@@ -67,11 +67,13 @@ def trained(models_dir: Path, name: str, target: str, recipe: dict, prepared, da
             and config["training"]["settings"]["rank_weight"] == recipe.get("rank_weight", 0.0)
             and config["training"]["split"]["test"] == list(prepared[4].test)
             and bool(config.get("canonical")) == recipe.get("canonical", False)
+            and config["training"]["settings"]["epochs"] == epochs
+            and config["training"]["settings"]["seed"] == seed
         )
         if same:
             return model, config, 0.0, 0.0
     started, cpu = time.perf_counter(), time.process_time()
-    settings = TrainSettings(epochs=epochs, seed=0, rank_weight=recipe.get("rank_weight", 0.0))
+    settings = TrainSettings(epochs=epochs, seed=seed, rank_weight=recipe.get("rank_weight", 0.0))
     model, config = train_on_dataset(
         data,
         arch=recipe["arch"],
@@ -184,6 +186,14 @@ def main() -> None:
     parser.add_argument("--k", type=int, default=32)
     parser.add_argument("--skip", default=None, help="comma-separated recipes to leave out")
     parser.add_argument(
+        "--seeds", default="0", help="comma-separated training seeds of the regressors"
+    )
+    parser.add_argument(
+        "--parts",
+        default="regressors,classifiers,k",
+        help="which parts to run: regressors, classifiers, k (K candidates)",
+    )
+    parser.add_argument(
         "--shipped", action="store_true", help="add the shipped models; use them for K candidates"
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log every epoch")
@@ -195,6 +205,8 @@ def main() -> None:
     args.models.mkdir(parents=True, exist_ok=True)
     only = set(args.only.split(",")) if args.only else None
     skip = set(args.skip.split(",")) if args.skip else set()
+    seeds = [int(x) for x in args.seeds.split(",")]
+    parts = set(args.parts.split(","))
     shipped = {}
     if args.shipped:
         from affordgrasp.learning.api import pretrained_path
@@ -211,29 +223,52 @@ def main() -> None:
     )
     runs = {}
     reg_recipes = {k: v for k, v in REGRESSORS.items() if (not only or k in only) and k not in skip}
+    if "regressors" not in parts:
+        reg_recipes = {}
     if "regressor" in shipped:
         reg_recipes["shipped"] = None
+    keys = ("mse", "comparison_accuracy", "expected_gms")
     for name, recipe in reg_recipes.items():
-        if recipe is None:
-            model, config = shipped["regressor"]
-            _check_split(config, reg[4], name)
-            secs = cpu = 0.0
-        else:
-            model, config, secs, cpu = trained(
-                args.models, f"reg_{name}", "hold_effort_sum", recipe, reg, args.data, args.epochs
-            )
-        from affordgrasp.learning.api import Inputs, predict_scores, report
+        reports = []
+        for seed in [0] if recipe is None else seeds:
+            if recipe is None:
+                model, config = shipped["regressor"]
+                _check_split(config, reg[4], name)
+                secs = cpu = 0.0
+            else:
+                model, config, secs, cpu = trained(
+                    args.models,
+                    f"reg_{name}" + (f"_s{seed}" if seed else ""),
+                    "hold_effort_sum",
+                    recipe,
+                    reg,
+                    args.data,
+                    args.epochs,
+                    seed,
+                )
+            from affordgrasp.learning.api import Inputs, predict_scores, report
 
-        runs[name] = predict_scores(model, config, Inputs(config, reg[2]))
-        results["regressors"][name] = report(model, config, reg[2], scores=runs[name])
-        results["seconds"][f"reg_{name}"] = secs or config["training"]["seconds"]
-        if cpu:
-            results.setdefault("cpu_seconds", {})[f"reg_{name}"] = cpu
-            print(f"  trained {name} in {secs:.0f} s ({cpu:.0f} CPU-s)", flush=True)
-        print(f"  {name}: {json.dumps(results['regressors'][name])}", flush=True)
+            scores = predict_scores(model, config, Inputs(config, reg[2]))
+            if seed == seeds[0] or recipe is None:
+                runs[name] = scores
+            reports.append(report(model, config, reg[2], scores=scores))
+            reports[-1]["epochs"] = len(config["training"]["history"])
+            tag = f"reg_{name}_s{seed}"
+            results["seconds"][tag] = secs or config["training"]["seconds"]
+            if cpu:
+                results.setdefault("cpu_seconds", {})[tag] = cpu
+                print(f"  trained {name} seed {seed} in {secs:.0f} s ({cpu:.0f} CPU-s)", flush=True)
+            print(f"  {name} seed {seed}: {json.dumps(reports[-1])}", flush=True)
+        results.setdefault("regressors_by_seed", {})[name] = reports
+        results["regressors"][name] = {k: float(np.mean([r[k] for r in reports])) for k in keys}
+        if args.json:
+            args.json.write_text(json.dumps(results, indent=2, default=float))
     truth = reg[3].normalise(reg[2].y)
-    print("\nTable II (ΣE_h regressors, held-out objects; paper's values in brackets)")
-    print(f"{'model':16s} {'MSE':>14s} {'comparison':>14s} {'E[GMS]':>14s}")
+    print(
+        "\nTable II (ΣE_h regressors, held-out objects; paper's values in brackets; "
+        f"mean [min-max] over seeds {args.seeds} where trained)"
+    )
+    print(f"{'model':16s} {'MSE':>14s} {'comparison':>22s} {'E[GMS]':>22s}")
     mean = float(np.mean(reg[3].normalise(reg[0].y)))
     base = {
         "mse": float(np.mean((truth - mean) ** 2)),
@@ -242,10 +277,15 @@ def main() -> None:
     }
     for name, rep in list(results["regressors"].items()) + [("predict-the-mean", base)]:
         paper = PAPER.get(name)
+        by_seed = results.get("regressors_by_seed", {}).get(name, [])
         cells = []
-        for i, key in enumerate(("mse", "comparison_accuracy", "expected_gms")):
-            cells.append(f"{rep[key]:.3f}" + (f" ({paper[i]:.3f})" if paper else "        "))
-        print(f"{name:16s} " + " ".join(f"{c:>14s}" for c in cells))
+        for i, key in enumerate(keys):
+            cell = f"{rep[key]:.3f}"
+            if len(by_seed) > 1 and key != "mse":
+                vals = [r[key] for r in by_seed]
+                cell += f" [{min(vals):.3f}-{max(vals):.3f}]"
+            cells.append(cell + (f" ({paper[i]:.3f})" if paper else ""))
+        print(f"{name:16s} {cells[0]:>14s} {cells[1]:>22s} {cells[2]:>22s}")
     results["regressors"]["predict-the-mean"] = base
 
     cls = prepare_split(args.data, "viable", seed=0)
@@ -257,6 +297,8 @@ def main() -> None:
     cls_recipes = {
         k: v for k, v in CLASSIFIERS.items() if (not only or k in only) and k not in skip
     }
+    if "classifiers" not in parts:
+        cls_recipes = {}
     if "classifier" in shipped:
         cls_recipes["shipped"] = None
     for name, recipe in cls_recipes.items():
@@ -277,10 +319,14 @@ def main() -> None:
             results.setdefault("cpu_seconds", {})[f"cls_{name}"] = cpu
             print(f"  trained {name} in {secs:.0f} s ({cpu:.0f} CPU-s)", flush=True)
         cls_models[name] = (model, config)
+        t["epochs"] = len(config["training"]["history"])
         print(
             f"  {name}: AP {t['average_precision']:.3f} (positive rate "
-            f"{t['positive_rate']:.3f}), balanced AP {t['average_precision_balanced']:.3f}"
+            f"{t['positive_rate']:.3f}), balanced AP {t['average_precision_balanced']:.3f}",
+            flush=True,
         )
+        if args.json:
+            args.json.write_text(json.dumps(results, indent=2, default=float))
 
     if args.plots:
         args.plots.mkdir(parents=True, exist_ok=True)
@@ -295,7 +341,7 @@ def main() -> None:
 
     cls_for_k = next((n for n in ("shipped", "cnn-canonical", "cnn") if n in cls_models), None)
     reg_for_k = ("shipped", "cnn+rank+canonical", "cnn+rank", "cnn")
-    if cls_for_k is not None and set(reg_for_k) & set(runs):
+    if "k" in parts and cls_for_k is not None and set(reg_for_k) & set(runs):
         from affordgrasp.learning.io import load_model
 
         reg_name = next(n for n in reg_for_k if n in runs)
