@@ -154,7 +154,7 @@ def _children_cpu() -> float:
 
 
 def run_once(src: Path, spec: str, out: Path, timed: bool = False) -> dict:
-    """One fresh process of ``affordgrasp generate SPEC --samples 1 --workers 1 --out OUT``.
+    """One fresh process of ``affordgrasp generate OBJECT --samples 1 --workers 1 --out OUT``.
 
     Parameters
     ----------
