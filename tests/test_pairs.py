@@ -135,3 +135,57 @@ def test_optimize_command_finds_a_default_mode_cut_with_use_points(capsys):
     for f in found:
         assert np.isfinite(f["value"]) and f["row"]["epsilon"] >= 0.014
         assert f["row"]["use_edge_angle"] <= np.radians(45)
+
+
+def test_searches_without_the_volume_score_the_same_grasps(hammer_grasps):
+    # the ε-only path (volume=False) changes gws_volume only: every score of the search is
+    # the same, so best_pairs and optimize_pairs may skip the 6-D hull
+    p0 = np.asarray(hammer_grasps.table.column("p0").to_pylist())[:60]
+    d = np.asarray(hammer_grasps.table.column("use_dir").to_pylist())[:60]
+    full = evaluate_inputs("hammer", p0, d).table
+    fast = evaluate_inputs("hammer", p0, d, volume=False).table
+    closure = full.column("epsilon").to_numpy() > 0
+    assert closure.any()
+    assert np.all(np.isnan(fast.column("gws_volume").to_numpy()[closure]))
+    for name in CHECKED:
+        np.testing.assert_allclose(  # ε: the same facets, summed in another order
+            fast.column(name).to_numpy(),
+            full.column(name).to_numpy(),
+            rtol=1e-12,
+            atol=1e-15,
+            err_msg=name,
+        )
+    again = evaluate_samples("hammer", 60, seed=3, volume=False).table
+    assert again.column("epsilon").to_pylist() == fast.column("epsilon").to_pylist()
+
+
+def test_pair_scores_in_blocks_equal_one_block(hammer_grasps, monkeypatch):
+    import affordgrasp.pairs as pairs
+
+    _, d = sample_inputs(5, 0, 400)
+    uses = UsePoints.of("hammer", d)
+    whole = pair_scores("hammer", hammer_grasps.table, uses, "beat", "no-robustness")
+    monkeypatch.setattr(pairs, "_BLOCK_PAIRS", 1000)  # 2 grasps x 400 uses per block
+    blocks = pair_scores("hammer", hammer_grasps.table, uses, "beat", "no-robustness")
+    assert len(whole["grasp"]) > 0 and whole.keys() == blocks.keys()
+    for key in whole:
+        np.testing.assert_array_equal(blocks[key], whole[key], err_msg=key)
+
+
+def test_optimizer_restarts_share_the_budget_and_repeat():
+    kwargs = dict(budget=96, uses=50, seed=0, top=5, population=16, restarts=3)
+    found = optimize_pairs("hammer", "pick", **kwargs)
+    again = optimize_pairs("hammer", "pick", **kwargs)
+    values = found.table.column("value").to_numpy()
+    assert found.grasps == 96 and found.candidates >= 1
+    assert 1 <= len(values) <= 5 and np.all(np.isfinite(values))
+    assert np.all(np.diff(values) <= 1e-12)
+    assert again.table.column("p0").to_pylist() == found.table.column("p0").to_pylist()
+
+
+@pytest.mark.parametrize("budget, restarts", [(96, 0), (96, 2.5), (2, 3), (96, True)])
+def test_optimizer_refuses_bad_restarts(budget, restarts):
+    from affordgrasp.errors import InputError
+
+    with pytest.raises(InputError, match="restarts|budget"):
+        optimize_pairs("hammer", "pick", budget=budget, uses=10, restarts=restarts)

@@ -33,6 +33,7 @@ from numba import njit
 
 from .columns import GRASP_METRICS, USE_METRICS
 from .dataset.best import TopRows
+from .errors import bad_parameter
 from .grasp.pregrasp import sample_inputs, use_points
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
@@ -53,6 +54,8 @@ USE_COLUMNS = frozenset(USE_METRICS)
 # most favourable values of the LP metrics, for the screen
 _SCREEN_FORCE = 1e12
 _SCREEN_IMPACT = 0.0
+# pairs screened at a time (bounds the memory of a search over G × U)
+_BLOCK_PAIRS = 1 << 20
 
 
 @njit(cache=True)
@@ -221,22 +224,36 @@ def pair_scores(
     use_rows = np.flatnonzero(hit)
     if not USE_COLUMNS & set(t.requires):
         use_rows = use_rows[:1]
-    gi, ui = np.meshgrid(np.flatnonzero(has_contacts), use_rows, indexing="ij")
-    gi, ui = gi.ravel(), ui.ravel()
-    cols = {c: col[c][gi] for c in GRASP_COLUMNS}
-    cols["discharge"] = (
-        np.asarray(discharge(uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]))
-        if len(gi)
-        else np.zeros(0)
-    )
-    cols["use_edge"] = uses.use_edge[ui]
-    cols["use_edge_angle"] = uses.use_edge_angle[ui]
-    if screen and len(gi):
-        cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
-        cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)
-        keep = t.evaluate(MetricColumns(cols), mode, **overrides) > -np.inf
-        gi, ui = gi[keep], ui[keep]
-        cols = {k: v[keep] for k, v in cols.items()}
+    # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
+    # G × U, so memory follows them, not the product (the same pairs in the same order)
+    with_contacts = np.flatnonzero(has_contacts)
+    step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
+    blocks = []
+    for first in range(0, len(with_contacts), step):
+        gi, ui = np.meshgrid(with_contacts[first : first + step], use_rows, indexing="ij")
+        gi, ui = gi.ravel(), ui.ravel()
+        cols = {c: col[c][gi] for c in GRASP_COLUMNS}
+        cols["discharge"] = (
+            np.asarray(discharge(uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]))
+            if len(gi)
+            else np.zeros(0)
+        )
+        cols["use_edge"] = uses.use_edge[ui]
+        cols["use_edge_angle"] = uses.use_edge_angle[ui]
+        if screen and len(gi):
+            cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
+            cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)
+            keep = t.evaluate(MetricColumns(cols), mode, **overrides) > -np.inf
+            gi, ui = gi[keep], ui[keep]
+            cols = {k: v[keep] for k, v in cols.items()}
+        blocks.append((gi, ui, cols))
+    if blocks:
+        gi = np.concatenate([b[0] for b in blocks])
+        ui = np.concatenate([b[1] for b in blocks])
+        cols = {k: np.concatenate([b[2][k] for b in blocks]) for k in blocks[0][2]}
+    else:
+        gi = ui = np.zeros(0, dtype=np.int64)
+        cols = {c: np.zeros(0) for c in (*GRASP_COLUMNS, *USE_COLUMNS)}
     log.info("%s on %s: %d of %d pairs need the LPs", task, obj.name, len(gi), n * m)
     rows = np.unique(gi)
     points, normals, mu, offsets = _contacts(grasps, rows)
@@ -345,7 +362,8 @@ def best_pairs(
     """
     obj = load_object(obj)
     if grasp_table is None:
-        grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand).table
+        # ε only: the search never reads the GWS volume; the returned rows carry it
+        grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand, volume=False).table
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
@@ -429,6 +447,7 @@ def optimize_pairs(
     top: int = 10,
     population: int | None = None,
     hand: str = "barrett",
+    restarts: int = 1,
     **overrides: float,
 ) -> PairSearch:
     """The cross-entropy method over p0, each grasp scored with its best of ``uses`` use points.
@@ -451,8 +470,14 @@ def optimize_pairs(
     top : int
         Distinct pairs returned.
     population : int, optional
-        CEM population; chosen from the budget when None.
+        CEM population; chosen from each run's budget when None.
     hand : str or Hand
+    restarts : int
+        Independent CEM runs that share the budget (each ``budget // restarts``
+        simulations, its own first generation and random stream); the pairs met by all of
+        them are ranked together. One run settles on the first good region it meets (on a
+        hammer, a hold of the head with 5× the hold effort of the best hold on the handle);
+        several runs make that less likely.
     **overrides : float
         Threshold values that replace the mode's.
 
@@ -466,15 +491,19 @@ def optimize_pairs(
 
     obj = load_object(obj)
     get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
+    if isinstance(restarts, bool) or not isinstance(restarts, int | np.integer) or restarts < 1:
+        raise bad_parameter("restarts", f"must be a positive integer, got {restarts!r}")
+    if isinstance(budget, bool) or not isinstance(budget, int | np.integer) or budget < restarts:
+        raise bad_parameter("budget", f"must be an integer >= restarts, got {budget!r}")
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)
-    pop = population or default_population(budget)
-    p0_first, d_first = sample_inputs(seed, 0, min(pop, budget))
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
 
     def objective(x: np.ndarray):
-        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed).table
+        # ε only (volume=False): the search never reads the GWS volume, whose 6-D hull is
+        # most of the metric cost on enveloping grasps; the returned rows are re-simulated
+        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed, volume=False).table
         scores = pair_scores(obj, rows, use, task, mode, **overrides)
         best, best_use = best_use_per_grasp(scores, len(x))
         counts["lp"] += len(scores["value"])
@@ -482,13 +511,23 @@ def optimize_pairs(
         found.append((x[:, :6].copy(), best, best_use))
         return best, guidance(rows)
 
-    cem_maximize(
-        objective,
-        budget=budget,
-        seed=seed,
-        population=pop,
-        initial=np.concatenate([p0_first, d_first], axis=1),
-    )
+    first = 0
+    for run in range(int(restarts)):
+        run_budget = int(budget) // int(restarts) + (run < int(budget) % int(restarts))
+        pop = population or default_population(run_budget)
+        # run r's first generation: the next uniform samples of run ``seed``; run 0 is the
+        # search of a single run
+        p0_first, d_first = sample_inputs(seed, first, first + min(pop, run_budget))
+        first += min(pop, run_budget)
+        cem_maximize(
+            objective,
+            budget=run_budget,
+            seed=seed
+            if run == 0
+            else int(np.random.SeedSequence([seed, run]).generate_state(1)[0]),
+            population=pop,
+            initial=np.concatenate([p0_first, d_first], axis=1),
+        )
     p0 = np.concatenate([f[0] for f in found])
     value = np.concatenate([f[1] for f in found])
     use_idx = np.concatenate([f[2] for f in found])

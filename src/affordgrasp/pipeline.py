@@ -91,7 +91,9 @@ class Evaluation:
         return self.table.to_pandas()
 
 
-def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False) -> dict:
+def phi_of_batch(
+    obj: GraspObject, batch: SimulationBatch, *, soft: bool = False, volume: bool = True
+) -> dict:
     """Φ for every row of a simulation batch.
 
     A row whose use ray left the object without a hit (from the cavity of a hollow object
@@ -106,6 +108,10 @@ def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False
         n grasps with their contacts (m, object frame), use points and wrist axes.
     soft : bool
         Soft-finger cones.
+    volume : bool
+        Compute ``gws_volume`` (False: ε only, the same ε; the volume is NaN for
+        force-closure grasps). Searches that score with ε pass False: the 6-D hull of an
+        enveloping grasp is most of the metric cost.
 
     Returns
     -------
@@ -126,6 +132,7 @@ def phi_of_batch(obj: GraspObject, batch: SimulationBatch, *, soft: bool = False
         batch.wrist_point,
         batch.wrist_axis,
         soft=soft,
+        volume=volume,
     )
     if no_use.any():
         for name in USE_METRICS:
@@ -143,6 +150,7 @@ def evaluate_inputs(
     sample_start: int = 0,
     soft: bool = False,
     metrics: bool = True,
+    volume: bool = True,
 ) -> Evaluation:
     """Simulate and score given inputs on one object.
 
@@ -164,6 +172,9 @@ def evaluate_inputs(
         Soft-finger contacts (torsional friction).
     metrics : bool
         Compute Φ (False: simulation columns only).
+    volume : bool
+        Compute ``gws_volume`` (False: NaN for force-closure grasps, every other column
+        the same; see :func:`phi_of_batch`).
 
     Returns
     -------
@@ -174,7 +185,7 @@ def evaluate_inputs(
     t0 = time.perf_counter()
     batch = simulate(obj, p0, use_dir, hand=hand)
     t1 = time.perf_counter()
-    phi = phi_of_batch(obj, batch, soft=soft) if metrics else None
+    phi = phi_of_batch(obj, batch, soft=soft, volume=volume) if metrics else None
     t2 = time.perf_counter()
     table = batch_to_table(
         obj, batch, hand=hand.name, seed=seed, sample_start=sample_start, metrics=phi
@@ -195,12 +206,13 @@ def evaluate_samples(
     metrics: bool = True,
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
+    volume: bool = True,
 ) -> Evaluation:
     """Draw samples ``start .. start + samples - 1`` of the run ``seed`` and evaluate them.
 
     Parameters
     ----------
-    obj, hand, soft, metrics
+    obj, hand, soft, metrics, volume
         As for :func:`evaluate_inputs`.
     samples : int
         Number of samples (> 0).
@@ -232,7 +244,15 @@ def evaluate_samples(
         k = min(step, start + n - first)
         p0, d = sample_inputs(seed, first, first + k)
         part = evaluate_inputs(
-            obj, p0, d, hand=hand, seed=seed, sample_start=first, soft=soft, metrics=metrics
+            obj,
+            p0,
+            d,
+            hand=hand,
+            seed=seed,
+            sample_start=first,
+            soft=soft,
+            metrics=metrics,
+            volume=volume,
         )
         for stage, seconds in part.timings.items():
             spent[stage] = spent.get(stage, 0.0) + seconds
