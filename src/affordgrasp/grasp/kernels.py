@@ -444,7 +444,7 @@ def _chain_frames(chain, s_max):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow):
+def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
     """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
@@ -462,6 +462,9 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow):
     (a distal link closing alone: its origin does not move at all).
     (error_model="numpy": no zero-division branches in the search's innermost arithmetic;
     every division here is guarded.)
+    trig : (m, 2) float64 ndarray
+        cos and sin of each joint's value at s (:func:`_set_trig`): many queries in a row
+        share their s (the children of a cell), so the search computes them once per s.
     returns : (smallest distance, its shape, the safe step in s)
     """
     ib = frames.inv_base
@@ -495,8 +498,8 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow):
             quad += w * frames.drift[j]
         if chain.kinds[j] == REVOLUTE:
             # Rotate by -q about the axis (Rodrigues): into the moving link's frame.
-            c = np.cos(q)
-            sn = np.sin(q)
+            c = trig[j, 0]
+            sn = trig[j, 1]
             dot = (ax * x + ay * y + az * z) * (1.0 - c)
             cx = ay * z - az * y
             cy = az * x - ax * z
@@ -547,6 +550,15 @@ def _swept_distance(px, py, pz, u, q, shapes, shape_pose, axis):
         shapes.halves[q],
         shapes.radii[q],
     )
+
+
+@njit(cache=True, inline="always")
+def _set_trig(s, chain, trig):
+    """cos and sin of every joint's value at s (rows of trig)."""
+    for j in range(chain.q0.shape[0]):
+        q = chain.q0[j] + chain.speeds[j] * s
+        trig[j, 0] = np.cos(q)
+        trig[j, 1] = np.sin(q)
 
 
 @njit(cache=True)
@@ -622,6 +634,7 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
     returns : (bracket value, point index, shape index); (inf, -1, -1) when there is no hit.
     """
     ph = np.empty(3)
+    trig = np.empty((chain.q0.shape[0], 2))
     first = np.inf
     first_p = -1
     first_q = -1
@@ -641,7 +654,9 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
             if slot > 0:
                 dm = _swept_distance(ph[0], ph[1], ph[2], mid, slot - 1, chain.shapes, swept, axis)
             else:
-                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps, 0.0)
+                _set_trig(mid, chain, trig)
+                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps, 0.0,
+                                        trig)  # fmt: skip
             if dm <= hit_eps:
                 hi = mid
             else:
@@ -651,7 +666,9 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
                 q_hi = slot - 1
             else:
                 counts[REFINE_QUERIES] += 1
-                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps, 0.0)
+                _set_trig(hi, chain, trig)
+                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps, 0.0,
+                                          trig)  # fmt: skip
             first = hi
             first_p = i
             first_q = q_hi
@@ -798,6 +815,10 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         kr[c] = r0 + radius
         cap += below
     heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap))
+    # the joints' cos and sin at trig_s (a chain's queries at one s share them)
+    trig = np.empty((m, 2))
+    trig_s = 0.0
+    _set_trig(0.0, chain, trig)
     # The children a touching cell releases share its key, the smallest of all (every key
     # pushed later is at least that): they wait on a stack, popped before the heap, instead
     # of each sifting through it.
@@ -821,7 +842,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             continue
         counts[QUERIES] += 1
         _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
-                                  margin + radius, radius)  # fmt: skip
+                                  margin + radius, radius, trig)  # fmt: skip
         if step < s_max:
             counts[PUSHES] += 1
             size = _heap_push(heap, size, step, code * slots, 0.0)
@@ -839,6 +860,9 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             break
         else:
             s, e, s_prev, size = _heap_pop(heap, size)
+        if s != trig_s and not translation:
+            _set_trig(s, chain, trig)
+            trig_s = s
         counts[POPS] += 1
         if s >= best:
             break
@@ -862,7 +886,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 dz = ph[2] - o0[2]
                 r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
                 d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames,
-                                          margin + radius, radius)  # fmt: skip
+                                          margin + radius, radius, trig)  # fmt: skip
                 touching = d - radius <= hit_eps
                 nxt = s + step
             if touching:
@@ -914,12 +938,14 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz)
-            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, 0.0)
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, 0.0, trig)
             pressing = False
             if d <= hit_eps:
                 counts[QUERIES] += 1
+                trig_s = s + PROBE
+                _set_trig(trig_s, chain, trig)
                 d_next, _, _ = _chain_touch(
-                    ph[0], ph[1], ph[2], s + PROBE, r, chain, frames, margin, 0.0
+                    ph[0], ph[1], ph[2], trig_s, r, chain, frames, margin, 0.0, trig
                 )
                 pressing = d_next < d
             # A point inside the hit level that is not pressed (receding or sliding) has no
