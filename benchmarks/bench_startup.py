@@ -137,7 +137,8 @@ TIMED = textwrap.dedent(
     _bootstrap._find_and_load = find_and_load
     from affordgrasp.cli import main
     try:
-        code = main(sys.argv[1:])
+        sys.argv[0] = "affordgrasp"
+        code = main()
     finally:
         _bootstrap._find_and_load = original
         times["in_process"] = time.perf_counter() - t0

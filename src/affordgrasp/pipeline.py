@@ -124,7 +124,7 @@ def phi_of_batch(
     use_triangle = np.where(no_use, 0, batch.use_triangle)
     phi = compute_phi_batch(
         obj.mass,
-        obj.mesh,
+        obj.mesh_data,  # the mesh's arrays, normals and adjacency; no trimesh needed
         batch.contacts,
         use_point,
         use_normal,

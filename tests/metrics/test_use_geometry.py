@@ -176,3 +176,23 @@ def test_batches_and_bad_input():
         use_edge(mesh, [len(mesh.faces)])
     with pytest.raises(InputError):
         use_edge_angle(mesh, [0, 0, 0], radius=-1.0)
+
+
+@pytest.mark.parametrize("with_normals", [False, True])
+def test_edge_angle_over_all_edges_equals_the_k_d_tree_search(monkeypatch, with_normals):
+    # Short batches test every edge (no scipy import); long ones go through the k-d tree of
+    # edge samples. The exact distance decides in both, so the angles are the same bits.
+    from affordgrasp.metrics import use_geometry
+    from affordgrasp.objects import load_object
+
+    mesh = load_object("knife").mesh
+    rng = np.random.default_rng(3)
+    faces = rng.integers(0, len(mesh.faces), 300)
+    points = mesh.triangles_center[faces] + rng.normal(scale=2e-3, size=(300, 3))
+    normals = mesh.face_normals[faces] if with_normals else None
+    monkeypatch.setattr(use_geometry, "_ALL_PAIRS_MAX", 10**12)
+    every_edge = use_edge_angle(mesh, points, use_normal=normals)
+    monkeypatch.setattr(use_geometry, "_ALL_PAIRS_MAX", 0)
+    tree = use_edge_angle(mesh, points, use_normal=normals)
+    assert every_edge.tobytes() == tree.tobytes()
+    assert (every_edge < np.pi).sum() > 50  # many points near a convex edge

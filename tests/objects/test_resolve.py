@@ -43,9 +43,11 @@ def fake_families() -> types.SimpleNamespace:
 
 
 @pytest.fixture
-def fake(monkeypatch):
+def fake(monkeypatch, tmp_path):
     families = fake_families()
     monkeypatch.setattr(resolve_module, "_families", lambda: families)
+    # the stand-ins must neither come from nor go to the cache of prepared families
+    monkeypatch.setenv("AFFORDGRASP_CACHE_DIR", str(tmp_path / "cache"))
     resolve_module._resolve_family.cache_clear()
     yield families
     resolve_module._resolve_family.cache_clear()
@@ -177,6 +179,7 @@ def test_without_families_every_spec_is_a_path(monkeypatch, box_file):
         raise ImportError("no families")
 
     monkeypatch.setattr(resolve_module, "_families", missing)
+    monkeypatch.setattr(resolve_module, "_families_installed", lambda: False)
     with pytest.raises(InputError, match=r"Families: \(none installed\)"):
         load_object("knife")
     assert load_object(box_file).name == "part.stl"

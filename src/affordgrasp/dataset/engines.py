@@ -90,8 +90,8 @@ class ObjectPayload:
             source=obj.source,
             density=float(obj.mass.density),
             mesh_hash=obj.mesh_hash,
-            vertices=np.ascontiguousarray(obj.mesh.vertices, dtype=np.float64),
-            faces=np.ascontiguousarray(obj.mesh.faces, dtype=np.int64),
+            vertices=np.ascontiguousarray(obj.vertices, dtype=np.float64),
+            faces=np.ascontiguousarray(obj.faces, dtype=np.int64),
             face_parts=getattr(obj, "face_parts", None),
             part_names=tuple(getattr(obj, "part_names", ())),
             mass=obj.mass,
@@ -110,11 +110,11 @@ class ObjectPayload:
         InternalError
             When the mesh arrived changed.
         """
-        import trimesh
-
         from ..objects import GraspObject, mass_properties, mesh_hash
+        from ..objects.prepared import MeshData
 
-        mesh = trimesh.Trimesh(self.vertices, self.faces, process=False)
+        # arrays, not a trimesh.Trimesh: the worker builds one only if something needs it
+        mesh = MeshData(self.vertices, self.faces, self.mesh_hash)
         digest = mesh_hash(mesh)
         if digest != self.mesh_hash:  # pragma: no cover - a transport error
             raise InternalError(f"object {self.name!r} arrived with a different mesh hash")
@@ -124,7 +124,7 @@ class ObjectPayload:
             mesh=mesh,
             mass=self.mass
             if self.mass is not None
-            else mass_properties(mesh, density=self.density),
+            else mass_properties(mesh.to_trimesh(), density=self.density),
             mesh_hash=digest,
             source=self.source,
             face_parts=self.face_parts,

@@ -23,9 +23,9 @@ import functools
 import logging
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from ..caching import IdentityCache
 from ..errors import InputError
@@ -36,7 +36,10 @@ from ..metrics.contacts import ContactSet
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
-from .surface import SurfaceSample, sample_surface
+from .surface import SurfaceSample
+
+if TYPE_CHECKING:
+    from ..objects.prepared import MeshData
 
 log = logging.getLogger(__name__)
 
@@ -293,14 +296,14 @@ class ObjectGeometry:
         Convex-hull vertices, centred frame, m.
     origin : (3,) float64 ndarray
         The centred frame's origin in the mesh frame, m.
-    mesh : trimesh.Trimesh
+    mesh : MeshData
         The centred mesh (for the use-point rays, cast in float32 by the ray engine).
     """
 
     samples: SurfaceSample
     hull_vertices: np.ndarray
     origin: np.ndarray
-    mesh: trimesh.Trimesh
+    mesh: MeshData
 
 
 _GEOMETRY: IdentityCache[ObjectGeometry] = IdentityCache()
@@ -335,13 +338,11 @@ def object_geometry(obj) -> ObjectGeometry:
     """
 
     def build() -> ObjectGeometry:
-        vertices = np.asarray(obj.mesh.vertices, dtype=np.float64)
-        origin = centred_frame_origin(vertices)
-        # Far from the origin, v - origin is exact (both within a factor 2: Sterbenz).
-        mesh = trimesh.Trimesh(vertices - origin, np.asarray(obj.mesh.faces), process=False)
-        return ObjectGeometry(
-            sample_surface(mesh), np.asarray(mesh.convex_hull.vertices), origin, mesh
-        )
+        # computed once per machine and mesh, then loaded (objects/prepared.py)
+        from ..objects.prepared import derived_geometry
+
+        d = derived_geometry(obj)
+        return ObjectGeometry(d.samples, d.hull_vertices, d.origin, d.centred)
 
     return _GEOMETRY.get(obj, build)
 

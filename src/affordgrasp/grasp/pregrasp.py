@@ -23,10 +23,14 @@ along direction(d) with the surface, with the outward normal of the triangle hit
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import trimesh
 
 from ..errors import InputError
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 def spherical_direction(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:

@@ -21,6 +21,7 @@ its functions are decorated (:func:`install_package_stamp`, idempotent).
 from __future__ import annotations
 
 import hashlib
+import sys
 from functools import cache
 from pathlib import Path
 
@@ -123,12 +124,55 @@ def _install_light_loading(locator: type) -> None:
             return original(self, sig, target_context)
         import numba.cpython.hashing  # noqa: F401 - installs the hash-secret symbols
 
+        _preload_lapack_tables()
         rtsys.initialize(target_context)
         with self._guard_against_spurious_io_errors():
             return self._load_overload(sig, target_context)
 
     load_overload.__wrapped__ = original  # type: ignore[attr-defined]
     caching.Cache.load_overload = load_overload
+
+
+_LAPACK_TABLES = ("cython_blas", "cython_lapack")
+
+
+def _preload_lapack_tables() -> None:
+    """Load scipy's tables of BLAS/LAPACK function pointers without the rest of scipy.linalg.
+
+    A kernel calling ``np.linalg`` asks numba's runtime for a LAPACK function on its first
+    call, and numba imports ``scipy.linalg.cython_lapack`` (or ``cython_blas``) for its
+    table of function pointers. Importing that module runs ``scipy.linalg/__init__`` first
+    (with ``scipy._lib``, array-API shims, ``numpy.testing``...: about 0.15 s of CPU), of
+    which only the extension module is needed. Loading the extension module alone (a few
+    ms) under its full name makes numba's import find it; a later ``import scipy.linalg``
+    still runs the package and uses this same module. Any failure leaves it to numba.
+    """
+    if "scipy.linalg" in sys.modules:
+        return
+    try:
+        import importlib.machinery
+        import importlib.util
+
+        scipy = sys.modules.get("scipy")
+        if scipy is None:
+            return
+        directory = Path(next(iter(scipy.__path__))) / "linalg"
+        for name in _LAPACK_TABLES:
+            full = f"scipy.linalg.{name}"
+            if full in sys.modules:
+                continue
+            for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+                path = directory / f"{name}{suffix}"
+                if path.is_file():
+                    spec = importlib.util.spec_from_file_location(full, path)
+                    if spec is None or spec.loader is None:
+                        break
+                    module = importlib.util.module_from_spec(spec)
+                    spec.loader.exec_module(module)
+                    sys.modules[full] = module
+                    break
+    except Exception:  # noqa: BLE001 - numba imports scipy.linalg itself then
+        return
 
 
 _installed: list[type] = []

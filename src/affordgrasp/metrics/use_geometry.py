@@ -219,8 +219,6 @@ def _edge_index(mesh, radius: float):
     key = ("edges", radius)
     if key in data:
         return data[key]
-    from scipy.spatial import cKDTree
-
     angles = np.asarray(mesh.face_adjacency_angles, dtype=np.float64)
     convex = np.asarray(mesh.face_adjacency_convex, dtype=bool)
     keep = convex & (angles > _FLAT_ANGLE)
@@ -247,9 +245,41 @@ def _edge_index(mesh, radius: float):
     start = np.repeat(np.cumsum(n_samples) - n_samples, n_samples)
     t = (np.arange(owner.size) - start) / np.maximum(n_samples[owner] - 1, 1)
     samples = A[owner] + t[:, None] * (B - A)[owner]
-    tree = cKDTree(samples) if owner.size else None
-    data[key] = (tree, owner, A, B, interior, spacing, N1, N2)
+    data[key] = (samples, owner, A, B, interior, spacing, N1, N2)
     return data[key]
+
+
+def _sample_tree(mesh, radius: float, samples: np.ndarray):
+    """The k-d tree of the edge samples (scipy), built on first use."""
+    data = _mesh_cache(mesh)
+    key = ("edge tree", radius)
+    if key not in data:
+        from scipy.spatial import cKDTree
+
+        data[key] = cKDTree(samples)
+    return data[key]
+
+
+def _candidate_pairs(mesh, radius, P, samples, owner, n_edges, spacing):
+    """(use point, edge) pairs that may be within ``radius``, sorted, without repeats."""
+    if P.shape[0] * n_edges <= _ALL_PAIRS_MAX:
+        return np.repeat(np.arange(P.shape[0]), n_edges), np.tile(np.arange(n_edges), P.shape[0])
+    tree = _sample_tree(mesh, radius, samples)
+    hits = tree.query_ball_point(P, radius + 0.5 * spacing, return_sorted=False)
+    lengths = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
+    if not lengths.sum():
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    query = np.repeat(np.arange(P.shape[0]), lengths)
+    edge = owner[np.concatenate([np.asarray(h, dtype=np.int64) for h in hits])]
+    pair = np.unique(query * n_edges + edge)
+    return pair // n_edges, pair % n_edges
+
+
+# Below this many (use point, edge) pairs the candidate edges are all edges: the exact
+# segment distance decides either way, so the result is the same as through the k-d tree
+# (whose candidates include every edge within the radius), and a short run spares
+# importing scipy.spatial (~0.3 s).
+_ALL_PAIRS_MAX = 20_000
 
 
 def _segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -322,19 +352,13 @@ def use_edge_angle(
                 f"use_normal has {normals.shape[0]} rows, expected one per use point ({P.shape[0]})"
             )
     out = np.full(P.shape[0], np.pi)
-    tree, owner, A, B, interior, spacing, N1, N2 = _edge_index(mesh, radius)
-    if tree is not None and P.shape[0]:
-        hits = tree.query_ball_point(P, radius + 0.5 * spacing, return_sorted=False)
-        lengths = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
-        if lengths.sum():
-            query = np.repeat(np.arange(P.shape[0]), lengths)
-            edge = owner[np.concatenate([np.asarray(h, dtype=np.int64) for h in hits])]
-            pair = np.unique(query * len(A) + edge)
-            query, edge = pair // len(A), pair % len(A)
-            close = _segment_distance(P[query], A[edge], B[edge]) <= radius
-            if normals is not None:
-                close &= (
-                    _off_fan(normals[query], A[edge], B[edge], N1[edge], N2[edge]) <= facing_tol
-                )
-            np.minimum.at(out, query[close], interior[edge[close]])
+    samples, owner, A, B, interior, spacing, N1, N2 = _edge_index(mesh, radius)
+    if owner.size and P.shape[0]:
+        query, edge = _candidate_pairs(mesh, radius, P, samples, owner, len(A), spacing)
+        close = np.nonzero(_segment_distance(P[query], A[edge], B[edge]) <= radius)[0]
+        query, edge = query[close], edge[close]
+        if normals is not None:
+            facing = _off_fan(normals[query], A[edge], B[edge], N1[edge], N2[edge]) <= facing_tol
+            query, edge = query[facing], edge[facing]
+        np.minimum.at(out, query, interior[edge])
     return float(out[0]) if single else out

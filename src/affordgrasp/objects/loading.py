@@ -27,13 +27,16 @@ import math
 import os
 from collections import defaultdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from affordgrasp.errors import InputError, MeshError
 from affordgrasp.objects.off import read_off, triangulate_polygon
 from affordgrasp.tolerances import MIN_RELATIVE_VOLUME, UNION_RTOL, ZERO_AREA
+
+if TYPE_CHECKING:
+    import trimesh
 
 __all__ = [
     "SUPPORTED_EXTENSIONS",
@@ -78,6 +81,8 @@ def load_mesh(
     mesh : trimesh.Trimesh
         See :func:`prepare_mesh`.
     """
+    import trimesh
+
     _scale_request(size_m, units)  # fail on bad options before a slow read
     file = Path(path).expanduser()
     if not file.exists():
@@ -143,6 +148,8 @@ def prepare_mesh(
     InputError
         Bad ``size_m`` / ``units``.
     """
+    import trimesh
+
     scale_kind, scale_value = _scale_request(size_m, units)
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
@@ -321,6 +328,8 @@ def _clean(
     vertices: np.ndarray, faces: np.ndarray, source: str, repairs: list[str]
 ) -> trimesh.Trimesh:
     """Merge duplicate vertices, drop faces repeating a vertex and duplicate faces."""
+    import trimesh
+
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     mesh.merge_vertices()
     f = mesh.faces
@@ -427,6 +436,8 @@ def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> tr
 
 def _fix_normals(mesh: trimesh.Trimesh) -> None:
     """Consistent, outward winding per body, in place."""
+    import trimesh
+
     # trimesh divides by the volume on its way; a flat part has none, and is refused later.
     with np.errstate(divide="ignore", invalid="ignore"):
         trimesh.repair.fix_normals(mesh, multibody=True)
@@ -472,6 +483,8 @@ def _combine_bodies(
     ``whole`` is the unchanged input when the bodies are just its split; it is returned as
     it is when nothing overlaps, so a clean mesh keeps its vertex order.
     """
+    import trimesh
+
     scale = max(float(np.ptp(b.bounds, axis=0).max()) for b in bodies)
     solid_bodies = [b for b in bodies if abs(_signed_volume(b)) > MIN_RELATIVE_VOLUME * scale**3]
     if len(solid_bodies) < len(bodies):
@@ -599,6 +612,8 @@ def _to_manifold(mesh: trimesh.Trimesh, merge: bool = False):
 
 
 def _from_manifold(solid) -> trimesh.Trimesh:
+    import trimesh
+
     data = solid.to_mesh64() if hasattr(solid, "to_mesh64") else solid.to_mesh()
     vertices = np.asarray(data.vert_properties, dtype=np.float64)[:, :3]
     faces = np.asarray(data.tri_verts, dtype=np.int64)
@@ -618,6 +633,8 @@ def _manifold_repair(mesh: trimesh.Trimesh) -> trimesh.Trimesh | None:
 
 def _read_with_trimesh(file: Path, ext: str) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (n, 3) float64 and faces (m, 3) int64 of every mesh in a file's scene."""
+    import trimesh
+
     try:
         scene = trimesh.load_scene(file, file_type=ext[1:], process=False)
     except Exception as exc:  # trimesh raises many types on malformed files

@@ -10,11 +10,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from affordgrasp.errors import InputError, MeshError
+
+if TYPE_CHECKING:
+    import trimesh
 
 __all__ = [
     "MassProperties",
@@ -202,6 +205,8 @@ def _unit_density_integrals(
     mesh: trimesh.Trimesh, what: str
 ) -> tuple[float, np.ndarray, np.ndarray]:
     """(volume, centre of mass (3,), inertia at unit density (3, 3)) of a closed mesh."""
+    import trimesh
+
     if len(mesh.faces) == 0:
         raise MeshError(f"{what} has no faces; mass properties need a closed mesh")
     if not mesh.is_watertight:

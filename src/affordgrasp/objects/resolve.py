@@ -18,13 +18,19 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 
 from affordgrasp.errors import InputError, did_you_mean
+from affordgrasp.objects import family_names
 from affordgrasp.objects.loading import load_mesh, prepare_mesh
 from affordgrasp.objects.mass import MassProperties, mass_properties, material_mass_properties
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from affordgrasp.objects.prepared import MeshData
 
 __all__ = [
     "GraspObject",
@@ -37,6 +43,34 @@ __all__ = [
 # Family objects are cached: building and repairing one can take a while, and the pipeline
 # asks for the same object again and again.
 _FAMILY_CACHE_SIZE = 64
+
+
+class _MeshField:
+    """The ``mesh`` of a GraspObject: a ``trimesh.Trimesh``, made on first access when the
+    object was given its mesh as arrays (a prepared object loaded from the cache, a worker's
+    copy), so that a run that never needs trimesh does not import it."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._slot = f"_{name}"
+
+    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+        if obj is None:
+            raise AttributeError("mesh has no default")  # a required dataclass field
+        value = obj.__dict__[self._slot]
+        if not _is_trimesh(value):
+            value = value.to_trimesh()
+            obj.__dict__[self._slot] = value
+        return value
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        obj.__dict__[self._slot] = value
+
+
+def _is_trimesh(value: Any) -> bool:
+    import sys
+
+    module = sys.modules.get("trimesh")
+    return module is not None and isinstance(value, module.Trimesh)
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +86,8 @@ class GraspObject:
     mesh : trimesh.Trimesh
         Watertight, outward-oriented, metres, in the object's mesh frame. Shared between
         callers (family objects are cached): treat it as read-only, ``copy()`` it to edit.
+        An object made from arrays (:class:`~affordgrasp.objects.prepared.MeshData`, as the
+        cache and the workers make them) builds it on first access.
     mass : MassProperties
         At the density the object was resolved with (unit density by default), or from
         its per-part materials when resolved with ``materials=True``.
@@ -72,13 +108,34 @@ class GraspObject:
 
     name: str
     category: str
-    mesh: trimesh.Trimesh
+    mesh: trimesh.Trimesh = _MeshField()  # type: ignore[assignment]
     mass: MassProperties
     mesh_hash: str
     source: str
     face_parts: np.ndarray | None = None
     part_names: tuple[str, ...] = ()
     materials: bool = False
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(v, 3) float64 ndarray: the mesh's vertices, m (without building ``mesh``)."""
+        return np.asarray(self.__dict__["_mesh"].vertices, dtype=np.float64)
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(f, 3) int64 ndarray: the mesh's faces (without building ``mesh``)."""
+        return np.asarray(self.__dict__["_mesh"].faces, dtype=np.int64)
+
+    @property
+    def mesh_data(self) -> MeshData:
+        """The mesh as arrays with its normals, adjacency and ray queries, without trimesh.
+
+        Loaded from the on-disk cache of prepared objects, or computed (with trimesh) and
+        stored there (:mod:`affordgrasp.objects.prepared`).
+        """
+        from affordgrasp.objects.prepared import derived_geometry
+
+        return derived_geometry(self).mesh
 
     def parts_of_faces(self, faces) -> np.ndarray:
         """Part name of each face index.
@@ -128,11 +185,13 @@ class GraspObject:
         if len(points) == 0:
             return np.zeros(0, dtype=np.int64)
         faces = np.asarray(
-            self.mesh.ray.intersects_first(points + offset_m * normals, -normals),
+            self.mesh_data.ray.intersects_first(points + offset_m * normals, -normals),
             dtype=np.int64,
         )
         missed = faces < 0
         if missed.any():
+            import trimesh
+
             _, _, closest = trimesh.proximity.closest_point(self.mesh, points[missed])
             faces[missed] = closest
         return faces
@@ -170,7 +229,7 @@ def list_families() -> list[str]:
     list of str
         Canonical names (``axe``, ``bottle``, ...); aliases such as ``cleaver`` are not listed.
     """
-    return sorted(_families().FAMILIES)
+    return sorted(family_names.CATEGORIES)
 
 
 def load_object(
@@ -299,12 +358,16 @@ def _families():
     return families
 
 
-def _available_families() -> dict | None:
-    try:
-        return dict(_families().FAMILIES)
-    except (ImportError, AttributeError):
-        # Without the procedural families every spec is a path.
-        return None
+def _families_installed() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("affordgrasp.objects.families") is not None
+
+
+def _available_families() -> dict[str, str] | None:
+    # Names only: the builders are imported when a family is built. Without the procedural
+    # families every spec is a path.
+    return family_names.CATEGORIES if _families_installed() else None
 
 
 def _normalise(name: str) -> str:
@@ -317,7 +380,7 @@ def _split_family(text: str) -> tuple[str | None, str | None]:
     if not families:
         return None, None
     by_key = {_normalise(name): name for name in families}
-    aliases = getattr(_families(), "ALIASES", {})
+    aliases = family_names.ALIASES
     by_key.update({_normalise(alias): name for alias, name in aliases.items() if name in families})
     head, sep, tail = text.partition(":")
     name = by_key.get(_normalise(head))
@@ -368,12 +431,35 @@ def _resolve_family(
     size_m: float | None,
     units: str | None,
 ) -> GraspObject:
+    from affordgrasp.objects import prepared
+
+    if size_m is not None or units is not None:
+        return _build_family(family, seed, density, materials, size_m, units)
+    # Built once per machine: later processes load the arrays (see objects/prepared.py).
+    key = prepared.family_key(family, seed, materials, density)
+    obj = prepared.load_family(key)
+    if obj is None:
+        obj = _build_family(family, seed, density, materials, size_m, units)
+        prepared.store_family(key, obj)
+    return obj
+
+
+def _build_family(
+    family: str,
+    seed: int,
+    density: float,
+    materials: bool,
+    size_m: float | None,
+    units: str | None,
+) -> GraspObject:
     families = _families()
     name = f"{family}:{seed}"
     raw = families.make_family(family, seed=seed, materials=materials)
     mesh = prepare_mesh(raw, size_m=size_m, units=units, source=name)
     face_parts = raw.metadata.get("face_parts")
     if face_parts is not None and not np.array_equal(raw.faces, mesh.faces):
+        import trimesh
+
         # preparing changed the triangles: each keeps the part of the raw face under it
         _, _, under = trimesh.proximity.closest_point(raw, mesh.triangles_center)
         face_parts = np.asarray(face_parts)[under]

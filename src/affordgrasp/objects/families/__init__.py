@@ -47,6 +47,7 @@ import numpy as np
 import trimesh
 
 from affordgrasp.errors import InputError
+from affordgrasp.objects import family_names
 from affordgrasp.objects.families import (
     blades,
     containers,
@@ -165,15 +166,7 @@ FAMILIES: dict[str, FamilyInfo] = {
     for name, (category, description, _) in _BUILDERS.items()
 }
 
-ALIASES: dict[str, str] = {
-    "cleaver": "meat_cleaver",
-    "hatchet": "axe",
-    "wineglass": "wine_glass",
-    "glass": "tumbler",
-    "cone": "ice_cream_cone",
-    "ice_cream": "ice_cream_cone",
-    "turner": "spatula",
-}
+ALIASES: dict[str, str] = dict(family_names.ALIASES)
 
 # Boolean seams leave a few sub-micrometre sliver triangles; simplifying at 1 um removes
 # them while moving no surface by more than that.

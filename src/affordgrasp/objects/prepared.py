@@ -1,0 +1,436 @@
+"""Prepared objects kept on disk as arrays, so that a warm start needs neither trimesh nor scipy.
+
+Two kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.caching.cache_dir`):
+
+* a **resolved family** (``family-<name>-<seed>-...npz``): the mesh a built-in family builds
+  and repairs (vertices, faces, face parts), its mass properties and labels; keyed by the
+  family, seed, materials and density;
+* the **derived geometry of a mesh** (``mesh-<mesh hash>-<stamp>.npz``): what the pipeline computes
+  from a mesh with trimesh and scipy: face normals, face adjacency and the bounding-box
+  diagonal in the mesh frame (use metrics, rays), and in the simulator's centred frame the
+  surface samples, the convex hull's vertices, face normals and diagonal; keyed by the mesh's
+  content hash (:func:`~affordgrasp.objects.mesh_hash`), so a mesh file or a family variant
+  with the same vertices and faces shares it.
+
+Every key also holds a **stamp**: a format number, a hash of the sources that compute the
+entries (``affordgrasp/objects``, ``grasp/surface.py``, ``grasp/policy.py``) and a
+fingerprint of the installed numpy, trimesh, scipy and manifold3d. An entry written under
+another key, that fails its checksum or that cannot be read is rebuilt and overwritten,
+never trusted (:func:`affordgrasp.caching.read_arrays`); a loaded family's vertices and
+faces must also hash to the mesh hash stored with them. Values are the ones a fresh build
+computes, bit for bit (tests compare them). Set ``AFFORDGRASP_CACHE_DIR`` to move the
+cache; deleting it only costs the rebuild.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..caching import IdentityCache, cache_dir, read_arrays, write_arrays
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from ..grasp.surface import SurfaceSample
+    from .mass import MassProperties
+    from .resolve import GraspObject
+
+FORMAT = 1
+_PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
+_STAMPED_SOURCES = ("objects", "grasp/surface.py", "grasp/policy.py")
+_STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d")
+
+
+@cache
+def stamp() -> str:
+    """What every entry depends on besides its own key: sources and libraries (hex digest).
+
+    Returns
+    -------
+    str
+    """
+    digest = hashlib.sha256(f"format {FORMAT}".encode())
+    for name in _STAMPED_SOURCES:
+        path = _PACKAGE_DIR / name
+        files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
+        for file in files:
+            digest.update(file.relative_to(_PACKAGE_DIR).as_posix().encode())
+            digest.update(hashlib.sha256(file.read_bytes()).digest())
+    for package in _STAMPED_PACKAGES:
+        # the installed files, not importlib.metadata (importing it costs ~0.1 s)
+        spec = importlib.util.find_spec(package)
+        origin = spec.origin if spec is not None else None
+        if origin:
+            st = os.stat(origin)
+            digest.update(f"{package}|{origin}|{st.st_size}|{st.st_mtime_ns}".encode())
+        else:
+            digest.update(f"{package}|missing".encode())
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class MeshData:
+    """A triangle mesh as arrays, with what trimesh derives from it, without trimesh.
+
+    Duck-types the part of ``trimesh.Trimesh`` the pipeline uses (``vertices``, ``faces``,
+    ``face_normals``, ``triangles``, ``face_adjacency*``, ``ray``, ``hash()``).
+
+    Attributes
+    ----------
+    vertices : (v, 3) float64 ndarray
+        m.
+    faces : (f, 3) int64 ndarray
+    content_hash : str
+        :func:`~affordgrasp.objects.mesh_hash` of the vertices and faces.
+    face_normals : (f, 3) float64 ndarray or None
+        Unit normals as trimesh computes them.
+    scale : float or None
+        Bounding-box diagonal, m (trimesh's ``mesh.scale``).
+    face_adjacency, face_adjacency_edges : (p, 2) int64 ndarray or None
+        Pairs of faces sharing an edge, and that edge's vertices (trimesh's).
+    face_adjacency_angles : (p,) float64 ndarray or None
+        rad.
+    face_adjacency_convex : (p,) bool ndarray or None
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    content_hash: str
+    face_normals: np.ndarray | None = None
+    scale: float | None = None
+    face_adjacency: np.ndarray | None = None
+    face_adjacency_edges: np.ndarray | None = None
+    face_adjacency_angles: np.ndarray | None = None
+    face_adjacency_convex: np.ndarray | None = None
+
+    def __hash__(self) -> int:
+        return hash(self.content_hash)
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(f, 3, 3) float64 ndarray: the vertices of each face, m."""
+        return self.vertices[self.faces]
+
+    @property
+    def ray(self):
+        """Ray queries (:class:`~affordgrasp.objects.rays.EmbreeRays`, else trimesh's)."""
+        return _RAYS.get(self, self._make_rays)
+
+    def _make_rays(self):
+        from .rays import EmbreeRays, embree_available
+
+        if embree_available() and self.face_normals is not None and self.scale is not None:
+            return EmbreeRays(self.vertices, self.faces, self.face_normals, self.scale)
+        return self.to_trimesh().ray
+
+    def to_trimesh(self) -> trimesh.Trimesh:
+        """The mesh as a ``trimesh.Trimesh`` (same vertices and faces, not processed).
+
+        Returns
+        -------
+        trimesh.Trimesh
+        """
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+    @classmethod
+    def from_trimesh(cls, mesh: trimesh.Trimesh, content_hash: str) -> MeshData:
+        """The arrays of ``mesh`` and what trimesh derives from them.
+
+        Parameters
+        ----------
+        mesh : trimesh.Trimesh
+        content_hash : str
+            Its mesh hash.
+
+        Returns
+        -------
+        MeshData
+        """
+        return cls(
+            vertices=np.asarray(mesh.vertices, dtype=np.float64),
+            faces=np.asarray(mesh.faces, dtype=np.int64),
+            content_hash=content_hash,
+            face_normals=np.asarray(mesh.face_normals, dtype=np.float64),
+            scale=float(mesh.scale),
+            face_adjacency=np.asarray(mesh.face_adjacency, dtype=np.int64),
+            face_adjacency_edges=np.asarray(mesh.face_adjacency_edges, dtype=np.int64),
+            face_adjacency_angles=np.asarray(mesh.face_adjacency_angles, dtype=np.float64),
+            face_adjacency_convex=np.asarray(mesh.face_adjacency_convex, dtype=bool),
+        )
+
+
+_RAYS: IdentityCache[Any] = IdentityCache()
+
+_MESH_FIELDS = (
+    "face_normals",
+    "face_adjacency",
+    "face_adjacency_edges",
+    "face_adjacency_angles",
+    "face_adjacency_convex",
+)
+_SAMPLE_FIELDS = (
+    "points",
+    "normals",
+    "sharp",
+    "cell_start",
+    "cell_center",
+    "cell_radius",
+    "coarse_start",
+    "coarse_center",
+    "coarse_radius",
+)
+
+
+@dataclass(frozen=True, eq=False)
+class DerivedGeometry:
+    """Everything the pipeline derives from one mesh (see the module docstring).
+
+    Attributes
+    ----------
+    mesh : MeshData
+        Mesh frame, with normals, adjacency and scale.
+    origin : (3,) float64 ndarray
+        The simulator's centred frame in the mesh frame, m.
+    centred : MeshData
+        The mesh in the centred frame, with normals and scale (for the use-point rays).
+    samples : SurfaceSample
+        Surface samples, centred frame.
+    hull_vertices : (h, 3) float64 ndarray
+        Convex-hull vertices, centred frame, m.
+    """
+
+    mesh: MeshData
+    origin: np.ndarray
+    centred: MeshData
+    samples: SurfaceSample
+    hull_vertices: np.ndarray
+
+
+_DERIVED: IdentityCache[DerivedGeometry] = IdentityCache()
+
+
+def _entry_path(name: str) -> Path:
+    return cache_dir() / "objects" / f"{name}.npz"
+
+
+def derived_geometry(obj: GraspObject) -> DerivedGeometry:
+    """The derived geometry of an object's mesh: from memory, from disk, or computed.
+
+    Parameters
+    ----------
+    obj : GraspObject
+
+    Returns
+    -------
+    DerivedGeometry
+    """
+    return _DERIVED.get(obj, lambda: _load_or_build_derived(obj))
+
+
+def _load_or_build_derived(obj: GraspObject) -> DerivedGeometry:
+    vertices, faces = obj.vertices, obj.faces
+    key = {"kind": "mesh", "mesh_hash": obj.mesh_hash, "stamp": stamp()}
+    path = _entry_path(f"mesh-{obj.mesh_hash[:32]}-{key['stamp'][:12]}")
+    arrays = read_arrays(path, key)
+    if arrays is not None:
+        try:
+            return _derived_from_arrays(vertices, faces, obj.mesh_hash, arrays)
+        except (KeyError, ValueError, IndexError):
+            pass  # a malformed entry under the right key: rebuild it
+    derived = _build_derived(obj)
+    write_arrays(path, key, _derived_to_arrays(derived))
+    return derived
+
+
+def _build_derived(obj: GraspObject) -> DerivedGeometry:
+    import trimesh
+
+    from ..grasp.policy import centred_frame_origin
+    from ..grasp.surface import sample_surface
+
+    mesh = obj.mesh
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    origin = centred_frame_origin(vertices)
+    # Far from the origin, v - origin is exact (both within a factor 2: Sterbenz).
+    centred = trimesh.Trimesh(vertices - origin, np.asarray(mesh.faces), process=False)
+    return DerivedGeometry(
+        mesh=MeshData.from_trimesh(mesh, obj.mesh_hash),
+        origin=origin,
+        centred=MeshData(
+            vertices=np.asarray(centred.vertices, dtype=np.float64),
+            faces=np.asarray(centred.faces, dtype=np.int64),
+            content_hash=obj.mesh_hash + ":centred",
+            face_normals=np.asarray(centred.face_normals, dtype=np.float64),
+            scale=float(centred.scale),
+        ),
+        samples=sample_surface(centred),
+        hull_vertices=np.asarray(centred.convex_hull.vertices),
+    )
+
+
+def _derived_to_arrays(d: DerivedGeometry) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {f"mesh_{k}": getattr(d.mesh, k) for k in _MESH_FIELDS}
+    out["mesh_scale"] = np.array(d.mesh.scale)
+    out["origin"] = d.origin
+    out["centred_face_normals"] = d.centred.face_normals
+    out["centred_scale"] = np.array(d.centred.scale)
+    out["hull_vertices"] = d.hull_vertices
+    out.update({f"samples_{k}": getattr(d.samples, k) for k in _SAMPLE_FIELDS})
+    out["samples_spacing"] = np.array(d.samples.spacing)
+    return out
+
+
+def _derived_from_arrays(
+    vertices: np.ndarray, faces: np.ndarray, content_hash: str, a: dict[str, np.ndarray]
+) -> DerivedGeometry:
+    from ..grasp.surface import SurfaceSample
+
+    origin = a["origin"]
+    n_faces = len(faces)
+    if a["mesh_face_normals"].shape != (n_faces, 3) or origin.shape != (3,):
+        raise ValueError("entry does not match the mesh")
+    mesh = MeshData(
+        vertices=vertices,
+        faces=faces,
+        content_hash=content_hash,
+        scale=float(a["mesh_scale"]),
+        **{k: a[f"mesh_{k}"] for k in _MESH_FIELDS},
+    )
+    centred = MeshData(
+        vertices=vertices - origin,
+        faces=faces,
+        content_hash=content_hash + ":centred",
+        face_normals=a["centred_face_normals"],
+        scale=float(a["centred_scale"]),
+    )
+    samples = SurfaceSample(
+        spacing=float(a["samples_spacing"]), **{k: a[f"samples_{k}"] for k in _SAMPLE_FIELDS}
+    )
+    return DerivedGeometry(mesh, origin, centred, samples, a["hull_vertices"])
+
+
+# ---------------------------------------------------------------------------------------
+# resolved families
+# ---------------------------------------------------------------------------------------
+
+_MASS_ARRAYS = ("center_of_mass", "inertia", "bounds")
+_MASS_FLOATS = ("density", "volume", "mass", "r_max")
+
+
+def family_key(family: str, seed: int, materials: bool, density: float) -> dict[str, Any]:
+    """The key of a resolved family's entry.
+
+    Parameters
+    ----------
+    family : str
+        Canonical family name.
+    seed : int
+    materials : bool
+    density : float
+        kg/m^3.
+
+    Returns
+    -------
+    dict
+    """
+    return {
+        "kind": "family",
+        "family": family,
+        "seed": int(seed),
+        "materials": bool(materials),
+        "density": float(density).hex(),
+        "stamp": stamp(),
+    }
+
+
+def _family_path(key: dict[str, Any]) -> Path:
+    name = hashlib.sha256(repr(sorted(key.items())).encode()).hexdigest()[:24]
+    return _entry_path(f"family-{key['family']}-{key['seed']}-{name}")
+
+
+def load_family(key: dict[str, Any]) -> GraspObject | None:
+    """The resolved family stored under ``key``, or None (missing, stale or corrupt).
+
+    Parameters
+    ----------
+    key : dict
+        :func:`family_key`.
+
+    Returns
+    -------
+    GraspObject or None
+        Its ``mesh`` is built (with trimesh) only when accessed.
+    """
+    from .mass import MassProperties
+    from .resolve import GraspObject, mesh_hash
+
+    a = read_arrays(_family_path(key), key)
+    if a is None:
+        return None
+    try:
+        vertices = a["vertices"]
+        faces = a["faces"]
+        digest = str(a["mesh_hash"])
+        if vertices.ndim != 2 or faces.ndim != 2 or mesh_hash(_Arrays(vertices, faces)) != digest:
+            return None
+        arrays = {}
+        for k in _MASS_ARRAYS:
+            arrays[k] = np.array(a[f"mass_{k}"], dtype=np.float64)
+            arrays[k].setflags(write=False)
+        mass = MassProperties(**{k: float(a[f"mass_{k}"]) for k in _MASS_FLOATS}, **arrays)
+        face_parts = a["face_parts"] if "face_parts" in a else None
+        return GraspObject(
+            name=str(a["name"]),
+            category=str(a["category"]),
+            mesh=MeshData(vertices, faces, digest),
+            mass=mass,
+            mesh_hash=digest,
+            source="family",
+            face_parts=face_parts,
+            part_names=tuple(str(p) for p in a["part_names"]),
+            materials=bool(a["materials"]),
+        )
+    except (KeyError, ValueError, TypeError):
+        return None
+
+
+def store_family(key: dict[str, Any], obj: GraspObject) -> None:
+    """Store a freshly resolved family under ``key`` (see :func:`load_family`).
+
+    Parameters
+    ----------
+    key : dict
+        :func:`family_key`.
+    obj : GraspObject
+    """
+    arrays: dict[str, np.ndarray] = {
+        "vertices": np.asarray(obj.vertices, dtype=np.float64),
+        "faces": np.asarray(obj.faces, dtype=np.int64),
+        "mesh_hash": np.array(obj.mesh_hash),
+        "name": np.array(obj.name),
+        "category": np.array(obj.category),
+        "part_names": np.array(list(obj.part_names), dtype=str),
+        "materials": np.array(bool(obj.materials)),
+    }
+    if obj.face_parts is not None:
+        arrays["face_parts"] = np.asarray(obj.face_parts)
+    mass: MassProperties = obj.mass
+    for k in _MASS_ARRAYS + _MASS_FLOATS:
+        arrays[f"mass_{k}"] = np.asarray(getattr(mass, k))
+    write_arrays(_family_path(key), key, arrays)
+
+
+@dataclass(frozen=True)
+class _Arrays:
+    vertices: np.ndarray
+    faces: np.ndarray

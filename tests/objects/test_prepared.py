@@ -1,0 +1,175 @@
+"""The prepared-object cache (objects/prepared.py): same bytes as a fresh build, never trusted."""
+
+import numpy as np
+import pytest
+
+from affordgrasp.objects import families, family_names, load_object, prepared, resolve
+from affordgrasp.objects.rays import EmbreeRays, embree_available
+from affordgrasp.objects.resolve import GraspObject
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """An empty cache directory; the in-process family cache emptied around the test."""
+    monkeypatch.setenv("AFFORDGRASP_CACHE_DIR", str(tmp_path))
+    resolve._resolve_family.cache_clear()
+    yield tmp_path / "objects"
+    resolve._resolve_family.cache_clear()
+
+
+def assert_same_object(a: GraspObject, b: GraspObject) -> None:
+    assert a.name == b.name and a.category == b.category and a.source == b.source
+    assert a.mesh_hash == b.mesh_hash
+    for x, y in ((a.vertices, b.vertices), (a.faces, b.faces)):
+        assert x.dtype == y.dtype and x.tobytes() == y.tobytes()
+    assert (a.face_parts is None) == (b.face_parts is None)
+    if a.face_parts is not None:
+        assert a.face_parts.dtype == b.face_parts.dtype
+        assert a.face_parts.tobytes() == b.face_parts.tobytes()
+    assert a.part_names == b.part_names and a.materials == b.materials
+    for field in ("density", "volume", "mass", "r_max"):
+        assert getattr(a.mass, field) == getattr(b.mass, field)
+    for field in ("center_of_mass", "inertia", "bounds"):
+        assert getattr(a.mass, field).tobytes() == getattr(b.mass, field).tobytes()
+
+
+def assert_same_derived(a: prepared.DerivedGeometry, b: prepared.DerivedGeometry) -> None:
+    for m, n in ((a.mesh, b.mesh), (a.centred, b.centred)):
+        assert m.scale == n.scale
+        for field in ("vertices", "faces", *prepared._MESH_FIELDS):
+            x, y = getattr(m, field), getattr(n, field)
+            assert (x is None) == (y is None), field
+            if x is not None:
+                assert x.dtype == y.dtype and x.tobytes() == y.tobytes(), field
+    assert a.origin.tobytes() == b.origin.tobytes()
+    assert a.hull_vertices.tobytes() == b.hull_vertices.tobytes()
+    assert a.samples.spacing == b.samples.spacing
+    for field in prepared._SAMPLE_FIELDS:
+        x, y = getattr(a.samples, field), getattr(b.samples, field)
+        assert x.dtype == y.dtype and x.tobytes() == y.tobytes(), field
+
+
+@pytest.mark.parametrize(("family", "seed", "materials"), [("mug", 0, False), ("knife", 3, True)])
+def test_a_cached_family_is_the_fresh_build_bit_for_bit(cache, family, seed, materials):
+    fresh = resolve._build_family(family, seed, 1.0, materials, None, None)
+    first = load_object(f"{family}:{seed}", materials=materials)  # builds and stores
+    assert list(cache.glob("family-*.npz"))
+    resolve._resolve_family.cache_clear()
+    loaded = load_object(f"{family}:{seed}", materials=materials)  # from disk
+    assert loaded is not first
+    assert_same_object(loaded, fresh)
+    assert_same_derived(prepared.derived_geometry(loaded), prepared._build_derived(fresh))
+    # the mesh is built on demand, and is the same mesh
+    mesh = loaded.mesh
+    assert mesh.vertices.tobytes() == fresh.mesh.vertices.tobytes()
+    assert np.array_equal(mesh.faces, fresh.mesh.faces)
+    assert loaded.mesh is mesh
+
+
+def test_derived_geometry_loaded_from_disk_is_the_fresh_one(cache):
+    obj = load_object("hammer")
+    built = prepared.derived_geometry(obj)  # computed and stored
+    assert list(cache.glob("mesh-*.npz"))
+    other = GraspObject(
+        obj.name, obj.category, obj.mesh, obj.mass, obj.mesh_hash, obj.source, obj.face_parts
+    )
+    loaded = prepared.derived_geometry(other)  # another object, same mesh hash: from disk
+    assert loaded is not built
+    assert_same_derived(loaded, built)
+
+
+def corrupt(path, how: str) -> None:
+    data = bytearray(path.read_bytes())
+    if how == "truncate":
+        path.write_bytes(bytes(data[: len(data) // 2]))
+    elif how == "flip":  # a byte inside the stored arrays: the zip still reads
+        with np.load(path) as entry:
+            arrays = {k: entry[k] for k in entry.files}
+        arrays["vertices" if "vertices" in arrays else "hull_vertices"][0, 0] += 1e-3
+        np.savez(path, **arrays)
+    else:
+        path.write_bytes(b"not an npz file")
+
+
+@pytest.mark.parametrize("how", ["truncate", "flip", "garbage"])
+def test_a_corrupt_entry_is_rebuilt_never_trusted(cache, how):
+    reference = load_object("tumbler")
+    derived = prepared.derived_geometry(reference)
+    for path in sorted(cache.glob("*.npz")):
+        corrupt(path, how)
+    resolve._resolve_family.cache_clear()
+    again = load_object("tumbler")
+    assert again is not reference
+    assert_same_object(again, reference)
+    assert_same_derived(prepared.derived_geometry(again), derived)
+    # and the entries were rewritten whole
+    resolve._resolve_family.cache_clear()
+    key = prepared.family_key("tumbler", 0, False, 1.0)
+    assert prepared.load_family(key) is not None
+
+
+def test_an_entry_of_other_code_or_libraries_is_not_used(cache, monkeypatch):
+    load_object("tumbler")
+    key = prepared.family_key("tumbler", 0, False, 1.0)
+    assert prepared.load_family(key) is not None
+    stale = dict(key, stamp="0" * 64)  # what another version would ask for
+    assert prepared.load_family(stale) is None
+    # the stamp follows the sources of the code that computes the entries
+    monkeypatch.setattr(prepared, "_STAMPED_SOURCES", ("objects/prepared.py",))
+    prepared.stamp.cache_clear()
+    try:
+        assert prepared.stamp() != key["stamp"]
+    finally:
+        prepared.stamp.cache_clear()
+
+
+def test_a_family_entry_whose_mesh_does_not_hash_to_its_hash_is_refused(cache):
+    load_object("tumbler")
+    key = prepared.family_key("tumbler", 0, False, 1.0)
+    obj = prepared.load_family(key)
+    forged = GraspObject(
+        obj.name,
+        obj.category,
+        prepared.MeshData(obj.vertices + 1e-3, obj.faces, obj.mesh_hash),
+        obj.mass,
+        obj.mesh_hash,  # the hash of the other vertices
+        obj.source,
+        obj.face_parts,
+        obj.part_names,
+    )
+    prepared.store_family(key, forged)
+    assert prepared.load_family(key) is None
+
+
+@pytest.mark.skipif(not embree_available(), reason="embreex not installed")
+def test_rays_are_trimeshs_rays_bit_for_bit():
+    obj = load_object("mug")
+    mesh = obj.mesh
+    data = prepared.MeshData.from_trimesh(mesh, obj.mesh_hash)
+    rays = EmbreeRays(data.vertices, data.faces, data.face_normals, data.scale)
+    rng = np.random.default_rng(5)
+    # from a sphere around the mug towards points near its centre: most rays cross its
+    # walls several times; a few start inside it
+    outward = rng.normal(size=(400, 3))
+    origins = 0.2 * outward / np.linalg.norm(outward, axis=1, keepdims=True)
+    origins[:40] *= 0.1
+    directions = rng.uniform(-0.03, 0.03, (400, 3)) - origins
+    for a, b in zip(
+        rays.intersects_location(origins, directions, multiple_hits=True),
+        mesh.ray.intersects_location(origins, directions, multiple_hits=True),
+        strict=True,
+    ):
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+    assert len(rays.intersects_location(origins, directions)[0]) > 400  # several hits per ray
+    first = rays.intersects_first(origins, directions)
+    assert first.tobytes() == mesh.ray.intersects_first(origins, directions).tobytes()
+    assert np.array_equal(rays.intersects_any(origins, directions), first != -1)
+    loc = rays.intersects_location(origins, directions, multiple_hits=False)
+    ref = mesh.ray.intersects_location(origins, directions, multiple_hits=False)
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(loc, ref, strict=True))
+
+
+def test_family_names_are_the_builders_names():
+    assert family_names.CATEGORIES == {n: f.category for n, f in families.FAMILIES.items()}
+    assert list(family_names.CATEGORIES) == list(families.FAMILIES)
+    assert family_names.ALIASES == families.ALIASES
