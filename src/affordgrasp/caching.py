@@ -181,8 +181,9 @@ def write_arrays(path: Path, key: Mapping[str, Any], arrays: Mapping[str, np.nda
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".npz")
+        save: Any = np.savez  # names are the arrays' keywords
         with os.fdopen(fd, "wb") as f:
-            np.savez(f, **data)
+            save(f, **data)
         os.replace(tmp, path)
         tmp = None
     except OSError as exc:  # a read-only or full cache only costs the rebuild next time
