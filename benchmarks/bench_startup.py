@@ -1,6 +1,6 @@
 """Start-up of the command line with warm caches, against the previous release, same run.
 
-    python benchmarks/bench_startup.py [--runs 7] [--object hammer] [--previous 2671c7c]
+    python benchmarks/bench_startup.py [--runs 7] [--object hammer] [--previous 2671c7c ...]
 
 What is measured ("start-up"): a fresh process running the README's main job form,
 ``affordgrasp generate OBJECT --samples 1 --workers 1 --out DIR`` into a new directory, timed
@@ -10,11 +10,12 @@ in an untimed process, so numba's kernel caches and affordgrasp's object cache e
 grasp's steady cost (a few ms) is inside the number and is not subtracted; it is below the
 noise.
 
-Each version (the current sources, and a checkout of the previous release made by
-``bench_release.previous_checkout``) runs ``--runs`` times, interleaved, and the medians are
-reported with their ratio. Then ``--runs`` more processes of each version run the same
-command with timers around its phases (exclusive times; a nested phase is not counted in its
-parent), and the medians per phase are printed:
+Each version (the current sources, and checkouts of the previous release or of other
+commits given with ``--previous``, made by ``bench_release.previous_checkout``) runs
+``--runs`` times, interleaved, and the medians are reported with their ratios. Then
+``--runs`` more processes of each version run the same command with timers around its
+phases (exclusive times; a nested phase is not counted in its parent), and the medians per
+phase are printed:
 
 * ``imports``: executing modules (every ``import``, wherever it happens), except those that
   numba's kernel loading does (they belong to ``kernels``);
@@ -202,7 +203,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=7, help="processes per version (median)")
     parser.add_argument("--object", default="hammer")
-    parser.add_argument("--previous", default="2671c7c", help="commit of the previous release")
+    parser.add_argument(
+        "--previous",
+        nargs="+",
+        default=["2671c7c"],
+        help="commits to measure beside the current sources (default: the previous release)",
+    )
     parser.add_argument("--no-previous", action="store_true", help="measure the current only")
     parser.add_argument(
         "--current-src", default=str(REPO / "src"), help="sources to measure as the current code"
@@ -210,9 +216,8 @@ def main() -> None:
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     args = parser.parse_args()
 
-    versions = {"current": Path(args.current_src)}
-    if not args.no_previous:
-        versions = {"previous": previous_checkout(args.previous) / "src", **versions}
+    versions = {} if args.no_previous else {c: previous_checkout(c) / "src" for c in args.previous}
+    versions["current"] = Path(args.current_src)
     tmp = Path(tempfile.mkdtemp(prefix="affordgrasp-startup-"))
     try:
         load = os.getloadavg()
@@ -242,13 +247,11 @@ def main() -> None:
             summary[name]["min_wall"] = float(min(wall))
             s = summary[name]
             print(f"{name:<10}{s['wall']:>9.2f}{s['cpu']:>9.2f}{s['min_wall']:>10.2f}")
-        if "previous" in summary:
-            for key in ("wall", "cpu"):
-                summary[f"ratio_{key}"] = summary["current"][key] / summary["previous"][key]
-            print(
-                f"current / previous: wall {summary['ratio_wall']:.2f}, "
-                f"cpu {summary['ratio_cpu']:.2f}"
-            )
+        for name in versions:
+            if name != "current":
+                ratio = {k: summary["current"][k] / summary[name][k] for k in ("wall", "cpu")}
+                summary[f"current/{name}"] = ratio
+                print(f"current / {name}: wall {ratio['wall']:.2f}, cpu {ratio['cpu']:.2f}")
         print("phases, median s (exclusive; timed runs): " + ", ".join(
             f"{n} wall, {n} cpu" for n in versions))  # fmt: skip
         for phase in PHASES:
