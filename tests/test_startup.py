@@ -39,20 +39,65 @@ def test_generate_imports_neither_pandas_nor_scipy_stats(tmp_path):
     assert "scipy.stats" not in modules
 
 
-def test_kernels_load_from_the_cache_without_numba_compiler_registries():
-    # numba's own cache loading first imports every typing and lowering registry (~0.2 s);
-    # the package's kernels load without them and give the same results.
-    modules = fresh_process_modules(
-        "from affordgrasp import compiled\n"
-        "load = compiled.warm_up()\n"
-        "import sys\n"
-        "if load.compiled:\n"
-        "    sys.modules['numba.np.arraymath'] = None  # compiled here: nothing to check\n"
-        "    sys.modules['compiled-in-test'] = None\n"
+LOAD_AND_RUN_THE_KERNELS = """
+import hashlib, json
+from affordgrasp import compiled
+from affordgrasp.metrics import kernel_cache
+from affordgrasp.objects import load_object
+from affordgrasp.pipeline import evaluate_samples
+kernel_cache._LightLoading.enabled = {light}
+load = compiled.warm_up()  # loads every kernel of the pipeline and runs it
+rows = evaluate_samples(load_object("tumbler"), 6, seed=0).table.to_pylist()
+print(json.dumps({{
+    "compiled": load.compiled,
+    "light_loads": kernel_cache._LightLoading.loads,
+    "failure": kernel_cache._LightLoading.failure,
+    "hits": {{
+        d.py_func.__name__: sum(d.stats.cache_hits.values()) for d in compiled._dispatchers()
+    }},
+    "rows": hashlib.sha256(json.dumps(rows, sort_keys=True, default=str).encode()).hexdigest(),
+    "n": len(rows),
+}}))
+"""
+
+
+def load_and_run_the_kernels(light: bool) -> tuple[dict, set[str]]:
+    code = LOAD_AND_RUN_THE_KERNELS.format(light=light)
+    proc = subprocess.run(
+        [sys.executable, "-c", code + "\nimport sys; print(json.dumps(sorted(sys.modules)))"],
+        capture_output=True,
+        text=True,
+        check=False,
+        env={
+            "PYTHONPATH": SRC,
+            "PATH": "/usr/bin:/bin",
+            "AFFORDGRASP_CACHE_DIR": os.environ["AFFORDGRASP_CACHE_DIR"],
+        },
     )
-    if "compiled-in-test" in modules:
-        pytest.skip("the kernel cache was stale and this process compiled the kernels")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    report, modules = proc.stdout.strip().splitlines()[-2:]
+    return json.loads(report), set(json.loads(modules))
+
+
+def test_kernels_load_from_the_cache_without_numba_compiler_registries_and_run_right():
+    # numba's own cache loading first imports every typing and lowering registry (~0.2 s);
+    # the package's kernels load without them, and every kernel of the pipeline then runs
+    # and gives what the same kernels give when numba loads them its own way.
+    light, modules = load_and_run_the_kernels(light=True)
+    if light["compiled"]:  # a stale kernel cache: this process compiled and saved it
+        light, modules = load_and_run_the_kernels(light=True)
+    if light["compiled"]:
+        pytest.skip("the kernel cache could not be written: nothing loads from it")
+    assert light["failure"] is None
+    for name, hits in light["hits"].items():
+        assert hits > 0, name  # loaded from the cache...
+    assert light["light_loads"] >= len(light["hits"])  # ...the light way
     assert "numba.np.arraymath" not in modules
+    numba_own, modules = load_and_run_the_kernels(light=False)
+    assert numba_own["light_loads"] == 0
+    assert "numba.np.arraymath" in modules  # numba's loading does import its registries
+    assert light["n"] == numba_own["n"] == 6
+    assert light["rows"] == numba_own["rows"]
 
 
 def test_a_warm_generate_imports_neither_trimesh_nor_scipy_spatial(tmp_path):

@@ -102,7 +102,28 @@ def _make_locator_class():
     return PackageStampLocator
 
 
-def _install_light_loading(locator: type) -> None:
+# numba internals the light loading relies on: (object, attribute), checked at install time
+def _light_loading_needs() -> list[tuple[object, str]]:
+    from numba.core import caching
+    from numba.core.runtime import rtsys
+
+    return [
+        (caching.Cache, "load_overload"),
+        (caching.Cache, "_load_overload"),
+        (caching.Cache, "_guard_against_spurious_io_errors"),
+        (rtsys, "initialize"),
+    ]
+
+
+class _LightLoading:
+    """Whether the light loading is in use in this process (off after its first failure)."""
+
+    enabled = True
+    failure: str | None = None
+    loads = 0  # kernels loaded by the light path (read by the tests)
+
+
+def _install_light_loading(locator: type) -> bool:
     """Load this package's cached kernels without refreshing numba's compiler registries.
 
     numba's ``Cache.load_overload`` first calls ``target_context.refresh()``, which imports
@@ -113,24 +134,57 @@ def _install_light_loading(locator: type) -> None:
     here by importing ``numba.cpython.hashing``). A cache miss compiles, and numba's
     compiler refreshes the registries itself. Functions from anywhere else load as numba
     loads them.
+
+    Parameters
+    ----------
+    locator : type
+        The package's locator class: only functions it locates load the light way.
+
+    Returns
+    -------
+    bool
+        True when installed. This relies on internals of numba (``Cache.load_overload``,
+        ``Cache._load_overload``, ``Cache._guard_against_spurious_io_errors``,
+        ``rtsys.initialize``): when one of them is missing (another numba version) numba
+        is left alone and loads the kernels its own way (about 0.2 s slower).
+
+    Notes
+    -----
+    When the light loading raises (any ``Exception``), that load is done again by numba's
+    own ``load_overload`` and every later load of the process goes to numba directly: a
+    change inside numba costs the 0.2 s, never a failed start-up.
     """
+    if not all(hasattr(owner, name) for owner, name in _light_loading_needs()):
+        return False
     from numba.core import caching
     from numba.core.runtime import rtsys
 
     original = caching.Cache.load_overload
 
     def load_overload(self, sig, target_context):
-        if not isinstance(getattr(self._impl, "locator", None), locator):
+        light = _LightLoading.enabled and isinstance(
+            getattr(getattr(self, "_impl", None), "locator", None), locator
+        )
+        if not light:
             return original(self, sig, target_context)
-        import numba.cpython.hashing  # noqa: F401 - installs the hash-secret symbols
+        try:
+            import numba.cpython.hashing  # noqa: F401 - installs the hash-secret symbols
 
-        _preload_lapack_tables()
-        rtsys.initialize(target_context)
-        with self._guard_against_spurious_io_errors():
-            return self._load_overload(sig, target_context)
+            _preload_lapack_tables()
+            rtsys.initialize(target_context)
+            with self._guard_against_spurious_io_errors():
+                data = self._load_overload(sig, target_context)
+        except Exception as error:  # noqa: BLE001 - numba's own loading takes over
+            _LightLoading.enabled = False
+            _LightLoading.failure = f"{type(error).__name__}: {error}"
+            return original(self, sig, target_context)
+        if data is not None:
+            _LightLoading.loads += 1
+        return data
 
     load_overload.__wrapped__ = original  # type: ignore[attr-defined]
     caching.Cache.load_overload = load_overload
+    return True
 
 
 _LAPACK_TABLES = ("cython_blas", "cython_lapack")
@@ -181,9 +235,17 @@ _installed: list[type] = []
 def install_package_stamp() -> None:
     """Make numba validate this package's cached kernels against all their sources (once).
 
-    Also makes loading them from the cache light (:func:`_install_light_loading`).
+    Also makes loading them from the cache light (:func:`_install_light_loading`). Both
+    rely on internals of numba (``caching._CacheLocator`` and the locator list of
+    ``caching.CacheImpl``); with a numba that lacks them numba is left alone: its caches
+    then follow the modification time of each kernel's own file, as for any numba user.
     """
     if _installed:
+        return
+    from numba.core import caching
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    if not hasattr(caching, "_CacheLocator") or not hasattr(impl, "_locator_classes"):
         return
     locator = _make_locator_class()
     _cache_impl()._locator_classes.insert(0, locator)
