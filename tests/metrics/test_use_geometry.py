@@ -196,3 +196,24 @@ def test_edge_angle_over_all_edges_equals_the_k_d_tree_search(monkeypatch, with_
     tree = use_edge_angle(mesh, points, use_normal=normals)
     assert every_edge.tobytes() == tree.tobytes()
     assert (every_edge < np.pi).sum() > 50  # many points near a convex edge
+
+
+def test_use_edge_of_a_use_point_does_not_depend_on_the_batch():
+    # The fits of a batch share one call; each query's value must be the same bits
+    # whatever else is evaluated with it (the mug's handle and rim have vertices of
+    # different valence, so the queries' fits have different row counts).
+    from affordgrasp.objects import load_object
+
+    mesh = load_object("mug").mesh
+    rng = np.random.default_rng(0)
+    faces = rng.integers(0, len(mesh.faces), 300)
+    points = mesh.triangles_center[faces] + rng.normal(scale=1e-4, size=(300, 3))
+    whole = use_edge(mesh, faces, points)
+    pieces = np.concatenate(
+        [use_edge(mesh, faces[i : i + 7], points[i : i + 7]) for i in range(0, 300, 7)]
+    )
+    alone = np.array([use_edge(mesh, int(f), p) for f, p in zip(faces, points, strict=True)])
+    assert whole.tobytes() == pieces.tobytes()
+    assert whole.tobytes() == alone.tobytes()
+    reverse = use_edge(mesh, faces[::-1], points[::-1])[::-1]
+    assert reverse.tobytes() == whole.tobytes()

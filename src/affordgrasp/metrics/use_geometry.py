@@ -185,21 +185,38 @@ def _use_edge_chunk(mesh, T: np.ndarray, origin: np.ndarray) -> np.ndarray:
     x, y, z = x / h[q], y / h[q], z / h[q]
     M = np.stack([x * x, np.sqrt(2.0) * x * y, y * y, x, y, np.ones_like(x)], axis=1)
 
-    # all fits at once: design matrices zero-padded to a common row count (zero rows do
-    # not change a least-squares problem), one batched SVD, minimum-norm pseudo-inverse
+    # The fits are batched by row count, never padded: a query's SVD sees exactly its own
+    # rows (LAPACK's path and blocking depend on the row count, so zero padding to the
+    # batch's largest fit would change the last bits with the batch's composition), and the
+    # contractions below run in a fixed order per query, so every value depends only on its
+    # own query, whatever else is evaluated with it.
     order = np.argsort(q, kind="stable")
     start = np.searchsorted(q[order], np.arange(n))
     pos = np.empty_like(q)
     pos[order] = np.arange(q.size) - start[q[order]]
-    rows = int(per_query.max())
-    Mpad = np.zeros((n, rows, 6))
-    zpad = np.zeros((n, rows))
-    Mpad[q, pos] = M
-    zpad[q, pos] = z
-    U, S, Vt = np.linalg.svd(Mpad, full_matrices=False)
-    cutoff = S[:, :1] * _FIT_RCOND
-    inv_s = np.divide(1.0, S, out=np.zeros_like(S), where=S > cutoff)
-    coef = np.einsum("nji,nj->ni", Vt, inv_s * np.einsum("nrj,nr->nj", U, zpad))
+    rows_of = per_query.astype(np.int64)
+    coef = np.zeros((n, 6))
+    for rows in np.unique(rows_of[rows_of > 0]):
+        members = np.nonzero(rows_of == rows)[0]
+        slot = np.full(n, -1, dtype=np.int64)
+        slot[members] = np.arange(members.size)
+        sel = slot[q] >= 0
+        Mg = np.zeros((members.size, int(rows), 6))
+        zg = np.zeros((members.size, int(rows)))
+        Mg[slot[q[sel]], pos[sel]] = M[sel]
+        zg[slot[q[sel]], pos[sel]] = z[sel]
+        U, S, Vt = np.linalg.svd(Mg, full_matrices=False)
+        cutoff = S[:, :1] * _FIT_RCOND
+        inv_s = np.divide(1.0, S, out=np.zeros_like(S), where=S > cutoff)
+        # minimum-norm pseudo-inverse, Vt.T @ (inv_s * (U.T @ z)), summed term by term
+        utz = np.zeros((members.size, S.shape[1]))
+        for r in range(int(rows)):
+            utz += U[:, r, :] * zg[:, r, None]
+        w = inv_s * utz
+        cg = np.zeros((members.size, 6))
+        for j in range(S.shape[1]):
+            cg += Vt[:, j, :] * w[:, j, None]
+        coef[members] = cg
     a = coef[:, 0]
     b = np.sqrt(2.0) * coef[:, 1]
     c = coef[:, 2]
