@@ -128,6 +128,11 @@ def hand_rotations(p0: np.ndarray) -> np.ndarray:
     return np.stack([x, y, z], axis=-1)
 
 
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot products over the last axis (length 3), broadcast, in a fixed order."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
 def start_poses(
     p0: np.ndarray, hull_vertices: np.ndarray, hand_reach: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -155,14 +160,17 @@ def start_poses(
     hi = hull_vertices.max(axis=0)
     centre = (lo + hi) / 2
     radius = float(np.max(np.linalg.norm(hull_vertices - centre, axis=1)))
-    # The object's extent along each hand's x and y axes: (v, n) projections, one matmul each.
-    px = hull_vertices @ rot[:, :, 0].T
-    py = hull_vertices @ rot[:, :, 1].T
+    # The object's extent along each hand's x and y axes: (v, n) projections. The dot
+    # products are summed term by term, not by a matmul: BLAS rounds a matrix product and a
+    # matrix-vector product (a batch of one) differently, and a sample's start pose must
+    # not depend on the batch it is simulated in.
+    px = _dot3(hull_vertices[:, None, :], rot[None, :, :, 0])
+    py = _dot3(hull_vertices[:, None, :], rot[None, :, :, 1])
     xlo, xhi = px.min(axis=0), px.max(axis=0)
     ylo, yhi = py.min(axis=0), py.max(axis=0)
     x = (xlo + xhi) / 2 + p0[:, 3] * (xhi - xlo) / 2
     y = (ylo + yhi) / 2 + p0[:, 4] * (yhi - ylo) / 2
-    z = rot[:, :, 2] @ centre - radius - hand_reach
+    z = _dot3(rot[:, :, 2], centre) - radius - hand_reach
     origin = rot[:, :, 0] * x[:, None] + rot[:, :, 1] * y[:, None] + rot[:, :, 2] * z[:, None]
     poses = np.zeros((len(p0), 4, 4))
     poses[:, :3, :3] = rot
