@@ -1,4 +1,4 @@
-"""Fixtures of the physics tests: a private decomposition cache and small objects."""
+"""Fixtures of the physics tests: small objects (the private cache is tests/conftest.py's)."""
 
 from __future__ import annotations
 
@@ -6,21 +6,6 @@ import pytest
 
 pytest.importorskip("mujoco")
 pytest.importorskip("coacd")
-
-
-@pytest.fixture(scope="session", autouse=True)
-def private_cache(tmp_path_factory):
-    """Every test writes decompositions to a per-session temporary cache, never ~/.cache."""
-    import os
-
-    cache = tmp_path_factory.mktemp("affordgrasp-cache")
-    before = os.environ.get("AFFORDGRASP_CACHE_DIR")
-    os.environ["AFFORDGRASP_CACHE_DIR"] = str(cache)
-    yield cache
-    if before is None:
-        del os.environ["AFFORDGRASP_CACHE_DIR"]
-    else:
-        os.environ["AFFORDGRASP_CACHE_DIR"] = before
 
 
 def make_object(mesh, name="box"):

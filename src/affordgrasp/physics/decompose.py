@@ -22,26 +22,13 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from ..caching import cache_dir
 from . import deps
 from .settings import PhysicsSettings
 
 log = logging.getLogger(__name__)
 
 __all__ = ["cache_dir", "convex_parts"]
-
-
-def cache_dir() -> Path:
-    """The user cache directory of affordgrasp (created on first write).
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    env = os.environ.get("AFFORDGRASP_CACHE_DIR")
-    if env:
-        return Path(env).expanduser()
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "affordgrasp"
 
 
 def _cache_path(mesh_hash: str, settings: PhysicsSettings) -> Path:
