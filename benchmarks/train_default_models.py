@@ -5,14 +5,16 @@ One command, deterministic (seed 0, one torch thread):
     python benchmarks/train_default_models.py --data /tmp/affordgrasp-train65
 
 1. generates (or resumes) the training dataset: 13 families x 5 instances (variants 0-4) x
-   1500 uniform samples, seed 0, with depth images (about 30 min on 2 shared cores);
+   1500 uniform samples, seed 0, with depth images (16 min on 2 shared cores);
 2. splits it by object instance (seed 0: per family 3 instances train, 1 validation,
    1 test);
 3. trains the CNN classifier (target ``viable``, balanced) and the CNN regressor (target
    ``hold_effort_sum`` on viable grasps, normalised from [0, 250]; an ensemble of 3
    networks) and writes them to ``src/affordgrasp/learning/pretrained/`` (or ``--out``).
 
-The printed test metrics are on the held-out objects.
+The printed test metrics are on the held-out objects. Both parts are deterministic: on an
+unchanged simulation the command reproduces the shipped files (53 minutes in all on 2 shared
+cores; docs/learning.md, "Shipped models").
 """
 
 from __future__ import annotations
@@ -31,10 +33,11 @@ HERE = Path(__file__).resolve().parent
 PRETRAINED = HERE.parent / "src" / "affordgrasp" / "learning" / "pretrained"
 
 # The shipped models' recipes: the CNN classifier on canonicalised depth (balanced AP 0.841
-# on the held-out objects vs 0.829 for plain depth) and the CNN regressor on canonicalised
-# depth with the ranking loss, an ensemble of 3 (seeds 0-2) trained up to 20 epochs each
-# (comparison 0.674 vs 0.666-0.668 for its members and 0.662 for one network of 12 epochs;
-# docs/learning.md).
+# on the held-out objects vs 0.829 for plain depth, on the previous dataset) and the CNN
+# regressor on canonicalised depth with the ranking loss, an ensemble of 3 (seeds 0-2)
+# trained up to 20 epochs each (comparison 0.674 vs 0.666-0.668 for its members and 0.662
+# for one network of 12 epochs on the previous dataset; 0.670 vs 0.661-0.671 on the current
+# one; docs/learning.md).
 CLASSIFIER = {
     "arch": "cnn",
     "target": "viable",
