@@ -30,6 +30,11 @@ It also renders one figure per task with the best grasp of each family in each m
 (paper Figs. 3-6), and the paper's threshold-mode comparison on the knife (Fig. 7).
 Results go to ``--out`` (JSON + PNG); intermediate tables are cached in ``--cache``.
 
+``--also-grasps K`` repeats the brute force on the first K of the ``--grasps`` uniform grasps
+(sample i of a run depends only on the run's seed and i, so they are exactly the grasps a
+K-grasp brute force draws) and reports it beside the full one (``brute_force_at_K``): the
+acceptance count "finite scores with 4000 uniform samples" and the effect of the count.
+
 Mass properties: uniform unit density by default (the paper's, and the library's default);
 ``--materials`` gives the families their per-part materials (steel, wood, ...), which moves
 the centre of mass (pick's judge) and I, E_h, E_i.
@@ -146,6 +151,30 @@ def grasp_table(cache: Path, family: str, seed: int, n: int, materials: bool = F
     return table
 
 
+def brute_force(obj, task: str, family: str, table: pa.Table, uses: int, top: int) -> dict:
+    """Top ``top`` distinct grasps of ``table`` × ``uses`` use points, judged (see above)."""
+    com = obj.mass.center_of_mass
+    box = working_end_box(obj, family) if task == "beat" else None
+    found = best_pairs(
+        obj,
+        task,
+        grasps=table.num_rows,
+        uses=uses,
+        seed=0,
+        top=top,
+        grasp_table=table,
+        per_grasp=True,
+    )
+    ok = judge(task, family, found.table, com, box)
+    strict = judge(task, family, found.table, com)
+    return {
+        "found": found,
+        "hits": [int(sum(ok)), len(ok)],
+        "labels": [int(sum(strict)), len(strict)],
+        "top1": bool(ok[0]) if ok else None,
+    }
+
+
 def render(cells_rows, row_labels, col_labels, title, path):
     from affordgrasp.viz.grid import save_grid
 
@@ -172,6 +201,12 @@ def main() -> None:
     parser.add_argument(
         "--restarts", type=int, default=1, help="independent CEM runs sharing the budget"
     )
+    parser.add_argument(
+        "--also-grasps",
+        type=int,
+        default=0,
+        help="also the brute force on the first K of the --grasps grasps (0: not)",
+    )
     parser.add_argument("--top", type=int, default=10)
     parser.add_argument("--tasks", default="cut,beat,pick")
     parser.add_argument("--no-optimizer", action="store_true")
@@ -187,11 +222,17 @@ def main() -> None:
         help="the families' per-part materials instead of uniform unit density (the default)",
     )
     args = parser.parse_args()
+    if not 0 <= args.also_grasps < args.grasps:
+        parser.error(f"--also-grasps must lie in [0, --grasps), got {args.also_grasps}")
+    also = args.also_grasps
     cache, out = Path(args.cache), Path(args.out)
     cache.mkdir(parents=True, exist_ok=True)
     out.mkdir(parents=True, exist_ok=True)
     report: dict = {"settings": vars(args), "tasks": {}}
     t0 = time.perf_counter()
+    methods = ["brute_force", "optimizer", "brute_force_labels", "optimizer_labels"]
+    if also:
+        methods += [f"brute_force_at_{also}", f"brute_force_at_{also}_labels"]
     for task in args.tasks.split(","):
         per_family = {}
         wanted = [f for f in args.families.split(",") if f]
@@ -208,6 +249,10 @@ def main() -> None:
                 "opt_candidates": [],
                 "seeds": [],
             }
+            if also:
+                entry[f"brute_force_at_{also}"] = []
+                entry[f"brute_force_at_{also}_labels"] = []
+                entry["top1"][f"brute_force_at_{also}"] = []
             for seed in range(args.seeds):
                 obj = load_object(f"{family}:{seed}", materials=args.materials)
                 com = obj.mass.center_of_mass
@@ -215,23 +260,21 @@ def main() -> None:
                 entry["seeds"].append(seed)
                 if not args.no_brute_force:
                     table = grasp_table(cache, family, seed, args.grasps, args.materials)
-                    found = best_pairs(
-                        obj,
-                        task,
-                        grasps=args.grasps,
-                        uses=args.uses,
-                        seed=0,
-                        top=args.top,
-                        grasp_table=table,
-                        per_grasp=True,
+                    bf = brute_force(obj, task, family, table, args.uses, args.top)
+                    entry["brute_force"].append(bf["hits"])
+                    entry["brute_force_labels"].append(bf["labels"])
+                    entry["top1"]["brute_force"].append(bf["top1"])
+                    entry["candidates"].append(bf["found"].candidates)
+                    pq.write_table(
+                        bf["found"].table, cache / f"top_{task}_{family}_{seed}_bf.parquet"
                     )
-                    ok = judge(task, family, found.table, com, box)
-                    entry["brute_force"].append([int(sum(ok)), len(ok)])
-                    strict = judge(task, family, found.table, com)
-                    entry["brute_force_labels"].append([int(sum(strict)), len(strict)])
-                    entry["top1"]["brute_force"].append(bool(ok[0]) if ok else None)
-                    entry["candidates"].append(found.candidates)
-                    pq.write_table(found.table, cache / f"top_{task}_{family}_{seed}_bf.parquet")
+                    if also:
+                        first = brute_force(
+                            obj, task, family, table.slice(0, also), args.uses, args.top
+                        )
+                        entry[f"brute_force_at_{also}"].append(first["hits"])
+                        entry[f"brute_force_at_{also}_labels"].append(first["labels"])
+                        entry["top1"][f"brute_force_at_{also}"].append(first["top1"])
                 if not args.no_optimizer:
                     opt = optimize_pairs(
                         obj,
@@ -255,15 +298,16 @@ def main() -> None:
                     seed,
                     entry["brute_force"][-1] if entry["brute_force"] else "",
                     entry["optimizer"][-1] if entry["optimizer"] else "",
+                    entry[f"brute_force_at_{also}"][-1] if also and entry["brute_force"] else "",
                     flush=True,
                 )
-            for method in ("brute_force", "optimizer", "brute_force_labels", "optimizer_labels"):
+            for method in methods:
                 hits = sum(h for h, _ in entry[method])
                 total = sum(n for _, n in entry[method])
                 entry[f"{method}_fraction"] = hits / total if total else None
             per_family[family] = entry
         summary = {}
-        for method in ("brute_force", "optimizer", "brute_force_labels", "optimizer_labels"):
+        for method in methods:
             hits = sum(h for e in per_family.values() for h, _ in e[method])
             total = sum(n for e in per_family.values() for _, n in e[method])
             summary[method] = {
@@ -281,6 +325,7 @@ def main() -> None:
 
 def figures(args, out: Path, cache: Path, report: dict) -> None:
     """Per task: best grasp of each family (seed 0) in each mode; Fig. 7 on the knife."""
+    mass = ", with the materials" if args.materials else ""
     for task in report["tasks"]:
         families = TASK_FAMILIES[task][:5]
         rows = []
@@ -308,7 +353,7 @@ def figures(args, out: Path, cache: Path, report: dict) -> None:
             rows,
             families,
             list(MODES),
-            f"best {task} grasp per mode (brute force)",
+            f"best {task} grasp per mode (brute force{mass})",
             out / f"validation_{task}.png",
         )
     # Fig. 7: beat and cut on the knife, three robustness requirements

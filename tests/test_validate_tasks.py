@@ -88,3 +88,37 @@ def test_surround_judge_needs_three_contacts_off_a_line():
     two = {"contact_points": [0, 0, 0, 0.01, 0, 0], "wrist_axis": [0, 0, 1.0]}
     com = np.array([0.01, 0.0, 0.0])
     assert vt.surrounds_com(line, com) is False and vt.surrounds_com(two, com) is False
+
+
+def test_brute_force_on_the_first_grasps_is_the_smaller_brute_force(hammer):
+    # sample i of a run depends only on (seed, i): the first k rows of an n-grasp table are
+    # the grasps a k-grasp brute force draws, so --also-grasps k reports that search
+    from affordgrasp.pairs import best_pairs
+    from affordgrasp.pipeline import evaluate_samples
+
+    table = evaluate_samples(hammer, 120, seed=0, volume=False).table
+    first = vt.brute_force(hammer, "pick", "hammer", table.slice(0, 60), uses=80, top=5)
+    alone = best_pairs(hammer, "pick", grasps=60, uses=80, seed=0, top=5, per_grasp=True)
+    assert first["found"].grasps == 60 and first["found"].candidates == alone.candidates
+    assert first["found"].table.column("p0").to_pylist() == alone.table.column("p0").to_pylist()
+    np.testing.assert_allclose(
+        first["found"].table.column("value").to_numpy(), alone.table.column("value").to_numpy()
+    )
+    ok = vt.judge("pick", "hammer", alone.table, hammer.mass.center_of_mass)
+    assert first["hits"] == [sum(ok), len(ok)] and first["top1"] == (ok[0] if ok else None)
+    assert first["labels"] == first["hits"]  # pick has no head-region rule
+
+
+@pytest.mark.parametrize("also", ["100", "-1"])
+def test_also_grasps_outside_the_brute_force_is_refused(also, tmp_path):
+    import subprocess
+    import sys
+
+    run = subprocess.run(
+        [sys.executable, str(_PATH), "--grasps", "100", "--also-grasps", also]
+        + ["--cache", str(tmp_path / "c"), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 2 and "--also-grasps must lie in [0, --grasps)" in run.stderr
+    assert not (tmp_path / "o").exists()
