@@ -151,11 +151,20 @@ def grasp_table(cache: Path, family: str, seed: int, n: int, materials: bool = F
     return table
 
 
-def brute_force(obj, task: str, family: str, table: pa.Table, uses: int, top: int) -> dict:
-    """Top ``top`` distinct grasps of ``table`` × ``uses`` use points, judged (see above)."""
-    com = obj.mass.center_of_mass
-    box = working_end_box(obj, family) if task == "beat" else None
-    found = best_pairs(
+def scored(task: str, family: str, top: pa.Table, com, box) -> dict:
+    """Judge a top table: hits with the working-end box, hits by labels alone, top-1."""
+    ok = judge(task, family, top, com, box)
+    strict = judge(task, family, top, com)
+    return {
+        "hits": [int(sum(ok)), len(ok)],
+        "labels": [int(sum(strict)), len(strict)],
+        "top1": bool(ok[0]) if ok else None,
+    }
+
+
+def brute_force(obj, task: str, table: pa.Table, uses: int, top: int) -> object:
+    """Top ``top`` distinct grasps of ``table`` × ``uses`` use points."""
+    return best_pairs(
         obj,
         task,
         grasps=table.num_rows,
@@ -165,14 +174,6 @@ def brute_force(obj, task: str, family: str, table: pa.Table, uses: int, top: in
         grasp_table=table,
         per_grasp=True,
     )
-    ok = judge(task, family, found.table, com, box)
-    strict = judge(task, family, found.table, com)
-    return {
-        "found": found,
-        "hits": [int(sum(ok)), len(ok)],
-        "labels": [int(sum(strict)), len(strict)],
-        "top1": bool(ok[0]) if ok else None,
-    }
 
 
 def render(cells_rows, row_labels, col_labels, title, path):
@@ -260,18 +261,16 @@ def main() -> None:
                 entry["seeds"].append(seed)
                 if not args.no_brute_force:
                     table = grasp_table(cache, family, seed, args.grasps, args.materials)
-                    bf = brute_force(obj, task, family, table, args.uses, args.top)
+                    found = brute_force(obj, task, table, args.uses, args.top)
+                    bf = scored(task, family, found.table, com, box)
                     entry["brute_force"].append(bf["hits"])
                     entry["brute_force_labels"].append(bf["labels"])
                     entry["top1"]["brute_force"].append(bf["top1"])
-                    entry["candidates"].append(bf["found"].candidates)
-                    pq.write_table(
-                        bf["found"].table, cache / f"top_{task}_{family}_{seed}_bf.parquet"
-                    )
+                    entry["candidates"].append(found.candidates)
+                    pq.write_table(found.table, cache / f"top_{task}_{family}_{seed}_bf.parquet")
                     if also:
-                        first = brute_force(
-                            obj, task, family, table.slice(0, also), args.uses, args.top
-                        )
+                        head = brute_force(obj, task, table.slice(0, also), args.uses, args.top)
+                        first = scored(task, family, head.table, com, box)
                         entry[f"brute_force_at_{also}"].append(first["hits"])
                         entry[f"brute_force_at_{also}_labels"].append(first["labels"])
                         entry["top1"][f"brute_force_at_{also}"].append(first["top1"])
@@ -285,11 +284,10 @@ def main() -> None:
                         top=args.top,
                         restarts=args.restarts,
                     )
-                    ok = judge(task, family, opt.table, com, box)
-                    entry["optimizer"].append([int(sum(ok)), len(ok)])
-                    strict = judge(task, family, opt.table, com)
-                    entry["optimizer_labels"].append([int(sum(strict)), len(strict)])
-                    entry["top1"]["optimizer"].append(bool(ok[0]) if ok else None)
+                    judged = scored(task, family, opt.table, com, box)
+                    entry["optimizer"].append(judged["hits"])
+                    entry["optimizer_labels"].append(judged["labels"])
+                    entry["top1"]["optimizer"].append(judged["top1"])
                     entry["opt_candidates"].append(opt.candidates)
                     pq.write_table(opt.table, cache / f"top_{task}_{family}_{seed}_opt.parquet")
                 print(

@@ -97,7 +97,9 @@ def test_brute_force_on_the_first_grasps_is_the_smaller_brute_force(hammer):
     from affordgrasp.pipeline import evaluate_samples
 
     table = evaluate_samples(hammer, 120, seed=0, volume=False).table
-    first = vt.brute_force(hammer, "pick", "hammer", table.slice(0, 60), uses=80, top=5)
+    found = vt.brute_force(hammer, "pick", table.slice(0, 60), uses=80, top=5)
+    com = hammer.mass.center_of_mass
+    first = {"found": found, **vt.scored("pick", "hammer", found.table, com, None)}
     alone = best_pairs(hammer, "pick", grasps=60, uses=80, seed=0, top=5, per_grasp=True)
     assert first["found"].grasps == 60 and first["found"].candidates == alone.candidates
     assert first["found"].table.column("p0").to_pylist() == alone.table.column("p0").to_pylist()
