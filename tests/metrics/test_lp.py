@@ -80,3 +80,25 @@ def test_bad_input_is_refused():
         solve_standard_lp([1.0], [[np.nan]], [1.0])
     with pytest.raises(InputError):
         solve_standard_lp([1.0], [[1.0]], [1.0], backend="cplex")
+
+
+def test_highs_prints_nothing_on_stdout():
+    """HiGHS's banner (C printf, first instance of a process) must not reach stdout.
+
+    ``generate --json`` writes its summary on stdout; a LP handed to HiGHS mid-run once
+    put the banner in front of it and the JSON could not be read.
+    """
+    import subprocess
+    import sys
+
+    script = (
+        "import numpy as np\n"
+        "from affordgrasp.metrics.lp import HighsStandardLP\n"
+        "lp = HighsStandardLP(np.array([[1.0, 1.0]]), np.array([1.0, 2.0]))\n"
+        "r = lp.solve(np.array([1.0]))\n"
+        "print(r.status.name, round(r.objective, 9))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True
+    )
+    assert out.stdout == "OPTIMAL 1.0\n", out.stdout

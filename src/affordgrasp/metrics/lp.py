@@ -26,6 +26,9 @@ from __future__ import annotations
 
 import enum
 import logging
+import os
+import sys
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -291,8 +294,15 @@ def simplex_standard(A, b, c, x_out):
     if m > 0:
         if abs(np.linalg.det(B)) < 1e-300:
             return FAILED, np.nan
-        xB = np.linalg.solve(B, bs)
-        y = np.linalg.solve(B.T, cB)
+        # Round-off in the tableau can end on a basis that is singular to machine precision
+        # while its determinant is not tiny (7e-19 with a condition number of 3e17 on a hold
+        # effort LP): LAPACK then meets an exact zero pivot in B or B^T. No certificate can
+        # come from such a basis; the caller hands the LP to HiGHS.
+        try:
+            xB = np.linalg.solve(B, bs)
+            y = np.linalg.solve(B.T, cB)
+        except Exception:  # numba catches only Exception: here np.linalg.LinAlgError
+            return FAILED, np.nan
     else:
         xB = np.zeros(0)
         y = np.zeros(0)
@@ -328,6 +338,47 @@ def simplex_standard(A, b, c, x_out):
 # --------------------------------------------------------------------------------------
 
 
+_banner_lock = threading.Lock()
+_banner_shown = False
+
+
+def _new_highs():
+    """A ``highspy.Highs`` with its output off, printing nothing on the process's stdout.
+
+    HiGHS writes its banner with C ``printf`` when the first instance of a process is
+    built, before any option can be set, and neither ``output_flag`` nor a Python-level
+    redirect reaches it. On the stdout of ``generate --json`` and of any pipe a user
+    reads, that banner is corrupt output, so the first construction runs with file
+    descriptor 1 pointed at ``/dev/null``. Later constructions print nothing.
+    """
+    import highspy
+
+    global _banner_shown
+    with _banner_lock:
+        saved = -1
+        if not _banner_shown:
+            sys.stdout.flush()
+            try:
+                saved = os.dup(1)
+            except OSError:  # no stdout at all: nothing to protect
+                saved = -1
+        if saved < 0:
+            highs = highspy.Highs()
+        else:
+            try:
+                with open(os.devnull, "w") as null:
+                    os.dup2(null.fileno(), 1)
+                    try:
+                        highs = highspy.Highs()
+                    finally:
+                        os.dup2(saved, 1)
+            finally:
+                os.close(saved)
+            _banner_shown = True
+    highs.setOptionValue("output_flag", False)
+    return highs
+
+
 class HighsStandardLP:
     """A HiGHS model of ``min c @ x, A @ x = b, x >= 0`` whose right-hand side can change.
 
@@ -348,8 +399,7 @@ class HighsStandardLP:
         m, n = A.shape
         self._m, self._n = m, n
         self._A = A
-        self._highs = highspy.Highs()
-        self._highs.setOptionValue("output_flag", False)
+        self._highs = _new_highs()
         lp = highspy.HighsLp()
         lp.num_col_ = n
         lp.num_row_ = m
