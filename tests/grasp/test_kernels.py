@@ -249,3 +249,33 @@ def test_closing_every_finger_is_the_breakaway_loop(hand_name):
         got = close_fingers(hand, SimpleNamespace(cloud=cloud), pose, dofs)
         want = breakaway_reference(hand, cloud, np.eye(3), np.zeros(3), dofs)
         np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_search_queue_pops_the_smallest_key_with_its_entry(seed):
+    # The search's 4-ary heap: random pushes and pops, many equal keys (a cell's children
+    # and slid points share theirs); every pop is a smallest key present, with the entry and
+    # bracket pushed with it, and nothing is lost.
+    rng = np.random.default_rng(seed)
+    cap = 600
+    heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap))
+    size = 0
+    present = {}
+    next_id = 0
+    for _ in range(3000):
+        if size < cap and (size == 0 or rng.random() < 0.55):
+            k = float(rng.integers(0, 40)) if rng.random() < 0.5 else float(rng.random() * 40)
+            size = kernels._heap_push(heap, size, k, next_id, -k)
+            present[next_id] = k
+            next_id += 1
+        else:
+            k, e, p, size = kernels._heap_pop(heap, size)
+            assert k == min(present.values())
+            assert present.pop(e) == k and p == -k
+        assert size == len(present)
+    popped = []
+    while size:
+        k, e, _, size = kernels._heap_pop(heap, size)
+        assert present.pop(e) == k
+        popped.append(k)
+    assert popped == sorted(popped) and not present

@@ -1,5 +1,7 @@
 """The compiled 6D hull against qhull (hull.py)."""
 
+import faulthandler
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -12,14 +14,18 @@ from affordgrasp.metrics.epsilon import (
     HULL_FALLBACK,
     epsilon_from_wrenches_qhull,
     epsilon_volume_kernel,
+    epsilon_volume_store,
 )
 from affordgrasp.metrics.hull import (
     HULL_DEGENERATE,
     HULL_FAILED,
     HULL_OK,
+    build_hull,
     convex_hull_6d,
     hull_volume,
+    hull_workspace,
     nearest_facet_hull,
+    store_volume,
 )
 
 
@@ -155,6 +161,35 @@ def test_epsilon_of_near_coplanar_sets_is_qhulls(seed, noise_exp, volume):
         assert vol == pytest.approx(ref_vol, rel=1e-7)
 
 
+def test_best_first_hull_of_a_pinched_near_coplanar_set_ends(capsys):
+    # Seed 210 at noise 1e-9, moved so that the origin is inside: turning about a pinched
+    # 4-face paired the horizon "consistently" and the best-first loop never ended. It now
+    # gives up after more rounds than points (qhull then), or agrees with qhull. A watchdog
+    # ends the process with a traceback (instead of a silent hang) if it ever loops again.
+    P = _near_coplanar_set(np.random.default_rng(210), 1e-9)
+    P = np.ascontiguousarray(P - P.mean(axis=0))
+    W = np.ascontiguousarray(P.T)
+    ref_code, ref_eps, _ = epsilon_from_wrenches_qhull(W)
+    assert ref_code == CLOSURE and ref_eps > 0
+    cube = np.array(np.meshgrid(*[[-1.0, 1.0]] * 6)).reshape(6, -1).T.copy()
+    nearest_facet_hull(cube)  # compiled (or loaded) outside the watchdog
+    epsilon_volume_kernel(np.ascontiguousarray(cube.T), False)
+    with capsys.disabled():  # the watchdog's traceback goes to the terminal
+        faulthandler.dump_traceback_later(60, exit=True)
+        try:
+            status, _, _, offsets, _ = nearest_facet_hull(P)
+            code, eps, vol = epsilon_volume_kernel(W, False)
+        finally:
+            faulthandler.cancel_dump_traceback_later()
+    assert status in (HULL_OK, HULL_FAILED)
+    if status == HULL_OK:
+        assert offsets.min() == pytest.approx(ref_eps, rel=1e-9, abs=1e-12)
+    assert code in (CLOSURE, HULL_FALLBACK)
+    if code == CLOSURE:
+        assert eps == pytest.approx(ref_eps, rel=1e-9, abs=1e-12)
+        assert np.isnan(vol)
+
+
 def _ring_contacts(k, seed):
     """A palm flat on a round foot: k contacts on a 64-gon ring, normals tilted alike, 2e-5 m
     steps in height, plus three contacts underneath (the wine-glass foot grasp, scaled down)."""
@@ -240,3 +275,68 @@ def test_folded_surfaces_are_not_taken_for_the_hull(seed, noise):
         assert hull_volume(P, verts, interior) == pytest.approx(ref.volume, rel=1e-7)
     else:
         assert status == HULL_FAILED
+
+
+def _check_adjacency(store, n):
+    """Each live facet's neighbour across slot j is live, shares the five other vertices and
+    names the facet back across the ridge: a closed simplicial surface."""
+    alive = np.flatnonzero(store.alive[:n])
+    verts, nbrs = store.vertices, store.neighbours
+    for f in alive:
+        for j in range(6):
+            g = nbrs[f, j]
+            assert 0 <= g < n and store.alive[g]
+            ridge = set(verts[f]) - {verts[f, j]}
+            assert ridge < set(verts[g])
+            (back,) = np.flatnonzero(~np.isin(verts[g], list(ridge)))
+            assert nbrs[g, back] == f
+
+
+def test_reused_store_gives_the_fresh_hull():
+    # One store for a sequence of hulls (as the pipeline does): large, small, degenerate,
+    # nearly coplanar and best-first hulls in between leave nothing behind that changes the
+    # next one. Same facets, same ε and volume as a fresh store; closed adjacency.
+    rng = np.random.default_rng(5)
+    sets = [rng.normal(size=(int(rng.integers(7, 90)), 6)) for _ in range(12)]
+    sets.insert(3, np.zeros((10, 6)))
+    sets.insert(5, _near_coplanar_set(np.random.default_rng(272), 1e-10))
+    sets.insert(7, np.array(np.meshgrid(*[[-1.0, 1.0]] * 6)).reshape(6, -1).T)  # hypercube
+    store = hull_workspace()
+    for i, P in enumerate(sets):
+        P = np.ascontiguousarray(P)
+        nearest = i % 4 == 1
+        status, n, interior, store = build_hull(P, nearest, store)
+        ref = nearest_facet_hull(P) if nearest else convex_hull_6d(P)
+        assert status == ref[0]
+        if status != HULL_OK:
+            continue
+        live = store.alive[:n]
+        assert sorted(map(tuple, np.sort(store.vertices[:n][live], axis=1))) == sorted(
+            map(tuple, np.sort(ref[1], axis=1))
+        )
+        assert store.offset[:n][live].min() == ref[3].min()
+        if not nearest:
+            _check_adjacency(store, n)
+            assert store_volume(P, store, n, interior) == pytest.approx(
+                hull_volume(P, ref[1], ref[4]), rel=1e-13
+            )
+            assert store_volume(P, store, n, interior) == pytest.approx(
+                ConvexHull(P, qhull_options="Qt Qx").volume, rel=1e-9
+            )
+
+
+def test_epsilon_with_a_reused_store_is_the_fresh_one():
+    rng = np.random.default_rng(8)
+    store = hull_workspace()
+    closures = 0
+    for _ in range(40):
+        cs = random_contacts(rng, int(rng.integers(2, 9)), spread=0.5)
+        W = ref_wrenches(cs.points, cs.normals, cs.mu, rng.normal(size=3) * 0.01, 1 / 0.06)
+        W = np.ascontiguousarray(W)
+        for volume in (True, False):
+            code, eps, vol, store = epsilon_volume_store(W, volume, store)
+            ref = epsilon_volume_kernel(W, volume)
+            assert (code, eps) == ref[:2]
+            assert vol == ref[2] or (np.isnan(vol) and np.isnan(ref[2]))
+            closures += code == CLOSURE
+    assert closures >= 10

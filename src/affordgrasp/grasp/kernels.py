@@ -563,15 +563,16 @@ def _set_trig(s, chain, trig):
 
 @njit(cache=True)
 def _heap_push(heap, size, k, i, p):
-    """Push (key k, entry i, bracket low p) on the binary heap (key, ident, prev).
+    """Push (key k, entry i, bracket low p) on the 4-ary heap (key, ident, prev).
 
-    The parents above the new key move down one level and the entry is written once where
-    it stops (the same arrangement as swapping it up, with a third of the writes).
+    Entry j's children are 4 j + 1 .. 4 j + 4: half the levels of a binary heap, and the
+    four keys compared at each level are adjacent in memory. The parents above the new key
+    move down one level and the entry is written once where it stops.
     """
     key, ident, prev = heap
     j = size
     while j > 0:
-        parent = (j - 1) >> 1
+        parent = (j - 1) >> 2
         kp = key[parent]
         if kp <= k:
             break
@@ -589,8 +590,10 @@ def _heap_push(heap, size, k, i, p):
 def _heap_pop(heap, size):
     """Pop the smallest key: (key, entry, bracket low, new size).
 
-    The last entry sifts down from the root as a hole (the same arrangement as swapping it
-    down).
+    The last entry sifts down from the root as a hole, each level to the smallest of the
+    (up to four) children. Entries with equal keys may leave in another order than from a
+    binary heap; the search's result does not depend on that order (every key is a lower
+    bound on when its entry can touch, whichever of equal keys goes first).
     """
     key, ident, prev = heap
     k0 = key[0]
@@ -602,13 +605,15 @@ def _heap_pop(heap, size):
     p = prev[size]
     j = 0
     while True:
-        left = 2 * j + 1
-        if left >= size:
+        first = 4 * j + 1
+        if first >= size:
             break
-        child = left
-        if left + 1 < size and key[left + 1] < key[left]:
-            child = left + 1
-        kc = key[child]
+        child = first
+        kc = key[first]
+        for c in range(first + 1, min(first + 4, size)):
+            if key[c] < kc:
+                kc = key[c]
+                child = c
         if k <= kc:
             break
         key[j] = kc

@@ -37,10 +37,12 @@ from .cones import contact_wrenches, wrench_matrix_kernel
 from .hull import (
     HULL_DEGENERATE,
     HULL_OK,
+    build_hull,
     convex_hull_6d,
     facet_spread,
     hull_volume,
-    nearest_facet_hull,
+    hull_workspace,
+    store_volume,
 )
 from .kernel_cache import install_package_stamp
 from .lp import FAILED, OPTIMAL, simplex_standard
@@ -227,32 +229,60 @@ def epsilon_volume_kernel(W, volume):
     gws_volume : float
         6-volume of the GWS, >= 0 (NaN for force closure when not asked).
     """
+    code, eps, vol, _ = epsilon_volume_store(W, volume, hull_workspace())
+    return code, eps, vol
+
+
+@njit(cache=True)
+def epsilon_volume_store(W, volume, store):
+    """:func:`epsilon_volume_kernel` building its hull in a reusable facet store.
+
+    Parameters
+    ----------
+    W : (6, N) float64 ndarray
+        Wrench matrix, torques divided by r_max.
+    volume : bool
+        Compute the volume (else it is NaN for force-closure grasps).
+    store : FacetStore
+        From :func:`~affordgrasp.metrics.hull.hull_workspace` or a previous call.
+
+    Returns
+    -------
+    code, epsilon, gws_volume
+        As for :func:`epsilon_volume_kernel`.
+    store : FacetStore
+        The store to pass to the next call (a larger one when it had to grow).
+    """
     n = W.shape[1]
     if n == 0:
-        return NO_CONTACT, 0.0, 0.0
+        return NO_CONTACT, 0.0, 0.0, store
     if wrench_rank(W, RANK_TOL) < 6:
-        return DEGENERATE, 0.0, 0.0
+        return DEGENERATE, 0.0, 0.0, store
     status, t = closure_margin(W)
     if status == FAILED:
-        return LP_FALLBACK, 0.0, 0.0
+        return LP_FALLBACK, 0.0, 0.0, store
     if status != OPTIMAL or t <= CLOSURE_TOL:
-        return NOT_FORCE_CLOSURE, 0.0, 0.0
+        return NOT_FORCE_CLOSURE, 0.0, 0.0, store
     P = np.ascontiguousarray(W.T)
-    if volume:
-        hs, verts, normals, offsets, interior = convex_hull_6d(P)
-    else:
-        hs, verts, normals, offsets, interior = nearest_facet_hull(P)
+    hs, nf, interior, store = build_hull(P, not volume, store)
     if hs != HULL_OK:
         # The LP proved the origin strictly inside a full-rank hull: never "degenerate".
-        return HULL_FALLBACK, 0.0, 0.0
-    f = nearest_facet(offsets)
-    if not facet_supports(P, normals[f], offsets[f], verts[f]) or offsets[f] <= 0.0:
+        return HULL_FALLBACK, 0.0, 0.0, store
+    f = -1
+    for g in range(nf):
+        if store.alive[g] and (f < 0 or store.offset[g] < store.offset[f]):
+            f = g
+    if (
+        f < 0
+        or not facet_supports(P, store.normal[f], store.offset[f], store.vertices[f])
+        or store.offset[f] <= 0.0
+    ):
         # A facet that some wrench lies above (a sliver built from nearly coplanar
         # wrenches) cannot give ε: recompute exactly.
-        return HULL_FALLBACK, 0.0, 0.0
+        return HULL_FALLBACK, 0.0, 0.0, store
     if not volume:
-        return CLOSURE, offsets[f], np.nan
-    return CLOSURE, offsets[f], hull_volume(P, verts, interior)
+        return CLOSURE, store.offset[f], np.nan, store
+    return CLOSURE, store.offset[f], store_volume(P, store, nf, interior), store
 
 
 @njit(cache=True)

@@ -325,22 +325,6 @@ def _dist_nd(normal, offset, f, P, p):
 
 
 @njit(cache=True)
-def _sorted_key4(a, b, c, d):
-    """Order-independent int64 key of four vertex indices (each < 32768)."""
-    if a > b:
-        a, b = b, a
-    if c > d:
-        c, d = d, c
-    if a > c:
-        a, c = c, a
-    if b > d:
-        b, d = d, b
-    if b > c:
-        b, c = c, b
-    return ((a * 32768 + b) * 32768 + c) * 32768 + d
-
-
-@njit(cache=True)
 def _det6(A):
     """Determinant of a 6 x 6 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
     det = 1.0
@@ -483,8 +467,13 @@ def _unlink(F, nxt, f, p, P):
 
 
 @njit(cache=True)
-def _hull(P, nearest_only):
-    """:func:`convex_hull_6d` (``nearest_only`` False) or :func:`nearest_facet_hull` (True)."""
+def _build(P, nearest_only, F):
+    """Build the hull of ``P`` in the facet store ``F`` (reused, grown as needed).
+
+    :func:`convex_hull_6d` (``nearest_only`` False) or :func:`nearest_facet_hull` (True).
+    Returns ``(status, nF, interior, F)``: the facets are the live rows ``f < nF`` of the
+    returned store (it is a new one when ``F`` had to grow).
+    """
     N = P.shape[0]
     scale = 0.0
     for i in range(N):
@@ -492,27 +481,27 @@ def _hull(P, nearest_only):
             v = abs(P[i, c])
             if v > scale:
                 scale = v
-    empty_i = np.zeros((0, DIM), dtype=np.int64)
-    empty_f = np.zeros((0, DIM))
     q0 = np.zeros(DIM)
     if N < DIM + 1 or scale == 0.0 or N >= 32768:
         status = HULL_DEGENERATE if N < DIM + 1 or scale == 0.0 else HULL_FAILED
-        return status, empty_i, empty_f, np.zeros(0), q0
+        return status, 0, q0, F
     tol = HULL_TOL * scale
     chk_tol = 1e-14 * scale
     vis_tol = COPLANAR_TOL * scale
     verify_tol = VERIFY_TOL * scale
     simplex = np.empty(DIM + 1, dtype=np.int64)
     if not _initial_simplex(P, simplex, RANK_TOL * scale):
-        return HULL_DEGENERATE, empty_i, empty_f, np.zeros(0), q0
+        return HULL_DEGENERATE, 0, q0, F
     for i in range(DIM + 1):
         for c in range(DIM):
             q0[c] += P[simplex[i], c]
     for c in range(DIM):
         q0[c] /= DIM + 1
 
-    cap = 512
-    F = _facet_store(cap)
+    cap = F.offset.shape[0]
+    if cap < 2 * (DIM + 1):
+        cap = 512
+        F = _facet_store(cap)
     F_vertices = F.vertices
     F_neighbours = F.neighbours
     F_normal = F.normal
@@ -538,10 +527,14 @@ def _hull(P, nearest_only):
                 s += 1
         d, ok = _hyperplane(P, F_vertices[i], q0, nvec, scratch, perm, yvec)
         if not ok:
-            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+            return HULL_FAILED, 0, q0, F
         F_normal[i] = nvec
         F_offset[i] = d
         F_alive[i] = True
+        F_outside[i] = -1
+        F_far_point[i] = -1
+        F_far_dist[i] = 0.0
+        F_mark[i] = 0
     nF = DIM + 1
 
     in_simplex = np.zeros(N, dtype=np.bool_)
@@ -568,10 +561,6 @@ def _hull(P, nearest_only):
                 break
 
     vis = np.empty(64, dtype=np.int64)
-    four = np.empty(DIM - 2, dtype=np.int64)
-    table_key = np.empty(0, dtype=np.int64)
-    table_f = np.empty(0, dtype=np.int64)
-    table_s = np.empty(0, dtype=np.int64)
     hv = np.empty(64, dtype=np.int64)
     hk = np.empty(64, dtype=np.int64)
     hg = np.empty(64, dtype=np.int64)
@@ -580,7 +569,13 @@ def _hull(P, nearest_only):
     free = np.empty(64, dtype=np.int64)  # retired facet slots, reused by new facets
     nfree = 0
     newf = np.empty(64, dtype=np.int64)
+    rounds = 0
     while nstack > 0 or nearest_only:
+        rounds += 1
+        if nearest_only and rounds > N:
+            # every round adds a point as an apex: more rounds than points is an
+            # inconsistent partial hull (e.g. a pinched horizon): give up to qhull
+            return HULL_FAILED, nF, q0, F
         if nearest_only:
             # Best first: the facet nearest the origin. If no point is above it, it is a
             # facet of the full hull, and no facet is nearer: the partial hull lies inside
@@ -641,7 +636,7 @@ def _hull(P, nearest_only):
                 nstack += 1
             if F_apex_dist[best] <= vis_tol:
                 if nearest_only:  # the same apex would come back
-                    return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                    return HULL_FAILED, nF, q0, F
                 continue
             f0 = best
             F_far_dist[f0] = F_apex_dist[best]
@@ -696,7 +691,8 @@ def _hull(P, nearest_only):
                     found = True
                     break
             if not found:
-                return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                return HULL_FAILED, nF, q0, F
+            F_neighbours[v, k] = -2 - nf  # v retires: its horizon slot names nf
             # The new hyperplane contains the ridge, so it lies in the pencil of the two
             # hyperplanes through that ridge (v's and g's): the combination through p is
             # exact in exact arithmetic and costs O(DIM). Near-coplanar v and g make it
@@ -725,7 +721,7 @@ def _hull(P, nearest_only):
             if not ok:
                 d, ok = _hyperplane(P, F_vertices[nf], q0, nvec, scratch, perm, yvec)
                 if not ok:
-                    return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                    return HULL_FAILED, nF, q0, F
             for c in range(DIM):
                 F_normal[nf, c] = nvec[c]
             F_offset[nf] = d
@@ -734,52 +730,51 @@ def _hull(P, nearest_only):
             F_far_point[nf] = -1
             F_far_dist[nf] = 0.0
             F_mark[nf] = 0
-        # neighbours among the new facets: they share p and a 4-face of the horizon,
-        # paired through an open-addressing hash table on the sorted 4-face
-        nkeys = nh * (DIM - 1)
-        tsize = 1
-        while tsize < 2 * nkeys:
-            tsize *= 2
-        if table_key.shape[0] < tsize:
-            table_key = np.empty(tsize, dtype=np.int64)
-            table_f = np.empty(tsize, dtype=np.int64)
-            table_s = np.empty(tsize, dtype=np.int64)
-        for t in range(tsize):
-            table_key[t] = -1
+        # neighbours among the new facets. The new facet on horizon ridge (v, k) and the one
+        # across its ridge opposite slot j share p and the 4-face Q = v's vertices but those
+        # of slots j and k. The facets around Q form a cycle (the link of a 3-face of a
+        # simplicial 5-sphere); turning about Q from v through visible facets, away from g,
+        # reaches the other horizon ridge that holds Q, whose new facet is the neighbour.
         npaired = 0
         for h in range(nh):
             nf = newf[h]
-            kp = hk[h]
+            v = hv[h]
+            k = hk[h]
             for j in range(DIM):
-                if j == kp:
+                if j == k or F_neighbours[nf, j] >= 0:
                     continue
-                t = 0
-                for c in range(DIM):
-                    if c != kp and c != j:
-                        four[t] = F_vertices[nf, c]
-                        t += 1
-                key = _sorted_key4(four[0], four[1], four[2], four[3])
-                # multiplicative hashing; int64 overflow wraps, the mask keeps it >= 0
-                slot = ((key ^ (key >> 29)) * 0x2545F4914F6CDD1D) & (tsize - 1)
+                c = v  # a visible facet holding Q
+                se = j  # cross c's ridge opposite its vertex in slot se ...
+                so = k  # ... keeping its vertex in slot so
+                steps = 0
                 while True:
-                    tk = table_key[slot]
-                    if tk == -1:
-                        table_key[slot] = key
-                        table_f[slot] = nf
-                        table_s[slot] = j
+                    x = F_neighbours[c, se]
+                    if x <= -2:  # a horizon ridge: x names its new facet
                         break
-                    if tk == key:
-                        if table_f[slot] < 0:  # a third facet on one 4-face
-                            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
-                        of = table_f[slot]
-                        F_neighbours[of, table_s[slot]] = nf
-                        F_neighbours[nf, j] = of
-                        table_f[slot] = -1
-                        npaired += 1
-                        break
-                    slot = (slot + 1) & (tsize - 1)
-        if 2 * npaired != nkeys:
-            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                    if F_mark[x] != stamp or steps > nvis:
+                        return HULL_FAILED, nF, q0, F
+                    t = -1
+                    s2 = -1
+                    o = F_vertices[c, so]
+                    for r in range(DIM):
+                        if F_neighbours[x, r] == c:
+                            t = r
+                        if F_vertices[x, r] == o:
+                            s2 = r
+                    if t < 0 or s2 < 0:
+                        return HULL_FAILED, nF, q0, F
+                    c = x
+                    se = s2
+                    so = t
+                    steps += 1
+                nf2 = -2 - x
+                if nf2 == nf or F_neighbours[nf2, so] != -1:
+                    return HULL_FAILED, nF, q0, F
+                F_neighbours[nf, j] = nf2
+                F_neighbours[nf2, so] = nf
+                npaired += 1
+        if 2 * npaired != nh * (DIM - 1):
+            return HULL_FAILED, nF, q0, F
         # retire the visible facets and hand their outside points to the new facets
         for i in range(nvis):
             F_alive[vis[i]] = False
@@ -814,41 +809,185 @@ def _hull(P, nearest_only):
             free[nfree] = vis[i]
             nfree += 1
 
-    count = 0
-    for f in range(nF):
-        if F_alive[f]:
-            count += 1
-            if thick and not nearest_only:
-                # Coplanar apexes were met (folds of <= vis_tol, dropped points): the surface
-                # is the hull only if every point is beneath every facet, to verify_tol
-                # (and see the volume test below).
+    if thick and not nearest_only:
+        # Coplanar apexes were met (folds of <= vis_tol, dropped points): the surface is the
+        # hull only if every point is beneath every facet, to verify_tol, and the volume is
+        # the same from two interior points. The boundary of a convex body gives the same
+        # sum of |cone volumes| from any interior point; a surface folded over itself
+        # (slivers whose hyperplanes are round-off) does not. Checked from the initial
+        # simplex's centroid and from the centroid of all points.
+        for f in range(nF):
+            if F_alive[f]:
                 for p in range(N):
                     if _dist_nd(F_normal, F_offset, f, P, p) > verify_tol:
-                        return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
+                        return HULL_FAILED, nF, q0, F
+        centroid = np.zeros(DIM)
+        for i in range(N):
+            for c in range(DIM):
+                centroid[c] += P[i, c] / N
+        v1 = _store_volume_det6(P, F, nF, q0)
+        v2 = _store_volume_det6(P, F, nF, centroid)
+        if abs(v1 - v2) > VOLUME_CHECK_TOL * v1:
+            return HULL_FAILED, nF, q0, F
+    return HULL_OK, nF, q0, F
+
+
+@njit(cache=True)
+def _hull(P, nearest_only):
+    """The hull's facets as arrays: ``(status, vertices, normals, offsets, interior)``."""
+    status, nF, q0, F = _build(P, nearest_only, _facet_store(512))
+    if status != HULL_OK:
+        return status, np.zeros((0, DIM), dtype=np.int64), np.zeros((0, DIM)), np.zeros(0), q0
+    count = 0
+    for f in range(nF):
+        if F.alive[f]:
+            count += 1
     out_v = np.empty((count, DIM), dtype=np.int64)
     out_n = np.empty((count, DIM))
     out_d = np.empty(count)
     j = 0
     for f in range(nF):
-        if F_alive[f]:
-            out_v[j] = F_vertices[f]
-            out_n[j] = F_normal[f]
-            out_d[j] = F_offset[f]
+        if F.alive[f]:
+            out_v[j] = F.vertices[f]
+            out_n[j] = F.normal[f]
+            out_d[j] = F.offset[f]
             j += 1
-    if thick and not nearest_only:
-        # The boundary of a convex body gives the same sum of |cone volumes| from any
-        # interior point; a surface folded over itself (slivers whose hyperplanes are
-        # round-off) does not. Checked from the initial simplex's centroid and from the
-        # centroid of all points.
-        centroid = np.zeros(DIM)
-        for i in range(N):
-            for c in range(DIM):
-                centroid[c] += P[i, c] / N
-        v1 = hull_volume(P, out_v, q0)
-        v2 = hull_volume(P, out_v, centroid)
-        if abs(v1 - v2) > VOLUME_CHECK_TOL * v1:
-            return HULL_FAILED, empty_i, empty_f, np.zeros(0), q0
     return HULL_OK, out_v, out_n, out_d, q0
+
+
+@njit(cache=True)
+def hull_workspace():
+    """An empty facet store for :func:`build_hull` to reuse from one hull to the next."""
+    return _facet_store(512)
+
+
+@njit(cache=True)
+def build_hull(P, nearest_only, store):
+    """The hull of ``P`` built in a reusable facet store (no per-hull allocation).
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Points.
+    nearest_only : bool
+        Stop when the facet nearest the origin is final (as :func:`nearest_facet_hull`).
+    store : FacetStore
+        From :func:`hull_workspace` or a previous call.
+
+    Returns
+    -------
+    status : int
+        HULL_OK, HULL_DEGENERATE or HULL_FAILED.
+    n : int
+        The facets are the rows ``f < n`` of the returned store with ``store.alive[f]``.
+    interior : (6,) float64 ndarray
+        A point inside the hull.
+    store : FacetStore
+        The store holding the facets (a larger one when ``store`` had to grow): pass it to
+        the next call.
+    """
+    return _build(P, nearest_only, store)
+
+
+@njit(cache=True)
+def _det5(A):
+    """Determinant of a 5 x 5 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
+    det = 1.0
+    for r in range(DIM - 1):
+        bi = r
+        best = abs(A[r, r])
+        for i in range(r + 1, DIM - 1):
+            if abs(A[i, r]) > best:
+                best = abs(A[i, r])
+                bi = i
+        if best == 0.0:
+            return 0.0
+        if bi != r:
+            for j in range(DIM - 1):
+                t = A[r, j]
+                A[r, j] = A[bi, j]
+                A[bi, j] = t
+            det = -det
+        piv = A[r, r]
+        det *= piv
+        for i in range(r + 1, DIM - 1):
+            f = A[i, r] / piv
+            for j in range(r + 1, DIM - 1):
+                A[i, j] -= f * A[r, j]
+    return det
+
+
+@njit(cache=True)
+def store_volume(P, F, n, interior):
+    """6-volume of the hull whose facets are the live rows ``f < n`` of the store ``F``.
+
+    Each facet's cone from the interior point has volume ``|c| h / 6!``: ``h`` the
+    point's distance to the facet's hyperplane, ``c`` the generalised cross product of the
+    facet's five edge vectors, which is parallel to the facet's unit normal ``n``, so
+    ``|c| = |c_a| / |n_a|`` for the normal's largest component ``a``, and ``c_a`` is a 5 x 5
+    determinant (the edges without coordinate ``a``): the same volume as
+    :func:`hull_volume`'s 6 x 6 determinants, at about half their cost.
+
+    Parameters
+    ----------
+    P : (N, 6) float64 ndarray
+        Points.
+    F : FacetStore
+        As returned by :func:`build_hull`.
+    n : int
+        Rows in use.
+    interior : (6,) float64 ndarray
+        A point inside the hull.
+
+    Returns
+    -------
+    float
+    """
+    A = np.empty((DIM - 1, DIM - 1))
+    vertices = F.vertices
+    normal = F.normal
+    offset = F.offset
+    alive = F.alive
+    vol = 0.0
+    for f in range(n):
+        if not alive[f]:
+            continue
+        a = 0
+        big = abs(normal[f, 0])
+        h = offset[f] - normal[f, 0] * interior[0]
+        for c in range(1, DIM):
+            h -= normal[f, c] * interior[c]
+            if abs(normal[f, c]) > big:
+                big = abs(normal[f, c])
+                a = c
+        v0 = vertices[f, 0]
+        for r in range(DIM - 1):
+            v = vertices[f, r + 1]
+            j = 0
+            for c in range(DIM):
+                if c != a:
+                    A[r, j] = P[v, c] - P[v0, c]
+                    j += 1
+        vol += abs(_det5(A) * h) / big
+    return vol / 720.0  # 6!
+
+
+@njit(cache=True)
+def _store_volume_det6(P, F, n, interior):
+    """:func:`store_volume` from the 6 x 6 determinants (no use of the facet normals)."""
+    A = np.empty((DIM, DIM))
+    vertices = F.vertices
+    alive = F.alive
+    vol = 0.0
+    for f in range(n):
+        if not alive[f]:
+            continue
+        for r in range(DIM):
+            v = vertices[f, r]
+            for c in range(DIM):
+                A[r, c] = P[v, c] - interior[c]
+        vol += abs(_det6(A))
+    return vol / 720.0  # 6!
 
 
 @njit(cache=True)

@@ -41,7 +41,8 @@ from .effort import (
     impact_effort_kernel,
     use_wrench,
 )
-from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_kernel
+from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
+from .hull import hull_workspace
 from .inertia import rotational_inertia
 from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
@@ -103,6 +104,7 @@ def contact_metrics_batch(
     force = np.empty(n)
     redo = np.zeros(n, dtype=np.bool_)
     inv_r = 1.0 / r_max
+    store = hull_workspace()  # one facet store for every hull of the batch
     for i in range(n):
         s = offsets[i]
         e = offsets[i + 1]
@@ -110,7 +112,7 @@ def contact_metrics_batch(
         N = np.ascontiguousarray(normals[s:e])
         M = np.ascontiguousarray(mu[s:e])
         Wn = wrench_matrix_kernel(P, N, M, center, inv_r, soft)
-        c, eps[i], vol[i] = epsilon_volume_kernel(Wn, volume)
+        c, eps[i], vol[i], store = epsilon_volume_store(Wn, volume, store)
         code[i] = c
         W = wrench_matrix_kernel(P, N, M, center, 1.0, soft)
         ok_hold = hold_effort_kernel(W, hold[i])
