@@ -8,7 +8,8 @@ grasps of the default mode are found two ways:
   (:func:`affordgrasp.pairs.best_pairs` with ``per_grasp=True``);
 * the optimiser: the cross-entropy method over p0, each grasp with its best use point of
   ``--uses`` (:func:`affordgrasp.pairs.optimize_pairs`), ``--budget`` simulations shared
-  by ``--restarts`` independent runs.
+  by ``--restarts`` independent runs; with ``--refine f`` the share f of the budget then
+  continues the best run around its best point.
 
 The searches score with ε alone (no GWS volume: ``volume=False``), which leaves every score
 unchanged and skips the 6-D hull of enveloping grasps.
@@ -203,6 +204,12 @@ def main() -> None:
         "--restarts", type=int, default=1, help="independent CEM runs sharing the budget"
     )
     parser.add_argument(
+        "--refine",
+        type=float,
+        default=0.0,
+        help="share of --budget that continues the best restart around its best point",
+    )
+    parser.add_argument(
         "--also-grasps",
         type=int,
         default=0,
@@ -283,6 +290,7 @@ def main() -> None:
                         seed=seed,
                         top=args.top,
                         restarts=args.restarts,
+                        refine=args.refine,
                     )
                     judged = scored(task, family, opt.table, com, box)
                     entry["optimizer"].append(judged["hits"])

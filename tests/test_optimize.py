@@ -9,6 +9,7 @@ import pytest
 
 from affordgrasp import tasks
 from affordgrasp.cli import main
+from affordgrasp.errors import InputError
 from affordgrasp.optimize import HIGH, LOW, PERIODIC, cem_maximize, optimize, uniform_inputs
 
 TARGET = np.array([0.97, 0.3, -0.98, 0.1, -0.2, 0.7, 0.5, -0.4])
@@ -99,3 +100,37 @@ def test_optimize_uses_the_hand_object_it_is_given(wrist_inertia_task, box_mesh)
     result = optimize(str(box_mesh), wrist_inertia_task, budget=40, seed=0, workers=1, hand=custom)
     joints = result.cem.row["joints"] if result.cem is not None else result.random.row["joints"]
     assert len(joints) == len(custom.dofs) != len(get_hand("barrett").dofs)
+
+
+def test_a_continued_run_keeps_its_elites_and_samples_its_distribution():
+    first = cem_maximize(narrow_peak, budget=300, seed=0, population=30)
+    state = first.state
+    assert state is not None and state.mean is not None
+    assert state.best == pytest.approx(first.values.max())
+    more = cem_maximize(narrow_peak, budget=120, seed=5, population=30, state=state)
+    # elites are kept until better points replace them: never worse than where it stood
+    assert more.state.best >= state.best
+    # the first generation is drawn around the run's mean (10 % of it uniform), not afresh
+    d = more.x[:30] - state.mean
+    d[:, PERIODIC] = (d[:, PERIODIC] + 1) % 2 - 1
+    near = np.all(np.abs(d) <= 4 * state.std + 1e-12, axis=1)
+    assert near.sum() >= 24
+    fresh = cem_maximize(narrow_peak, budget=120, seed=5, population=30)
+    assert more.values.max() >= fresh.values.max()
+
+
+def test_a_carried_elite_stays_until_beaten():
+    from affordgrasp.optimize import CEMState
+
+    x0 = np.full((2, 8), 0.5)
+    state = CEMState(
+        mean=np.zeros(8),
+        std=np.full(8, 0.1),
+        elite_x=x0,
+        elite_v=np.array([10.0, 9.0]),  # better than anything the objective gives
+        elite_g=np.full(2, np.nan),
+    )
+    trace = cem_maximize(narrow_peak, budget=60, seed=0, population=20, state=state)
+    assert trace.state.best == 10.0 and len(trace.values) == 60
+    with pytest.raises(InputError, match="initial|state"):
+        cem_maximize(narrow_peak, budget=60, seed=0, initial=x0, state=state)

@@ -189,3 +189,41 @@ def test_optimizer_refuses_bad_restarts(budget, restarts):
 
     with pytest.raises(InputError, match="restarts|budget"):
         optimize_pairs("hammer", "pick", budget=budget, uses=10, restarts=restarts)
+
+
+def test_refine_continues_the_best_restart_within_the_budget(monkeypatch):
+    import affordgrasp.optimize as optimize_module
+
+    calls = []
+    real = optimize_module.cem_maximize
+
+    def spy(objective, **kwargs):
+        trace = real(objective, **kwargs)
+        calls.append((kwargs, trace))
+        return trace
+
+    monkeypatch.setattr(optimize_module, "cem_maximize", spy)
+    kwargs = dict(budget=96, uses=50, seed=0, top=5, population=16, restarts=3, refine=0.25)
+    found = optimize_pairs("hammer", "pick", **kwargs)
+    assert found.grasps == 96
+    runs, last = calls[:3], calls[3]
+    assert [c[0]["budget"] for c in calls] == [24, 24, 24, 24]
+    assert len(calls) == 4 and runs[0][0].get("state") is None
+    # the continued run is the restart with the largest F_T (ties: the first)
+    bests = [trace.state.best for _, trace in runs]
+    chosen = runs[int(np.argmax(bests))][1].state
+    given = last[0]["state"]
+    # ... its elites carried on, its distribution centred on its best point, narrow
+    np.testing.assert_array_equal(given.elite_v, chosen.elite_v)
+    np.testing.assert_array_equal(given.mean, chosen.elite_x[0])
+    np.testing.assert_allclose(given.std, 0.01 * (optimize_module.HIGH - optimize_module.LOW))
+    again = optimize_pairs("hammer", "pick", **kwargs)
+    assert again.table.column("p0").to_pylist() == found.table.column("p0").to_pylist()
+
+
+@pytest.mark.parametrize("refine", [-0.1, 1.0, True, "half"])
+def test_optimizer_refuses_bad_refine(refine):
+    from affordgrasp.errors import InputError
+
+    with pytest.raises(InputError, match="refine"):
+        optimize_pairs("hammer", "pick", budget=96, uses=10, restarts=2, refine=refine)

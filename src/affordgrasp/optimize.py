@@ -46,6 +46,66 @@ WIDTH = HIGH - LOW
 PERIODIC = np.array([True, False, True, False, False, False, True, False])
 
 Objective = Callable[[np.ndarray], np.ndarray]
+MIN_STD = 0.01  # default floor of CEM's std, as a fraction of each coordinate's range
+
+
+@dataclass
+class CEMState:
+    """Where a CEM run stands: its sampling distribution and its elites.
+
+    Passed back to :func:`cem_maximize` (``state=``), it continues the run: the next
+    generation is drawn from this distribution and ranked together with these elites.
+
+    Attributes
+    ----------
+    mean, std : (8,) float64 ndarray or None
+        The Gaussian of the next generation (None: no fit yet, the next is uniform).
+    elite_x : (k, 8) float64 ndarray
+        The elites' inputs, best first.
+    elite_v : (k,) float64 ndarray
+        Their values.
+    elite_g : (k,) float64 ndarray
+        Their guidance (NaN without).
+    """
+
+    mean: np.ndarray | None
+    std: np.ndarray | None
+    elite_x: np.ndarray
+    elite_v: np.ndarray
+    elite_g: np.ndarray
+
+    @property
+    def best(self) -> float:
+        """The best elite value (−inf when no elite is finite)."""
+        finite = self.elite_v[self.elite_v > -np.inf]
+        return float(finite.max()) if len(finite) else -math.inf
+
+    def around_best(self, std: float = MIN_STD) -> CEMState:
+        """The same elites, the distribution centred on the best of them.
+
+        A run that met its best point late or alone has fitted its distribution to few,
+        scattered elites (two finite elites: their midpoint); centring on the best point
+        with a narrow std searches that point's neighbourhood instead.
+
+        Parameters
+        ----------
+        std : float
+            The std as a fraction of each coordinate's range.
+
+        Returns
+        -------
+        CEMState
+            Unchanged when there are no elites.
+        """
+        if len(self.elite_x) == 0:
+            return self
+        return CEMState(
+            mean=np.array(self.elite_x[0], dtype=np.float64),
+            std=std * WIDTH,
+            elite_x=self.elite_x,
+            elite_v=self.elite_v,
+            elite_g=self.elite_g,
+        )
 
 
 @dataclass
@@ -60,11 +120,14 @@ class CEMTrace:
         Objective values (−inf allowed).
     generations : list of dict
         Per generation: evaluations so far, best so far, finite fraction, mean std.
+    state : CEMState or None
+        The run's final distribution and elites (pass it as ``state=`` to continue the run).
     """
 
     x: np.ndarray
     values: np.ndarray
     generations: list[dict] = field(default_factory=list)
+    state: CEMState | None = None
 
     @property
     def best_index(self) -> int | None:
@@ -143,10 +206,11 @@ def cem_maximize(
     population: int | None = None,
     elite_fraction: float = 0.1,
     smoothing: float = 0.7,
-    min_std: float = 0.01,
+    min_std: float = MIN_STD,
     explore_fraction: float = 0.1,
     initial: np.ndarray | None = None,
     on_generation: Callable[[int], None] | None = None,
+    state: CEMState | None = None,
 ) -> CEMTrace:
     """Maximise ``objective`` over the (p0, d) box with the cross-entropy method.
 
@@ -175,6 +239,10 @@ def cem_maximize(
         The first generation (default: uniform from ``seed``).
     on_generation : callable, optional
         Called with the number of evaluations of each generation.
+    state : CEMState, optional
+        Continue a run (its ``CEMTrace.state``) instead of starting one: the first
+        generation is drawn from its distribution and its elites stay elites until better
+        points replace them (``initial`` must then be None).
 
     Returns
     -------
@@ -193,10 +261,18 @@ def cem_maximize(
     xs: list[np.ndarray] = []
     vs: list[np.ndarray] = []
     generations: list[dict] = []
+    if state is not None and initial is not None:
+        raise InputError("give either initial (a new run) or state (a run to continue)")
     mean = std = None
     elite_x = np.empty((0, DIM))
     elite_v = np.empty(0)
     elite_g = np.empty(0)
+    if state is not None:
+        mean = None if state.mean is None else np.array(state.mean, dtype=np.float64)
+        std = None if state.std is None else np.array(state.std, dtype=np.float64)
+        elite_x = np.array(state.elite_x, dtype=np.float64).reshape(-1, DIM)
+        elite_v = np.array(state.elite_v, dtype=np.float64).reshape(-1)
+        elite_g = np.array(state.elite_g, dtype=np.float64).reshape(-1)
     used = 0
     while used < budget:
         m = min(pop, budget - used)
@@ -260,7 +336,18 @@ def cem_maximize(
         )
         if on_generation is not None:
             on_generation(len(x))
-    return CEMTrace(x=np.concatenate(xs), values=np.concatenate(vs), generations=generations)
+    return CEMTrace(
+        x=np.concatenate(xs),
+        values=np.concatenate(vs),
+        generations=generations,
+        state=CEMState(
+            mean=None if mean is None else mean.copy(),
+            std=None if std is None else std.copy(),
+            elite_x=elite_x.copy(),
+            elite_v=elite_v.copy(),
+            elite_g=elite_g.copy(),
+        ),
+    )
 
 
 # -------------------------------------------------------------------------- on the simulator

@@ -448,6 +448,7 @@ def optimize_pairs(
     population: int | None = None,
     hand: str = "barrett",
     restarts: int = 1,
+    refine: float = 0.0,
     **overrides: float,
 ) -> PairSearch:
     """The cross-entropy method over p0, each grasp scored with its best of ``uses`` use points.
@@ -478,6 +479,15 @@ def optimize_pairs(
         them are ranked together. One run settles on the first good region it meets (on a
         hammer, a hold of the head with 5× the hold effort of the best hold on the handle);
         several runs make that less likely.
+    refine : float
+        Share of ``budget`` (in [0, 1)) spent after the restarts on continuing the best of
+        them (the run with the largest F_T; without one, the best guidance) around its best
+        point: its elites carry on and its distribution restarts centred there with CEM's
+        narrowest std (:meth:`affordgrasp.optimize.CEMState.around_best`). The restarts
+        share the rest. A run can meet its best point alone (its fit to two scattered
+        elites then samples between them); refining finds that point's neighbours, so the
+        top pairs are neighbours of the best pair rather than the best of weaker regions
+        that other restarts settled in.
     **overrides : float
         Threshold values that replace the mode's.
 
@@ -493,8 +503,17 @@ def optimize_pairs(
     get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
     if isinstance(restarts, bool) or not isinstance(restarts, int | np.integer) or restarts < 1:
         raise bad_parameter("restarts", f"must be a positive integer, got {restarts!r}")
-    if isinstance(budget, bool) or not isinstance(budget, int | np.integer) or budget < restarts:
-        raise bad_parameter("budget", f"must be an integer >= restarts, got {budget!r}")
+    if isinstance(refine, bool) or not isinstance(refine, float | int) or not 0 <= refine < 1:
+        raise bad_parameter("refine", f"must be a share in [0, 1), got {refine!r}")
+    n_refine = int(round(float(refine) * budget)) if isinstance(budget, int | np.integer) else 0
+    if (
+        isinstance(budget, bool)
+        or not isinstance(budget, int | np.integer)
+        or budget - n_refine < restarts
+    ):
+        raise bad_parameter(
+            "budget", f"must be an integer >= restarts / (1 - refine), got {budget!r}"
+        )
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
@@ -512,14 +531,16 @@ def optimize_pairs(
         return best, guidance(rows)
 
     first = 0
+    explore = int(budget) - n_refine
+    runs = []
     for run in range(int(restarts)):
-        run_budget = int(budget) // int(restarts) + (run < int(budget) % int(restarts))
+        run_budget = explore // int(restarts) + (run < explore % int(restarts))
         pop = population or default_population(run_budget)
         # run r's first generation: the next uniform samples of run ``seed``; run 0 is the
         # search of a single run
         p0_first, d_first = sample_inputs(seed, first, first + min(pop, run_budget))
         first += min(pop, run_budget)
-        cem_maximize(
+        trace = cem_maximize(
             objective,
             budget=run_budget,
             seed=seed
@@ -527,6 +548,22 @@ def optimize_pairs(
             else int(np.random.SeedSequence([seed, run]).generate_state(1)[0]),
             population=pop,
             initial=np.concatenate([p0_first, d_first], axis=1),
+        )
+        runs.append((trace.state, pop))
+    if n_refine:
+        # the best run (ties: the first): largest F_T, else the best guidance of its elites
+        def rank(state) -> tuple[float, float]:
+            g = state.elite_g[np.isfinite(state.elite_g)]
+            return state.best, float(g.max()) if len(g) else -np.inf
+
+        best = max(range(len(runs)), key=lambda r: rank(runs[r][0]))
+        state, pop = runs[best]
+        cem_maximize(
+            objective,
+            budget=n_refine,
+            seed=int(np.random.SeedSequence([seed, int(restarts), best]).generate_state(1)[0]),
+            population=pop,
+            state=state.around_best(),
         )
     p0 = np.concatenate([f[0] for f in found])
     value = np.concatenate([f[1] for f in found])
