@@ -23,8 +23,13 @@ from pathlib import Path
 import numpy as np
 
 
-def perturbed_rows(train, *, copies: int, sigma: float, seed: int):
-    """Viable re-simulations of the training rows' perturbed pregrasps, as Samples."""
+def perturbed_rows(train, *, copies: int, sigma: float, seed: int, origins: bool = False):
+    """Viable re-simulations of the training rows' perturbed pregrasps, as Samples.
+
+    Returns the parts (one Samples per object with viable copies) and the number of copies
+    simulated; with ``origins``, also each part's row numbers in ``train`` (the grasp each
+    copy perturbs).
+    """
     from affordgrasp.learning.data import Samples
     from affordgrasp.learning.targets import target_values
     from affordgrasp.objects import load_object
@@ -34,6 +39,7 @@ def perturbed_rows(train, *, copies: int, sigma: float, seed: int):
 
     rng = np.random.default_rng(seed)
     parts = []
+    sources = []
     tried = 0
     for name in sorted(set(train.object)):
         rows = np.flatnonzero(train.object == name)
@@ -49,6 +55,7 @@ def perturbed_rows(train, *, copies: int, sigma: float, seed: int):
             continue
         y = target_values("hold_effort_sum", table)[ok]
         images = depth_to_mm(renderer_for(load_object(name)).render(q[ok]))
+        sources.append(np.repeat(rows, copies)[ok])
         parts.append(
             Samples(
                 np.full(int(ok.sum()), name, dtype=object),
@@ -61,6 +68,8 @@ def perturbed_rows(train, *, copies: int, sigma: float, seed: int):
                 dict(train.meta),
             )
         )
+    if origins:
+        return parts, tried, sources
     return parts, tried
 
 

@@ -1,0 +1,71 @@
+"""The subsets and the fit of benchmarks/learning_curve.py (docs/learning.md, "Learning curve")."""
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+_DIR = Path(__file__).resolve().parents[2] / "benchmarks"
+
+
+@pytest.fixture(scope="module")
+def lc():
+    sys.path.insert(0, str(_DIR))  # it imports its sibling more_viable_rows
+    try:
+        spec = importlib.util.spec_from_file_location("learning_curve", _DIR / "learning_curve.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(_DIR))
+    return module
+
+
+class _Rows:
+    def __init__(self, objects, samples):
+        self.object = np.array(objects, dtype=object)
+        self.sample = np.array(samples)
+
+
+FAMILIES = {"axe": ["axe:0", "axe:1", "axe:3"], "mug": ["mug:0", "mug:2"], "knife": ["knife:4"]}
+
+
+def test_object_order_takes_every_family_in_turn_and_is_seeded(lc):
+    names = [o for objs in FAMILIES.values() for o in objs]
+    fams = [f for f, objs in FAMILIES.items() for _ in objs]
+    order = lc.object_order(names * 2, fams * 2, seed=0)  # one entry per row: repeats
+    assert sorted(order) == sorted(names)
+    # the first round has one object of each family, the second of each family left
+    assert sorted(o.split(":")[0] for o in order[:3]) == ["axe", "knife", "mug"]
+    assert sorted(o.split(":")[0] for o in order[3:5]) == ["axe", "mug"]
+    assert order == lc.object_order(names, fams, seed=0)
+    assert any(lc.object_order(names, fams, seed=s) != order for s in range(1, 6))
+
+
+def test_subsets_are_nested(lc):
+    rows = _Rows(["a:0"] * 4 + ["b:0"] * 4 + ["c:0"] * 4, list(range(4)) * 3)
+    order = ["b:0", "a:0", "c:0"]
+    quarter = lc.keep_mask(rows, "samples:0.25", order, 4)
+    half = lc.keep_mask(rows, "samples:0.5", order, 4)
+    assert quarter.sum() == 3 and half.sum() == 6 and np.all(half[quarter])
+    assert np.array_equal(rows.sample[half], [0, 1] * 3)
+    third = lc.keep_mask(rows, "objects:0.34", order, 4)
+    two = lc.keep_mask(rows, "objects:0.67", order, 4)
+    assert set(rows.object[third]) == {"b:0"} and set(rows.object[two]) == {"a:0", "b:0"}
+    assert lc.keep_mask(rows, "all", order, 4).all()
+    with pytest.raises(SystemExit):
+        lc.keep_mask(rows, "rows:0.5", order, 4)
+
+
+def test_fit_recovers_a_log_line_and_the_rows_for_the_goal(lc):
+    rows = [1000, 2000, 4000, 8000]
+    points = [{"train_rows": n, "comparison_accuracy": 0.5 + 0.05 * math.log(n)} for n in rows]
+    f = lc.fit(points, 0.8)
+    assert f["slope_per_ln_rows"] == pytest.approx(0.05)
+    assert f["residual_sd"] == pytest.approx(0.0, abs=1e-12)
+    assert f["rows_for_goal"] == pytest.approx(math.exp(0.3 / 0.05))
+    flat = lc.fit([{"train_rows": n, "comparison_accuracy": 0.6} for n in rows], 0.8)
+    assert flat["rows_for_goal"] == math.inf
+    assert lc.fit(points[:2], 0.8) is None
