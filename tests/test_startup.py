@@ -113,3 +113,24 @@ def test_a_warm_generate_imports_neither_trimesh_nor_scipy_spatial(tmp_path):
     warm = fresh_process_modules(generate.format(str(tmp_path / "b")), **cache)
     for name in ("trimesh", "scipy.spatial", "scipy.sparse", "pandas", "manifold3d"):
         assert name not in warm, name
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj"])
+def test_a_warm_generate_on_a_mesh_file_imports_neither_trimesh_nor_scipy_spatial(tmp_path, suffix):
+    # The first process reads and repairs the file into the cache (keyed by its bytes); the
+    # second loads the arrays as it does for a built-in family.
+    import trimesh
+
+    path = tmp_path / f"block{suffix}"
+    trimesh.creation.box((0.03, 0.05, 0.11)).export(path)
+    generate = (
+        "from affordgrasp.cli import main\n"
+        f"assert main(['generate', {str(path)!r}, '--samples', '2', '--workers', '1', "
+        "'--out', {!r}]) == 0"
+    )
+    cache = {"AFFORDGRASP_CACHE_DIR": str(tmp_path / "cache")}
+    cold = fresh_process_modules(generate.format(str(tmp_path / "a")), **cache)
+    assert "trimesh" in cold
+    warm = fresh_process_modules(generate.format(str(tmp_path / "b")), **cache)
+    for name in ("trimesh", "scipy.spatial", "scipy.sparse", "pandas", "manifold3d"):
+        assert name not in warm, name

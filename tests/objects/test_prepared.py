@@ -1,9 +1,13 @@
 """The prepared-object cache (objects/prepared.py): same bytes as a fresh build, never trusted."""
 
+import logging
+
 import numpy as np
 import pytest
+import trimesh
 
-from affordgrasp.objects import families, family_names, load_object, prepared, resolve
+from affordgrasp.errors import InputError
+from affordgrasp.objects import families, family_names, load_mesh, load_object, prepared, resolve
 from affordgrasp.objects.rays import EmbreeRays, embree_available
 from affordgrasp.objects.resolve import GraspObject
 
@@ -139,6 +143,110 @@ def test_a_family_entry_whose_mesh_does_not_hash_to_its_hash_is_refused(cache):
     )
     prepared.store_family(key, forged)
     assert prepared.load_family(key) is None
+
+
+def fresh_file_object(path, **options) -> GraspObject:
+    """A mesh file resolved without the cache, as before there was one."""
+    density = options.pop("density", 1.0)
+    mesh = load_mesh(path, **options)
+    return resolve._build(path.name, "mesh", mesh, density, str(path.resolve()))
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply", ".off", ".glb"])
+def test_a_cached_mesh_file_is_the_fresh_build_bit_for_bit(cache, tmp_path, suffix):
+    path = tmp_path / f"tool{suffix}"
+    load_object("knife:3").mesh.export(path)
+    fresh = fresh_file_object(path)
+    first = load_object(path)  # reads, repairs and stores
+    assert len(list(cache.glob("file-*.npz"))) == 1
+    loaded = load_object(path)  # from disk
+    assert loaded is not first and type(loaded.__dict__["_mesh"]) is prepared.MeshData
+    assert_same_object(loaded, fresh)
+    assert_same_derived(prepared.derived_geometry(loaded), prepared._build_derived(fresh))
+    assert loaded.mesh.vertices.tobytes() == fresh.mesh.vertices.tobytes()
+
+
+def test_a_mesh_file_entry_follows_the_files_bytes_and_the_options(cache, tmp_path):
+    path = tmp_path / "block.stl"
+    trimesh.creation.box((0.03, 0.05, 0.11)).export(path)
+    first = load_object(path)
+    assert load_object(path).mesh_hash == first.mesh_hash
+    # the same name, other bytes: read again
+    trimesh.creation.box((0.04, 0.05, 0.11)).export(path)
+    edited = load_object(path)
+    assert edited.mesh_hash != first.mesh_hash
+    assert_same_object(edited, fresh_file_object(path))
+    # other options: other entries, each what a fresh load gives
+    for options in ({"size_m": 0.2}, {"units": "m", "density": 700.0}):
+        assert_same_object(load_object(path, **options), fresh_file_object(path, **options))
+        assert_same_object(load_object(path, **options), fresh_file_object(path, **options))
+    assert len(list(cache.glob("file-*.npz"))) == 4
+    # the same bytes at another path: the entry is shared, the name and source are the path's
+    other = tmp_path / "copy" / "other.stl"
+    other.parent.mkdir()
+    other.write_bytes(path.read_bytes())
+    copy = load_object(other)
+    assert (copy.name, copy.source) == ("other.stl", str(other.resolve()))
+    assert copy.mesh_hash == edited.mesh_hash
+
+
+def test_a_mesh_files_material_library_is_part_of_its_key(cache, tmp_path):
+    path = tmp_path / "block.obj"
+    path.write_text(
+        "mtllib block.mtl\n" + trimesh.creation.box((0.03, 0.05, 0.11)).export(file_type="obj")
+    )
+    (tmp_path / "block.mtl").write_text("newmtl a\nKd 1 0 0\n")
+    key = prepared.mesh_file_key(path, size_m=None, units=None, density=1.0)
+    assert key is not None and list(key["companions"]) == ["block.mtl"]
+    (tmp_path / "block.mtl").write_text("newmtl a\nKd 0 1 0\n")
+    assert prepared.mesh_file_key(path, size_m=None, units=None, density=1.0) != key
+    assert_same_object(load_object(path), fresh_file_object(path))
+
+
+def test_the_repair_warnings_of_a_mesh_file_are_logged_again_from_the_cache(
+    cache, tmp_path, caplog
+):
+    box = trimesh.creation.box((0.03, 0.05, 0.11))
+    path = tmp_path / "open.stl"
+    trimesh.Trimesh(box.vertices, box.faces[1:], process=False).export(path)
+    with caplog.at_level(logging.ERROR):  # not shown: recorded all the same
+        load_object(path)
+    assert not caplog.records
+    with caplog.at_level(logging.WARNING, logger="affordgrasp"):
+        loaded = load_object(path)
+    messages = [(r.name, r.levelno, r.getMessage()) for r in caplog.records]
+    assert messages == [
+        (
+            "affordgrasp.objects.loading",
+            logging.WARNING,
+            "open.stl was repaired: capped 1 hole (3 boundary edges, the widest 110 mm "
+            "across) with flat faces",
+        )
+    ]
+    assert_same_object(loaded, fresh_file_object(path))
+
+
+@pytest.mark.parametrize("how", ["truncate", "flip", "garbage"])
+def test_a_corrupt_mesh_file_entry_is_rebuilt_never_trusted(cache, tmp_path, how):
+    path = tmp_path / "block.stl"
+    trimesh.creation.box((0.03, 0.05, 0.11)).export(path)
+    reference = load_object(path)
+    (entry,) = cache.glob("file-*.npz")
+    corrupt(entry, how)
+    again = load_object(path)
+    assert_same_object(again, reference)
+    key = prepared.mesh_file_key(path, size_m=None, units=None, density=1.0)
+    assert prepared.load_mesh_file(key, path.name, str(path)) is not None  # rewritten whole
+    stale = dict(key, stamp="0" * 64)
+    assert prepared.load_mesh_file(stale, path.name, str(path)) is None
+
+
+def test_bad_options_for_a_mesh_file_fail_before_the_cache(cache, box_mesh):
+    with pytest.raises(InputError, match="size_m"):
+        load_object(box_mesh, size_m=-1.0)
+    with pytest.raises(InputError, match="unit"):
+        load_object(box_mesh, units="furlong")
+    assert not list(cache.glob("file-*.npz"))
 
 
 @pytest.mark.skipif(not embree_available(), reason="embreex not installed")

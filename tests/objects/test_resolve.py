@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import hashlib
+import json
+import os
+import subprocess
+import sys
 import types
 from dataclasses import dataclass
 from pathlib import Path
@@ -212,3 +216,57 @@ def test_built_in_families_resolve(real_families):
 
 def test_family_aliases_resolve_to_the_family():
     assert load_object("cleaver:2").name == "meat_cleaver:2"
+
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+FACES_AT = """
+import json, sys
+import numpy as np
+from affordgrasp.objects import load_object
+obj = load_object({spec!r})
+obj.mesh_data  # the derived geometry, from the cache
+points, normals = (np.array(a) for a in json.loads(sys.stdin.read()))
+faces = obj.faces_at(points, normals)
+print(json.dumps({{"faces": faces.tolist(), "modules": sorted(sys.modules)}}))
+"""
+
+
+def test_faces_at_on_a_miss_is_trimeshs_closest_face_without_importing_trimesh():
+    spec = "knife:3"
+    obj = load_object(spec)  # builds the cache entries the subprocess loads
+    mesh = obj.mesh_data
+    # points on the blade's edges, with normals along the edge's bisector and tilted: some
+    # rays start outside and miss the thin edge
+    rng = np.random.default_rng(0)
+    pairs = mesh.face_adjacency[np.abs(mesh.face_adjacency_angles) > 2.0]
+    edges = mesh.face_adjacency_edges[np.abs(mesh.face_adjacency_angles) > 2.0]
+    pick = rng.integers(0, len(pairs), 200)
+    t = rng.random((200, 1))
+    points = mesh.vertices[edges[pick, 0]] * (1 - t) + mesh.vertices[edges[pick, 1]] * t
+    bisector = mesh.face_normals[pairs[pick, 0]] + mesh.face_normals[pairs[pick, 1]]
+    normals = bisector + 0.5 * rng.normal(size=bisector.shape)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    rays = mesh.ray.intersects_first(points + 5e-4 * normals, -normals)
+    missed = rays < 0
+    assert missed.sum() >= 5  # the test is about misses
+    expected = np.array(rays, dtype=np.int64)
+    expected[missed] = trimesh.proximity.closest_point(obj.mesh, points[missed])[2]
+
+    proc = subprocess.run(
+        [sys.executable, "-c", FACES_AT.format(spec=spec)],
+        input=json.dumps([points.tolist(), normals.tolist()]),
+        capture_output=True,
+        text=True,
+        check=False,
+        env={
+            "PYTHONPATH": SRC,
+            "PATH": "/usr/bin:/bin",
+            "AFFORDGRASP_CACHE_DIR": os.environ["AFFORDGRASP_CACHE_DIR"],
+        },
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert report["faces"] == expected.tolist()
+    for name in ("trimesh", "scipy.spatial"):
+        assert name not in report["modules"], name

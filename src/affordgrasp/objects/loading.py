@@ -26,6 +26,9 @@ import logging
 import math
 import os
 from collections import defaultdict
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -48,6 +51,39 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+# The warnings of the load in progress, when someone records them (see recording_warnings).
+_RECORDED: ContextVar[list[str] | None] = ContextVar("_RECORDED", default=None)
+
+
+def _warn(message: str, *args: object) -> None:
+    """``log.warning``, and the message kept for :func:`recording_warnings`."""
+    log.warning(message, *args)
+    recorded = _RECORDED.get()
+    if recorded is not None:
+        recorded.append(message % args if args else message)
+
+
+@contextmanager
+def recording_warnings() -> Iterator[list[str]]:
+    """The warnings that loading logs inside the block, as formatted messages.
+
+    They are logged as usual too. The prepared-object cache keeps them with a mesh file's
+    entry and logs them again when it loads the entry (:mod:`affordgrasp.objects.prepared`),
+    whatever the logging configuration was when they were recorded.
+
+    Yields
+    ------
+    list of str
+        Filled while the block runs.
+    """
+    recorded: list[str] = []
+    token = _RECORDED.set(recorded)
+    try:
+        yield recorded
+    finally:
+        _RECORDED.reset(token)
+
 
 SUPPORTED_EXTENSIONS: tuple[str, ...] = (".glb", ".gltf", ".obj", ".off", ".ply", ".stl")
 
@@ -165,7 +201,7 @@ def prepare_mesh(
     work = _closed_volume(work, source, repairs)
     if repairs:
         # One line that says what was done, so that the user can judge the result.
-        log.warning("%s was repaired: %s", source, "; ".join(repairs))
+        _warn("%s was repaired: %s", source, "; ".join(repairs))
 
     extent = float(work.extents.max())
     volume = _signed_volume(work)
@@ -280,7 +316,7 @@ def _warn_if_implausible_size(extent_m: float, units: str, source: str) -> None:
     low, high = PLAUSIBLE_SIZE_M
     if extent_m > high:
         hint = "did you mean --units mm (or cm, in)?" if units == "m" else "check --units;"
-        log.warning(
+        _warn(
             "%s is %.3g m long with units '%s'; %s Pass --size-m to set its real size.",
             source,
             extent_m,
@@ -288,7 +324,7 @@ def _warn_if_implausible_size(extent_m: float, units: str, source: str) -> None:
             hint,
         )
     elif extent_m < low:
-        log.warning(
+        _warn(
             "%s is only %.3g m long with units '%s'; pass --size-m to set its real size, "
             "or --units with the file's unit.",
             source,
@@ -527,7 +563,7 @@ def _combine_bodies(
         solid = manifold3d.Manifold.batch_boolean([solid, holes], _op("Subtract"))
     expected = sum(_signed_volume(b) for b in [*outer, *cavities])
     if solid.status() != manifold3d.Error.NoError or solid.is_empty():
-        log.warning(
+        _warn(
             "%s: could not union its %d bodies (%s); using them as they are, overlaps "
             "would be counted twice in the mass properties",
             source,

@@ -1,10 +1,15 @@
 """Prepared objects kept on disk as arrays, so that a warm start needs neither trimesh nor scipy.
 
-Two kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.caching.cache_dir`):
+Three kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.caching.cache_dir`):
 
 * a **resolved family** (``family-<name>-<seed>-...npz``): the mesh a built-in family builds
   and repairs (vertices, faces, face parts), its mass properties and labels; keyed by the
   family, seed, materials and density;
+* a **resolved mesh file** (``file-<content hash>-...npz``): the mesh that reading and
+  repairing a file gives (vertices, faces), its mass properties and the warnings the repair
+  logged (logged again on a load); keyed by the SHA-256 of the file's bytes (and of the
+  ``.mtl`` or ``.bin`` files it names, which the readers may open), its name and format,
+  ``size_m``, ``units`` and density, so that an edited file is read again;
 * the **derived geometry of a mesh** (``mesh-<mesh hash>-<stamp>.npz``): what the pipeline computes
   from a mesh with trimesh and scipy: face normals, face adjacency and the bounding-box
   diagonal in the mesh frame (use metrics, rays), and in the simulator's centred frame the
@@ -26,7 +31,10 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import json
+import logging
 import os
+import struct
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -371,30 +379,23 @@ def load_family(key: dict[str, Any]) -> GraspObject | None:
     GraspObject or None
         Its ``mesh`` is built (with trimesh) only when accessed.
     """
-    from .mass import MassProperties
-    from .resolve import GraspObject, mesh_hash
+    from .resolve import GraspObject
 
     a = read_arrays(_family_path(key), key)
     if a is None:
         return None
     try:
-        vertices = a["vertices"]
-        faces = a["faces"]
-        digest = str(a["mesh_hash"])
-        if vertices.ndim != 2 or faces.ndim != 2 or mesh_hash(_Arrays(vertices, faces)) != digest:
+        mesh = _mesh_from_arrays(a)
+        if mesh is None:
             return None
-        arrays = {}
-        for k in _MASS_ARRAYS:
-            arrays[k] = np.array(a[f"mass_{k}"], dtype=np.float64)
-            arrays[k].setflags(write=False)
-        mass = MassProperties(**{k: float(a[f"mass_{k}"]) for k in _MASS_FLOATS}, **arrays)
+        mass = _mass_from_arrays(a)
         face_parts = a["face_parts"] if "face_parts" in a else None
         return GraspObject(
             name=str(a["name"]),
             category=str(a["category"]),
-            mesh=MeshData(vertices, faces, digest),
+            mesh=mesh,
             mass=mass,
-            mesh_hash=digest,
+            mesh_hash=mesh.content_hash,
             source="family",
             face_parts=face_parts,
             part_names=tuple(str(p) for p in a["part_names"]),
@@ -413,21 +414,206 @@ def store_family(key: dict[str, Any], obj: GraspObject) -> None:
         :func:`family_key`.
     obj : GraspObject
     """
+    arrays = _mesh_to_arrays(obj)
+    arrays["name"] = np.array(obj.name)
+    arrays["category"] = np.array(obj.category)
+    arrays["part_names"] = np.array(list(obj.part_names), dtype=str)
+    arrays["materials"] = np.array(bool(obj.materials))
+    if obj.face_parts is not None:
+        arrays["face_parts"] = np.asarray(obj.face_parts)
+    write_arrays(_family_path(key), key, arrays)
+
+
+# ---------------------------------------------------------------------------------------
+# resolved mesh files
+# ---------------------------------------------------------------------------------------
+
+
+def mesh_file_key(
+    path: Path, *, size_m: float | None, units: str | None, density: float
+) -> dict[str, Any] | None:
+    """The key of a mesh file's entry, or None when the file cannot be cached.
+
+    Not cached (read every time): a path that is not a file, an unsupported format, or a
+    glTF whose buffers cannot be told (the reader then reports the problem).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The mesh file.
+    size_m : float or None
+        m; as given to :func:`~affordgrasp.objects.load_mesh` (already validated).
+    units : str or None
+        As given to :func:`~affordgrasp.objects.load_mesh` (already validated).
+    density : float
+        kg/m^3.
+
+    Returns
+    -------
+    dict or None
+    """
+    from .loading import SUPPORTED_EXTENSIONS
+
+    ext = path.suffix.lower()
+    if ext not in SUPPORTED_EXTENSIONS:
+        return None
+    try:
+        if not path.is_file():
+            return None
+        data = path.read_bytes()
+        companions = _companion_files(path, data, ext)
+        if companions is None:
+            return None
+        named = {name: _file_digest(path.parent / name) for name in companions}
+    except OSError:
+        return None
+    return {
+        "kind": "file",
+        "sha256": hashlib.sha256(data).hexdigest(),
+        "companions": named,
+        "name": path.name,
+        "format": ext,
+        "size_m": None if size_m is None else float(size_m).hex(),
+        "units": None if units is None else str(units),
+        "density": float(density).hex(),
+        "stamp": stamp(),
+    }
+
+
+def _file_digest(path: Path) -> str:
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return "unreadable"  # the reader then goes without it, and so does the entry
+
+
+def _companion_files(path: Path, data: bytes, ext: str) -> list[str] | None:
+    """The files beside ``path`` whose contents its reader may use (relative names).
+
+    An OBJ's material library (trimesh reads the first ``mtllib``, and groups faces by
+    material); a glTF's external buffers. None: cannot tell (not cached).
+    """
+    if ext == ".obj":
+        at = data.find(b"mtllib")
+        if at < 0:
+            return []
+        end = data.find(b"\n", at)
+        line = data[at + 6 : end if end >= 0 else len(data)]
+        return [line.decode("utf-8", "replace").strip()]
+    if ext in (".gltf", ".glb"):
+        try:
+            if ext == ".glb":
+                # header (magic, version, length), then the JSON chunk (length, type, data)
+                magic, _, _, length, kind = struct.unpack_from("<4sIIII", data)
+                if magic != b"glTF" or kind != 0x4E4F534A:
+                    return None
+                data = data[20 : 20 + length]
+            gltf = json.loads(data)
+            uris = [b.get("uri") for b in gltf.get("buffers", [])]
+        except (ValueError, struct.error, AttributeError, TypeError):
+            return None
+        return sorted({u for u in uris if isinstance(u, str) and not u.startswith("data:")})
+    return []
+
+
+def _file_path(key: dict[str, Any]) -> Path:
+    name = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
+    return _entry_path(f"file-{key['sha256'][:16]}-{name}")
+
+
+def load_mesh_file(key: dict[str, Any], name: str, source: str) -> GraspObject | None:
+    """The resolved mesh file stored under ``key``, or None (missing, stale or corrupt).
+
+    Logs again the warnings that resolving it logged.
+
+    Parameters
+    ----------
+    key : dict
+        :func:`mesh_file_key`.
+    name : str
+        The object's name (the file name).
+    source : str
+        The file's absolute path.
+
+    Returns
+    -------
+    GraspObject or None
+        Its ``mesh`` is built (with trimesh) only when accessed.
+    """
+    from .resolve import GraspObject
+
+    a = read_arrays(_file_path(key), key)
+    if a is None:
+        return None
+    try:
+        mesh = _mesh_from_arrays(a)
+        if mesh is None:
+            return None
+        mass = _mass_from_arrays(a)
+        warnings = [str(w) for w in a["warnings"]]
+    except (KeyError, ValueError, TypeError):
+        return None
+    log = logging.getLogger("affordgrasp.objects.loading")
+    for message in warnings:
+        log.warning("%s", message)
+    return GraspObject(
+        name=name,
+        category="mesh",
+        mesh=mesh,
+        mass=mass,
+        mesh_hash=mesh.content_hash,
+        source=source,
+    )
+
+
+def store_mesh_file(key: dict[str, Any], obj: GraspObject, warnings: list[str]) -> None:
+    """Store a freshly resolved mesh file under ``key`` (see :func:`load_mesh_file`).
+
+    Parameters
+    ----------
+    key : dict
+        :func:`mesh_file_key`.
+    obj : GraspObject
+    warnings : list of str
+        What resolving it logged (:func:`~affordgrasp.objects.loading.recording_warnings`).
+    """
+    arrays = _mesh_to_arrays(obj)
+    arrays["warnings"] = np.array(warnings, dtype=str).reshape(-1)
+    write_arrays(_file_path(key), key, arrays)
+
+
+def _mesh_to_arrays(obj: GraspObject) -> dict[str, np.ndarray]:
     arrays: dict[str, np.ndarray] = {
         "vertices": np.asarray(obj.vertices, dtype=np.float64),
         "faces": np.asarray(obj.faces, dtype=np.int64),
         "mesh_hash": np.array(obj.mesh_hash),
-        "name": np.array(obj.name),
-        "category": np.array(obj.category),
-        "part_names": np.array(list(obj.part_names), dtype=str),
-        "materials": np.array(bool(obj.materials)),
     }
-    if obj.face_parts is not None:
-        arrays["face_parts"] = np.asarray(obj.face_parts)
     mass: MassProperties = obj.mass
     for k in _MASS_ARRAYS + _MASS_FLOATS:
         arrays[f"mass_{k}"] = np.asarray(getattr(mass, k))
-    write_arrays(_family_path(key), key, arrays)
+    return arrays
+
+
+def _mesh_from_arrays(a: dict[str, np.ndarray]) -> MeshData | None:
+    """The stored mesh, or None when its vertices and faces do not hash to its hash."""
+    from .resolve import mesh_hash
+
+    vertices = a["vertices"]
+    faces = a["faces"]
+    digest = str(a["mesh_hash"])
+    if vertices.ndim != 2 or faces.ndim != 2 or mesh_hash(_Arrays(vertices, faces)) != digest:
+        return None
+    return MeshData(vertices, faces, digest)
+
+
+def _mass_from_arrays(a: dict[str, np.ndarray]) -> MassProperties:
+    from .mass import MassProperties
+
+    arrays = {}
+    for k in _MASS_ARRAYS:
+        arrays[k] = np.array(a[f"mass_{k}"], dtype=np.float64)
+        arrays[k].setflags(write=False)
+    return MassProperties(**{k: float(a[f"mass_{k}"]) for k in _MASS_FLOATS}, **arrays)
 
 
 @dataclass(frozen=True)

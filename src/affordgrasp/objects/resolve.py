@@ -24,7 +24,12 @@ import numpy as np
 
 from affordgrasp.errors import InputError, did_you_mean
 from affordgrasp.objects import family_names
-from affordgrasp.objects.loading import load_mesh, prepare_mesh
+from affordgrasp.objects.loading import (
+    _scale_request,
+    load_mesh,
+    prepare_mesh,
+    recording_warnings,
+)
 from affordgrasp.objects.mass import MassProperties, mass_properties, material_mass_properties
 
 if TYPE_CHECKING:
@@ -184,16 +189,16 @@ class GraspObject:
         normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
         if len(points) == 0:
             return np.zeros(0, dtype=np.int64)
+        mesh = self.mesh_data
         faces = np.asarray(
-            self.mesh_data.ray.intersects_first(points + offset_m * normals, -normals),
-            dtype=np.int64,
+            mesh.ray.intersects_first(points + offset_m * normals, -normals), dtype=np.int64
         )
         missed = faces < 0
         if missed.any():
-            import trimesh
+            # trimesh's closest_point, without importing trimesh (~0.5 s) mid-run
+            from affordgrasp.objects.proximity import closest_faces
 
-            _, _, closest = trimesh.proximity.closest_point(self.mesh, points[missed])
-            faces[missed] = closest
+            faces[missed] = closest_faces(mesh, points[missed])
         return faces
 
 
@@ -416,10 +421,25 @@ def _unknown_spec_message(text: str) -> str:
 def _resolve_file(
     path: Path, *, size_m: float | None, units: str | None, density: float
 ) -> GraspObject:
+    from affordgrasp.objects import prepared
+
     if not path.exists():
         raise InputError(_unknown_spec_message(str(path)))
-    mesh = load_mesh(path, size_m=size_m, units=units)
-    return _build(path.name, "mesh", mesh, density, str(path.resolve()))
+    _scale_request(size_m, units)  # bad options fail before the file is read
+    # Read and repaired once per file content: later processes load the arrays (see
+    # objects/prepared.py).
+    key = prepared.mesh_file_key(path, size_m=size_m, units=units, density=density)
+    source = str(path.resolve())
+    if key is not None:
+        obj = prepared.load_mesh_file(key, path.name, source)
+        if obj is not None:
+            return obj
+    with recording_warnings() as warnings:
+        mesh = load_mesh(path, size_m=size_m, units=units)
+    obj = _build(path.name, "mesh", mesh, density, source)
+    if key is not None:
+        prepared.store_mesh_file(key, obj, warnings)
+    return obj
 
 
 @functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
