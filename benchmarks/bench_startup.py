@@ -1,6 +1,7 @@
 """Start-up of the command line with warm caches, against the previous release, same run.
 
     python benchmarks/bench_startup.py [--runs 7] [--object hammer] [--previous 2671c7c ...]
+                                       [--samples 1] [--seed S]
 
 What is measured ("start-up"): a fresh process running the README's main job form,
 ``affordgrasp generate OBJECT --samples 1 --workers 1 --out DIR`` into a new directory, timed
@@ -8,7 +9,8 @@ as a whole, from the parent's ``fork`` to the child's exit: wall time and CPU ti
 system, from the parent's ``RUSAGE_CHILDREN``). "Warm caches": the same command ran before
 in an untimed process, so numba's kernel caches and affordgrasp's object cache exist. One
 grasp's steady cost (a few ms) is inside the number and is not subtracted; it is below the
-noise.
+noise. ``--samples N --seed S`` time a longer job instead (e.g. one whose grasps reach a
+cost that only some grasps pay, such as a ray that misses the surface).
 
 Each version (the current sources, and checkouts of the previous release or of other
 commits given with ``--previous``, made by ``bench_release.previous_checkout``) runs
@@ -155,7 +157,9 @@ def _children_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def run_once(src: Path, spec: str, out: Path, timed: bool = False) -> dict:
+def run_once(
+    src: Path, spec: str, out: Path, timed: bool = False, extra: tuple[str, ...] = ()
+) -> dict:
     """One fresh process of ``affordgrasp generate OBJECT --samples 1 --workers 1 --out OUT``.
 
     Parameters
@@ -168,6 +172,8 @@ def run_once(src: Path, spec: str, out: Path, timed: bool = False) -> dict:
         A directory that does not exist yet.
     timed : bool
         Run with the phase timers and return the phases too.
+    extra : tuple of str
+        More options for ``generate`` (a later ``--samples`` wins).
 
     Returns
     -------
@@ -176,7 +182,7 @@ def run_once(src: Path, spec: str, out: Path, timed: bool = False) -> dict:
     """
     env = dict(os.environ, PYTHONPATH=str(src))
     env.pop("NUMBA_CACHE_DIR", None)
-    args = ["generate", spec, "--samples", "1", "--workers", "1", "--out", str(out)]
+    args = ["generate", spec, "--samples", "1", "--workers", "1", "--out", str(out), *extra]
     entry = ["-c", TIMED] if timed else ["-m", "affordgrasp.cli"]
     cmd = [sys.executable, *entry, *args]
     cpu0 = _children_cpu()
@@ -203,6 +209,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=7, help="processes per version (median)")
     parser.add_argument("--object", default="hammer")
+    parser.add_argument("--samples", type=int, default=1, help="grasps of the timed job")
+    parser.add_argument("--seed", type=int, help="the job's seed (default: generate's)")
     parser.add_argument(
         "--previous",
         nargs="+",
@@ -216,6 +224,9 @@ def main() -> None:
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     args = parser.parse_args()
 
+    extra = ("--samples", str(args.samples))
+    if args.seed is not None:
+        extra += ("--seed", str(args.seed))
     versions = {} if args.no_previous else {c: previous_checkout(c) / "src" for c in args.previous}
     versions["current"] = Path(args.current_src)
     tmp = Path(tempfile.mkdtemp(prefix="affordgrasp-startup-"))
@@ -224,19 +235,22 @@ def main() -> None:
         print(f"load average {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}; {os.cpu_count()} cores")
         for name, src in versions.items():  # warm the caches: kernels, objects
             for i in range(2):
-                run_once(src, args.object, tmp / f"warm-{name}-{i}")
+                run_once(src, args.object, tmp / f"warm-{name}-{i}", extra=extra)
         runs: dict[str, list[dict]] = {name: [] for name in versions}
         timed: dict[str, list[dict]] = {name: [] for name in versions}
         for i in range(args.runs):
             for name, src in versions.items():
-                runs[name].append(run_once(src, args.object, tmp / f"{name}-{i}"))
+                runs[name].append(run_once(src, args.object, tmp / f"{name}-{i}", extra=extra))
         for i in range(args.runs):
             for name, src in versions.items():
-                timed[name].append(run_once(src, args.object, tmp / f"t-{name}-{i}", timed=True))
+                timed[name].append(
+                    run_once(src, args.object, tmp / f"t-{name}-{i}", timed=True, extra=extra)
+                )
         load = os.getloadavg()
         summary: dict = {"object": args.object, "runs": args.runs, "load_after": load[:3]}
         print(
-            f"start-up: affordgrasp generate {args.object} --samples 1 --workers 1, warm caches, "
+            f"start-up: affordgrasp generate {args.object} --samples {args.samples} --workers 1"
+            f"{'' if args.seed is None else f' --seed {args.seed}'}, warm caches, "
             f"median of {args.runs} fresh processes"
         )
         print(f"{'':<10}{'wall s':>9}{'cpu s':>9}{'min wall':>10}")
