@@ -190,6 +190,23 @@ def test_a_mesh_file_entry_follows_the_files_bytes_and_the_options(cache, tmp_pa
     assert copy.mesh_hash == edited.mesh_hash
 
 
+def test_a_mesh_file_edited_while_it_is_read_is_not_stored(cache, tmp_path, monkeypatch):
+    path = tmp_path / "block.stl"
+    trimesh.creation.box((0.03, 0.05, 0.11)).export(path)
+    read = resolve.load_mesh
+
+    def read_then_edit(*args, **kwargs):
+        mesh = read(*args, **kwargs)
+        trimesh.creation.box((0.04, 0.05, 0.11)).export(path)
+        return mesh
+
+    monkeypatch.setattr(resolve, "load_mesh", read_then_edit)
+    load_object(path)
+    assert not list(cache.glob("file-*.npz"))
+    monkeypatch.undo()
+    assert_same_object(load_object(path), fresh_file_object(path))
+
+
 def test_a_mesh_files_material_library_is_part_of_its_key(cache, tmp_path):
     path = tmp_path / "block.obj"
     path.write_text(

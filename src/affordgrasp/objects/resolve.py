@@ -437,7 +437,10 @@ def _resolve_file(
     with recording_warnings() as warnings:
         mesh = load_mesh(path, size_m=size_m, units=units)
     obj = _build(path.name, "mesh", mesh, density, source)
-    if key is not None:
+    # not if the file changed while it was read: the mesh may be of other bytes than the key's
+    if key is not None and key == prepared.mesh_file_key(
+        path, size_m=size_m, units=units, density=density
+    ):
         prepared.store_mesh_file(key, obj, warnings)
     return obj
 
