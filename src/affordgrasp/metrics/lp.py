@@ -26,9 +26,6 @@ from __future__ import annotations
 
 import enum
 import logging
-import os
-import sys
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -338,43 +335,22 @@ def simplex_standard(A, b, c, x_out):
 # --------------------------------------------------------------------------------------
 
 
-_banner_lock = threading.Lock()
-_banner_shown = False
-
-
 def _new_highs():
-    """A ``highspy.Highs`` with its output off, printing nothing on the process's stdout.
+    """A HiGHS solver with its output off before it has printed anything.
 
-    HiGHS writes its banner with C ``printf`` when the first instance of a process is
-    built, before any option can be set, and neither ``output_flag`` nor a Python-level
-    redirect reaches it. On the stdout of ``generate --json`` and of any pipe a user
-    reads, that banner is corrupt output, so the first construction runs with file
-    descriptor 1 pointed at ``/dev/null``. Later constructions print nothing.
+    HiGHS prints its banner on the first call that may log unless ``output_flag`` is already
+    false, and highspy's ``Highs`` wrapper (1.8 and later) makes such a call in its own
+    constructor (it enables callbacks), so the banner reached stdout, where it corrupted the
+    JSON summary of ``generate --json`` after a LP fell back to HiGHS. The wrapper adds
+    only callbacks and Ctrl-C handling of ``solve``, which this module does not use, so the
+    solver is built from the class it wraps and silenced first. Older highspy (no wrapper)
+    exports that class as ``Highs`` and prints nothing before the option is set.
     """
-    import highspy
-
-    global _banner_shown
-    with _banner_lock:
-        saved = -1
-        if not _banner_shown:
-            sys.stdout.flush()
-            try:
-                saved = os.dup(1)
-            except OSError:  # no stdout at all: nothing to protect
-                saved = -1
-        if saved < 0:
-            highs = highspy.Highs()
-        else:
-            try:
-                with open(os.devnull, "w") as null:
-                    os.dup2(null.fileno(), 1)
-                    try:
-                        highs = highspy.Highs()
-                    finally:
-                        os.dup2(saved, 1)
-            finally:
-                os.close(saved)
-            _banner_shown = True
+    try:
+        from highspy._core import _Highs as highs_class
+    except ImportError:
+        from highspy import Highs as highs_class
+    highs = highs_class()
     highs.setOptionValue("output_flag", False)
     return highs
 
