@@ -295,7 +295,11 @@ def fit(points: list[dict], goal: float) -> dict | None:
     se_b, se_mean = s / math.sqrt(sxx), s / math.sqrt(n)
 
     def rows_for(slope: float) -> float:
-        return math.exp(xm + (goal - ym) / slope) if slope > 0 else math.inf
+        if slope <= 0:
+            return math.inf
+        exponent = xm + (goal - ym) / slope
+        # A nearly flat curve puts the goal beyond any float: never reached, not an overflow.
+        return math.exp(exponent) if exponent < 700.0 else math.inf
 
     return {
         "n": n,
@@ -380,6 +384,26 @@ def cost(full: dict, f: dict, rate: dict) -> None:
         )
 
 
+def run_settings(args) -> dict:
+    """What a point's result depends on besides its file name (model, copies, seed, point)."""
+    return {
+        "data": str(Path(args.data).resolve()),
+        "order_seed": args.order_seed,
+        "sigma": args.sigma,
+        "base_samples": args.base_samples,
+    }
+
+
+def check_settings(path: Path, settings: dict) -> None:
+    """Refuse to reuse a finished point measured with other settings (a resumed run is fine)."""
+    stored = json.loads(path.read_text()).get("settings")
+    if stored != settings:
+        raise SystemExit(
+            f"{path} was measured with {stored}, not {settings}: use another --out, "
+            "or delete that file to measure it again"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True, help="the shipped models' dataset")
@@ -408,15 +432,18 @@ def main() -> None:
         ["classifier"] if args.classifier else []
     )
     points = [] if args.points == "none" else args.points.split(",")
+    settings = run_settings(args)
     cache: dict = {}
     for kind in kinds:
         for point in points:
             tag = f"c{args.copies}-" if kind == "regressor" else ""
             path = args.out / f"{kind}-{tag}s{args.seed}-{point.replace(':', '_')}.json"
             if path.exists():
+                check_settings(path, settings)
                 continue
             started = time.perf_counter()
             result = run_point(args, kind, point, cache)
+            result["settings"] = settings
             path.write_text(json.dumps(result, indent=2, default=float))
             print(f"{kind} {point}: {time.perf_counter() - started:.0f} s", flush=True)
     rate = json.loads(args.rate_file.read_text()) if args.rate_file else None

@@ -148,9 +148,11 @@ def main() -> None:
         "--models", default="classifier,regressor", help="which models to rebuild (comma-separated)"
     )
     args = parser.parse_args()
+    models = set(args.models.split(","))
+    if not models or models - {"classifier", "regressor"}:
+        parser.error(f"--models {args.models!r}: name classifier, regressor or both")
     make_dataset(args.data, args.samples, args.workers)
     args.out.mkdir(parents=True, exist_ok=True)
-    models = set(args.models.split(","))
     if "classifier" in models:
         train(args.data, CLASSIFIER, args.out / "default_classifier.safetensors", args.epochs)
     if "regressor" in models:

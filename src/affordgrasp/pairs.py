@@ -551,7 +551,7 @@ def optimize_pairs(
         )
         runs.append((trace.state, pop))
     if n_refine:
-        # the best run (ties: the first): largest F_T, else the best guidance of its elites
+        # the best run: largest F_T, then the best guidance of its elites, then the first
         def rank(state) -> tuple[float, float]:
             g = state.elite_g[np.isfinite(state.elite_g)]
             return state.best, float(g.max()) if len(g) else -np.inf

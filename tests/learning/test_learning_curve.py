@@ -1,6 +1,7 @@
 """The subsets and the fit of benchmarks/learning_curve.py (docs/learning.md, "Learning curve")."""
 
 import importlib.util
+import json
 import math
 import sys
 from pathlib import Path
@@ -69,3 +70,30 @@ def test_fit_recovers_a_log_line_and_the_rows_for_the_goal(lc):
     flat = lc.fit([{"train_rows": n, "comparison_accuracy": 0.6} for n in rows], 0.8)
     assert flat["rows_for_goal"] == math.inf
     assert lc.fit(points[:2], 0.8) is None
+
+
+def test_fit_of_a_plateau_says_never_instead_of_overflowing(lc):
+    # a tiny positive slope puts the goal at exp(>709) rows
+    acc = [0.6785, 0.6786, 0.6783, 0.6787, 0.6786]
+    rows = [1e4, 2e4, 4e4, 8e4, 1.2e5]
+    f = lc.fit(
+        [{"train_rows": n, "comparison_accuracy": a} for n, a in zip(rows, acc, strict=True)], 0.8
+    )
+    assert f["slope_per_ln_rows"] > 0
+    assert f["rows_for_goal"] == math.inf and f["rows_for_goal_slope_minus_se"] == math.inf
+
+
+def test_a_finished_point_is_reused_only_with_the_same_settings(lc, tmp_path):
+    class Args:
+        data, order_seed, sigma, base_samples = tmp_path / "data", 0, 0.02, None
+
+    settings = lc.run_settings(Args)
+    path = tmp_path / "regressor-c3-s0-all.json"
+    path.write_text(json.dumps({"comparison_accuracy": 0.6, "settings": settings}))
+    lc.check_settings(path, settings)  # a resumed run: reused
+    Args.sigma = 0.05
+    with pytest.raises(SystemExit, match="use another --out"):
+        lc.check_settings(path, lc.run_settings(Args))
+    path.write_text(json.dumps({"comparison_accuracy": 0.6}))  # no settings: unknown
+    with pytest.raises(SystemExit):
+        lc.check_settings(path, settings)
