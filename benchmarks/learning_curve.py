@@ -269,7 +269,7 @@ def run_point(args, model_kind: str, point: str, cache: dict) -> dict:
                 cpu, tried = cpu + info["cpu_s"], tried + info["tried"]
             result["copies_simulated"] = int(keep.sum()) * args.copies
             result["copies_viable"] = int(sum(len(p) for p in parts[1:]))
-            result["copies_cpu_s_per_copy"] = cpu / tried
+            result["copies_cpu_s_per_copy"] = cpu / tried if tried else float("nan")
         prepared = (concatenate(parts, train.meta), val, test, target, sp)
     else:
         if base != per_object:
