@@ -76,6 +76,8 @@ def perturbed_rows(train, *, copies: int, sigma: float, seed: int, origins: bool
 def concatenate(parts, meta):
     from affordgrasp.learning.data import Samples
 
+    if not parts:
+        raise SystemExit("no perturbed copy was viable: nothing to add (try a smaller --sigma)")
     return Samples(
         *(
             np.concatenate([getattr(p, f) for p in parts])

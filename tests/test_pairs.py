@@ -227,3 +227,10 @@ def test_optimizer_refuses_bad_refine(refine):
 
     with pytest.raises(InputError, match="refine"):
         optimize_pairs("hammer", "pick", budget=96, uses=10, restarts=2, refine=refine)
+
+
+def test_optimizer_refuses_a_refine_share_that_rounds_to_nothing():
+    from affordgrasp.errors import InputError
+
+    with pytest.raises(InputError, match="rounds to no simulation"):
+        optimize_pairs("hammer", "pick", budget=96, uses=10, restarts=2, refine=0.001)

@@ -514,6 +514,12 @@ def optimize_pairs(
         raise bad_parameter(
             "budget", f"must be an integer >= restarts / (1 - refine), got {budget!r}"
         )
+    if refine > 0 and n_refine == 0:
+        raise bad_parameter(
+            "refine",
+            f"{refine!r} of a budget of {budget} rounds to no simulation; raise the budget "
+            "or pass refine=0",
+        )
     _, d = sample_inputs(seed + 1, 0, uses)
     use = UsePoints.of(obj, d)
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
