@@ -35,10 +35,11 @@ import json
 import logging
 import os
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -52,6 +53,7 @@ if TYPE_CHECKING:
     from .resolve import GraspObject
 
 FORMAT = 1
+_T = TypeVar("_T")
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
 _STAMPED_SOURCES = ("objects", "grasp/surface.py", "grasp/policy.py")
 _STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d")
@@ -381,15 +383,7 @@ def load_family(key: dict[str, Any]) -> GraspObject | None:
     """
     from .resolve import GraspObject
 
-    a = read_arrays(_family_path(key), key)
-    if a is None:
-        return None
-    try:
-        mesh = _mesh_from_arrays(a)
-        if mesh is None:
-            return None
-        mass = _mass_from_arrays(a)
-        face_parts = a["face_parts"] if "face_parts" in a else None
+    def build(a: dict[str, np.ndarray], mesh: MeshData, mass: MassProperties) -> GraspObject:
         return GraspObject(
             name=str(a["name"]),
             category=str(a["category"]),
@@ -397,10 +391,29 @@ def load_family(key: dict[str, Any]) -> GraspObject | None:
             mass=mass,
             mesh_hash=mesh.content_hash,
             source="family",
-            face_parts=face_parts,
+            face_parts=a["face_parts"] if "face_parts" in a else None,
             part_names=tuple(str(p) for p in a["part_names"]),
             materials=bool(a["materials"]),
         )
+
+    return _load_object(_family_path(key), key, build)
+
+
+def _load_object(
+    path: Path,
+    key: dict[str, Any],
+    build: Callable[[dict[str, np.ndarray], MeshData, MassProperties], _T],
+) -> _T | None:
+    """``build(arrays, mesh, mass)`` of the entry at ``path``, or None (missing, stale,
+    corrupt, or its mesh does not hash to its stored hash)."""
+    a = read_arrays(path, key)
+    if a is None:
+        return None
+    try:
+        mesh = _mesh_from_arrays(a)
+        if mesh is None:
+            return None
+        return build(a, mesh, _mass_from_arrays(a))
     except (KeyError, ValueError, TypeError):
         return None
 
@@ -542,28 +555,26 @@ def load_mesh_file(key: dict[str, Any], name: str, source: str) -> GraspObject |
     """
     from .resolve import GraspObject
 
-    a = read_arrays(_file_path(key), key)
-    if a is None:
-        return None
-    try:
-        mesh = _mesh_from_arrays(a)
-        if mesh is None:
-            return None
-        mass = _mass_from_arrays(a)
-        warnings = [str(w) for w in a["warnings"]]
-    except (KeyError, ValueError, TypeError):
+    def build(
+        a: dict[str, np.ndarray], mesh: MeshData, mass: MassProperties
+    ) -> tuple[GraspObject, list[str]]:
+        obj = GraspObject(
+            name=name,
+            category="mesh",
+            mesh=mesh,
+            mass=mass,
+            mesh_hash=mesh.content_hash,
+            source=source,
+        )
+        return obj, [str(w) for w in a["warnings"]]
+
+    found = _load_object(_file_path(key), key, build)
+    if found is None:
         return None
     log = logging.getLogger("affordgrasp.objects.loading")
-    for message in warnings:
+    for message in found[1]:
         log.warning("%s", message)
-    return GraspObject(
-        name=name,
-        category="mesh",
-        mesh=mesh,
-        mass=mass,
-        mesh_hash=mesh.content_hash,
-        source=source,
-    )
+    return found[0]
 
 
 def store_mesh_file(key: dict[str, Any], obj: GraspObject, warnings: list[str]) -> None:
