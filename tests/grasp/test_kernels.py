@@ -265,17 +265,17 @@ def test_the_search_queue_pops_the_smallest_key_with_its_entry(seed):
     for _ in range(3000):
         if size < cap and (size == 0 or rng.random() < 0.55):
             k = float(rng.integers(0, 40)) if rng.random() < 0.5 else float(rng.random() * 40)
-            size = kernels._heap_push(heap, size, k, next_id, -k)
+            size = kernels._heap_push(*heap, size, k, next_id, -k)
             present[next_id] = k
             next_id += 1
         else:
-            k, e, p, size = kernels._heap_pop(heap, size)
+            k, e, p, size = kernels._heap_pop(*heap, size)
             assert k == min(present.values())
             assert present.pop(e) == k and p == -k
         assert size == len(present)
     popped = []
     while size:
-        k, e, _, size = kernels._heap_pop(heap, size)
+        k, e, _, size = kernels._heap_pop(*heap, size)
         assert present.pop(e) == k
         popped.append(k)
     assert popped == sorted(popped) and not present

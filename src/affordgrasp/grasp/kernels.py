@@ -284,6 +284,19 @@ def sdf_world(px, py, pz, pose, kind, half, r):
 
 
 @njit(cache=True)
+def _sdf_at(px, py, pz, poses, s, kinds, halves, radii):
+    """:func:`sdf_world` against shape s of a set (poses, kinds, halves, radii), indexing
+    its rows in place (no views of them)."""
+    dx = px - poses[s, 0, 3]
+    dy = py - poses[s, 1, 3]
+    dz = pz - poses[s, 2, 3]
+    x = poses[s, 0, 0] * dx + poses[s, 1, 0] * dy + poses[s, 2, 0] * dz
+    y = poses[s, 0, 1] * dx + poses[s, 1, 1] * dy + poses[s, 2, 1] * dz
+    z = poses[s, 0, 2] * dx + poses[s, 1, 2] * dy + poses[s, 2, 2] * dz
+    return sdf_local(x, y, z, kinds[s], halves[s, 0], halves[s, 1], halves[s, 2], radii[s])
+
+
+@njit(cache=True)
 def outward_normal_world(px, py, pz, pose, kind, half, r):
     """Unit normal of the shape surface closest to the point, pointing out of the shape.
 
@@ -335,11 +348,12 @@ def outward_normal_world(px, py, pz, pose, kind, half, r):
 
 
 @njit(cache=True)
-def _to_hand(p, rot, trans, out):
-    """out = (p - trans) @ rot: an object-frame point in the hand frame."""
-    dx = p[0] - trans[0]
-    dy = p[1] - trans[1]
-    dz = p[2] - trans[2]
+def _to_hand(points, i, rot, trans, out):
+    """out = (points[i] - trans) @ rot: an object-frame point in the hand frame (the row is
+    indexed in place: no view of it)."""
+    dx = points[i, 0] - trans[0]
+    dy = points[i, 1] - trans[1]
+    dz = points[i, 2] - trans[2]
     out[0] = dx * rot[0, 0] + dy * rot[1, 0] + dz * rot[2, 0]
     out[1] = dx * rot[0, 1] + dy * rot[1, 1] + dz * rot[2, 1]
     out[2] = dx * rot[0, 2] + dy * rot[1, 2] + dz * rot[2, 2]
@@ -353,13 +367,14 @@ def _bounding_radius(kind, half, r):
 
 
 @njit(cache=True)
-def _sweep_entry(c, rr, pose, axis, t_max):
+def _sweep_entry(cx, cy, cz, rr, poses, q, axis, t_max):
     """For a sphere (hand-frame centre c, radius rr grown by a shape's bounding radius) and
-    the shape translating by 0..t_max along axis: the travel at which the sphere enters
-    the shape's swept bounding sphere (0 if it is in already), or -1 if it never does."""
-    dx = c[0] - pose[0, 3]
-    dy = c[1] - pose[1, 3]
-    dz = c[2] - pose[2, 3]
+    shape q (start pose ``poses[q]``) translating by 0..t_max along axis: the travel at
+    which the sphere enters the shape's swept bounding sphere (0 if it is in already), or
+    -1 if it never does."""
+    dx = cx - poses[q, 0, 3]
+    dy = cy - poses[q, 1, 3]
+    dz = cz - poses[q, 2, 3]
     along = dx * axis[0] + dy * axis[1] + dz * axis[2]
     # the part across the axis (for the approach's axis, +z: exactly (dx, dy, 0))
     ex = dx - along * axis[0]
@@ -478,12 +493,14 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
     bound = 0.0
     lin = 0.0
     quad = 0.0
+    io = frames.inv_origin
+    it = frames.inv_shape
+    halves = shapes.halves
     for j in range(chain.origins.shape[0]):
-        o = frames.inv_origin[j]
         x, y, z = (
-            o[0, 0] * x + o[0, 1] * y + o[0, 2] * z + o[0, 3],
-            o[1, 0] * x + o[1, 1] * y + o[1, 2] * z + o[1, 3],
-            o[2, 0] * x + o[2, 1] * y + o[2, 2] * z + o[2, 3],
+            io[j, 0, 0] * x + io[j, 0, 1] * y + io[j, 0, 2] * z + io[j, 0, 3],
+            io[j, 1, 0] * x + io[j, 1, 1] * y + io[j, 1, 2] * z + io[j, 1, 3],
+            io[j, 2, 0] * x + io[j, 2, 1] * y + io[j, 2, 2] * z + io[j, 2, 3],
         )
         q = chain.q0[j] + chain.speeds[j] * s
         ax = chain.axes[j, 0]
@@ -516,12 +533,11 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
         for sq in range(chain.shape_joint.shape[0]):
             if chain.shape_joint[sq] != j:
                 continue
-            t = frames.inv_shape[sq]
-            lx = t[0, 0] * x + t[0, 1] * y + t[0, 2] * z + t[0, 3]
-            ly = t[1, 0] * x + t[1, 1] * y + t[1, 2] * z + t[1, 3]
-            lz = t[2, 0] * x + t[2, 1] * y + t[2, 2] * z + t[2, 3]
-            h = shapes.halves[sq]
-            d = sdf_local(lx, ly, lz, shapes.kinds[sq], h[0], h[1], h[2], shapes.radii[sq])
+            lx = it[sq, 0, 0] * x + it[sq, 0, 1] * y + it[sq, 0, 2] * z + it[sq, 0, 3]
+            ly = it[sq, 1, 0] * x + it[sq, 1, 1] * y + it[sq, 1, 2] * z + it[sq, 1, 3]
+            lz = it[sq, 2, 0] * x + it[sq, 2, 1] * y + it[sq, 2, 2] * z + it[sq, 2, 3]
+            d = sdf_local(lx, ly, lz, shapes.kinds[sq], halves[sq, 0], halves[sq, 1],
+                          halves[sq, 2], shapes.radii[sq])  # fmt: skip
             d_joint = min(d_joint, d)
             if d < d_min:
                 d_min = d
@@ -541,15 +557,14 @@ def _swept_distance(px, py, pz, u, q, shapes, shape_pose, axis):
     """For a translation: distance of a hand-frame point to shape q (at ``shape_pose`` when
     the motion starts) after it has travelled u along axis. Only the point moves (by -u
     along axis), so for the approach (axis +z) this is exactly sdf(px, py, pz - u)."""
-    return sdf_world(
-        px - axis[0] * u,
-        py - axis[1] * u,
-        pz - axis[2] * u,
-        shape_pose[q],
-        shapes.kinds[q],
-        shapes.halves[q],
-        shapes.radii[q],
-    )
+    dx = px - axis[0] * u - shape_pose[q, 0, 3]
+    dy = py - axis[1] * u - shape_pose[q, 1, 3]
+    dz = pz - axis[2] * u - shape_pose[q, 2, 3]
+    x = shape_pose[q, 0, 0] * dx + shape_pose[q, 1, 0] * dy + shape_pose[q, 2, 0] * dz
+    y = shape_pose[q, 0, 1] * dx + shape_pose[q, 1, 1] * dy + shape_pose[q, 2, 1] * dz
+    z = shape_pose[q, 0, 2] * dx + shape_pose[q, 1, 2] * dy + shape_pose[q, 2, 2] * dz
+    h = shapes.halves
+    return sdf_local(x, y, z, shapes.kinds[q], h[q, 0], h[q, 1], h[q, 2], shapes.radii[q])
 
 
 @njit(cache=True, inline="always")
@@ -562,14 +577,13 @@ def _set_trig(s, chain, trig):
 
 
 @njit(cache=True)
-def _heap_push(heap, size, k, i, p):
+def _heap_push(key, ident, prev, size, k, i, p):
     """Push (key k, entry i, bracket low p) on the 4-ary heap (key, ident, prev).
 
     Entry j's children are 4 j + 1 .. 4 j + 4: half the levels of a binary heap, and the
     four keys compared at each level are adjacent in memory. The parents above the new key
     move down one level and the entry is written once where it stops.
     """
-    key, ident, prev = heap
     j = size
     while j > 0:
         parent = (j - 1) >> 2
@@ -587,7 +601,7 @@ def _heap_push(heap, size, k, i, p):
 
 
 @njit(cache=True)
-def _heap_pop(heap, size):
+def _heap_pop(key, ident, prev, size):
     """Pop the smallest key: (key, entry, bracket low, new size).
 
     The last entry sifts down from the root as a hole, each level to the smallest of the
@@ -595,7 +609,6 @@ def _heap_pop(heap, size):
     binary heap; the search's result does not depend on that order (every key is a lower
     bound on when its entry can touch, whichever of equal keys goes first).
     """
-    key, ident, prev = heap
     k0 = key[0]
     i0 = ident[0]
     p0 = prev[0]
@@ -650,7 +663,7 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
         i = int(hits[h, 0])
         slot = int(hits[h, 1])
         hi = hits[h, 3]
-        _to_hand(cloud.points[i], rot, trans, ph)
+        _to_hand(cloud.points, i, rot, trans, ph)
         for _ in range(BISECTIONS):
             if hi - lo <= 1e-13:
                 break
@@ -683,14 +696,14 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
 
 
 @njit(cache=True)
-def _ahead(c, pose, axis, u, extent):
+def _ahead(c, poses, q, axis, u, extent):
     """For a translation: whether a shape (start pose ``pose``, bounding radius grown by the
     hit level and a cell's radius: ``extent``) that has travelled u along axis has not yet
     passed the point or cell centre c."""
     along = (
-        (c[0] - pose[0, 3]) * axis[0]
-        + (c[1] - pose[1, 3]) * axis[1]
-        + (c[2] - pose[2, 3]) * axis[2]
+        (c[0] - poses[q, 0, 3]) * axis[0]
+        + (c[1] - poses[q, 1, 3]) * axis[1]
+        + (c[2] - poses[q, 2, 3]) * axis[2]
     )
     return along - u > -extent
 
@@ -795,7 +808,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     tmp = np.empty(3)
     cap = 1
     for c in range(nk):
-        _to_hand(cloud.coarse_center[c], rot, trans, tmp)
+        _to_hand(cloud.coarse_center, c, rot, trans, tmp)
         kc[c, 0] = tmp[0]
         kc[c, 1] = tmp[1]
         kc[c, 2] = tmp[2]
@@ -806,7 +819,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         below = 1 + f1 - f0 + cloud.cell_start[f1] - cloud.cell_start[f0]
         if translation:
             for q in range(k):
-                if _sweep_entry(tmp, radius + rho[q], shape_buf[q], a_move, limit) >= 0.0:
+                rr = radius + rho[q]
+                if _sweep_entry(tmp[0], tmp[1], tmp[2], rr, shape_buf, q, a_move, limit) >= 0.0:
                     cap += below
             continue
         dx = tmp[0] - o0[0]
@@ -819,7 +833,9 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             continue
         kr[c] = r0 + radius
         cap += below
-    heap = (np.empty(cap), np.empty(cap, dtype=np.int64), np.empty(cap))
+    heap_key = np.empty(cap)
+    heap_ident = np.empty(cap, dtype=np.int64)
+    heap_prev = np.empty(cap)
     # the joints' cos and sin at trig_s (a chain's queries at one s share them)
     trig = np.empty((m, 2))
     trig_s = 0.0
@@ -838,10 +854,12 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         radius = cloud.coarse_radius[c]
         if translation:
             for q in range(k):
-                t_in = _sweep_entry(kc[c], radius + rho[q], shape_buf[q], a_move, limit)
+                rr = radius + rho[q]
+                t_in = _sweep_entry(kc[c, 0], kc[c, 1], kc[c, 2], rr, shape_buf, q, a_move, limit)
                 if t_in >= 0.0:
                     counts[PUSHES] += 1
-                    size = _heap_push(heap, size, t_in, code * slots + q + 1, t_in)
+                    e = code * slots + q + 1
+                    size = _heap_push(heap_key, heap_ident, heap_prev, size, t_in, e, t_in)
             continue
         if kr[c] < 0.0:
             continue
@@ -850,7 +868,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                                   margin + radius, radius, trig)  # fmt: skip
         if step < s_max:
             counts[PUSHES] += 1
-            size = _heap_push(heap, size, step, code * slots, 0.0)
+            size = _heap_push(heap_key, heap_ident, heap_prev, size, step, code * slots, 0.0)
     best = limit  # an upper bound on the first crossing, lowered by every hit
     hits = np.empty((64, 4))
     nh = 0
@@ -864,7 +882,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         elif size == 0:
             break
         else:
-            s, e, s_prev, size = _heap_pop(heap, size)
+            s, e, s_prev, size = _heap_pop(heap_key, heap_ident, heap_prev, size)
         if s != trig_s and not translation:
             _set_trig(s, chain, trig)
             trig_s = s
@@ -877,9 +895,12 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         if code >= n:
             coarse = code >= n + nf
             c = code - n - nf if coarse else code - n
-            radius = cloud.coarse_radius[c] if coarse else cloud.cell_radius[c]
-            center = cloud.coarse_center[c] if coarse else cloud.cell_center[c]
-            _to_hand(center, rot, trans, ph)
+            if coarse:
+                radius = cloud.coarse_radius[c]
+                _to_hand(cloud.coarse_center, c, rot, trans, ph)
+            else:
+                radius = cloud.cell_radius[c]
+                _to_hand(cloud.cell_center, c, rot, trans, ph)
             counts[QUERIES] += 1
             if translation:
                 d = _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move) - radius
@@ -917,11 +938,11 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                         n_stack += 1
             elif nxt < best:
                 # A translation's pair is dropped once the shape has passed the cell.
-                if not translation or _ahead(ph, shape_buf[q], a_move, nxt, rho[q] + radius):
+                if not translation or _ahead(ph, shape_buf, q, a_move, nxt, rho[q] + radius):
                     counts[PUSHES] += 1
-                    size = _heap_push(heap, size, nxt, e, s)
+                    size = _heap_push(heap_key, heap_ident, heap_prev, size, nxt, e, s)
             continue
-        _to_hand(cloud.points[code], rot, trans, ph)
+        _to_hand(cloud.points, code, rot, trans, ph)
         counts[QUERIES] += 1
         if translation:
             d = _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move)
@@ -937,7 +958,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 pressing = d_next < d
             # d > hit_eps = 2 margin: a step of at least margin
             nxt = s + d - margin if d > hit_eps else s + speed * SLIDE_STEP
-            still = _ahead(ph, shape_buf[q], a_move, nxt, rho[q])
+            still = _ahead(ph, shape_buf, q, a_move, nxt, rho[q])
         else:
             dx = ph[0] - o0[0]
             dy = ph[1] - o0[1]
@@ -971,7 +992,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             best = min(best, s)
         elif nxt < best and still:
             counts[PUSHES] += 1
-            size = _heap_push(heap, size, nxt, e, s)
+            size = _heap_push(heap_key, heap_ident, heap_prev, size, nxt, e, s)
     first, p, q = _refine_first_hit(cloud, rot, trans, chain, frames, shape_buf, a_move, hits,
                                     nh, best, hit_eps, counts)  # fmt: skip
     if translation and p >= 0:
@@ -1386,7 +1407,7 @@ def touching_points(cloud, rot, trans, shapes, tol):
     tmp = np.empty(3)
     ph = np.empty(3)
     for kk in range(coarse_center.shape[0]):
-        _to_hand(coarse_center[kk], rot, trans, tmp)
+        _to_hand(coarse_center, kk, rot, trans, tmp)
         near = False
         for s in range(ns):
             dx = tmp[0] - poses[s, 0, 3]
@@ -1399,7 +1420,7 @@ def touching_points(cloud, rot, trans, shapes, tol):
         if not near:
             continue
         for c in range(coarse_start[kk], coarse_start[kk + 1]):
-            _to_hand(cell_center[c], rot, trans, tmp)
+            _to_hand(cell_center, c, rot, trans, tmp)
             for s in range(ns):
                 dx = tmp[0] - poses[s, 0, 3]
                 dy = tmp[1] - poses[s, 1, 3]
@@ -1407,12 +1428,12 @@ def touching_points(cloud, rot, trans, shapes, tol):
                 rr = rho[s] + cell_radius[c]
                 if dx * dx + dy * dy + dz * dz > rr * rr:
                     continue
-                dc = sdf_world(tmp[0], tmp[1], tmp[2], poses[s], kinds[s], halves[s], radii[s])
+                dc = _sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii)
                 if dc - cell_radius[c] > tol:
                     continue
                 for i in range(cell_start[c], cell_start[c + 1]):
-                    _to_hand(points[i], rot, trans, ph)
-                    d = sdf_world(ph[0], ph[1], ph[2], poses[s], kinds[s], halves[s], radii[s])
+                    _to_hand(points, i, rot, trans, ph)
+                    d = _sdf_at(ph[0], ph[1], ph[2], poses, s, kinds, halves, radii)
                     if d > tol:
                         continue
                     if m == cap:
