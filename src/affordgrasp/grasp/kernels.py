@@ -805,6 +805,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     nk = cloud.coarse_center.shape[0]
     kc = np.empty((nk, 3))
     kr = np.empty(nk)
+    # a translation's entry travel of each (coarse cell, shape) pair, -1: never enters
+    t_enter = np.empty((nk, k) if translation else (0, k))
     tmp = np.empty(3)
     cap = 1
     for c in range(nk):
@@ -820,7 +822,9 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         if translation:
             for q in range(k):
                 rr = radius + rho[q]
-                if _sweep_entry(tmp[0], tmp[1], tmp[2], rr, shape_buf, q, a_move, limit) >= 0.0:
+                t_in = _sweep_entry(tmp[0], tmp[1], tmp[2], rr, shape_buf, q, a_move, limit)
+                t_enter[c, q] = t_in
+                if t_in >= 0.0:
                     cap += below
             continue
         dx = tmp[0] - o0[0]
@@ -840,6 +844,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     trig = np.empty((m, 2))
     trig_s = 0.0
     _set_trig(0.0, chain, trig)
+    # the same at a probe's s (trig keeps those of trig_s for the entries that share it)
+    trig_probe = np.empty((m, 2))
     # The children a touching cell releases share its key, the smallest of all (every key
     # pushed later is at least that): they wait on a stack, popped before the heap, instead
     # of each sifting through it.
@@ -854,8 +860,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         radius = cloud.coarse_radius[c]
         if translation:
             for q in range(k):
-                rr = radius + rho[q]
-                t_in = _sweep_entry(kc[c, 0], kc[c, 1], kc[c, 2], rr, shape_buf, q, a_move, limit)
+                t_in = t_enter[c, q]
                 if t_in >= 0.0:
                     counts[PUSHES] += 1
                     e = code * slots + q + 1
@@ -968,10 +973,10 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             pressing = False
             if d <= hit_eps:
                 counts[QUERIES] += 1
-                trig_s = s + PROBE
-                _set_trig(trig_s, chain, trig)
+                s_probe = s + PROBE
+                _set_trig(s_probe, chain, trig_probe)
                 d_next, _, _ = _chain_touch(
-                    ph[0], ph[1], ph[2], trig_s, r, chain, frames, margin, 0.0, trig
+                    ph[0], ph[1], ph[2], s_probe, r, chain, frames, margin, 0.0, trig_probe
                 )
                 pressing = d_next < d
             # A point inside the hit level that is not pressed (receding or sliding) has no
