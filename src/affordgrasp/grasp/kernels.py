@@ -606,8 +606,10 @@ def _heap_pop(key, ident, prev, size):
 
     The last entry sifts down from the root as a hole, each level to the smallest of the
     (up to four) children. Entries with equal keys may leave in another order than from a
-    binary heap; the search's result does not depend on that order (every key is a lower
-    bound on when its entry can touch, whichever of equal keys goes first).
+    binary heap. Every key is a lower bound on when its entry can touch, so the first
+    crossing the search finds does not depend on that order; which points touching at
+    exactly that crossing it collects could (on the built-in objects the results equal
+    those of a binary heap).
     """
     k0 = key[0]
     i0 = ident[0]
