@@ -324,32 +324,48 @@ def _dist_nd(normal, offset, f, P, p):
     return s - offset[f]
 
 
-@njit(cache=True)
-def _det6(A):
-    """Determinant of a 6 x 6 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
+@njit(cache=True, inline="always")
+def _det_lu(A, n):
+    """Determinant of the leading n x n block of A (Gaussian elimination, partial pivoting).
+
+    A is overwritten. Inlined into :func:`_det5` and :func:`_det6`, where ``n`` is a
+    constant.
+    """
     det = 1.0
-    for r in range(DIM):
+    for r in range(n):
         bi = r
         best = abs(A[r, r])
-        for i in range(r + 1, DIM):
+        for i in range(r + 1, n):
             if abs(A[i, r]) > best:
                 best = abs(A[i, r])
                 bi = i
         if best == 0.0:
             return 0.0
         if bi != r:
-            for j in range(DIM):
+            for j in range(n):
                 t = A[r, j]
                 A[r, j] = A[bi, j]
                 A[bi, j] = t
             det = -det
         piv = A[r, r]
         det *= piv
-        for i in range(r + 1, DIM):
+        for i in range(r + 1, n):
             f = A[i, r] / piv
-            for j in range(r + 1, DIM):
+            for j in range(r + 1, n):
                 A[i, j] -= f * A[r, j]
     return det
+
+
+@njit(cache=True)
+def _det6(A):
+    """Determinant of a 6 x 6 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
+    return _det_lu(A, DIM)
+
+
+@njit(cache=True)
+def _det5(A):
+    """Determinant of a 5 x 5 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
+    return _det_lu(A, DIM - 1)
 
 
 @njit(cache=True)
@@ -399,9 +415,11 @@ def _visible(F, f0, p, P, thr, stamp, vis, hv, hk, hg):
     """Facets more than ``thr`` below apex ``p``, breadth-first from ``f0``, and the horizon.
 
     Marks visited facets (``stamp``: visible, ``-stamp``: not) and stores the apex's height
-    above each in ``F.apex_dist``. Returns ``(nvis, nh, vis, hv, hk, hg)``: the visible facets
-    and the horizon ridges (visible facet, the vertex slot opposite the ridge, the
-    neighbour across it); the arrays are grown as needed.
+    above each in ``F.apex_dist``. Returns ``(nvis, nh)``: the visible facets ``vis[:nvis]``
+    and the horizon ridges (visible facet ``hv``, the vertex slot opposite the ridge ``hk``,
+    the neighbour across it ``hg``, ``[:nh]``). The arrays are never grown here (an array
+    reassigned inside the loop costs reference counts on every pass): ``nvis = -1`` says
+    they were too short; the caller grows them and searches again with a fresh stamp.
     """
     # the store's fields as locals: the loop touches them tens of thousands of times
     neighbours = F.neighbours
@@ -409,6 +427,8 @@ def _visible(F, f0, p, P, thr, stamp, vis, hv, hk, hg):
     apex_dist = F.apex_dist
     normal = F.normal
     offset = F.offset
+    nvis_cap = vis.shape[0]
+    nh_cap = hv.shape[0]
     nvis = 1
     vis[0] = f0
     mark[f0] = stamp
@@ -426,21 +446,19 @@ def _visible(F, f0, p, P, thr, stamp, vis, hv, hk, hg):
                 apex_dist[g] = dg
                 if dg > thr:
                     mark[g] = stamp
-                    if nvis == vis.shape[0]:
-                        vis = _grow_1(vis, 2 * nvis, -1)
+                    if nvis == nvis_cap:
+                        return -1, nh
                     vis[nvis] = g
                     nvis += 1
                     continue
                 mark[g] = -stamp
-            if nh == hv.shape[0]:
-                hv = _grow_1(hv, 2 * nh, -1)
-                hk = _grow_1(hk, 2 * nh, -1)
-                hg = _grow_1(hg, 2 * nh, -1)
+            if nh == nh_cap:
+                return -1, nh
             hv[nh] = v
             hk[nh] = k
             hg[nh] = g
             nh += 1
-    return nvis, nh, vis, hv, hk, hg
+    return nvis, nh
 
 
 @njit(cache=True)
@@ -482,6 +500,10 @@ def _build(P, nearest_only, F):
             if v > scale:
                 scale = v
     q0 = np.zeros(DIM)
+    # Fewer than DIM + 1 points or all at the origin: no 6-D hull (HULL_DEGENERATE). 32768
+    # points or more: HULL_FAILED, so the caller uses qhull. Nothing below needs that cap
+    # any more (it bounded a packed ridge key that the adjacency no longer uses); it stays
+    # as a size limit of this kernel, far above the hundreds of wrenches of a grasp.
     if N < DIM + 1 or scale == 0.0 or N >= 32768:
         status = HULL_DEGENERATE if N < DIM + 1 or scale == 0.0 else HULL_FAILED
         return status, 0, q0, F
@@ -549,9 +571,7 @@ def _build(P, nearest_only, F):
             dist = _dist_nd(F_normal, F_offset, f, P, p)
             if dist > tol:
                 if F_outside[f] < 0:
-                    if nstack == stack.shape[0]:
-                        stack = _grow_1(stack, 2 * nstack, -1)
-                    stack[nstack] = f
+                    stack[nstack] = f  # at most DIM + 1 of them: no growth
                     nstack += 1
                 nxt[p] = F_outside[f]
                 F_outside[f] = p
@@ -623,7 +643,14 @@ def _build(P, nearest_only, F):
             thick = True
             stamp += 1
             F_apex_dist[f0] = F_far_dist[f0]
-            nvis, nh, vis, hv, hk, hg = _visible(F, f0, p, P, tol, stamp, vis, hv, hk, hg)
+            nvis, nh = _visible(F, f0, p, P, tol, stamp, vis, hv, hk, hg)
+            while nvis < 0:  # the search ran out of room: grow, search again
+                vis = np.empty(2 * vis.shape[0], dtype=np.int64)
+                hv = np.empty(2 * hv.shape[0], dtype=np.int64)
+                hk = np.empty(hv.shape[0], dtype=np.int64)
+                hg = np.empty(hv.shape[0], dtype=np.int64)
+                stamp += 1
+                nvis, nh = _visible(F, f0, p, P, tol, stamp, vis, hv, hk, hg)
             best = f0
             for i in range(nvis):
                 if F_apex_dist[vis[i]] > F_apex_dist[best]:
@@ -646,31 +673,40 @@ def _build(P, nearest_only, F):
         # of noise) is not visible: the new facet on that ridge makes a fold of at most
         # vis_tol instead of a sliver whose hyperplane is round-off.
         F_apex_dist[f0] = F_far_dist[f0]
-        nvis, nh, vis, hv, hk, hg = _visible(F, f0, p, P, vis_tol, stamp, vis, hv, hk, hg)
+        nvis, nh = _visible(F, f0, p, P, vis_tol, stamp, vis, hv, hk, hg)
+        while nvis < 0:
+            vis = np.empty(2 * vis.shape[0], dtype=np.int64)
+            hv = np.empty(2 * hv.shape[0], dtype=np.int64)
+            hk = np.empty(hv.shape[0], dtype=np.int64)
+            hg = np.empty(hv.shape[0], dtype=np.int64)
+            stamp += 1
+            nvis, nh = _visible(F, f0, p, P, vis_tol, stamp, vis, hv, hk, hg)
         for h in range(nh):
             if F_apex_dist[hg[h]] > tol:
                 thick = True
                 break
         if nh > newf.shape[0]:
             newf = np.empty(2 * nh, dtype=np.int64)
+        # retired slots first, then fresh rows; the store grows here, before the loop (an
+        # array reassigned inside a loop costs reference counts on every pass)
+        if nF + nh - nfree > cap:
+            cap = max(2 * cap, nF + nh - nfree + 64)
+            F = _grown(F, nF, cap)
+            F_vertices = F.vertices
+            F_neighbours = F.neighbours
+            F_normal = F.normal
+            F_offset = F.offset
+            F_alive = F.alive
+            F_outside = F.outside
+            F_far_point = F.far_point
+            F_far_dist = F.far_dist
+            F_mark = F.mark
+            F_apex_dist = F.apex_dist
         for h in range(nh):
             if nfree > 0:
                 nfree -= 1
                 newf[h] = free[nfree]
             else:
-                if nF == cap:
-                    cap = max(2 * cap, nF + nh + 64)
-                    F = _grown(F, nF, cap)
-                    F_vertices = F.vertices
-                    F_neighbours = F.neighbours
-                    F_normal = F.normal
-                    F_offset = F.offset
-                    F_alive = F.alive
-                    F_outside = F.outside
-                    F_far_point = F.far_point
-                    F_far_dist = F.far_dist
-                    F_mark = F.mark
-                    F_apex_dist = F.apex_dist
                 newf[h] = nF
                 nF += 1
         # cone of new facets from p over the horizon ridges
@@ -796,11 +832,11 @@ def _build(P, nearest_only, F):
                                 F_far_point[nf] = pt
                             break
                 pt = pn
+        if nstack + nh > stack.shape[0]:
+            stack = _grow_1(stack, 2 * (nstack + nh), -1)
         for h in range(nh):
             nf = newf[h]
             if F_outside[nf] >= 0:
-                if nstack == stack.shape[0]:
-                    stack = _grow_1(stack, 2 * nstack, -1)
                 stack[nstack] = nf
                 nstack += 1
         if nfree + nvis > free.shape[0]:
@@ -887,34 +923,6 @@ def build_hull(P, nearest_only, store):
         the next call.
     """
     return _build(P, nearest_only, store)
-
-
-@njit(cache=True)
-def _det5(A):
-    """Determinant of a 5 x 5 matrix (Gaussian elimination, partial pivoting); A is overwritten."""
-    det = 1.0
-    for r in range(DIM - 1):
-        bi = r
-        best = abs(A[r, r])
-        for i in range(r + 1, DIM - 1):
-            if abs(A[i, r]) > best:
-                best = abs(A[i, r])
-                bi = i
-        if best == 0.0:
-            return 0.0
-        if bi != r:
-            for j in range(DIM - 1):
-                t = A[r, j]
-                A[r, j] = A[bi, j]
-                A[bi, j] = t
-            det = -det
-        piv = A[r, r]
-        det *= piv
-        for i in range(r + 1, DIM - 1):
-            f = A[i, r] / piv
-            for j in range(r + 1, DIM - 1):
-                A[i, j] -= f * A[r, j]
-    return det
 
 
 @njit(cache=True)
