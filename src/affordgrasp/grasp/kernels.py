@@ -255,38 +255,31 @@ def sdf_local(x, y, z, kind, hx, hy, hz, r):
 
 
 @njit(cache=True)
-def sdf_world(px, py, pz, pose, kind, half, r):
-    """Signed distance of a hand-frame point to a shape with hand-frame ``pose``.
+def sdf_at(px, py, pz, poses, s, kinds, halves, radii):
+    """Signed distance of a hand-frame point to shape ``s`` of a set of shapes.
+
+    The shape's rows are indexed in place (no views of them: in a compiled loop each view
+    costs a reference-count increment and decrement).
 
     Parameters
     ----------
     px, py, pz : float
         The point, hand frame, m.
-    pose : (4, 4) float64 ndarray
-    kind : int
-    half : (3,) float64 ndarray
+    poses : (S, 4, 4) float64 ndarray
+        Hand-frame poses.
+    s : int
+        The shape.
+    kinds : (S,) int ndarray
+    halves : (S, 3) float64 ndarray
         Core half extents, m.
-    r : float
-        Rounding radius, m.
+    radii : (S,) float64 ndarray
+        Rounding radii, m.
 
     Returns
     -------
     float
         m; negative inside.
     """
-    dx = px - pose[0, 3]
-    dy = py - pose[1, 3]
-    dz = pz - pose[2, 3]
-    x = pose[0, 0] * dx + pose[1, 0] * dy + pose[2, 0] * dz
-    y = pose[0, 1] * dx + pose[1, 1] * dy + pose[2, 1] * dz
-    z = pose[0, 2] * dx + pose[1, 2] * dy + pose[2, 2] * dz
-    return sdf_local(x, y, z, kind, half[0], half[1], half[2], r)
-
-
-@njit(cache=True)
-def _sdf_at(px, py, pz, poses, s, kinds, halves, radii):
-    """:func:`sdf_world` against shape s of a set (poses, kinds, halves, radii), indexing
-    its rows in place (no views of them)."""
     dx = px - poses[s, 0, 3]
     dy = py - poses[s, 1, 3]
     dz = pz - poses[s, 2, 3]
@@ -302,8 +295,15 @@ def outward_normal_world(px, py, pz, pose, kind, half, r):
 
     Parameters
     ----------
-    px, py, pz, pose, kind, half, r
-        As for :func:`sdf_world`.
+    px, py, pz : float
+        The point, hand frame, m.
+    pose : (4, 4) float64 ndarray
+        The shape's hand-frame pose.
+    kind : int
+    half : (3,) float64 ndarray
+        Core half extents, m.
+    r : float
+        Rounding radius, m.
 
     Returns
     -------
@@ -557,14 +557,8 @@ def _swept_distance(px, py, pz, u, q, shapes, shape_pose, axis):
     """For a translation: distance of a hand-frame point to shape q (at ``shape_pose`` when
     the motion starts) after it has travelled u along axis. Only the point moves (by -u
     along axis), so for the approach (axis +z) this is exactly sdf(px, py, pz - u)."""
-    dx = px - axis[0] * u - shape_pose[q, 0, 3]
-    dy = py - axis[1] * u - shape_pose[q, 1, 3]
-    dz = pz - axis[2] * u - shape_pose[q, 2, 3]
-    x = shape_pose[q, 0, 0] * dx + shape_pose[q, 1, 0] * dy + shape_pose[q, 2, 0] * dz
-    y = shape_pose[q, 0, 1] * dx + shape_pose[q, 1, 1] * dy + shape_pose[q, 2, 1] * dz
-    z = shape_pose[q, 0, 2] * dx + shape_pose[q, 1, 2] * dy + shape_pose[q, 2, 2] * dz
-    h = shapes.halves
-    return sdf_local(x, y, z, shapes.kinds[q], h[q, 0], h[q, 1], h[q, 2], shapes.radii[q])
+    return sdf_at(px - axis[0] * u, py - axis[1] * u, pz - axis[2] * u, shape_pose, q,
+                  shapes.kinds, shapes.halves, shapes.radii)  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -1435,12 +1429,12 @@ def touching_points(cloud, rot, trans, shapes, tol):
                 rr = rho[s] + cell_radius[c]
                 if dx * dx + dy * dy + dz * dz > rr * rr:
                     continue
-                dc = _sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii)
+                dc = sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii)
                 if dc - cell_radius[c] > tol:
                     continue
                 for i in range(cell_start[c], cell_start[c + 1]):
                     _to_hand(points, i, rot, trans, ph)
-                    d = _sdf_at(ph[0], ph[1], ph[2], poses, s, kinds, halves, radii)
+                    d = sdf_at(ph[0], ph[1], ph[2], poses, s, kinds, halves, radii)
                     if d > tol:
                         continue
                     if m == cap:
