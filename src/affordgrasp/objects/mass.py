@@ -24,6 +24,7 @@ __all__ = [
     "mass_properties",
     "mass_properties_parts",
     "material_mass_properties",
+    "regions_on_mesh",
 ]
 
 
@@ -257,3 +258,52 @@ def _make(
         r_max=r_max,
         bounds=bounds,
     )
+
+
+def regions_on_mesh(
+    mesh: trimesh.Trimesh, regions: Sequence[tuple[str, float, trimesh.Trimesh]]
+) -> list[tuple[str, float, trimesh.Trimesh]]:
+    """Material regions of a nearby geometry carried onto ``mesh`` (exact booleans).
+
+    Each region but the largest becomes ``mesh`` ∩ region; the largest takes the rest of
+    ``mesh``, so the regions split ``mesh`` exactly even where ``mesh`` bulges out of the
+    regions' union (a scan-like copy's noise, 0.1-0.3 mm). Used to give a scan-like variant
+    of a family its materials (:mod:`affordgrasp.objects.scan`).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Closed, outward-oriented, m.
+    regions : sequence of (material, density, trimesh.Trimesh)
+        Disjoint closed regions close to ``mesh`` (a family's ``metadata["materials"]``).
+
+    Returns
+    -------
+    list of (material, density kg/m^3, trimesh.Trimesh)
+        Disjoint, union ``mesh``; empty pieces are dropped.
+    """
+    import manifold3d
+
+    from affordgrasp.objects.loading import _from_manifold, _op, _to_manifold
+
+    regions = list(regions)
+    if not regions:
+        raise InputError("regions_on_mesh needs at least one region; got none")
+    whole = _to_manifold(mesh)
+    solids = [_to_manifold(r[2]) for r in regions]
+    largest = int(np.argmax([s.volume() for s in solids]))
+    out: list[tuple[str, float, trimesh.Trimesh]] = []
+    taken = []
+    for i, (name, density, _) in enumerate(regions):
+        if i == largest:
+            continue
+        piece = manifold3d.Manifold.batch_boolean([whole, solids[i]], _op("Intersect"))
+        if piece.volume() > 0:
+            out.append((name, density, _from_manifold(piece)))
+            taken.append(piece)
+    rest = whole
+    if taken:
+        union = manifold3d.Manifold.batch_boolean(taken, _op("Add"))
+        rest = manifold3d.Manifold.batch_boolean([whole, union], _op("Subtract"))
+    out.append((regions[largest][0], regions[largest][1], _from_manifold(rest)))
+    return out
