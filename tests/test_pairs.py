@@ -67,7 +67,8 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
     if task != "pick":
         assert np.all(eps >= 0.014)
     if task == "cut":
-        assert np.all(result.table.column("use_edge_angle").to_numpy() <= np.radians(45))
+        assert np.all(result.table.column("use_wedge_angle").to_numpy() <= np.radians(45))
+        assert np.all(result.table.column("use_clearance").to_numpy() >= 0.035)
 
 
 def test_optimizer_over_grasps_with_their_best_use_point():

@@ -23,6 +23,8 @@ USE_METRICS: tuple[str, ...] = (
     "use_force",
     "use_edge",
     "use_edge_angle",
+    "use_wedge_angle",
+    "use_clearance",
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
@@ -54,10 +56,16 @@ METRIC_UNITS: dict[str, str] = {
     "use_force": "N",
     "use_edge": "m⁻²",
     "use_edge_angle": "rad",
+    "use_wedge_angle": "rad",
+    "use_clearance": "m",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).
-DISPLAY_UNITS: dict[str, tuple[str, float]] = {"use_edge_angle": ("°", 180.0 / math.pi)}
+DISPLAY_UNITS: dict[str, tuple[str, float]] = {
+    "use_edge_angle": ("°", 180.0 / math.pi),
+    "use_wedge_angle": ("°", 180.0 / math.pi),
+    "use_clearance": ("mm", 1000.0),
+}
 
 
 def display_unit(column: str) -> str:

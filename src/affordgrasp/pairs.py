@@ -40,7 +40,7 @@ from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
-from .metrics.use_geometry import use_edge, use_edge_angle
+from .metrics.use_geometry import use_clearance, use_edge, use_edge_angle, use_wedge_angle
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .tasks import MetricColumns, get_task
@@ -123,6 +123,8 @@ class UsePoints:
         U_g, m⁻².
     use_edge_angle : (m,) float64 ndarray
         rad.
+    use_wedge_angle : (m,) float64 ndarray
+        rad.
     """
 
     use_dir: np.ndarray
@@ -131,6 +133,7 @@ class UsePoints:
     triangle: np.ndarray
     use_edge: np.ndarray
     use_edge_angle: np.ndarray
+    use_wedge_angle: np.ndarray
 
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
@@ -154,10 +157,12 @@ class UsePoints:
         hit = T >= 0
         ug = np.full(len(T), np.nan)
         ang = np.full(len(T), np.nan)
+        wedge = np.full(len(T), np.nan)
         if hit.any():
             ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
             ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
-        return cls(use_dir, P, N, T, ug, ang)
+            wedge[hit] = use_wedge_angle(obj.mesh_data, P[hit], N[hit])
+        return cls(use_dir, P, N, T, ug, ang, wedge)
 
 
 def _contacts(table: pa.Table, rows: np.ndarray):
@@ -227,6 +232,7 @@ def pair_scores(
     # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
+    all_points, _, _, all_offsets = _contacts(grasps, np.arange(n))
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
     for first in range(0, len(with_contacts), step):
@@ -240,6 +246,8 @@ def pair_scores(
         )
         cols["use_edge"] = uses.use_edge[ui]
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
+        cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
+        cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
         if screen and len(gi):
             cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
             cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)

@@ -51,6 +51,20 @@ TAU_UG_DEFAULT = 3.0e4
 # degrees where the balanced accuracy is 1.0. That is why the default "cut" tests the
 # edge angle (a deviation from the paper, whose U_g test is "cut-ug").
 TAU_EDGE_ANGLE_DEFAULT = math.radians(45.0)
+# That test sees mesh edges, so a scanned blade, whose edge the scanner rounds into a strip of
+# 30-90 degree dihedrals, has no edge. The wedge angle (use_wedge_angle: 2π × the part of a
+# 3 mm ball around U inside the solid) measures the flanks at a physical scale instead.
+# Calibrated with benchmarks/calibrate_wedge_angle.py on crisp and scan-like (~scan) blades,
+# flats, spines, handles and round parts (docs/validation.md has the numbers); it is the
+# default cut's test, the dihedral one the task "cut-dihedral".
+TAU_WEDGE_DEFAULT = math.radians(45.0)
+# A striking surface is blunt at the same scale: a flat face reads 180 degrees, a hammer
+# face's rounded rim 110-150, a claw's or a blade's tip less than 60.
+TAU_BLUNT_DEFAULT = math.radians(135.0)
+# The hand off the working part: the smallest contact-to-U distance of cut and beat. A
+# human index finger is 16-20 mm wide and the Barrett hand's finger links 25 mm: at 35 mm
+# no finger pad reaches the part of a blade or head within a finger's width of U.
+TAU_CLEARANCE_DEFAULT = 0.035
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
