@@ -34,7 +34,7 @@ from numba import njit
 from .columns import GRASP_METRICS, USE_METRICS
 from .dataset.best import TopRows
 from .errors import bad_parameter
-from .grasp.pregrasp import sample_inputs, use_points
+from .grasp.pregrasp import sample_inputs, surface_use_directions, use_points
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
@@ -163,6 +163,25 @@ class UsePoints:
             ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
             wedge[hit] = use_wedge_angle(obj.mesh_data, P[hit], N[hit])
         return cls(use_dir, P, N, T, ug, ang, wedge)
+
+    @classmethod
+    def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
+        """``n`` use points that cover the surface by area (their d towards surface points
+        drawn uniformly by area, :func:`~affordgrasp.grasp.pregrasp.surface_use_directions`).
+
+        Parameters
+        ----------
+        obj : GraspObject or str
+        n : int
+        seed : int
+
+        Returns
+        -------
+        UsePoints
+        """
+        obj = load_object(obj)
+        d = surface_use_directions(obj.mesh_data, obj.mass.center_of_mass, n, seed)
+        return cls.of(obj, d)
 
 
 def _contacts(table: pa.Table, rows: np.ndarray):
@@ -331,7 +350,8 @@ def best_pairs(
     per_grasp: bool = False,
     **overrides: float,
 ) -> PairSearch:
-    """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` × ``uses`` uniform samples.
+    """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` uniform samples × ``uses`` use
+    points drawn by surface area (:meth:`UsePoints.sample`).
 
     The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate`` draws them; pass
     ``grasp_table`` to reuse evaluated rows); the use directions are drawn from run
@@ -372,8 +392,8 @@ def best_pairs(
     if grasp_table is None:
         # ε only: the search never reads the GWS volume; the returned rows carry it
         grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand, volume=False).table
-    _, d = sample_inputs(seed + 1, 0, uses)
-    use = UsePoints.of(obj, d)
+    use = UsePoints.sample(obj, uses, seed + 1)
+    d = use.use_dir
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
     # The one ranker of the package: highest F_T first, ties to the smaller grasp, then use.
     values = scores["value"]
@@ -463,7 +483,7 @@ def optimize_pairs(
 
     The search space splits as the metrics do: CEM (:func:`affordgrasp.optimize.cem_maximize`)
     moves the pregrasp, and each simulated grasp takes the best use point of a fixed
-    uniform sample of ``uses`` directions (run ``seed + 1``), found as in
+    sample of ``uses`` use points drawn by surface area (run ``seed + 1``), found as in
     :func:`pair_scores`. ``budget`` counts simulations, as for ``optimize``.
 
     Parameters
@@ -528,8 +548,8 @@ def optimize_pairs(
             f"{refine!r} of a budget of {budget} rounds to no simulation; raise the budget "
             "or pass refine=0",
         )
-    _, d = sample_inputs(seed + 1, 0, uses)
-    use = UsePoints.of(obj, d)
+    use = UsePoints.sample(obj, uses, seed + 1)
+    d = use.use_dir
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
 

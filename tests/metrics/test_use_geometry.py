@@ -1,6 +1,5 @@
 """U_g and the sharpest-edge angle (use_geometry.py, conventions: Metrics)."""
 
-
 import numpy as np
 import pytest
 import trimesh

@@ -222,8 +222,6 @@ def use_points(
         return points, normals, tris
     origins = np.repeat(np.asarray(center, dtype=np.float64)[None], n, axis=0)
     _, ray_idx, tri_idx = mesh.ray.intersects_location(origins, d, multiple_hits=True)
-    if len(tri_idx) == 0:
-        return points, normals, tris
     # Exact float64 intersection with the triangles the (float32) ray engine reported.
     tri = np.asarray(mesh.triangles, dtype=np.float64)[tri_idx]
     e1 = tri[:, 1] - tri[:, 0]
