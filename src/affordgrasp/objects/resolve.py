@@ -5,6 +5,8 @@ Spec grammar, as on the command line:
 * ``knife`` — a built-in family, seed 0 (the same as ``knife:0``);
 * ``knife:7`` — a family variant, the seed a non-negative integer;
 * ``path/to/mesh.off`` — a mesh file (see :func:`affordgrasp.objects.load_mesh`);
+* a mesh file may have region densities beside it, ``<file>.materials.toml`` (a steel head
+  cut off by a plane; see :func:`_with_region_densities`);
 * any of these followed by ``~scan`` or ``~scan:K`` — its scan-like variant
   (:mod:`affordgrasp.objects.scan`), degraded with seed K (default: the family's seed, 0
   for a file).
@@ -37,6 +39,7 @@ from affordgrasp.objects.mass import (
     MassProperties,
     mass_properties,
     material_mass_properties,
+    plane_regions,
     regions_on_mesh,
 )
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
@@ -447,10 +450,11 @@ def _resolve_file(
     if key is not None:
         obj = prepared.load_mesh_file(key, path.name, source)
         if obj is not None:
-            return obj
+            return _with_region_densities(obj, path)
     with recording_warnings() as warnings:
         mesh = load_mesh(path, size_m=size_m, units=units)
     obj = _build(path.name, "mesh", mesh, density, source)
+    obj = _with_region_densities(obj, path)
     # not if the file changed while it was read: the mesh may be of other bytes than the key's
     if key is not None and key == prepared.mesh_file_key(
         path, size_m=size_m, units=units, density=density
@@ -513,6 +517,55 @@ def _build_family(
     )
 
 
+MATERIALS_SUFFIX = ".materials.toml"
+
+
+def _with_region_densities(obj: GraspObject, path: Path) -> GraspObject:
+    """``obj`` with the region densities of ``<path>.materials.toml`` when that file exists.
+
+    The file (TOML; lengths in metres in the loaded object's frame, densities kg/m^3)::
+
+        density = 700.0            # what no region below takes (a wooden handle)
+        [[region]]                 # in order of precedence
+        name = "head"
+        density = 7850.0           # steel
+        plane_point = [0.10, 0.0, 0.0]
+        plane_normal = [1.0, 0.0, 0.0]   # the region is the side the normal points to
+
+    Each region is the part of the mesh beyond its cutting plane
+    (:func:`~affordgrasp.objects.mass.plane_regions`): a hammer's head, an axe's head.
+    """
+    side = path.with_name(path.name + MATERIALS_SUFFIX)
+    if not side.exists():
+        return obj
+    import tomllib
+
+    try:
+        doc = tomllib.loads(side.read_text(encoding="utf-8"))
+        planes = [
+            (r.get("name", f"region {i}"), r["density"], r["plane_point"], r["plane_normal"])
+            for i, r in enumerate(doc.get("region", []))
+        ]
+        rest = doc.get("density", obj.mass.density)
+    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError) as exc:
+        raise InputError(
+            f"{side}: cannot read the region densities ({exc}); write 'density = ...' and "
+            "[[region]] tables with name, density, plane_point and plane_normal"
+        ) from None
+    regions = plane_regions(obj.mesh, rest, planes)
+    return GraspObject(
+        name=obj.name,
+        category=obj.category,
+        mesh=obj.mesh,
+        mass=material_mass_properties(obj.mesh, regions),
+        mesh_hash=obj.mesh_hash,
+        source=obj.source,
+        face_parts=obj.face_parts,
+        part_names=obj.part_names,
+        materials=True,
+    )
+
+
 def _resolve_scan(
     base: str,
     scan_seed: int | None,
@@ -534,7 +587,7 @@ def _resolve_scan(
         with recording_warnings():
             mesh, _ = scan_like(crisp.mesh, seed=seed)
         name = f"{crisp.name}{SCAN_SUFFIX}:{seed}"
-        return _build(name, "mesh", mesh, density, crisp.source)
+        return _with_region_densities(_build(name, "mesh", mesh, density, crisp.source), path)
     if size_m is not None or units is not None:
         raise InputError(
             f"{base!r} is a built-in family, made at its real size in metres; size and units "
