@@ -106,7 +106,7 @@ def test_best_pairs_per_grasp_ranks_each_grasp_once_with_its_best_use():
     assert np.all(np.diff(values) <= 1e-12)
     assert values[0] == pytest.approx(pairs.table.column("value").to_numpy()[0], rel=1e-9)
     # the best pair of each listed grasp: no other use point of it scores higher
-    scores = pair_scores(cleaver, table, UsePoints.of(cleaver, sample_inputs(1, 0, 400)[1]), "cut")
+    scores = pair_scores(cleaver, table, UsePoints.sample(cleaver, 400, 1), "cut")
     best, _ = best_use_per_grasp(scores, 120)
     np.testing.assert_allclose(np.sort(best[np.isfinite(best)])[::-1][: len(values)], values)
 
@@ -165,9 +165,9 @@ def test_pair_scores_in_blocks_equal_one_block(hammer_grasps, monkeypatch):
 
     _, d = sample_inputs(5, 0, 400)
     uses = UsePoints.of("hammer", d)
-    whole = pair_scores("hammer", hammer_grasps.table, uses, "beat", "no-robustness")
+    whole = pair_scores("hammer", hammer_grasps.table, uses, "beat-paper", "no-robustness")
     monkeypatch.setattr(pairs, "_BLOCK_PAIRS", 1000)  # 2 grasps x 400 uses per block
-    blocks = pair_scores("hammer", hammer_grasps.table, uses, "beat", "no-robustness")
+    blocks = pair_scores("hammer", hammer_grasps.table, uses, "beat-paper", "no-robustness")
     assert len(whole["grasp"]) > 0 and whole.keys() == blocks.keys()
     for key in whole:
         np.testing.assert_array_equal(blocks[key], whole[key], err_msg=key)
