@@ -17,7 +17,7 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
   (``use_clearance``), else I / E_i (0 when E_i = inf);
 * ``beat-paper``: the paper's beat, without the bluntness and clearance tests;
 * ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
-  opening of the solid within 3 mm, > τ_wedge, 45°), or a contact is within τ_clear
+  opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
   (35 mm) of it, else U_τ;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
