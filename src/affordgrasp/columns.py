@@ -28,7 +28,13 @@ USE_METRICS: tuple[str, ...] = (
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
-GRASP_METRICS: tuple[str, ...] = ("epsilon", "gws_volume", "inertia", *HOLD_EFFORT_COLUMNS)
+GRASP_METRICS: tuple[str, ...] = (
+    "epsilon",
+    "gws_volume",
+    "inertia",
+    *HOLD_EFFORT_COLUMNS,
+    "contact_thickness",
+)
 
 METRIC_COLUMNS: tuple[str, ...] = (
     "epsilon",
@@ -37,6 +43,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
     "inertia",
     *HOLD_EFFORT_COLUMNS,
     *USE_METRICS,
+    "contact_thickness",
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
@@ -58,6 +65,7 @@ METRIC_UNITS: dict[str, str] = {
     "use_edge_angle": "rad",
     "use_wedge_angle": "rad",
     "use_clearance": "m",
+    "contact_thickness": "m",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).
@@ -65,6 +73,7 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "use_edge_angle": ("°", 180.0 / math.pi),
     "use_wedge_angle": ("°", 180.0 / math.pi),
     "use_clearance": ("mm", 1000.0),
+    "contact_thickness": ("mm", 1000.0),
 }
 
 

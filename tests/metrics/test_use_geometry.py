@@ -277,3 +277,15 @@ def test_use_clearance_is_the_nearest_contact():
         use_clearance(contacts, offsets, U[[0, 0]], group=[2, 0]), [np.hypot(0.03, 0.2), 0.03]
     )
     assert np.isnan(use_clearance(contacts, offsets, [[np.nan] * 3], group=[0]))[0]
+
+
+def test_contact_thickness_is_the_chord_under_the_thinnest_contact():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import contact_thickness
+
+    plate = trimesh.creation.box(extents=(0.1, 0.05, 0.004))
+    C = np.array([[0.0, 0.0, 0.002], [0.05, 0.0, 0.0], [0.0, 0.025, 0.0]])
+    N = np.array([[0, 0, 1.0], [1.0, 0, 0], [0, 1.0, 0]])
+    got = contact_thickness(plate, C, N, [0, 1, 1, 3])  # grasp 1 has no contact
+    np.testing.assert_allclose(got, [0.004, np.inf, 0.05], rtol=1e-6)

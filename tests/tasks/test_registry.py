@@ -26,6 +26,7 @@ def table(**overrides):
         "use_edge_angle": np.full(n, math.radians(20)),
         "use_wedge_angle": np.full(n, math.radians(20)),  # beat's tests make it blunt
         "use_clearance": np.full(n, 0.05),
+        "contact_thickness": np.full(n, 0.02),
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -87,6 +88,9 @@ def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
     assert cut.evaluate(blunt)[0] == -INF and cut.evaluate(blunt)[1] == 1.0
     on_blade = table(use_clearance=[0.005, 0.05, 0.05, 0.05, 0.05])
     assert cut.evaluate(on_blade)[0] == -INF and cut.evaluate(on_blade, tau_clear=0.0)[0] == 0.5
+    thin = table(contact_thickness=[0.002, 0.02, 0.02, 0.02, 0.02])
+    assert cut.evaluate(thin)[0] == -INF and cut.evaluate(thin)[1] == 1.0
+    assert cut.thresholds["tau_thick"] == tasks.TAU_THICKNESS_DEFAULT
     assert cut.thresholds["tau_wedge"] == pytest.approx(tasks.TAU_WEDGE_DEFAULT)
     dihedral = tasks.get_task("cut-dihedral")
     edge_only = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_wedge_angle=np.full(5, 3.0))

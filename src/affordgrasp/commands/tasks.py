@@ -10,6 +10,7 @@ THRESHOLD_COLUMNS = {
     "tau_wedge": "use_wedge_angle",
     "tau_blunt": "use_wedge_angle",
     "tau_clear": "use_clearance",
+    "tau_thick": "contact_thickness",
     "tau_ug": "use_edge",
     "eps_min": "epsilon",
     "hold_max": "hold_effort_sum",

@@ -18,6 +18,7 @@ function                    metric
 :func:`use_edge_angle`      sharpest convex dihedral angle near U
 :func:`use_wedge_angle`     opening angle of the solid in a 3 mm ball at U
 :func:`use_clearance`       smallest contact-to-U distance
+:func:`contact_thickness`   thinnest chord through the solid under a contact
 :func:`compute_phi`         all of them, one grasp; :func:`compute_phi_batch` for many
 ==========================  ==============================================================
 """
@@ -34,6 +35,7 @@ from .phi import compute_phi, compute_phi_batch
 from .transmission import use_force
 from .use_geometry import (
     EDGE_RADIUS_M,
+    contact_thickness,
     use_clearance,
     use_edge,
     use_edge_angle,
@@ -52,6 +54,7 @@ __all__ = [
     "LPStatus",
     "compute_phi",
     "compute_phi_batch",
+    "contact_thickness",
     "contact_wrenches",
     "discharge",
     "edges_per_contact",

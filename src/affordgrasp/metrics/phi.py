@@ -19,6 +19,7 @@ use_edge                  m⁻²    U_g (:mod:`.use_geometry`)
 use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.use_geometry`)
 use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the solid
 use_clearance             m      smallest contact-to-U distance
+contact_thickness         m      thinnest chord through the solid under a contact
 ========================  =====  ==========================================================
 
 Infeasible efforts are +inf (IEEE), never a sentinel.
@@ -51,6 +52,7 @@ from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
 from .use_geometry import (
     EDGE_RADIUS_M,
+    contact_thickness,
     use_clearance,
     use_edge,
     use_edge_angle,
@@ -266,6 +268,9 @@ def compute_phi_batch(
         np.asarray(use_wedge_angle(mesh, use_point, use_normal), dtype=float) if n else np.zeros(0)
     )
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
+    out["contact_thickness"] = (
+        contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
+    )
     return {name: out[name] for name in METRIC_COLUMNS}
 
 

@@ -14,11 +14,12 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
 
 * ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, or the use point is not blunt
   (``use_wedge_angle`` < τ_blunt, 135°) or a contact is within τ_clear (35 mm) of it
-  (``use_clearance``), else I / E_i (0 when E_i = inf);
+  (``use_clearance``) or one touches material thinner than τ_thick (8 mm,
+  ``contact_thickness``), else I / E_i (0 when E_i = inf);
 * ``beat-paper``: the paper's beat, without the bluntness and clearance tests;
 * ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
   opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
-  (35 mm) of it, else U_τ;
+  (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), else U_τ;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
   rounds the mesh's edges away);
@@ -93,6 +94,7 @@ from .thresholds import (
     TAU_EPS_DEFAULT,
     TAU_EPS_EXTRA,
     TAU_EPS_VIABLE,
+    TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
     VIABLE_EPS_MIN,
@@ -113,6 +115,7 @@ __all__ = [
     "TAU_BLUNT_DEFAULT",
     "TAU_CLEARANCE_DEFAULT",
     "TAU_EDGE_ANGLE_DEFAULT",
+    "TAU_THICKNESS_DEFAULT",
     "TAU_EPS_DEFAULT",
     "TAU_EPS_EXTRA",
     "TAU_EPS_VIABLE",

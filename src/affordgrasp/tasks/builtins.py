@@ -15,6 +15,7 @@ from .thresholds import (
     TAU_DELTA_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
+    TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
     VIABLE_EPS_MIN,
@@ -25,7 +26,11 @@ from .thresholds import (
 
 def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
     # the paper's beat, on a blunt use point with the hand off it
-    ok = (m["use_wedge_angle"] >= t["tau_blunt"]) & (m["use_clearance"] >= t["tau_clear"])
+    ok = (
+        (m["use_wedge_angle"] >= t["tau_blunt"])
+        & (m["use_clearance"] >= t["tau_clear"])
+        & (m["contact_thickness"] >= t["tau_thick"])
+    )
     return np.where(ok, _beat_paper(m, t), -np.inf)
 
 
@@ -44,6 +49,7 @@ def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         (m["epsilon"] >= t["tau_eps"])
         & (m["use_wedge_angle"] <= t["tau_wedge"])
         & (m["use_clearance"] >= t["tau_clear"])
+        & (m["contact_thickness"] >= t["tau_thick"])
     )
     return np.where(ok, m["use_force"], -np.inf)
 
@@ -107,6 +113,7 @@ def builtin_tasks() -> list[Task]:
                 "tau_delta": TAU_DELTA_DEFAULT,
                 "tau_blunt": TAU_BLUNT_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
+                "tau_thick": TAU_THICKNESS_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
             "on a blunt use point with the hand off it",
@@ -118,6 +125,7 @@ def builtin_tasks() -> list[Task]:
                 "impact_effort",
                 "use_wedge_angle",
                 "use_clearance",
+                "contact_thickness",
             ),
         ),
         make_task(
@@ -134,10 +142,17 @@ def builtin_tasks() -> list[Task]:
                 "tau_eps": TAU_EPS_DEFAULT,
                 "tau_wedge": TAU_WEDGE_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
+                "tau_thick": TAU_THICKNESS_DEFAULT,
             },
             description="cutting: U_τ if robust, the use point on an edge (wedge angle at "
             "3 mm) and the hand off it",
-            requires=("epsilon", "use_wedge_angle", "use_clearance", "use_force"),
+            requires=(
+                "epsilon",
+                "use_wedge_angle",
+                "use_clearance",
+                "contact_thickness",
+                "use_force",
+            ),
         ),
         make_task(
             "cut-dihedral",

@@ -70,6 +70,11 @@ TAU_BLUNT_DEFAULT = math.radians(135.0)
 # human index finger is 16-20 mm wide and the Barrett hand's finger links 25 mm: at 35 mm
 # no finger pad reaches the part of a blade or head within a finger's width of U.
 TAU_CLEARANCE_DEFAULT = 0.035
+# Nor anywhere else on the working part: every contact of cut and beat on material at least
+# this thick (contact_thickness, the chord through the solid along the contact's normal).
+# Blades are 1.5-5 mm thick at the spine and thinner towards the edge; the families'
+# handles 12 mm and more; 8 mm lies between.
+TAU_THICKNESS_DEFAULT = 0.008
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
