@@ -25,6 +25,7 @@ USE_METRICS: tuple[str, ...] = (
     "use_edge_angle",
     "use_wedge_angle",
     "use_clearance",
+    "use_lever_ratio",
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
@@ -65,6 +66,7 @@ METRIC_UNITS: dict[str, str] = {
     "use_edge_angle": "rad",
     "use_wedge_angle": "rad",
     "use_clearance": "m",
+    "use_lever_ratio": "",
     "contact_thickness": "m",
 }
 

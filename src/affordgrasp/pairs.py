@@ -40,7 +40,14 @@ from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
-from .metrics.use_geometry import use_clearance, use_edge, use_edge_angle, use_wedge_angle
+from .metrics.use_geometry import (
+    contact_thickness,
+    use_clearance,
+    use_edge,
+    use_edge_angle,
+    use_lever_ratio,
+    use_wedge_angle,
+)
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .tasks import MetricColumns, get_task
@@ -240,7 +247,12 @@ def pair_scores(
     obj = load_object(obj)
     t = get_task(task)
     n, m = grasps.num_rows, len(uses.triangle)
-    col = {c: grasps.column(c).to_numpy(zero_copy_only=False) for c in GRASP_COLUMNS}
+    names = set(grasps.column_names)
+    col = {
+        c: grasps.column(c).to_numpy(zero_copy_only=False)
+        for c in GRASP_COLUMNS
+        if c in names or c != "contact_thickness"
+    }
     wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
     has_contacts = grasps.column("n_contacts").to_numpy() > 0
@@ -251,7 +263,12 @@ def pair_scores(
     # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
-    all_points, _, _, all_offsets = _contacts(grasps, np.arange(n))
+    all_points, all_normals, _, all_offsets = _contacts(grasps, np.arange(n))
+    if "contact_thickness" not in col:
+        # rows evaluated before the column existed: computed from their contacts
+        col["contact_thickness"] = contact_thickness(
+            obj.mesh_data, all_points, all_normals, all_offsets
+        )
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
     for first in range(0, len(with_contacts), step):
@@ -267,6 +284,9 @@ def pair_scores(
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
         cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
         cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
+        cols["use_lever_ratio"] = use_lever_ratio(
+            uses.point[ui], obj.mass.center_of_mass, wrist_point[gi], wrist_axis[gi]
+        )
         if screen and len(gi):
             cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
             cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)

@@ -289,3 +289,12 @@ def test_contact_thickness_is_the_chord_under_the_thinnest_contact():
     N = np.array([[0, 0, 1.0], [1.0, 0, 0], [0, 1.0, 0]])
     got = contact_thickness(plate, C, N, [0, 1, 1, 3])  # grasp 1 has no contact
     np.testing.assert_allclose(got, [0.004, np.inf, 0.05], rtol=1e-6)
+
+
+def test_lever_ratio_compares_distances_to_the_wrist_axis():
+    from affordgrasp.metrics.use_geometry import use_lever_ratio
+
+    U = np.array([[0.3, 0, 0.5], [0.05, 0, 0]])
+    W = np.zeros((2, 3))
+    A = np.tile([0, 0, 1.0], (2, 1))
+    np.testing.assert_allclose(use_lever_ratio(U, [0.2, 0, 0], W, A), [1.5, 0.25])

@@ -27,6 +27,7 @@ def table(**overrides):
         "use_wedge_angle": np.full(n, math.radians(20)),  # beat's tests make it blunt
         "use_clearance": np.full(n, 0.05),
         "contact_thickness": np.full(n, 0.02),
+        "use_lever_ratio": np.full(n, 1.2),
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -77,6 +78,8 @@ def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
     assert beat.evaluate(sharp)[1] == -INF and np.isfinite(beat.evaluate(sharp)[0])
     assert beat.evaluate(near)[2] == -INF and np.isfinite(beat.evaluate(near)[3])
     assert beat.thresholds["tau_clear"] == tasks.TAU_CLEARANCE_DEFAULT
+    butt = table(use_wedge_angle=np.full(5, math.pi), use_lever_ratio=[0.3, 1.2, 1.2, 1.2, 1.2])
+    assert beat.evaluate(butt)[0] == -INF and np.isfinite(beat.evaluate(butt)[1])
     nan_use = table(use_wedge_angle=[np.nan, math.pi, math.pi, math.pi, math.pi])
     assert beat.evaluate(nan_use)[0] == -INF  # no use point: not usable
 

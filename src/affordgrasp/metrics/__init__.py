@@ -39,6 +39,7 @@ from .use_geometry import (
     use_clearance,
     use_edge,
     use_edge_angle,
+    use_lever_ratio,
     use_wedge_angle,
 )
 
@@ -71,5 +72,6 @@ __all__ = [
     "use_clearance",
     "use_edge_angle",
     "use_force",
+    "use_lever_ratio",
     "use_wedge_angle",
 ]

@@ -19,6 +19,7 @@ use_edge                  m⁻²    U_g (:mod:`.use_geometry`)
 use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.use_geometry`)
 use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the solid
 use_clearance             m      smallest contact-to-U distance
+use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
 ========================  =====  ==========================================================
 
@@ -56,6 +57,7 @@ from .use_geometry import (
     use_clearance,
     use_edge,
     use_edge_angle,
+    use_lever_ratio,
     use_wedge_angle,
 )
 from .validation import points_n3, stacked_contact_arrays, units_n3
@@ -268,6 +270,9 @@ def compute_phi_batch(
         np.asarray(use_wedge_angle(mesh, use_point, use_normal), dtype=float) if n else np.zeros(0)
     )
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
+    out["use_lever_ratio"] = (
+        use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)
+    )
     out["contact_thickness"] = (
         contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
     )

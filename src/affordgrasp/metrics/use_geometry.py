@@ -589,3 +589,41 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
     owner = np.repeat(np.arange(g), counts)
     np.minimum.at(out, owner, chord)
     return out
+
+
+def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
+    """How far U is from the wrist axis, relative to the centre of mass (``use_lever_ratio``).
+
+    The distance from U to the wrist axis (the line through the palm centre along the
+    approach direction) divided by the centre of mass's distance to it. A swing about that
+    axis strikes with its massive end when the ratio is at least 1: a hammer held by its
+    handle, whose steel head holds the centre of mass, strikes with the head, not with the
+    handle's end near the hand.
+
+    Parameters
+    ----------
+    use_point : (n, 3) float
+        m.
+    center_of_mass : (3,) float
+        m.
+    wrist_point : (n, 3) float
+        Palm centres, m.
+    wrist_axis : (n, 3) float
+        Unit approach directions.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Dimensionless; +inf when the axis passes through the centre of mass.
+    """
+    U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
+    W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
+    A = np.asarray(wrist_axis, dtype=np.float64).reshape(-1, 3)
+    c = np.asarray(center_of_mass, dtype=np.float64).reshape(1, 3)
+
+    def off_axis(P: np.ndarray) -> np.ndarray:
+        d = P - W
+        return np.linalg.norm(d - np.einsum("ij,ij->i", d, A)[:, None] * A, axis=1)
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return off_axis(U) / off_axis(np.broadcast_to(c, U.shape))

@@ -15,7 +15,8 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
 * ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, or the use point is not blunt
   (``use_wedge_angle`` < τ_blunt, 135°) or a contact is within τ_clear (35 mm) of it
   (``use_clearance``) or one touches material thinner than τ_thick (8 mm,
-  ``contact_thickness``), else I / E_i (0 when E_i = inf);
+  ``contact_thickness``) or U is nearer the wrist axis than the centre of mass
+  (``use_lever_ratio`` < 1), else I / E_i (0 when E_i = inf);
 * ``beat-paper``: the paper's beat, without the bluntness and clearance tests;
 * ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
   opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
@@ -94,6 +95,7 @@ from .thresholds import (
     TAU_EPS_DEFAULT,
     TAU_EPS_EXTRA,
     TAU_EPS_VIABLE,
+    TAU_LEVER_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -118,6 +120,7 @@ __all__ = [
     "TAU_THICKNESS_DEFAULT",
     "TAU_EPS_DEFAULT",
     "TAU_EPS_EXTRA",
+    "TAU_LEVER_DEFAULT",
     "TAU_EPS_VIABLE",
     "TAU_UG_DEFAULT",
     "TAU_WEDGE_DEFAULT",

@@ -15,6 +15,7 @@ from .thresholds import (
     TAU_DELTA_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
+    TAU_LEVER_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -30,6 +31,7 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         (m["use_wedge_angle"] >= t["tau_blunt"])
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
+        & (m["use_lever_ratio"] >= t["tau_lever"])
     )
     return np.where(ok, _beat_paper(m, t), -np.inf)
 
@@ -114,6 +116,7 @@ def builtin_tasks() -> list[Task]:
                 "tau_blunt": TAU_BLUNT_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
+                "tau_lever": TAU_LEVER_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
             "on a blunt use point with the hand off it",
@@ -126,6 +129,7 @@ def builtin_tasks() -> list[Task]:
                 "use_wedge_angle",
                 "use_clearance",
                 "contact_thickness",
+                "use_lever_ratio",
             ),
         ),
         make_task(

@@ -75,6 +75,10 @@ TAU_CLEARANCE_DEFAULT = 0.035
 # Blades are 1.5-5 mm thick at the spine and thinner towards the edge; the families'
 # handles 12 mm and more; 8 mm lies between.
 TAU_THICKNESS_DEFAULT = 0.008
+# Beat strikes with the massive end: U at least as far from the wrist axis as the centre of
+# mass (use_lever_ratio >= 1), so a hammer held by its handle does not strike with the
+# handle's end. On a mesh file, the massive end is where its region densities put it.
+TAU_LEVER_DEFAULT = 1.0
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
