@@ -75,4 +75,15 @@ def test_cli_metrics_plus_volume(tmp_path, capsys):
     assert main(["evaluate", "knife", "--samples", "8", "--metrics", "+vol"]) == 2
     err = capsys.readouterr().err
     assert "'+vol'" in err and "+volume" in err
-    json.dumps(err)
+
+
+def test_generate_records_the_volume_request(tmp_path, capsys):
+    out = tmp_path / "d"
+    gen = ["generate", "knife", "--samples", "2", "--workers", "1", "--out", str(out)]
+    assert main([*gen, "--metrics", "+volume", "--json"]) == 0
+    manifest = json.loads((out / "_manifest.json").read_text())
+    assert manifest["volume"] is True
+    assert "+volume" in manifest["command"]
+    capsys.readouterr()
+    assert main([*gen, "--no-metrics", "--metrics", "+volume"]) == 2
+    assert "drop --no-metrics" in capsys.readouterr().err
