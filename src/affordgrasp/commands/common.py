@@ -179,21 +179,32 @@ def check_output_file(path: str, option: str) -> None:
     Raises
     ------
     InputError
-        When ``path`` is a directory, or its folder is missing or not writable.
+        When ``path`` is a directory, or its folder is missing or not writable
+        (:func:`affordgrasp.writing.check_output_path`).
     """
-    import os
+    from ..writing import check_output_path
 
-    if os.path.isdir(path):
-        raise InputError(
-            f"{option} {path!r} is a directory; give a file name, e.g. {path}/x.parquet"
-        )
-    parent = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(parent):
-        raise InputError(
-            f"{option} {path!r}: the folder {parent!r} does not exist; create it first"
-        )
-    if not os.access(parent, os.W_OK):
-        raise InputError(f"{option} {path!r}: the folder {parent!r} is not writable")
+    check_output_path(path, option, kind="file")
+
+
+def check_output_dir(path: str, option: str) -> None:
+    """Refuse an output directory that cannot be created or written, before any work.
+
+    Parameters
+    ----------
+    path : str
+        The directory (created, with its parents, when missing).
+    option : str
+        The option that named it (``--out``, ``--report``), for the message.
+
+    Raises
+    ------
+    InputError
+        When ``path`` is a file, or it (or its nearest existing folder) is not writable.
+    """
+    from ..writing import check_output_path
+
+    check_output_path(path, option, kind="dir", create_parents=True)
 
 
 def run_batches(args, out, obj, metrics: bool):
