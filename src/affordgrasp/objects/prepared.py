@@ -565,6 +565,7 @@ def load_mesh_file(key: dict[str, Any], name: str, source: str) -> GraspObject |
             mass=mass,
             mesh_hash=mesh.content_hash,
             source=source,
+            load_warnings=tuple(str(w) for w in a["warnings"]),
         )
         return obj, [str(w) for w in a["warnings"]]
 
