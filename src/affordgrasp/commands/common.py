@@ -164,6 +164,55 @@ def check_counts(args) -> None:
         raise InputError(f"--seed must be an integer in [0, 2**63 - 1], got {args.seed}")
     if getattr(args, "batch", 1) <= 0:
         raise InputError(f"--batch must be a positive integer, got {args.batch}")
+    check_table_fits(args.samples)
+
+
+# Bytes of memory per evaluated sample while a command holds its table: ~0.9 kB per row
+# with the metric columns (measured, pyarrow), twice while the batches are assembled.
+ROW_BYTES = 2 * 1024
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to new allocations (Linux ``MemAvailable``), or None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def check_table_fits(samples: int) -> None:
+    """Refuse a sample count whose in-memory table would not fit, before any work.
+
+    ``evaluate``, ``simulate`` and the object sources of ``show``/``plots`` hold every row
+    in memory (they summarise and write it at the end); ``generate`` streams shards to disk
+    and is the command for runs of any size. Refusing is chosen over streaming here: the
+    summary tables and ``--out`` need the whole table, and a dataset already does the rest.
+
+    Parameters
+    ----------
+    samples : int
+
+    Raises
+    ------
+    InputError
+        When ``samples`` × ``ROW_BYTES`` exceeds half the available memory; the message
+        gives both numbers and the largest count that fits.
+    """
+    available = available_memory()
+    if available is None:
+        return
+    budget = available // 2
+    need = int(samples) * ROW_BYTES
+    if need > budget:
+        raise InputError(
+            f"--samples {samples} would hold about {need / 1e9:.3g} GB of rows in memory, more "
+            f"than half of the {available / 1e9:.3g} GB available; use at most "
+            f"{budget // ROW_BYTES} here, or 'affordgrasp generate' (streams to disk)"
+        )
 
 
 def check_output_file(path: str, option: str) -> None:
