@@ -378,19 +378,15 @@ def write_table(table, path: str | None, out) -> None:
     """
     if not path:
         return
-    import os
 
     import pyarrow.parquet as pq
 
-    tmp = f"{path}.partial"
+    from ..writing import atomic_write
+
     try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
+        atomic_write(path, lambda fh: pq.write_table(table, fh), fsync=False)
     except OSError as exc:
         raise InputError(f"cannot write {path!r}: {exc.strerror or exc}") from exc
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     out.text(f"wrote {table.num_rows} rows to {path}")
 
 

@@ -29,6 +29,7 @@ import pyarrow as pa
 from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
 from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
+from ..worker_lifetime import die_with_parent
 
 log = logging.getLogger(__name__)
 
@@ -258,10 +259,12 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
     return table
 
 
-def _worker_init(context: RunContext) -> None:
+def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
     # Ctrl-C and a terminal's hangup reach the whole process group; only the parent decides
     # what to do about them (it stops the workers). SIGTERM keeps its default: it is how
-    # the parent stops a worker.
+    # the parent stops a worker. A parent killed outright (SIGKILL) takes its workers along.
+    if parent_pid is not None:
+        die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
     _install_context(context)
@@ -402,7 +405,7 @@ class LocalEngine(Engine):
             max_workers=workers,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_worker_init,
-            initargs=(context,),
+            initargs=(context, os.getpid()),
         )
 
     def submit(self, job: Job):

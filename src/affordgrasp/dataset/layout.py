@@ -171,12 +171,11 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         Naming ``path`` when it cannot be written (no space left, no permission, read-only
         file system); nothing half-written is left behind.
     """
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    from ..writing import atomic_write
+
     try:
-        write_file(tmp, data)
-        os.replace(tmp, path)
+        atomic_write(path, data)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise write_error(path, exc) from exc
     _sync_directory(path.parent)
 
@@ -482,18 +481,18 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
     metadata = dict(table.schema.metadata or {})
     metadata[SHARD_META_KEY] = json.dumps(info, sort_keys=True).encode()
     table = table.replace_schema_metadata(metadata)
+    from ..writing import atomic_write
+
     final = directory / shard.name
-    tmp = directory / f".{shard.name}.tmp-{os.getpid()}"
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink, compression=COMPRESSION, row_group_size=max(1, shard.rows))
     data = sink.getvalue().to_pybytes()
     try:
-        write_file(tmp, data)
         # The checksum is on disk before the shard: a shard in place always has one.
-        record_checksum(directory, shard.name, data)
-        os.replace(tmp, final)
+        atomic_write(
+            final, data, before_replace=lambda: record_checksum(directory, shard.name, data)
+        )
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise write_error(final, exc) from exc
     _sync_directory(directory)
     return final

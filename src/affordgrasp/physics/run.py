@@ -30,6 +30,8 @@ from .. import __version__
 from ..columns import METRIC_COLUMNS
 from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
+from ..worker_lifetime import die_with_parent
+from ..writing import atomic_write
 from .settings import PhysicsSettings
 
 log = logging.getLogger(__name__)
@@ -202,9 +204,7 @@ def _prepare_out(out: Path, plan: dict) -> None:
             f"{str(out)!r} is not empty and holds no physics run; give a new or empty directory"
         )
     out.mkdir(parents=True, exist_ok=True)
-    tmp = out / f".{MANIFEST}.tmp-{os.getpid()}"
-    tmp.write_text(json.dumps(plan, indent=2))
-    os.replace(tmp, path)
+    atomic_write(path, json.dumps(plan, indent=2).encode())
 
 
 def shard_path(out: Path, k: int) -> Path:
@@ -318,7 +318,12 @@ def run_physics(
                 _account(summary, validate_shard(*job), advance)
         else:
             ctx = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            with ProcessPoolExecutor(
+                max_workers=workers,
+                mp_context=ctx,
+                initializer=die_with_parent,
+                initargs=(os.getpid(),),
+            ) as pool:
                 try:
                     for result in pool.map(_validate_job, jobs):
                         _account(summary, result, advance)
@@ -461,15 +466,10 @@ def validate_shard(out, k, rows, hand, objects, settings) -> dict:
     table = validate_rows(rows, hand, objects, settings)
     seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
     path = shard_path(Path(out), k)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     meta = {b"affordgrasp_version": __version__.encode(), b"physics_settings": b""}
     meta[b"physics_settings"] = settings.digest().encode()
     table = table.replace_schema_metadata(meta)
-    with open(tmp, "wb") as fh:
-        pq.write_table(table, fh)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    atomic_write(path, lambda fh: pq.write_table(table, fh))
     steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
     return {"rows": table.num_rows, "steps": steps, "seconds": seconds, "cpu_seconds": cpu}
 
