@@ -171,12 +171,15 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         Naming ``path`` when it cannot be written (no space left, no permission, read-only
         file system); nothing half-written is left behind.
     """
-    from ..writing import atomic_write
-
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        atomic_write(path, data)
-    except OSError as exc:
-        raise write_error(path, exc) from exc
+        write_file(tmp, data)
+        os.replace(tmp, path)
+    except BaseException as exc:  # Ctrl-C too: no temporary left behind
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise write_error(path, exc) from exc
+        raise
     _sync_directory(path.parent)
 
 
@@ -481,19 +484,21 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
     metadata = dict(table.schema.metadata or {})
     metadata[SHARD_META_KEY] = json.dumps(info, sort_keys=True).encode()
     table = table.replace_schema_metadata(metadata)
-    from ..writing import atomic_write
-
     final = directory / shard.name
+    tmp = directory / f".{shard.name}.tmp-{os.getpid()}"
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink, compression=COMPRESSION, row_group_size=max(1, shard.rows))
     data = sink.getvalue().to_pybytes()
     try:
+        write_file(tmp, data)
         # The checksum is on disk before the shard: a shard in place always has one.
-        atomic_write(
-            final, data, before_replace=lambda: record_checksum(directory, shard.name, data)
-        )
-    except OSError as exc:
-        raise write_error(final, exc) from exc
+        record_checksum(directory, shard.name, data)
+        os.replace(tmp, final)
+    except BaseException as exc:  # Ctrl-C too: no temporary left behind
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise write_error(final, exc) from exc
+        raise
     _sync_directory(directory)
     return final
 

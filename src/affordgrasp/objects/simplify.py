@@ -146,7 +146,7 @@ def simplify_to_tolerance(
     faces: np.ndarray,
     tolerance: float,
     *,
-    target_faces: int = TARGET_FACES,
+    target_faces: int | None = None,
     seed: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, Simplification]:
     """Decimate a mesh until the measured distance is within ``tolerance`` (or tries run out).
@@ -159,8 +159,9 @@ def simplify_to_tolerance(
         An indexed mesh (shared vertices; a triangle soup cannot be decimated).
     tolerance : float
         Largest accepted one-sided distance, in the units of ``vertices``.
-    target_faces : int
-        Triangles of the first attempt; doubled on each retry.
+    target_faces : int, optional
+        Triangles of the first attempt, doubled on each retry; default ``TARGET_FACES``,
+        or a quarter of the mesh's when that is fewer.
     seed : int
         Chooses the sampled vertices (same seed, same result).
 
@@ -179,7 +180,7 @@ def simplify_to_tolerance(
     used = np.unique(faces)
     sample = used if len(used) <= DISTANCE_SAMPLES else rng.choice(used, DISTANCE_SAMPLES, False)
     points = vertices[np.sort(sample)]
-    target = int(target_faces)
+    target = int(target_faces or min(TARGET_FACES, len(faces) // 4))
     best = None
     for _ in range(ATTEMPTS):
         if target >= len(faces):
