@@ -8,6 +8,7 @@ the temporary removed whatever happens (an error, Ctrl-C, SIGTERM).
 
 from __future__ import annotations
 
+import errno
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -96,6 +97,8 @@ def _unwritable(folder: Path) -> str:
     try:
         fd, probe = tempfile.mkstemp(dir=folder, prefix=".affordgrasp-probe-")
     except OSError as exc:
+        if exc.errno == errno.ENOENT:  # an existing folder that takes no files (/proc)
+            return "the folder takes no new files"
         return exc.strerror or type(exc).__name__
     os.close(fd)
     os.unlink(probe)
