@@ -51,13 +51,13 @@ def run(args, out) -> None:
             if ":" in spec:
                 raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
             spec = f"{spec}:{args.seed}"
+        from .common import check_output_file
+
+        check_output_file(args.out, "-o")
         path = Path(args.out)
         ext = path.suffix.lower().lstrip(".")
         if ext not in ("obj", "stl", "ply", "glb", "off"):
             raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
-        from .common import check_output_file
-
-        check_output_file(args.out, "-o")
         (obj,) = load_objects([spec], args)
         from ..dataset.layout import write_bytes_atomic
 
