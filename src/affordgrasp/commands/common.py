@@ -173,7 +173,13 @@ ROW_BYTES = 2 * 1024
 
 
 def available_memory() -> int | None:
-    """Bytes of memory available to new allocations (Linux ``MemAvailable``), or None."""
+    """Memory available to new allocations (Linux ``MemAvailable``).
+
+    Returns
+    -------
+    int or None
+        Bytes; None where the system does not say.
+    """
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
