@@ -24,6 +24,13 @@ def test_file_paths(tmp_path):
     assert check_output_path(tmp_path / "new" / "deeper" / "a.png", create_parents=True)
 
 
+def test_empty_and_folder_like_names():
+    with pytest.raises(InputError, match="--out is empty; give a directory"):
+        check_output_path("", kind="dir")
+    with pytest.raises(InputError, match="is not a file name"):
+        check_output_path("some/folder/")
+
+
 def test_directory_paths(tmp_path):
     check_output_path(tmp_path, kind="dir")
     check_output_path(tmp_path / "new" / "ds", kind="dir")

@@ -56,7 +56,9 @@ def check_output_path(
         raise ValueError(f"kind must be 'file' or 'dir', not {kind!r}")
     p = Path(path)
     text = str(path)
-    if not text or text.endswith(("/", os.sep)) and kind == "file":
+    if not text.strip():
+        raise InputError(f"{option} is empty; give a {'directory' if kind == 'dir' else 'file'}")
+    if kind == "file" and text.endswith(("/", os.sep)):
         raise InputError(f"{option} {text!r} is not a file name; give one, e.g. {text}out")
     if kind == "file" and p.is_dir():
         raise InputError(f"{option} {text!r} is a directory; give a file name inside it")
