@@ -8,6 +8,12 @@ Every case must end in one of two ways, and the corpus says which:
 
 Never exit 1 (an internal error) and never a traceback. The counts per category are printed
 with ``pytest -s`` (and reported in the release notes).
+
+``COMMAND_CASES`` (at the end) covers the other commands: outputs that cannot be written,
+physics settings outside their physical ranges, unknown metrics in a tasks file, a sample
+count whose table cannot fit, foreign and non-finite model files. Interrupts, orphaned
+workers and large meshes have their own tests (``test_interrupts.py``,
+``dataset/test_signals.py``, ``objects/test_simplify.py``, ``grasp/test_surface.py``).
 """
 
 from __future__ import annotations
