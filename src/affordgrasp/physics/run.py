@@ -16,6 +16,7 @@ import json
 import logging
 import multiprocessing
 import os
+import signal
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -321,14 +322,14 @@ def run_physics(
             with ProcessPoolExecutor(
                 max_workers=workers,
                 mp_context=ctx,
-                initializer=die_with_parent,
+                initializer=_worker_init,
                 initargs=(os.getpid(),),
             ) as pool:
                 try:
                     for result in pool.map(_validate_job, jobs):
                         _account(summary, result, advance)
                 except BaseException:
-                    pool.shutdown(wait=False, cancel_futures=True)
+                    _stop_workers(pool)
                     raise
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
@@ -350,6 +351,29 @@ def _account(summary: PhysicsSummary, result: dict, advance) -> None:
     summary.busy_s += result["seconds"]
     summary.cpu_s += result["cpu_seconds"]
     advance(result["rows"])
+
+
+def _worker_init(parent_pid: int) -> None:
+    # Ctrl-C and a hangup reach the whole process group: the parent stops the workers (a
+    # worker's own KeyboardInterrupt would only print its traceback). A parent killed
+    # outright takes them along.
+    die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+
+def _stop_workers(pool) -> None:
+    """Stop a pool at once: cancel what waits, terminate what runs (its shard is redone)."""
+    processes = list(getattr(pool, "_processes", {}).values())  # the executor's own
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout=5)
+        if proc.is_alive():  # pragma: no cover - stuck in native code
+            proc.kill()
+            proc.join(timeout=5)
 
 
 def _validate_job(job) -> dict:
