@@ -114,10 +114,12 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..errors import InputError
+    from .common import check_output_dir
 
     volume = "volume" in optional_metrics(args)
     if volume and args.no_metrics:
         raise InputError("--metrics +volume adds to the metric columns; drop --no-metrics")
+    check_output_dir(args.out, "--out")
     cmd = command_line(args)
     objects = args.objects
     if any(v is not None for v in scale_options(args).values()) or args.materials:
