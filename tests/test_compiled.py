@@ -45,7 +45,18 @@ def test_building_the_package_warms_the_vision_kernels_up(monkeypatch):
     calls = []
     monkeypatch.setattr(compiled, "warm_up", lambda **kw: calls.append(kw) or LOADED)
     compiled.main()
-    assert calls == [{"vision": True}]
+    assert calls == [{"vision": True, "reference": True}]
+
+
+def test_warm_up_also_readies_the_reference_paths_and_counts_every_compilation():
+    compiled.warm_up(reference=True)
+    assert not compiled.warm_up(reference=True).compiled
+    # a compilation anywhere in the warm-up counts, not only in the listed dispatchers
+    import numba
+
+    with compiled._Compilations() as seen:
+        numba.njit(lambda x: x * 3)(2)
+    assert seen.count >= 1
 
 
 LOADED = compiled.KernelLoad(0.5, False)
@@ -119,7 +130,7 @@ def test_an_installed_package_loads_its_kernels_without_compiling(tmp_path):
     code = (
         "import json, affordgrasp\n"
         "from affordgrasp.compiled import warm_up\n"
-        "load = warm_up(vision=True)\n"
+        "load = warm_up(vision=True, reference=True)\n"
         "print(json.dumps({'compiled': load.compiled, 'file': affordgrasp.__file__}))"
     )
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
