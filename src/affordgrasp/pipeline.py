@@ -124,7 +124,7 @@ def phi_of_batch(
     use_point = np.where(no_use[:, None], obj.mass.center_of_mass, batch.use_point)
     use_normal = np.where(no_use[:, None], [1.0, 0.0, 0.0], batch.use_normal)
     use_triangle = np.where(no_use, 0, batch.use_triangle)
-    phi = compute_phi_batch(
+    phi: dict = compute_phi_batch(
         obj.mass,
         obj.mesh_data,  # the mesh's arrays, normals and adjacency; no trimesh needed
         batch.contacts,
