@@ -25,7 +25,7 @@ from .data import (
     split_by_family,
     split_by_object,
 )
-from .evaluation import classification_report, regression_report
+from .evaluation import classification_report, expected_calibration_error, regression_report
 from .targets import Target
 from .training import Inputs, TrainSettings, default_config, predict_scores, train_model
 
@@ -154,15 +154,24 @@ def prepare_split(
     for k, part in enumerate(("train", "val", "test")):
         idx = np.flatnonzero(sp.part_of(samples.object, part))
         cap = max_train if part == "train" else max_eval
+        weights = {}
         if target.kind == "classification" and part != "test":
             y = samples.y[idx]
             pos, neg = idx[y > 0.5], idx[y <= 0.5]
-            pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
-            n_neg = int(round(negatives_ratio * max(len(pos), 1)))
-            idx = np.sort(np.r_[pos, _subsample(neg, n_neg, seed + 10 + k)])
+            kept_pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
+            n_neg = int(round(negatives_ratio * max(len(kept_pos), 1)))
+            kept_neg = _subsample(neg, n_neg, seed + 10 + k)
+            idx = np.sort(np.r_[kept_pos, kept_neg])
+            # what each kept row stands for: restores the natural balance of the part
+            weights = {
+                "positive_weight": len(pos) / max(len(kept_pos), 1),
+                "negative_weight": len(neg) / max(len(kept_neg), 1),
+            }
         else:  # regression rows, and the classifier's test rows at their natural balance
             idx = _subsample(idx, cap, seed + k)
-        parts.append(samples.take(idx))
+        taken = samples.take(idx)
+        taken.meta.update(weights)
+        parts.append(taken)
     for p in parts:
         if len(p):
             load_depth(p, dataset)
@@ -266,11 +275,55 @@ def train_on_dataset(
         **{k: v for k, v in summary.items() if k != "history"},
         "history": summary["history"],
     }
+    if tgt.kind == "classification":
+        config["decision_threshold"] = choose_threshold(model, config, val)
     if len(test):
         config["test"] = report(model, config, test)
     if out is not None:
         save_model(out, model, config)
     return model, config
+
+
+def choose_threshold(model, config: dict, val: Samples) -> dict:
+    """A classifier's decision threshold, chosen on its validation objects.
+
+    The threshold of largest F1 over the validation rows, each weighted by how many rows of
+    its class it stands for (the training subsample of negatives is undone, so F1 is that
+    of the objects' natural class balance).
+
+    Parameters
+    ----------
+    model : torch.nn.Module
+    config : dict
+        The classifier's config.
+    val : Samples
+        The validation rows, with depth images (``meta`` may hold ``positive_weight`` and
+        ``negative_weight``).
+
+    Returns
+    -------
+    dict
+        ``value`` (a probability), ``rule``, ``f1``, ``rows`` and ``expected_calibration_error``
+        (at the natural balance), stored in the model's config as ``decision_threshold``.
+    """
+    from .evaluation import best_f1_threshold, expected_calibration_error
+
+    rule = "largest F1 on the validation objects at their natural class balance"
+    if len(val) == 0:
+        return {"value": 0.5, "rule": "no validation rows: 0.5", "f1": None, "rows": 0}
+    prob = predict_scores(model, config, Inputs(config, val))
+    positive = val.y > 0.5
+    weights = np.where(
+        positive, val.meta.get("positive_weight", 1.0), val.meta.get("negative_weight", 1.0)
+    )
+    value, f1 = best_f1_threshold(val.y, prob, weights=weights)
+    return {
+        "value": value,
+        "rule": rule,
+        "f1": f1,
+        "rows": len(val),
+        "expected_calibration_error": expected_calibration_error(val.y, prob, weights=weights),
+    }
 
 
 def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None) -> dict:
@@ -302,6 +355,7 @@ def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None)
     if tgt.kind == "classification":
         out = classification_report(samples.y, scores, seed=seed)
         out["baseline_average_precision"] = out["positive_rate"]
+        out["expected_calibration_error"] = expected_calibration_error(samples.y, scores)
         return out
     truth = tgt.normalise(samples.y)
     out = regression_report(truth, scores, lower_is_better=tgt.lower_is_better, seed=seed)
@@ -430,17 +484,20 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
     dataset : path
         A dataset generated with metrics.
     objects : "test", "all" or sequence of str
-        The model's held-out test objects (when the dataset has them), every object, or the
-        objects named.
+        The model's held-out test objects, every object, or the objects named. When none of
+        the model's test objects is in the dataset, ``"test"`` evaluates every object and
+        says so in the report's ``selection``.
     seed : int
         Seeds the subsample and the metrics.
     max_rows : int, optional
-        Evaluate a uniform subsample of at most this many rows.
+        Evaluate a uniform subsample of at most this many rows (the report's ``selection``
+        says when it did).
 
     Returns
     -------
     report : dict
-        :func:`report`.
+        :func:`report`, plus ``selection``: ``objects`` (how they were chosen, in words),
+        ``rows_available``, ``rows_evaluated`` and ``subsampled``.
     samples : Samples
         The rows evaluated.
     scores : (n,) float64 ndarray
@@ -449,28 +506,44 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
     Raises
     ------
     InputError
-        When none of the chosen objects is in the dataset.
+        When none of the named objects is in the dataset.
     """
     tgt = Target.from_dict(config["target"])
     samples, _ = read_rows(dataset, tgt)
     if objects == "test":
-        held = config.get("training", {}).get("split", {}).get("test", [])
+        split = config.get("training", {}).get("split", {})
+        held = split.get("test", [])
         mask = np.isin(samples.object, held)
+        how = "the model's held-out test objects"
         if not mask.any():
-            raise InputError(
-                f"objects: none of the model's test objects ({', '.join(held) or 'none'}) is "
-                f"in {str(dataset)!r}; pass 'all' or name objects",
-                parameter="objects",
+            mask = np.ones(len(samples), dtype=bool)
+            earlier = set(split.get("train", [])) | set(split.get("val", []))
+            seen = sorted(set(samples.object) & earlier)
+            how = "every object: none of the model's test objects is in the dataset" + (
+                f" ({len(seen)} of its objects were in the model's training or "
+                f"validation split: {', '.join(seen[:5])}{', ...' if len(seen) > 5 else ''})"
+                if seen
+                else " (and none of its objects was in the model's training split)"
             )
     elif objects == "all":
         mask = np.ones(len(samples), dtype=bool)
+        how = "every object"
     else:
         mask = np.isin(samples.object, list(objects))
+        how = "the objects named"
         if not mask.any():
             raise InputError(f"none of the objects {list(objects)} is in {str(dataset)!r}")
+    available = int(mask.sum())
     idx = _subsample(np.flatnonzero(mask), max_rows, seed)
     samples = samples.take(idx)
     if config["arch"] != "pose":
         load_depth(samples, dataset)
     scores = predict_scores(model, config, Inputs(config, samples))
-    return report(model, config, samples, seed=seed, scores=scores), samples, scores
+    rep = report(model, config, samples, seed=seed, scores=scores)
+    rep["selection"] = {
+        "objects": how,
+        "rows_available": available,
+        "rows_evaluated": len(samples),
+        "subsampled": len(samples) < available,
+    }
+    return rep, samples, scores
