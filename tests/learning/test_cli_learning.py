@@ -143,3 +143,56 @@ def test_training_from_a_dataset_is_deterministic_to_the_bit(tiny_dataset, tmp_p
     config_a, config_b = (read_config(p) for p in paths)
     assert len(config_a["training"]["members"]) == 2
     assert _without_times(config_a) == _without_times(config_b)
+
+
+def test_model_eval_decisions_and_calibration(tiny_dataset, tmp_path, capsys):
+    plots = tmp_path / "plots"
+    rc = main(
+        [
+            "model-eval",
+            "classifier",
+            str(tiny_dataset),
+            "--objects",
+            "all",
+            "--candidates",
+            "8",
+            "--draws",
+            "3",
+            "--threshold",
+            "0.7",
+            "--plots",
+            str(plots),
+            "--json",
+        ]
+    )
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    dec = doc["decisions"]
+    assert dec["objects"] == 3 and dec["rule"] == "highest viability probability"
+    for entry in dec["per_object"].values():
+        assert entry["draws"] == 3 and entry["candidates"] == 8
+        assert entry["oracle"]["top1_percentile"] >= entry["model"]["top1_percentile"]
+        assert entry["random"]["top1_percentile"] == pytest.approx(50.0)
+    assert 0 <= doc["reports"]["model"]["expected_calibration_error"] <= 1
+    assert (plots / "reliability.png").stat().st_size > 1000
+
+
+def test_model_eval_without_test_objects_and_subsample_say_so(tiny_dataset, capsys):
+    # the shipped classifier's test objects are not in this dataset: every object, said
+    rc = main(
+        [
+            "model-eval",
+            "classifier",
+            str(tiny_dataset),
+            "--max-rows",
+            "10",
+            "--no-decisions",
+            "--json",
+        ]
+    )
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    sel = json.loads(captured.out)["reports"]["model"]["selection"]
+    assert sel["objects"].startswith("every object") and "training" in sel["objects"]
+    assert sel["subsampled"] and sel["rows_evaluated"] == 10 and sel["rows_available"] == 72
+    assert "subsample of 10 of 72 rows" in captured.err

@@ -69,3 +69,23 @@ def test_measures_random_and_oracle():
 def test_decision_threshold_stored_or_default():
     assert decision_threshold({}) == 0.5
     assert decision_threshold({"decision_threshold": {"value": 0.83}}) == 0.83
+
+
+def test_within_object_against_pooled():
+    from affordgrasp.learning.decision_eval import object_mean_baseline, within_object
+
+    # perfect order inside each object, objects swapped: pooled is wrong on cross pairs
+    objects = np.array(["a"] * 4 + ["b"] * 4, dtype=object)
+    truth = np.r_[0.0, 1, 2, 3, 10, 11, 12, 13]
+    pred = np.r_[10.0, 11, 12, 13, 0, 1, 2, 3]
+    w = within_object(objects, truth, pred, kind="regression")
+    assert w["comparison_accuracy"] == 1.0 and w["objects"] == 2
+    from affordgrasp.learning.evaluation import comparison_accuracy
+
+    pooled = comparison_accuracy(truth, pred)
+    assert pooled == pytest.approx(12 / 28)  # 2 x 6 within pairs right, 16 cross pairs wrong
+    # the object mean: cross pairs right, within pairs tied (one half each)
+    base = object_mean_baseline(objects, truth)
+    assert base["comparison_accuracy"] == pytest.approx((16 + 0.5 * 12) / 28)
+    c = within_object(objects, np.r_[1.0, 0, 0, 0, 0, 0, 0, 0], pred, kind="classification")
+    assert c["objects"] == 1 and c["average_precision"] == pytest.approx(1 / 4)

@@ -128,3 +128,21 @@ def test_ensemble_is_the_mean_of_its_members_and_round_trips(tmp_path):
     np.testing.assert_array_equal(
         predict_scores(loaded, cfg, x), predict_scores(ensemble, config, x)
     )
+
+
+def test_decision_threshold_chosen_on_validation_and_round_trips(tmp_path):
+    from affordgrasp.learning.api import choose_threshold
+    from affordgrasp.learning.decisions import decision_threshold
+    from affordgrasp.learning.evaluation import best_f1_threshold
+
+    train, val = _samples(64, 0), _samples(32, 1)
+    config = default_config("cnn", make_target("viable"), width=8)
+    model, _ = train_model(config, train, val, SETTINGS)
+    val.meta.update(positive_weight=1.0, negative_weight=5.0)
+    chosen = choose_threshold(model, config, val)
+    prob = predict_scores(model, config, Inputs(config, val))
+    weights = np.where(val.y > 0.5, 1.0, 5.0)
+    assert chosen["value"] == best_f1_threshold(val.y, prob, weights=weights)[0]
+    config["decision_threshold"] = chosen
+    path = save_model(tmp_path / "c.safetensors", model, config)
+    assert decision_threshold(read_config(path)) == chosen["value"]
