@@ -211,10 +211,10 @@ def model_order(classifier, regressor, samples, *, threshold: float | None = Non
     lower = True
     t = 0.5
     if classifier is not None:
-        probability = predictions_of(*classifier, samples)
+        probability = predictions_of(classifier[0], classifier[1], samples)
         t = decision_threshold(classifier[1]) if threshold is None else float(threshold)
     if regressor is not None:
-        predicted = predictions_of(*regressor, samples)
+        predicted = predictions_of(regressor[0], regressor[1], samples)
         lower = bool(regressor[1]["target"]["lower_is_better"])
     order = decision_order(probability, predicted, threshold=t, lower_is_better=lower)
     return order, probability, predicted
