@@ -58,3 +58,15 @@ def test_plan_physics_replays_the_chosen_grasp(box_mesh):
     p = ag.plan(str(box_mesh), "pick", candidates=3, seed=0, physics=True)
     assert isinstance(p.physics["hold_ok"], bool)
     assert "physics" in p.timings
+
+
+def test_plan_with_a_sensor_sees_other_images_of_the_same_candidates(box_mesh):
+    from affordgrasp.vision.sensor import SensorModel
+
+    exact = ag.plan(str(box_mesh), "pick", candidates=4, seed=2, models="classifier")
+    sensed = ag.plan(
+        str(box_mesh), "pick", candidates=4, seed=2, models="classifier", sensor=SensorModel()
+    )
+    assert np.array_equal(exact.p0, sensed.p0)
+    np.testing.assert_array_equal(exact.true_score, sensed.true_score)
+    assert not np.array_equal(exact.probability, sensed.probability)

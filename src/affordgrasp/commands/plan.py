@@ -41,6 +41,12 @@ def add_arguments(p) -> None:
         action="store_true",
         help="replay the chosen grasp in MuJoCo (needs affordgrasp[physics])",
     )
+    p.add_argument(
+        "--sensor",
+        action="store_true",
+        help="the models see the images a depth sensor would return (noise, lost returns; "
+        "seeded by --seed); default: exact images",
+    )
     add_scale_arguments(p)
 
 
@@ -89,6 +95,7 @@ def run(args, out) -> None:
         mode=args.mode,
         physics=args.physics,
         threshold=args.threshold,
+        sensor=_sensor(args),
         progress=progress,
     )
     doc = result.summary()
@@ -135,3 +142,12 @@ def run(args, out) -> None:
         )
     out.text("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in doc["timings"].items()))
     out.result(doc)
+
+
+def _sensor(args):
+    """The sensor model of ``--sensor`` (seeded by ``--seed``), else None."""
+    if not args.sensor:
+        return None
+    from ..vision.sensor import SensorModel
+
+    return SensorModel(seed=args.seed)

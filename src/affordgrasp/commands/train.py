@@ -58,6 +58,12 @@ def add_arguments(p) -> None:
         "outputs are averaged (default 1)",
     )
     p.add_argument("--max-minutes", type=float, default=None, help="stop after this long")
+    p.add_argument(
+        "--sensor",
+        action="store_true",
+        help="train on the images a depth sensor would return (noise growing with depth, "
+        "returns lost at grazing angles and at random; seeded by --seed); default: exact",
+    )
 
 
 @contextmanager
@@ -136,6 +142,7 @@ def run(args, out) -> None:
             max_train=args.max_train,
             progress=update,
             members=args.members,
+            sensor=_sensor(args),
         )
     tr = config["training"]
     out.table(
@@ -177,3 +184,12 @@ def _test_rows(test: dict) -> list[list]:
         ["E[GMS]", test["expected_gms"], 0.5],
         ["rows", test["n"], ""],
     ]
+
+
+def _sensor(args):
+    """The sensor model of ``--sensor`` (seeded by ``--seed``), else None."""
+    if not getattr(args, "sensor", False):
+        return None
+    from ..vision.sensor import SensorModel
+
+    return SensorModel(seed=args.seed)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Sequence
+from dataclasses import asdict
 from importlib import resources
 from pathlib import Path
 
@@ -104,6 +105,7 @@ def prepare_split(
     max_train: int | None = 20000,
     max_eval: int | None = 4000,
     negatives_ratio: float = 3.0,
+    sensor=None,
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
@@ -128,6 +130,10 @@ def prepare_split(
         Caps on the training rows and on each of validation and test (None: no cap).
     negatives_ratio : float
         Negatives kept per positive for training and validation.
+    sensor : SensorModel, optional
+        A depth sensor's noise and lost returns applied to every image
+        (:func:`~affordgrasp.vision.sensor.apply_sensor`; keyed by object and sample, so a
+        row's noisy image does not depend on the split); None: the exact images.
 
     Returns
     -------
@@ -175,7 +181,34 @@ def prepare_split(
     for p in parts:
         if len(p):
             load_depth(p, dataset)
+            if sensor is not None:
+                p.depth_mm = sensed_depth_mm(p, sensor)
     return parts[0], parts[1], parts[2], target, sp
+
+
+def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
+    """The samples' depth images as a sensor model returns them.
+
+    Parameters
+    ----------
+    samples : Samples
+        With depth images.
+    sensor : SensorModel
+        The sensor (:mod:`affordgrasp.vision.sensor`).
+
+    Returns
+    -------
+    (n, h, w) uint16 ndarray
+        Depth, mm; image i's noise keyed by (CRC-32 of its object's name, its sample).
+    """
+    import zlib
+
+    from ..vision.depth import depth_from_mm, depth_to_mm
+    from ..vision.sensor import apply_sensor
+
+    ids = np.array([zlib.crc32(str(o).encode()) for o in samples.object], dtype=np.int64)
+    keys = np.c_[ids, samples.sample]
+    return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
 
 
 def train_on_dataset(
@@ -193,6 +226,7 @@ def train_on_dataset(
     progress: Callable[[dict], None] | None = None,
     prepared=None,
     members: int = 1,
+    sensor=None,
 ):
     """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
 
@@ -225,6 +259,9 @@ def train_on_dataset(
     members : int
         More than 1: an ensemble of that many networks (seeds seed, seed + 1, ...) whose
         outputs are averaged, saved as one model.
+    sensor : SensorModel, optional
+        Train (and validate and test) on the images a depth sensor would return
+        (:func:`prepare_split`); recorded in the config's ``training``.
 
     Returns
     -------
@@ -249,6 +286,7 @@ def train_on_dataset(
             test_families=test_families,
             seed=settings.seed,
             max_train=max_train,
+            sensor=sensor,
         )
     train, val, test, tgt, sp = prepared
     if log_target and tgt.kind == "regression":
@@ -272,6 +310,7 @@ def train_on_dataset(
         "split": sp.to_dict(),
         "rows": {"train": len(train), "val": len(val), "test": len(test)},
         "train_mean": float(np.mean(tgt.normalise(train.y))),
+        "sensor": None if sensor is None else asdict(sensor),
         **{k: v for k, v in summary.items() if k != "history"},
         "history": summary["history"],
     }

@@ -231,6 +231,7 @@ def plan(
     mode: str = "default",
     physics: bool = False,
     threshold: float | None = None,
+    sensor=None,
     progress: Callable[[str], Any] | None = None,
 ) -> Plan:
     """Choose a grasp of an object from camera-in-hand views, and check the choice.
@@ -258,6 +259,9 @@ def plan(
         Replay the chosen grasp in MuJoCo (needs ``affordgrasp[physics]``).
     threshold : float, optional
         Overrides the classifier's stored decision threshold.
+    sensor : SensorModel, optional
+        The models see the images a depth sensor would return
+        (:mod:`affordgrasp.vision.sensor`; candidate i's noise keyed by i); None: exact.
     progress : callable, optional
         Called with the name of each step as it starts.
 
@@ -294,7 +298,12 @@ def plan(
 
     step("render")
     t0 = time.perf_counter()
-    depth_mm = depth_to_mm(renderer_for(obj).render(p0))
+    depth = renderer_for(obj).render(p0)
+    if sensor is not None:
+        from ..vision.sensor import apply_sensor
+
+        depth = apply_sensor(depth, sensor, np.arange(n))
+    depth_mm = depth_to_mm(depth)
     timings["render"] = time.perf_counter() - t0
 
     step("predict")
