@@ -196,3 +196,32 @@ def test_model_eval_without_test_objects_and_subsample_say_so(tiny_dataset, caps
     assert sel["objects"].startswith("every object") and "training" in sel["objects"]
     assert sel["subsampled"] and sel["rows_evaluated"] == 10 and sel["rows_available"] == 72
     assert "subsample of 10 of 72 rows" in captured.err
+
+
+def test_streamed_training_reads_each_epochs_rows_once_within_its_buffer(tiny_dataset):
+    from affordgrasp.learning.api import prepare_split, train_on_dataset
+    from affordgrasp.learning.streaming import StreamedEpochs
+    from affordgrasp.learning.training import TrainSettings, default_config
+
+    train, val, test, target, _ = prepare_split(
+        tiny_dataset, "n_contacts", max_train=None, train_depth=False
+    )
+    assert train.depth_mm is None and val.depth_mm is not None
+    config = default_config("cnn", target, width=4)
+    epochs = StreamedEpochs(tiny_dataset, config, train, batch_size=4, buffer_rows=10)
+    batches, n = epochs(1, 0)
+    seen = []
+    for inputs, idx, y in batches:
+        assert inputs.depth_mm.shape[0] <= 10 and len(idx) <= 4
+        seen += [float(v) for v in y]
+    sizes = [10] * (len(train) // 10) + ([len(train) % 10] if len(train) % 10 else [])
+    assert len(seen) == len(train) and n == sum(-(-k // 4) for k in sizes)
+    # the targets streamed are the training rows' targets
+    assert sorted(seen) == pytest.approx(sorted(target.normalise(train.y)))
+    settings = TrainSettings(epochs=2, batch_size=4, seed=0)
+    kwargs = dict(arch="cnn", target="n_contacts", settings=settings, stream=True, buffer_rows=10)
+    m1, c1 = train_on_dataset(tiny_dataset, **kwargs)
+    m2, c2 = train_on_dataset(tiny_dataset, **kwargs)
+    assert c1["training"]["streamed"]["max_buffered"] <= 10
+    a, b = m1.state_dict(), m2.state_dict()
+    assert all(np.array_equal(a[k].numpy(), b[k].numpy()) for k in a)  # seeded

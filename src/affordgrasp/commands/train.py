@@ -59,6 +59,18 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--max-minutes", type=float, default=None, help="stop after this long")
     p.add_argument(
+        "--stream",
+        action="store_true",
+        help="read the training images shard by shard every epoch instead of holding them "
+        "(every training row is used; memory: --buffer-rows images)",
+    )
+    p.add_argument(
+        "--buffer-rows",
+        type=int,
+        default=4096,
+        help="with --stream: rows shuffled together (default 4096, about 140 MB)",
+    )
+    p.add_argument(
         "--sensor",
         action="store_true",
         help="train on the images a depth sensor would return (noise growing with depth, "
@@ -127,6 +139,8 @@ def run(args, out) -> None:
         rank_weight=args.rank_weight,
         max_seconds=None if args.max_minutes is None else 60 * args.max_minutes,
     )
+    if args.buffer_rows < 1:
+        raise InputError(f"--buffer-rows must be >= 1, got {args.buffer_rows}")
     families = args.test_families.split(",") if args.test_families else None
     with _bar(out, settings) as update:
         model, config = train_on_dataset(
@@ -143,6 +157,8 @@ def run(args, out) -> None:
             progress=update,
             members=args.members,
             sensor=_sensor(args),
+            stream=args.stream,
+            buffer_rows=args.buffer_rows,
         )
     tr = config["training"]
     out.table(

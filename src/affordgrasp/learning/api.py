@@ -106,6 +106,7 @@ def prepare_split(
     max_eval: int | None = 4000,
     negatives_ratio: float = 3.0,
     sensor=None,
+    train_depth: bool = True,
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
@@ -134,6 +135,9 @@ def prepare_split(
         A depth sensor's noise and lost returns applied to every image
         (:func:`~affordgrasp.vision.sensor.apply_sensor`; keyed by object and sample, so a
         row's noisy image does not depend on the split); None: the exact images.
+    train_depth : bool
+        Load the training rows' images (False: streamed later, see
+        :class:`~affordgrasp.learning.streaming.StreamedEpochs`).
 
     Returns
     -------
@@ -178,8 +182,8 @@ def prepare_split(
         taken = samples.take(idx)
         taken.meta.update(weights)
         parts.append(taken)
-    for p in parts:
-        if len(p):
+    for k, p in enumerate(parts):
+        if len(p) and (k > 0 or train_depth):
             load_depth(p, dataset)
             if sensor is not None:
                 p.depth_mm = sensed_depth_mm(p, sensor)
@@ -227,6 +231,8 @@ def train_on_dataset(
     prepared=None,
     members: int = 1,
     sensor=None,
+    stream: bool = False,
+    buffer_rows: int = 4096,
 ):
     """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
 
@@ -262,6 +268,12 @@ def train_on_dataset(
     sensor : SensorModel, optional
         Train (and validate and test) on the images a depth sensor would return
         (:func:`prepare_split`); recorded in the config's ``training``.
+    stream : bool
+        Read the training images shard by shard every epoch instead of holding them
+        (:class:`~affordgrasp.learning.streaming.StreamedEpochs`): every training row is
+        used (``max_train`` is ignored) and memory is that of ``buffer_rows`` images.
+    buffer_rows : int
+        With ``stream``: rows shuffled together before batches are cut.
 
     Returns
     -------
@@ -285,8 +297,9 @@ def train_on_dataset(
             split=split,
             test_families=test_families,
             seed=settings.seed,
-            max_train=max_train,
+            max_train=None if stream else max_train,
             sensor=sensor,
+            train_depth=not stream,
         )
     train, val, test, tgt, sp = prepared
     if log_target and tgt.kind == "regression":
@@ -304,7 +317,23 @@ def train_on_dataset(
     if not isinstance(members, int) or isinstance(members, bool) or members < 1:
         raise InputError(f"members must be an integer >= 1, got {members!r}")
     config = default_config(arch, tgt, canonical=canonical, members=members)
-    model, summary = train_model(config, train, val, settings, progress=progress)
+    epochs = None
+    if stream:
+        from .streaming import StreamedEpochs
+
+        epochs = StreamedEpochs(
+            dataset,
+            config,
+            train,
+            batch_size=settings.batch_size,
+            buffer_rows=buffer_rows,
+            sensor=sensor,
+        )
+    model, summary = train_model(
+        config, train, val, settings, progress=progress, epoch_batches=epochs
+    )
+    if epochs is not None:
+        summary["streamed"] = {"buffer_rows": buffer_rows, "max_buffered": epochs.max_buffered}
     config["training"] = {
         "dataset": str(dataset),
         "split": sp.to_dict(),
