@@ -291,7 +291,7 @@ def evaluate_decisions(
         "mode": mode,
         "candidates": candidates,
         "draws": draws,
-        "rule": rule_of(classifier, regressor),
+        "rule": rule_of(classifier, regressor, threshold),
         "baseline_rule": rule_of(*base) if base else None,
         "objects": len(per),
         "per_object": per,

@@ -165,19 +165,21 @@ def split_models(models: Sequence[tuple[Any, dict]]):
     return classifier, regressor
 
 
-def rule_of(classifier, regressor) -> str:
+def rule_of(classifier, regressor, threshold: float | None = None) -> str:
     """The decision rule of a pair of models, in words.
 
     Parameters
     ----------
     classifier, regressor : (torch.nn.Module, dict) or None
+    threshold : float, optional
+        The threshold used instead of the classifier's own.
 
     Returns
     -------
     str
     """
     if classifier is not None and regressor is not None:
-        t = decision_threshold(classifier[1])
+        t = decision_threshold(classifier[1]) if threshold is None else float(threshold)
         best = "least" if regressor[1]["target"]["lower_is_better"] else "largest"
         return (
             f"viability probability >= {t:.3g}, then {best} predicted "
@@ -345,7 +347,7 @@ def plan(
         viable=viable,
         percentile=float(true_percentiles(true_score)[chosen]),
         measures=measures,
-        rule=rule_of(classifier, regressor),
+        rule=rule_of(classifier, regressor, threshold),
         table=table,
         physics=outcome,
         timings=timings,
