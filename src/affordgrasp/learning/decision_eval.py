@@ -191,6 +191,7 @@ def evaluate_decisions(
     from ..dataset.layout import read_manifest
     from ..dataset.reading import manifest_hand, open_dataset, read_dataset
     from ..tasks import get_task, is_viable
+    from ..vision.depth import decode_depth_column, depth_to_mm
     from .data import Samples, _families, load_depth, object_of
     from .plan import model_order, replay, rule_of, split_models
 
@@ -203,7 +204,9 @@ def evaluate_decisions(
     manifest = read_manifest(dataset)
     families = _families(manifest)
     entries = {o["name"]: o for o in manifest["objects"]}
-    names = [c for c in open_dataset(dataset).schema.names if c != "depth_mm"]
+    needs_depth = any(c["arch"] != "pose" for _, c in [*models, *(baseline or [])])
+    stored = bool(manifest.get("depth")) and needs_depth
+    names = [c for c in open_dataset(dataset).schema.names if c != "depth_mm" or stored]
     per: dict[str, dict] = {}
     decisions: dict[str, list[float]] = {"model": [], "random": [], "oracle": []}
     if base:
@@ -234,8 +237,9 @@ def evaluate_decisions(
             np.full(len(used), np.nan),
             meta={"directory": str(dataset)},
         )
-        needs_depth = any(c["arch"] != "pose" for _, c in [*models, *(baseline or [])])
-        if needs_depth:
+        if stored:  # read with the rows: one pass over the object's shards
+            samples.depth_mm = depth_to_mm(decode_depth_column(sub.column("depth_mm")))
+        elif needs_depth:
             load_depth(samples, dataset)
         _, prob, pred = model_order(classifier, regressor, samples, threshold=threshold)
         if base:
