@@ -225,3 +225,32 @@ def test_streamed_training_reads_each_epochs_rows_once_within_its_buffer(tiny_da
     assert c1["training"]["streamed"]["max_buffered"] <= 10
     a, b = m1.state_dict(), m2.state_dict()
     assert all(np.array_equal(a[k].numpy(), b[k].numpy()) for k in a)  # seeded
+
+
+def test_model_eval_decides_beside_a_pose_only_baseline(tiny_dataset, tmp_path, capsys):
+    pose = tmp_path / "pose.safetensors"
+    args = ["train", str(tiny_dataset), "--model", "pose", "--target", "n_contacts"]
+    assert main([*args, "--epochs", "1", "-o", str(pose)]) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    rc = main(
+        [
+            "model-eval",
+            "classifier",
+            str(tiny_dataset),
+            "--objects",
+            "knife:0",
+            "--baseline",
+            str(pose),
+            "--candidates",
+            "6",
+            "--draws",
+            "2",
+            "--json",
+        ]
+    )
+    assert rc == 0, capsys.readouterr().err
+    dec = json.loads(capsys.readouterr().out)["decisions"]
+    assert dec["baseline_rule"] == "largest predicted n_contacts"
+    entry = dec["per_object"]["knife:0"]
+    assert set(entry) >= {"model", "baseline", "random", "oracle"}
+    assert entry["baseline"]["top1_percentile"] <= entry["oracle"]["top1_percentile"]
