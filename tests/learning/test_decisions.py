@@ -69,6 +69,8 @@ def test_measures_random_and_oracle():
 def test_decision_threshold_stored_or_default():
     assert decision_threshold({}) == 0.5
     assert decision_threshold({"decision_threshold": {"value": 0.83}}) == 0.83
+    with pytest.raises(InputError, match="not a probability"):
+        decision_threshold({"decision_threshold": {"value": "high"}})
 
 
 def test_within_object_against_pooled():

@@ -111,6 +111,10 @@ def run(args, out) -> None:
         )
     if args.threshold is not None and not 0.0 <= args.threshold <= 1.0:
         raise InputError(f"--threshold must be a probability in [0, 1], got {args.threshold}")
+    if args.plots:
+        from .common import check_output_dir
+
+        check_output_dir(args.plots, "--plots")
     max_rows = args.max_rows or None
     objects = args.objects if args.objects in ("test", "all") else args.objects.split(",")
     models = _load(_split_spec(args.model))

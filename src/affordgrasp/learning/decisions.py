@@ -199,6 +199,12 @@ def decision_threshold(config: dict) -> float:
         A probability.
     """
     stored = config.get("decision_threshold")
-    if isinstance(stored, dict) and stored.get("value") is not None:
-        return float(stored["value"])
-    return DEFAULT_THRESHOLD
+    if not isinstance(stored, dict) or stored.get("value") is None:
+        return DEFAULT_THRESHOLD
+    value = stored["value"]
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= 1:
+        raise InputError(
+            f"the model's stored decision threshold {value!r} is not a probability in [0, 1]; "
+            "pass a threshold explicitly or retrain the model"
+        )
+    return float(value)
