@@ -50,6 +50,9 @@ def test_plan_command_json_and_bad_input(box_mesh, capsys):
     assert "candidates" in capsys.readouterr().err
     assert main(["plan", str(box_mesh), "--task", "nope"]) == 2
     assert main(["plan", str(box_mesh), "--threshold", "2"]) == 2
+    capsys.readouterr()
+    assert main(["plan", str(box_mesh), "--candidates", "1000000000"]) == 2
+    assert "GB in memory" in capsys.readouterr().err
 
 
 def test_plan_physics_replays_the_chosen_grasp(box_mesh):
