@@ -143,6 +143,11 @@ def test_decision_threshold_chosen_on_validation_and_round_trips(tmp_path):
     prob = predict_scores(model, config, Inputs(config, val))
     weights = np.where(val.y > 0.5, 1.0, 5.0)
     assert chosen["value"] == best_f1_threshold(val.y, prob, weights=weights)[0]
+    from affordgrasp.learning.api import _natural_rate
+
+    # 1 row per positive, 5 per negative: the objects' rate is P / (P + 5 N)
+    p = int((val.y > 0.5).sum())
+    assert _natural_rate(val) == pytest.approx(p / (p + 5 * (len(val) - p)))
     config["decision_threshold"] = chosen
     path = save_model(tmp_path / "c.safetensors", model, config)
     assert decision_threshold(read_config(path)) == chosen["value"]

@@ -340,6 +340,7 @@ def train_on_dataset(
         "rows": {"train": len(train), "val": len(val), "test": len(test)},
         "train_mean": float(np.mean(tgt.normalise(train.y))),
         "sensor": None if sensor is None else asdict(sensor),
+        "positive_rate": _natural_rate(train) if tgt.kind == "classification" else None,
         **{k: v for k, v in summary.items() if k != "history"},
         "history": summary["history"],
     }
@@ -350,6 +351,14 @@ def train_on_dataset(
     if out is not None:
         save_model(out, model, config)
     return model, config
+
+
+def _natural_rate(samples: Samples) -> float:
+    """The positive rate of the objects some (subsampled) rows came from."""
+    y = samples.y > 0.5
+    pos = y.sum() * samples.meta.get("positive_weight", 1.0)
+    neg = (~y).sum() * samples.meta.get("negative_weight", 1.0)
+    return float(pos / max(pos + neg, 1e-300))
 
 
 def choose_threshold(model, config: dict, val: Samples) -> dict:
