@@ -254,3 +254,17 @@ def test_model_eval_decides_beside_a_pose_only_baseline(tiny_dataset, tmp_path, 
     entry = dec["per_object"]["knife:0"]
     assert set(entry) >= {"model", "baseline", "random", "oracle"}
     assert entry["baseline"]["top1_percentile"] <= entry["oracle"]["top1_percentile"]
+
+
+def test_decisions_replay_the_choice_in_physics(tiny_dataset):
+    pytest.importorskip("mujoco")
+    pytest.importorskip("coacd")
+    from affordgrasp.learning.decision_eval import evaluate_decisions
+    from affordgrasp.learning.plan import load_models
+
+    res = evaluate_decisions(
+        load_models("classifier"), tiny_dataset, ["knife:0"], candidates=3, draws=1, physics=True
+    )
+    outcome = res["per_object"]["knife:0"]["physics"]
+    assert isinstance(outcome["hold_ok"], bool)
+    assert res["physics_hold_rate"] == float(outcome["hold_ok"])
