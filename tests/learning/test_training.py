@@ -151,3 +151,20 @@ def test_decision_threshold_chosen_on_validation_and_round_trips(tmp_path):
     config["decision_threshold"] = chosen
     path = save_model(tmp_path / "c.safetensors", model, config)
     assert decision_threshold(read_config(path)) == chosen["value"]
+
+
+def test_prior_shift_calibration_moves_the_odds():
+    from affordgrasp.errors import InputError
+    from affordgrasp.learning.training import prior_shift
+
+    train, val = _samples(32, 0), _samples(16, 1)
+    config = default_config("pose", make_target("viable"), width=4)
+    model, _ = train_model(config, train, val, TrainSettings(epochs=1, batch_size=16, seed=0))
+    raw = predict_scores(model, config, Inputs(config, val))
+    config["calibration"] = {"kind": "prior_shift", "from_rate": 0.5, "to_rate": 0.05}
+    shifted = predict_scores(model, config, Inputs(config, val))
+    odds = raw / (1 - raw) * 0.05 / 0.95  # the odds times pi / (1 - pi)
+    np.testing.assert_allclose(shifted, odds / (1 + odds), rtol=1e-6)
+    assert prior_shift({}) == 0.0
+    with pytest.raises(InputError, match="prior shift"):
+        prior_shift({"calibration": {"kind": "prior_shift", "from_rate": 0.5, "to_rate": 1.0}})

@@ -59,6 +59,12 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--max-minutes", type=float, default=None, help="stop after this long")
     p.add_argument(
+        "--calibrate",
+        action="store_true",
+        help="classifiers: probabilities corrected from the balanced training to the "
+        "positive rate of the training objects (stored in the model)",
+    )
+    p.add_argument(
         "--stream",
         action="store_true",
         help="read the training images shard by shard every epoch instead of holding them "
@@ -161,6 +167,7 @@ def run(args, out) -> None:
             members=args.members,
             sensor=_sensor(args),
             stream=args.stream,
+            calibrate=args.calibrate,
             buffer_rows=args.buffer_rows,
         )
     tr = config["training"]

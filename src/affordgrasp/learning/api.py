@@ -233,6 +233,7 @@ def train_on_dataset(
     sensor=None,
     stream: bool = False,
     buffer_rows: int = 4096,
+    calibrate: bool = False,
 ):
     """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
 
@@ -274,6 +275,11 @@ def train_on_dataset(
         used (``max_train`` is ignored) and memory is that of ``buffer_rows`` images.
     buffer_rows : int
         With ``stream``: rows shuffled together before batches are cut.
+    calibrate : bool
+        A classifier's probabilities corrected from its balanced training to the positive
+        rate of its training objects (config ``calibration``,
+        :func:`~affordgrasp.learning.training.prior_shift`); its threshold and test report
+        are then those of the corrected probabilities.
 
     Returns
     -------
@@ -345,6 +351,12 @@ def train_on_dataset(
         "history": summary["history"],
     }
     if tgt.kind == "classification":
+        if calibrate:
+            config["calibration"] = {
+                "kind": "prior_shift",
+                "from_rate": 0.5,
+                "to_rate": config["training"]["positive_rate"],
+            }
         config["decision_threshold"] = choose_threshold(model, config, val)
     if len(test):
         config["test"] = report(model, config, test)

@@ -196,18 +196,59 @@ def predict_scores(model, config: dict, inputs: Inputs, batch_size: int = 256) -
     Returns
     -------
     (n,) float64 ndarray
-        Probabilities (classifier) or values on the target's [0, 1] scale (regressor).
+        Probabilities (classifier; corrected to the prior its config's ``calibration``
+        names, :func:`prior_shift`) or values on the target's [0, 1] scale (regressor).
     """
     torch = require_torch()
     classification = config["target"]["kind"] == "classification"
+    shift = prior_shift(config) if classification else 0.0
     model.eval()
     out = np.zeros(len(inputs), dtype=np.float64)
     with torch.no_grad():
         for lo in range(0, len(inputs), batch_size):
             idx = np.arange(lo, min(len(inputs), lo + batch_size))
             y = _forward(model, inputs, idx)
-            out[idx] = (torch.sigmoid(y) if classification else y).double().numpy()
+            out[idx] = (torch.sigmoid(y + shift) if classification else y).double().numpy()
     return out
+
+
+def prior_shift(config: dict) -> float:
+    """The logit offset that moves a classifier's probabilities to another class prior.
+
+    A classifier trained on balanced batches learns odds at a 50 % prior; at a natural
+    positive rate π its calibrated odds are those odds × π / (1 − π) (Saerens et al. 2002).
+    A config's ``calibration`` = ``{"kind": "prior_shift", "from_rate": 0.5, "to_rate": π}``
+    asks for it; without one (the shipped files) the offset is 0.
+
+    Parameters
+    ----------
+    config : dict
+        A classifier's config.
+
+    Returns
+    -------
+    float
+        logit(to_rate) − logit(from_rate).
+
+    Raises
+    ------
+    InputError
+        For a calibration that is not a prior shift between rates in (0, 1).
+    """
+    cal = config.get("calibration")
+    if not cal:
+        return 0.0
+    rates = (cal.get("from_rate"), cal.get("to_rate")) if isinstance(cal, dict) else (None,)
+    if (
+        not isinstance(cal, dict)
+        or cal.get("kind") != "prior_shift"
+        or not all(isinstance(r, int | float) and 0 < r < 1 for r in rates)
+    ):
+        raise InputError(
+            f"the model's calibration {cal!r} is not a prior shift between two rates in (0, 1)"
+        )
+    a, b = float(rates[0]), float(rates[1])
+    return math.log(b / (1 - b)) - math.log(a / (1 - a))
 
 
 def _pairwise_rank_loss(torch, pred, y):
