@@ -23,6 +23,7 @@ from .layout import (
     CARD_MD_NAME,
     FORMAT,
     FORMAT_VERSION,
+    manifest_volume,
     write_bytes_atomic,
     write_json_atomic,
 )
@@ -85,6 +86,8 @@ def object_description(obj) -> dict:
         "inertia_kg_m2": np.asarray(m.inertia, dtype=float).tolist(),
         "r_max_m": float(m.r_max),
         "bounds_m": np.asarray(m.bounds, dtype=float).tolist(),
+        # repairs and simplification (with its measured distance) of a mesh file
+        "load_warnings": list(getattr(obj, "load_warnings", ())),
     }
 
 
@@ -250,6 +253,7 @@ def build_card(
         "samples_per_object": manifest["samples"],
         "shard_size": manifest["shard_size"],
         "metrics": manifest["metrics"],
+        "gws_volume": manifest_volume(manifest),
         "soft_contacts": manifest["soft"],
         "materials": bool(manifest.get("materials", False)),
         "command": manifest.get("command"),
@@ -291,7 +295,12 @@ def card_markdown(card: dict) -> str:
         f"* affordgrasp {card['affordgrasp_version']}, format {card['format_version']}",
         f"* seed {card['seed']}, {card['samples_per_object']:,} samples per object, "
         f"shards of {card['shard_size']} rows, metrics: {'yes' if card['metrics'] else 'no'}, "
-        f"soft contacts: {'yes' if card['soft_contacts'] else 'no'}",
+        f"soft contacts: {'yes' if card['soft_contacts'] else 'no'}, GWS volume: "
+        + (
+            "computed (--metrics +volume)"
+            if card.get("gws_volume", card["metrics"])
+            else "not computed (column gws_volume null)"
+        ),
         "* mass properties: "
         + (
             "per-part materials of the built-in families (--materials)"
@@ -326,6 +335,10 @@ def card_markdown(card: dict) -> str:
             f"| {o['name']} | {o['category']} | {o['mass_kg']:.4g} | {o['volume_m3']:.4g} | "
             f"{o['r_max_m']:.4g} | `{o['mesh_hash'][:16]}…` |"
         )
+    notes = [(o["name"], w) for o in card["objects"] for w in o.get("load_warnings", ())]
+    if notes:
+        lines += ["", "Loading the mesh files:", ""]
+        lines += [f"* {name}: {warning}" for name, warning in notes]
     hand = card["hand"]
     lines += [
         "",

@@ -63,6 +63,7 @@ PLAN_KEYS = (
     "hand",
     "hand_spec",
     "metrics",
+    "volume",
     "soft",
     "depth",
     "materials",
@@ -175,9 +176,11 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     try:
         write_file(tmp, data)
         os.replace(tmp, path)
-    except OSError as exc:
+    except BaseException as exc:  # Ctrl-C too: no temporary left behind
         tmp.unlink(missing_ok=True)
-        raise write_error(path, exc) from exc
+        if isinstance(exc, OSError):
+            raise write_error(path, exc) from exc
+        raise
     _sync_directory(path.parent)
 
 
@@ -288,6 +291,25 @@ def read_manifest(directory: str | os.PathLike) -> dict:
     return manifest
 
 
+def manifest_volume(manifest: dict) -> bool:
+    """Whether a dataset's ``gws_volume`` column holds computed volumes.
+
+    Parameters
+    ----------
+    manifest : dict
+        A dataset manifest.
+
+    Returns
+    -------
+    bool
+        Its ``volume`` entry; a manifest written before the volume became optional has
+        none, and computed the volume whenever it computed metrics.
+    """
+    if "volume" in manifest:
+        return bool(manifest["volume"])
+    return bool(manifest.get("metrics"))
+
+
 def manifest_differences(existing: dict, requested: dict) -> list[str]:
     """Readable differences between two manifests' plans (``PLAN_KEYS``).
 
@@ -323,6 +345,16 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                         if [n for n, _ in a] == [n for n, _ in b]
                         else ""
                     )
+                )
+        elif key == "volume":
+            a, b = manifest_volume(existing), manifest_volume(requested)
+            if a != b:
+                diffs.append(
+                    "GWS volume "
+                    + ("computed (--metrics +volume)" if a else "not computed")
+                    + " there vs "
+                    + ("computed (--metrics +volume)" if b else "not computed")
+                    + " here"
                 )
         elif key == "materials":
             # absent from manifests written before it was recorded: unit density
@@ -492,9 +524,11 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
         # The checksum is on disk before the shard: a shard in place always has one.
         record_checksum(directory, shard.name, data)
         os.replace(tmp, final)
-    except OSError as exc:
+    except BaseException as exc:  # Ctrl-C too: no temporary left behind
         tmp.unlink(missing_ok=True)
-        raise write_error(final, exc) from exc
+        if isinstance(exc, OSError):
+            raise write_error(final, exc) from exc
+        raise
     _sync_directory(directory)
     return final
 

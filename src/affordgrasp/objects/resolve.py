@@ -121,6 +121,9 @@ class GraspObject:
     materials : bool
         Whether ``mass`` follows the family's per-part materials (``materials=True``)
         rather than one uniform density.
+    load_warnings : tuple of str
+        What loading a mesh file warned about (repairs, a simplification with its
+        measured distance); the dataset card lists them.
     """
 
     name: str
@@ -132,6 +135,7 @@ class GraspObject:
     face_parts: np.ndarray | None = None
     part_names: tuple[str, ...] = ()
     materials: bool = False
+    load_warnings: tuple[str, ...] = ()
 
     @property
     def vertices(self) -> np.ndarray:
@@ -453,7 +457,7 @@ def _resolve_file(
             return _with_region_densities(obj, path)
     with recording_warnings() as warnings:
         mesh = load_mesh(path, size_m=size_m, units=units)
-    obj = _build(path.name, "mesh", mesh, density, source)
+    obj = _build(path.name, "mesh", mesh, density, source, load_warnings=tuple(warnings))
     obj = _with_region_densities(obj, path)
     # not if the file changed while it was read: the mesh may be of other bytes than the key's
     if key is not None and key == prepared.mesh_file_key(
@@ -563,6 +567,7 @@ def _with_region_densities(obj: GraspObject, path: Path) -> GraspObject:
         face_parts=obj.face_parts,
         part_names=obj.part_names,
         materials=True,
+        load_warnings=obj.load_warnings,
     )
 
 
@@ -642,6 +647,7 @@ def _build(
     face_parts: np.ndarray | None = None,
     part_names: tuple[str, ...] = (),
     regions: list | None = None,
+    load_warnings: tuple[str, ...] = (),
 ) -> GraspObject:
     if regions:
         mass = material_mass_properties(mesh, regions)
@@ -657,6 +663,7 @@ def _build(
         face_parts=face_parts,
         part_names=part_names,
         materials=bool(regions),
+        load_warnings=tuple(load_warnings),
     )
 
 
@@ -700,4 +707,5 @@ def _reuse(
         source=obj.source,
         face_parts=obj.face_parts,
         part_names=obj.part_names,
+        load_warnings=obj.load_warnings,
     )
