@@ -134,3 +134,30 @@ def test_a_carried_elite_stays_until_beaten():
     assert trace.state.best == 10.0 and len(trace.values) == 60
     with pytest.raises(InputError, match="initial|state"):
         cem_maximize(narrow_peak, budget=60, seed=0, initial=x0, state=state)
+
+
+@pytest.mark.parametrize("uses", [0, 8])
+def test_optimize_reports_rows_of_the_hand_it_searched_with(wrist_inertia_task, box_mesh, uses):
+    # With use points the winner is simulated once more with its best use point: that
+    # simulation used to fall back to the Barrett hand, so `optimize --hand parallel_jaw`
+    # reported a Barrett row.
+    from affordgrasp.hands import get_hand
+
+    jaw = get_hand("parallel_jaw")
+    result = optimize(
+        str(box_mesh), wrist_inertia_task, budget=40, seed=0, workers=1, hand=jaw, uses=uses
+    )
+    for found in (result.cem, result.random):
+        assert found is not None
+        assert found.row["hand"] == "parallel_jaw"
+        assert len(found.row["joints"]) == len(jaw.dofs) != len(get_hand("barrett").dofs)
+        assert found.row["inertia"] == pytest.approx(found.value, rel=1e-12)
+
+
+def test_optimize_cli_reports_a_parallel_jaw_row(wrist_inertia_task, box_mesh, capsys):
+    args = ["optimize", str(box_mesh), "--task", wrist_inertia_task, "--hand", "parallel_jaw"]
+    code = main(args + ["--budget", "40", "--uses", "8", "--workers", "1", "--json"])
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["cem"]["row"]["hand"] == "parallel_jaw"
+    assert doc["random"]["row"]["hand"] == "parallel_jaw"

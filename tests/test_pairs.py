@@ -192,7 +192,7 @@ def test_optimizer_refuses_bad_restarts(budget, restarts):
 
 
 def test_refine_continues_the_best_restart_within_the_budget(monkeypatch):
-    import affordgrasp.optimize as optimize_module
+    import affordgrasp.search.cem as optimize_module
 
     calls = []
     real = optimize_module.cem_maximize
