@@ -161,3 +161,20 @@ def test_optimize_cli_reports_a_parallel_jaw_row(wrist_inertia_task, box_mesh, c
     doc = json.loads(capsys.readouterr().out)
     assert doc["cem"]["row"]["hand"] == "parallel_jaw"
     assert doc["random"]["row"]["hand"] == "parallel_jaw"
+
+
+def test_optimize_with_restarts_keeps_the_budget_and_the_baseline(wrist_inertia_task, box_mesh):
+    from affordgrasp.pipeline import evaluate_samples
+
+    result = optimize(
+        str(box_mesh), wrist_inertia_task, budget=64, seed=2, workers=1, restarts=2, refine=0.25
+    )
+    assert len(result.cem_trace.values) == 64
+    assert {g["run"] for g in result.cem_trace.generations} == {0, 1, 2}
+    assert result.cem.value == pytest.approx(result.cem_trace.values.max(), rel=1e-12)
+    assert result.cem.row["inertia"] == pytest.approx(result.cem.value, rel=1e-12)
+    # the baseline is samples 0..63 of the seed, the runs' first generations reused in it
+    plain = evaluate_samples(str(box_mesh), 64, seed=2).table["inertia"].to_numpy()
+    np.testing.assert_allclose(result.random_values, plain, rtol=1e-12)
+    with pytest.raises(InputError, match="restarts"):
+        optimize(str(box_mesh), wrist_inertia_task, budget=64, restarts=0)

@@ -33,6 +33,7 @@ from numba import njit
 
 from .columns import GRASP_METRICS, USE_METRICS
 from .grasp.pregrasp import sample_inputs, use_points
+from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
@@ -319,7 +320,7 @@ def best_pairs(
     uses: int = 4000,
     seed: int = 0,
     top: int = 10,
-    hand: str = "barrett",
+    hand: Hand | str = "barrett",
     grasp_table: pa.Table | None = None,
     per_grasp: bool = False,
     **overrides: float,
@@ -447,7 +448,7 @@ def optimize_pairs(
     seed: int = 0,
     top: int = 10,
     population: int | None = None,
-    hand: str = "barrett",
+    hand: Hand | str = "barrett",
     restarts: int = 1,
     refine: float = 0.0,
     **overrides: float,
