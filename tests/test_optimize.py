@@ -178,3 +178,19 @@ def test_optimize_with_restarts_keeps_the_budget_and_the_baseline(wrist_inertia_
     np.testing.assert_allclose(result.random_values, plain, rtol=1e-12)
     with pytest.raises(InputError, match="restarts"):
         optimize(str(box_mesh), wrist_inertia_task, budget=64, restarts=0)
+
+
+def test_optimize_simulates_the_object_with_its_materials(wrist_inertia_task):
+    # A steel blade on a wooden handle: another centre of mass (so other use points) and
+    # another inertia than at uniform density. The winner's row is the materials object's.
+    from affordgrasp.objects import load_object
+    from affordgrasp.pipeline import evaluate_inputs
+
+    steel = load_object("meat_cleaver", materials=True)
+    result = optimize(steel, wrist_inertia_task, budget=40, seed=0, workers=1, uses=8)
+    p0, d = result.cem.p0[None], result.cem.use_dir[None]
+    again = evaluate_inputs(steel, p0, d).table.to_pylist()[0]
+    uniform = evaluate_inputs(load_object("meat_cleaver"), p0, d).table.to_pylist()[0]
+    for name in ("inertia", "use_edge_angle"):
+        assert result.cem.row[name] == pytest.approx(again[name], rel=1e-12)
+        assert result.cem.row[name] != pytest.approx(uniform[name], rel=1e-6)
