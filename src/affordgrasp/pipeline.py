@@ -24,9 +24,10 @@ from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
 from .metrics.phi import compute_phi_batch
 from .objects import GraspObject, load_object
-from .schema import batch_to_table
+from .robust import RobustSettings, robust_columns, robust_settings
+from .schema import append_float_columns, batch_to_table, robust_fields
 
-STAGES = ("simulate", "metrics", "table")
+STAGES = ("simulate", "metrics", "table")  # and "robust" with robust evaluation
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,8 @@ class Evaluation:
     table : pyarrow.Table
         One row per grasp, stable or not (columns: docs/conventions.md).
     timings : mapping of str to float
-        Seconds spent per stage: ``simulate``, ``metrics``, ``table``.
+        Seconds spent per stage: ``simulate``, ``metrics``, ``table``, and ``robust`` (the
+        perturbed copies) with robust evaluation.
 
     Notes
     -----
@@ -151,6 +153,7 @@ def evaluate_inputs(
     soft: bool = False,
     metrics: bool = True,
     volume: bool = True,
+    robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Simulate and score given inputs on one object.
 
@@ -175,6 +178,10 @@ def evaluate_inputs(
     volume : bool
         Compute ``gws_volume`` (False: NaN for force-closure grasps, every other column
         the same; see :func:`phi_of_batch`).
+    robust : RobustSettings or int, optional
+        Robust evaluation (:mod:`affordgrasp.robust`): K perturbed copies per grasp and the
+        ``robust_*`` columns after the metric columns. An int is K with the default
+        perturbations; None or 0: plain evaluation, the same table as without it.
 
     Returns
     -------
@@ -182,17 +189,25 @@ def evaluate_inputs(
     """
     obj = load_object(obj)
     hand = get_hand(hand)
+    settings = robust_settings(robust)
     t0 = time.perf_counter()
     batch = simulate(obj, p0, use_dir, hand=hand)
     t1 = time.perf_counter()
     phi = phi_of_batch(obj, batch, soft=soft, volume=volume) if metrics else None
     t2 = time.perf_counter()
+    extra = None
+    if settings is not None and phi is not None:
+        extra = robust_columns(obj, batch, settings, hand=hand, phi=phi, soft=soft)
+    t3 = time.perf_counter()
     table = batch_to_table(
         obj, batch, hand=hand.name, seed=seed, sample_start=sample_start, metrics=phi
     )
-    return Evaluation(
-        table, {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t2}
-    )
+    if extra is not None:
+        table = append_float_columns(table, robust_fields(settings.tasks), extra)
+    timings = {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t3}
+    if extra is not None:
+        timings["robust"] = t3 - t2
+    return Evaluation(table, timings)
 
 
 def evaluate_samples(
@@ -207,12 +222,13 @@ def evaluate_samples(
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
     volume: bool = True,
+    robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Draw samples ``start .. start + samples - 1`` of the run ``seed`` and evaluate them.
 
     Parameters
     ----------
-    obj, hand, soft, metrics, volume
+    obj, hand, soft, metrics, volume, robust
         As for :func:`evaluate_inputs`.
     samples : int
         Number of samples (> 0).
@@ -253,6 +269,7 @@ def evaluate_samples(
             soft=soft,
             metrics=metrics,
             volume=volume,
+            robust=robust,
         )
         for stage, seconds in part.timings.items():
             spent[stage] = spent.get(stage, 0.0) + seconds
@@ -276,6 +293,7 @@ def evaluate(
     metrics: bool = True,
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
+    robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Simulate grasps on an object and compute their metric vector Φ.
 
@@ -305,6 +323,9 @@ def evaluate(
         With ``samples``: evaluate at most this many at a time (same rows).
     progress : callable, optional
         With ``samples``: ``progress(k)`` after each batch of ``k`` grasps.
+    robust : RobustSettings or int, optional
+        K perturbed re-simulations per grasp and the ``robust_*`` columns
+        (:mod:`affordgrasp.robust`); None or 0: plain evaluation.
 
     Returns
     -------
@@ -325,7 +346,15 @@ def evaluate(
         if p0 is None or use_dir is None:
             raise InputError("p0 and use_dir go together: give both")
         return evaluate_inputs(
-            obj, p0, use_dir, hand=hand, seed=-1, sample_start=start, soft=soft, metrics=metrics
+            obj,
+            p0,
+            use_dir,
+            hand=hand,
+            seed=-1,
+            sample_start=start,
+            soft=soft,
+            metrics=metrics,
+            robust=robust,
         )
     if samples is None:
         raise InputError("give samples (how many grasps to draw) or p0 and use_dir")
@@ -339,4 +368,5 @@ def evaluate(
         metrics=metrics,
         batch_size=batch_size,
         progress=progress,
+        robust=robust,
     )

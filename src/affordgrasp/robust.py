@@ -79,8 +79,10 @@ __all__ = [
     "hold_dirs",
     "perturbations",
     "ranking_column",
+    "ranking_values",
     "robust_column_names",
     "robust_columns",
+    "robust_settings",
 ]
 
 # Tasks summarised by default (the built-in affordance functions; ``viable`` has its own
@@ -203,6 +205,28 @@ class Perturbations:
 
     def __len__(self) -> int:
         return len(self.friction)
+
+
+def robust_settings(value: RobustSettings | int | None) -> RobustSettings | None:
+    """Settings from an option value: K (the default perturbations), settings, or None.
+
+    Parameters
+    ----------
+    value : RobustSettings, int or None
+        ``--robust K``; 0 or None: plain evaluation.
+
+    Returns
+    -------
+    RobustSettings or None
+        None when robust evaluation is off.
+    """
+    if value is None:
+        return None
+    if isinstance(value, RobustSettings):
+        return value if value.enabled else None
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+        raise InputError(f"--robust K must be an integer >= 0 (copies per grasp), got {value!r}")
+    return RobustSettings(copies=int(value)) if value > 0 else None
 
 
 def _rotation_matrix(rotvec: np.ndarray) -> np.ndarray:
@@ -539,3 +563,38 @@ def _summarise(
         ok = f > -np.inf
         out[f"robust_p_{name}"] = mean(ok)
         out[f"robust_{name}"] = np.sort(per_grasp(f), axis=1)[:, index]
+
+
+def ranking_values(columns: Any, task: str) -> np.ndarray:
+    """The robust ranking score of ``task`` for every row (:func:`ranking_column`).
+
+    Parameters
+    ----------
+    columns : pyarrow.Table or mapping of str to (n,) ndarray
+        Rows evaluated with robust evaluation (``--robust K``).
+    task : str
+        The task name.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        −∞ where the robust score fails; NaN never ranks.
+
+    Raises
+    ------
+    InputError
+        When the rows have no robust column for the task.
+    """
+    name = ranking_column(task)
+    names = columns.column_names if hasattr(columns, "column_names") else list(columns)
+    if name not in names:
+        present = sorted(n for n in names if n.startswith("robust_") and n.count("_") == 1)
+        raise InputError(
+            f"no column {name!r} for task {task!r} in robust mode: evaluate or generate with "
+            f"--robust K (robust columns here: {', '.join(present) or 'none'}); tasks other "
+            "than the built-in ones need RobustSettings(tasks=...)"
+        )
+    col = columns.column(name) if hasattr(columns, "column") else columns[name]
+    if hasattr(col, "to_numpy"):
+        col = col.to_numpy()
+    return np.asarray(col, dtype=np.float64).reshape(-1)

@@ -7,7 +7,14 @@ import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
-from .common import HAND_HELP, add_scale_arguments, load_objects, scale_options
+from .common import (
+    HAND_HELP,
+    add_robust_argument,
+    add_scale_arguments,
+    load_objects,
+    robust_option,
+    scale_options,
+)
 
 
 def add_arguments(p) -> None:
@@ -58,6 +65,7 @@ def add_arguments(p) -> None:
         action="store_true",
         help="also store each row's 128x128 depth image D(p0, O) (uint16 mm, ~3-8 kB/row)",
     )
+    add_robust_argument(p)
 
 
 def command_line(args) -> list[str]:
@@ -84,6 +92,8 @@ def command_line(args) -> list[str]:
         cmd.append("--no-metrics")
     if args.depth:
         cmd.append("--depth")
+    if getattr(args, "robust", 0):
+        cmd += ["--robust", str(args.robust)]
     if args.engine != "local":
         cmd += ["--engine", args.engine]
     if args.address:
@@ -103,6 +113,7 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    robust = robust_option(args)
     cmd = command_line(args)
     objects = args.objects
     if any(v is not None for v in scale_options(args).values()) or args.materials:
@@ -124,6 +135,7 @@ def run(args, out) -> None:
             materials=args.materials,
             command=cmd,
             progress=lambda total: out.progress("generating", total),
+            robust=robust,
         )
     except KeyboardInterrupt:
         print(

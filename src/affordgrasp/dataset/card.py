@@ -171,13 +171,15 @@ def _plain(value):
     return value
 
 
-def schema_description(metrics: bool, depth: bool = False) -> list[dict]:
+def schema_description(metrics: bool, depth: bool = False, robust=None) -> list[dict]:
     """Every field of the shards' schema with its Arrow type.
 
     Parameters
     ----------
     metrics, depth : bool
         As for :func:`affordgrasp.schema.dataset_schema`.
+    robust : RobustSettings, optional
+        The robust settings of the run (their columns are listed).
 
     Returns
     -------
@@ -186,7 +188,7 @@ def schema_description(metrics: bool, depth: bool = False) -> list[dict]:
     """
     from ..schema import dataset_schema
 
-    schema = dataset_schema(metrics, depth)
+    schema = dataset_schema(metrics, depth, robust)
     return [{"name": f.name, "type": str(f.type)} for f in schema]
 
 
@@ -266,8 +268,18 @@ def build_card(
         "simulation": simulation_settings(),
         "task_thresholds": task_thresholds(),
         "depth": manifest.get("depth"),
-        "columns": schema_description(manifest["metrics"], bool(manifest.get("depth"))),
+        "robust": manifest.get("robust"),
+        "columns": schema_description(
+            manifest["metrics"], bool(manifest.get("depth")), _robust(manifest)
+        ),
     }
+
+
+def _robust(manifest: dict):
+    """The run's robust settings (None for a plain run)."""
+    from ..robust import RobustSettings, robust_settings
+
+    return robust_settings(RobustSettings.from_dict(manifest.get("robust")))
 
 
 def card_markdown(card: dict) -> str:
@@ -344,6 +356,9 @@ def card_markdown(card: dict) -> str:
     ]
     lines += ["", "## Simulation", ""]
     lines += [f"* {k}: {v}" for k, v in card["simulation"].items()]
+    if card.get("robust"):
+        lines += ["", "## Robust evaluation (robust_* columns)", ""]
+        lines += [f"* {k}: {v}" for k, v in card["robust"].items()]
     lines += ["", "## Friction table (μ)", ""]
     lines.append(", ".join(f"{k} {v}" for k, v in card["friction_table"].items()))
     if card["task_thresholds"]:

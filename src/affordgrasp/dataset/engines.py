@@ -28,6 +28,7 @@ import pyarrow as pa
 
 from ..errors import InputError, InternalError, Interrupted, bad_parameter, require
 from ..hands import Hand
+from ..robust import RobustSettings
 
 log = logging.getLogger(__name__)
 
@@ -160,6 +161,7 @@ class RunContext:
     metrics: bool = True
     soft: bool = False
     depth: bool = False
+    robust: RobustSettings | None = None
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
 
@@ -238,6 +240,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             hand=ctx.hand,
             soft=ctx.soft,
             metrics=ctx.metrics,
+            robust=ctx.robust,
         ).table
     else:
         table = evaluate_inputs(
@@ -249,6 +252,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             sample_start=job.start,
             soft=ctx.soft,
             metrics=ctx.metrics,
+            robust=ctx.robust,
         ).table
     if ctx.depth:
         from ..vision.depth import depth_column

@@ -32,6 +32,7 @@ import pyarrow as pa
 from .. import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..hands import Hand, hand_to_dict
+from ..robust import RobustSettings, robust_settings
 from ..schema import column_numbers
 from . import card as card_module
 from .engines import (
@@ -137,6 +138,7 @@ def build_manifest(
     command: Sequence[str] | None,
     depth: bool = False,
     materials: bool = False,
+    robust: RobustSettings | None = None,
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``).
 
@@ -157,6 +159,9 @@ def build_manifest(
     materials : bool
         Whether the families' mass properties follow their per-part materials (recorded
         always: a resume must use the same mass properties).
+    robust : RobustSettings, optional
+        Robust evaluation's parameters (recorded under ``robust`` when K > 0; a resume
+        must use the same).
     command : sequence of str or None
         The command line, recorded.
 
@@ -193,6 +198,8 @@ def build_manifest(
         from ..vision.depth import depth_manifest
 
         manifest["depth"] = depth_manifest()
+    if robust is not None and robust.enabled:  # absent for plain runs: earlier ones resume
+        manifest["robust"] = robust.to_dict()
     return manifest
 
 
@@ -265,6 +272,7 @@ def generate(
     materials: bool = False,
     command: Sequence[str] | None = None,
     progress: ProgressFactory | None = None,
+    robust: RobustSettings | int | None = None,
 ) -> GenerationSummary:
     """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
 
@@ -304,6 +312,9 @@ def generate(
         The command line, recorded in the manifest and the card.
     progress : callable, optional
         ``progress(total_samples)`` returns a context manager yielding ``advance(n)``.
+    robust : RobustSettings or int, optional
+        K perturbed copies per grasp and the ``robust_*`` columns (:mod:`affordgrasp.robust`);
+        None or 0: plain. Needs ``metrics``.
 
     Returns
     -------
@@ -325,6 +336,9 @@ def generate(
     _check_counts(samples, seed, shard_size, chunk_size)
     check_engine(engine, workers, address)
     hand_model = get_hand(hand)
+    robust = robust_settings(robust)
+    if robust is not None and not metrics:
+        raise bad_parameter("robust", "needs the metric columns; drop --no-metrics or --robust")
     resolved = load_objects(list(objects), materials=materials)
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
@@ -340,6 +354,7 @@ def generate(
         command=command,
         depth=depth,
         materials=materials or any(o.materials for o in resolved),
+        robust=robust,
     )
     manifest = prepare_directory(directory, manifest)
     removed = remove_stale_temporaries(directory)
@@ -348,7 +363,7 @@ def generate(
 
     from ..schema import dataset_schema
 
-    schema = dataset_schema(metrics, depth)
+    schema = dataset_schema(metrics, depth, robust)
     plan = plan_shards(len(resolved), samples, shard_size)
     infos: dict[Shard, dict] = {}
     checksums = read_checksums(directory)
@@ -366,6 +381,7 @@ def generate(
         metrics=metrics,
         soft=soft,
         depth=depth,
+        robust=robust,
     )
     started = time.perf_counter()
     started_at = time.strftime("%Y-%m-%dT%H:%M:%S%z")
