@@ -77,6 +77,7 @@ __all__ = [
     "Perturbations",
     "RobustSettings",
     "hold_dirs",
+    "manifest_robust",
     "perturbations",
     "ranking_column",
     "ranking_values",
@@ -205,6 +206,21 @@ class Perturbations:
 
     def __len__(self) -> int:
         return len(self.friction)
+
+
+def manifest_robust(manifest: dict) -> RobustSettings | None:
+    """The robust settings a dataset manifest records (None for a plain dataset).
+
+    Parameters
+    ----------
+    manifest : dict
+        A dataset's ``_manifest.json``.
+
+    Returns
+    -------
+    RobustSettings or None
+    """
+    return robust_settings(RobustSettings.from_dict(manifest.get("robust")))
 
 
 def robust_settings(value: RobustSettings | int | None) -> RobustSettings | None:

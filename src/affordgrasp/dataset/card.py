@@ -225,6 +225,7 @@ def build_card(
     dict
     """
     from ..materials import friction_table
+    from ..robust import manifest_robust
 
     per_object: dict[str, Counter] = {o.name: Counter() for o in objects}
     closure: Counter = Counter()
@@ -270,16 +271,9 @@ def build_card(
         "depth": manifest.get("depth"),
         "robust": manifest.get("robust"),
         "columns": schema_description(
-            manifest["metrics"], bool(manifest.get("depth")), _robust(manifest)
+            manifest["metrics"], bool(manifest.get("depth")), manifest_robust(manifest)
         ),
     }
-
-
-def _robust(manifest: dict):
-    """The run's robust settings (None for a plain run)."""
-    from ..robust import RobustSettings, robust_settings
-
-    return robust_settings(RobustSettings.from_dict(manifest.get("robust")))
 
 
 def card_markdown(card: dict) -> str:
