@@ -152,11 +152,22 @@ class RobustSettings:
 
     @property
     def enabled(self) -> bool:
-        """True when K > 0."""
+        """True when K > 0.
+
+        Returns
+        -------
+        bool
+        """
         return self.copies > 0
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-ready values (for manifests and cards)."""
+        """Plain JSON-ready values (for manifests and cards).
+
+        Returns
+        -------
+        dict
+            Every attribute; ``tasks`` as a list.
+        """
         out = asdict(self)
         out["tasks"] = list(self.tasks)
         out["copies"] = int(self.copies)
