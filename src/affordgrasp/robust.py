@@ -411,6 +411,7 @@ def robust_columns(
     hand,
     phi: dict | None = None,
     soft: bool = False,
+    timings: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """The ``robust_*`` columns (and ``hold_dirs``) of simulated grasps.
 
@@ -430,12 +431,17 @@ def robust_columns(
         from it); computed when None.
     soft : bool
         Soft-finger contacts.
+    timings : dict, optional
+        Filled with the seconds spent simulating the copies (``simulate``), on their
+        metrics (``metrics``) and summarising them (``summary``).
 
     Returns
     -------
     dict of str to (n,) float64 ndarray
         :func:`robust_column_names` of ``settings.tasks``.
     """
+    import time
+
     from .grasp.policy import object_geometry, pregrasp_starts, simulate_starts
     from .hands import get_hand
     from .pipeline import phi_of_batch
@@ -464,6 +470,7 @@ def robust_columns(
     depth = np.where(missed, np.einsum("ij,ij->i", centre[None] - start_origin, z), depth)
     identity = settings.translation_m == 0.0 and settings.rotation_rad == 0.0
     backoff = 0.0 if identity else float(settings.backoff_m)
+    t0 = time.perf_counter()
     copies = _perturbed_starts(starts, depth, draws, backoff)
     flat = simulate_starts(
         hand,
@@ -479,8 +486,12 @@ def robust_columns(
     mu = np.maximum(flat.mu + draws.friction[per_contact_copy % k_count], settings.friction_min)
     if settings.friction_sd == 0.0:
         mu = flat.mu
+    t1 = time.perf_counter()
     phi_k = _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft)
+    t2 = time.perf_counter()
     _summarise(out, phi_k, n, k_count, settings)
+    if timings is not None:
+        timings.update(simulate=t1 - t0, metrics=t2 - t1, summary=time.perf_counter() - t2)
     return out
 
 
