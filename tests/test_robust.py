@@ -223,3 +223,17 @@ def test_robust_dataset_records_its_settings_and_resumes(tmp_path):
     best = best_grasps(out, "pick", top=3, robust=True)
     every = np.concatenate([t.column("robust_hold").to_numpy() for t in first.values()])
     assert best.table.column("affordance").to_numpy()[0] == every.max()
+
+
+def test_hold_dirs_is_a_derived_column_of_every_evaluation(hammer):
+    from affordgrasp.tasks import MetricColumns
+
+    t = evaluate_samples(hammer, 8, seed=1).table
+    assert "hold_dirs" not in t.column_names
+    m = MetricColumns(t)
+    hold = np.stack([t.column(f"hold_effort_{s}").to_numpy() for s in "px nx py ny pz nz".split()])
+    np.testing.assert_array_equal(m["hold_dirs"], np.isfinite(hold).sum(axis=0))
+    assert "hold_dirs" in m and list(m).count("hold_dirs") == 1
+    stored = MetricColumns(evaluate_samples(hammer, 8, seed=1, robust=2).table)
+    np.testing.assert_array_equal(stored["hold_dirs"], m["hold_dirs"])
+    assert list(stored).count("hold_dirs") == 1

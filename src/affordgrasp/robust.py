@@ -329,11 +329,11 @@ def hold_dirs(metrics: Any) -> np.ndarray:
     (n,) float64 ndarray
         0 to 6 (NaN efforts count as infinite).
     """
+    from .columns import hold_dirs_count
     from .tasks.metric_columns import MetricColumns
 
     cols = metrics if isinstance(metrics, MetricColumns) else MetricColumns(metrics)
-    hold = np.stack([cols[c] for c in HOLD_EFFORT_COLUMNS], axis=1)
-    return np.isfinite(hold).sum(axis=1).astype(np.float64)
+    return hold_dirs_count({c: cols[c] for c in HOLD_EFFORT_COLUMNS})
 
 
 def robust_column_names(tasks: Sequence[str] = DEFAULT_TASKS) -> tuple[str, ...]:
