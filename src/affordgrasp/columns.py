@@ -143,7 +143,7 @@ def hold_effort_sum(values: Mapping[str, Any]) -> Any:
 
 
 def hold_dirs_count(values: Mapping[str, Any]) -> np.ndarray:
-    """Number of the six load directions with finite E_h (the graded hold, SPEC §2.10).
+    """Number of the six load directions with finite E_h (the graded hold, docs/robust.md).
 
     Parameters
     ----------

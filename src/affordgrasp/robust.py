@@ -1,4 +1,4 @@
-"""Robust quality (SPEC §2.10): metrics and task scores under hand-pose, friction and
+"""Robust quality (docs/robust.md): metrics and task scores under hand-pose, friction and
 centre-of-mass uncertainty, by K perturbed re-simulations per grasp.
 
 For each grasp the policy is run again K times from a perturbed pregrasp and the metric
