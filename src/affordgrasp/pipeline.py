@@ -202,7 +202,7 @@ def evaluate_inputs(
     table = batch_to_table(
         obj, batch, hand=hand.name, seed=seed, sample_start=sample_start, metrics=phi
     )
-    if extra is not None:
+    if extra is not None and settings is not None:
         table = append_float_columns(table, robust_fields(settings.tasks), extra)
     timings = {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t3}
     if extra is not None:
