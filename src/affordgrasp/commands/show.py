@@ -481,7 +481,7 @@ def run(args, out) -> None:
             f"({r.accepted} of {r.scored} samples accepted); "
             + (
                 "try more --samples"
-                if args.mode == "no-robustness"
+                if args.mode == "no-robustness" or args.robust
                 else "try --mode no-robustness or more --samples"
             )
         )
