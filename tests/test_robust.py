@@ -193,6 +193,8 @@ def test_ranking_values_read_the_robust_score(hammer):
     t = evaluate_samples(hammer, 5, seed=0, robust=3).table
     np.testing.assert_array_equal(ranking_values(t, "pick"), t.column("robust_hold").to_numpy())
     np.testing.assert_array_equal(ranking_values(t, "cut"), t.column("robust_cut").to_numpy())
+    result = evaluate_samples(hammer, 5, seed=0, robust=3)
+    np.testing.assert_array_equal(result.scores("pick", robust=True), ranking_values(t, "pick"))
     with pytest.raises(InputError, match="--robust K"):
         ranking_values(evaluate_samples(hammer, 2, seed=0).table, "pick")
 

@@ -66,8 +66,10 @@ class Evaluation:
         """Total time spent, s."""
         return float(sum(self.timings.values()))
 
-    def scores(self, task: Any, mode: str = "default", **thresholds: float) -> np.ndarray:
-        """F_T of every grasp for a task.
+    def scores(
+        self, task: Any, mode: str = "default", robust: bool = False, **thresholds: float
+    ) -> np.ndarray:
+        """F_T of every grasp for a task (its robust ranking score with ``robust``).
 
         Parameters
         ----------
@@ -75,6 +77,9 @@ class Evaluation:
             A registered name or a :class:`~affordgrasp.tasks.Task`.
         mode : str
             Threshold mode (``"default"``, ``"no-robustness"``, ...).
+        robust : bool
+            The robust score (:func:`affordgrasp.robust.ranking_column`; an evaluation with
+            ``robust=K``); ``mode`` and ``thresholds`` do not apply.
         **thresholds : float
             Overrides of the task's thresholds.
 
@@ -84,6 +89,11 @@ class Evaluation:
             -inf where the task's thresholds fail.
         """
         from .tasks import get_task
+
+        if robust:
+            from .robust import ranking_values
+
+            return ranking_values(self.table, task if isinstance(task, str) else task.name)
 
         task = get_task(task) if isinstance(task, str) else task
         return task.evaluate(self.table, mode, **thresholds)
