@@ -13,10 +13,13 @@ Perturbation k, all of it expressed in the grasp's hand frame (x, y, z = approac
 * **hand pose**: a rotation ``R_k = exp([ω_k]×)``, ``ω_k ~ N(0, σ_r² I)`` about the point
   where the unperturbed grasp stopped (the palm at first contact; for a grasp that missed,
   the point of the approach line nearest the object's centre), then a translation
-  ``t_k ~ N(0, σ_t² I)``. The perturbed hand starts ``backoff_m`` further back along its
-  own approach direction (so that a tilted open hand still starts outside the object) and
-  approaches until contact and closes as usual. The component of ``t_k`` along the
-  approach is absorbed by the approach.
+  ``t_k ~ N(0, σ_t² I)``. The perturbed hand then backs off along its own approach
+  direction by a bound on how far the move brought any point of the open hand forward,
+  ``b = (2 sin(θ/2) (D + ρ) + max(t_z, 0)) / cos θ + clearance_m`` (θ the rotation angle,
+  D the pivot's depth in front of the palm, ρ the open hand's radius about the palm), so
+  that it starts outside the object as the unperturbed hand did, and approaches until
+  contact and closes as usual. The component of ``t_k`` along the approach is absorbed by
+  the approach.
 * **friction**: every contact's μ becomes ``max(μ + σ_μ z_k, μ_min)``, ``z_k`` a standard
   normal truncated to ``[-2, 2]``: the hand/material μ shifted by one draw per copy (a
   robot's pads are all too slippery or all too sticky together).
@@ -115,8 +118,8 @@ class RobustSettings:
         q of the conservative task score ``robust_<task>``, in [0, 1].
     seed : int
         Seed of the perturbations (the k-th depends on (seed, k) only).
-    backoff_m : float
-        How much further back a perturbed hand starts along its approach, m.
+    clearance_m : float
+        Margin added to a perturbed hand's back-off, m (see the module docstring).
     tasks : tuple of str
         Tasks with ``robust_p_<task>`` and ``robust_<task>`` columns.
     """
@@ -129,14 +132,14 @@ class RobustSettings:
     com_m: float = 0.0025
     quantile: float = 0.2
     seed: int = 0
-    backoff_m: float = 0.03
+    clearance_m: float = 0.002
     tasks: tuple[str, ...] = field(default=DEFAULT_TASKS)
 
     def __post_init__(self) -> None:
         k = self.copies
         if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 0:
             raise InputError(f"robust copies K must be an integer >= 0, got {k!r}")
-        for name in ("translation_m", "rotation_rad", "friction_sd", "com_m", "backoff_m"):
+        for name in ("translation_m", "rotation_rad", "friction_sd", "com_m", "clearance_m"):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
                 raise InputError(f"robust {name} must be a finite number >= 0, got {v!r}")
@@ -380,13 +383,27 @@ def ranking_column(task: str) -> str:
     return "robust_hold" if task == "pick" else f"robust_{task}"
 
 
+def _backoff(
+    pivot_depth: np.ndarray, draws: Perturbations, hand_radius: float, clearance: float
+) -> np.ndarray:
+    """How far each copy backs off, (n, K), m: a bound on the forward move of any point of
+    the open hand (within ``hand_radius`` of the palm) under copy k's rotation about the
+    pivot and translation, plus ``clearance``."""
+    cos_t = np.clip((np.trace(draws.rotation, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    half_chord = np.sqrt(np.maximum(0.0, (1.0 - cos_t) / 2.0))  # sin(θ / 2)
+    lever = np.abs(pivot_depth)[:, None] + hand_radius
+    forward = 2.0 * half_chord[None] * lever + np.maximum(draws.translation[None, :, 2], 0.0)
+    return forward / np.maximum(cos_t, 0.1)[None] + clearance
+
+
 def _perturbed_starts(
     starts: np.ndarray,
     pivot_depth: np.ndarray,
     draws: Perturbations,
-    backoff: float,
+    backoff: np.ndarray,
 ) -> np.ndarray:
-    """Start poses of every copy, (n K, 4, 4), grasp-major (row i K + k)."""
+    """Start poses of every copy, (n K, 4, 4), grasp-major (row i K + k); ``backoff``
+    (n, K), m."""
     n, k_count = len(starts), len(draws)
     # hand-frame transform of copy k about the pivot p = (0, 0, depth):
     # x' = R (x - p) + p + t - b R e_z
@@ -394,7 +411,7 @@ def _perturbed_starts(
     p = np.zeros((n, k_count, 3))
     p[..., 2] = pivot_depth[:, None]
     rz = rot[..., :, 2]
-    offset = p - _matvec(rot, p) + draws.translation[None] - backoff * rz
+    offset = p - _matvec(rot, p) + draws.translation[None] - backoff[..., None] * rz
     local = np.zeros((n, k_count, 4, 4))
     local[..., :3, :3] = rot
     local[..., :3, 3] = offset
@@ -468,15 +485,17 @@ def robust_columns(
     missed = np.asarray(batch.status == "missed")
     centre = 0.5 * (geom.hull_vertices.min(axis=0) + geom.hull_vertices.max(axis=0))
     depth = np.where(missed, np.einsum("ij,ij->i", centre[None] - start_origin, z), depth)
-    identity = settings.translation_m == 0.0 and settings.rotation_rad == 0.0
-    backoff = 0.0 if identity else float(settings.backoff_m)
+    if settings.translation_m == 0.0 and settings.rotation_rad == 0.0:
+        backoff = np.zeros((n, k_count))  # every copy is the unperturbed grasp
+    else:
+        backoff = _backoff(depth, draws, _open_hand_radius(hand), settings.clearance_m)
     t0 = time.perf_counter()
     copies = _perturbed_starts(starts, depth, draws, backoff)
     flat = simulate_starts(
         hand,
         geom,
         copies,
-        np.repeat(travel + backoff, k_count),
+        (travel[:, None] + backoff).reshape(n * k_count),
         np.repeat(batch.p0[:, 5], k_count),
     )
     # centre-of-mass shift of copy k in the object frame: the grasp's hand axes times c_k
@@ -493,6 +512,24 @@ def robust_columns(
     if timings is not None:
         timings.update(simulate=t1 - t0, metrics=t2 - t1, summary=time.perf_counter() - t2)
     return out
+
+
+def _open_hand_radius(hand) -> float:
+    """The largest distance from the palm origin of any point of the open hand, m (every
+    pregrasp DOF value)."""
+    from .grasp.policy import hand_arrays
+
+    arrays = hand_arrays(hand)
+    radius = 0.0
+    for s in (0.0, 0.25, 0.5, 0.75, 1.0):
+        poses = arrays.shape_poses(hand.open_dofs(s))
+        reach = (
+            np.linalg.norm(poses[:, :3, 3], axis=1)
+            + np.linalg.norm(arrays.shapes.halves, axis=1)
+            + arrays.shapes.radii
+        )
+        radius = max(radius, float(reach.max()))
+    return radius
 
 
 def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, np.ndarray]:
