@@ -149,6 +149,9 @@ def test_k_zero_is_plain_evaluation(hammer):
         RobustSettings(quantile=1.5)
     with pytest.raises(InputError, match="translation_m"):
         RobustSettings(translation_m=-0.001)
+    assert RobustSettings.from_dict(RobustSettings(copies=7).to_dict()) == RobustSettings(copies=7)
+    with pytest.raises(InputError, match="unknown"):
+        RobustSettings.from_dict({"copies": 3, "sideways_m": 0.1})
 
 
 @pytest.mark.parametrize("quarter_turns", [0, 1])

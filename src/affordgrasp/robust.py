@@ -67,7 +67,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -192,6 +192,12 @@ class RobustSettings:
         if not values:
             return cls(copies=0)
         values = dict(values)
+        unknown = sorted(set(values) - {f.name for f in fields(cls)})
+        if unknown:
+            raise InputError(
+                f"robust settings {', '.join(unknown)} are unknown to this version of "
+                "affordgrasp; read the dataset with the version that wrote it"
+            )
         if "tasks" in values:
             values["tasks"] = tuple(values["tasks"])
         return cls(**values)
