@@ -242,3 +242,23 @@ def test_hold_dirs_is_a_derived_column_of_every_evaluation(hammer):
     stored = MetricColumns(evaluate_samples(hammer, 8, seed=1, robust=2).table)
     np.testing.assert_array_equal(stored["hold_dirs"], m["hold_dirs"])
     assert list(stored).count("hold_dirs") == 1
+
+
+def test_cli_robust_options(capsys, tmp_path):
+    import json
+
+    from affordgrasp.cli import main
+
+    code = main(
+        ["evaluate", "hammer", "--samples", "6", "--robust", "2", "--task", "pick", "--json"]
+    )
+    doc = json.loads(capsys.readouterr().out)
+    assert code == 0 and doc["robust"]["copies"] == 2
+    assert doc["best"]["pick"] is None or doc["best"]["pick"]["value"] <= 6.0  # robust_hold
+    assert main(["evaluate", "hammer", "--samples", "2", "--robust", "-1"]) == 2
+    assert "--robust" in capsys.readouterr().err
+    out = tmp_path / "plain"
+    assert main(["generate", "hammer", "--samples", "4", "--out", str(out), "--workers", "1"]) == 0
+    capsys.readouterr()
+    assert main(["best", str(out), "--task", "pick", "--robust", "3"]) == 2
+    assert "no robust columns" in capsys.readouterr().err
