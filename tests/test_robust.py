@@ -262,3 +262,18 @@ def test_cli_robust_options(capsys, tmp_path):
     capsys.readouterr()
     assert main(["best", str(out), "--task", "pick", "--robust", "3"]) == 2
     assert "no robust columns" in capsys.readouterr().err
+
+
+def test_robust_task_scores_follow_the_threshold_mode():
+    mug = load_object("mug")
+    p0, d = sample_inputs(0, 0, 300)
+    batch = simulate(mug, p0, d, hand="barrett")
+    phi = phi_of_batch(mug, batch, volume=False)
+    finite = {}
+    for mode in ("default", "no-robustness"):
+        s = RobustSettings(copies=1, mode=mode, **ZERO)
+        r = robust_columns(mug, batch, s, hand="barrett", phi=phi)
+        plain = evaluate_task("cut-ug", phi, mode)
+        np.testing.assert_array_equal(r["robust_cut-ug"], np.where(np.isnan(plain), -np.inf, plain))
+        finite[mode] = int(np.isfinite(r["robust_cut-ug"]).sum())
+    assert finite["no-robustness"] > finite["default"]  # the mode's thresholds were applied

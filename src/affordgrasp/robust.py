@@ -122,6 +122,9 @@ class RobustSettings:
         Margin added to a perturbed hand's back-off, m (see the module docstring).
     tasks : tuple of str
         Tasks with ``robust_p_<task>`` and ``robust_<task>`` columns.
+    mode : str
+        Threshold mode of the tasks' scores (``robust_viable`` uses the ``viable`` task's
+        default thresholds).
     """
 
     copies: int = 25
@@ -134,6 +137,7 @@ class RobustSettings:
     seed: int = 0
     clearance_m: float = 0.002
     tasks: tuple[str, ...] = field(default=DEFAULT_TASKS)
+    mode: str = "default"
 
     def __post_init__(self) -> None:
         k = self.copies
@@ -553,6 +557,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.inertia import rotational_inertia
     from .metrics.phi import contact_metrics_batch
     from .metrics.transmission import use_force
+    from .metrics.validation import units_n3
 
     mass = obj.mass
     center = np.ascontiguousarray(mass.center_of_mass, dtype=np.float64).reshape(3)
@@ -566,8 +571,10 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     points = np.ascontiguousarray(flat.points - np.repeat(shift, counts, axis=0))
     normals = np.ascontiguousarray(flat.normals)
     mu = np.ascontiguousarray(mu, dtype=np.float64)
+    # normalised as compute_phi_batch does, so that an unperturbed copy matches it bit for bit
+    use_normal = units_n3(use_normal, "use_normal")
     wrist_point = flat.poses[:, :3, 3]
-    wrist_axis = np.ascontiguousarray(flat.poses[:, :3, 2])
+    wrist_axis = units_n3(flat.poses[:, :3, 2], "wrist_axis")
     shifted_use = np.ascontiguousarray(use_point - shift)
     _code, eps, _vol, hold, impact, force, redo = contact_metrics_batch(
         points,
@@ -644,7 +651,7 @@ def _summarise(
     index = int(math.floor(settings.quantile * (k_count - 1)))
     for name in settings.tasks:
         with np.errstate(invalid="ignore"):
-            f = np.asarray(get_task(name).evaluate(cols), dtype=np.float64)
+            f = np.asarray(get_task(name).evaluate(cols, settings.mode), dtype=np.float64)
         f = np.where(np.isnan(f), -np.inf, f)
         ok = f > -np.inf
         out[f"robust_p_{name}"] = mean(ok)

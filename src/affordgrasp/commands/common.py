@@ -525,4 +525,5 @@ def robust_option(args):
     k = getattr(args, "robust", 0) or 0
     if k < 0:
         raise InputError(f"--robust must be an integer >= 0 (copies per grasp), got {k}")
-    return RobustSettings(copies=k) if k > 0 else None
+    mode = getattr(args, "mode", None) or "default"
+    return RobustSettings(copies=k, mode=mode) if k > 0 else None
