@@ -22,6 +22,7 @@ name                   what
 ``generate``           a sharded, resumable Parquet dataset
 ``read_dataset``       a dataset as an Arrow table
 ``best_grasps``        the argmax of a task over a dataset
+``RobustSettings``     perturbations of robust evaluation (``evaluate(..., robust=K)``)
 =====================  ===================================================================
 
 Names are imported on first use, so ``import affordgrasp`` stays fast. Units, frames and
@@ -58,6 +59,7 @@ _EXPORTS = {
     "generate": "affordgrasp.dataset.generate",
     "read_dataset": "affordgrasp.dataset.reading",
     "best_grasps": "affordgrasp.dataset.best",
+    "RobustSettings": "affordgrasp.robust",
 }
 
 if TYPE_CHECKING:
@@ -68,6 +70,7 @@ if TYPE_CHECKING:
     from .metrics.contacts import ContactSet
     from .objects.resolve import GraspObject, list_families, load_object
     from .pipeline import Evaluation, evaluate
+    from .robust import RobustSettings
     from .tasks import Task, get_task, list_tasks, load_task_file, register_task
 
 
@@ -89,6 +92,7 @@ __all__ = [
     "Evaluation",
     "GraspObject",
     "Hand",
+    "RobustSettings",
     "Task",
     "best_grasps",
     "evaluate",
