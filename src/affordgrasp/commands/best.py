@@ -159,6 +159,10 @@ def run(args, out) -> None:
 
     if args.out and not str(args.out).endswith(".parquet"):
         raise InputError(f"--out must name a .parquet file, got {args.out!r}")
+    if args.out:
+        from .common import check_output_file
+
+        check_output_file(args.out, "--out")
 
     robust = check_dataset_robust(args.directory, args.robust)
     result = best_grasps(

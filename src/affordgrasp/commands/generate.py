@@ -113,6 +113,9 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    from .common import check_output_dir
+
+    check_output_dir(args.out, "--out")
     robust = robust_option(args)
     cmd = command_line(args)
     objects = args.objects
