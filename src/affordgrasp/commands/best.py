@@ -117,20 +117,26 @@ def check_dataset_robust(directory, k: int) -> bool:
     Returns
     -------
     bool
-        True for K > 0 (the dataset holds robust columns of K copies).
+        True for K > 0 (the dataset holds robust columns of K copies; a folder of tables
+        without a manifest is not checked here, its rows are when ranked).
 
     Raises
     ------
     InputError
         For K < 0, or K > 0 on a dataset without robust columns or with another K.
     """
-    from ..dataset.layout import read_manifest
+    from pathlib import Path
+
+    from ..dataset.layout import MANIFEST_NAME, read_manifest
     from ..errors import InputError
 
     if k < 0:
         raise InputError(f"--robust must be an integer >= 0, got {k}")
     if k == 0:
         return False
+    manifest_path = Path(directory).expanduser() / MANIFEST_NAME
+    if not manifest_path.exists():
+        return True  # a folder of evaluated tables: its rows must carry the robust columns
     there = (read_manifest(directory).get("robust") or {}).get("copies", 0)
     if there != k:
         raise InputError(
