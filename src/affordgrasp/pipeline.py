@@ -104,7 +104,7 @@ class Evaluation:
 
 
 def phi_of_batch(
-    obj: GraspObject, batch: SimulationBatch, *, soft: bool = False, volume: bool = True
+    obj: GraspObject, batch: SimulationBatch, *, soft: bool = False, volume: bool = False
 ) -> dict:
     """Φ for every row of a simulation batch.
 
@@ -121,20 +121,22 @@ def phi_of_batch(
     soft : bool
         Soft-finger cones.
     volume : bool
-        Compute ``gws_volume`` (False: ε only, the same ε; the volume is NaN for
-        force-closure grasps). Searches that score with ε pass False: the 6-D hull of an
-        enveloping grasp is most of the metric cost.
+        Also compute ``gws_volume``, the 6-volume of the grasp wrench space (the full 6-D
+        hull of every force-closure grasp, most of the metric cost on enveloping grasps).
+        False (default): ε alone, the same ε from the exact best-first hull, and
+        ``gws_volume`` None (a null column). The paper's Φ has no volume and no task uses it.
 
     Returns
     -------
     dict of str to (n,) ndarray
-        Column name → float64 array (``epsilon_reason``: object array of str).
+        Column name → float64 array (``epsilon_reason``: object array of str;
+        ``gws_volume``: None when not computed).
     """
     no_use = batch.use_triangle < 0
     use_point = np.where(no_use[:, None], obj.mass.center_of_mass, batch.use_point)
     use_normal = np.where(no_use[:, None], [1.0, 0.0, 0.0], batch.use_normal)
     use_triangle = np.where(no_use, 0, batch.use_triangle)
-    phi = compute_phi_batch(
+    phi: dict = compute_phi_batch(
         obj.mass,
         obj.mesh_data,  # the mesh's arrays, normals and adjacency; no trimesh needed
         batch.contacts,
@@ -149,6 +151,8 @@ def phi_of_batch(
     if no_use.any():
         for name in USE_METRICS:
             phi[name] = np.where(no_use, np.nan, phi[name])
+    if not volume:
+        phi["gws_volume"] = None  # not computed: a null column, never a number
     return phi
 
 
@@ -162,7 +166,7 @@ def evaluate_inputs(
     sample_start: int = 0,
     soft: bool = False,
     metrics: bool = True,
-    volume: bool = True,
+    volume: bool = False,
     robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Simulate and score given inputs on one object.
@@ -186,8 +190,8 @@ def evaluate_inputs(
     metrics : bool
         Compute Φ (False: simulation columns only).
     volume : bool
-        Compute ``gws_volume`` (False: NaN for force-closure grasps, every other column
-        the same; see :func:`phi_of_batch`).
+        Also compute ``gws_volume`` (default False: the column is null, every other
+        column the same; see :func:`phi_of_batch`).
     robust : RobustSettings or int, optional
         Robust evaluation (:mod:`affordgrasp.robust`): K perturbed copies per grasp and the
         ``robust_*`` columns after the metric columns. An int is K with the default
@@ -231,7 +235,7 @@ def evaluate_samples(
     metrics: bool = True,
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
-    volume: bool = True,
+    volume: bool = False,
     robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Draw samples ``start .. start + samples - 1`` of the run ``seed`` and evaluate them.
@@ -303,6 +307,7 @@ def evaluate(
     metrics: bool = True,
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
+    volume: bool = False,
     robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Simulate grasps on an object and compute their metric vector Φ.
@@ -333,6 +338,10 @@ def evaluate(
         With ``samples``: evaluate at most this many at a time (same rows).
     progress : callable, optional
         With ``samples``: ``progress(k)`` after each batch of ``k`` grasps.
+    volume : bool
+        Also compute the GWS volume (column ``gws_volume``; default False: the column is
+        null). Not part of the paper's Φ and used by no built-in task; it costs the full
+        6-D hull of every force-closure grasp.
     robust : RobustSettings or int, optional
         K perturbed re-simulations per grasp and the ``robust_*`` columns
         (:mod:`affordgrasp.robust`); None or 0: plain evaluation.
@@ -364,6 +373,7 @@ def evaluate(
             sample_start=start,
             soft=soft,
             metrics=metrics,
+            volume=volume,
             robust=robust,
         )
     if samples is None:
@@ -378,5 +388,6 @@ def evaluate(
         metrics=metrics,
         batch_size=batch_size,
         progress=progress,
+        volume=volume,
         robust=robust,
     )

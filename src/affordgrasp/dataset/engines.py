@@ -151,6 +151,8 @@ class RunContext:
         The run's seed.
     metrics, soft, depth : bool
         Metric columns, soft-finger contacts, depth images.
+    volume : bool
+        Compute the GWS volume (``gws_volume``; null otherwise).
     key : str
         Identifies the run, so that a worker process rebuilds its objects once per run.
     """
@@ -163,6 +165,7 @@ class RunContext:
     metrics: bool = True
     soft: bool = False
     depth: bool = False
+    volume: bool = False
     robust: RobustSettings | None = None
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
@@ -242,6 +245,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             hand=ctx.hand,
             soft=ctx.soft,
             metrics=ctx.metrics,
+            volume=ctx.volume,
             robust=ctx.robust,
         ).table
     else:
@@ -254,6 +258,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             sample_start=job.start,
             soft=ctx.soft,
             metrics=ctx.metrics,
+            volume=ctx.volume,
             robust=ctx.robust,
         ).table
     if ctx.depth:

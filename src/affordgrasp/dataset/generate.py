@@ -138,6 +138,7 @@ def build_manifest(
     command: Sequence[str] | None,
     depth: bool = False,
     materials: bool = False,
+    volume: bool = False,
     robust: RobustSettings | None = None,
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``).
@@ -159,11 +160,15 @@ def build_manifest(
     materials : bool
         Whether the families' mass properties follow their per-part materials (recorded
         always: a resume must use the same mass properties).
+    command : sequence of str or None
+        The command line, recorded.
+    volume : bool
+        Whether the GWS volume is computed (``gws_volume``; null otherwise). Recorded
+        always (a resume must match); a manifest written before it was recorded computed
+        it whenever it computed metrics (:func:`~affordgrasp.dataset.layout.manifest_volume`).
     robust : RobustSettings, optional
         Robust evaluation's parameters (recorded under ``robust`` when K > 0; a resume
         must use the same).
-    command : sequence of str or None
-        The command line, recorded.
 
     Returns
     -------
@@ -179,6 +184,7 @@ def build_manifest(
         "hand": hand.name,
         "hand_spec": hand_to_dict(hand),
         "metrics": metrics,
+        "volume": bool(metrics and volume),
         "soft": soft,
         "materials": bool(materials),
         "objects": [
@@ -272,6 +278,7 @@ def generate(
     materials: bool = False,
     command: Sequence[str] | None = None,
     progress: ProgressFactory | None = None,
+    volume: bool = False,
     robust: RobustSettings | int | None = None,
 ) -> GenerationSummary:
     """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
@@ -312,6 +319,10 @@ def generate(
         The command line, recorded in the manifest and the card.
     progress : callable, optional
         ``progress(total_samples)`` returns a context manager yielding ``advance(n)``.
+    volume : bool
+        Also compute the GWS volume (column ``gws_volume``, null otherwise; recorded in the
+        manifest and the card). Not in the paper's Φ; it costs the full 6-D hull of every
+        force-closure grasp.
     robust : RobustSettings or int, optional
         K perturbed copies per grasp and the ``robust_*`` columns (:mod:`affordgrasp.robust`);
         None or 0: plain. Needs ``metrics``.
@@ -354,6 +365,7 @@ def generate(
         command=command,
         depth=depth,
         materials=materials or any(o.materials for o in resolved),
+        volume=volume,
         robust=robust,
     )
     manifest = prepare_directory(directory, manifest)
@@ -381,6 +393,7 @@ def generate(
         metrics=metrics,
         soft=soft,
         depth=depth,
+        volume=bool(metrics and volume),
         robust=robust,
     )
     started = time.perf_counter()
