@@ -433,10 +433,19 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
 
 
 def _outcome_type(name: str) -> pa.DataType:
-    if name in ("contacts", "hold_directions_ok", "steps"):
+    if name in (
+        "contacts",
+        "hold_directions_ok",
+        "steps",
+        "distal_at_limit",
+        "settled_contacts",
+        "settled_hold_dirs",
+    ):
         return pa.int64()
-    if name in ("hold_ok", "settled", "impact_ok", "press_held"):
+    if name in ("hold_ok", "settled", "impact_ok", "press_held", "ejected"):
         return pa.bool_()
+    if name in ("settled_points", "settled_normals", "settled_mu"):
+        return pa.list_(pa.float64())
     return pa.float64()
 
 
