@@ -7,7 +7,7 @@ import shlex
 import sys
 
 from ..errors import InputError, MissingDependencyError
-from ..physics.settings import PhysicsSettings
+from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
 
 
 def add_arguments(p) -> None:
@@ -27,6 +27,18 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--report", default=None, metavar="DIR", help="write the report and plots here")
     p.add_argument(
+        "--protocol",
+        choices=PROTOCOLS,
+        default="affordgrasp",
+        help="affordgrasp (default) or dgb (DexGraspBench-compatible); docs/physics.md lists "
+        "every constant of both",
+    )
+    p.add_argument(
+        "--no-backoff",
+        action="store_true",
+        help="start where the dataset row puts the hand, even inside the object's convex parts",
+    )
+    p.add_argument(
         "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
     )
     p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
@@ -37,29 +49,29 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--load-factor",
         type=float,
-        default=d.load_factor,
+        default=None,
         metavar="K",
-        help=f"hold test load, k·m·g (default {d.load_factor})",
+        help=f"hold test load, k·m·g (default {d.load_factor}, dgb 10)",
     )
     p.add_argument(
         "--density",
         type=float,
-        default=d.density,
+        default=None,
         help=f"object density, kg/m^3 (default {d.density:g})",
     )
     p.add_argument(
         "--grip-torque",
         type=float,
-        default=d.grip_torque,
+        default=None,
         help=f"finger joint torque, N·m (default {d.grip_torque})",
     )
     p.add_argument(
         "--grip-force",
         type=float,
-        default=d.grip_force,
+        default=None,
         help=f"jaw force, N (default {d.grip_force})",
     )
-    p.add_argument("--timestep", type=float, default=d.timestep, help=f"s (default {d.timestep})")
+    p.add_argument("--timestep", type=float, default=None, help=f"s (default {d.timestep})")
     p.add_argument("--gravity", action="store_true", help="gravity on (-z of the hand frame)")
     p.add_argument(
         "--backdrivable",
@@ -70,15 +82,18 @@ def add_arguments(p) -> None:
 
 
 def _settings(args) -> PhysicsSettings:
-    return PhysicsSettings(
-        load_factor=args.load_factor,
-        density=args.density,
-        grip_torque=args.grip_torque,
-        grip_force=args.grip_force,
-        timestep=args.timestep,
+    given = {
+        name: getattr(args, name)
+        for name in ("load_factor", "density", "grip_torque", "grip_force", "timestep")
+        if getattr(args, name) is not None
+    }
+    return protocol_settings(
+        args.protocol,
         gravity=args.gravity,
         backdrivable=args.backdrivable,
         seed=args.seed,
+        backoff=not args.no_backoff,
+        **given,
     )
 
 
