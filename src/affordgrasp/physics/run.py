@@ -123,8 +123,12 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
             f"dataset {str(dataset_dir)!r} was generated with --no-metrics; the physics "
             "report compares metrics with outcomes: generate it with metrics"
         )
+    from ..dataset.reading import open_dataset
+
     chosen = select_objects(dataset_dir, objects)
-    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS]
+    # Robust metrics (``robust_*``) travel to the report when the dataset has them.
+    robust = [c for c in open_dataset(dataset_dir).schema.names if c.startswith("robust_")]
+    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS, *robust]
     table = read_dataset(dataset_dir, columns=columns, objects=chosen)
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
     keep = np.isin(status, list(statuses))
@@ -429,7 +433,7 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     for name in outcomes[0] if outcomes else ():
         values = [o[name] for o in outcomes]
         table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
-    return table
+    return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 
 def _outcome_type(name: str) -> pa.DataType:
