@@ -97,6 +97,11 @@ def _settings(args) -> PhysicsSettings:
     )
 
 
+def _interval(v) -> str:
+    auc, lo, hi = v
+    return "—" if math.isnan(auc) else f"{auc:.3f} [{lo:.3f}–{hi:.3f}]"
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp physics``.
 
@@ -171,6 +176,22 @@ def run(args, out) -> None:
             ["predictor", "outcome", "statistic", "value"],
             headline,
         )
+        h = report["headline"]
+        groups = [("all", h["all"]), ("force closure", h["force_closure"])]
+        groups += [("settled", h["settled"])]
+        out.table(
+            "ROC-AUC for hold_ok [95 % bootstrap interval]",
+            ["predictor", *(f"{g} (n={v['n']})" for g, v in groups)],
+            [[p, *(_interval(v["auc"][p]) for _, v in groups)] for p in h["predictors"]],
+        )
+        if "start" in report:
+            st = report["start"]
+            out.text(
+                f"start: {100 * st['start_under_0.5mm']:.1f} % of rows below 0.5 mm of "
+                f"penetration ({100 * st['initial_over_0.5mm']:.1f} % at 0.5 mm or more as "
+                f"placed); the squeeze ejected {100 * st['force_closure']['ejected_rate']:.1f} % "
+                "of the force-closure grasps"
+            )
         out.text(f"report: {args.report}/report.md and PNG plots")
         doc["report"] = report
     out.result(doc)

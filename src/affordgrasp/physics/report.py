@@ -206,6 +206,7 @@ def physics_report(
             f: _headline(preds, outs, families == f, n_boot, seed) for f in sorted(set(families))
         },
         "force_closure": _headline(preds, outs, fc, n_boot, seed),
+        "settled": _headline(preds, outs, settled, n_boot, seed),
         "force_closure_families": {
             f: _headline(preds, outs, fc & (families == f), n_boot, seed)
             for f in sorted(set(families))
@@ -331,6 +332,7 @@ def _headline_markdown(h: dict) -> list[str]:
     for title, overall, fams in (
         ("all grasps", h["all"], h["families"]),
         ("force-closure grasps (ε > 0)", h["force_closure"], h["force_closure_families"]),
+        ("grasps that settled after the squeeze", h["settled"], {}),
     ):
         groups = [("all", overall)] + list(fams.items())
         lines += [
