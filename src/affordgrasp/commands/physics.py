@@ -79,6 +79,18 @@ def add_arguments(p) -> None:
         help="fingers the load can push open (default: non-backdrivable drives)",
     )
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
+    p.add_argument(
+        "--coacd-threshold",
+        type=float,
+        default=d.coacd_threshold,
+        help=f"concavity threshold of the convex decomposition (default {d.coacd_threshold})",
+    )
+    p.add_argument(
+        "--coacd-max-hulls",
+        type=int,
+        default=d.coacd_max_hulls,
+        help=f"most convex parts per object (default {d.coacd_max_hulls})",
+    )
 
 
 def _settings(args) -> PhysicsSettings:
@@ -93,6 +105,8 @@ def _settings(args) -> PhysicsSettings:
         backdrivable=args.backdrivable,
         seed=args.seed,
         backoff=not args.no_backoff,
+        coacd_threshold=args.coacd_threshold,
+        coacd_max_hulls=args.coacd_max_hulls,
         **given,
     )
 
