@@ -37,7 +37,7 @@ log = logging.getLogger(__name__)
 __all__ = ["REPORTED_METRICS", "PhysicsSummary", "read_outcomes", "run_physics"]
 
 FORMAT = "affordgrasp-physics"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: start, settled and protocol columns
 MANIFEST = "_physics.json"
 DEFAULT_SHARD_SIZE = 128
 
