@@ -17,7 +17,16 @@ from . import deps
 from .scene import FAR, Scene
 from .settings import G
 
-__all__ = ["HOLD_DIRECTIONS", "GraspOutcome", "set_grasp", "validate_grasp"]
+__all__ = [
+    "HOLD_DIRECTIONS",
+    "GraspOutcome",
+    "StartState",
+    "back_off",
+    "penetration_depth",
+    "set_grasp",
+    "settled_contacts",
+    "validate_grasp",
+]
 
 HOLD_DIRECTIONS = ("px", "nx", "py", "ny", "pz", "nz")
 _AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
