@@ -83,6 +83,7 @@ def _synthetic_outcomes(n=60, seed=0):
 
 def test_report_headline_start_tables_and_plots(tmp_path):
     import matplotlib
+    import pyarrow as pa
 
     from affordgrasp.columns import HOLD_EFFORT_COLUMNS
     from affordgrasp.physics.report import physics_report
@@ -104,6 +105,12 @@ def test_report_headline_start_tables_and_plots(tmp_path):
     assert sum(b["n"] for b in start["by_initial_penetration"]) == table.num_rows
     assert sum(b["n"] for b in start["by_distal_at_limit"]) == table.num_rows
     assert start["start_under_0.5mm"] == 1.0
+    other = table.set_column(
+        table.schema.get_field_index("protocol"), "protocol", pa.array(["affordgrasp"] * 60)
+    )
+    both = physics_report(table, n_boot=20, compare=[other])
+    assert list(both["by_run"]) == ["dgb", "affordgrasp"]
+    assert both["by_run"]["dgb"]["n"] == table.num_rows
     for name in ("report.md", "roc_hold_headline.png", "report.json"):
         assert (tmp_path / name).is_file()
     assert "bootstrap 95 % interval" in (tmp_path / "report.md").read_text()

@@ -27,6 +27,14 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--report", default=None, metavar="DIR", help="write the report and plots here")
     p.add_argument(
+        "--compare",
+        action="append",
+        default=None,
+        metavar="OUT",
+        help="with --report: the headline AUCs of another physics run (e.g. the other "
+        "protocol) beside this run's (repeatable)",
+    )
+    p.add_argument(
         "--protocol",
         choices=PROTOCOLS,
         default="affordgrasp",
@@ -176,7 +184,8 @@ def run(args, out) -> None:
     )
     doc = {"summary": summary.to_dict(), "settings": settings.to_dict()}
     if args.report:
-        report = physics_report(read_outcomes(args.out), args.report)
+        others = [read_outcomes(o) for o in args.compare or ()]
+        report = physics_report(read_outcomes(args.out), args.report, compare=others)
         headline = []
         for pred, outcome in DESIGNED_FOR.items():
             g = report["all"]

@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -162,6 +163,7 @@ def physics_report(
     *,
     n_boot: int = 1000,
     seed: int = 0,
+    compare: Sequence[pa.Table] = (),
 ) -> dict:
     """AUC and Spearman of every predictor against every outcome, overall and per family.
 
@@ -175,6 +177,9 @@ def physics_report(
         Bootstrap resamples of the headline intervals.
     seed : int
         Seed of the bootstrap (same seed, same report).
+    compare : sequence of pyarrow.Table
+        Outcomes of other runs (e.g. the other protocol): their headline over all rows is
+        reported beside this run's (``report["by_run"]``); the other tables are this run's.
 
     Returns
     -------
@@ -197,6 +202,17 @@ def physics_report(
     names = set(outcomes.column_names)
     if "protocol" in names:
         report["protocol"] = sorted(set(outcomes.column("protocol").to_pylist()))
+    if compare:
+        runs = {}
+        for k, table in enumerate([outcomes, *compare]):
+            name = f"run {k}"
+            if "protocol" in table.column_names:
+                name = "+".join(sorted(set(table.column("protocol").to_pylist()))) or name
+            every = np.ones(table.num_rows, dtype=bool)
+            runs[name if name not in runs else f"{name} ({k})"] = _headline(
+                _predictors(table), _outcomes(table), every, n_boot, seed
+            )
+        report["by_run"] = runs
     fc = preds["epsilon"] > 0
     report["headline"] = {
         "outcome": "hold_ok",
@@ -311,6 +327,8 @@ def report_markdown(report: dict) -> str:
     lines = ["# Physics validation report", ""]
     if "protocol" in report:
         lines += [f"Protocol: {', '.join(report['protocol'])} (docs/physics.md).", ""]
+    if "by_run" in report:
+        lines += _runs_markdown(report["by_run"], report["headline"]["predictors"])
     if "headline" in report:
         lines += _headline_markdown(report["headline"])
     if "start" in report:
@@ -347,6 +365,21 @@ def _headline_markdown(h: dict) -> list[str]:
         lines.append("")
     lines += ["Predictors: " + "; ".join(f"`{k}` {v}" for k, v in h["predictors"].items()), ""]
     return lines
+
+
+def _runs_markdown(by: dict, predictors: dict) -> list[str]:
+    groups = list(by.items())
+    lines = [
+        "## ROC-AUC for `hold_ok` per run [bootstrap 95 % interval]",
+        "",
+        "| predictor | " + " | ".join(f"{p} (n={v['n']})" for p, v in groups) + " |",
+        "|---" * (1 + len(groups)) + "|",
+        "| hold rate | " + " | ".join(_f(v["hold_rate"]) for _, v in groups) + " |",
+    ]
+    for p in predictors:
+        cells = [_ci(v["auc"][p]) if p in v["auc"] else "—" for _, v in groups]
+        lines.append(f"| {p} | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def _start_markdown(st: dict) -> list[str]:
