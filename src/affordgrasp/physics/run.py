@@ -507,7 +507,13 @@ def read_outcomes(out: str | os.PathLike) -> pa.Table:
     paths = sorted(out.glob("part-*.parquet"))
     if not paths:
         raise DatasetError(f"physics run {str(out)!r} has no shards yet; run it again")
-    return pa.concat_tables([pq.read_table(p) for p in paths], promote_options="default")
+    table = pa.concat_tables([pq.read_table(p) for p in paths], promote_options="default")
+    if "protocol" not in table.column_names:
+        # Shards written before the column existed: the run's manifest names the protocol.
+        settings = json.loads((out / MANIFEST).read_text()).get("settings", {})
+        name = settings.get("protocol", "affordgrasp")
+        table = table.append_column("protocol", pa.array([name] * table.num_rows, pa.string()))
+    return table
 
 
 def _hold_counts(out: Path, n_shards: int) -> dict:
