@@ -97,7 +97,8 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
         preds["neg_settled_hold_effort_sum"] = -col("settled_hold_effort_sum")
         preds["settled_hold_dirs"] = col("settled_hold_dirs")
     for name in sorted(names):
-        if name.startswith("robust_") and pa.types.is_floating(table.schema.field(name).type):
+        kind = table.schema.field(name).type
+        if name.startswith("robust_") and (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
             preds[name] = col(name)
     columns = {name: col(name) for name in table.column_names if _is_metric(table, name)}
     for task in list_tasks():
