@@ -14,8 +14,10 @@
 * The object collides as its convex parts (:mod:`.decompose`); its mass, centre of mass and
   inertia are those of the ORIGINAL mesh at ``settings.density``.
 * Friction: every hand geom carries μ(link material, object material) from the material
-  table, object geoms μ = 0; MuJoCo takes the larger of a pair, so each contact gets the
-  table's μ. Contacts are point contacts with friction (condim 3), as the metrics assume.
+  table (or ``settings.friction`` when set), object geoms μ = 0; MuJoCo takes the larger
+  of a pair, so each contact gets that μ. Contacts are point contacts with friction
+  (condim 3), as the metrics assume, unless ``settings.condim`` says otherwise (the
+  DexGraspBench protocol: 4, with torsional friction).
 * Two tools for the use tests, off stage during the hold test: a fixed anvil (mocap body)
   and a plate on a slide joint pushed by a force actuator; both are frictionless 10 mm
   cubes (a local obstacle at the use point that pushes only along its normal).
