@@ -114,3 +114,16 @@ def test_report_headline_start_tables_and_plots(tmp_path):
     for name in ("report.md", "roc_hold_headline.png", "report.json"):
         assert (tmp_path / name).is_file()
     assert "bootstrap 95 % interval" in (tmp_path / "report.md").read_text()
+
+
+def test_outcomes_without_a_protocol_column_take_the_runs(tmp_path):
+    import json
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from affordgrasp.physics.run import MANIFEST, read_outcomes, shard_path
+
+    (tmp_path / MANIFEST).write_text(json.dumps({"settings": {"protocol": "dgb"}}))
+    pq.write_table(pa.table({"object": ["mug:0", "mug:0"]}), shard_path(tmp_path, 0))
+    assert read_outcomes(tmp_path).column("protocol").to_pylist() == ["dgb", "dgb"]
