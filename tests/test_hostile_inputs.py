@@ -8,6 +8,12 @@ Every case must end in one of two ways, and the corpus says which:
 
 Never exit 1 (an internal error) and never a traceback. The counts per category are printed
 with ``pytest -s`` (and reported in the release notes).
+
+``COMMAND_CASES`` (at the end) covers the other commands: outputs that cannot be written,
+physics settings outside their physical ranges, unknown metrics in a tasks file, a sample
+count whose table cannot fit, foreign and non-finite model files. Interrupts, orphaned
+workers and large meshes have their own tests (``test_interrupts.py``,
+``dataset/test_signals.py``, ``objects/test_simplify.py``, ``grasp/test_surface.py``).
 """
 
 from __future__ import annotations
@@ -416,3 +422,173 @@ def test_corpus_size_and_report():
         assert OUTCOMES == expected
         report = ", ".join(f"{cat} {n} {how}" for (cat, how), n in sorted(OUTCOMES.items()))
         print(f"\nhostile inputs: {len(CASES)} cases; {report}")
+
+
+# ---------------------------------------------------------------------------- commands
+# Beyond mesh files: outputs that cannot be written, settings outside physical ranges,
+# task files naming unknown metrics, sample counts whose table cannot fit, foreign model
+# files. Each is refused before any work, with exit 2 and one line naming the problem.
+
+
+def _tasks_file(folder: Path) -> str:
+    path = folder / "tasks.toml"
+    path.write_text('[tasks.bogus]\nvalue = "epsilon * nosuchmetric"\n')
+    return str(path)
+
+
+def _foreign_model(folder: Path) -> str:
+    pytest.importorskip("torch")
+    from affordgrasp.learning.io import save_model
+    from affordgrasp.learning.models import build_model
+    from affordgrasp.learning.targets import make_target
+    from affordgrasp.learning.training import default_config
+
+    config = default_config("cnn", make_target("viable"), width=8)
+    wide = build_model(default_config("cnn", make_target("viable"), width=16))
+    path = folder / "foreign.safetensors"
+    save_model(path, wide, config)  # weights of a wider network under this config
+    return str(path)
+
+
+def _nan_model(folder: Path) -> str:
+    torch = pytest.importorskip("torch")
+    from affordgrasp.learning.io import save_model
+    from affordgrasp.learning.models import build_model
+    from affordgrasp.learning.targets import make_target
+    from affordgrasp.learning.training import default_config
+
+    config = default_config("pose", make_target("viable"))
+    model = build_model(config)
+    with torch.no_grad():
+        for p in model.parameters():
+            p.fill_(float("nan"))
+    path = folder / "nan.safetensors"
+    save_model(path, model, config)
+    return str(path)
+
+
+COMMAND_CASES = [
+    # (id, argv builder (folder) -> argv, fragment of the one-line message)
+    (
+        "depth -o under a missing folder",
+        lambda d: ["depth", "knife", "--sample", "1", "-o", "missing/dir/d.png"],
+        "does not exist",
+    ),
+    (
+        "objects export -o in /proc",
+        lambda d: ["objects", "export", "knife", "-o", "/proc/k.obj"],
+        "takes no new files",
+    ),
+    (
+        "objects export -o a folder",
+        lambda d: ["objects", "export", "knife", "-o", "."],
+        "is a directory",
+    ),
+    (
+        "evaluate --out under a missing folder",
+        lambda d: ["evaluate", "knife", "--samples", "2", "--out", "no/x.parquet"],
+        "does not exist",
+    ),
+    (
+        "simulate --out in /proc",
+        lambda d: ["simulate", "knife", "--samples", "2", "--out", "/proc/x.parquet"],
+        "takes no new files",
+    ),
+    (
+        "generate --out a file",
+        lambda d: ["generate", "knife", "--samples", "2", "--out", _tasks_file(d)],
+        "is a file, not a directory",
+    ),
+    (
+        "generate --out in /proc",
+        lambda d: ["generate", "knife", "--samples", "2", "--out", "/proc/ds"],
+        "takes no new files",
+    ),
+    (
+        "show -o in /proc",
+        lambda d: ["show", "knife", "--task", "cut", "-o", "/proc/show"],
+        "takes no new files",
+    ),
+    ("plots -o in /proc", lambda d: ["plots", "knife", "-o", "/proc/plots"], "takes no new files"),
+    (
+        "best --out under a missing folder",
+        lambda d: ["best", "nodata", "--task", "cut", "--out", "no/b.parquet"],
+        "does not exist",
+    ),
+    (
+        "train -o under a missing folder",
+        lambda d: ["train", "nodata", "-o", "no/m.safetensors"],
+        "does not exist",
+    ),
+    (
+        "predict --out in /proc",
+        lambda d: ["predict", "default", "nodata", "--out", "/proc/p.parquet"],
+        "takes no new files",
+    ),
+    (
+        "physics --out in /proc",
+        lambda d: ["physics", "nodata", "--out", "/proc/ph"],
+        "takes no new files",
+    ),
+    (
+        "physics --timestep 10",
+        lambda d: ["physics", "nodata", "--out", "ph", "--timestep", "10"],
+        "timestep = 10.0 s is outside",
+    ),
+    (
+        "physics --timestep too coarse",
+        lambda d: ["physics", "nodata", "--out", "ph", "--timestep", "0.005"],
+        "too coarse",
+    ),
+    (
+        "physics --load-factor 1e6",
+        lambda d: ["physics", "nodata", "--out", "ph", "--load-factor", "1e6"],
+        "load_factor",
+    ),
+    (
+        "physics --density 1e9",
+        lambda d: ["physics", "nodata", "--out", "ph", "--density", "1e9"],
+        "density",
+    ),
+    (
+        "unknown metric in a tasks file",
+        lambda d: ["evaluate", "knife", "--samples", "2", "--tasks-file", _tasks_file(d)],
+        "unknown metric 'nosuchmetric'",
+    ),
+    (
+        "evaluate --samples 1e9",
+        lambda d: ["evaluate", "knife", "--samples", "1000000000"],
+        "GB of rows in memory",
+    ),
+    (
+        "predict with a foreign model",
+        lambda d: ["predict", _foreign_model(d), "nodata", "--out", "p.parquet"],
+        "but its config",
+    ),
+    (
+        "predict with NaN weights",
+        lambda d: ["predict", _nan_model(d), "nodata", "--out", "p.parquet"],
+        "non-finite values",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "build, fragment", [c[1:] for c in COMMAND_CASES], ids=[c[0] for c in COMMAND_CASES]
+)
+def test_hostile_command(build, fragment, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = build(tmp_path)
+    code, out, err = _run(argv, capsys)
+    assert "Traceback" not in err and "internal error" not in err, err
+    assert code == 2, f"exit {code}: {err}"
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"affordgrasp {argv[0]}: error: "), lines[0]
+    assert fragment in lines[0], lines[0]
+    # Refused before any work: nothing was written where the command was run.
+    assert {p.name for p in tmp_path.iterdir()} <= {
+        "tasks.toml",
+        "foreign.safetensors",
+        "nan.safetensors",
+    }

@@ -15,6 +15,7 @@ import sys
 
 from . import __version__
 from .errors import InputError, cli_message
+from .interrupts import interrupt_in, stop_on_signals
 
 COMMANDS = {
     "objects": "list the built-in object families, or export one as a mesh",
@@ -113,16 +114,17 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out = Output(json_mode=args.json)
     try:
-        args._module.run(args, out)
+        with stop_on_signals():
+            args._module.run(args, out)
     except InputError as exc:
         print(f"affordgrasp {args.command}: error: {cli_message(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt as exc:
-        signum = getattr(exc, "signum", None)
-        how = f" ({exc})" if signum else ""
-        print(f"affordgrasp {args.command}: interrupted{how}", file=sys.stderr)
-        return 128 + signum if signum else 130
-    except Exception as exc:  # noqa: BLE001 - the CLI's last line of defence
+    except BaseException as exc:  # noqa: BLE001 - the CLI's last line of defence
+        stop = interrupt_in(exc)
+        if stop is not None:
+            return _interrupted(args.command, stop)
+        if not isinstance(exc, Exception):
+            raise
         logging.getLogger("affordgrasp").debug("internal failure", exc_info=True)
         print(
             f"affordgrasp {args.command}: internal error: {type(exc).__name__}: {exc} "
@@ -135,6 +137,14 @@ def main(argv: list[str] | None = None) -> int:
     if argv is None:
         _about_to_exit()
     return 0
+
+
+def _interrupted(command: str, exc: KeyboardInterrupt) -> int:
+    """Say that ``command`` was stopped; the exit status for Ctrl-C (130) or the signal."""
+    signum = getattr(exc, "signum", None)
+    how = f" ({exc})" if signum else ""
+    print(f"affordgrasp {command}: interrupted{how}", file=sys.stderr)
+    return 128 + signum if signum else 130
 
 
 def _about_to_exit() -> None:

@@ -113,6 +113,57 @@ def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum
     assert read_dataset(out)["sample"].to_pylist() == list(range(512))
 
 
+def test_workers_end_when_generate_is_killed(tmp_path, box_mesh):
+    """kill -9 of generate: its workers (parent-death signal, or watchdog) end within 5 s."""
+    out = tmp_path / "ds"
+    args = ["generate", str(box_mesh), "--samples", "4096", "--out", str(out)]
+    args += ["--seed", str(SEED), "--shard-size", "8", "--chunk-size", "8", "--workers", "2"]
+    proc = _start(args)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        if len([p for p in _children(proc.pid) if _alive(p)]) >= 2 and out.exists():
+            if shard_paths(out):
+                break
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.02)
+    else:
+        pytest.fail("the workers did not start in time")
+    workers = [p for p in _children(proc.pid) if _alive(p)]
+    proc.kill()  # SIGKILL: no handler runs in the parent
+    proc.communicate(timeout=30)
+    killed = time.monotonic()
+    while any(_alive(p) for p in workers) and time.monotonic() < killed + 5:
+        time.sleep(0.05)
+    left = [p for p in workers if _alive(p)]
+    for pid in left:  # do not leave them to the next test
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"{len(left)} of {len(workers)} workers outlived their parent by 5 s"
+
+
+def test_die_with_parent_arms_the_parent_death_signal():
+    """In a child process: the kernel's parent-death signal is set to SIGKILL."""
+    code = (
+        "import ctypes, os, signal\n"
+        "from affordgrasp.worker_lifetime import die_with_parent\n"
+        "assert die_with_parent(os.getppid())\n"
+        "libc = ctypes.CDLL(None)\n"
+        "sig = ctypes.c_int()\n"
+        "assert libc.prctl(2, ctypes.byref(sig), 0, 0, 0) == 0\n"  # PR_GET_PDEATHSIG
+        "print(sig.value)\n"
+    )
+    if not sys.platform.startswith("linux"):
+        pytest.skip("PR_SET_PDEATHSIG is Linux only (the watchdog covers other systems)")
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(SRC)},
+        timeout=60,
+    )
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout) == signal.SIGKILL
+
+
 @pytest.fixture
 def silent_server():
     """A TCP port that accepts connections and never says a word (not a Ray cluster)."""

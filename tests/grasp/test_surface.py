@@ -50,3 +50,23 @@ def test_a_kilometre_cube_runs_through_the_whole_pipeline():
     obj = GraspObject("cube", "mesh", mesh, mass_properties(mesh), mesh_hash(mesh), "test")
     table = evaluate_samples(obj, 4, seed=0).table
     assert table.num_rows == 4
+
+
+@pytest.mark.parametrize("max_points", [3000, 1000], ids=["cap above the vertices", "below"])
+def test_spacing_stays_finite_when_the_mesh_alone_fills_the_cap(max_points, caplog):
+    """More triangles than the cap allows samples: the spacing stops at the longest side.
+
+    It used to be raised by 1.25x up to 400 times (8e38 mm) or set to inf.
+    """
+    mesh = trimesh.creation.icosphere(subdivisions=4, radius=0.05)  # 2562 vertices
+    longest = float(mesh.edges_unique_length.max())
+    with caplog.at_level(logging.WARNING):
+        sample = sample_surface(mesh, max_points=max_points)
+    assert np.isfinite(sample.spacing)
+    assert DEFAULT_SPACING < sample.spacing <= longest * (1 + 1e-12)
+    assert "inf mm" not in caplog.text and "e+" not in caplog.text
+    # Every vertex is kept, and at the longest side nothing is added inside the triangles.
+    assert len(sample.points) >= len(mesh.vertices)
+    if max_points < len(mesh.vertices):
+        assert sample.spacing == pytest.approx(longest)
+        assert len(sample.points) == len(mesh.vertices)

@@ -114,6 +114,10 @@ def run(args, out) -> None:
 
     if args.out and not str(args.out).endswith(".parquet"):
         raise InputError(f"--out must name a .parquet file, got {args.out!r}")
+    if args.out:
+        from .common import check_output_file
+
+        check_output_file(args.out, "--out")
 
     result = best_grasps(
         args.directory,

@@ -164,6 +164,61 @@ def check_counts(args) -> None:
         raise InputError(f"--seed must be an integer in [0, 2**63 - 1], got {args.seed}")
     if getattr(args, "batch", 1) <= 0:
         raise InputError(f"--batch must be a positive integer, got {args.batch}")
+    check_table_fits(args.samples)
+
+
+# Bytes of memory per evaluated sample while a command holds its table: ~0.9 kB per row
+# with the metric columns (measured, pyarrow), twice while the batches are assembled.
+ROW_BYTES = 2 * 1024
+
+
+def available_memory() -> int | None:
+    """Memory available to new allocations (Linux ``MemAvailable``).
+
+    Returns
+    -------
+    int or None
+        Bytes; None where the system does not say.
+    """
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def check_table_fits(samples: int) -> None:
+    """Refuse a sample count whose in-memory table would not fit, before any work.
+
+    ``evaluate``, ``simulate`` and the object sources of ``show``/``plots`` hold every row
+    in memory (they summarise and write it at the end); ``generate`` streams shards to disk
+    and is the command for runs of any size. Refusing is chosen over streaming here: the
+    summary tables and ``--out`` need the whole table, and a dataset already does the rest.
+
+    Parameters
+    ----------
+    samples : int
+
+    Raises
+    ------
+    InputError
+        When ``samples`` × ``ROW_BYTES`` exceeds half the available memory; the message
+        gives both numbers and the largest count that fits.
+    """
+    available = available_memory()
+    if available is None:
+        return
+    budget = available // 2
+    need = int(samples) * ROW_BYTES
+    if need > budget:
+        raise InputError(
+            f"--samples {samples} would hold about {need / 1e9:.3g} GB of rows in memory, more "
+            f"than half of the {available / 1e9:.3g} GB available; use at most "
+            f"{budget // ROW_BYTES} here, or 'affordgrasp generate' (streams to disk)"
+        )
 
 
 def check_output_file(path: str, option: str) -> None:
@@ -179,21 +234,32 @@ def check_output_file(path: str, option: str) -> None:
     Raises
     ------
     InputError
-        When ``path`` is a directory, or its folder is missing or not writable.
+        When ``path`` is a directory, or its folder is missing or not writable
+        (:func:`affordgrasp.writing.check_output_path`).
     """
-    import os
+    from ..writing import check_output_path
 
-    if os.path.isdir(path):
-        raise InputError(
-            f"{option} {path!r} is a directory; give a file name, e.g. {path}/x.parquet"
-        )
-    parent = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(parent):
-        raise InputError(
-            f"{option} {path!r}: the folder {parent!r} does not exist; create it first"
-        )
-    if not os.access(parent, os.W_OK):
-        raise InputError(f"{option} {path!r}: the folder {parent!r} is not writable")
+    check_output_path(path, option, kind="file")
+
+
+def check_output_dir(path: str, option: str) -> None:
+    """Refuse an output directory that cannot be created or written, before any work.
+
+    Parameters
+    ----------
+    path : str
+        The directory (created, with its parents, when missing).
+    option : str
+        The option that named it (``--out``, ``--report``), for the message.
+
+    Raises
+    ------
+    InputError
+        When ``path`` is a file, or it (or its nearest existing folder) is not writable.
+    """
+    from ..writing import check_output_path
+
+    check_output_path(path, option, kind="dir", create_parents=True)
 
 
 def run_batches(args, out, obj, metrics: bool):
@@ -318,19 +384,15 @@ def write_table(table, path: str | None, out) -> None:
     """
     if not path:
         return
-    import os
 
     import pyarrow.parquet as pq
 
-    tmp = f"{path}.partial"
+    from ..writing import atomic_write
+
     try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
+        atomic_write(path, lambda fh: pq.write_table(table, fh), fsync=False)
     except OSError as exc:
         raise InputError(f"cannot write {path!r}: {exc.strerror or exc}") from exc
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     out.text(f"wrote {table.num_rows} rows to {path}")
 
 

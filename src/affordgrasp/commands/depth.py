@@ -85,6 +85,10 @@ def run(args, out) -> None:
 
     if args.out is not None and not args.out.endswith((".png", ".npy")):
         raise InputError(f"--out {args.out!r} must end in .png or .npy")
+    if args.out is not None:
+        from .common import check_output_file
+
+        check_output_file(args.out, "--out")
     if args.scale < 1:
         raise InputError(f"--scale must be >= 1, got {args.scale}")
     if args.p0 is not None:

@@ -103,6 +103,9 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    from .common import check_output_dir
+
+    check_output_dir(args.out, "--out")
     cmd = command_line(args)
     objects = args.objects
     if any(v is not None for v in scale_options(args).values()) or args.materials:

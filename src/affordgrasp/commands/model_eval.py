@@ -57,6 +57,10 @@ def run(args, out) -> None:
         raise InputError(f"--max-rows must be >= 2, got {args.max_rows}")
     if args.model == "default":
         raise InputError("model-eval takes one model: 'classifier', 'regressor' or a file")
+    if args.plots:
+        from .common import check_output_dir
+
+        check_output_dir(args.plots, "--plots")
     objects = args.objects if args.objects in ("test", "all") else args.objects.split(",")
     ((model, config),) = load_models(args.model)
     rep, samples, scores = evaluate_on_dataset(

@@ -51,13 +51,14 @@ def run(args, out) -> None:
             if ":" in spec:
                 raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
             spec = f"{spec}:{args.seed}"
-        (obj,) = load_objects([spec], args)
+        from .common import check_output_file
+
+        check_output_file(args.out, "-o")
         path = Path(args.out)
         ext = path.suffix.lower().lstrip(".")
         if ext not in ("obj", "stl", "ply", "glb", "off"):
             raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
-        if not path.parent.is_dir():
-            raise InputError(f"-o {str(path)!r}: the folder {str(path.parent)!r} does not exist")
+        (obj,) = load_objects([spec], args)
         from ..dataset.layout import write_bytes_atomic
 
         data = obj.mesh.export(file_type=ext)

@@ -137,8 +137,12 @@ def run(args, out) -> None:
     from ..physics import deps
     from ..physics.report import DESIGNED_FOR, physics_report
     from ..physics.run import read_outcomes, run_physics
+    from .common import check_output_dir
 
     settings = _settings(args)
+    check_output_dir(args.out, "--out")
+    if args.report:
+        check_output_dir(args.report, "--report")
     try:
         deps.mujoco()
         deps.coacd()

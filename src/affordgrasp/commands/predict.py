@@ -72,8 +72,8 @@ def run(args, out) -> None:
     if not args.out.endswith(".parquet"):
         raise InputError(f"--out {args.out!r} must end in .parquet")
     check_output_file(args.out, "--out")
+    models = load_models(args.model)  # a foreign or broken model file: refused first
     read_manifest(args.dataset)
-    models = load_models(args.model)
     with out.progress("predicting", _rows(args.dataset, args.object)) as advance:
         table = predict_dataset(models, args.dataset, objects=args.object, progress=advance)
     table = table.replace_schema_metadata(

@@ -85,6 +85,8 @@ def object_description(obj) -> dict:
         "inertia_kg_m2": np.asarray(m.inertia, dtype=float).tolist(),
         "r_max_m": float(m.r_max),
         "bounds_m": np.asarray(m.bounds, dtype=float).tolist(),
+        # repairs and simplification (with its measured distance) of a mesh file
+        "load_warnings": list(getattr(obj, "load_warnings", ())),
     }
 
 
@@ -326,6 +328,10 @@ def card_markdown(card: dict) -> str:
             f"| {o['name']} | {o['category']} | {o['mass_kg']:.4g} | {o['volume_m3']:.4g} | "
             f"{o['r_max_m']:.4g} | `{o['mesh_hash'][:16]}…` |"
         )
+    notes = [(o["name"], w) for o in card["objects"] for w in o.get("load_warnings", ())]
+    if notes:
+        lines += ["", "Loading the mesh files:", ""]
+        lines += [f"* {name}: {warning}" for name, warning in notes]
     hand = card["hand"]
     lines += [
         "",

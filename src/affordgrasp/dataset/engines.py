@@ -26,8 +26,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyarrow as pa
 
-from ..errors import InputError, InternalError, Interrupted, bad_parameter, require
+from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
+from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
+from ..worker_lifetime import die_with_parent
 
 log = logging.getLogger(__name__)
 
@@ -257,45 +259,15 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
     return table
 
 
-def _worker_init(context: RunContext) -> None:
+def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
     # Ctrl-C and a terminal's hangup reach the whole process group; only the parent decides
     # what to do about them (it stops the workers). SIGTERM keeps its default: it is how
-    # the parent stops a worker.
+    # the parent stops a worker. A parent killed outright (SIGKILL) takes its workers along.
+    if parent_pid is not None:
+        die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
     _install_context(context)
-
-
-STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
-
-
-@contextlib.contextmanager
-def stop_on_signals(signals=STOP_SIGNALS):
-    """Within this block, SIGTERM and SIGHUP stop the run as Ctrl-C does (a context manager).
-
-    The handler raises :class:`~affordgrasp.errors.Interrupted` (a KeyboardInterrupt) in
-    the main thread, so the engine's ``close(cancel=True)`` stops the worker processes and
-    the finished work is kept. Outside the main thread it does nothing (Python delivers
-    signals to the main thread only).
-
-    Parameters
-    ----------
-    signals : tuple of signal.Signals
-        The signals handled; the previous handlers come back on exit.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum, frame):
-        raise Interrupted(signum)
-
-    previous = {s: signal.signal(s, handler) for s in signals}
-    try:
-        yield
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
 
 
 def default_workers() -> int:
@@ -433,7 +405,7 @@ class LocalEngine(Engine):
             max_workers=workers,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_worker_init,
-            initargs=(context,),
+            initargs=(context, os.getpid()),
         )
 
     def submit(self, job: Job):

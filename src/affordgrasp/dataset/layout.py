@@ -175,9 +175,11 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     try:
         write_file(tmp, data)
         os.replace(tmp, path)
-    except OSError as exc:
+    except BaseException as exc:  # Ctrl-C too: no temporary left behind
         tmp.unlink(missing_ok=True)
-        raise write_error(path, exc) from exc
+        if isinstance(exc, OSError):
+            raise write_error(path, exc) from exc
+        raise
     _sync_directory(path.parent)
 
 
@@ -492,9 +494,11 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
         # The checksum is on disk before the shard: a shard in place always has one.
         record_checksum(directory, shard.name, data)
         os.replace(tmp, final)
-    except OSError as exc:
+    except BaseException as exc:  # Ctrl-C too: no temporary left behind
         tmp.unlink(missing_ok=True)
-        raise write_error(final, exc) from exc
+        if isinstance(exc, OSError):
+            raise write_error(final, exc) from exc
+        raise
     _sync_directory(directory)
     return final
 

@@ -203,7 +203,8 @@ def capped_spacing(
     :func:`sample_count_bound` is <= max_points. Memory is bounded by construction: no sample
     array is built before the count fits, so a mesh in the wrong units (a 100 mm cube read as
     100 m) costs seconds, not 228 GiB. A mesh with more than ``max_points`` vertices keeps
-    only its vertices and edges' ends.
+    only its vertices and edges' ends. The result is finite and at most the longest side of
+    a triangle (where the count is smallest); it may then still exceed ``max_points``.
 
     Parameters
     ----------
@@ -220,15 +221,22 @@ def capped_spacing(
     count = sample_count_bound(tri, edge_len, n_vertices, spacing)
     if count <= max_points:
         return spacing
-    if n_vertices >= max_points:
-        return float(np.inf)
+    # Beyond the longest side nothing changes (one segment per edge, the coarsest lattice),
+    # so the search stops there: the spacing stays finite and no larger than the mesh's own
+    # triangles, which then bound how far a link can sink (the mesh has more vertices and
+    # triangles than the cap allows samples; simplify it, see objects.loading).
+    longest = float(np.max(edge_len)) if len(edge_len) else spacing
+    if len(tri):
+        longest = max(longest, float(np.max(np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2))))
+    if n_vertices >= max_points or spacing >= longest:
+        return max(spacing, longest)
     # Area terms scale as 1 / spacing², so this jump lands near the cap; then step up.
-    spacing *= max(np.sqrt(count / max_points) / 1.25**2, 1.0)
-    for _ in range(400):
+    spacing = min(spacing * max(np.sqrt(count / max_points) / 1.25**2, 1.0), longest)
+    while spacing < longest:
         if sample_count_bound(tri, edge_len, n_vertices, spacing) <= max_points:
-            break
-        spacing *= 1.25
-    return spacing
+            return spacing
+        spacing = min(spacing * 1.25, longest)
+    return longest
 
 
 def sample_surface(
@@ -261,15 +269,20 @@ def sample_surface(
     adj_edges = np.asarray(mesh.face_adjacency_edges, dtype=np.int64)
     adj_faces = np.asarray(mesh.face_adjacency, dtype=np.int64)
     adj_angle = np.asarray(mesh.face_adjacency_angles, dtype=np.float64)
-    edge_key = {tuple(e): k for k, e in enumerate(np.sort(edges, axis=1).tolist())}
+    # Each adjacency's unique edge, by its sorted vertex pair as one integer (vectorised:
+    # a dictionary of pairs costs seconds on a scan). The last adjacency of an edge wins,
+    # as it did when they were assigned in turn.
+    n_v = np.int64(max(len(vertices), 1))
+    sorted_edges = np.sort(edges, axis=1)
+    key = sorted_edges[:, 0] * n_v + sorted_edges[:, 1]
+    order = np.argsort(key, kind="stable")
+    adj_sorted = np.sort(adj_edges, axis=1).reshape(-1, 2)
+    adj_key = adj_sorted[:, 0] * n_v + adj_sorted[:, 1]
+    k = order[np.searchsorted(key[order], adj_key)] if len(adj_key) else adj_key
     edge_normal = np.zeros((len(edges), 3))
     edge_sharp = np.zeros(len(edges), dtype=bool)
-    for (a, b), (f0, f1), ang in zip(
-        np.sort(adj_edges, axis=1).tolist(), adj_faces.tolist(), adj_angle.tolist(), strict=True
-    ):
-        k = edge_key[(a, b)]
-        edge_normal[k] = face_normals[f0] + face_normals[f1]
-        edge_sharp[k] = ang > SHARP_ANGLE
+    edge_normal[k] = face_normals[adj_faces[:, 0]] + face_normals[adj_faces[:, 1]]
+    edge_sharp[k] = adj_angle > SHARP_ANGLE
 
     vertex_sharp = np.zeros(len(vertices), dtype=bool)
     vertex_sharp[edges[edge_sharp].ravel()] = True

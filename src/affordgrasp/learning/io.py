@@ -12,6 +12,7 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
+from ..writing import atomic_write
 from .torch_support import require_safetensors, require_torch
 
 METADATA_KEY = "affordgrasp_model"
@@ -42,9 +43,8 @@ def save_model(path: str | os.PathLike, model, config: dict) -> Path:
     document = dict(config, format=FORMAT, format_version=FORMAT_VERSION)
     state = {k: v.detach().contiguous().cpu() for k, v in model.state_dict().items()}
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    st.save_file(state, str(tmp), metadata={METADATA_KEY: json.dumps(document, sort_keys=True)})
-    os.replace(tmp, path)
+    data = st.save(state, metadata={METADATA_KEY: json.dumps(document, sort_keys=True)})
+    atomic_write(path, data)
     return path
 
 
@@ -76,10 +76,56 @@ def read_config(path: str | os.PathLike) -> dict:
         raise InputError(f"{str(path)!r} is not a safetensors model file: {exc}") from None
     if METADATA_KEY not in meta:
         raise InputError(f"{str(path)!r} is a safetensors file without an affordgrasp model config")
-    config = json.loads(meta[METADATA_KEY])
-    if config.get("format") != FORMAT or config.get("format_version", 0) > FORMAT_VERSION:
-        raise InputError(f"{str(path)!r} holds an unsupported model format")
+    try:
+        config = json.loads(meta[METADATA_KEY])
+    except ValueError as exc:
+        raise InputError(f"{str(path)!r}: its model config is not valid JSON ({exc})") from None
+    check_config(config, path)
     return config
+
+
+def check_config(config, path: str | os.PathLike) -> None:
+    """Refuse a model config this version cannot rebuild: format, version, architecture, inputs.
+
+    Parameters
+    ----------
+    config : object
+        The decoded ``affordgrasp_model`` metadata.
+    path : path
+        The file, for the message.
+
+    Raises
+    ------
+    InputError
+        Naming what differs from what this version reads.
+    """
+    from .models import ARCHITECTURES
+
+    where = repr(str(path))
+    if not isinstance(config, dict) or config.get("format") != FORMAT:
+        raise InputError(f"{where} holds an unsupported model format (not {FORMAT!r})")
+    version = config.get("format_version", 0)
+    if not isinstance(version, int) or not 1 <= version <= FORMAT_VERSION:
+        raise InputError(
+            f"{where} has model format version {version!r}; this affordgrasp reads versions "
+            f"1 to {FORMAT_VERSION} (made by affordgrasp {config.get('affordgrasp_version', '?')})"
+        )
+    arch = config.get("arch")
+    if arch not in ARCHITECTURES:
+        raise InputError(
+            f"{where} has architecture {arch!r}; this affordgrasp knows {', '.join(ARCHITECTURES)}"
+        )
+    target = config.get("target")
+    if not isinstance(target, dict) or "kind" not in target or "name" not in target:
+        raise InputError(f"{where} has no target (kind and name) in its config")
+    camera = config.get("camera", {"size": 128})
+    size = camera.get("size") if isinstance(camera, dict) else None
+    if not isinstance(size, int) or not 8 <= size <= 1024:
+        raise InputError(f"{where} has input image size {size!r}; expected a size of 8-1024 px")
+    for key in ("width", "n_points", "members"):
+        value = config.get(key, 1)
+        if not isinstance(value, int) or value < 1:
+            raise InputError(f"{where} has {key} = {value!r}; expected a positive integer")
 
 
 def load_model(path: str | os.PathLike):
@@ -100,7 +146,11 @@ def load_model(path: str | os.PathLike):
 
     config = read_config(path)
     model = build_model(config)
-    state = st.load_file(str(path))
+    try:
+        state = st.load_file(str(path))
+    except Exception as exc:  # noqa: BLE001 - a truncated or corrupt file is bad input
+        raise InputError(f"{str(path)!r}: cannot read its weights ({exc})") from None
+    _check_tensors(state, model.state_dict(), config, path)
     missing, unexpected = model.load_state_dict(state, strict=False)
     if missing or unexpected:
         raise InputError(
@@ -109,3 +159,26 @@ def load_model(path: str | os.PathLike):
         )
     model.eval()
     return model, config
+
+
+def _check_tensors(state: dict, expected: dict, config: dict, path) -> None:
+    """Shapes as the config's architecture builds them, and finite values, before loading."""
+    torch = require_torch()
+    described = (
+        f"architecture {config['arch']!r}, image {config.get('camera', {}).get('size')} px, "
+        f"width {config.get('width')}"
+    )
+    for name, tensor in state.items():
+        want = expected.get(name)
+        if want is not None and tuple(tensor.shape) != tuple(want.shape):
+            raise InputError(
+                f"{str(path)!r}: tensor {name!r} has shape {tuple(tensor.shape)}, but its config "
+                f"({described}) builds {tuple(want.shape)}; the weights are of another model"
+            )
+        if tensor.is_floating_point():
+            bad = int((~torch.isfinite(tensor)).sum())
+            if bad:
+                raise InputError(
+                    f"{str(path)!r}: tensor {name!r} holds {bad} non-finite values (NaN or "
+                    "inf); the file is corrupt or its training diverged: retrain it"
+                )

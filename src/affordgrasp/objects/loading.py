@@ -36,6 +36,7 @@ import numpy as np
 
 from affordgrasp.errors import InputError, MeshError
 from affordgrasp.objects.off import read_off, triangulate_polygon
+from affordgrasp.objects.simplify import LARGE_MESH_FACES, SIMPLIFY_TOLERANCE_M
 from affordgrasp.tolerances import MIN_RELATIVE_VOLUME, UNION_RTOL, ZERO_AREA
 
 if TYPE_CHECKING:
@@ -146,6 +147,8 @@ def prepare_mesh(
     units: str | None = None,
     source: str = "mesh",
     check_size: bool = False,
+    simplify_above: int | None = LARGE_MESH_FACES,
+    tolerance_m: float = SIMPLIFY_TOLERANCE_M,
 ) -> trimesh.Trimesh:
     """Clean, repair, orient and scale a mesh into a closed solid in metres.
 
@@ -167,6 +170,13 @@ def prepare_mesh(
         Refuse a mesh whose longest extent in metres is outside ``PLAUSIBLE_SIZE_M`` (what
         a hand can grasp), with a message naming the likely unit. Without it such a mesh
         only logs a warning. :func:`load_mesh` checks.
+    simplify_above : int or None
+        A mesh with more triangles is first decimated to ``tolerance_m``
+        (:func:`~affordgrasp.objects.simplify.simplify_to_tolerance`); a warning gives the
+        triangle counts and the measured distance. None: never.
+    tolerance_m : float
+        The simplification's geometric tolerance, metres (one-sided distance from the
+        original's vertices to the simplified surface).
 
     Returns
     -------
@@ -192,9 +202,16 @@ def prepare_mesh(
     _validate_arrays(vertices, faces, source)
     if check_size:
         # Before the repair: an implausible size is refused however the mesh looks.
-        used = vertices[np.unique(faces)]
+        used = vertices[_used_vertices(len(vertices), faces)]
         raw_extent = float(np.ptp(used, axis=0).max())
         check_plausible_size(raw_extent, scale_kind, scale_value, units, source)
+
+    if simplify_above is not None and len(faces) > simplify_above:
+        factor = scale_value
+        if scale_kind == "size_m":
+            used = vertices[_used_vertices(len(vertices), faces)]
+            factor = scale_value / float(np.ptp(used, axis=0).max())
+        vertices, faces = _simplified(vertices, faces, tolerance_m / factor, factor, source)
 
     repairs: list[str] = []
     work = _clean(vertices, faces.astype(np.int64), source, repairs)
@@ -358,6 +375,44 @@ def _validate_arrays(vertices: np.ndarray, faces: np.ndarray, source: str) -> No
             f"vertex {int(bad[0])} = {vertices[bad[0]].tolist()}); fix or remove them in "
             "a mesh editor"
         )
+
+
+def _used_vertices(n_vertices: int, faces: np.ndarray) -> np.ndarray:
+    """(n,) bool: the vertices some face uses (a mask: np.unique sorts, 5 s on a scan)."""
+    used = np.zeros(n_vertices, dtype=bool)
+    used[np.asarray(faces).ravel()] = True
+    return used
+
+
+def _simplified(
+    vertices: np.ndarray, faces: np.ndarray, tolerance: float, factor: float, source: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """A large mesh decimated to ``tolerance`` (its units; ``factor`` converts to metres)."""
+    import trimesh
+
+    from .simplify import simplify_to_tolerance
+
+    faces = np.asarray(faces, dtype=np.int64)
+    if len(vertices) >= 2 * len(faces):  # a triangle soup (STL): share vertices first
+        soup = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+        soup.merge_vertices()
+        vertices, faces = np.asarray(soup.vertices), np.asarray(soup.faces, dtype=np.int64)
+    v, f, report = simplify_to_tolerance(vertices, faces, tolerance)
+    if report.faces_after == report.faces_before:
+        return vertices, faces
+    within = "within" if report.within_tolerance else "NOT within"
+    _warn(
+        "%s has %d triangles: simplified to %d, %s the %.3g mm tolerance (the original's "
+        "surface lies at most %.3g mm from it, measured at %d of its vertices)",
+        source,
+        report.faces_before,
+        report.faces_after,
+        within,
+        report.tolerance * factor * 1e3,
+        report.distance * factor * 1e3,
+        report.sampled,
+    )
+    return v, f
 
 
 def _clean(

@@ -56,7 +56,7 @@ FORMAT = 1
 _T = TypeVar("_T")
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
 _STAMPED_SOURCES = ("objects", "grasp/surface.py", "grasp/policy.py")
-_STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d")
+_STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d", "fast_simplification")
 
 
 @cache
@@ -565,6 +565,7 @@ def load_mesh_file(key: dict[str, Any], name: str, source: str) -> GraspObject |
             mass=mass,
             mesh_hash=mesh.content_hash,
             source=source,
+            load_warnings=tuple(str(w) for w in a["warnings"]),
         )
         return obj, [str(w) for w in a["warnings"]]
 

@@ -109,6 +109,9 @@ class GraspObject:
     materials : bool
         Whether ``mass`` follows the family's per-part materials (``materials=True``)
         rather than one uniform density.
+    load_warnings : tuple of str
+        What loading a mesh file warned about (repairs, a simplification with its
+        measured distance); the dataset card lists them.
     """
 
     name: str
@@ -120,6 +123,7 @@ class GraspObject:
     face_parts: np.ndarray | None = None
     part_names: tuple[str, ...] = ()
     materials: bool = False
+    load_warnings: tuple[str, ...] = ()
 
     @property
     def vertices(self) -> np.ndarray:
@@ -436,7 +440,7 @@ def _resolve_file(
             return obj
     with recording_warnings() as warnings:
         mesh = load_mesh(path, size_m=size_m, units=units)
-    obj = _build(path.name, "mesh", mesh, density, source)
+    obj = _build(path.name, "mesh", mesh, density, source, load_warnings=tuple(warnings))
     # not if the file changed while it was read: the mesh may be of other bytes than the key's
     if key is not None and key == prepared.mesh_file_key(
         path, size_m=size_m, units=units, density=density
@@ -509,6 +513,7 @@ def _build(
     face_parts: np.ndarray | None = None,
     part_names: tuple[str, ...] = (),
     regions: list | None = None,
+    load_warnings: tuple[str, ...] = (),
 ) -> GraspObject:
     if regions:
         mass = material_mass_properties(mesh, regions)
@@ -524,6 +529,7 @@ def _build(
         face_parts=face_parts,
         part_names=part_names,
         materials=bool(regions),
+        load_warnings=tuple(load_warnings),
     )
 
 
@@ -565,4 +571,5 @@ def _reuse(
         source=obj.source,
         face_parts=obj.face_parts,
         part_names=obj.part_names,
+        load_warnings=obj.load_warnings,
     )

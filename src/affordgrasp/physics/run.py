@@ -16,6 +16,7 @@ import json
 import logging
 import multiprocessing
 import os
+import signal
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -30,6 +31,8 @@ from .. import __version__
 from ..columns import METRIC_COLUMNS
 from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
+from ..worker_lifetime import die_with_parent
+from ..writing import atomic_write
 from .settings import PhysicsSettings
 
 log = logging.getLogger(__name__)
@@ -206,9 +209,7 @@ def _prepare_out(out: Path, plan: dict) -> None:
             f"{str(out)!r} is not empty and holds no physics run; give a new or empty directory"
         )
     out.mkdir(parents=True, exist_ok=True)
-    tmp = out / f".{MANIFEST}.tmp-{os.getpid()}"
-    tmp.write_text(json.dumps(plan, indent=2))
-    os.replace(tmp, path)
+    atomic_write(path, json.dumps(plan, indent=2).encode())
 
 
 def shard_path(out: Path, k: int) -> Path:
@@ -322,12 +323,17 @@ def run_physics(
                 _account(summary, validate_shard(*job), advance)
         else:
             ctx = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            with ProcessPoolExecutor(
+                max_workers=workers,
+                mp_context=ctx,
+                initializer=_worker_init,
+                initargs=(os.getpid(),),
+            ) as pool:
                 try:
                     for result in pool.map(_validate_job, jobs):
                         _account(summary, result, advance)
                 except BaseException:
-                    pool.shutdown(wait=False, cancel_futures=True)
+                    _stop_workers(pool)
                     raise
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
@@ -349,6 +355,29 @@ def _account(summary: PhysicsSummary, result: dict, advance) -> None:
     summary.busy_s += result["seconds"]
     summary.cpu_s += result["cpu_seconds"]
     advance(result["rows"])
+
+
+def _worker_init(parent_pid: int) -> None:
+    # Ctrl-C and a hangup reach the whole process group: the parent stops the workers (a
+    # worker's own KeyboardInterrupt would only print its traceback). A parent killed
+    # outright takes them along.
+    die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+
+def _stop_workers(pool) -> None:
+    """Stop a pool at once: cancel what waits, terminate what runs (its shard is redone)."""
+    processes = list(getattr(pool, "_processes", {}).values())  # the executor's own
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout=5)
+        if proc.is_alive():  # pragma: no cover - stuck in native code
+            proc.kill()
+            proc.join(timeout=5)
 
 
 def _validate_job(job) -> dict:
@@ -474,15 +503,10 @@ def validate_shard(out, k, rows, hand, objects, settings) -> dict:
     table = validate_rows(rows, hand, objects, settings)
     seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
     path = shard_path(Path(out), k)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     meta = {b"affordgrasp_version": __version__.encode(), b"physics_settings": b""}
     meta[b"physics_settings"] = settings.digest().encode()
     table = table.replace_schema_metadata(meta)
-    with open(tmp, "wb") as fh:
-        pq.write_table(table, fh)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    atomic_write(path, lambda fh: pq.write_table(table, fh))
     steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
     return {"rows": table.num_rows, "steps": steps, "seconds": seconds, "cpu_seconds": cpu}
 

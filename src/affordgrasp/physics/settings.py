@@ -25,6 +25,28 @@ _MAY_BE_ZERO = (
 )
 
 
+# Physical ranges (low, high, unit): what a hand grasping a hand-held object can mean. A value
+# outside is a typo or a unit mistake (milliseconds for seconds, grams for kilograms).
+PHYSICAL_RANGES: dict[str, tuple[float, float, str]] = {
+    "timestep": (1e-5, 0.01, "s"),
+    "density": (1.0, 25_000.0, "kg/m^3"),  # aerogel to osmium
+    "grip_torque": (1e-3, 100.0, "N·m"),
+    "grip_force": (1e-2, 1000.0, "N"),
+    "load_factor": (1e-3, 100.0, "(× m·g)"),
+    "impact_factor": (1e-3, 100.0, "(× m·g·lever)"),
+    "squeeze_time": (1e-3, 10.0, "s"),
+    "settle_time": (0.0, 10.0, "s"),
+    "hold_ramp": (1e-3, 10.0, "s"),
+    "hold_time": (1e-3, 30.0, "s"),
+    "impact_time": (1e-3, 10.0, "s"),
+    "impact_settle": (0.0, 10.0, "s"),
+    "press_rate": (1e-2, 1e4, "N/s"),
+    "press_max_force": (1e-2, 1000.0, "N"),
+    "contact_timeconst": (1e-4, 0.1, "s"),
+}
+MIN_STEPS_PER_PHASE = 10
+
+
 @dataclass(frozen=True)
 class PhysicsSettings:
     """The validation protocol: simulation, grip, the three trials and their pass limits.
@@ -199,6 +221,24 @@ class PhysicsSettings:
                 raise InputError(f"physics setting {f.name} must be a finite number, got {value!r}")
             if value < 0 or (value == 0 and f.name not in _MAY_BE_ZERO):
                 raise InputError(f"physics setting {f.name} must be > 0, got {value!r}")
+        for name, (low, high, unit) in PHYSICAL_RANGES.items():
+            value = getattr(self, name)
+            if not low <= value <= high:
+                raise InputError(
+                    f"physics setting {name} = {value!r} {unit} is outside its physical range "
+                    f"[{low:g}, {high:g}] {unit}"
+                )
+        # MuJoCo resolves a soft contact only if its time constant spans two steps or more,
+        # and a ramp or pulse only if it spans several: a coarser step runs, but reports
+        # holds and slips that are artefacts of the integrator.
+        shortest = min(self.squeeze_time, self.hold_ramp, self.impact_time)
+        limit = min(self.contact_timeconst / 2, shortest / MIN_STEPS_PER_PHASE)
+        if self.timestep > limit:
+            raise InputError(
+                f"physics setting timestep = {self.timestep!r} s is too coarse: at most "
+                f"{limit:g} s (half the contact time constant {self.contact_timeconst:g} s, "
+                f"and {MIN_STEPS_PER_PHASE} steps in the shortest phase, {shortest:g} s)"
+            )
         if self.hold_ramp >= self.hold_time:
             raise InputError(
                 f"hold_ramp ({self.hold_ramp} s) must be shorter than hold_time "

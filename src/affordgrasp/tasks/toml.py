@@ -7,6 +7,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+from ..columns import DERIVED_COLUMNS, METRIC_COLUMNS
 from ..errors import TaskError
 from .expressions import expression_task
 from .task import Task
@@ -71,14 +72,34 @@ def read_task_file(path: str | os.PathLike) -> list[Task]:
                 }
                 for mode, over in modes_in.items()
             }
-        found.append(
-            expression_task(
-                str(name),
-                spec["value"],
-                spec.get("requires"),
-                thresholds,
-                modes,
-                str(spec.get("description", "")),
-            )
+        task = expression_task(
+            str(name),
+            spec["value"],
+            spec.get("requires"),
+            thresholds,
+            modes,
+            str(spec.get("description", "")),
         )
+        _check_metric_names(task.requires, where)
+        found.append(task)
     return found
+
+
+def _check_metric_names(names, where: str) -> None:
+    """Refuse a name that is neither a metric column nor a threshold, before any simulation.
+
+    Robust columns (``robust_<metric>``) are accepted when their metric is known.
+    """
+    import difflib
+
+    known = set(METRIC_COLUMNS) | set(DERIVED_COLUMNS)
+    for name in names:
+        base = name[len("robust_") :] if name.startswith("robust_") else name
+        if base in known:
+            continue
+        close = difflib.get_close_matches(name, sorted(known), n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise TaskError(
+            f"{where}: unknown metric {name!r} ({hint}known metrics: {', '.join(sorted(known))}; "
+            "or declare it under thresholds)"
+        )
