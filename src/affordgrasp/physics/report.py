@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from ..columns import HOLD_EFFORT_COLUMNS, hold_effort_sum
+from ..columns import HOLD_EFFORT_COLUMNS, hold_directions, hold_effort_sum
 from ..stats import bootstrap_auc, roc_auc, roc_curve, spearman
 
 __all__ = ["HEADLINE", "physics_report", "roc_auc", "roc_curve", "spearman"]
@@ -84,11 +84,7 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
         "use_force": col("use_force"),
         "discharge": col("discharge"),
     }
-    finite = np.isfinite(np.stack([col(c) for c in HOLD_EFFORT_COLUMNS]))
-    preds["hold_dirs"] = finite.sum(axis=0).astype(np.float64)
-    finite_sum = np.stack(
-        [np.where(np.isfinite(v), v, 0.0) for v in (col(c) for c in HOLD_EFFORT_COLUMNS)]
-    ).sum(axis=0)
+    preds["hold_dirs"], finite_sum = hold_directions({c: col(c) for c in HOLD_EFFORT_COLUMNS})
     # Lexicographic: more finite directions first, then the smaller effort over them.
     preds["graded_pick"] = preds["hold_dirs"] + 1.0 / (1.0 + finite_sum)
     names = set(table.column_names)
