@@ -6,13 +6,25 @@ fresh directories, and reports the rates and the split between simulation and me
 
     python benchmarks/bench_generate.py --samples 1000 --objects knife hammer mug
     python benchmarks/bench_generate.py --samples 1000 --ray --json out.json
+
+``--process SRC [SRC ...]`` measures instead what a user's command costs, whole process:
+``affordgrasp generate OBJECT --samples N --workers 1`` run as a fresh process for each
+object and each source tree (e.g. this checkout's ``src`` and a copy of the previous
+``src``, measured in turn in the same run), grasps per CPU-second of that process, start-up,
+kernel loading, object preparation and Parquet writing included (warm kernel caches: an
+untimed first process per tree builds them)::
+
+    nice -n 10 python benchmarks/bench_generate.py --process /tmp/prev/src src --samples 4000
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -56,6 +68,64 @@ def run(objects, samples, seed, workers, engine, root: Path) -> dict:
     return d
 
 
+FAMILIES = [
+    "hammer", "knife", "meat_cleaver", "axe", "screwdriver", "spatula", "sword", "dagger",
+    "bottle", "wine_glass", "tumbler", "mug", "ice_cream_cone",
+]  # fmt: skip
+
+
+def command_process(src: str, argv: list[str]) -> dict:
+    """Run ``affordgrasp ARGV`` from the sources ``src`` in a fresh process; its costs."""
+    env = dict(os.environ, PYTHONPATH=str(Path(src).resolve()))
+    env.pop("NUMBA_CACHE_DIR", None)
+    code = "import sys; from affordgrasp.cli import main; sys.exit(main(sys.argv[1:]))"
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    w0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", code, *argv], env=env, capture_output=True)
+    wall = time.perf_counter() - w0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{src}: {' '.join(argv)}: {proc.stderr.decode()[-1500:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"cpu_s": cpu, "wall_s": wall}
+
+
+def process_rates(sources: list[str], objects: list[str], samples: int, seed: int) -> dict:
+    """Whole-process ``generate --workers 1`` rates per object and source tree."""
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, src in enumerate(sources):  # warm the caches (kernels, prepared objects)
+            for spec in objects:
+                gen = ["generate", spec, "--samples", "2", "--workers", "1"]
+                command_process(src, [*gen, "--out", f"{tmp}/warm-{k}-{spec}"])
+        labels = [Path(s).resolve().parent.name[-14:] for s in sources]
+        print(f"{'object':<16}" + "".join(f"{label:>16}" for label in labels))
+        for spec in objects:
+            row = {}
+            for k, src in enumerate(sources):
+                gen = ["generate", spec, "--samples", str(samples), "--workers", "1"]
+                gen += ["--seed", str(seed), "--out", f"{tmp}/{k}-{spec}"]
+                r = command_process(src, gen)
+                r["grasps_per_cpu_s"] = samples / r["cpu_s"]
+                row[src] = r
+            out[spec] = row
+            print(
+                f"{spec:<16}" + "".join(f"{row[s]['grasps_per_cpu_s']:>16.0f}" for s in sources),
+                flush=True,
+            )
+        for src in sources:  # start-up: a one-sample command, warm caches
+            times = []
+            for _ in range(3):
+                gen = ["simulate", "knife", "--samples", "1"]
+                times.append(command_process(src, gen))
+            out.setdefault("_startup", {})[src] = {
+                "wall_s": sorted(t["wall_s"] for t in times)[1],
+                "cpu_s": sorted(t["cpu_s"] for t in times)[1],
+            }
+            print(f"start-up ({src}): simulate knife --samples 1: {out['_startup'][src]}")
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--objects", nargs="+", default=["knife", "hammer", "mug", "screwdriver"])
@@ -63,7 +133,20 @@ def main() -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--ray", action="store_true", help="also run the Ray engine")
     p.add_argument("--json", default=None, help="write the results to this file")
+    p.add_argument(
+        "--process",
+        nargs="+",
+        metavar="SRC",
+        help="whole-process generate --workers 1 of every family (or --objects) for each of "
+        "these source trees",
+    )
     args = p.parse_args()
+    if args.process:
+        objects = FAMILIES if args.objects == p.get_default("objects") else args.objects
+        results = process_rates(args.process, objects, args.samples, args.seed)
+        if args.json:
+            Path(args.json).write_text(json.dumps(results, indent=2))
+        return
 
     cores = default_workers()
     results = {"cores": cores, "samples_per_object": args.samples, "objects": args.objects}

@@ -1,7 +1,14 @@
 """Kernels ready up front, caches valid after an install (compiled.py, kernel_cache.py)."""
 
+import json
 import os
 import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
 
 from affordgrasp import compiled
 from affordgrasp.grasp import kernels
@@ -38,7 +45,18 @@ def test_building_the_package_warms_the_vision_kernels_up(monkeypatch):
     calls = []
     monkeypatch.setattr(compiled, "warm_up", lambda **kw: calls.append(kw) or LOADED)
     compiled.main()
-    assert calls == [{"vision": True}]
+    assert calls == [{"vision": True, "reference": True}]
+
+
+def test_warm_up_also_readies_the_reference_paths_and_counts_every_compilation():
+    compiled.warm_up(reference=True)
+    assert not compiled.warm_up(reference=True).compiled
+    # a compilation anywhere in the warm-up counts, not only in the listed dispatchers
+    import numba
+
+    with compiled._Compilations() as seen:
+        numba.njit(lambda x: x * 3)(2)
+    assert seen.count >= 1
 
 
 LOADED = compiled.KernelLoad(0.5, False)
@@ -63,3 +81,65 @@ def test_every_kernel_of_the_package_uses_the_content_stamp():
     locator = locator_class.from_function(func, func.__code__.co_filename)
     assert locator is not None
     assert locator.get_source_stamp() == ("affordgrasp-kernels", kernel_cache.package_stamp())
+
+
+def test_a_compilation_of_the_package_says_so_once_on_stderr(monkeypatch, capsys):
+    import numba
+
+    monkeypatch.setattr(kernel_cache._CompileNotice, "shown", False)
+
+    def package_function(x):
+        return x + 1
+
+    def other_function(x):
+        return x + 2
+
+    package_function.__module__ = "affordgrasp.metrics.example"
+    numba.njit(other_function)(1)  # not the package's: no notice
+    assert capsys.readouterr().err == ""
+    assert numba.njit(package_function)(1) == 2
+    numba.njit(package_function)(2.5)  # a second compilation: still the one line
+    err = capsys.readouterr().err
+    assert err.count("compiling the numba kernels") == 1 and err.count("\n") == 1, err
+
+
+def _installed_package() -> Path | None:
+    """The package under test when it is an installed (non-editable) copy, else None."""
+    import affordgrasp
+
+    package = Path(affordgrasp.__file__).resolve().parent
+    installed = any(part in ("site-packages", "dist-packages") for part in package.parts)
+    return package if installed else None
+
+
+@pytest.mark.skipif(
+    _installed_package() is None,
+    reason="the package under test is a source tree or an editable install (its kernels "
+    "compile on first use); CI's non-editable install runs this",
+)
+def test_an_installed_package_loads_its_kernels_without_compiling(tmp_path):
+    # The wheel ships numba's caches; an install copies the files with new modification
+    # times. A copy with fresh times, in a new place, must still load every kernel.
+    package = _installed_package()
+    copy = tmp_path / "site" / package.name
+    shutil.copytree(package, copy, copy_function=shutil.copyfile)  # no times kept
+    later = time.time() + 3600
+    for path in copy.rglob("*"):
+        os.utime(path, (later, later))
+    assert list(copy.rglob("*.nbi")), "the installed package holds no kernel caches"
+    code = (
+        "import json, affordgrasp\n"
+        "from affordgrasp.compiled import warm_up\n"
+        "load = warm_up(vision=True, reference=True)\n"
+        "print(json.dumps({'compiled': load.compiled, 'file': affordgrasp.__file__}))"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    env["PYTHONPATH"] = str(copy.parent)
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert Path(result["file"]).resolve().is_relative_to(copy.resolve())
+    assert result["compiled"] is False, proc.stderr[-2000:]
+    assert "compiling" not in proc.stderr

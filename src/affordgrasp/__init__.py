@@ -22,6 +22,8 @@ name                   what
 ``generate``           a sharded, resumable Parquet dataset
 ``read_dataset``       a dataset as an Arrow table
 ``best_grasps``        the argmax of a task over a dataset
+``plan``               a grasp chosen by learned models from camera-in-hand views, checked
+                       in simulation: a :class:`Plan`
 =====================  ===================================================================
 
 Names are imported on first use, so ``import affordgrasp`` stays fast. Units, frames and
@@ -58,6 +60,8 @@ _EXPORTS = {
     "generate": "affordgrasp.dataset.generate",
     "read_dataset": "affordgrasp.dataset.reading",
     "best_grasps": "affordgrasp.dataset.best",
+    "plan": "affordgrasp.learning.plan",
+    "Plan": "affordgrasp.learning.plan",
 }
 
 if TYPE_CHECKING:
@@ -65,6 +69,7 @@ if TYPE_CHECKING:
     from .dataset.generate import generate
     from .dataset.reading import read_dataset
     from .hands import Hand, get_hand, list_hands, load_hand, register_hand, save_hand
+    from .learning.plan import Plan, plan
     from .metrics.contacts import ContactSet
     from .objects.resolve import GraspObject, list_families, load_object
     from .pipeline import Evaluation, evaluate
@@ -89,6 +94,7 @@ __all__ = [
     "Evaluation",
     "GraspObject",
     "Hand",
+    "Plan",
     "Task",
     "best_grasps",
     "evaluate",
@@ -101,6 +107,7 @@ __all__ = [
     "load_hand",
     "load_object",
     "load_task_file",
+    "plan",
     "read_dataset",
     "register_hand",
     "register_task",

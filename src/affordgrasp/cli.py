@@ -32,6 +32,7 @@ COMMANDS = {
     "train": "train a viability classifier or a metric regressor on a dataset",
     "predict": "predict with a trained (or the shipped) model on every sample of a dataset",
     "model-eval": "evaluate a model on held-out objects beside baselines, with plots",
+    "plan": "choose a grasp from camera-in-hand views with learned models, and check it",
 }
 
 

@@ -70,7 +70,60 @@ def _misses(dispatchers: list) -> int:
     return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
 
 
-def warm_up(*, vision: bool = False) -> KernelLoad:
+class _Compilations:
+    """Counts numba's ``numba:compile`` events (one per compiled signature, nested too)."""
+
+    def __init__(self) -> None:
+        self.count = 0
+
+    def __enter__(self):
+        try:
+            from numba.core import event
+        except ImportError:  # pragma: no cover - numba without its event API
+            return self
+
+        outer = self
+
+        class _Listener(event.Listener):
+            def on_start(self, ev):
+                outer.count += 1
+
+            def on_end(self, ev):
+                pass
+
+        self._listener = _Listener()
+        event.register("numba:compile", self._listener)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        listener = getattr(self, "_listener", None)
+        if listener is not None:
+            from numba.core import event
+
+            event.unregister("numba:compile", listener)
+
+
+def _reference_paths() -> None:
+    """Run the per-metric functions the batch falls back to when a compiled solver cannot
+    certify its answer (rare: see ``metrics.phi``), so that their kernels are ready (and
+    ship with the package) before the first grasp that needs them."""
+    import numpy as np
+
+    from .metrics import epsilon, hold_effort, impact_effort, use_force
+    from .metrics.contacts import ContactSet
+
+    axes = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]])
+    contacts = ContactSet.from_arrays(0.03 * axes, axes, 0.5)
+    center = np.zeros(3)
+    use_point, use_normal, axis = np.array([0.03, 0.0, 0.0]), axes[0], axes[4]
+    for volume in (False, True):
+        epsilon(contacts, center, 0.05, volume=volume)
+    hold_effort(contacts, center, backend="highs")
+    impact_effort(contacts, center, use_point, use_normal, axis, backend="highs")
+    use_force(contacts, center, use_point, use_normal, backend="highs")
+
+
+def warm_up(*, vision: bool = False, reference: bool = False) -> KernelLoad:
     """Load (or compile) every kernel the pipeline calls, by running it on a small object.
 
     The object is the built-in tumbler: after the first run it comes from the cache of
@@ -82,6 +135,9 @@ def warm_up(*, vision: bool = False) -> KernelLoad:
         Also render one depth image of the tumbler with the default (raster) engine, which
         loads or compiles the rasteriser's kernel (imports trimesh; the commands that do not
         render leave it out).
+    reference : bool
+        Also run the per-metric functions that the batch falls back to in rare grasps
+        (their own kernels; imports highspy). The build step does, so that they ship too.
 
     Returns
     -------
@@ -93,19 +149,22 @@ def warm_up(*, vision: bool = False) -> KernelLoad:
     started = time.perf_counter()
     dispatchers = _dispatchers() + (_vision_dispatchers() if vision else [])
     misses_before = _misses(dispatchers)
-    obj = load_object("tumbler")
-    evaluate_samples(obj, 6, seed=0)
-    if vision:
-        from .vision.depth import DepthRenderer
+    with _Compilations() as compilations:
+        obj = load_object("tumbler")
+        evaluate_samples(obj, 6, seed=0)
+        if reference:
+            _reference_paths()
+        if vision:
+            from .vision.depth import DepthRenderer
 
-        DepthRenderer(obj.mesh, engine="raster").render([[0.1, -0.2, 0.3, 0.0, 0.5, 0.5]])
+            DepthRenderer(obj.mesh, engine="raster").render([[0.1, -0.2, 0.3, 0.0, 0.5, 0.5]])
     misses = _misses(dispatchers) - misses_before
-    return KernelLoad(time.perf_counter() - started, misses > 0)
+    return KernelLoad(time.perf_counter() - started, misses > 0 or compilations.count > 0)
 
 
 def main() -> None:
     """Warm the kernels up and print what it cost (``python -m affordgrasp.compiled``)."""
-    load = warm_up(vision=True)
+    load = warm_up(vision=True, reference=True)
     print(f"affordgrasp: {load.describe()}")
 
 

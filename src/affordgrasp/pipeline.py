@@ -92,7 +92,7 @@ class Evaluation:
 
 
 def phi_of_batch(
-    obj: GraspObject, batch: SimulationBatch, *, soft: bool = False, volume: bool = True
+    obj: GraspObject, batch: SimulationBatch, *, soft: bool = False, volume: bool = False
 ) -> dict:
     """Φ for every row of a simulation batch.
 
@@ -109,20 +109,22 @@ def phi_of_batch(
     soft : bool
         Soft-finger cones.
     volume : bool
-        Compute ``gws_volume`` (False: ε only, the same ε; the volume is NaN for
-        force-closure grasps). Searches that score with ε pass False: the 6-D hull of an
-        enveloping grasp is most of the metric cost.
+        Also compute ``gws_volume``, the 6-volume of the grasp wrench space (the full 6-D
+        hull of every force-closure grasp, most of the metric cost on enveloping grasps).
+        False (default): ε alone, the same ε from the exact best-first hull, and
+        ``gws_volume`` None (a null column). The paper's Φ has no volume and no task uses it.
 
     Returns
     -------
     dict of str to (n,) ndarray
-        Column name → float64 array (``epsilon_reason``: object array of str).
+        Column name → float64 array (``epsilon_reason``: object array of str;
+        ``gws_volume``: None when not computed).
     """
     no_use = batch.use_triangle < 0
     use_point = np.where(no_use[:, None], obj.mass.center_of_mass, batch.use_point)
     use_normal = np.where(no_use[:, None], [1.0, 0.0, 0.0], batch.use_normal)
     use_triangle = np.where(no_use, 0, batch.use_triangle)
-    phi = compute_phi_batch(
+    phi: dict = compute_phi_batch(
         obj.mass,
         obj.mesh_data,  # the mesh's arrays, normals and adjacency; no trimesh needed
         batch.contacts,
@@ -137,6 +139,8 @@ def phi_of_batch(
     if no_use.any():
         for name in USE_METRICS:
             phi[name] = np.where(no_use, np.nan, phi[name])
+    if not volume:
+        phi["gws_volume"] = None  # not computed: a null column, never a number
     return phi
 
 
@@ -150,7 +154,7 @@ def evaluate_inputs(
     sample_start: int = 0,
     soft: bool = False,
     metrics: bool = True,
-    volume: bool = True,
+    volume: bool = False,
 ) -> Evaluation:
     """Simulate and score given inputs on one object.
 
@@ -173,8 +177,8 @@ def evaluate_inputs(
     metrics : bool
         Compute Φ (False: simulation columns only).
     volume : bool
-        Compute ``gws_volume`` (False: NaN for force-closure grasps, every other column
-        the same; see :func:`phi_of_batch`).
+        Also compute ``gws_volume`` (default False: the column is null, every other
+        column the same; see :func:`phi_of_batch`).
 
     Returns
     -------
@@ -206,7 +210,7 @@ def evaluate_samples(
     metrics: bool = True,
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
-    volume: bool = True,
+    volume: bool = False,
 ) -> Evaluation:
     """Draw samples ``start .. start + samples - 1`` of the run ``seed`` and evaluate them.
 
@@ -276,6 +280,7 @@ def evaluate(
     metrics: bool = True,
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
+    volume: bool = False,
 ) -> Evaluation:
     """Simulate grasps on an object and compute their metric vector Φ.
 
@@ -305,6 +310,10 @@ def evaluate(
         With ``samples``: evaluate at most this many at a time (same rows).
     progress : callable, optional
         With ``samples``: ``progress(k)`` after each batch of ``k`` grasps.
+    volume : bool
+        Also compute the GWS volume (column ``gws_volume``; default False: the column is
+        null). Not part of the paper's Φ and used by no built-in task; it costs the full
+        6-D hull of every force-closure grasp.
 
     Returns
     -------
@@ -325,7 +334,15 @@ def evaluate(
         if p0 is None or use_dir is None:
             raise InputError("p0 and use_dir go together: give both")
         return evaluate_inputs(
-            obj, p0, use_dir, hand=hand, seed=-1, sample_start=start, soft=soft, metrics=metrics
+            obj,
+            p0,
+            use_dir,
+            hand=hand,
+            seed=-1,
+            sample_start=start,
+            soft=soft,
+            metrics=metrics,
+            volume=volume,
         )
     if samples is None:
         raise InputError("give samples (how many grasps to draw) or p0 and use_dir")
@@ -339,4 +356,5 @@ def evaluate(
         metrics=metrics,
         batch_size=batch_size,
         progress=progress,
+        volume=volume,
     )

@@ -86,8 +86,8 @@ def _numbers(values, typ: pa.DataType = _f64) -> pa.Array:
 def column_numbers(column) -> np.ndarray:
     """A numeric Arrow column as a numpy array, read from its buffers.
 
-    ``to_numpy`` would import pandas (a quarter of a second of a command's start-up); a
-    column with nulls or of another type still goes through it.
+    ``to_numpy`` would import pandas (a quarter of a second of a command's start-up); an
+    integer column with nulls or a column of another type still goes through it.
 
     Parameters
     ----------
@@ -97,16 +97,28 @@ def column_numbers(column) -> np.ndarray:
     Returns
     -------
     (n,) ndarray
-        A copy, of the column's numpy dtype.
+        A copy, of the column's numpy dtype; NaN where a float64 column is null.
     """
     chunks = column.chunks if isinstance(column, pa.ChunkedArray) else [column]
     dtype = _NUMPY_TYPES.get(column.type)
-    if dtype is None or any(c.null_count for c in chunks):
+    nulls = any(c.null_count for c in chunks)
+    if dtype is None or (nulls and dtype is not np.float64):
         return column.to_numpy(zero_copy_only=False)
-    parts = [
-        np.frombuffer(c.buffers()[1], dtype=dtype)[c.offset : c.offset + len(c)] for c in chunks
-    ]
+    parts = [_chunk_numbers(c, dtype) for c in chunks]
     return np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
+
+
+def _chunk_numbers(chunk: pa.Array, dtype) -> np.ndarray:
+    """One primitive chunk's values (a copy); null float64 entries become NaN."""
+    n = len(chunk)
+    if chunk.null_count == n:
+        return np.full(n, np.nan, dtype=dtype)
+    validity, data = chunk.buffers()[:2]
+    values = np.frombuffer(data, dtype=dtype)[chunk.offset : chunk.offset + n].copy()
+    if chunk.null_count:
+        bits = np.unpackbits(np.frombuffer(validity, dtype=np.uint8), bitorder="little")
+        values[~bits[chunk.offset : chunk.offset + n].astype(bool)] = np.nan
+    return values
 
 
 def _strings(values) -> pa.Array:
@@ -186,7 +198,8 @@ def batch_to_table(
     sample_start : int
         Sample index of the first row.
     metrics : dict of str to ndarray, optional
-        Column name to an (n,) array (float64; ``epsilon_reason`` str); None leaves the
+        Column name to an (n,) array (float64; ``epsilon_reason`` str) or None for a metric
+        not computed (a null column: ``gws_volume`` unless asked for); None leaves the
         metric columns out.
 
     Returns
@@ -230,6 +243,8 @@ def batch_to_table(
             values = metrics[name]
             if name == "epsilon_reason":
                 cols[name] = _strings([str(v) for v in values])
+            elif values is None:  # not computed (gws_volume unless asked for): null
+                cols[name] = pa.nulls(n, _f64)
             else:
                 cols[name] = _numbers(values)
         schema = SCHEMA
@@ -247,7 +262,8 @@ def metric_arrays(table: pa.Table) -> dict[str, np.ndarray]:
     Returns
     -------
     dict of str to ndarray
-        Column name to an (n,) array: float64 for the numeric metrics, object (str) for
+        Column name to an (n,) array: float64 for the numeric metrics (NaN where null,
+        e.g. ``gws_volume`` when it was not computed), object (str) for
         ``epsilon_reason``; columns absent from ``table`` are left out.
     """
     out = {}

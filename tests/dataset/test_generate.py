@@ -34,6 +34,8 @@ def _bits(column) -> bytes:
     values = column.combine_chunks()
     while pa.types.is_list(values.type) or pa.types.is_fixed_size_list(values.type):
         values = values.flatten()
+    if values.null_count == len(values):  # a metric not computed (gws_volume by default)
+        return f"{len(values)} nulls".encode()
     if pa.types.is_floating(values.type):
         assert values.null_count == 0
         return np.ascontiguousarray(values.to_numpy(zero_copy_only=False)).tobytes()
@@ -311,3 +313,34 @@ def test_the_manifest_records_the_materials_and_a_resume_must_match(tmp_path):
         generate(
             ["knife"], 2, plain, seed=3, workers=1, shard_size=2, metrics=False, materials=True
         )
+
+
+def test_the_gws_volume_is_computed_on_request_recorded_and_resumed(tmp_path):
+    from affordgrasp.dataset.card import read_card
+    from affordgrasp.dataset.reading import dataset_volume
+
+    plain, full = tmp_path / "plain", tmp_path / "full"
+    generate(["knife"], 6, plain, seed=3, workers=1, shard_size=3)
+    generate(["knife"], 6, full, seed=3, workers=1, shard_size=3, volume=True)
+    assert json.loads((plain / "_manifest.json").read_text())["volume"] is False
+    assert json.loads((full / "_manifest.json").read_text())["volume"] is True
+    assert read_card(plain)["gws_volume"] is False and read_card(full)["gws_volume"] is True
+    assert "GWS volume: not computed" in (plain / "_card.md").read_text()
+    a, b = read_dataset(plain), read_dataset(full)
+    assert a.schema == b.schema and a["gws_volume"].null_count == 6
+    assert b["gws_volume"].null_count == 0
+    assert np.all((b["gws_volume"].to_numpy() > 0) == (b["epsilon"].to_numpy() > 0))
+    assert not dataset_volume(plain) and dataset_volume(full)
+    with pytest.raises(DatasetError, match="GWS volume not computed there vs computed"):
+        generate(["knife"], 6, plain, seed=3, workers=1, shard_size=3, volume=True)
+
+    # a dataset from before the volume was optional computed it: it resumes with it only
+    path = full / "_manifest.json"
+    manifest = json.loads(path.read_text())
+    del manifest["volume"]
+    path.write_text(json.dumps(manifest))
+    assert dataset_volume(full)
+    again = generate(["knife"], 6, full, seed=3, workers=1, shard_size=3, volume=True)
+    assert again.shards_skipped == 2
+    with pytest.raises(DatasetError, match="GWS volume computed .--metrics .volume. there vs not"):
+        generate(["knife"], 6, full, seed=3, workers=1, shard_size=3)

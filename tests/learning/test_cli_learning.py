@@ -143,3 +143,128 @@ def test_training_from_a_dataset_is_deterministic_to_the_bit(tiny_dataset, tmp_p
     config_a, config_b = (read_config(p) for p in paths)
     assert len(config_a["training"]["members"]) == 2
     assert _without_times(config_a) == _without_times(config_b)
+
+
+def test_model_eval_decisions_and_calibration(tiny_dataset, tmp_path, capsys):
+    plots = tmp_path / "plots"
+    rc = main(
+        [
+            "model-eval",
+            "classifier",
+            str(tiny_dataset),
+            "--objects",
+            "all",
+            "--candidates",
+            "8",
+            "--draws",
+            "3",
+            "--threshold",
+            "0.7",
+            "--plots",
+            str(plots),
+            "--json",
+        ]
+    )
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    dec = doc["decisions"]
+    assert dec["objects"] == 3 and dec["rule"] == "highest viability probability"
+    for entry in dec["per_object"].values():
+        assert entry["draws"] == 3 and entry["candidates"] == 8
+        assert entry["oracle"]["top1_percentile"] >= entry["model"]["top1_percentile"]
+        assert entry["random"]["top1_percentile"] == pytest.approx(50.0)
+    assert 0 <= doc["reports"]["model"]["expected_calibration_error"] <= 1
+    assert (plots / "reliability.png").stat().st_size > 1000
+
+
+def test_model_eval_without_test_objects_and_subsample_say_so(tiny_dataset, capsys):
+    # the shipped classifier's test objects are not in this dataset: every object, said
+    rc = main(
+        [
+            "model-eval",
+            "classifier",
+            str(tiny_dataset),
+            "--max-rows",
+            "10",
+            "--no-decisions",
+            "--json",
+        ]
+    )
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    sel = json.loads(captured.out)["reports"]["model"]["selection"]
+    assert sel["objects"].startswith("every object") and "training" in sel["objects"]
+    assert sel["subsampled"] and sel["rows_evaluated"] == 10 and sel["rows_available"] == 72
+    assert "subsample of 10 of 72 rows" in captured.err
+
+
+def test_streamed_training_reads_each_epochs_rows_once_within_its_buffer(tiny_dataset):
+    from affordgrasp.learning.api import prepare_split, train_on_dataset
+    from affordgrasp.learning.streaming import StreamedEpochs
+    from affordgrasp.learning.training import TrainSettings, default_config
+
+    train, val, test, target, _ = prepare_split(
+        tiny_dataset, "n_contacts", max_train=None, train_depth=False
+    )
+    assert train.depth_mm is None and val.depth_mm is not None
+    config = default_config("cnn", target, width=4)
+    epochs = StreamedEpochs(tiny_dataset, config, train, batch_size=4, buffer_rows=10)
+    batches, n = epochs(1, 0)
+    seen = []
+    for inputs, idx, y in batches:
+        assert inputs.depth_mm.shape[0] <= 10 and len(idx) <= 4
+        seen += [float(v) for v in y]
+    sizes = [10] * (len(train) // 10) + ([len(train) % 10] if len(train) % 10 else [])
+    assert len(seen) == len(train) and n == sum(-(-k // 4) for k in sizes)
+    # the targets streamed are the training rows' targets
+    assert sorted(seen) == pytest.approx(sorted(target.normalise(train.y)))
+    settings = TrainSettings(epochs=2, batch_size=4, seed=0)
+    kwargs = dict(arch="cnn", target="n_contacts", settings=settings, stream=True, buffer_rows=10)
+    m1, c1 = train_on_dataset(tiny_dataset, **kwargs)
+    m2, c2 = train_on_dataset(tiny_dataset, **kwargs)
+    assert c1["training"]["streamed"]["max_buffered"] <= 10
+    a, b = m1.state_dict(), m2.state_dict()
+    assert all(np.array_equal(a[k].numpy(), b[k].numpy()) for k in a)  # seeded
+
+
+def test_model_eval_decides_beside_a_pose_only_baseline(tiny_dataset, tmp_path, capsys):
+    pose = tmp_path / "pose.safetensors"
+    args = ["train", str(tiny_dataset), "--model", "pose", "--target", "n_contacts"]
+    assert main([*args, "--epochs", "1", "-o", str(pose)]) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    rc = main(
+        [
+            "model-eval",
+            "classifier",
+            str(tiny_dataset),
+            "--objects",
+            "knife:0",
+            "--baseline",
+            str(pose),
+            "--candidates",
+            "6",
+            "--draws",
+            "2",
+            "--json",
+        ]
+    )
+    assert rc == 0, capsys.readouterr().err
+    dec = json.loads(capsys.readouterr().out)["decisions"]
+    assert dec["baseline_rule"] == "largest predicted n_contacts"
+    entry = dec["per_object"]["knife:0"]
+    assert set(entry) >= {"model", "baseline", "random", "oracle"}
+    assert entry["baseline"]["top1_percentile"] <= entry["oracle"]["top1_percentile"]
+
+
+def test_decisions_replay_the_choice_in_physics(tiny_dataset):
+    pytest.importorskip("mujoco")
+    pytest.importorskip("coacd")
+    from affordgrasp.learning.decision_eval import evaluate_decisions
+    from affordgrasp.learning.plan import load_models
+
+    res = evaluate_decisions(
+        load_models("classifier"), tiny_dataset, ["knife:0"], candidates=3, draws=1, physics=True
+    )
+    outcome = res["per_object"]["knife:0"]["physics"]
+    assert isinstance(outcome["hold_ok"], bool)
+    assert res["physics_hold_rate"] == float(outcome["hold_ok"])

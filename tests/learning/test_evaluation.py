@@ -69,3 +69,35 @@ def test_precision_recall_and_average_precision_by_hand():
     assert average_precision(labels, scores) == pytest.approx(0.5 + 1 / 3)
     assert average_precision([1, 0, 0, 0], [0.5] * 4) == pytest.approx(0.25)
     assert average_precision([1, 1, 0], [3, 2, 1]) == 1.0
+
+
+def test_expected_calibration_error_by_hand():
+    from affordgrasp.learning.evaluation import expected_calibration_error, reliability_bins
+
+    # bin [0.2, 0.3): p 0.25 twice, one positive -> gap 0.25; bin [0.9, 1]: p 1.0, positive
+    y = np.array([1, 0, 1])
+    p = np.array([0.25, 0.25, 1.0])
+    r = reliability_bins(y, p, bins=10)
+    assert r["count"][2] == 2 and r["count"][9] == 1 and r["count"].sum() == 3
+    assert r["positive_rate"][2] == 0.5 and np.isnan(r["positive_rate"][0])
+    assert expected_calibration_error(y, p, bins=10) == pytest.approx(2 / 3 * 0.25)
+    # a perfectly calibrated score: the rate of each bin equals its probability
+    rng = np.random.default_rng(0)
+    q = rng.random(200_000)
+    assert expected_calibration_error(rng.random(200_000) < q, q) < 0.01
+    # weights count rows as that many rows
+    assert expected_calibration_error(y, p, weights=[1, 1, 2]) == pytest.approx(2 / 4 * 0.25)
+
+
+def test_best_f1_threshold_by_hand():
+    from affordgrasp.learning.evaluation import best_f1_threshold
+
+    y = np.array([1, 1, 0, 1, 0, 0])
+    p = np.array([0.9, 0.8, 0.7, 0.6, 0.2, 0.1])
+    # thresholds 0.9: F1 2/4; 0.8: 4/5; 0.7: 4/6; 0.6: 6/7 (best); 0.2: 6/8
+    t, f1 = best_f1_threshold(y, p)
+    assert t == 0.6 and f1 == pytest.approx(6 / 7)
+    # negatives weighted 10x: 0.8 (tp 2, fp 0, fn 1: F1 4/5) beats 0.6 (fp 10: F1 6/17)
+    t, f1 = best_f1_threshold(y, p, weights=np.where(y == 1, 1.0, 10.0))
+    assert t == 0.8 and f1 == pytest.approx(4 / 5)
+    assert best_f1_threshold(np.zeros(3), p[:3])[0] == 0.5

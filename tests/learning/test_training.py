@@ -128,3 +128,43 @@ def test_ensemble_is_the_mean_of_its_members_and_round_trips(tmp_path):
     np.testing.assert_array_equal(
         predict_scores(loaded, cfg, x), predict_scores(ensemble, config, x)
     )
+
+
+def test_decision_threshold_chosen_on_validation_and_round_trips(tmp_path):
+    from affordgrasp.learning.api import choose_threshold
+    from affordgrasp.learning.decisions import decision_threshold
+    from affordgrasp.learning.evaluation import best_f1_threshold
+
+    train, val = _samples(64, 0), _samples(32, 1)
+    config = default_config("cnn", make_target("viable"), width=8)
+    model, _ = train_model(config, train, val, SETTINGS)
+    val.meta.update(positive_weight=1.0, negative_weight=5.0)
+    chosen = choose_threshold(model, config, val)
+    prob = predict_scores(model, config, Inputs(config, val))
+    weights = np.where(val.y > 0.5, 1.0, 5.0)
+    assert chosen["value"] == best_f1_threshold(val.y, prob, weights=weights)[0]
+    from affordgrasp.learning.api import _natural_rate
+
+    # 1 row per positive, 5 per negative: the objects' rate is P / (P + 5 N)
+    p = int((val.y > 0.5).sum())
+    assert _natural_rate(val) == pytest.approx(p / (p + 5 * (len(val) - p)))
+    config["decision_threshold"] = chosen
+    path = save_model(tmp_path / "c.safetensors", model, config)
+    assert decision_threshold(read_config(path)) == chosen["value"]
+
+
+def test_prior_shift_calibration_moves_the_odds():
+    from affordgrasp.errors import InputError
+    from affordgrasp.learning.training import prior_shift
+
+    train, val = _samples(32, 0), _samples(16, 1)
+    config = default_config("pose", make_target("viable"), width=4)
+    model, _ = train_model(config, train, val, TrainSettings(epochs=1, batch_size=16, seed=0))
+    raw = predict_scores(model, config, Inputs(config, val))
+    config["calibration"] = {"kind": "prior_shift", "from_rate": 0.5, "to_rate": 0.05}
+    shifted = predict_scores(model, config, Inputs(config, val))
+    odds = raw / (1 - raw) * 0.05 / 0.95  # the odds times pi / (1 - pi)
+    np.testing.assert_allclose(shifted, odds / (1 + odds), rtol=1e-6)
+    assert prior_shift({}) == 0.0
+    with pytest.raises(InputError, match="prior shift"):
+        prior_shift({"calibration": {"kind": "prior_shift", "from_rate": 0.5, "to_rate": 1.0}})

@@ -179,9 +179,9 @@ def test_batches_and_bad_input():
 
 
 @pytest.mark.parametrize("with_normals", [False, True])
-def test_edge_angle_over_all_edges_equals_the_k_d_tree_search(monkeypatch, with_normals):
-    # Short batches test every edge (no scipy import); long ones go through the k-d tree of
-    # edge samples. The exact distance decides in both, so the angles are the same bits.
+def test_edge_angle_over_all_edges_equals_the_grid_search(monkeypatch, with_normals):
+    # Short batches test every edge; long ones go through the grid of edge samples. The
+    # exact distance decides in both, so the angles are the same bits.
     from affordgrasp.metrics import use_geometry
     from affordgrasp.objects import load_object
 
@@ -193,8 +193,8 @@ def test_edge_angle_over_all_edges_equals_the_k_d_tree_search(monkeypatch, with_
     monkeypatch.setattr(use_geometry, "_ALL_PAIRS_MAX", 10**12)
     every_edge = use_edge_angle(mesh, points, use_normal=normals)
     monkeypatch.setattr(use_geometry, "_ALL_PAIRS_MAX", 0)
-    tree = use_edge_angle(mesh, points, use_normal=normals)
-    assert every_edge.tobytes() == tree.tobytes()
+    grid = use_edge_angle(mesh, points, use_normal=normals)
+    assert every_edge.tobytes() == grid.tobytes()
     assert (every_edge < np.pi).sum() > 50  # many points near a convex edge
 
 

@@ -34,7 +34,60 @@ def add_sampling_arguments(p) -> None:
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     add_scale_arguments(p)
     p.add_argument("--out", default=None, help="write one row per sample to this Parquet file")
+    add_metrics_argument(p)
     p.add_argument("--batch", type=int, default=250, help=argparse.SUPPRESS)
+
+
+# Metrics computed only on request, beyond the paper's Φ: ``--metrics +NAME``.
+OPTIONAL_METRICS = ("volume",)
+
+
+def add_metrics_argument(p) -> None:
+    """``--metrics +volume``: the optional metrics (the GWS volume) to compute as well.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        Extended in place.
+    """
+    p.add_argument(
+        "--metrics",
+        default="",
+        metavar="+NAME",
+        help="also compute an optional metric: +volume (the GWS volume, column gws_volume; "
+        "not in the paper's metric vector, it costs the full 6-D hull of every "
+        "force-closure grasp; null when not asked for)",
+    )
+
+
+def optional_metrics(args) -> set[str]:
+    """The optional metrics a parsed command line asks for (``--metrics +volume``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+
+    Returns
+    -------
+    set of str
+        Names from :data:`OPTIONAL_METRICS`; empty when the option is absent.
+
+    Raises
+    ------
+    InputError
+        For a word that is not ``+NAME`` of a known optional metric.
+    """
+    wanted = set()
+    for word in (getattr(args, "metrics", "") or "").replace(",", " ").split():
+        name = word[1:] if word.startswith("+") else None
+        if name not in OPTIONAL_METRICS:
+            raise InputError(
+                f"--metrics {word!r} is not one of "
+                + ", ".join(f"+{m}" for m in OPTIONAL_METRICS)
+                + " (the paper's metric vector is always computed; e.g. --metrics +volume)"
+            )
+        wanted.add(name)
+    return wanted
 
 
 def add_scale_arguments(p) -> None:
@@ -156,7 +209,7 @@ def check_counts(args) -> None:
     ------
     InputError
         Naming the option: ``--samples`` and ``--batch`` must be positive, ``--seed`` in
-        [0, 2**63 - 1].
+        [0, 2**63 - 1], ``--metrics`` a known ``+NAME``.
     """
     if args.samples <= 0:
         raise InputError(f"--samples must be a positive integer, got {args.samples}")
@@ -164,6 +217,7 @@ def check_counts(args) -> None:
         raise InputError(f"--seed must be an integer in [0, 2**63 - 1], got {args.seed}")
     if getattr(args, "batch", 1) <= 0:
         raise InputError(f"--batch must be a positive integer, got {args.batch}")
+    optional_metrics(args)
     check_table_fits(args.samples)
 
 
@@ -278,7 +332,7 @@ def run_batches(args, out, obj, metrics: bool):
         The command's output (progress bar).
     obj : GraspObject
     metrics : bool
-        Compute the metric columns.
+        Compute the metric columns (with the GWS volume when ``--metrics +volume``).
 
     Returns
     -------
@@ -312,6 +366,7 @@ def run_batches(args, out, obj, metrics: bool):
             metrics=metrics,
             batch_size=args.batch,
             progress=advance,
+            volume="volume" in optional_metrics(args),
         )
     wall = time.perf_counter() - started
     return result.table, {**result.timings, **one_time}, wall

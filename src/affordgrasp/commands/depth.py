@@ -41,6 +41,12 @@ def add_arguments(p) -> None:
     p.add_argument("--size", type=int, default=128, help="image side, pixels (default 128)")
     p.add_argument("--fov", type=float, default=60.0, help="field of view, degrees (default 60)")
     p.add_argument("--scale", type=int, default=2, help="PNG upscaling factor (default 2)")
+    p.add_argument(
+        "--sensor",
+        action="store_true",
+        help="as a depth sensor would return it (noise, returns lost at grazing angles and "
+        "at random; seeded by --seed and the sample); default: the exact image",
+    )
 
 
 def parse_p0(text: str) -> np.ndarray:
@@ -101,7 +107,12 @@ def run(args, out) -> None:
     camera = DepthCamera(size=args.size, fov_deg=args.fov)
     obj = load_object(args.object)
     renderer = renderer_for(obj, camera)
-    depth = renderer.render(p0)[0]
+    depth = renderer.render(p0)
+    if args.sensor:
+        from ..vision.sensor import SensorModel, apply_sensor
+
+        depth = apply_sensor(depth, SensorModel(seed=args.seed), [args.sample or 0], camera)
+    depth = depth[0]
     pose = renderer.poses(p0)[0]
     if args.out is not None:
         if args.out.endswith(".npy"):

@@ -7,7 +7,14 @@ import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
-from .common import HAND_HELP, add_scale_arguments, load_objects, scale_options
+from .common import (
+    HAND_HELP,
+    add_metrics_argument,
+    add_scale_arguments,
+    load_objects,
+    optional_metrics,
+    scale_options,
+)
 
 
 def add_arguments(p) -> None:
@@ -53,6 +60,7 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--no-metrics", action="store_true", help="simulate only; write no metric columns"
     )
+    add_metrics_argument(p)
     p.add_argument(
         "--depth",
         action="store_true",
@@ -82,6 +90,8 @@ def command_line(args) -> list[str]:
         cmd += ["--units", args.units]
     if args.no_metrics:
         cmd.append("--no-metrics")
+    for name in sorted(optional_metrics(args)):
+        cmd += ["--metrics", f"+{name}"]
     if args.depth:
         cmd.append("--depth")
     if args.engine != "local":
@@ -103,8 +113,12 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    from ..errors import InputError
     from .common import check_output_dir
 
+    volume = "volume" in optional_metrics(args)
+    if volume and args.no_metrics:
+        raise InputError("--metrics +volume adds to the metric columns; drop --no-metrics")
     check_output_dir(args.out, "--out")
     cmd = command_line(args)
     objects = args.objects
@@ -123,6 +137,7 @@ def run(args, out) -> None:
             shard_size=args.shard_size,
             chunk_size=args.chunk_size,
             metrics=not args.no_metrics,
+            volume=volume,
             depth=args.depth,
             materials=args.materials,
             command=cmd,

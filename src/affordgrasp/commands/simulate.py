@@ -7,6 +7,7 @@ from .common import (
     check_counts,
     check_output_file,
     one_time_text,
+    optional_metrics,
     run_batches,
     status_summary,
     write_table,
@@ -40,7 +41,8 @@ def run(args, out) -> None:
     if args.out:
         check_output_file(args.out, "--out")
     obj = load_object(args.object, size_m=args.size_m, units=args.units, materials=args.materials)
-    table, spent, wall = run_batches(args, out, obj, metrics=False)
+    # Simulation only; ``--metrics +volume`` adds Φ with the GWS volume to the rows.
+    table, spent, wall = run_batches(args, out, obj, metrics=bool(optional_metrics(args)))
     rows, doc = status_summary(table)
     rate = args.samples / spent["simulate"] if spent["simulate"] > 0 else float("inf")
     out.table(

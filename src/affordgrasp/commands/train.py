@@ -58,6 +58,30 @@ def add_arguments(p) -> None:
         "outputs are averaged (default 1)",
     )
     p.add_argument("--max-minutes", type=float, default=None, help="stop after this long")
+    p.add_argument(
+        "--calibrate",
+        action="store_true",
+        help="classifiers: probabilities corrected from the balanced training to the "
+        "positive rate of the training objects (stored in the model)",
+    )
+    p.add_argument(
+        "--stream",
+        action="store_true",
+        help="read the training images shard by shard every epoch instead of holding them "
+        "(every training row is used; memory: --buffer-rows images)",
+    )
+    p.add_argument(
+        "--buffer-rows",
+        type=int,
+        default=4096,
+        help="with --stream: rows shuffled together (default 4096, about 140 MB)",
+    )
+    p.add_argument(
+        "--sensor",
+        action="store_true",
+        help="train on the images a depth sensor would return (noise growing with depth, "
+        "returns lost at grazing angles and at random; seeded by --seed); default: exact",
+    )
 
 
 @contextmanager
@@ -124,6 +148,8 @@ def run(args, out) -> None:
         rank_weight=args.rank_weight,
         max_seconds=None if args.max_minutes is None else 60 * args.max_minutes,
     )
+    if args.buffer_rows < 1:
+        raise InputError(f"--buffer-rows must be >= 1, got {args.buffer_rows}")
     families = args.test_families.split(",") if args.test_families else None
     with _bar(out, settings) as update:
         model, config = train_on_dataset(
@@ -139,6 +165,10 @@ def run(args, out) -> None:
             max_train=args.max_train,
             progress=update,
             members=args.members,
+            sensor=_sensor(args),
+            stream=args.stream,
+            calibrate=args.calibrate,
+            buffer_rows=args.buffer_rows,
         )
     tr = config["training"]
     out.table(
@@ -180,3 +210,12 @@ def _test_rows(test: dict) -> list[list]:
         ["E[GMS]", test["expected_gms"], 0.5],
         ["rows", test["n"], ""],
     ]
+
+
+def _sensor(args):
+    """The sensor model of ``--sensor`` (seeded by ``--seed``), else None."""
+    if not getattr(args, "sensor", False):
+        return None
+    from ..vision.sensor import SensorModel
+
+    return SensorModel(seed=args.seed)

@@ -23,6 +23,7 @@ from .layout import (
     CARD_MD_NAME,
     FORMAT,
     FORMAT_VERSION,
+    manifest_volume,
     write_bytes_atomic,
     write_json_atomic,
 )
@@ -252,6 +253,7 @@ def build_card(
         "samples_per_object": manifest["samples"],
         "shard_size": manifest["shard_size"],
         "metrics": manifest["metrics"],
+        "gws_volume": manifest_volume(manifest),
         "soft_contacts": manifest["soft"],
         "materials": bool(manifest.get("materials", False)),
         "command": manifest.get("command"),
@@ -293,7 +295,12 @@ def card_markdown(card: dict) -> str:
         f"* affordgrasp {card['affordgrasp_version']}, format {card['format_version']}",
         f"* seed {card['seed']}, {card['samples_per_object']:,} samples per object, "
         f"shards of {card['shard_size']} rows, metrics: {'yes' if card['metrics'] else 'no'}, "
-        f"soft contacts: {'yes' if card['soft_contacts'] else 'no'}",
+        f"soft contacts: {'yes' if card['soft_contacts'] else 'no'}, GWS volume: "
+        + (
+            "computed (--metrics +volume)"
+            if card.get("gws_volume", card["metrics"])
+            else "not computed (column gws_volume null)"
+        ),
         "* mass properties: "
         + (
             "per-part materials of the built-in families (--materials)"

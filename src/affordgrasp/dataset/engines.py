@@ -150,6 +150,8 @@ class RunContext:
         The run's seed.
     metrics, soft, depth : bool
         Metric columns, soft-finger contacts, depth images.
+    volume : bool
+        Compute the GWS volume (``gws_volume``; null otherwise).
     key : str
         Identifies the run, so that a worker process rebuilds its objects once per run.
     """
@@ -162,6 +164,7 @@ class RunContext:
     metrics: bool = True
     soft: bool = False
     depth: bool = False
+    volume: bool = False
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
 
@@ -240,6 +243,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             hand=ctx.hand,
             soft=ctx.soft,
             metrics=ctx.metrics,
+            volume=ctx.volume,
         ).table
     else:
         table = evaluate_inputs(
@@ -251,6 +255,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             sample_start=job.start,
             soft=ctx.soft,
             metrics=ctx.metrics,
+            volume=ctx.volume,
         ).table
     if ctx.depth:
         from ..vision.depth import depth_column

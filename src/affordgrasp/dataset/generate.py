@@ -137,6 +137,7 @@ def build_manifest(
     command: Sequence[str] | None,
     depth: bool = False,
     materials: bool = False,
+    volume: bool = False,
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``).
 
@@ -159,6 +160,10 @@ def build_manifest(
         always: a resume must use the same mass properties).
     command : sequence of str or None
         The command line, recorded.
+    volume : bool
+        Whether the GWS volume is computed (``gws_volume``; null otherwise). Recorded
+        always (a resume must match); a manifest written before it was recorded computed
+        it whenever it computed metrics (:func:`~affordgrasp.dataset.layout.manifest_volume`).
 
     Returns
     -------
@@ -174,6 +179,7 @@ def build_manifest(
         "hand": hand.name,
         "hand_spec": hand_to_dict(hand),
         "metrics": metrics,
+        "volume": bool(metrics and volume),
         "soft": soft,
         "materials": bool(materials),
         "objects": [
@@ -265,6 +271,7 @@ def generate(
     materials: bool = False,
     command: Sequence[str] | None = None,
     progress: ProgressFactory | None = None,
+    volume: bool = False,
 ) -> GenerationSummary:
     """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
 
@@ -304,6 +311,10 @@ def generate(
         The command line, recorded in the manifest and the card.
     progress : callable, optional
         ``progress(total_samples)`` returns a context manager yielding ``advance(n)``.
+    volume : bool
+        Also compute the GWS volume (column ``gws_volume``, null otherwise; recorded in the
+        manifest and the card). Not in the paper's Φ; it costs the full 6-D hull of every
+        force-closure grasp.
 
     Returns
     -------
@@ -340,6 +351,7 @@ def generate(
         command=command,
         depth=depth,
         materials=materials or any(o.materials for o in resolved),
+        volume=volume,
     )
     manifest = prepare_directory(directory, manifest)
     removed = remove_stale_temporaries(directory)
@@ -366,6 +378,7 @@ def generate(
         metrics=metrics,
         soft=soft,
         depth=depth,
+        volume=bool(metrics and volume),
     )
     started = time.perf_counter()
     started_at = time.strftime("%Y-%m-%dT%H:%M:%S%z")

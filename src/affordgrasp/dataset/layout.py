@@ -63,6 +63,7 @@ PLAN_KEYS = (
     "hand",
     "hand_spec",
     "metrics",
+    "volume",
     "soft",
     "depth",
     "materials",
@@ -290,6 +291,25 @@ def read_manifest(directory: str | os.PathLike) -> dict:
     return manifest
 
 
+def manifest_volume(manifest: dict) -> bool:
+    """Whether a dataset's ``gws_volume`` column holds computed volumes.
+
+    Parameters
+    ----------
+    manifest : dict
+        A dataset manifest.
+
+    Returns
+    -------
+    bool
+        Its ``volume`` entry; a manifest written before the volume became optional has
+        none, and computed the volume whenever it computed metrics.
+    """
+    if "volume" in manifest:
+        return bool(manifest["volume"])
+    return bool(manifest.get("metrics"))
+
+
 def manifest_differences(existing: dict, requested: dict) -> list[str]:
     """Readable differences between two manifests' plans (``PLAN_KEYS``).
 
@@ -325,6 +345,16 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                         if [n for n, _ in a] == [n for n, _ in b]
                         else ""
                     )
+                )
+        elif key == "volume":
+            a, b = manifest_volume(existing), manifest_volume(requested)
+            if a != b:
+                diffs.append(
+                    "GWS volume "
+                    + ("computed (--metrics +volume)" if a else "not computed")
+                    + " there vs "
+                    + ("computed (--metrics +volume)" if b else "not computed")
+                    + " here"
                 )
         elif key == "materials":
             # absent from manifests written before it was recorded: unit density

@@ -21,7 +21,7 @@ import pyarrow.parquet as pq
 
 from ..errors import DatasetError
 from ..hands.model import Hand
-from .layout import read_manifest, shard_paths, verify_shards
+from .layout import manifest_volume, read_manifest, shard_paths, verify_shards
 
 # Columns without which Parquet files are not affordgrasp samples (see docs/conventions.md).
 REQUIRED_COLUMNS = ("object", "sample", "seed", "hand_pose", "joints")
@@ -126,6 +126,25 @@ def _open_loose_files(directory: Path) -> pads.Dataset:
             "they do not look like an affordgrasp dataset (see docs/conventions.md)"
         )
     return dataset
+
+
+def dataset_volume(directory: str | os.PathLike) -> bool:
+    """Whether a dataset's ``gws_volume`` column holds computed GWS volumes.
+
+    Generated with ``--metrics +volume`` (``volume=True``); otherwise the column is there,
+    null. A dataset written before the volume became optional computed it with every
+    metric (its manifest has no ``volume`` entry).
+
+    Parameters
+    ----------
+    directory : path
+        A dataset directory.
+
+    Returns
+    -------
+    bool
+    """
+    return manifest_volume(read_manifest(directory))
 
 
 def manifest_hand(manifest: dict) -> Hand:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Sequence
+from dataclasses import asdict
 from importlib import resources
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from .data import (
     split_by_family,
     split_by_object,
 )
-from .evaluation import classification_report, regression_report
+from .evaluation import classification_report, expected_calibration_error, regression_report
 from .targets import Target
 from .training import Inputs, TrainSettings, default_config, predict_scores, train_model
 
@@ -104,6 +105,8 @@ def prepare_split(
     max_train: int | None = 20000,
     max_eval: int | None = 4000,
     negatives_ratio: float = 3.0,
+    sensor=None,
+    train_depth: bool = True,
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
@@ -128,6 +131,13 @@ def prepare_split(
         Caps on the training rows and on each of validation and test (None: no cap).
     negatives_ratio : float
         Negatives kept per positive for training and validation.
+    sensor : SensorModel, optional
+        A depth sensor's noise and lost returns applied to every image
+        (:func:`~affordgrasp.vision.sensor.apply_sensor`; keyed by object and sample, so a
+        row's noisy image does not depend on the split); None: the exact images.
+    train_depth : bool
+        Load the training rows' images (False: streamed later, see
+        :class:`~affordgrasp.learning.streaming.StreamedEpochs`).
 
     Returns
     -------
@@ -154,19 +164,55 @@ def prepare_split(
     for k, part in enumerate(("train", "val", "test")):
         idx = np.flatnonzero(sp.part_of(samples.object, part))
         cap = max_train if part == "train" else max_eval
+        weights = {}
         if target.kind == "classification" and part != "test":
             y = samples.y[idx]
             pos, neg = idx[y > 0.5], idx[y <= 0.5]
-            pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
-            n_neg = int(round(negatives_ratio * max(len(pos), 1)))
-            idx = np.sort(np.r_[pos, _subsample(neg, n_neg, seed + 10 + k)])
+            kept_pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
+            n_neg = int(round(negatives_ratio * max(len(kept_pos), 1)))
+            kept_neg = _subsample(neg, n_neg, seed + 10 + k)
+            idx = np.sort(np.r_[kept_pos, kept_neg])
+            # what each kept row stands for: restores the natural balance of the part
+            weights = {
+                "positive_weight": len(pos) / max(len(kept_pos), 1),
+                "negative_weight": len(neg) / max(len(kept_neg), 1),
+            }
         else:  # regression rows, and the classifier's test rows at their natural balance
             idx = _subsample(idx, cap, seed + k)
-        parts.append(samples.take(idx))
-    for p in parts:
-        if len(p):
+        taken = samples.take(idx)
+        taken.meta.update(weights)
+        parts.append(taken)
+    for k, p in enumerate(parts):
+        if len(p) and (k > 0 or train_depth):
             load_depth(p, dataset)
+            if sensor is not None:
+                p.depth_mm = sensed_depth_mm(p, sensor)
     return parts[0], parts[1], parts[2], target, sp
+
+
+def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
+    """The samples' depth images as a sensor model returns them.
+
+    Parameters
+    ----------
+    samples : Samples
+        With depth images.
+    sensor : SensorModel
+        The sensor (:mod:`affordgrasp.vision.sensor`).
+
+    Returns
+    -------
+    (n, h, w) uint16 ndarray
+        Depth, mm; image i's noise keyed by (CRC-32 of its object's name, its sample).
+    """
+    import zlib
+
+    from ..vision.depth import depth_from_mm, depth_to_mm
+    from ..vision.sensor import apply_sensor
+
+    ids = np.array([zlib.crc32(str(o).encode()) for o in samples.object], dtype=np.int64)
+    keys = np.c_[ids, samples.sample]
+    return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
 
 
 def train_on_dataset(
@@ -184,6 +230,10 @@ def train_on_dataset(
     progress: Callable[[dict], None] | None = None,
     prepared=None,
     members: int = 1,
+    sensor=None,
+    stream: bool = False,
+    buffer_rows: int = 4096,
+    calibrate: bool = False,
 ):
     """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
 
@@ -216,6 +266,20 @@ def train_on_dataset(
     members : int
         More than 1: an ensemble of that many networks (seeds seed, seed + 1, ...) whose
         outputs are averaged, saved as one model.
+    sensor : SensorModel, optional
+        Train (and validate and test) on the images a depth sensor would return
+        (:func:`prepare_split`); recorded in the config's ``training``.
+    stream : bool
+        Read the training images shard by shard every epoch instead of holding them
+        (:class:`~affordgrasp.learning.streaming.StreamedEpochs`): every training row is
+        used (``max_train`` is ignored) and memory is that of ``buffer_rows`` images.
+    buffer_rows : int
+        With ``stream``: rows shuffled together before batches are cut.
+    calibrate : bool
+        A classifier's probabilities corrected from its balanced training to the positive
+        rate of its training objects (config ``calibration``,
+        :func:`~affordgrasp.learning.training.prior_shift`); its threshold and test report
+        are then those of the corrected probabilities.
 
     Returns
     -------
@@ -239,7 +303,9 @@ def train_on_dataset(
             split=split,
             test_families=test_families,
             seed=settings.seed,
-            max_train=max_train,
+            max_train=None if stream else max_train,
+            sensor=sensor,
+            train_depth=not stream,
         )
     train, val, test, tgt, sp = prepared
     if log_target and tgt.kind == "regression":
@@ -257,20 +323,96 @@ def train_on_dataset(
     if not isinstance(members, int) or isinstance(members, bool) or members < 1:
         raise InputError(f"members must be an integer >= 1, got {members!r}")
     config = default_config(arch, tgt, canonical=canonical, members=members)
-    model, summary = train_model(config, train, val, settings, progress=progress)
+    epochs = None
+    if stream:
+        from .streaming import StreamedEpochs
+
+        epochs = StreamedEpochs(
+            dataset,
+            config,
+            train,
+            batch_size=settings.batch_size,
+            buffer_rows=buffer_rows,
+            sensor=sensor,
+        )
+    model, summary = train_model(
+        config, train, val, settings, progress=progress, epoch_batches=epochs
+    )
+    if epochs is not None:
+        summary["streamed"] = {"buffer_rows": buffer_rows, "max_buffered": epochs.max_buffered}
     config["training"] = {
         "dataset": str(dataset),
         "split": sp.to_dict(),
         "rows": {"train": len(train), "val": len(val), "test": len(test)},
         "train_mean": float(np.mean(tgt.normalise(train.y))),
+        "sensor": None if sensor is None else asdict(sensor),
+        "positive_rate": _natural_rate(train) if tgt.kind == "classification" else None,
         **{k: v for k, v in summary.items() if k != "history"},
         "history": summary["history"],
     }
+    if tgt.kind == "classification":
+        if calibrate:
+            config["calibration"] = {
+                "kind": "prior_shift",
+                "from_rate": 0.5,
+                "to_rate": config["training"]["positive_rate"],
+            }
+        config["decision_threshold"] = choose_threshold(model, config, val)
     if len(test):
         config["test"] = report(model, config, test)
     if out is not None:
         save_model(out, model, config)
     return model, config
+
+
+def _natural_rate(samples: Samples) -> float:
+    """The positive rate of the objects some (subsampled) rows came from."""
+    y = samples.y > 0.5
+    pos = y.sum() * samples.meta.get("positive_weight", 1.0)
+    neg = (~y).sum() * samples.meta.get("negative_weight", 1.0)
+    return float(pos / max(pos + neg, 1e-300))
+
+
+def choose_threshold(model, config: dict, val: Samples) -> dict:
+    """A classifier's decision threshold, chosen on its validation objects.
+
+    The threshold of largest F1 over the validation rows, each weighted by how many rows of
+    its class it stands for (the training subsample of negatives is undone, so F1 is that
+    of the objects' natural class balance).
+
+    Parameters
+    ----------
+    model : torch.nn.Module
+    config : dict
+        The classifier's config.
+    val : Samples
+        The validation rows, with depth images (``meta`` may hold ``positive_weight`` and
+        ``negative_weight``).
+
+    Returns
+    -------
+    dict
+        ``value`` (a probability), ``rule``, ``f1``, ``rows`` and ``expected_calibration_error``
+        (at the natural balance), stored in the model's config as ``decision_threshold``.
+    """
+    from .evaluation import best_f1_threshold, expected_calibration_error
+
+    rule = "largest F1 on the validation objects at their natural class balance"
+    if len(val) == 0:
+        return {"value": 0.5, "rule": "no validation rows: 0.5", "f1": None, "rows": 0}
+    prob = predict_scores(model, config, Inputs(config, val))
+    positive = val.y > 0.5
+    weights = np.where(
+        positive, val.meta.get("positive_weight", 1.0), val.meta.get("negative_weight", 1.0)
+    )
+    value, f1 = best_f1_threshold(val.y, prob, weights=weights)
+    return {
+        "value": value,
+        "rule": rule,
+        "f1": f1,
+        "rows": len(val),
+        "expected_calibration_error": expected_calibration_error(val.y, prob, weights=weights),
+    }
 
 
 def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None) -> dict:
@@ -302,6 +444,7 @@ def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None)
     if tgt.kind == "classification":
         out = classification_report(samples.y, scores, seed=seed)
         out["baseline_average_precision"] = out["positive_rate"]
+        out["expected_calibration_error"] = expected_calibration_error(samples.y, scores)
         return out
     truth = tgt.normalise(samples.y)
     out = regression_report(truth, scores, lower_is_better=tgt.lower_is_better, seed=seed)
@@ -430,17 +573,20 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
     dataset : path
         A dataset generated with metrics.
     objects : "test", "all" or sequence of str
-        The model's held-out test objects (when the dataset has them), every object, or the
-        objects named.
+        The model's held-out test objects, every object, or the objects named. When none of
+        the model's test objects is in the dataset, ``"test"`` evaluates every object and
+        says so in the report's ``selection``.
     seed : int
         Seeds the subsample and the metrics.
     max_rows : int, optional
-        Evaluate a uniform subsample of at most this many rows.
+        Evaluate a uniform subsample of at most this many rows (the report's ``selection``
+        says when it did).
 
     Returns
     -------
     report : dict
-        :func:`report`.
+        :func:`report`, plus ``selection``: ``objects`` (how they were chosen, in words),
+        ``rows_available``, ``rows_evaluated`` and ``subsampled``.
     samples : Samples
         The rows evaluated.
     scores : (n,) float64 ndarray
@@ -449,28 +595,44 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
     Raises
     ------
     InputError
-        When none of the chosen objects is in the dataset.
+        When none of the named objects is in the dataset.
     """
     tgt = Target.from_dict(config["target"])
     samples, _ = read_rows(dataset, tgt)
     if objects == "test":
-        held = config.get("training", {}).get("split", {}).get("test", [])
+        split = config.get("training", {}).get("split", {})
+        held = split.get("test", [])
         mask = np.isin(samples.object, held)
+        how = "the model's held-out test objects"
         if not mask.any():
-            raise InputError(
-                f"objects: none of the model's test objects ({', '.join(held) or 'none'}) is "
-                f"in {str(dataset)!r}; pass 'all' or name objects",
-                parameter="objects",
+            mask = np.ones(len(samples), dtype=bool)
+            earlier = set(split.get("train", [])) | set(split.get("val", []))
+            seen = sorted(set(samples.object) & earlier)
+            how = "every object: none of the model's test objects is in the dataset" + (
+                f" ({len(seen)} of its objects were in the model's training or "
+                f"validation split: {', '.join(seen[:5])}{', ...' if len(seen) > 5 else ''})"
+                if seen
+                else " (and none of its objects was in the model's training split)"
             )
     elif objects == "all":
         mask = np.ones(len(samples), dtype=bool)
+        how = "every object"
     else:
         mask = np.isin(samples.object, list(objects))
+        how = "the objects named"
         if not mask.any():
             raise InputError(f"none of the objects {list(objects)} is in {str(dataset)!r}")
+    available = int(mask.sum())
     idx = _subsample(np.flatnonzero(mask), max_rows, seed)
     samples = samples.take(idx)
     if config["arch"] != "pose":
         load_depth(samples, dataset)
     scores = predict_scores(model, config, Inputs(config, samples))
-    return report(model, config, samples, seed=seed, scores=scores), samples, scores
+    rep = report(model, config, samples, seed=seed, scores=scores)
+    rep["selection"] = {
+        "objects": how,
+        "rows_available": available,
+        "rows_evaluated": len(samples),
+        "subsampled": len(samples) < available,
+    }
+    return rep, samples, scores

@@ -276,8 +276,31 @@ def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
 
 
 def _renderer_of(entry: dict | None, name: str):
-    from ..objects import load_object
     from ..vision.depth import renderer_for
+
+    return renderer_for(object_of(entry, name))
+
+
+def object_of(entry: dict | None, name: str):
+    """The object a dataset's manifest entry names, checked against its mesh hash.
+
+    Parameters
+    ----------
+    entry : dict or None
+        The manifest's entry of the object (None: not in the manifest).
+    name : str
+        The object's name in the dataset.
+
+    Returns
+    -------
+    GraspObject
+
+    Raises
+    ------
+    DatasetError
+        When the object is not in the manifest, or its mesh is gone or changed.
+    """
+    from ..objects import load_object
 
     if entry is None:
         raise DatasetError(f"object {name!r} is not in the dataset's manifest")
@@ -293,7 +316,7 @@ def _renderer_of(entry: dict | None, name: str):
             f"object {name!r} resolves to a different mesh than the dataset's; "
             "generate the dataset with --depth to keep its images"
         )
-    return renderer_for(obj)
+    return obj
 
 
 # ------------------------------------------------------------------------------------ splits

@@ -230,3 +230,108 @@ def classification_report(labels, scores, *, seed: int = 0) -> dict:
             float(0.5 * (np.mean(s[pos] >= 0.5) + np.mean(s[neg] < 0.5))) if k else float("nan")
         ),
     }
+
+
+def reliability_bins(labels, probabilities, *, bins: int = 10, weights=None) -> dict:
+    """Observed positive rate against mean predicted probability, in equal-width bins.
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    probabilities : (n,) array_like of float
+        Predicted probabilities in [0, 1].
+    bins : int
+        Equal-width bins over [0, 1]; a probability of exactly 1 falls in the last.
+    weights : (n,) array_like of float, optional
+        Row weights (e.g. to restore a natural class balance); 1 each when None.
+
+    Returns
+    -------
+    dict
+        ``edges`` (bins + 1,), and per bin ``count`` (weighted), ``mean_probability`` and
+        ``positive_rate`` (NaN for an empty bin).
+    """
+    y = (np.asarray(labels, dtype=np.float64).ravel() > 0.5).astype(np.float64)
+    p = np.asarray(probabilities, dtype=np.float64).ravel()
+    if len(y) != len(p):
+        raise InputError(f"{len(y)} labels but {len(p)} probabilities")
+    if not isinstance(bins, int) or bins < 1:
+        raise InputError(f"bins must be a positive integer, got {bins!r}")
+    w = np.ones(len(y)) if weights is None else np.asarray(weights, dtype=np.float64).ravel()
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which = np.clip(np.searchsorted(edges, p, side="right") - 1, 0, bins - 1)
+    count = np.bincount(which, weights=w, minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_p = np.bincount(which, weights=w * p, minlength=bins) / count
+        rate = np.bincount(which, weights=w * y, minlength=bins) / count
+    return {"edges": edges, "count": count, "mean_probability": mean_p, "positive_rate": rate}
+
+
+def expected_calibration_error(labels, probabilities, *, bins: int = 10, weights=None) -> float:
+    """ECE: the count-weighted mean gap between predicted probability and observed rate.
+
+    ECE = Σ_b (n_b / n) · |mean p_b − positive rate_b| over equal-width bins (Guo et al.
+    2017, "On calibration of modern neural networks").
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    probabilities : (n,) array_like of float
+        Predicted probabilities in [0, 1].
+    bins : int
+        Equal-width bins over [0, 1].
+    weights : (n,) array_like of float, optional
+        Row weights; 1 each when None.
+
+    Returns
+    -------
+    float
+        In [0, 1]; NaN for n = 0.
+    """
+    r = reliability_bins(labels, probabilities, bins=bins, weights=weights)
+    total = r["count"].sum()
+    if total <= 0:
+        return float("nan")
+    full = r["count"] > 0
+    gaps = np.abs(r["mean_probability"][full] - r["positive_rate"][full])
+    return float(np.sum(r["count"][full] * gaps) / total)
+
+
+def best_f1_threshold(labels, probabilities, *, weights=None) -> tuple[float, float]:
+    """The probability threshold of largest F1 (predicted positive when p >= threshold).
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    probabilities : (n,) array_like of float
+        Predicted probabilities.
+    weights : (n,) array_like of float, optional
+        Row weights (to restore a natural class balance from a subsample); 1 each when None.
+
+    Returns
+    -------
+    threshold : float
+        One of the distinct probabilities (the largest among equal F1); 0.5 without a
+        positive label.
+    f1 : float
+        Its F1 (NaN without a positive label).
+    """
+    y = np.asarray(labels, dtype=np.float64).ravel() > 0.5
+    p = np.asarray(probabilities, dtype=np.float64).ravel()
+    if len(y) != len(p):
+        raise InputError(f"{len(y)} labels but {len(p)} probabilities")
+    w = np.ones(len(y)) if weights is None else np.asarray(weights, dtype=np.float64).ravel()
+    if not y.any():
+        return 0.5, float("nan")
+    order = np.argsort(-p, kind="mergesort")
+    ps, ys, ws = p[order], y[order], w[order]
+    last = np.r_[np.flatnonzero(np.diff(ps) != 0), len(ps) - 1]
+    tp = np.cumsum(ws * ys)[last]
+    fp = np.cumsum(ws * ~ys)[last]
+    fn = np.sum(ws * ys) - tp
+    f1 = 2 * tp / np.maximum(2 * tp + fp + fn, 1e-300)
+    k = int(np.flatnonzero(f1 == f1.max())[0])
+    return float(ps[last][k]), float(f1[k])

@@ -107,3 +107,49 @@ def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def plot_reliability(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, bins: int = 10):
+    """Reliability diagram: observed positive rate against predicted probability.
+
+    Parameters
+    ----------
+    path : path
+        The PNG file.
+    runs : dict of str to (labels, probabilities)
+        Label → ((n,) bool truth, (n,) float probabilities).
+    bins : int
+        Equal-width probability bins.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    from .evaluation import expected_calibration_error, reliability_bins
+
+    plt = _figure()
+    fig, (ax, hist) = plt.subplots(
+        2, 1, figsize=(5, 5.5), dpi=120, sharex=True, gridspec_kw={"height_ratios": [3, 1]}
+    )
+    ax.plot([0, 1], [0, 1], ls="--", c="grey", label="calibrated")
+    for label, (y, p) in runs.items():
+        r = reliability_bins(y, p, bins=bins)
+        ece = expected_calibration_error(y, p, bins=bins)
+        full = r["count"] > 0
+        ax.plot(
+            r["mean_probability"][full],
+            r["positive_rate"][full],
+            marker="o",
+            label=f"{label} (ECE {ece:.3f})",
+        )
+        centres = 0.5 * (r["edges"][:-1] + r["edges"][1:])
+        hist.bar(centres, r["count"], width=1.0 / bins, alpha=0.5, label=label)
+    ax.set(ylabel="observed viable rate", xlim=(0, 1), ylim=(0, 1.02))
+    ax.set_title("Reliability, held-out objects")
+    ax.legend(loc="upper left", fontsize=8)
+    hist.set(xlabel="predicted probability", ylabel="rows")
+    hist.set_yscale("log")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

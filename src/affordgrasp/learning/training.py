@@ -196,18 +196,59 @@ def predict_scores(model, config: dict, inputs: Inputs, batch_size: int = 256) -
     Returns
     -------
     (n,) float64 ndarray
-        Probabilities (classifier) or values on the target's [0, 1] scale (regressor).
+        Probabilities (classifier; corrected to the prior its config's ``calibration``
+        names, :func:`prior_shift`) or values on the target's [0, 1] scale (regressor).
     """
     torch = require_torch()
     classification = config["target"]["kind"] == "classification"
+    shift = prior_shift(config) if classification else 0.0
     model.eval()
     out = np.zeros(len(inputs), dtype=np.float64)
     with torch.no_grad():
         for lo in range(0, len(inputs), batch_size):
             idx = np.arange(lo, min(len(inputs), lo + batch_size))
             y = _forward(model, inputs, idx)
-            out[idx] = (torch.sigmoid(y) if classification else y).double().numpy()
+            out[idx] = (torch.sigmoid(y + shift) if classification else y).double().numpy()
     return out
+
+
+def prior_shift(config: dict) -> float:
+    """The logit offset that moves a classifier's probabilities to another class prior.
+
+    A classifier trained on balanced batches learns odds at a 50 % prior; at a natural
+    positive rate π its calibrated odds are those odds × π / (1 − π) (Saerens et al. 2002).
+    A config's ``calibration`` = ``{"kind": "prior_shift", "from_rate": 0.5, "to_rate": π}``
+    asks for it; without one (the shipped files) the offset is 0.
+
+    Parameters
+    ----------
+    config : dict
+        A classifier's config.
+
+    Returns
+    -------
+    float
+        logit(to_rate) − logit(from_rate).
+
+    Raises
+    ------
+    InputError
+        For a calibration that is not a prior shift between rates in (0, 1).
+    """
+    cal = config.get("calibration")
+    if not cal:
+        return 0.0
+    rates = (cal.get("from_rate"), cal.get("to_rate")) if isinstance(cal, dict) else (None,)
+    if (
+        not isinstance(cal, dict)
+        or cal.get("kind") != "prior_shift"
+        or not all(isinstance(r, int | float) and 0 < r < 1 for r in rates)
+    ):
+        raise InputError(
+            f"the model's calibration {cal!r} is not a prior shift between two rates in (0, 1)"
+        )
+    a, b = float(rates[0]), float(rates[1])
+    return math.log(b / (1 - b)) - math.log(a / (1 - a))
 
 
 def _pairwise_rank_loss(torch, pred, y):
@@ -226,6 +267,7 @@ def train_model(
     val: Samples,
     settings: TrainSettings | None = None,
     progress: Callable[[dict], None] | None = None,
+    epoch_batches: Callable | None = None,
 ):
     """Train the network a config describes (see the module docstring).
 
@@ -240,6 +282,11 @@ def train_model(
     progress : callable, optional
         Called after every batch with a dict: ``epoch``, ``epochs``, ``batch``, ``batches``,
         ``loss`` (running mean of the epoch) and ``eta_s``.
+    epoch_batches : callable, optional
+        ``epoch_batches(epoch, seed)`` → (iterable of (Inputs, idx, y), number of batches):
+        the training batches of one epoch, made elsewhere (e.g. streamed from a dataset by
+        :class:`~affordgrasp.learning.streaming.StreamedEpochs`, ``train`` then needs no
+        images); None: batches of ``train`` in memory.
 
     Returns
     -------
@@ -252,7 +299,7 @@ def train_model(
     settings = settings or TrainSettings()
     members = int(config.get("members", 1))
     if members > 1:
-        return _train_ensemble(config, train, val, settings, progress, members)
+        return _train_ensemble(config, train, val, settings, progress, members, epoch_batches)
     torch = require_torch()
     # One thread by default: small batches gain little from more, and on a shared machine
     # torch's spinning worker threads cost far more than they give (measured: 5x slower).
@@ -262,7 +309,8 @@ def train_model(
     target = Target.from_dict(config["target"])
     classification = target.kind == "classification"
     model = build_model(config)
-    train_in, val_in = Inputs(config, train), Inputs(config, val)
+    train_in = Inputs(config, train) if epoch_batches is None else None
+    val_in = Inputs(config, val)
     y_train = torch.from_numpy(target.normalise(train.y))
     y_val = torch.from_numpy(target.normalise(val.y))
     if classification:
@@ -281,24 +329,30 @@ def train_model(
     stale = 0
     for epoch in range(1, settings.epochs + 1):
         rng = np.random.default_rng(np.random.SeedSequence([settings.seed, epoch]))
-        if classification:
-            order = balanced_indices(train.y, seed=int(rng.integers(2**31)))
-            order = rng.permutation(order)
+        if epoch_batches is not None:
+            batches, n_batches = epoch_batches(epoch, settings.seed)
         else:
-            order = rng.permutation(len(train))
-        batches = [
-            order[i : i + settings.batch_size] for i in range(0, len(order), settings.batch_size)
-        ]
+            if classification:
+                order = balanced_indices(train.y, seed=int(rng.integers(2**31)))
+                order = rng.permutation(order)
+            else:
+                order = rng.permutation(len(train))
+            batches = [
+                (train_in, order[i : i + settings.batch_size], None)
+                for i in range(0, len(order), settings.batch_size)
+            ]
+            n_batches = len(batches)
         model.train()
         lr_used = optimiser.param_groups[0]["lr"]
         total, seen = 0.0, 0
-        for b, idx in enumerate(batches, 1):
+        for b, (inputs, idx, y_given) in enumerate(batches, 1):
             if len(idx) < 2:
                 continue
-            pred = _forward(model, train_in, idx)
-            loss = loss_fn(pred, y_train[idx])
+            y_batch = y_train[idx] if y_given is None else y_given
+            pred = _forward(model, inputs, idx)
+            loss = loss_fn(pred, y_batch)
             if settings.rank_weight and not classification:
-                loss = loss + settings.rank_weight * _pairwise_rank_loss(torch, pred, y_train[idx])
+                loss = loss + settings.rank_weight * _pairwise_rank_loss(torch, pred, y_batch)
             if full and model.last_feature_transform is not None:
                 t = model.last_feature_transform
                 eye = torch.eye(t.shape[1])
@@ -312,13 +366,13 @@ def train_model(
             seen += len(idx)
             if progress is not None:
                 elapsed = time.perf_counter() - started
-                done = (epoch - 1) + b / len(batches)
+                done = (epoch - 1) + min(b / max(n_batches, 1), 1.0)
                 progress(
                     {
                         "epoch": epoch,
                         "epochs": settings.epochs,
                         "batch": b,
-                        "batches": len(batches),
+                        "batches": n_batches,
                         "loss": total / max(seen, 1),
                         "eta_s": elapsed / done * (settings.epochs - done),
                     }
@@ -360,7 +414,7 @@ def train_model(
     return model, summary
 
 
-def _train_ensemble(config, train, val, settings, progress, members: int):
+def _train_ensemble(config, train, val, settings, progress, members: int, epoch_batches=None):
     """Train ``members`` networks with seeds seed, seed + 1, ... and assemble them."""
     from dataclasses import replace
 
@@ -368,7 +422,7 @@ def _train_ensemble(config, train, val, settings, progress, members: int):
     trained, summaries = [], []
     for k in range(members):
         model, summary = train_model(
-            single, train, val, replace(settings, seed=settings.seed + k), progress
+            single, train, val, replace(settings, seed=settings.seed + k), progress, epoch_batches
         )
         trained.append(model)
         summaries.append(summary)

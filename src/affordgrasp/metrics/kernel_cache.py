@@ -229,20 +229,76 @@ def _preload_lapack_tables() -> None:
         return
 
 
+class _CompileNotice:
+    """Whether this process has said that it compiles the package's kernels (once)."""
+
+    shown = False
+    registered = False
+    text = (
+        "affordgrasp: compiling the numba kernels (no usable cache: an editable install, an "
+        "edited kernel or another CPU); a few minutes, once - later runs load them from the "
+        "cache in about a second"
+    )
+
+
+def _announce_compilation(event) -> None:
+    """Say on stderr, once per process, that the package's kernels compile.
+
+    A cache miss costs minutes of silence otherwise. Written to stderr rather than logged:
+    it must reach a user who configured no logging, and the CLI's summary line reports the
+    cost afterwards.
+    """
+    if _CompileNotice.shown:
+        return
+    dispatcher = (event.data or {}).get("dispatcher")
+    module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+    if not module.startswith(f"{_PACKAGE_DIR.name}."):
+        return
+    _CompileNotice.shown = True
+    print(_CompileNotice.text, file=sys.stderr, flush=True)
+
+
+def _install_compile_notice() -> None:
+    """Register :func:`_announce_compilation` for numba's ``numba:compile`` event.
+
+    numba broadcasts the event only when a function compiles (after a cache miss), never
+    when it loads from the cache. Without numba's event API nothing is announced.
+    """
+    if _CompileNotice.registered:
+        return
+    _CompileNotice.registered = True
+    try:
+        from numba.core import event
+    except ImportError:  # pragma: no cover - numba without its event API
+        return
+
+    class _Notice(event.Listener):
+        def on_start(self, ev):
+            _announce_compilation(ev)
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", _Notice())
+
+
 _installed: list[type] = []
 
 
 def install_package_stamp() -> None:
     """Make numba validate this package's cached kernels against all their sources (once).
 
-    Also makes loading them from the cache light (:func:`_install_light_loading`). Both
-    rely on internals of numba (``caching._CacheLocator`` and the locator list of
+    Also makes loading them from the cache light (:func:`_install_light_loading`) and a
+    compilation announce itself once on stderr (:func:`_install_compile_notice`). The
+    first two rely on internals of numba (``caching._CacheLocator`` and the locator list of
     ``caching.CacheImpl``); with a numba that lacks them numba is left alone: its caches
     then follow the modification time of each kernel's own file, as for any numba user.
     """
     if _installed:
         return
     from numba.core import caching
+
+    _install_compile_notice()
 
     impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
     if not hasattr(caching, "_CacheLocator") or not hasattr(impl, "_locator_classes"):

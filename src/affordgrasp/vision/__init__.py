@@ -4,7 +4,8 @@
 * ``depth``: D(p0, O) (``DepthRenderer``), uint16-millimetre encoding, PNG views;
 * ``raster``: the default engine, z-buffer rasterisation of the triangles;
 * ``packets``: Embree rays in 16-ray packets (the reference ``embreex`` casts one per call);
-* ``points``: the equivalent fixed-size point clouds.
+* ``points``: the equivalent fixed-size point clouds;
+* ``sensor``: a depth sensor's noise and lost returns (``SensorModel``), off by default.
 
 See docs/vision.md for every convention.
 """
@@ -20,11 +21,14 @@ from .depth import (
     save_depth_png,
 )
 from .points import depth_to_points, point_clouds
+from .sensor import SensorModel, apply_sensor
 
 __all__ = [
     "DepthCamera",
     "DepthRenderer",
     "ObjectFrame",
+    "SensorModel",
+    "apply_sensor",
     "camera_poses",
     "depth_from_mm",
     "depth_to_mm",

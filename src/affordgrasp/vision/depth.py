@@ -260,7 +260,7 @@ def renderer_for(obj, camera: DepthCamera | None = None) -> DepthRenderer:
     return renderer
 
 
-def render_depth(obj, p0, camera: DepthCamera | None = None) -> np.ndarray:
+def render_depth(obj, p0, camera: DepthCamera | None = None, *, sensor=None, keys=None):
     """D(p0, O): the depth images an in-hand camera sees at each pregrasp.
 
     Parameters
@@ -270,6 +270,11 @@ def render_depth(obj, p0, camera: DepthCamera | None = None) -> np.ndarray:
     p0 : (n, 6) or (6,) array_like of float
         Pregrasps in [-1, 1]^5 × [0, 1].
     camera : DepthCamera, optional
+    sensor : SensorModel, optional
+        A depth sensor's noise and lost returns (:mod:`affordgrasp.vision.sensor`); None
+        (default): the exact image.
+    keys : (n,) array_like of int, optional
+        With ``sensor``: the key of each image's noise (default 0, 1, ..., n − 1).
 
     Returns
     -------
@@ -279,10 +284,16 @@ def render_depth(obj, p0, camera: DepthCamera | None = None) -> np.ndarray:
     import trimesh
 
     if isinstance(obj, trimesh.Trimesh):
-        return DepthRenderer(obj, camera).render(p0)
-    from ..objects import load_object
+        depth = DepthRenderer(obj, camera).render(p0)
+    else:
+        from ..objects import load_object
 
-    return renderer_for(load_object(obj), camera).render(p0)
+        depth = renderer_for(load_object(obj), camera).render(p0)
+    if sensor is None:
+        return depth
+    from .sensor import apply_sensor
+
+    return apply_sensor(depth, sensor, keys, camera)
 
 
 def depth_to_mm(depth: np.ndarray) -> np.ndarray:

@@ -1,0 +1,176 @@
+"""``affordgrasp plan``: choose a grasp of an object from camera-in-hand views with learned
+models, then simulate every candidate to say how good the choice truly was."""
+
+from __future__ import annotations
+
+import sys
+
+from ..errors import InputError, MissingDependencyError
+
+
+def add_arguments(p) -> None:
+    """Add the options of ``affordgrasp plan`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser, changed in place.
+    """
+    from .common import HAND_HELP, add_scale_arguments
+
+    p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
+    p.add_argument("--task", default="pick", help="task that judges the choice (default pick)")
+    p.add_argument("--mode", default="default", help="threshold mode of the task")
+    p.add_argument("--candidates", type=int, default=64, help="candidate grasps drawn (default 64)")
+    p.add_argument(
+        "--model",
+        default="default",
+        help="default (shipped classifier + regressor), classifier, regressor, or model "
+        "files separated by commas (at most one classifier and one regressor)",
+    )
+    p.add_argument(
+        "--threshold",
+        type=float,
+        default=None,
+        help="classifier decision threshold (default: the one stored in the model, else 0.5)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the candidates (default 0)")
+    p.add_argument("--hand", default="barrett", help=HAND_HELP)
+    p.add_argument(
+        "--physics",
+        action="store_true",
+        help="replay the chosen grasp in MuJoCo (needs affordgrasp[physics])",
+    )
+    p.add_argument(
+        "--sensor",
+        action="store_true",
+        help="the models see the images a depth sensor would return (noise, lost returns; "
+        "seeded by --seed); default: exact images",
+    )
+    add_scale_arguments(p)
+
+
+def run(args, out) -> None:
+    """Run ``affordgrasp plan``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options.
+    out : Output
+        Where results go (text or ``--json``).
+    """
+    from ..objects import load_object
+    from .common import materials_option, scale_options
+
+    if args.seed < 0:
+        raise InputError(f"--seed must be >= 0, got {args.seed}")
+    _check_candidates_fit(args.candidates)
+    models = args.model.split(",") if "," in args.model else args.model
+    try:
+        from ..learning.plan import plan
+        from ..learning.torch_support import require_safetensors, require_torch
+
+        require_torch()
+        require_safetensors()
+        if args.physics:
+            from ..physics import deps
+
+            deps.mujoco()
+            deps.coacd()
+    except MissingDependencyError as exc:
+        raise InputError(str(exc)) from None
+    obj = load_object(args.object, **scale_options(args), materials=materials_option(args))
+
+    def progress(step: str) -> None:
+        if not args.json:
+            print(f"plan: {step} ({args.candidates} candidates)", file=sys.stderr, flush=True)
+
+    result = plan(
+        obj,
+        args.task,
+        candidates=args.candidates,
+        models=models,
+        seed=args.seed,
+        hand=args.hand,
+        mode=args.mode,
+        physics=args.physics,
+        threshold=args.threshold,
+        sensor=_sensor(args),
+        progress=progress,
+    )
+    doc = result.summary()
+    c = doc["chosen"]
+    m = doc["measures"]
+    rows = [
+        ["true task score", c["true_score"], "-", m["oracle"]["top1_score"]],
+        ["viable", c["viable"], m["random"]["top1_viable"], m["oracle"]["top1_viable"]],
+        [
+            "task-feasible",
+            c["feasible"],
+            m["random"]["top1_feasible"],
+            m["oracle"]["top1_feasible"],
+        ],
+        [
+            "percentile",
+            c["percentile"],
+            m["random"]["top1_percentile"],
+            m["oracle"]["top1_percentile"],
+        ],
+        [
+            "top-5 viable share",
+            m["model"]["topk_precision"],
+            m["random"]["topk_precision"],
+            m["oracle"]["topk_precision"],
+        ],
+    ]
+    out.table(
+        f"{doc['object']}, task {doc['task']}: candidate {c['index']} of {doc['candidates']} "
+        f"({doc['rule']}); {doc['candidates_viable']} viable, "
+        f"{doc['candidates_feasible']} task-feasible",
+        ["quantity", "chosen", "random (expected)", "oracle"],
+        rows,
+    )
+    if c["probability"] is not None:
+        out.text(f"viability probability {c['probability']:.3f}")
+    if c["predicted"] is not None:
+        out.text(f"predicted value {c['predicted']:.4g}")
+    if doc["physics"] is not None:
+        ph = doc["physics"]
+        out.text(
+            f"physics replay: hold {'held' if ph.get('hold_ok') else 'failed'} "
+            f"({ph.get('hold_directions_ok', 0)}/6 directions), settled {ph.get('settled')}"
+        )
+    out.text("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in doc["timings"].items()))
+    out.result(doc)
+
+
+def _sensor(args):
+    """The sensor model of ``--sensor`` (seeded by ``--seed``), else None."""
+    if not args.sensor:
+        return None
+    from ..vision.sensor import SensorModel
+
+    return SensorModel(seed=args.seed)
+
+
+# Bytes per candidate while plan holds it: its float32 and uint16 depth images (64 + 32 kB
+# at 128 px), its simulated row and its share of the network's batch activations.
+CANDIDATE_BYTES = 128 * 1024
+
+
+def _check_candidates_fit(candidates: int) -> None:
+    """Refuse a candidate count whose images would not fit in memory, before any work."""
+    from .common import available_memory
+
+    available = available_memory()
+    if available is None or candidates < 1:
+        return
+    budget = available // 2
+    need = int(candidates) * CANDIDATE_BYTES
+    if need > budget:
+        raise InputError(
+            f"--candidates {candidates} would hold about {need / 1e9:.3g} GB in memory, more "
+            f"than half of the {available / 1e9:.3g} GB available; use at most "
+            f"{budget // CANDIDATE_BYTES}"
+        )

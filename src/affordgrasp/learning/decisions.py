@@ -1,0 +1,210 @@
+"""Decisions from predictions (conventions: Vision): which candidate grasp a model chooses,
+and how good that choice truly is. numpy only (no torch needed).
+
+A model is judged by the grasp it picks on one object, not by pooled metrics:
+
+* **the rule** (:func:`decision_order`): with a classifier and a regressor, the candidates
+  whose viability probability reaches the classifier's decision threshold come first, in
+  the order of the regressor's prediction (least predicted effort first); the others
+  follow by decreasing probability. With one model, its own score orders the candidates
+  (highest probability; best predicted value). Ties keep the candidates' order.
+* **the truth**: the task score F_T of each candidate, simulated (−inf where the task's
+  requirements fail; NaN counts as −inf), and its viability.
+* **the measures** (:func:`decision_measures`): is the first choice viable and
+  task-feasible (finite F_T), its percentile among the candidates' true scores (the mean
+  of the strict and weak percentile ranks, so that ties share their ranks: 100 = strictly
+  better than every other candidate, a constant set gives 50), and the precision of the
+  first k choices (how many are viable).
+* **baselines**: random choice (its expectation, computed exactly: the viable share, 50th
+  percentile), and the oracle (the candidates ordered by their true score).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+
+
+def decision_order(
+    probability: np.ndarray | None = None,
+    predicted: np.ndarray | None = None,
+    *,
+    threshold: float = 0.5,
+    lower_is_better: bool = True,
+) -> np.ndarray:
+    """The candidates in the order a model would choose them (best first).
+
+    Parameters
+    ----------
+    probability : (n,) array_like of float, optional
+        A classifier's probability that each candidate is viable.
+    predicted : (n,) array_like of float, optional
+        A regressor's prediction for each candidate (e.g. ΣE_h, N).
+    threshold : float
+        The classifier's decision threshold (a probability).
+    lower_is_better : bool
+        The regressor's target is better when lower (efforts).
+
+    Returns
+    -------
+    (n,) int64 ndarray
+        Candidate indices, the chosen one first.
+
+    Raises
+    ------
+    InputError
+        When neither score is given, or their lengths differ.
+    """
+    if probability is None and predicted is None:
+        raise InputError("a decision needs a classifier's probabilities or a regressor's values")
+    p = None if probability is None else np.asarray(probability, dtype=np.float64).ravel()
+    v = None if predicted is None else np.asarray(predicted, dtype=np.float64).ravel()
+    if p is not None and v is not None and len(p) != len(v):
+        raise InputError(f"{len(p)} probabilities but {len(v)} predicted values")
+    if v is not None:
+        value_key = v if lower_is_better else -v
+        value_key = np.where(np.isnan(value_key), np.inf, value_key)
+    if p is None:
+        return np.argsort(value_key, kind="stable")
+    prob_key = -np.where(np.isnan(p), -np.inf, p)
+    if v is None:
+        return np.argsort(prob_key, kind="stable")
+    passed = p >= threshold
+    # lexsort: the last key is the primary one
+    return np.lexsort((prob_key, np.where(passed, value_key, 0.0), ~passed))
+
+
+def true_percentiles(true_score: np.ndarray) -> np.ndarray:
+    """Percentile of every candidate among all candidates' true scores.
+
+    Parameters
+    ----------
+    true_score : (n,) array_like of float
+        F_T per candidate; NaN counts as −inf (the task is undefined there).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        In [0, 100]: 50 · (share strictly below + share at or below); ties share their rank.
+    """
+    s = np.asarray(true_score, dtype=np.float64).ravel()
+    s = np.where(np.isnan(s), -np.inf, s)
+    n = len(s)
+    if n == 0:
+        return np.zeros(0)
+    ordered = np.sort(s)
+    below = np.searchsorted(ordered, s, side="left")
+    at_or_below = np.searchsorted(ordered, s, side="right")
+    return 50.0 * (below + at_or_below) / n
+
+
+def decision_measures(
+    order: np.ndarray, true_score: np.ndarray, viable: np.ndarray, *, k: int = 5
+) -> dict:
+    """How good a ranking's choices truly are.
+
+    Parameters
+    ----------
+    order : (n,) int array_like
+        Candidate indices, the chosen one first (:func:`decision_order`).
+    true_score : (n,) array_like of float
+        Simulated F_T per candidate (NaN or −inf: the task fails there).
+    viable : (n,) array_like of bool
+        Simulated viability per candidate.
+    k : int
+        How many first choices the precision counts.
+
+    Returns
+    -------
+    dict
+        ``chosen`` (index), ``top1_viable`` and ``top1_feasible`` (0 or 1),
+        ``top1_percentile`` (:func:`true_percentiles`), ``top1_score`` (F_T) and
+        ``topk_precision`` (viable share of the first min(k, n) choices).
+    """
+    order = np.asarray(order, dtype=np.int64)
+    s = np.asarray(true_score, dtype=np.float64).ravel()
+    ok = np.asarray(viable, dtype=bool).ravel()
+    if len(order) == 0:
+        raise InputError("no candidates to choose from")
+    c = int(order[0])
+    return {
+        "chosen": c,
+        "top1_viable": float(ok[c]),
+        "top1_feasible": float(np.isfinite(s[c])),
+        "top1_percentile": float(true_percentiles(s)[c]),
+        "top1_score": float(s[c]),
+        "topk_precision": float(ok[order[:k]].mean()),
+    }
+
+
+def oracle_order(true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:
+    """The candidates by their true score (best first), viable ones first among ties.
+
+    Parameters
+    ----------
+    true_score : (n,) array_like of float
+    viable : (n,) array_like of bool
+
+    Returns
+    -------
+    (n,) int64 ndarray
+    """
+    s = np.asarray(true_score, dtype=np.float64).ravel()
+    s = np.where(np.isnan(s), -np.inf, s)
+    return np.lexsort((~np.asarray(viable, dtype=bool).ravel(), -s))
+
+
+def random_measures(true_score: np.ndarray, viable: np.ndarray, *, k: int = 5) -> dict:
+    """The expected measures of a uniformly random choice (exact, no draws).
+
+    Parameters
+    ----------
+    true_score : (n,) array_like of float
+    viable : (n,) array_like of bool
+    k : int
+        As for :func:`decision_measures`.
+
+    Returns
+    -------
+    dict
+        ``top1_viable``, ``top1_feasible``, ``top1_percentile`` (50 by construction) and
+        ``topk_precision`` (the viable share), each an expectation.
+    """
+    s = np.asarray(true_score, dtype=np.float64).ravel()
+    ok = np.asarray(viable, dtype=bool).ravel()
+    return {
+        "top1_viable": float(ok.mean()),
+        "top1_feasible": float(np.isfinite(s).mean()),
+        "top1_percentile": float(true_percentiles(s).mean()),
+        "topk_precision": float(ok.mean()),
+    }
+
+
+DEFAULT_THRESHOLD = 0.5
+
+
+def decision_threshold(config: dict) -> float:
+    """A classifier's decision threshold: the one chosen on its validation objects and
+    stored in its model file, else 0.5 (model files written before it was stored).
+
+    Parameters
+    ----------
+    config : dict
+        The model's config.
+
+    Returns
+    -------
+    float
+        A probability.
+    """
+    stored = config.get("decision_threshold")
+    if not isinstance(stored, dict) or stored.get("value") is None:
+        return DEFAULT_THRESHOLD
+    value = stored["value"]
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= 1:
+        raise InputError(
+            f"the model's stored decision threshold {value!r} is not a probability in [0, 1]; "
+            "pass a threshold explicitly or retrain the model"
+        )
+    return float(value)

@@ -1,0 +1,416 @@
+"""From a camera view to a grasp: sample candidates, look, predict, choose, check
+(conventions: Vision).
+
+:func:`plan` (``affordgrasp.plan``) does what a robot with a camera in its hand would do,
+then says how good the decision truly was:
+
+1. draw ``candidates`` uniform pregrasps p0 and use directions d (sample i depends only on
+   (seed, i), as in a generated dataset);
+2. render every candidate's camera-in-hand depth image D(p0, O) in one batch;
+3. predict with the models in one batch (the shipped classifier and regressor by default);
+4. choose by :func:`~affordgrasp.learning.decisions.decision_order` (the classifier's
+   decision threshold, then least predicted effort);
+5. simulate every candidate (not only the chosen one), so the chosen grasp's true task
+   score, viability and percentile among the candidates' true scores are known; with
+   ``physics=True`` replay the chosen grasp in MuJoCo (the physics extra).
+
+The simulation of step 5 is the check, not part of the decision: the models see only the
+depth images and the poses.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+
+from ..errors import InputError
+from .decisions import (
+    decision_measures,
+    decision_order,
+    decision_threshold,
+    oracle_order,
+    random_measures,
+    true_percentiles,
+)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A model's choice among candidate grasps on one object, and its simulated truth.
+
+    Attributes
+    ----------
+    object : str
+        The object's name.
+    task : str
+        The task whose true score judges the choice.
+    chosen : int
+        Index of the chosen candidate.
+    order : (n,) int64 ndarray
+        Every candidate in the order the models rank them (``order[0] == chosen``).
+    p0 : (n, 6) float64 ndarray
+        Candidate pregrasps.
+    use_dir : (n, 2) float64 ndarray
+        Candidate use directions.
+    probability : (n,) float64 ndarray or None
+        The classifier's viability probabilities (None without a classifier).
+    predicted : (n,) float64 ndarray or None
+        The regressor's predictions in its target's units (None without a regressor).
+    true_score : (n,) float64 ndarray
+        Simulated F_T of every candidate (−inf where the task fails).
+    viable : (n,) bool ndarray
+        Simulated viability of every candidate.
+    percentile : float
+        The chosen grasp's percentile among the candidates' true scores, in [0, 100]
+        (:func:`~affordgrasp.learning.decisions.true_percentiles`).
+    measures : dict
+        The decision's measures, the random-choice expectation and the oracle's
+        (``model``, ``random``, ``oracle``; see
+        :func:`~affordgrasp.learning.decisions.decision_measures`).
+    rule : str
+        How the choice was made, in words.
+    table : pyarrow.Table
+        The simulated candidates (one row each; columns: docs/conventions.md).
+    physics : dict or None
+        The chosen grasp's replay outcome (``GraspOutcome.to_row()``), when asked for.
+    timings : dict of str to float
+        Seconds per step: ``render``, ``predict``, ``simulate``, ``physics``.
+    """
+
+    object: str
+    task: str
+    chosen: int
+    order: np.ndarray
+    p0: np.ndarray
+    use_dir: np.ndarray
+    probability: np.ndarray | None
+    predicted: np.ndarray | None
+    true_score: np.ndarray
+    viable: np.ndarray
+    percentile: float
+    measures: dict
+    rule: str
+    table: pa.Table
+    physics: dict | None = None
+    timings: dict = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """The plan as JSON-ready data (without the per-candidate arrays).
+
+        Returns
+        -------
+        dict
+            Object, task, rule, the chosen candidate (p0, d, probability, prediction,
+            true score, viable, percentile), the measures, physics and timings.
+        """
+        c = self.chosen
+        return {
+            "object": self.object,
+            "task": self.task,
+            "candidates": int(len(self.p0)),
+            "rule": self.rule,
+            "chosen": {
+                "index": c,
+                "p0": self.p0[c].tolist(),
+                "use_dir": self.use_dir[c].tolist(),
+                "probability": None if self.probability is None else float(self.probability[c]),
+                "predicted": None if self.predicted is None else float(self.predicted[c]),
+                "true_score": float(self.true_score[c]),
+                "viable": bool(self.viable[c]),
+                "feasible": bool(np.isfinite(self.true_score[c])),
+                "percentile": self.percentile,
+            },
+            "candidates_viable": int(self.viable.sum()),
+            "candidates_feasible": int(np.isfinite(self.true_score).sum()),
+            "measures": self.measures,
+            "physics": self.physics,
+            "timings": dict(self.timings),
+        }
+
+
+def split_models(models: Sequence[tuple[Any, dict]]):
+    """The classifier and the regressor among some models.
+
+    Parameters
+    ----------
+    models : sequence of (torch.nn.Module, dict)
+        One classifier and/or one regressor, each with its config.
+
+    Returns
+    -------
+    classifier, regressor : (torch.nn.Module, dict) or None
+
+    Raises
+    ------
+    InputError
+        With no model, or two of the same kind.
+    """
+    classifier = regressor = None
+    for model, config in models:
+        if config["target"]["kind"] == "classification":
+            if classifier is not None:
+                raise InputError("give at most one classifier to decide with")
+            classifier = (model, config)
+        else:
+            if regressor is not None:
+                raise InputError("give at most one regressor to decide with")
+            regressor = (model, config)
+    if classifier is None and regressor is None:
+        raise InputError("give a classifier and/or a regressor to decide with")
+    return classifier, regressor
+
+
+def rule_of(classifier, regressor, threshold: float | None = None) -> str:
+    """The decision rule of a pair of models, in words.
+
+    Parameters
+    ----------
+    classifier, regressor : (torch.nn.Module, dict) or None
+    threshold : float, optional
+        The threshold used instead of the classifier's own.
+
+    Returns
+    -------
+    str
+    """
+    if classifier is not None and regressor is not None:
+        t = decision_threshold(classifier[1]) if threshold is None else float(threshold)
+        best = "least" if regressor[1]["target"]["lower_is_better"] else "largest"
+        return (
+            f"viability probability >= {t:.3g}, then {best} predicted "
+            f"{regressor[1]['target']['name']}"
+        )
+    if classifier is not None:
+        return "highest viability probability"
+    tgt = regressor[1]["target"]
+    return f"{'least' if tgt['lower_is_better'] else 'largest'} predicted {tgt['name']}"
+
+
+def model_order(classifier, regressor, samples, *, threshold: float | None = None):
+    """Predict for candidates and rank them (see :func:`decision_order`).
+
+    Parameters
+    ----------
+    classifier, regressor : (torch.nn.Module, dict) or None
+    samples : Samples
+        The candidates, with depth images.
+    threshold : float, optional
+        Overrides the classifier's decision threshold.
+
+    Returns
+    -------
+    order : (n,) int64 ndarray
+    probability, predicted : (n,) float64 ndarray or None
+    """
+    from .api import predictions_of
+
+    probability = predicted = None
+    lower = True
+    t = 0.5
+    if classifier is not None:
+        probability = predictions_of(classifier[0], classifier[1], samples)
+        t = decision_threshold(classifier[1]) if threshold is None else float(threshold)
+    if regressor is not None:
+        predicted = predictions_of(regressor[0], regressor[1], samples)
+        lower = bool(regressor[1]["target"]["lower_is_better"])
+    order = decision_order(probability, predicted, threshold=t, lower_is_better=lower)
+    return order, probability, predicted
+
+
+def plan(
+    obj,
+    task: str = "pick",
+    *,
+    candidates: int = 64,
+    models="default",
+    seed: int = 0,
+    hand="barrett",
+    mode: str = "default",
+    physics: bool = False,
+    threshold: float | None = None,
+    sensor=None,
+    progress: Callable[[str], Any] | None = None,
+) -> Plan:
+    """Choose a grasp of an object from camera-in-hand views, and check the choice.
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+        The object: ``ag.load_object(...)``, a family (``"knife"``), ``"knife:7"`` or a mesh
+        path.
+    task : str
+        The task that judges the choice (its simulated F_T in ``mode``).
+    candidates : int
+        How many candidate grasps to draw (>= 1).
+    models : str, path or sequence
+        ``"default"`` (the shipped classifier and regressor), ``"classifier"``,
+        ``"regressor"``, a model file, or a sequence of files and/or loaded
+        ``(model, config)`` pairs: at most one classifier and one regressor.
+    seed : int
+        Seeds the candidates (candidate i depends only on (seed, i)).
+    hand : Hand or str
+        The hand simulated (the models were trained with the Barrett hand).
+    mode : str
+        Threshold mode of the task.
+    physics : bool
+        Replay the chosen grasp in MuJoCo (needs ``affordgrasp[physics]``).
+    threshold : float, optional
+        Overrides the classifier's stored decision threshold.
+    sensor : SensorModel, optional
+        The models see the images a depth sensor would return
+        (:mod:`affordgrasp.vision.sensor`; candidate i's noise keyed by i); None: exact.
+    progress : callable, optional
+        Called with the name of each step as it starts.
+
+    Returns
+    -------
+    Plan
+
+    Raises
+    ------
+    InputError
+        For a bad number of candidates, unknown task or model, or missing extras.
+    """
+    from ..grasp.pregrasp import sample_inputs
+    from ..objects import load_object
+    from ..pipeline import evaluate_inputs
+    from ..tasks import get_task, is_viable
+    from ..vision.depth import depth_to_mm, renderer_for
+    from .data import Samples
+
+    if isinstance(candidates, bool) or not isinstance(candidates, int | np.integer):
+        raise InputError(f"candidates must be a positive integer, got {candidates!r}")
+    if candidates < 1:
+        raise InputError(f"candidates must be >= 1, got {candidates}")
+    if threshold is not None and not 0.0 <= float(threshold) <= 1.0:
+        raise InputError(f"threshold must be a probability in [0, 1], got {threshold!r}")
+    task_obj = get_task(task)
+    task_obj.thresholds_for(mode)  # an unknown mode fails before any work
+    step = progress or (lambda name: None)
+    timings: dict[str, float] = {}
+    classifier, regressor = split_models(load_models(models))
+    obj = load_object(obj)
+    n = int(candidates)
+    p0, use_dir = sample_inputs(seed, 0, n)
+
+    step("render")
+    t0 = time.perf_counter()
+    depth = renderer_for(obj).render(p0)
+    if sensor is not None:
+        from ..vision.sensor import apply_sensor
+
+        depth = apply_sensor(depth, sensor, np.arange(n))
+    depth_mm = depth_to_mm(depth)
+    timings["render"] = time.perf_counter() - t0
+
+    step("predict")
+    t0 = time.perf_counter()
+    names = np.full(n, obj.name, dtype=object)
+    samples = Samples(names, names.copy(), np.arange(n), p0, use_dir, np.full(n, np.nan), depth_mm)
+    order, probability, predicted = model_order(classifier, regressor, samples, threshold=threshold)
+    timings["predict"] = time.perf_counter() - t0
+
+    step("simulate")
+    t0 = time.perf_counter()
+    table = evaluate_inputs(obj, p0, use_dir, hand=hand, seed=seed, volume=False).table
+    true_score = task_obj.evaluate(table, mode)
+    viable = is_viable(table)
+    timings["simulate"] = time.perf_counter() - t0
+
+    measures = {
+        "model": decision_measures(order, true_score, viable),
+        "random": random_measures(true_score, viable),
+        "oracle": decision_measures(oracle_order(true_score, viable), true_score, viable),
+    }
+    chosen = int(order[0])
+    outcome = None
+    if physics:
+        step("physics")
+        t0 = time.perf_counter()
+        outcome = replay(obj, hand, table.slice(chosen, 1))
+        timings["physics"] = time.perf_counter() - t0
+    return Plan(
+        object=obj.name,
+        task=task_obj.name,
+        chosen=chosen,
+        order=order,
+        p0=p0,
+        use_dir=use_dir,
+        probability=probability,
+        predicted=predicted,
+        true_score=true_score,
+        viable=viable,
+        percentile=float(true_percentiles(true_score)[chosen]),
+        measures=measures,
+        rule=rule_of(classifier, regressor, threshold),
+        table=table,
+        physics=outcome,
+        timings=timings,
+    )
+
+
+def load_models(models) -> list[tuple[Any, dict]]:
+    """Models named or given, loaded (see :func:`plan`'s ``models``).
+
+    Parameters
+    ----------
+    models : str, path or sequence
+
+    Returns
+    -------
+    list of (torch.nn.Module, dict)
+    """
+    from .api import resolve_models
+    from .io import load_model
+
+    if isinstance(models, str) or hasattr(models, "__fspath__"):
+        models = [models]
+    loaded = []
+    for m in models:
+        if isinstance(m, tuple):
+            loaded.append(m)
+        else:
+            loaded += [load_model(p) for p in resolve_models(m)]
+    return loaded
+
+
+def replay(obj, hand, row: pa.Table) -> dict:
+    """The physics replay of one simulated grasp (the physics extra).
+
+    Parameters
+    ----------
+    obj : GraspObject
+    hand : Hand or str
+    row : pyarrow.Table
+        One row of an evaluation table (its ``hand_pose``, ``joints``, ``use_point`` and
+        ``use_normal``).
+
+    Returns
+    -------
+    dict
+        ``GraspOutcome.to_row()``: ``hold_ok``, ``settled``, ``impact_ok``, ...; with
+        ``status`` set when the grasp has no pose to replay.
+    """
+    from ..physics.scene import build_scene
+    from ..physics.trials import validate_grasp
+
+    pose = row.column("hand_pose")[0].as_py()
+    joints = row.column("joints")[0].as_py()
+    if pose is None or joints is None:
+        return {"hold_ok": False, "settled": False, "status": "no grasp to replay"}
+    up = row.column("use_point")[0].as_py()
+    un = row.column("use_normal")[0].as_py()
+    scene = build_scene(hand, obj)
+    outcome = validate_grasp(
+        scene,
+        np.asarray(pose, dtype=np.float64).reshape(4, 4),
+        np.asarray(joints, dtype=np.float64),
+        None if up is None else np.asarray(up, dtype=np.float64),
+        None if un is None else np.asarray(un, dtype=np.float64),
+    )
+    return outcome.to_row()

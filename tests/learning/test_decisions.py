@@ -1,0 +1,93 @@
+"""Decision rule and decision measures, checked by hand on small cases."""
+
+import numpy as np
+import pytest
+
+from affordgrasp.errors import InputError
+from affordgrasp.learning.decisions import (
+    decision_measures,
+    decision_order,
+    decision_threshold,
+    oracle_order,
+    random_measures,
+    true_percentiles,
+)
+
+
+def test_threshold_then_least_predicted_effort():
+    prob = np.array([0.9, 0.4, 0.6, 0.7, 0.45])
+    effort = np.array([50.0, 1.0, 20.0, 20.0, 2.0])
+    order = decision_order(prob, effort, threshold=0.5)
+    # passed (0, 2, 3) by effort, the tie 2/3 broken by probability; then 4, 1 by probability
+    assert order.tolist() == [3, 2, 0, 4, 1]
+    assert decision_order(prob, -effort, threshold=0.5, lower_is_better=False).tolist() == [
+        3,
+        2,
+        0,
+        4,
+        1,
+    ]
+    # nothing passes: the most probable first
+    assert decision_order(prob, effort, threshold=0.95)[0] == 0
+
+
+def test_one_model_orders_by_its_own_score():
+    assert decision_order(np.array([0.1, 0.8, 0.3])).tolist() == [1, 2, 0]
+    assert decision_order(None, np.array([3.0, 1.0, np.nan])).tolist() == [1, 0, 2]
+    assert decision_order(None, np.array([3.0, 1.0, 2.0]), lower_is_better=False)[0] == 0
+    with pytest.raises(InputError):
+        decision_order(None, None)
+    with pytest.raises(InputError, match="2 probabilities but 3"):
+        decision_order(np.ones(2), np.ones(3))
+
+
+def test_true_percentiles_share_ties_and_treat_nan_as_failure():
+    s = np.array([-np.inf, np.nan, 1.0, 3.0])
+    # the two failures tie at the bottom: 50 * (0 + 2) / 4 = 25
+    assert true_percentiles(s).tolist() == [25.0, 25.0, 62.5, 87.5]
+    assert true_percentiles(np.full(5, 2.0)).tolist() == [50.0] * 5
+    rng = np.random.default_rng(0)
+    for _ in range(5):  # the mean of mid-rank percentiles is 50 whatever the ties
+        x = rng.integers(0, 4, 17).astype(float)
+        assert true_percentiles(x).mean() == pytest.approx(50.0)
+
+
+def test_measures_random_and_oracle():
+    score = np.array([-np.inf, -10.0, -5.0, -1.0, -np.inf, -7.0])
+    viable = np.array([False, True, True, False, False, True])
+    m = decision_measures(np.array([2, 3, 0, 1, 4, 5]), score, viable, k=2)
+    assert m["chosen"] == 2 and m["top1_viable"] == 1.0 and m["top1_feasible"] == 1.0
+    assert m["top1_percentile"] == pytest.approx(50 * (4 + 5) / 6)
+    assert m["topk_precision"] == 0.5
+    oracle = decision_measures(oracle_order(score, viable), score, viable)
+    assert oracle["chosen"] == 3 and oracle["top1_percentile"] == pytest.approx(100 * 11 / 12)
+    r = random_measures(score, viable)
+    assert r["top1_viable"] == pytest.approx(0.5) and r["top1_feasible"] == pytest.approx(4 / 6)
+    assert r["top1_percentile"] == pytest.approx(50.0)
+
+
+def test_decision_threshold_stored_or_default():
+    assert decision_threshold({}) == 0.5
+    assert decision_threshold({"decision_threshold": {"value": 0.83}}) == 0.83
+    with pytest.raises(InputError, match="not a probability"):
+        decision_threshold({"decision_threshold": {"value": "high"}})
+
+
+def test_within_object_against_pooled():
+    from affordgrasp.learning.decision_eval import object_mean_baseline, within_object
+
+    # perfect order inside each object, objects swapped: pooled is wrong on cross pairs
+    objects = np.array(["a"] * 4 + ["b"] * 4, dtype=object)
+    truth = np.r_[0.0, 1, 2, 3, 10, 11, 12, 13]
+    pred = np.r_[10.0, 11, 12, 13, 0, 1, 2, 3]
+    w = within_object(objects, truth, pred, kind="regression")
+    assert w["comparison_accuracy"] == 1.0 and w["objects"] == 2
+    from affordgrasp.learning.evaluation import comparison_accuracy
+
+    pooled = comparison_accuracy(truth, pred)
+    assert pooled == pytest.approx(12 / 28)  # 2 x 6 within pairs right, 16 cross pairs wrong
+    # the object mean: cross pairs right, within pairs tied (one half each)
+    base = object_mean_baseline(objects, truth)
+    assert base["comparison_accuracy"] == pytest.approx((16 + 0.5 * 12) / 28)
+    c = within_object(objects, np.r_[1.0, 0, 0, 0, 0, 0, 0, 0], pred, kind="classification")
+    assert c["objects"] == 1 and c["average_precision"] == pytest.approx(1 / 4)

@@ -1,0 +1,75 @@
+"""The decision loop: candidates, views, predictions, choice, simulated truth."""
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+import affordgrasp as ag  # noqa: E402
+from affordgrasp.cli import main  # noqa: E402
+from affordgrasp.learning.decisions import decision_order, true_percentiles  # noqa: E402
+
+
+def test_plan_chooses_by_the_rule_and_reports_the_truth(box_mesh):
+    p = ag.plan(str(box_mesh), "pick", candidates=6, seed=3)
+    assert isinstance(p, ag.Plan)
+    assert p.chosen == p.order[0] and sorted(p.order.tolist()) == list(range(6))
+    # the order is the rule's on the predictions (threshold 0.5: shipped files store none)
+    again = decision_order(p.probability, p.predicted, threshold=0.5)
+    assert again.tolist() == p.order.tolist()
+    # the truth: -ΣE_h of the simulated candidates, the percentile among them
+    from affordgrasp.columns import HOLD_EFFORT_COLUMNS
+
+    effort = sum(p.table.column(c).to_numpy() for c in HOLD_EFFORT_COLUMNS)
+    np.testing.assert_allclose(p.true_score, -effort)
+    assert p.percentile == true_percentiles(p.true_score)[p.chosen]
+    assert p.measures["oracle"]["top1_percentile"] >= p.percentile
+    assert p.measures["random"]["top1_percentile"] == pytest.approx(50.0)
+    doc = p.summary()
+    assert doc["chosen"]["index"] == p.chosen and doc["candidates"] == 6
+    json.dumps(doc)  # JSON-ready
+    # same seed, same candidates and choice
+    q = ag.plan(str(box_mesh), "pick", candidates=6, seed=3)
+    assert q.chosen == p.chosen and np.array_equal(q.p0, p.p0)
+
+
+def test_plan_with_a_classifier_alone_takes_the_most_probable(box_mesh):
+    p = ag.plan(str(box_mesh), "pick", candidates=5, models="classifier", seed=1)
+    assert p.predicted is None and p.chosen == int(np.argmax(p.probability))
+    assert p.rule == "highest viability probability"
+
+
+def test_plan_command_json_and_bad_input(box_mesh, capsys):
+    rc = main(["plan", str(box_mesh), "--candidates", "4", "--task", "pick", "--json"])
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["candidates"] == 4 and 0 <= doc["chosen"]["percentile"] <= 100
+    assert main(["plan", str(box_mesh), "--candidates", "0"]) == 2
+    assert "candidates" in capsys.readouterr().err
+    assert main(["plan", str(box_mesh), "--task", "nope"]) == 2
+    assert main(["plan", str(box_mesh), "--threshold", "2"]) == 2
+    capsys.readouterr()
+    assert main(["plan", str(box_mesh), "--candidates", "1000000000"]) == 2
+    assert "GB in memory" in capsys.readouterr().err
+
+
+def test_plan_physics_replays_the_chosen_grasp(box_mesh):
+    pytest.importorskip("mujoco")
+    pytest.importorskip("coacd")
+    p = ag.plan(str(box_mesh), "pick", candidates=3, seed=0, physics=True)
+    assert isinstance(p.physics["hold_ok"], bool)
+    assert "physics" in p.timings
+
+
+def test_plan_with_a_sensor_sees_other_images_of_the_same_candidates(box_mesh):
+    from affordgrasp.vision.sensor import SensorModel
+
+    exact = ag.plan(str(box_mesh), "pick", candidates=4, seed=2, models="classifier")
+    sensed = ag.plan(
+        str(box_mesh), "pick", candidates=4, seed=2, models="classifier", sensor=SensorModel()
+    )
+    assert np.array_equal(exact.p0, sensed.p0)
+    np.testing.assert_array_equal(exact.true_score, sensed.true_score)
+    assert not np.array_equal(exact.probability, sensed.probability)
