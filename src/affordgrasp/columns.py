@@ -157,3 +157,23 @@ def hold_dirs_count(values: Mapping[str, Any]) -> np.ndarray:
     """
     hold = np.stack([np.asarray(values[c], dtype=np.float64) for c in HOLD_EFFORT_COLUMNS], 1)
     return np.isfinite(hold).sum(axis=1).astype(np.float64)
+
+
+def hold_directions(values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """The graded hold: how many of the six hold efforts are finite, and their sum.
+
+    Parameters
+    ----------
+    values : mapping
+        Column name to an (n,) array of each hold-effort column.
+
+    Returns
+    -------
+    count : (n,) float64 ndarray
+        Load directions with a finite E_h (0..6).
+    finite_sum : (n,) float64 ndarray
+        ΣE_h over those directions only, N (0 where none is finite).
+    """
+    parts = np.asarray([values[c] for c in HOLD_EFFORT_COLUMNS], dtype=np.float64)
+    finite = np.isfinite(parts)
+    return finite.sum(axis=0).astype(np.float64), np.where(finite, parts, 0.0).sum(axis=0)
