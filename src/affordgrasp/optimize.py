@@ -472,8 +472,11 @@ class OptimizationResult:
 class _Simulator:
     """Scores batches of inputs with F_T on an engine, remembering the best row."""
 
-    def __init__(self, engine, task, mode, thresholds, seed, obj=None, use_points=None):
+    def __init__(
+        self, engine, task, mode, thresholds, seed, obj=None, use_points=None, robust=False
+    ):
         self.engine = engine
+        self.robust = robust  # rank by the rows' robust score
         self.task = task
         self.mode = mode
         self.thresholds = dict(thresholds or {})
@@ -509,7 +512,7 @@ class _Simulator:
             )
             values, self.best_use = best_use_per_grasp(scores, table.num_rows)
             return values
-        values = task_values(self.task, table, self.mode, self.thresholds)
+        values = task_values(self.task, table, self.mode, self.thresholds, robust=self.robust)
         return np.where(np.isnan(values), -np.inf, values)
 
     def found(self, values: np.ndarray, table: pa.Table, offset: int) -> Found | None:
@@ -617,6 +620,7 @@ def optimize(
     baseline: bool = True,
     progress=None,
     uses: int = 0,
+    robust=None,
 ) -> OptimizationResult:
     """Maximise F_T of ``task`` on ``obj`` with CEM; also uniform random sampling, same budget.
 
@@ -652,6 +656,10 @@ def optimize(
         use point among ``uses`` uniform use directions (run ``seed + 1``), as in
         :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
         is found by ray casts, which cost no simulation.
+    robust : RobustSettings or int, optional
+        Score every grasp by its robust score (:mod:`affordgrasp.robust`: K perturbed
+        copies each, so a grasp costs K + 1 simulations; ``budget`` counts grasps). Each
+        grasp then keeps its own use direction (``uses`` is not applied).
 
     Returns
     -------
@@ -667,6 +675,7 @@ def optimize(
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
     from .objects import load_object
+    from .robust import robust_settings
     from .tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:
@@ -681,7 +690,15 @@ def optimize(
     resolved = load_object(obj)
     hand_model = get_hand(hand)
     pop = population or default_population(budget)
-    context = RunContext(objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed)
+    settings = robust_settings(robust)
+    if settings is not None and task_obj.name not in settings.tasks:
+        raise bad_parameter(
+            "robust",
+            f"has no score for task {task_obj.name!r}; robust tasks: {', '.join(settings.tasks)}",
+        )
+    context = RunContext(
+        objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed, robust=settings
+    )
     started = time.perf_counter()
     total = budget + (max(0, budget - min(pop, budget)) if baseline else 0)
     bar = progress(total) if progress is not None else nullcontext(lambda n: None)
@@ -691,11 +708,20 @@ def optimize(
         bar as adv,
     ):
         use_points = None
-        if uses:
+        if uses and settings is None:
             from .pairs import UsePoints
 
             use_points = UsePoints.of(resolved, sample_inputs(seed + 1, 0, uses)[1])
-        sim = _Simulator(eng, task_obj, mode, thresholds, seed, resolved, use_points)
+        sim = _Simulator(
+            eng,
+            task_obj,
+            mode,
+            thresholds,
+            seed,
+            resolved,
+            use_points,
+            robust=settings is not None,
+        )
         # The first generation is the random run's first samples: evaluate them once.
         p0, d = sample_inputs(seed, 0, min(pop, budget))
         first_values, first_table = sim.seeded(0, len(p0))
