@@ -40,5 +40,4 @@ def test_no_library_module_switches_the_backend_or_uses_pyplot():
         for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
         if pattern.search(line)
     ]
-    # physics/report.py is rewritten on its own (Figure objects) and is checked from then on
-    assert offenders == [] or all(o.startswith("physics/report.py") for o in offenders), offenders
+    assert offenders == []

@@ -196,8 +196,11 @@ class _Simulator:
     hand and object (its mass, materials included).
     """
 
-    def __init__(self, engine, task, mode, thresholds, seed, obj, hand, use_points=None):
+    def __init__(
+        self, engine, task, mode, thresholds, seed, obj, hand, use_points=None, robust=False
+    ):
         self.engine = engine
+        self.robust = robust  # rank by the rows' robust score
         self.task = task
         self.mode = mode
         self.thresholds = dict(thresholds or {})
@@ -234,7 +237,7 @@ class _Simulator:
             )
             values, use = best_use_per_grasp(scores, table.num_rows)
             return _Scored(values, table, use)
-        values = task_values(self.task, table, self.mode, self.thresholds)
+        values = task_values(self.task, table, self.mode, self.thresholds, robust=self.robust)
         return _Scored(np.where(np.isnan(values), -np.inf, values), table)
 
     def found(self, scored: _Scored, offset: int) -> Found | None:
@@ -310,6 +313,7 @@ def optimize(
     uses: int = 0,
     restarts: int = 1,
     refine: float = 0.0,
+    robust=None,
 ) -> OptimizationResult:
     """Maximise F_T of ``task`` on ``obj`` with CEM; also uniform random sampling, same budget.
 
@@ -350,6 +354,10 @@ def optimize(
     restarts, refine
         Independent CEM runs sharing the budget, and the share of it that continues the
         best of them (:func:`affordgrasp.search.cem.cem_search`); 1 and 0: one run.
+    robust : RobustSettings or int, optional
+        Score every grasp by its robust score (:mod:`affordgrasp.robust`: K perturbed
+        copies each, so a grasp costs K + 1 simulations; ``budget`` counts grasps). Each
+        grasp then keeps its own use direction (``uses`` is not applied).
 
     Returns
     -------
@@ -365,6 +373,7 @@ def optimize(
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
     from .objects import load_object
+    from .robust import robust_settings
     from .tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:
@@ -379,7 +388,15 @@ def optimize(
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
     resolved = load_object(obj)
     hand_model = get_hand(hand)
-    context = RunContext(objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed)
+    settings = robust_settings(robust)
+    if settings is not None and task_obj.name not in settings.tasks:
+        raise bad_parameter(
+            "robust",
+            f"has no score for task {task_obj.name!r}; robust tasks: {', '.join(settings.tasks)}",
+        )
+    context = RunContext(
+        objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed, robust=settings
+    )
     started = time.perf_counter()
     # The runs' first generations are samples 0..seeded-1 of the run: the baseline reuses them.
     seeded = sum(min(pop, b) for b, pop in runs)
@@ -391,11 +408,21 @@ def optimize(
         bar as adv,
     ):
         use_points = None
-        if uses:
+        if uses and settings is None:
             from .pairs import UsePoints
 
             use_points = UsePoints.of(resolved, sample_inputs(seed + 1, 0, uses)[1])
-        sim = _Simulator(eng, task_obj, mode, thresholds, seed, resolved, hand_model, use_points)
+        sim = _Simulator(
+            eng,
+            task_obj,
+            mode,
+            thresholds,
+            seed,
+            resolved,
+            hand_model,
+            use_points,
+            robust=settings is not None,
+        )
         first_blocks: list[tuple[int, int]] = []  # first generations still to simulate
         reused: list[tuple[int, _Scored]] = []  # (start, batch) of the seeded samples
         best: dict[str, Found | None] = {"cem": None}

@@ -5,10 +5,12 @@ from __future__ import annotations
 from .best import metric_cells, metric_headings, shown_metrics
 from .common import (
     HAND_HELP,
+    add_robust_argument,
     add_scale_arguments,
     add_task_arguments,
     load_objects,
     parse_thresholds,
+    robust_option,
 )
 
 
@@ -43,6 +45,11 @@ def add_arguments(p) -> None:
         metavar="M",
         help="score each grasp with its best of M uniform use points (ray casts, no "
         "simulation; default 2000); 0: each sample keeps its own use direction",
+    )
+    add_robust_argument(
+        p,
+        help="maximise the robust score over K perturbed copies per grasp (each grasp keeps "
+        "its own use direction; --budget counts grasps; default 0: plain F_T)",
     )
     p.add_argument(
         "--restarts",
@@ -96,6 +103,7 @@ def run(args, out) -> None:
         restarts=args.restarts,
         refine=args.refine,
         progress=lambda total: out.progress("optimising", total),
+        robust=robust_option(args),
     )
     shown = shown_metrics(args.task)
     rows = []

@@ -117,8 +117,10 @@ def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
     return out
 
 
-def task_values(task, columns, mode: str = "default", thresholds: Mapping | None = None):
-    """F_T for every row of ``columns``.
+def task_values(
+    task, columns, mode: str = "default", thresholds: Mapping | None = None, robust: bool = False
+):
+    """F_T for every row of ``columns`` (its robust ranking score with ``robust``).
 
     Parameters
     ----------
@@ -130,12 +132,20 @@ def task_values(task, columns, mode: str = "default", thresholds: Mapping | None
         Threshold mode.
     thresholds : mapping of str to float, optional
         Threshold values that replace the mode's.
+    robust : bool
+        Rank by the robust score instead (:func:`affordgrasp.robust.ranking_column`:
+        ``robust_hold`` for pick, ``robust_<task>`` otherwise), read from the rows; the
+        mode and thresholds are those the rows were evaluated with.
 
     Returns
     -------
     (n,) float64 ndarray
         −∞ where a requirement fails.
     """
+    if robust:
+        from ..robust import ranking_values
+
+        return ranking_values(columns, task.name)
     if isinstance(columns, pa.Table):
         # Only the numeric columns: the task reads names, not strings like `object`.
         columns = numeric_columns(columns)
@@ -152,6 +162,7 @@ def best_grasps(
     top: int = 5,
     thresholds: Mapping[str, float] | None = None,
     batch_size: int = 65536,
+    robust: bool = False,
 ) -> BestGrasps:
     """The ``top`` rows of a dataset by the affordance F_T of ``task`` (paper §IV-C).
 
@@ -171,6 +182,9 @@ def best_grasps(
         Overrides of the task's thresholds, e.g. ``{"tau_eps": 0.01}``.
     batch_size : int
         Rows scored at a time (memory stays bounded).
+    robust : bool
+        Rank by the robust score (a dataset generated with ``--robust K``;
+        :func:`affordgrasp.robust.ranking_column`).
 
     Returns
     -------
@@ -197,6 +211,15 @@ def best_grasps(
     dataset = open_dataset(directory)
     flt = pads.field("object").isin(chosen) if chosen else None
     metric_cols = [c for c in METRIC_COLUMNS if c in dataset.schema.names]
+    if robust:
+        from ..robust import ranking_column
+
+        if not manifest.get("robust"):
+            raise DatasetError(
+                f"dataset {str(directory)!r} has no robust columns; generate it with "
+                "--robust K to rank by a robust score, or drop --robust"
+            )
+        metric_cols.append(ranking_column(task_obj.name))
     scanner = dataset.scanner(
         columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
     )
@@ -208,7 +231,7 @@ def best_grasps(
             if batch.num_rows == 0:
                 continue
             table = pa.Table.from_batches([batch])
-            values = task_values(task_obj, table, mode, thresholds)
+            values = task_values(task_obj, table, mode, thresholds, robust=robust)
             scanned += len(values)
             o = pc.index_in(table["object"], value_set=name_set).to_numpy(zero_copy_only=False)
             s = table["sample"].to_numpy()
@@ -221,7 +244,7 @@ def best_grasps(
     rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
     return BestGrasps(
         task=task_obj.name,
-        mode=mode,
+        mode=f"{mode}, robust" if robust else mode,
         table=rows,
         rows_scanned=scanned,
         finite=finite,

@@ -250,6 +250,7 @@ def top_grasps(
     top: int = 4,
     thresholds: dict[str, dict[str, float]] | None = None,
     progress=None,
+    robust: bool = False,
 ) -> dict[tuple[str, str], TaskRanking]:
     """The ``top`` best rows per (object, task) by the tasks' scores.
 
@@ -268,6 +269,8 @@ def top_grasps(
         Task name -> threshold overrides.
     progress : callable, optional
         Called with the number of rows after each batch.
+    robust : bool
+        Rank by the rows' robust scores (:func:`affordgrasp.robust.ranking_column`).
 
     Returns
     -------
@@ -291,7 +294,7 @@ def top_grasps(
         order = np.argsort(codes, kind="stable")
         bounds = np.concatenate([[0], np.cumsum(np.bincount(codes, minlength=len(names)))])
         for task in tasks:
-            scores = task_values(task, numeric, mode, thresholds.get(task.name))
+            scores = task_values(task, numeric, mode, thresholds.get(task.name), robust=robust)
             for code, name in enumerate(names):
                 rows = order[bounds[code] : bounds[code + 1]]
                 key = (name, task.name)
