@@ -155,8 +155,7 @@ def hold_dirs_count(values: Mapping[str, Any]) -> np.ndarray:
     (n,) float64 ndarray
         0 to 6; NaN and +inf efforts count as not held.
     """
-    hold = np.stack([np.asarray(values[c], dtype=np.float64) for c in HOLD_EFFORT_COLUMNS], 1)
-    return np.isfinite(hold).sum(axis=1).astype(np.float64)
+    return hold_directions(values)[0]
 
 
 def hold_directions(values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:

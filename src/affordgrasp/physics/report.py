@@ -44,7 +44,8 @@ HEADLINE = {
     "epsilon": "plain ε",
     "hold_dirs": "graded: load directions with finite E_h",
     "graded_pick": "graded pick: hold_dirs, then −ΣE_h of the finite ones",
-    "robust_pick": "robust pick score",
+    "robust_hold": "robust pick score: graded hold over the perturbed copies",
+    "robust_pick": "robust: q-quantile of pick over the perturbed copies",
     "robust_hold_dirs": "robust: mean hold_dirs over the perturbed copies",
     "robust_fc": "robust: fraction in force closure",
     "robust_epsilon": "robust: mean ε",
@@ -85,8 +86,9 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
         "discharge": col("discharge"),
     }
     preds["hold_dirs"], finite_sum = hold_directions({c: col(c) for c in HOLD_EFFORT_COLUMNS})
-    # Lexicographic: more finite directions first, then the smaller effort over them.
-    preds["graded_pick"] = preds["hold_dirs"] + 1.0 / (1.0 + finite_sum)
+    # Lexicographic: more finite directions first, then the smaller effort over them; the
+    # one-copy form of robust_hold (docs/robust.md), so the plain and robust scores compare.
+    preds["graded_pick"] = preds["hold_dirs"] - finite_sum / (finite_sum + 1.0)
     names = set(table.column_names)
     if "settled_epsilon" in names:
         preds["settled_epsilon"] = col("settled_epsilon")
