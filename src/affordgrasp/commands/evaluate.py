@@ -77,6 +77,7 @@ def best_rows(
     """
     from ..columns import display_value
     from ..schema import metric_arrays
+    from ..search.ranking import best_index
     from ..tasks import MetricColumns, get_task
 
     metrics = MetricColumns(metric_arrays(table))
@@ -93,7 +94,7 @@ def best_rows(
             rows.append([name, "-", "-inf", *["-"] * len(SHOWN_METRICS)])
             doc[name] = None
             continue
-        i = int(np.argmax(np.where(finite, values, -np.inf)))
+        i = best_index(np.where(finite, values, -np.inf))  # +inf does not rank here either
         shown = [float(metrics[m][i]) for m in SHOWN_METRICS]
         cells = [display_value(m, v) for m, v in zip(SHOWN_METRICS, shown, strict=True)]
         rows.append([name, int(table.column("sample")[i].as_py()), float(values[i]), *cells])

@@ -52,6 +52,21 @@ def add_arguments(p) -> None:
         "its own use direction; --budget counts grasps; default 0: plain F_T)",
     )
     p.add_argument(
+        "--restarts",
+        type=int,
+        default=1,
+        metavar="R",
+        help="independent cross-entropy runs sharing the budget (default 1)",
+    )
+    p.add_argument(
+        "--refine",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="share of the budget, in [0, 1), that continues the best run around its best "
+        "grasp (default 0)",
+    )
+    p.add_argument(
         "--no-baseline",
         action="store_true",
         help="skip uniform random sampling with the same budget",
@@ -85,6 +100,8 @@ def run(args, out) -> None:
         population=args.population,
         baseline=not args.no_baseline,
         uses=args.uses,
+        restarts=args.restarts,
+        refine=args.refine,
         progress=lambda total: out.progress("optimising", total),
         robust=robust_option(args),
     )

@@ -4,7 +4,8 @@
 function F_T and keeps the ``top`` rows, so memory stays bounded however large the dataset.
 Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks); ties go to the
 object given first, then the lower sample index, so the result is the same as sorting the
-whole table by (F_T descending, object, sample).
+whole table by (F_T descending, object, sample) (the ranker:
+:class:`affordgrasp.search.ranking.TopRows`).
 
 A first pass reads only the metric columns; a second fetches the full rows of the winners,
 reading only the row groups that hold them.
@@ -26,6 +27,7 @@ import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
 from ..errors import DatasetError, bad_parameter
+from ..search.ranking import TopRows  # noqa: F401  (re-exported: its former home)
 from ..tasks import Task, get_task
 from .layout import read_manifest, write_bytes_atomic
 from .reading import open_dataset, read_errors, select_objects
@@ -149,52 +151,6 @@ def task_values(
         columns = numeric_columns(columns)
     values = task.evaluate(columns, mode=mode, **dict(thresholds or {}))
     return np.asarray(values, dtype=np.float64)
-
-
-class TopRows:
-    """The ``k`` best rows seen so far, streamed: highest value first, ties by the keys.
-
-    Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks). Ties go to the
-    smaller first key, then the smaller second key..., so the result does not depend on the
-    order in which rows arrive.
-
-    Parameters
-    ----------
-    k : int
-        How many rows to keep.
-    n_keys : int
-        Number of tie-breaking key arrays given to ``add``.
-    """
-
-    def __init__(self, k: int, n_keys: int):
-        self.k = k
-        self.values = np.empty(0)
-        self.keys = tuple(np.empty(0, dtype=np.int64) for _ in range(n_keys))
-
-    def add(self, values: np.ndarray, *keys: np.ndarray) -> int:
-        """Offer rows; the best ``k`` of all rows offered so far are kept.
-
-        Parameters
-        ----------
-        values : (n,) float ndarray
-            F_T of each row; −∞ and NaN never rank.
-        *keys : (n,) int ndarray
-            The ``n_keys`` tie-breaking keys of each row.
-
-        Returns
-        -------
-        int
-            How many of these rows can rank (value > −∞).
-        """
-        keep = values > -np.inf  # False for NaN too
-        n = int(keep.sum())
-        if n:
-            v = np.concatenate([self.values, values[keep]])
-            ks = [np.concatenate([a, b[keep]]) for a, b in zip(self.keys, keys, strict=True)]
-            order = np.lexsort((*reversed(ks), -v))[: self.k]  # lexsort: last key first
-            self.values = v[order]
-            self.keys = tuple(a[order] for a in ks)
-        return n
 
 
 def best_grasps(

@@ -33,6 +33,7 @@ from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..metrics.contacts import ContactSet
+from ..objects.prepared import centred_frame_origin  # noqa: F401  (re-exported: its former home)
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
@@ -307,22 +308,6 @@ class ObjectGeometry:
 
 
 _GEOMETRY: IdentityCache[ObjectGeometry] = IdentityCache()
-
-
-def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
-    """Origin of the frame the simulation runs in: the bounding-box centre.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float ndarray
-        m.
-
-    Returns
-    -------
-    (3,) float64 ndarray
-        m.
-    """
-    return 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
 
 
 def object_geometry(obj) -> ObjectGeometry:

@@ -232,7 +232,7 @@ def physics_report(
     if directory is not None:
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
-        from ..commands.output import to_jsonable
+        from ..jsonable import to_jsonable
 
         (directory / "report.json").write_text(json.dumps(to_jsonable(report), indent=2))
         (directory / "report.md").write_text(report_markdown(report))
