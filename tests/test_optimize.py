@@ -134,3 +134,63 @@ def test_a_carried_elite_stays_until_beaten():
     assert trace.state.best == 10.0 and len(trace.values) == 60
     with pytest.raises(InputError, match="initial|state"):
         cem_maximize(narrow_peak, budget=60, seed=0, initial=x0, state=state)
+
+
+@pytest.mark.parametrize("uses", [0, 8])
+def test_optimize_reports_rows_of_the_hand_it_searched_with(wrist_inertia_task, box_mesh, uses):
+    # With use points the winner is simulated once more with its best use point: that
+    # simulation used to fall back to the Barrett hand, so `optimize --hand parallel_jaw`
+    # reported a Barrett row.
+    from affordgrasp.hands import get_hand
+
+    jaw = get_hand("parallel_jaw")
+    result = optimize(
+        str(box_mesh), wrist_inertia_task, budget=40, seed=0, workers=1, hand=jaw, uses=uses
+    )
+    for found in (result.cem, result.random):
+        assert found is not None
+        assert found.row["hand"] == "parallel_jaw"
+        assert len(found.row["joints"]) == len(jaw.dofs) != len(get_hand("barrett").dofs)
+        assert found.row["inertia"] == pytest.approx(found.value, rel=1e-12)
+
+
+def test_optimize_cli_reports_a_parallel_jaw_row(wrist_inertia_task, box_mesh, capsys):
+    args = ["optimize", str(box_mesh), "--task", wrist_inertia_task, "--hand", "parallel_jaw"]
+    code = main(args + ["--budget", "40", "--uses", "8", "--workers", "1", "--json"])
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["cem"]["row"]["hand"] == "parallel_jaw"
+    assert doc["random"]["row"]["hand"] == "parallel_jaw"
+
+
+def test_optimize_with_restarts_keeps_the_budget_and_the_baseline(wrist_inertia_task, box_mesh):
+    from affordgrasp.pipeline import evaluate_samples
+
+    result = optimize(
+        str(box_mesh), wrist_inertia_task, budget=64, seed=2, workers=1, restarts=2, refine=0.25
+    )
+    assert len(result.cem_trace.values) == 64
+    assert {g["run"] for g in result.cem_trace.generations} == {0, 1, 2}
+    assert result.cem.value == pytest.approx(result.cem_trace.values.max(), rel=1e-12)
+    assert result.cem.row["inertia"] == pytest.approx(result.cem.value, rel=1e-12)
+    # the baseline is samples 0..63 of the seed, the runs' first generations reused in it
+    plain = evaluate_samples(str(box_mesh), 64, seed=2).table["inertia"].to_numpy()
+    np.testing.assert_allclose(result.random_values, plain, rtol=1e-12)
+    with pytest.raises(InputError, match="restarts"):
+        optimize(str(box_mesh), wrist_inertia_task, budget=64, restarts=0)
+
+
+def test_optimize_simulates_the_object_with_its_materials(wrist_inertia_task):
+    # A steel blade on a wooden handle: another centre of mass (so other use points) and
+    # another inertia than at uniform density. The winner's row is the materials object's.
+    from affordgrasp.objects import load_object
+    from affordgrasp.pipeline import evaluate_inputs
+
+    steel = load_object("meat_cleaver", materials=True)
+    result = optimize(steel, wrist_inertia_task, budget=40, seed=0, workers=1, uses=8)
+    p0, d = result.cem.p0[None], result.cem.use_dir[None]
+    again = evaluate_inputs(steel, p0, d).table.to_pylist()[0]
+    uniform = evaluate_inputs(load_object("meat_cleaver"), p0, d).table.to_pylist()[0]
+    for name in ("inertia", "use_edge_angle"):
+        assert result.cem.row[name] == pytest.approx(again[name], rel=1e-12)
+        assert result.cem.row[name] != pytest.approx(uniform[name], rel=1e-6)

@@ -196,7 +196,7 @@ def test_optimizer_refuses_bad_restarts(budget, restarts):
 
 
 def test_refine_continues_the_best_restart_within_the_budget(monkeypatch):
-    import affordgrasp.optimize as optimize_module
+    import affordgrasp.search.cem as optimize_module
 
     calls = []
     real = optimize_module.cem_maximize
@@ -238,3 +238,30 @@ def test_optimizer_refuses_a_refine_share_that_rounds_to_nothing():
 
     with pytest.raises(InputError, match="rounds to no simulation"):
         optimize_pairs("hammer", "pick", budget=96, uses=10, restarts=2, refine=0.001)
+
+
+def test_pair_searches_simulate_the_hand_they_are_given():
+    from affordgrasp import tasks
+    from affordgrasp.hands import get_hand
+
+    # finite on every grasp: the searches rank rows whatever the hand
+    tasks.register_task("inertia-only", lambda m, t: m["inertia"], requires=("inertia",))
+    jaw = get_hand("parallel_jaw")
+    try:
+        searches = (
+            best_pairs("hammer", "inertia-only", grasps=40, uses=20, top=2, hand="parallel_jaw"),
+            optimize_pairs(
+                "hammer", "inertia-only", budget=32, uses=20, top=2, population=16, hand=jaw
+            ),
+        )
+    finally:
+        tasks.unregister_task("inertia-only")
+    for found in searches:
+        assert found.table.num_rows == 2
+        assert set(found.table.column("hand").to_pylist()) == {"parallel_jaw"}
+        joints = found.table.column("joints").to_pylist()
+        assert {len(j) for j in joints} == {len(jaw.dofs)} != {len(get_hand("barrett").dofs)}
+        # the re-simulated rows score what the search scored
+        np.testing.assert_allclose(
+            found.table.column("value").to_numpy(), found.table.column("inertia").to_numpy()
+        )

@@ -24,6 +24,7 @@ name                   what
 ``best_grasps``        the argmax of a task over a dataset
 ``plan``               a grasp chosen by learned models from camera-in-hand views, checked
                        in simulation: a :class:`Plan`
+``RobustSettings``     perturbations of robust evaluation (``evaluate(..., robust=K)``)
 =====================  ===================================================================
 
 Names are imported on first use, so ``import affordgrasp`` stays fast. Units, frames and
@@ -62,6 +63,7 @@ _EXPORTS = {
     "best_grasps": "affordgrasp.dataset.best",
     "plan": "affordgrasp.learning.plan",
     "Plan": "affordgrasp.learning.plan",
+    "RobustSettings": "affordgrasp.robust",
 }
 
 if TYPE_CHECKING:
@@ -73,6 +75,7 @@ if TYPE_CHECKING:
     from .metrics.contacts import ContactSet
     from .objects.resolve import GraspObject, list_families, load_object
     from .pipeline import Evaluation, evaluate
+    from .robust import RobustSettings
     from .tasks import Task, get_task, list_tasks, load_task_file, register_task
 
 
@@ -95,6 +98,7 @@ __all__ = [
     "GraspObject",
     "Hand",
     "Plan",
+    "RobustSettings",
     "Task",
     "best_grasps",
     "evaluate",

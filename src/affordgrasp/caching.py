@@ -20,7 +20,6 @@ import hashlib
 import json
 import logging
 import os
-import tempfile
 import weakref
 from collections.abc import Callable, Hashable, Mapping
 from pathlib import Path
@@ -177,17 +176,12 @@ def write_arrays(path: Path, key: Mapping[str, Any], arrays: Mapping[str, np.nda
     data = {name: np.asarray(a) for name, a in arrays.items()}
     data[_CHECKSUM] = np.array(_checksum(data))
     data[_KEY] = np.array(json.dumps(key, sort_keys=True))
-    tmp = None
+    from .writing import atomic_write
+
+    save: Any = np.savez  # names are the arrays' keywords
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".npz")
-        save: Any = np.savez  # names are the arrays' keywords
-        with os.fdopen(fd, "wb") as f:
-            save(f, **data)
-        os.replace(tmp, path)
-        tmp = None
+        # A cache entry need not survive a power cut (its checksum catches a torn one).
+        atomic_write(path, lambda f: save(f, **data), fsync=False)
     except OSError as exc:  # a read-only or full cache only costs the rebuild next time
         log.warning("could not write cache entry %s (%s)", path, exc)
-    finally:
-        if tmp is not None:
-            Path(tmp).unlink(missing_ok=True)

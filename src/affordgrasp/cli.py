@@ -14,6 +14,7 @@ import logging
 import sys
 
 from . import __version__
+from .commands import add_verbose_argument  # also used by subcommands' own parsers
 from .errors import InputError, cli_message
 from .interrupts import interrupt_in, stop_on_signals
 
@@ -41,19 +42,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
-
-
-def add_verbose_argument(p: argparse.ArgumentParser) -> None:
-    """``-v`` on a subcommand too (``affordgrasp generate ... -v``); the top level sets it.
-
-    Parameters
-    ----------
-    p : argparse.ArgumentParser
-        The subcommand's parser, changed in place.
-    """
-    p.add_argument(
-        "-v", "--verbose", action="store_true", default=argparse.SUPPRESS, help="log details"
-    )
 
 
 def build_parser() -> argparse.ArgumentParser:

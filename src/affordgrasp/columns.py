@@ -15,6 +15,7 @@ import numpy as np
 HOLD_EFFORT_SUFFIXES: tuple[str, ...] = ("px", "nx", "py", "ny", "pz", "nz")
 HOLD_EFFORT_COLUMNS: tuple[str, ...] = tuple(f"hold_effort_{s}" for s in HOLD_EFFORT_SUFFIXES)
 HOLD_EFFORT_SUM = "hold_effort_sum"  # derived column: ΣE_h
+HOLD_DIRS = "hold_dirs"  # derived column: load directions with finite E_h (0-6)
 
 # Metrics that need a use point (NaN for a row whose use ray missed the object).
 USE_METRICS: tuple[str, ...] = (
@@ -48,7 +49,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
-DERIVED_COLUMNS: tuple[str, ...] = (HOLD_EFFORT_SUM,)
+DERIVED_COLUMNS: tuple[str, ...] = (HOLD_EFFORT_SUM, HOLD_DIRS)
 
 # Unit of each metric column as stored (SI; "" when dimensionless). E_i is per 1 N·m of
 # swing torque; I is at the object's mass properties: unit density by default, as in the
@@ -59,6 +60,7 @@ METRIC_UNITS: dict[str, str] = {
     "inertia": "kg·m²",
     **{c: "N" for c in HOLD_EFFORT_COLUMNS},
     HOLD_EFFORT_SUM: "N",
+    HOLD_DIRS: "",
     "impact_effort": "N per N·m",
     "discharge": "",
     "use_force": "N",
@@ -157,3 +159,39 @@ def hold_effort_sum(values: Mapping[str, Any]) -> Any:
         return math.nan
     total = np.sum(np.asarray(parts, dtype=np.float64), axis=0)
     return float(total) if np.ndim(total) == 0 else total
+
+
+def hold_dirs_count(values: Mapping[str, Any]) -> np.ndarray:
+    """Number of the six load directions with finite E_h (the graded hold, docs/robust.md).
+
+    Parameters
+    ----------
+    values : mapping
+        Column name to an (n,) array of the six ``hold_effort_*`` columns (N).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        0 to 6; NaN and +inf efforts count as not held.
+    """
+    return hold_directions(values)[0]
+
+
+def hold_directions(values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """The graded hold: how many of the six hold efforts are finite, and their sum.
+
+    Parameters
+    ----------
+    values : mapping
+        Column name to an (n,) array of each hold-effort column.
+
+    Returns
+    -------
+    count : (n,) float64 ndarray
+        Load directions with a finite E_h (0..6).
+    finite_sum : (n,) float64 ndarray
+        ΣE_h over those directions only, N (0 where none is finite).
+    """
+    parts = np.asarray([values[c] for c in HOLD_EFFORT_COLUMNS], dtype=np.float64)
+    finite = np.isfinite(parts)
+    return finite.sum(axis=0).astype(np.float64), np.where(finite, parts, 0.0).sum(axis=0)

@@ -1,353 +1,73 @@
 """Direct optimisation of an affordance F_T over (p0, d) in simulation (conventions: Datasets).
 
-Beyond the paper's brute-force argmax: the cross-entropy method (CEM) searches the 8-D box
-x = (p0, d) ∈ [-1, 1]^5 × [0, 1] × [-1, 1]^2 for the grasp with the largest F_T.
+Beyond the paper's brute-force argmax: the cross-entropy method (CEM,
+:mod:`affordgrasp.search.cem`) searches the 8-D box x = (p0, d) for the grasp with the largest
+F_T. :func:`optimize` applies it to a task on an object, simulating on an engine (local
+processes or Ray) with the hand and the object (its mass, materials included) it is given,
+and, with the same simulation budget, runs uniform random sampling:
 
-* Generation 0 is the run's uniform samples 0..m-1 (the same samples ``generate`` and the
-  random baseline use), so CEM starts where random sampling starts.
-* Each later generation is drawn from a Gaussian with a diagonal covariance, fitted to the
-  elites (the best ``elite_fraction`` of the population, plus the previous elites: the
-  simulation is deterministic, so keeping them is safe) and smoothed with the previous fit.
-  Angles (the approach azimuth u1, the roll u3 and the use azimuth d1) wrap around; the other
-  coordinates are clipped to the box.
-* −∞ (a failed threshold) ranks below every finite value and never becomes an elite once a
-  finite value is known. Until then the elites are the samples with the best *guidance*:
-  how close the grasp came to a usable one (contacts made, ε), which leads the search
-  towards the feasible region instead of sampling blindly.
-* A share of every generation (``explore_fraction``, and at least half while only guidance
-  leads) is drawn uniformly, so feasible regions the fit has not seen keep being found.
+* the first generation of CEM is the run's uniform samples 0..m-1 (the samples ``generate``
+  and the random baseline use), so CEM starts where random sampling starts, and the
+  baseline reuses those rows;
+* with ``uses`` > 0 each grasp is scored with its best use point (:mod:`affordgrasp.pairs`).
 
-:func:`cem_maximize` is the method on any vectorised objective; :func:`optimize` applies it to
-a task on an object and, with the same simulation budget, runs uniform random sampling.
+The method itself (``cem_maximize``, ``CEMState``, ``CEMTrace``, ``uniform_inputs``...) lives
+in :mod:`affordgrasp.search.cem` and is re-exported here.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from contextlib import nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
 
-from .errors import InputError, bad_parameter
+from .errors import bad_parameter
 from .hands import Hand
+from .search.cem import (
+    DIM,
+    HIGH,
+    LOW,
+    MIN_STD,
+    PERIODIC,
+    WIDTH,
+    CEMState,
+    CEMTrace,
+    Objective,
+    cem_maximize,
+    cem_search,
+    default_population,
+    plan_runs,
+    uniform_inputs,
+)
+from .search.guidance import guidance
+from .search.ranking import best_index
+
+__all__ = [
+    "DIM",
+    "HIGH",
+    "LOW",
+    "MIN_STD",
+    "PERIODIC",
+    "WIDTH",
+    "CEMState",
+    "CEMTrace",
+    "Found",
+    "Objective",
+    "OptimizationResult",
+    "cem_maximize",
+    "cem_search",
+    "default_population",
+    "guidance",
+    "optimize",
+    "uniform_inputs",
+]
 
 log = logging.getLogger(__name__)
-
-DIM = 8
-LOW = np.array([-1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0])
-HIGH = np.ones(DIM)
-WIDTH = HIGH - LOW
-# u1 (azimuth, π·u1), u3 (roll, π·u3) and d1 (use azimuth) are angles: period 2 in u.
-PERIODIC = np.array([True, False, True, False, False, False, True, False])
-
-Objective = Callable[[np.ndarray], np.ndarray]
-MIN_STD = 0.01  # default floor of CEM's std, as a fraction of each coordinate's range
-
-
-@dataclass
-class CEMState:
-    """Where a CEM run stands: its sampling distribution and its elites.
-
-    Passed back to :func:`cem_maximize` (``state=``), it continues the run: the next
-    generation is drawn from this distribution and ranked together with these elites.
-
-    Attributes
-    ----------
-    mean, std : (8,) float64 ndarray or None
-        The Gaussian of the next generation (None: no fit yet, the next is uniform).
-    elite_x : (k, 8) float64 ndarray
-        The elites' inputs, best first.
-    elite_v : (k,) float64 ndarray
-        Their values.
-    elite_g : (k,) float64 ndarray
-        Their guidance (NaN without).
-    """
-
-    mean: np.ndarray | None
-    std: np.ndarray | None
-    elite_x: np.ndarray
-    elite_v: np.ndarray
-    elite_g: np.ndarray
-
-    @property
-    def best(self) -> float:
-        """The best elite value (−inf when no elite is finite)."""
-        finite = self.elite_v[self.elite_v > -np.inf]
-        return float(finite.max()) if len(finite) else -math.inf
-
-    def around_best(self, std: float = MIN_STD) -> CEMState:
-        """The same elites, the distribution centred on the best of them.
-
-        A run that met its best point late or alone has fitted its distribution to few,
-        scattered elites (two finite elites: their midpoint); centring on the best point
-        with a narrow std searches that point's neighbourhood instead.
-
-        Parameters
-        ----------
-        std : float
-            The std as a fraction of each coordinate's range.
-
-        Returns
-        -------
-        CEMState
-            Unchanged when there are no elites.
-        """
-        if len(self.elite_x) == 0:
-            return self
-        return CEMState(
-            mean=np.array(self.elite_x[0], dtype=np.float64),
-            std=std * WIDTH,
-            elite_x=self.elite_x,
-            elite_v=self.elite_v,
-            elite_g=self.elite_g,
-        )
-
-
-@dataclass
-class CEMTrace:
-    """Every point CEM evaluated, in order, and what each generation did.
-
-    Attributes
-    ----------
-    x : (budget, 8) float64 ndarray
-        Inputs (p0 (6), d (2)).
-    values : (budget,) float64 ndarray
-        Objective values (−inf allowed).
-    generations : list of dict
-        Per generation: evaluations so far, best so far, finite fraction, mean std.
-    state : CEMState or None
-        The run's final distribution and elites (pass it as ``state=`` to continue the run).
-    """
-
-    x: np.ndarray
-    values: np.ndarray
-    generations: list[dict] = field(default_factory=list)
-    state: CEMState | None = None
-
-    @property
-    def best_index(self) -> int | None:
-        """Index of the best evaluation (the first of ties), None when none is finite."""
-        if not np.any(self.values > -np.inf):
-            return None
-        return int(np.argmax(self.values))
-
-    def best_so_far(self) -> np.ndarray:
-        """The best value among the first i + 1 evaluations, for every i.
-
-        Returns
-        -------
-        (budget,) float64 ndarray
-            Non-decreasing; NaN counts as −inf.
-        """
-        return np.maximum.accumulate(np.where(np.isnan(self.values), -np.inf, self.values))
-
-
-def default_population(budget: int) -> int:
-    """About 20 generations, each between 32 and 1000 samples.
-
-    Parameters
-    ----------
-    budget : int
-        Total evaluations.
-
-    Returns
-    -------
-    int
-    """
-    return int(np.clip(budget // 20, 32, 1000))
-
-
-def _wrap(u: np.ndarray) -> np.ndarray:
-    return (u + 1.0) % 2.0 - 1.0
-
-
-def _fit(elites: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and std of elite points (k, 8), circular on the periodic coordinates."""
-    mean = elites.mean(axis=0)
-    ang = np.pi * elites[:, PERIODIC]
-    mean[PERIODIC] = np.arctan2(np.sin(ang).mean(axis=0), np.cos(ang).mean(axis=0)) / np.pi
-    dev = elites - mean
-    dev[:, PERIODIC] = _wrap(dev[:, PERIODIC])
-    return mean, np.sqrt((dev**2).mean(axis=0))
-
-
-def _sample(rng: np.random.Generator, mean: np.ndarray, std: np.ndarray, n: int) -> np.ndarray:
-    x = mean + std * rng.standard_normal((n, DIM))
-    x[:, PERIODIC] = _wrap(x[:, PERIODIC])
-    return np.clip(x, LOW, HIGH)
-
-
-def uniform_inputs(rng: np.random.Generator, n: int) -> np.ndarray:
-    """Uniform samples of the (p0, d) box.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-    n : int
-
-    Returns
-    -------
-    (n, 8) float64 ndarray
-        p0 in [-1, 1]^5 × [0, 1], d in [-1, 1]^2.
-    """
-    return LOW + WIDTH * rng.random((n, DIM))
-
-
-def cem_maximize(
-    objective: Objective,
-    *,
-    budget: int,
-    seed: int = 0,
-    population: int | None = None,
-    elite_fraction: float = 0.1,
-    smoothing: float = 0.7,
-    min_std: float = MIN_STD,
-    explore_fraction: float = 0.1,
-    initial: np.ndarray | None = None,
-    on_generation: Callable[[int], None] | None = None,
-    state: CEMState | None = None,
-) -> CEMTrace:
-    """Maximise ``objective`` over the (p0, d) box with the cross-entropy method.
-
-    Parameters
-    ----------
-    objective : callable
-        (m, 8) inputs → (m,) values; −inf for infeasible, NaN counts as −inf. It may return
-        (values, guidance) instead: among infeasible points, a larger guidance (finite)
-        ranks first, so the search heads for the feasible region while no or few feasible
-        points are known; guidance never ranks an infeasible point above a feasible.
-    budget : int
-        Total evaluations.
-    seed : int
-    population : int, optional
-        Per generation (default :func:`default_population`).
-    elite_fraction : float
-        Share of a generation that refits the distribution.
-    smoothing : float
-        Weight of the new fit against the old one.
-    min_std : float
-        Floor of the std, as a fraction of each coordinate's range.
-    explore_fraction : float
-        Share of every later generation drawn uniformly from the box (at least half while
-        no feasible point is known).
-    initial : (m, 8) float64 ndarray, optional
-        The first generation (default: uniform from ``seed``).
-    on_generation : callable, optional
-        Called with the number of evaluations of each generation.
-    state : CEMState, optional
-        Continue a run (its ``CEMTrace.state``) instead of starting one: the first
-        generation is drawn from its distribution and its elites stay elites until better
-        points replace them (``initial`` must then be None).
-
-    Returns
-    -------
-    CEMTrace
-    """
-    if not isinstance(budget, int) or budget < 1:
-        raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
-    pop = population or default_population(budget)
-    if pop < 2:
-        raise InputError(f"the population must be at least 2, got {pop}")
-    if not 0 < elite_fraction <= 0.5:
-        raise InputError(f"elite_fraction must lie in (0, 0.5], got {elite_fraction}")
-    rng = np.random.default_rng(np.random.SeedSequence([seed, 0xCE]))
-    n_elite = max(2, math.ceil(elite_fraction * pop))
-    floor = min_std * WIDTH
-    xs: list[np.ndarray] = []
-    vs: list[np.ndarray] = []
-    generations: list[dict] = []
-    if state is not None and initial is not None:
-        raise InputError("give either initial (a new run) or state (a run to continue)")
-    mean = std = None
-    elite_x = np.empty((0, DIM))
-    elite_v = np.empty(0)
-    elite_g = np.empty(0)
-    if state is not None:
-        mean = None if state.mean is None else np.array(state.mean, dtype=np.float64)
-        std = None if state.std is None else np.array(state.std, dtype=np.float64)
-        elite_x = np.array(state.elite_x, dtype=np.float64).reshape(-1, DIM)
-        elite_v = np.array(state.elite_v, dtype=np.float64).reshape(-1)
-        elite_g = np.array(state.elite_g, dtype=np.float64).reshape(-1)
-    used = 0
-    while used < budget:
-        m = min(pop, budget - used)
-        if used == 0 and initial is not None:
-            x = np.asarray(initial, dtype=np.float64)[:m]
-        elif mean is None:
-            x = uniform_inputs(rng, m)
-        else:
-            x = _sample(rng, mean, std, m)
-            # A share of uniform samples keeps finding feasible regions the fit has not seen;
-            # half of the generation while the fit follows guidance only (it may mislead).
-            share = explore_fraction if np.any(elite_v > -np.inf) else max(explore_fraction, 0.5)
-            k = int(round(share * m))
-            x[:k] = uniform_inputs(rng, k)
-        got = objective(x)
-        v, g = got if isinstance(got, tuple) else (got, None)
-        v = np.asarray(v, dtype=np.float64)
-        if v.shape != (len(x),):
-            raise ValueError(f"objective returned shape {v.shape} for {len(x)} inputs")
-        v = np.where(np.isnan(v), -np.inf, v)
-        if g is None:
-            g = np.full(len(x), np.nan)  # no guidance: infeasible points never become elites
-        g = np.asarray(g, dtype=np.float64)
-        xs.append(x)
-        vs.append(v)
-        used += len(x)
-        # Elites among this generation and the previous elites: finite values first (best
-        # first), then the infeasible ones with the best guidance, if any.
-        cx = np.concatenate([elite_x, x])
-        cv = np.concatenate([elite_v, v])
-        cg = np.concatenate([elite_g, g])
-        finite = cv > -np.inf  # +inf, if a task gives it, is a value too; NaN is not
-        # Guidance only while nothing feasible is known: it is a heuristic, the values are not.
-        usable = finite | (np.isfinite(cg) & ~finite.any())
-        cx, cv, cg, finite = cx[usable], cv[usable], cg[usable], finite[usable]
-        order = np.lexsort((-np.nan_to_num(cg), -np.where(finite, cv, 0.0), ~finite))[:n_elite]
-        elite_x, elite_v, elite_g = cx[order], cv[order], cg[order]
-        if len(elite_v) >= 2:
-            new_mean, new_std = _fit(elite_x)
-            if mean is None:
-                mean, std = new_mean, np.maximum(new_std, floor)
-            else:
-                step = new_mean - mean
-                step[PERIODIC] = _wrap(step[PERIODIC])
-                mean = mean + smoothing * step
-                mean[PERIODIC] = _wrap(mean[PERIODIC])
-                std = np.maximum(smoothing * new_std + (1 - smoothing) * std, floor)
-        elif len(elite_v) == 1:
-            # One usable point: search around it, broadly.
-            mean = elite_x[0].copy()
-            std = WIDTH / 4 if std is None else std
-        generations.append(
-            {
-                "generation": len(generations),
-                "evaluations": used,
-                "best": float(elite_v[0]) if len(elite_v) else -math.inf,
-                "finite_elites": int(np.sum(elite_v > -np.inf)),
-                "finite_fraction": float(np.mean(v > -np.inf)),
-                "mean_std": float(np.mean(std / WIDTH)) if std is not None else None,
-            }
-        )
-        if on_generation is not None:
-            on_generation(len(x))
-    return CEMTrace(
-        x=np.concatenate(xs),
-        values=np.concatenate(vs),
-        generations=generations,
-        state=CEMState(
-            mean=None if mean is None else mean.copy(),
-            std=None if std is None else std.copy(),
-            elite_x=elite_x.copy(),
-            elite_v=elite_v.copy(),
-            elite_g=elite_g.copy(),
-        ),
-    )
 
 
 # -------------------------------------------------------------------------- on the simulator
@@ -470,18 +190,25 @@ class OptimizationResult:
 
 
 class _Simulator:
-    """Scores batches of inputs with F_T on an engine, remembering the best row."""
+    """Scores batches of inputs with F_T on an engine.
 
-    def __init__(self, engine, task, mode, thresholds, seed, obj=None, use_points=None):
+    Every simulation, on the engine and again for a winner's full row, uses the search's
+    hand and object (its mass, materials included).
+    """
+
+    def __init__(
+        self, engine, task, mode, thresholds, seed, obj, hand, use_points=None, robust=False
+    ):
         self.engine = engine
+        self.robust = robust  # rank by the rows' robust score
         self.task = task
         self.mode = mode
         self.thresholds = dict(thresholds or {})
         self.seed = seed
         self.next_sample = 0
         self.obj = obj
+        self.hand = hand
         self.use_points = use_points  # pairs.UsePoints: score a grasp with its best use
-        self.best_use: np.ndarray | None = None
 
     def _run(self, jobs) -> pa.Table:
         handles = [self.engine.submit(j) for j in jobs]
@@ -498,7 +225,8 @@ class _Simulator:
         bounds = np.linspace(0, n, parts + 1).astype(int)
         return [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
 
-    def score(self, table: pa.Table) -> np.ndarray:
+    def score(self, table: pa.Table) -> _Scored:
+        """F_T of every row (with use points: with its best use point)."""
         from .dataset.best import task_values
 
         if self.use_points is not None:
@@ -507,26 +235,30 @@ class _Simulator:
             scores = pair_scores(
                 self.obj, table, self.use_points, self.task.name, self.mode, **self.thresholds
             )
-            values, self.best_use = best_use_per_grasp(scores, table.num_rows)
-            return values
-        values = task_values(self.task, table, self.mode, self.thresholds)
-        return np.where(np.isnan(values), -np.inf, values)
+            values, use = best_use_per_grasp(scores, table.num_rows)
+            return _Scored(values, table, use)
+        values = task_values(self.task, table, self.mode, self.thresholds, robust=self.robust)
+        return _Scored(np.where(np.isnan(values), -np.inf, values), table)
 
-    def found(self, values: np.ndarray, table: pa.Table, offset: int) -> Found | None:
+    def found(self, scored: _Scored, offset: int) -> Found | None:
         """The best row of a scored batch; with use points, its grasp with its best use
-        point, simulated once more to give the whole row."""
-        best = _found(values, table, offset)
-        if best is None or self.use_points is None:
-            return best
-        from .pipeline import evaluate_inputs
+        point, simulated once more (same hand, same object) to give the whole row."""
+        i = best_index(scored.values)
+        if i is None:
+            return None
+        row = scored.table.slice(i, 1).to_pylist()[0]
+        p0 = np.asarray(row["p0"], dtype=np.float64)
+        d = np.asarray(row["use_dir"], dtype=np.float64)
+        if self.use_points is not None:
+            from .pipeline import evaluate_inputs
 
-        i = int(np.argmax(values))
-        d = self.use_points.use_dir[self.best_use[i]]
-        rows = evaluate_inputs(self.obj, best.p0[None], d[None], seed=self.seed).table
-        row = rows.to_pylist()[0]
-        return Found(best.value, best.p0, np.asarray(d, dtype=np.float64), best.evaluations, row)
+            d = np.asarray(self.use_points.use_dir[scored.use[i]], dtype=np.float64)
+            again = evaluate_inputs(self.obj, p0[None], d[None], hand=self.hand, seed=self.seed)
+            row = again.table.to_pylist()[0]
+        return Found(float(scored.values[i]), p0, d, offset + i + 1, row)
 
-    def inputs(self, x: np.ndarray) -> tuple[np.ndarray, pa.Table]:
+    def inputs(self, x: np.ndarray) -> _Scored:
+        """Simulate and score given inputs (rows numbered on from the last)."""
         from .dataset.engines import Job
 
         start = self.next_sample
@@ -535,68 +267,24 @@ class _Simulator:
             for a, b in self._split(len(x))
         ]
         self.next_sample += len(x)
-        table = self._run(jobs)
-        return self.score(table), table
+        return self.score(self._run(jobs))
 
-    def seeded(self, start: int, stop: int) -> tuple[np.ndarray, pa.Table]:
+    def seeded(self, start: int, stop: int) -> _Scored:
+        """Simulate and score samples ``start .. stop - 1`` of the run's seed."""
         from .dataset.engines import Job
 
         jobs = [Job(0, start + a, b - a) for a, b in self._split(stop - start)]
-        table = self._run(jobs)
-        return self.score(table), table
+        self.next_sample = max(self.next_sample, stop)  # inputs() rows are numbered on
+        return self.score(self._run(jobs))
 
 
-def _found(values: np.ndarray, table: pa.Table, offset: int) -> Found | None:
-    if not np.any(values > -np.inf):
-        return None
-    i = int(np.argmax(values))
-    row = table.slice(i, 1).to_pylist()[0]
-    return Found(
-        value=float(values[i]),
-        p0=np.asarray(row["p0"], dtype=np.float64),
-        use_dir=np.asarray(row["use_dir"], dtype=np.float64),
-        evaluations=offset + i + 1,
-        row=row,
-    )
+@dataclass(frozen=True)
+class _Scored:
+    """A simulated batch: its rows, F_T and (with use points) each grasp's best use index."""
 
-
-def guidance(table: pa.Table, requires=()) -> np.ndarray:
-    """How close each grasp came to a usable one.
-
-    Contacts made, plus 100 ε, plus, for a task that reads them (``requires``), how sharp
-    the use point is (3 (1 - angle / π)) and how well it discharges the swing (3 δ).
-    Ranks infeasible (−∞) samples among themselves while CEM has too few feasible ones: more
-    links touching and force closure make every task's thresholds likelier to pass, and
-    the use terms lead the use direction towards an edge or a discharging point, which
-    uniform use directions rarely hit (a knife's cutting edge: 0.1 % of them).
-
-    Parameters
-    ----------
-    table : pyarrow.Table
-        Evaluated rows.
-    requires : iterable of str
-        Metric columns the task reads.
-
-    Returns
-    -------
-    (n,) float64 ndarray
-    """
-    n = table["n_contacts"].to_numpy().astype(np.float64)
-    eps = table["epsilon"].to_numpy() if "epsilon" in table.column_names else 0.0
-    g = n + 100.0 * np.nan_to_num(eps)
-    names = table.column_names
-    if "use_edge_angle" in requires and "use_edge_angle" in names:
-        angle = np.nan_to_num(table["use_edge_angle"].to_numpy(), nan=np.pi)
-        g = g + 3.0 * (1.0 - angle / np.pi)
-    if "use_wedge_angle" in requires and "use_wedge_angle" in names and "use_force" in requires:
-        wedge = np.nan_to_num(table["use_wedge_angle"].to_numpy(), nan=np.pi)
-        g = g + 3.0 * np.clip(1.0 - wedge / np.pi, 0.0, 1.0)
-    if "use_clearance" in requires and "use_clearance" in names:
-        clear = np.nan_to_num(table["use_clearance"].to_numpy(), nan=0.0, posinf=0.0)
-        g = g + 3.0 * np.clip(clear / 0.035, 0.0, 1.0)
-    if "discharge" in requires and "discharge" in names:
-        g = g + 3.0 * np.nan_to_num(table["discharge"].to_numpy())
-    return g
+    values: np.ndarray
+    table: pa.Table
+    use: np.ndarray | None = None
 
 
 def _better(a: Found | None, b: Found | None) -> Found | None:
@@ -623,13 +311,16 @@ def optimize(
     baseline: bool = True,
     progress=None,
     uses: int = 0,
+    restarts: int = 1,
+    refine: float = 0.0,
+    robust=None,
 ) -> OptimizationResult:
     """Maximise F_T of ``task`` on ``obj`` with CEM; also uniform random sampling, same budget.
 
     Parameters
     ----------
     obj : str or GraspObject
-        An object spec or object.
+        An object spec or object (a resolved object keeps its mass, e.g. its materials).
     task : str
         A registered task.
     mode : str
@@ -640,6 +331,7 @@ def optimize(
     thresholds : mapping of str to float, optional
         Threshold values that replace the mode's.
     hand : Hand or str
+        The hand of every simulation, the winners' rows included.
     workers : int, optional
         Simulation processes.
     engine : str
@@ -650,7 +342,8 @@ def optimize(
         CEM population per generation.
     baseline : bool
         Also run random sampling (samples 0..budget-1 of the run ``seed``, the rows
-        ``generate --seed`` writes; CEM's first generation is their first part, reused).
+        ``generate --seed`` writes; the first generation of each CEM run is the next part of
+        them, reused).
     progress : callable, optional
         ``progress(total)`` returns a context manager yielding ``advance(n)``.
     uses : int
@@ -658,6 +351,13 @@ def optimize(
         use point among ``uses`` use points drawn by surface area (run ``seed + 1``), as in
         :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
         is found by ray casts, which cost no simulation.
+    restarts, refine
+        Independent CEM runs sharing the budget, and the share of it that continues the
+        best of them (:func:`affordgrasp.search.cem.cem_search`); 1 and 0: one run.
+    robust : RobustSettings or int, optional
+        Score every grasp by its robust score (:mod:`affordgrasp.robust`: K perturbed
+        copies each, so a grasp costs K + 1 simulations; ``budget`` counts grasps). Each
+        grasp then keeps its own use direction (``uses`` is not applied).
 
     Returns
     -------
@@ -673,6 +373,7 @@ def optimize(
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
     from .objects import load_object
+    from .robust import robust_settings
     from .tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:
@@ -681,15 +382,25 @@ def optimize(
         raise bad_parameter("uses", f"must be a non-negative integer, got {uses!r}")
     if not isinstance(seed, int) or seed < 0:
         raise bad_parameter("seed", f"must be a non-negative integer, got {seed!r}")
+    runs, _ = plan_runs(budget, restarts, refine, population)  # bad split: fail now
     check_engine(engine, workers, address)
     task_obj = get_task(task) if isinstance(task, str) else task
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
     resolved = load_object(obj)
     hand_model = get_hand(hand)
-    pop = population or default_population(budget)
-    context = RunContext(objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed)
+    settings = robust_settings(robust)
+    if settings is not None and task_obj.name not in settings.tasks:
+        raise bad_parameter(
+            "robust",
+            f"has no score for task {task_obj.name!r}; robust tasks: {', '.join(settings.tasks)}",
+        )
+    context = RunContext(
+        objects=(ObjectPayload.from_object(resolved),), hand=hand_model, seed=seed, robust=settings
+    )
     started = time.perf_counter()
-    total = budget + (max(0, budget - min(pop, budget)) if baseline else 0)
+    # The runs' first generations are samples 0..seeded-1 of the run: the baseline reuses them.
+    seeded = sum(min(pop, b) for b, pop in runs)
+    total = budget + (max(0, budget - seeded) if baseline else 0)
     bar = progress(total) if progress is not None else nullcontext(lambda n: None)
     with (
         stop_on_signals(),
@@ -697,48 +408,66 @@ def optimize(
         bar as adv,
     ):
         use_points = None
-        if uses:
+        if uses and settings is None:
             from .pairs import UsePoints
 
             use_points = UsePoints.sample(resolved, uses, seed + 1)
-        sim = _Simulator(eng, task_obj, mode, thresholds, seed, resolved, use_points)
-        # The first generation is the random run's first samples: evaluate them once.
-        p0, d = sample_inputs(seed, 0, min(pop, budget))
-        first_values, first_table = sim.seeded(0, len(p0))
-        sim.next_sample = len(p0)  # CEM's own rows are numbered on from there
-        adv(len(p0))
-        best = {"cem": sim.found(first_values, first_table, 0)}
-        calls = {"n": 0}
+        sim = _Simulator(
+            eng,
+            task_obj,
+            mode,
+            thresholds,
+            seed,
+            resolved,
+            hand_model,
+            use_points,
+            robust=settings is not None,
+        )
+        first_blocks: list[tuple[int, int]] = []  # first generations still to simulate
+        reused: list[tuple[int, _Scored]] = []  # (start, batch) of the seeded samples
+        best: dict[str, Found | None] = {"cem": None}
+        done = {"n": 0}  # simulations CEM has run
 
-        def objective(x: np.ndarray) -> np.ndarray:
-            calls["n"] += 1
-            if calls["n"] == 1:
-                return first_values, guidance(first_table, task_obj.requires)
-            offset = sim.next_sample
-            values, table = sim.inputs(x)
-            best["cem"] = _better(best["cem"], sim.found(values, table, offset))
-            return values, guidance(table, task_obj.requires)
+        def first_generation(start: int, stop: int) -> np.ndarray:
+            first_blocks.append((start, stop))
+            return np.concatenate(sample_inputs(seed, start, stop), axis=1)
 
-        trace = cem_maximize(
+        def objective(x: np.ndarray):
+            if first_blocks:  # a run's first generation: seeded samples, as generate draws
+                start, stop = first_blocks.pop(0)
+                scored = sim.seeded(start, stop)
+                reused.append((start, scored))
+            else:
+                scored = sim.inputs(x)
+            adv(len(x))
+            best["cem"] = _better(best["cem"], sim.found(scored, done["n"]))
+            done["n"] += len(x)
+            return scored.values, guidance(scored.table, task_obj.requires)
+
+        trace = cem_search(
             objective,
             budget=budget,
             seed=seed,
-            population=pop,
-            initial=np.concatenate([p0, d], axis=1),
-            on_generation=lambda n: adv(n) if calls["n"] > 1 else None,
+            restarts=restarts,
+            refine=refine,
+            population=population,
+            first_generation=first_generation,
         )
         random_best = random_values = None
         if baseline:
-            random_best = sim.found(first_values, first_table, 0)
-            parts = [first_values]
+            parts = []
+            for start, scored in reused:
+                random_best = _better(random_best, sim.found(scored, start))
+                parts.append(scored.values)
+            pop = runs[0][1]
             step = max(pop, 256 * eng.workers)
-            for start in range(len(p0), budget, step):
+            for start in range(seeded, budget, step):
                 stop = min(budget, start + step)
-                values, table = sim.seeded(start, stop)
-                random_best = _better(random_best, sim.found(values, table, start))
-                parts.append(values)
+                scored = sim.seeded(start, stop)
+                random_best = _better(random_best, sim.found(scored, start))
+                parts.append(scored.values)
                 adv(stop - start)
-            random_values = np.concatenate(parts)
+            random_values = np.concatenate(parts)[:budget]
     return OptimizationResult(
         object=resolved.name,
         task=task,

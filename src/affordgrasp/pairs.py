@@ -32,9 +32,8 @@ import pyarrow as pa
 from numba import njit
 
 from .columns import GRASP_METRICS, USE_METRICS
-from .dataset.best import TopRows
-from .errors import bad_parameter
 from .grasp.pregrasp import sample_inputs, surface_use_directions, use_points
+from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
@@ -50,6 +49,9 @@ from .metrics.use_geometry import (
 )
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
+from .search.cem import cem_search, plan_runs
+from .search.guidance import guidance
+from .search.ranking import TopRows, top_indices
 from .tasks import MetricColumns, get_task
 
 log = logging.getLogger(__name__)
@@ -365,7 +367,7 @@ def best_pairs(
     uses: int = 4000,
     seed: int = 0,
     top: int = 10,
-    hand: str = "barrett",
+    hand: Hand | str = "barrett",
     grasp_table: pa.Table | None = None,
     per_grasp: bool = False,
     **overrides: float,
@@ -494,17 +496,18 @@ def optimize_pairs(
     seed: int = 0,
     top: int = 10,
     population: int | None = None,
-    hand: str = "barrett",
+    hand: Hand | str = "barrett",
     restarts: int = 1,
     refine: float = 0.0,
     **overrides: float,
 ) -> PairSearch:
     """The cross-entropy method over p0, each grasp scored with its best of ``uses`` use points.
 
-    The search space splits as the metrics do: CEM (:func:`affordgrasp.optimize.cem_maximize`)
-    moves the pregrasp, and each simulated grasp takes the best use point of a fixed
-    sample of ``uses`` use points drawn by surface area (run ``seed + 1``), found as in
-    :func:`pair_scores`. ``budget`` counts simulations, as for ``optimize``.
+    The search space splits as the metrics do: CEM (:func:`affordgrasp.search.cem.cem_search`,
+    the optimiser of :func:`affordgrasp.optimize.optimize`) moves the pregrasp, and each
+    simulated grasp takes the best use point of a fixed sample of ``uses`` use
+    points drawn by surface area (run ``seed + 1``), found as in :func:`pair_scores`.
+    ``budget`` counts simulations, as for ``optimize``.
 
     Parameters
     ----------
@@ -531,7 +534,7 @@ def optimize_pairs(
         Share of ``budget`` (in [0, 1)) spent after the restarts on continuing the best of
         them (the run with the largest F_T; without one, the best guidance) around its best
         point: its elites carry on and its distribution restarts centred there with CEM's
-        narrowest std (:meth:`affordgrasp.optimize.CEMState.around_best`). The restarts
+        narrowest std (:meth:`affordgrasp.search.cem.CEMState.around_best`). The restarts
         share the rest. A run can meet its best point alone (its fit to two scattered
         elites then samples between them); refining finds that point's neighbours, so the
         top pairs are neighbours of the best pair rather than the best of weaker regions
@@ -545,29 +548,9 @@ def optimize_pairs(
         The ``top`` best distinct (grasp, use point) pairs met during the search,
         re-simulated.
     """
-    from .optimize import cem_maximize, default_population, guidance
-
     obj = load_object(obj)
     get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
-    if isinstance(restarts, bool) or not isinstance(restarts, int | np.integer) or restarts < 1:
-        raise bad_parameter("restarts", f"must be a positive integer, got {restarts!r}")
-    if isinstance(refine, bool) or not isinstance(refine, float | int) or not 0 <= refine < 1:
-        raise bad_parameter("refine", f"must be a share in [0, 1), got {refine!r}")
-    n_refine = int(round(float(refine) * budget)) if isinstance(budget, int | np.integer) else 0
-    if (
-        isinstance(budget, bool)
-        or not isinstance(budget, int | np.integer)
-        or budget - n_refine < restarts
-    ):
-        raise bad_parameter(
-            "budget", f"must be an integer >= restarts / (1 - refine), got {budget!r}"
-        )
-    if refine > 0 and n_refine == 0:
-        raise bad_parameter(
-            "refine",
-            f"{refine!r} of a budget of {budget} rounds to no simulation; raise the budget "
-            "or pass refine=0",
-        )
+    plan_runs(budget, restarts, refine, population)  # a budget that cannot be split: too
     use = UsePoints.sample(obj, uses, seed + 1)
     d = use.use_dir
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
@@ -584,41 +567,20 @@ def optimize_pairs(
         found.append((x[:, :6].copy(), best, best_use))
         return best, guidance(rows)
 
-    first = 0
-    explore = int(budget) - n_refine
-    runs = []
-    for run in range(int(restarts)):
-        run_budget = explore // int(restarts) + (run < explore % int(restarts))
-        pop = population or default_population(run_budget)
+    def first_generation(start: int, stop: int) -> np.ndarray:
         # run r's first generation: the next uniform samples of run ``seed``; run 0 is the
         # search of a single run
-        p0_first, d_first = sample_inputs(seed, first, first + min(pop, run_budget))
-        first += min(pop, run_budget)
-        trace = cem_maximize(
-            objective,
-            budget=run_budget,
-            seed=seed
-            if run == 0
-            else int(np.random.SeedSequence([seed, run]).generate_state(1)[0]),
-            population=pop,
-            initial=np.concatenate([p0_first, d_first], axis=1),
-        )
-        runs.append((trace.state, pop))
-    if n_refine:
-        # the best run: largest F_T, then the best guidance of its elites, then the first
-        def rank(state) -> tuple[float, float]:
-            g = state.elite_g[np.isfinite(state.elite_g)]
-            return state.best, float(g.max()) if len(g) else -np.inf
+        return np.concatenate(sample_inputs(seed, start, stop), axis=1)
 
-        best = max(range(len(runs)), key=lambda r: rank(runs[r][0]))
-        state, pop = runs[best]
-        cem_maximize(
-            objective,
-            budget=n_refine,
-            seed=int(np.random.SeedSequence([seed, int(restarts), best]).generate_state(1)[0]),
-            population=pop,
-            state=state.around_best(),
-        )
+    cem_search(
+        objective,
+        budget=budget,
+        seed=seed,
+        restarts=restarts,
+        refine=refine,
+        population=population,
+        first_generation=first_generation,
+    )
     p0 = np.concatenate([f[0] for f in found])
     value = np.concatenate([f[1] for f in found])
     use_idx = np.concatenate([f[2] for f in found])
@@ -627,7 +589,7 @@ def optimize_pairs(
     key = np.concatenate([p0[ok], use_idx[ok, None].astype(float)], axis=1)
     _, first = np.unique(key, axis=0, return_index=True)
     ok = ok[np.sort(first)]
-    pick = ok[np.argsort(-value[ok], kind="stable")][:top]
+    pick = ok[top_indices(value[ok], top)]
     rows = _top_rows(obj, p0[pick], use.use_dir[use_idx[pick]], task, mode, hand, seed, overrides)
     return PairSearch(
         table=rows,

@@ -24,9 +24,10 @@ from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
 from .metrics.phi import compute_phi_batch
 from .objects import GraspObject, load_object
-from .schema import batch_to_table
+from .robust import RobustSettings, robust_columns, robust_settings
+from .schema import append_float_columns, batch_to_table, robust_fields
 
-STAGES = ("simulate", "metrics", "table")
+STAGES = ("simulate", "metrics", "table")  # and "robust" with robust evaluation
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,8 @@ class Evaluation:
     table : pyarrow.Table
         One row per grasp, stable or not (columns: docs/conventions.md).
     timings : mapping of str to float
-        Seconds spent per stage: ``simulate``, ``metrics``, ``table``.
+        Seconds spent per stage: ``simulate``, ``metrics``, ``table``, and ``robust`` (the
+        perturbed copies) with robust evaluation.
 
     Notes
     -----
@@ -64,8 +66,10 @@ class Evaluation:
         """Total time spent, s."""
         return float(sum(self.timings.values()))
 
-    def scores(self, task: Any, mode: str = "default", **thresholds: float) -> np.ndarray:
-        """F_T of every grasp for a task.
+    def scores(
+        self, task: Any, mode: str = "default", robust: bool = False, **thresholds: float
+    ) -> np.ndarray:
+        """F_T of every grasp for a task (its robust ranking score with ``robust``).
 
         Parameters
         ----------
@@ -73,6 +77,9 @@ class Evaluation:
             A registered name or a :class:`~affordgrasp.tasks.Task`.
         mode : str
             Threshold mode (``"default"``, ``"no-robustness"``, ...).
+        robust : bool
+            The robust score (:func:`affordgrasp.robust.ranking_column`; an evaluation with
+            ``robust=K``); ``mode`` and ``thresholds`` do not apply.
         **thresholds : float
             Overrides of the task's thresholds.
 
@@ -82,6 +89,11 @@ class Evaluation:
             -inf where the task's thresholds fail.
         """
         from .tasks import get_task
+
+        if robust:
+            from .robust import ranking_values
+
+            return ranking_values(self.table, task if isinstance(task, str) else task.name)
 
         task = get_task(task) if isinstance(task, str) else task
         return task.evaluate(self.table, mode, **thresholds)
@@ -155,6 +167,7 @@ def evaluate_inputs(
     soft: bool = False,
     metrics: bool = True,
     volume: bool = False,
+    robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Simulate and score given inputs on one object.
 
@@ -179,6 +192,10 @@ def evaluate_inputs(
     volume : bool
         Also compute ``gws_volume`` (default False: the column is null, every other
         column the same; see :func:`phi_of_batch`).
+    robust : RobustSettings or int, optional
+        Robust evaluation (:mod:`affordgrasp.robust`): K perturbed copies per grasp and the
+        ``robust_*`` columns after the metric columns. An int is K with the default
+        perturbations; None or 0: plain evaluation, the same table as without it.
 
     Returns
     -------
@@ -186,17 +203,25 @@ def evaluate_inputs(
     """
     obj = load_object(obj)
     hand = get_hand(hand)
+    settings = robust_settings(robust)
     t0 = time.perf_counter()
     batch = simulate(obj, p0, use_dir, hand=hand)
     t1 = time.perf_counter()
     phi = phi_of_batch(obj, batch, soft=soft, volume=volume) if metrics else None
     t2 = time.perf_counter()
+    extra = None
+    if settings is not None and phi is not None:
+        extra = robust_columns(obj, batch, settings, hand=hand, phi=phi, soft=soft)
+    t3 = time.perf_counter()
     table = batch_to_table(
         obj, batch, hand=hand.name, seed=seed, sample_start=sample_start, metrics=phi
     )
-    return Evaluation(
-        table, {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t2}
-    )
+    if extra is not None and settings is not None:
+        table = append_float_columns(table, robust_fields(settings.tasks), extra)
+    timings = {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t3}
+    if extra is not None:
+        timings["robust"] = t3 - t2
+    return Evaluation(table, timings)
 
 
 def evaluate_samples(
@@ -211,12 +236,13 @@ def evaluate_samples(
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
     volume: bool = False,
+    robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Draw samples ``start .. start + samples - 1`` of the run ``seed`` and evaluate them.
 
     Parameters
     ----------
-    obj, hand, soft, metrics, volume
+    obj, hand, soft, metrics, volume, robust
         As for :func:`evaluate_inputs`.
     samples : int
         Number of samples (> 0).
@@ -257,6 +283,7 @@ def evaluate_samples(
             soft=soft,
             metrics=metrics,
             volume=volume,
+            robust=robust,
         )
         for stage, seconds in part.timings.items():
             spent[stage] = spent.get(stage, 0.0) + seconds
@@ -281,6 +308,7 @@ def evaluate(
     batch_size: int | None = None,
     progress: Callable[[int], Any] | None = None,
     volume: bool = False,
+    robust: RobustSettings | int | None = None,
 ) -> Evaluation:
     """Simulate grasps on an object and compute their metric vector Φ.
 
@@ -314,6 +342,9 @@ def evaluate(
         Also compute the GWS volume (column ``gws_volume``; default False: the column is
         null). Not part of the paper's Φ and used by no built-in task; it costs the full
         6-D hull of every force-closure grasp.
+    robust : RobustSettings or int, optional
+        K perturbed re-simulations per grasp and the ``robust_*`` columns
+        (:mod:`affordgrasp.robust`); None or 0: plain evaluation.
 
     Returns
     -------
@@ -343,6 +374,7 @@ def evaluate(
             soft=soft,
             metrics=metrics,
             volume=volume,
+            robust=robust,
         )
     if samples is None:
         raise InputError("give samples (how many grasps to draw) or p0 and use_dir")
@@ -357,4 +389,5 @@ def evaluate(
         batch_size=batch_size,
         progress=progress,
         volume=volume,
+        robust=robust,
     )

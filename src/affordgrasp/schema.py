@@ -54,7 +54,45 @@ DEPTH_COLUMN = "depth_mm"
 DEPTH_FIELD = pa.field(DEPTH_COLUMN, pa.binary())
 
 
-def dataset_schema(metrics: bool = True, depth: bool = False) -> pa.Schema:
+def robust_fields(tasks) -> list[pa.Field]:
+    """The float64 fields of robust evaluation (:func:`affordgrasp.robust.robust_column_names`).
+
+    Parameters
+    ----------
+    tasks : sequence of str
+        Tasks with ``robust_p_<task>`` and ``robust_<task>`` columns.
+
+    Returns
+    -------
+    list of pyarrow.Field
+    """
+    from .robust import robust_column_names
+
+    return [pa.field(name, _f64) for name in robust_column_names(tuple(tasks))]
+
+
+def append_float_columns(table: pa.Table, fields: list[pa.Field], values: dict) -> pa.Table:
+    """``table`` with float64 columns appended.
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        n rows.
+    fields : list of pyarrow.Field
+        float64 fields, in order.
+    values : dict of str to (n,) float ndarray
+        The values of each field by name.
+
+    Returns
+    -------
+    pyarrow.Table
+    """
+    for f in fields:
+        table = table.append_column(f, _numbers(values[f.name]))
+    return table
+
+
+def dataset_schema(metrics: bool = True, depth: bool = False, robust=None) -> pa.Schema:
     """The schema of a dataset's shards.
 
     Parameters
@@ -63,13 +101,18 @@ def dataset_schema(metrics: bool = True, depth: bool = False) -> pa.Schema:
         Include the metric columns (:data:`affordgrasp.columns.METRIC_COLUMNS`).
     depth : bool
         Include the depth image column (uint16 millimetres).
+    robust : RobustSettings, optional
+        Include the robust columns of these settings (with the metric columns, K > 0).
 
     Returns
     -------
     pyarrow.Schema
-        Key, grasp state and (optionally) metric and depth fields, in shard order.
+        Key, grasp state and (optionally) metric, robust and depth fields, in shard order.
     """
     schema = SCHEMA if metrics else SIMULATION_SCHEMA
+    if metrics and robust is not None and robust.enabled:
+        for f in robust_fields(robust.tasks):
+            schema = schema.append(f)
     return schema.append(DEPTH_FIELD) if depth else schema
 
 

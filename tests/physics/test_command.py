@@ -87,3 +87,17 @@ def test_missing_extra_names_the_install_command(monkeypatch):
     monkeypatch.delitem(__import__("sys").modules, "mujoco", raising=False)
     with pytest.raises(MissingDependencyError, match=r'pip install "affordgrasp\[physics\]"'):
         deps.mujoco()
+
+
+def test_physics_command_dgb_protocol_and_bad_protocol(tiny_dataset, tmp_path, capsys):
+    out = tmp_path / "dgb"
+    args = [tiny_dataset, "--out", out, "--max-per-object", 2, "--workers", 1]
+    code, stdout, _ = _run(capsys, *args, "--protocol", "dgb")
+    assert code == 0
+    doc = json.loads(stdout)
+    assert doc["settings"]["protocol"] == "dgb" and doc["settings"]["load_factor"] == 10.0
+    table = pq.read_table(out)
+    assert set(table.column("protocol").to_pylist()) == {"dgb"}
+    assert max(table.column("start_penetration_m").to_pylist()) <= 5e-5
+    code, _, stderr = _run(capsys, tiny_dataset, "--out", tmp_path / "x", "--protocol", "bogus")
+    assert code == 2 and "bogus" in stderr

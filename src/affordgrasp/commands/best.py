@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from ..columns import column_heading
-from .common import add_task_arguments, parse_thresholds
+from .common import add_robust_argument, add_task_arguments, parse_thresholds
 
 METRICS_SHOWN = (
     ("ε", "epsilon"),
@@ -32,6 +32,11 @@ def add_arguments(p) -> None:
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
     p.add_argument("--top", type=int, default=5, help="how many grasps to show (default 5)")
     p.add_argument("--out", default=None, help="write the top rows to this .parquet file")
+    add_robust_argument(
+        p,
+        help="rank by the robust score of a dataset generated with --robust K (K must be "
+        "the dataset's; default 0: plain F_T)",
+    )
 
 
 def shown_metrics(task_name: str) -> list[tuple[str, str]]:
@@ -99,6 +104,52 @@ def metric_headings(shown=METRICS_SHOWN) -> list[str]:
     return [column_heading(name, label) for label, name in shown]
 
 
+def check_dataset_robust(directory, k: int) -> bool:
+    """Whether ``--robust K`` ranks a dataset by its robust score; K must be the dataset's.
+
+    Parameters
+    ----------
+    directory : path
+        A dataset.
+    k : int
+        ``--robust K`` (0: plain).
+
+    Returns
+    -------
+    bool
+        True for K > 0 (the dataset holds robust columns of K copies; a folder of tables
+        without a manifest is not checked here, its rows are when ranked).
+
+    Raises
+    ------
+    InputError
+        For K < 0, or K > 0 on a dataset without robust columns or with another K.
+    """
+    from pathlib import Path
+
+    from ..dataset.layout import MANIFEST_NAME, read_manifest
+    from ..errors import InputError
+
+    if k < 0:
+        raise InputError(f"--robust must be an integer >= 0, got {k}")
+    if k == 0:
+        return False
+    manifest_path = Path(directory).expanduser() / MANIFEST_NAME
+    if not manifest_path.exists():
+        return True  # a folder of evaluated tables: its rows must carry the robust columns
+    there = (read_manifest(directory).get("robust") or {}).get("copies", 0)
+    if there != k:
+        raise InputError(
+            f"--robust {k}: the dataset in {str(directory)!r} has "
+            + (
+                f"robust columns of K = {there} copies; pass --robust {there}"
+                if there
+                else "no robust columns; generate it with --robust K"
+            )
+        )
+    return True
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp best``.
 
@@ -119,6 +170,7 @@ def run(args, out) -> None:
 
         check_output_file(args.out, "--out")
 
+    robust = check_dataset_robust(args.directory, args.robust)
     result = best_grasps(
         args.directory,
         args.task,
@@ -126,6 +178,7 @@ def run(args, out) -> None:
         objects=args.object,
         top=args.top,
         thresholds=parse_thresholds(args.threshold),
+        robust=robust,
     )
     shown = shown_metrics(args.task)
     rows = [

@@ -5,12 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..columns import column_heading
+from ..errors import InputError
+from ..schema import column_numbers
 from .common import (
+    add_robust_argument,
     add_sampling_arguments,
     add_task_arguments,
     check_counts,
     check_output_file,
     one_time_text,
+    robust_option,
     run_batches,
     status_summary,
     task_names,
@@ -45,9 +49,12 @@ def add_arguments(p) -> None:
         help="task(s) to rank by, e.g. beat,cut (repeatable; default: every registered task)",
     )
     p.add_argument("--tasks-file", default=None, help="TOML file declaring more tasks")
+    add_robust_argument(p)
 
 
-def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict]:
+def best_rows(
+    table, task_names: list[str], mode: str, robust: bool = False
+) -> tuple[list[list], dict]:
     """The best sample of every task, as table rows and a JSON-ready dict.
 
     Parameters
@@ -57,6 +64,9 @@ def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict
     task_names : list of str
     mode : str
         Threshold mode.
+    robust : bool
+        Rank by the robust score (:func:`affordgrasp.robust.ranking_column`); the value
+        shown is that score.
 
     Returns
     -------
@@ -67,18 +77,24 @@ def best_rows(table, task_names: list[str], mode: str) -> tuple[list[list], dict
     """
     from ..columns import display_value
     from ..schema import metric_arrays
+    from ..search.ranking import best_index
     from ..tasks import MetricColumns, get_task
 
     metrics = MetricColumns(metric_arrays(table))
     rows, doc = [], {}
     for name in task_names:
-        values = get_task(name).evaluate(metrics, mode)
+        if robust:
+            from ..robust import ranking_values
+
+            values = ranking_values(table, name)
+        else:
+            values = get_task(name).evaluate(metrics, mode)
         finite = np.isfinite(values)
         if not finite.any():
             rows.append([name, "-", "-inf", *["-"] * len(SHOWN_METRICS)])
             doc[name] = None
             continue
-        i = int(np.argmax(np.where(finite, values, -np.inf)))
+        i = best_index(np.where(finite, values, -np.inf))  # +inf does not rank here either
         shown = [float(metrics[m][i]) for m in SHOWN_METRICS]
         cells = [display_value(m, v) for m, v in zip(SHOWN_METRICS, shown, strict=True)]
         rows.append([name, int(table.column("sample")[i].as_py()), float(values[i]), *cells])
@@ -111,9 +127,17 @@ def run(args, out) -> None:
         check_output_file(args.out, "--out")
     if args.tasks_file:
         load_task_file(args.tasks_file)
-    names = task_names(args.task) or [t for t in list_tasks() if t != "viable"]
+    robust = robust_option(args)
+    names = task_names(args.task) or [
+        t for t in list_tasks() if t != "viable" and (robust is None or t in robust.tasks)
+    ]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
+        if robust is not None and name not in robust.tasks:
+            raise InputError(
+                f"task {name!r} has no robust score; --robust ranks the built-in tasks "
+                f"({', '.join(robust.tasks)}): drop --robust or choose among them"
+            )
     obj = load_object(args.object, size_m=args.size_m, units=args.units, materials=args.materials)
     table, spent, wall = run_batches(args, out, obj, metrics=True)
     from ..schema import metric_arrays
@@ -122,7 +146,7 @@ def run(args, out) -> None:
     metrics = MetricColumns(metric_arrays(table))
     closure = float(np.mean(metrics["epsilon"] > 0))
     viable = float(np.mean(is_viable(metrics, args.mode)))
-    busy = spent["simulate"] + spent["metrics"]
+    busy = spent["simulate"] + spent["metrics"] + spent.get("robust", 0.0)
     rate = args.samples / busy if busy > 0 else float("inf")
     out.table(
         f"{obj.name}: {args.samples} grasps, hand {args.hand}, seed {args.seed}",
@@ -132,13 +156,24 @@ def run(args, out) -> None:
     out.text(
         f"force closure (ε > 0): {100 * closure:.1f}%   viable: {100 * viable:.1f}%   "
         f"{rate:,.0f} grasps/s on one core (simulation {spent['simulate']:.2f} s, "
-        f"metrics {spent['metrics']:.2f} s; {one_time_text(spent)})"
+        f"metrics {spent['metrics']:.2f} s"
+        + (f", robust copies {spent['robust']:.2f} s" if "robust" in spent else "")
+        + f"; {one_time_text(spent)})"
     )
-    best, best_doc = best_rows(table, names, args.mode)
+    if robust is not None:
+        r_fc = float(np.mean(column_numbers(table.column("robust_fc"))))
+        r_dirs = float(np.mean(column_numbers(table.column("robust_hold_dirs"))))
+        out.text(
+            f"robust (K = {robust.copies}, q = {robust.quantile}): mean fraction of copies in "
+            f"force closure {r_fc:.3f}, mean load directions held {r_dirs:.2f} of 6"
+        )
+    best, best_doc = best_rows(table, names, args.mode, robust=robust is not None)
     # One column per task, one row per quantity: fits a terminal for any number of metrics.
     labels = ["sample", "value", *[column_heading(m) for m in SHOWN_METRICS]]
     out.table(
-        f"best grasp per task (mode {args.mode}; '-' when no sample passes the thresholds)",
+        f"best grasp per task (mode {args.mode}"
+        + (f", robust score over K = {robust.copies} copies" if robust is not None else "")
+        + "; '-' when no sample passes the thresholds)",
         ["quantity", *[r[0] for r in best]],
         [[label, *[r[k + 1] for r in best]] for k, label in enumerate(labels)],
     )
@@ -158,6 +193,7 @@ def run(args, out) -> None:
             "grasps_per_second_per_core": rate,
             "seconds": wall,
             "one_time_seconds": {"kernels": spent["kernels"], "prepare": spent["prepare"]},
+            "robust": robust.to_dict() if robust is not None else None,
             "out": args.out,
         }
     )

@@ -10,9 +10,11 @@ from ..dataset.layout import DEFAULT_SHARD_SIZE
 from .common import (
     HAND_HELP,
     add_metrics_argument,
+    add_robust_argument,
     add_scale_arguments,
     load_objects,
     optional_metrics,
+    robust_option,
     scale_options,
 )
 
@@ -66,6 +68,7 @@ def add_arguments(p) -> None:
         action="store_true",
         help="also store each row's 128x128 depth image D(p0, O) (uint16 mm, ~3-8 kB/row)",
     )
+    add_robust_argument(p)
 
 
 def command_line(args) -> list[str]:
@@ -94,6 +97,8 @@ def command_line(args) -> list[str]:
         cmd += ["--metrics", f"+{name}"]
     if args.depth:
         cmd.append("--depth")
+    if getattr(args, "robust", 0):
+        cmd += ["--robust", str(args.robust)]
     if args.engine != "local":
         cmd += ["--engine", args.engine]
     if args.address:
@@ -120,6 +125,7 @@ def run(args, out) -> None:
     if volume and args.no_metrics:
         raise InputError("--metrics +volume adds to the metric columns; drop --no-metrics")
     check_output_dir(args.out, "--out")
+    robust = robust_option(args)
     cmd = command_line(args)
     objects = args.objects
     if any(v is not None for v in scale_options(args).values()) or args.materials:
@@ -142,6 +148,7 @@ def run(args, out) -> None:
             materials=args.materials,
             command=cmd,
             progress=lambda total: out.progress("generating", total),
+            robust=robust,
         )
     except KeyboardInterrupt:
         print(

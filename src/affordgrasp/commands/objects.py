@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..cli import add_verbose_argument
 from ..errors import InputError
+from . import add_verbose_argument
 from .common import add_scale_arguments, load_objects
 
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 from .best import metric_cells, metric_headings, shown_metrics
 from .common import (
     HAND_HELP,
+    add_robust_argument,
     add_scale_arguments,
     add_task_arguments,
     load_objects,
     parse_thresholds,
+    robust_option,
 )
 
 
@@ -44,6 +46,26 @@ def add_arguments(p) -> None:
         help="score each grasp with its best of M use points drawn by surface area (ray casts, no "
         "simulation; default 2000); 0: each sample keeps its own use direction",
     )
+    add_robust_argument(
+        p,
+        help="maximise the robust score over K perturbed copies per grasp (each grasp keeps "
+        "its own use direction; --budget counts grasps; default 0: plain F_T)",
+    )
+    p.add_argument(
+        "--restarts",
+        type=int,
+        default=1,
+        metavar="R",
+        help="independent cross-entropy runs sharing the budget (default 1)",
+    )
+    p.add_argument(
+        "--refine",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="share of the budget, in [0, 1), that continues the best run around its best "
+        "grasp (default 0)",
+    )
     p.add_argument(
         "--no-baseline",
         action="store_true",
@@ -78,7 +100,10 @@ def run(args, out) -> None:
         population=args.population,
         baseline=not args.no_baseline,
         uses=args.uses,
+        restarts=args.restarts,
+        refine=args.refine,
         progress=lambda total: out.progress("optimising", total),
+        robust=robust_option(args),
     )
     shown = shown_metrics(args.task)
     rows = []

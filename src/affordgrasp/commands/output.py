@@ -9,35 +9,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-
-def to_jsonable(value):
-    """Numbers, arrays and nested containers as JSON; inf/NaN as the strings JSON lacks.
-
-    Parameters
-    ----------
-    value : object
-
-    Returns
-    -------
-    object
-        dicts, lists, ints, floats and strs only; NaN becomes None, ±inf ``"inf"``/``"-inf"``.
-    """
-    if isinstance(value, dict):
-        return {str(k): to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [to_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return to_jsonable(value.tolist())
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        if math.isnan(v):
-            return None
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return v
-    return value
+from ..jsonable import to_jsonable  # re-exported: its former home
 
 
 def fmt(value) -> str:

@@ -7,7 +7,7 @@ import shlex
 import sys
 
 from ..errors import InputError, MissingDependencyError
-from ..physics.settings import PhysicsSettings
+from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
 
 
 def add_arguments(p) -> None:
@@ -27,6 +27,26 @@ def add_arguments(p) -> None:
     )
     p.add_argument("--report", default=None, metavar="DIR", help="write the report and plots here")
     p.add_argument(
+        "--compare",
+        action="append",
+        default=None,
+        metavar="OUT",
+        help="with --report: the headline AUCs of another physics run (e.g. the other "
+        "protocol) beside this run's (repeatable)",
+    )
+    p.add_argument(
+        "--protocol",
+        choices=PROTOCOLS,
+        default="affordgrasp",
+        help="affordgrasp (default) or dgb (DexGraspBench-compatible); docs/physics.md lists "
+        "every constant of both",
+    )
+    p.add_argument(
+        "--no-backoff",
+        action="store_true",
+        help="start where the dataset row puts the hand, even inside the object's convex parts",
+    )
+    p.add_argument(
         "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
     )
     p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
@@ -37,29 +57,29 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--load-factor",
         type=float,
-        default=d.load_factor,
+        default=None,
         metavar="K",
-        help=f"hold test load, k·m·g (default {d.load_factor})",
+        help=f"hold test load, k·m·g (default {d.load_factor}, dgb 10)",
     )
     p.add_argument(
         "--density",
         type=float,
-        default=d.density,
+        default=None,
         help=f"object density, kg/m^3 (default {d.density:g})",
     )
     p.add_argument(
         "--grip-torque",
         type=float,
-        default=d.grip_torque,
+        default=None,
         help=f"finger joint torque, N·m (default {d.grip_torque})",
     )
     p.add_argument(
         "--grip-force",
         type=float,
-        default=d.grip_force,
+        default=None,
         help=f"jaw force, N (default {d.grip_force})",
     )
-    p.add_argument("--timestep", type=float, default=d.timestep, help=f"s (default {d.timestep})")
+    p.add_argument("--timestep", type=float, default=None, help=f"s (default {d.timestep})")
     p.add_argument("--gravity", action="store_true", help="gravity on (-z of the hand frame)")
     p.add_argument(
         "--backdrivable",
@@ -67,19 +87,41 @@ def add_arguments(p) -> None:
         help="fingers the load can push open (default: non-backdrivable drives)",
     )
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
+    p.add_argument(
+        "--coacd-threshold",
+        type=float,
+        default=d.coacd_threshold,
+        help=f"concavity threshold of the convex decomposition (default {d.coacd_threshold})",
+    )
+    p.add_argument(
+        "--coacd-max-hulls",
+        type=int,
+        default=d.coacd_max_hulls,
+        help=f"most convex parts per object (default {d.coacd_max_hulls})",
+    )
 
 
 def _settings(args) -> PhysicsSettings:
-    return PhysicsSettings(
-        load_factor=args.load_factor,
-        density=args.density,
-        grip_torque=args.grip_torque,
-        grip_force=args.grip_force,
-        timestep=args.timestep,
+    given = {
+        name: getattr(args, name)
+        for name in ("load_factor", "density", "grip_torque", "grip_force", "timestep")
+        if getattr(args, name) is not None
+    }
+    return protocol_settings(
+        args.protocol,
         gravity=args.gravity,
         backdrivable=args.backdrivable,
         seed=args.seed,
+        backoff=not args.no_backoff,
+        coacd_threshold=args.coacd_threshold,
+        coacd_max_hulls=args.coacd_max_hulls,
+        **given,
     )
+
+
+def _interval(v) -> str:
+    auc, lo, hi = v
+    return "—" if math.isnan(auc) else f"{auc:.3f} [{lo:.3f}–{hi:.3f}]"
 
 
 def run(args, out) -> None:
@@ -146,7 +188,8 @@ def run(args, out) -> None:
     )
     doc = {"summary": summary.to_dict(), "settings": settings.to_dict()}
     if args.report:
-        report = physics_report(read_outcomes(args.out), args.report)
+        others = [read_outcomes(o) for o in args.compare or ()]
+        report = physics_report(read_outcomes(args.out), args.report, compare=others)
         headline = []
         for pred, outcome in DESIGNED_FOR.items():
             g = report["all"]
@@ -160,6 +203,22 @@ def run(args, out) -> None:
             ["predictor", "outcome", "statistic", "value"],
             headline,
         )
+        h = report["headline"]
+        groups = [("all", h["all"]), ("force closure", h["force_closure"])]
+        groups += [("settled", h["settled"])]
+        out.table(
+            "ROC-AUC for hold_ok [95 % bootstrap interval]",
+            ["predictor", *(f"{g} (n={v['n']})" for g, v in groups)],
+            [[p, *(_interval(v["auc"][p]) for _, v in groups)] for p in h["predictors"]],
+        )
+        if "start" in report:
+            st = report["start"]
+            out.text(
+                f"start: {100 * st['start_under_0.5mm']:.1f} % of rows below 0.5 mm of "
+                f"penetration ({100 * st['initial_over_0.5mm']:.1f} % at 0.5 mm or more as "
+                f"placed); the squeeze ejected {100 * st['force_closure']['ejected_rate']:.1f} % "
+                "of the force-closure grasps"
+            )
         out.text(f"report: {args.report}/report.md and PNG plots")
         doc["report"] = report
     out.result(doc)

@@ -77,7 +77,15 @@ def run(args, out) -> None:
     if tasks and not _has_metrics(schema):
         out.text("the sources hold no metric columns: skipping the affordance plot")
         tasks = []
-    summary = summarize(scan, schema, tasks, mode=args.mode, thresholds=thresholds, bins=args.bins)
+    summary = summarize(
+        scan,
+        schema,
+        tasks,
+        mode=args.mode,
+        thresholds=thresholds,
+        bins=args.bins,
+        robust=bool(args.robust),
+    )
     if summary.rows == 0:
         raise InputError("the sources hold no rows; nothing to plot")
     files = save_plots(summary, args.out, mode=args.mode)

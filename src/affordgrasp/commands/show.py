@@ -14,12 +14,14 @@ from pathlib import Path
 from ..errors import DatasetError, InputError
 from .common import (
     HAND_HELP,
+    add_robust_argument,
     add_scale_arguments,
     add_task_arguments,
     check_counts,
     check_output_dir,
     load_objects,
     parse_tasks,
+    robust_option,
     scale_options,
 )
 
@@ -75,6 +77,12 @@ def add_source_arguments(p) -> None:
         help="mesh file of a dataset object that is not a built-in family (repeatable)",
     )
     add_scale_arguments(p)
+    add_robust_argument(
+        p,
+        help="rank by the robust score: an object SOURCE is evaluated with K perturbed "
+        "copies per grasp; a dataset SOURCE must have been generated with --robust K "
+        "(default 0: plain F_T)",
+    )
     p.add_argument("-o", "--out", required=True, metavar="OUTDIR", help="directory to write into")
 
 
@@ -165,8 +173,13 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
         else load_object(s, **scale)
         for s in specs
     }
+    robust = robust_option(args)
     for spec in args.source:
         if is_dataset_path(spec):
+            if robust is not None:
+                from .best import check_dataset_robust
+
+                check_dataset_robust(Path(spec).expanduser(), robust.copies)
             sources.append(DatasetSource(Path(spec).expanduser()))
             continue
         obj = objects[spec]
@@ -178,8 +191,9 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
                 hand=args.hand,
                 batch_size=EVALUATION_BATCH,
                 progress=advance,
+                robust=robust,
             ).table
-        if getattr(args, "uses", 0):
+        if getattr(args, "uses", 0) and robust is None:  # robust scores keep their own use
             table = with_best_pairs(obj, table, tasks, thresholds or {}, args)
         sources.append(
             TableSource(table, name=obj.name, objects={obj.name: obj}, hand=get_hand(args.hand))
@@ -406,7 +420,14 @@ def run(args, out) -> None:
     rankings = []
     sources_by_object = {}
     for source in sources:
-        found = top_grasps(source, tasks, mode=args.mode, top=args.top, thresholds=thresholds)
+        found = top_grasps(
+            source,
+            tasks,
+            mode=args.mode,
+            top=args.top,
+            thresholds=thresholds,
+            robust=bool(getattr(args, "robust", 0)),
+        )
         for (obj_name, _), ranking in found.items():
             sources_by_object.setdefault(obj_name, source)
             rankings.append(ranking)
@@ -462,7 +483,7 @@ def run(args, out) -> None:
             f"({r.accepted} of {r.scored} samples accepted); "
             + (
                 "try more --samples"
-                if args.mode == "no-robustness"
+                if args.mode == "no-robustness" or args.robust
                 else "try --mode no-robustness or more --samples"
             )
         )

@@ -4,7 +4,8 @@
 function F_T and keeps the ``top`` rows, so memory stays bounded however large the dataset.
 Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks); ties go to the
 object given first, then the lower sample index, so the result is the same as sorting the
-whole table by (F_T descending, object, sample).
+whole table by (F_T descending, object, sample) (the ranker:
+:class:`affordgrasp.search.ranking.TopRows`).
 
 A first pass reads only the metric columns; a second fetches the full rows of the winners,
 reading only the row groups that hold them.
@@ -26,6 +27,7 @@ import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
 from ..errors import DatasetError, bad_parameter
+from ..search.ranking import TopRows  # noqa: F401  (re-exported: its former home)
 from ..tasks import Task, get_task
 from .layout import read_manifest, write_bytes_atomic
 from .reading import open_dataset, read_errors, select_objects
@@ -115,8 +117,10 @@ def numeric_columns(table: pa.Table) -> dict[str, np.ndarray]:
     return out
 
 
-def task_values(task, columns, mode: str = "default", thresholds: Mapping | None = None):
-    """F_T for every row of ``columns``.
+def task_values(
+    task, columns, mode: str = "default", thresholds: Mapping | None = None, robust: bool = False
+):
+    """F_T for every row of ``columns`` (its robust ranking score with ``robust``).
 
     Parameters
     ----------
@@ -128,63 +132,25 @@ def task_values(task, columns, mode: str = "default", thresholds: Mapping | None
         Threshold mode.
     thresholds : mapping of str to float, optional
         Threshold values that replace the mode's.
+    robust : bool
+        Rank by the robust score instead (:func:`affordgrasp.robust.ranking_column`:
+        ``robust_hold`` for pick, ``robust_<task>`` otherwise), read from the rows; the
+        mode and thresholds are those the rows were evaluated with.
 
     Returns
     -------
     (n,) float64 ndarray
         −∞ where a requirement fails.
     """
+    if robust:
+        from ..robust import ranking_values
+
+        return ranking_values(columns, task.name)
     if isinstance(columns, pa.Table):
         # Only the numeric columns: the task reads names, not strings like `object`.
         columns = numeric_columns(columns)
     values = task.evaluate(columns, mode=mode, **dict(thresholds or {}))
     return np.asarray(values, dtype=np.float64)
-
-
-class TopRows:
-    """The ``k`` best rows seen so far, streamed: highest value first, ties by the keys.
-
-    Only values above −∞ rank (−∞ means a threshold failed; NaN never ranks). Ties go to the
-    smaller first key, then the smaller second key..., so the result does not depend on the
-    order in which rows arrive.
-
-    Parameters
-    ----------
-    k : int
-        How many rows to keep.
-    n_keys : int
-        Number of tie-breaking key arrays given to ``add``.
-    """
-
-    def __init__(self, k: int, n_keys: int):
-        self.k = k
-        self.values = np.empty(0)
-        self.keys = tuple(np.empty(0, dtype=np.int64) for _ in range(n_keys))
-
-    def add(self, values: np.ndarray, *keys: np.ndarray) -> int:
-        """Offer rows; the best ``k`` of all rows offered so far are kept.
-
-        Parameters
-        ----------
-        values : (n,) float ndarray
-            F_T of each row; −∞ and NaN never rank.
-        *keys : (n,) int ndarray
-            The ``n_keys`` tie-breaking keys of each row.
-
-        Returns
-        -------
-        int
-            How many of these rows can rank (value > −∞).
-        """
-        keep = values > -np.inf  # False for NaN too
-        n = int(keep.sum())
-        if n:
-            v = np.concatenate([self.values, values[keep]])
-            ks = [np.concatenate([a, b[keep]]) for a, b in zip(self.keys, keys, strict=True)]
-            order = np.lexsort((*reversed(ks), -v))[: self.k]  # lexsort: last key first
-            self.values = v[order]
-            self.keys = tuple(a[order] for a in ks)
-        return n
 
 
 def best_grasps(
@@ -196,6 +162,7 @@ def best_grasps(
     top: int = 5,
     thresholds: Mapping[str, float] | None = None,
     batch_size: int = 65536,
+    robust: bool = False,
 ) -> BestGrasps:
     """The ``top`` rows of a dataset by the affordance F_T of ``task`` (paper §IV-C).
 
@@ -215,6 +182,9 @@ def best_grasps(
         Overrides of the task's thresholds, e.g. ``{"tau_eps": 0.01}``.
     batch_size : int
         Rows scored at a time (memory stays bounded).
+    robust : bool
+        Rank by the robust score (a dataset generated with ``--robust K``;
+        :func:`affordgrasp.robust.ranking_column`).
 
     Returns
     -------
@@ -241,6 +211,15 @@ def best_grasps(
     dataset = open_dataset(directory)
     flt = pads.field("object").isin(chosen) if chosen else None
     metric_cols = [c for c in METRIC_COLUMNS if c in dataset.schema.names]
+    if robust:
+        from ..robust import ranking_column
+
+        if not manifest.get("robust"):
+            raise DatasetError(
+                f"dataset {str(directory)!r} has no robust columns; generate it with "
+                "--robust K to rank by a robust score, or drop --robust"
+            )
+        metric_cols.append(ranking_column(task_obj.name))
     scanner = dataset.scanner(
         columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
     )
@@ -252,7 +231,7 @@ def best_grasps(
             if batch.num_rows == 0:
                 continue
             table = pa.Table.from_batches([batch])
-            values = task_values(task_obj, table, mode, thresholds)
+            values = task_values(task_obj, table, mode, thresholds, robust=robust)
             scanned += len(values)
             o = pc.index_in(table["object"], value_set=name_set).to_numpy(zero_copy_only=False)
             s = table["sample"].to_numpy()
@@ -265,7 +244,7 @@ def best_grasps(
     rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
     return BestGrasps(
         task=task_obj.name,
-        mode=mode,
+        mode=f"{mode}, robust" if robust else mode,
         table=rows,
         rows_scanned=scanned,
         finite=finite,

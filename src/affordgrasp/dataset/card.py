@@ -174,13 +174,15 @@ def _plain(value):
     return value
 
 
-def schema_description(metrics: bool, depth: bool = False) -> list[dict]:
+def schema_description(metrics: bool, depth: bool = False, robust=None) -> list[dict]:
     """Every field of the shards' schema with its Arrow type.
 
     Parameters
     ----------
     metrics, depth : bool
         As for :func:`affordgrasp.schema.dataset_schema`.
+    robust : RobustSettings, optional
+        The robust settings of the run (their columns are listed).
 
     Returns
     -------
@@ -189,7 +191,7 @@ def schema_description(metrics: bool, depth: bool = False) -> list[dict]:
     """
     from ..schema import dataset_schema
 
-    schema = dataset_schema(metrics, depth)
+    schema = dataset_schema(metrics, depth, robust)
     return [{"name": f.name, "type": str(f.type)} for f in schema]
 
 
@@ -226,6 +228,7 @@ def build_card(
     dict
     """
     from ..materials import friction_table
+    from ..robust import manifest_robust
 
     per_object: dict[str, Counter] = {o.name: Counter() for o in objects}
     closure: Counter = Counter()
@@ -270,7 +273,10 @@ def build_card(
         "simulation": simulation_settings(),
         "task_thresholds": task_thresholds(),
         "depth": manifest.get("depth"),
-        "columns": schema_description(manifest["metrics"], bool(manifest.get("depth"))),
+        "robust": manifest.get("robust"),
+        "columns": schema_description(
+            manifest["metrics"], bool(manifest.get("depth")), manifest_robust(manifest)
+        ),
     }
 
 
@@ -357,6 +363,9 @@ def card_markdown(card: dict) -> str:
     ]
     lines += ["", "## Simulation", ""]
     lines += [f"* {k}: {v}" for k, v in card["simulation"].items()]
+    if card.get("robust"):
+        lines += ["", "## Robust evaluation (robust_* columns)", ""]
+        lines += [f"* {k}: {v}" for k, v in card["robust"].items()]
     lines += ["", "## Friction table (μ)", ""]
     lines.append(", ".join(f"{k} {v}" for k, v in card["friction_table"].items()))
     if card["task_thresholds"]:

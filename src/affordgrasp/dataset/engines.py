@@ -29,6 +29,7 @@ import pyarrow as pa
 from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
 from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
+from ..robust import RobustSettings
 from ..worker_lifetime import die_with_parent
 
 log = logging.getLogger(__name__)
@@ -165,6 +166,7 @@ class RunContext:
     soft: bool = False
     depth: bool = False
     volume: bool = False
+    robust: RobustSettings | None = None
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
 
@@ -244,6 +246,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             soft=ctx.soft,
             metrics=ctx.metrics,
             volume=ctx.volume,
+            robust=ctx.robust,
         ).table
     else:
         table = evaluate_inputs(
@@ -256,6 +259,7 @@ def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
             soft=ctx.soft,
             metrics=ctx.metrics,
             volume=ctx.volume,
+            robust=ctx.robust,
         ).table
     if ctx.depth:
         from ..vision.depth import depth_column

@@ -32,6 +32,7 @@ import pyarrow as pa
 from .. import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..hands import Hand, hand_to_dict
+from ..robust import RobustSettings, robust_settings
 from ..schema import column_numbers
 from . import card as card_module
 from .engines import (
@@ -138,6 +139,7 @@ def build_manifest(
     depth: bool = False,
     materials: bool = False,
     volume: bool = False,
+    robust: RobustSettings | None = None,
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``).
 
@@ -164,6 +166,9 @@ def build_manifest(
         Whether the GWS volume is computed (``gws_volume``; null otherwise). Recorded
         always (a resume must match); a manifest written before it was recorded computed
         it whenever it computed metrics (:func:`~affordgrasp.dataset.layout.manifest_volume`).
+    robust : RobustSettings, optional
+        Robust evaluation's parameters (recorded under ``robust`` when K > 0; a resume
+        must use the same).
 
     Returns
     -------
@@ -199,6 +204,8 @@ def build_manifest(
         from ..vision.depth import depth_manifest
 
         manifest["depth"] = depth_manifest()
+    if robust is not None and robust.enabled:  # absent for plain runs: earlier ones resume
+        manifest["robust"] = robust.to_dict()
     return manifest
 
 
@@ -272,6 +279,7 @@ def generate(
     command: Sequence[str] | None = None,
     progress: ProgressFactory | None = None,
     volume: bool = False,
+    robust: RobustSettings | int | None = None,
 ) -> GenerationSummary:
     """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
 
@@ -315,6 +323,9 @@ def generate(
         Also compute the GWS volume (column ``gws_volume``, null otherwise; recorded in the
         manifest and the card). Not in the paper's Φ; it costs the full 6-D hull of every
         force-closure grasp.
+    robust : RobustSettings or int, optional
+        K perturbed copies per grasp and the ``robust_*`` columns (:mod:`affordgrasp.robust`);
+        None or 0: plain. Needs ``metrics``.
 
     Returns
     -------
@@ -336,6 +347,9 @@ def generate(
     _check_counts(samples, seed, shard_size, chunk_size)
     check_engine(engine, workers, address)
     hand_model = get_hand(hand)
+    robust = robust_settings(robust)
+    if robust is not None and not metrics:
+        raise bad_parameter("robust", "needs the metric columns; drop --no-metrics or --robust")
     resolved = load_objects(list(objects), materials=materials)
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
@@ -352,6 +366,7 @@ def generate(
         depth=depth,
         materials=materials or any(o.materials for o in resolved),
         volume=volume,
+        robust=robust,
     )
     manifest = prepare_directory(directory, manifest)
     removed = remove_stale_temporaries(directory)
@@ -360,7 +375,7 @@ def generate(
 
     from ..schema import dataset_schema
 
-    schema = dataset_schema(metrics, depth)
+    schema = dataset_schema(metrics, depth, robust)
     plan = plan_shards(len(resolved), samples, shard_size)
     infos: dict[Shard, dict] = {}
     checksums = read_checksums(directory)
@@ -379,6 +394,7 @@ def generate(
         soft=soft,
         depth=depth,
         volume=bool(metrics and volume),
+        robust=robust,
     )
     started = time.perf_counter()
     started_at = time.strftime("%Y-%m-%dT%H:%M:%S%z")

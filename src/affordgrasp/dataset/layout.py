@@ -55,6 +55,7 @@ _TMP_RE = re.compile(
 
 # Manifest keys that define the content of the dataset; a resume must match all of them.
 PLAN_KEYS = (
+    "robust",
     "format_version",
     "affordgrasp_version",
     "seed",

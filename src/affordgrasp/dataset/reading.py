@@ -70,7 +70,11 @@ def open_dataset(
         )
     if verify:
         verify_shards(Path(directory), paths, manifest)
-    schema = dataset_schema(manifest.get("metrics", True), bool(manifest.get("depth")))
+    from ..robust import manifest_robust
+
+    schema = dataset_schema(
+        manifest.get("metrics", True), bool(manifest.get("depth")), manifest_robust(manifest)
+    )
     return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
 
 

@@ -33,6 +33,7 @@ from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..metrics.contacts import ContactSet
+from ..objects.prepared import centred_frame_origin  # noqa: F401  (re-exported: its former home)
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
@@ -309,22 +310,6 @@ class ObjectGeometry:
 _GEOMETRY: IdentityCache[ObjectGeometry] = IdentityCache()
 
 
-def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
-    """Origin of the frame the simulation runs in: the bounding-box centre.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float ndarray
-        m.
-
-    Returns
-    -------
-    (3,) float64 ndarray
-        m.
-    """
-    return 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-
-
 def object_geometry(obj) -> ObjectGeometry:
     """Surface samples and hull of an object, cached for the object's lifetime.
 
@@ -523,16 +508,68 @@ def _open_dofs(hand: Hand, s: np.ndarray) -> np.ndarray:
     return q
 
 
-def _simulate_centred(
+@dataclass(frozen=True)
+class FlatGrasps:
+    """Simulated grasps as flat arrays (no Python object per grasp), object frame.
+
+    Attributes
+    ----------
+    poses : (n, 4, 4) float64 ndarray
+        Final hand → object, m.
+    joints : (n, n_dofs) float64 ndarray
+        Final DOF values, rad / m.
+    touched : (n,) bool ndarray
+        The approach touched the object.
+    offsets : (n + 1,) int64 ndarray
+        Grasp i owns contact rows ``offsets[i]:offsets[i + 1]``.
+    points, normals : (c, 3) float64 ndarray
+        Contact points (m) and the object's outward unit normals.
+    mu : (c,) float64 ndarray
+        Friction coefficient of each contact.
+    link : (c,) int64 ndarray
+        Hand link index of each contact.
+    """
+
+    poses: np.ndarray
+    joints: np.ndarray
+    touched: np.ndarray
+    offsets: np.ndarray
+    points: np.ndarray
+    normals: np.ndarray
+    mu: np.ndarray
+    link: np.ndarray
+
+
+def simulate_starts(
     hand: Hand,
     geom: ObjectGeometry,
     starts: np.ndarray,
     travel: np.ndarray,
     s: np.ndarray,
-    object_material: str,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
-    """The policy for start poses in the centred frame of ``geom``, in one compiled call;
-    poses and contacts returned in the object frame."""
+    object_material: str = DEFAULT_OBJECT_MATERIAL,
+) -> FlatGrasps:
+    """The policy from given start poses, in one compiled call, as flat arrays.
+
+    Parameters
+    ----------
+    hand : Hand
+    geom : ObjectGeometry
+        The object's simulation geometry (:func:`object_geometry`).
+    starts : (n, 4, 4) float64 ndarray
+        Start poses, hand → the *centred* frame of ``geom`` (mesh frame minus
+        ``geom.origin``), m.
+    travel : (n,) float64 ndarray
+        Approach length to try, m.
+    s : (n,) float64 ndarray
+        Pregrasp DOF parameters in [0, 1].
+    object_material : str
+        The object's surface material (friction).
+
+    Returns
+    -------
+    FlatGrasps
+        Poses and contacts in the object's mesh frame.
+    """
     arrays = hand_arrays(hand)
     samples = geom.samples
     joints = _open_dofs(hand, s)
@@ -554,11 +591,51 @@ def _simulate_centred(
     link = arrays.shape_link[shape]
     points = samples.points[point] + geom.origin
     mu = _link_mu(arrays.materials, object_material)[link]
+    return FlatGrasps(poses, joints, touched, offsets, points, normal, mu, link)
+
+
+def pregrasp_starts(
+    hand: Hand, geom: ObjectGeometry, p0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Start poses (centred frame of ``geom``) and approach lengths of pregrasps.
+
+    Parameters
+    ----------
+    hand : Hand
+    geom : ObjectGeometry
+    p0 : (n, 6) float64 ndarray
+        Valid pregrasps.
+
+    Returns
+    -------
+    starts : (n, 4, 4) float64 ndarray
+        Hand → centred frame, m.
+    travel : (n,) float64 ndarray
+        m.
+    """
+    # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all.
+    reach = max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
+    return start_poses(p0, geom.hull_vertices, reach)
+
+
+def _simulate_centred(
+    hand: Hand,
+    geom: ObjectGeometry,
+    starts: np.ndarray,
+    travel: np.ndarray,
+    s: np.ndarray,
+    object_material: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """The policy for start poses in the centred frame of ``geom``, in one compiled call;
+    poses and contacts returned in the object frame."""
+    flat = simulate_starts(hand, geom, starts, travel, s, object_material)
+    link, points, normal, mu = flat.link, flat.points, flat.normals, flat.mu
     names = _LINK_NAMES.get(hand, lambda: np.array(hand.link_names, dtype=object))[link]
+    touched = flat.touched
     n = len(starts)
     status = np.empty(n, dtype=object)
     contacts = []
-    bounds = offsets.tolist()
+    bounds = flat.offsets.tolist()
     for i in range(n):
         a, b = bounds[i], bounds[i + 1]
         if not touched[i]:
@@ -568,7 +645,7 @@ def _simulate_centred(
         # two or more links touching: grasped (whether it holds is for the metrics)
         status[i] = "grasped" if len(set(link[a:b].tolist())) >= 2 else "touched"
         contacts.append(ContactSet(points[a:b], normal[a:b], mu[a:b], names[a:b]))
-    return status, poses, joints, contacts
+    return status, flat.poses, flat.joints, contacts
 
 
 def simulate(
@@ -613,9 +690,7 @@ def simulate(
         upts, unrm, utri = use_points(geom.mesh, obj.mass.center_of_mass - geom.origin, use_dir)
         upts += geom.origin
     started = time.perf_counter()
-    # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all.
-    reach = max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
-    starts, travel = start_poses(p0, geom.hull_vertices, reach)
+    starts, travel = pregrasp_starts(hand, geom, p0)
     status, poses, joints, contacts = _simulate_centred(
         hand, geom, starts, travel, p0[:, 5], object_material
     )

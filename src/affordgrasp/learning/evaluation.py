@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..stats import average_precision, precision_recall  # noqa: F401 - re-exported
 
 
 def _pair(y_true, y_pred) -> tuple[np.ndarray, np.ndarray]:
@@ -157,64 +158,6 @@ def gms_distribution(
         idx = rng.choice(n, k, replace=False)
         out[s] = global_min_score(t[idx], p[idx], lower_is_better=lower_is_better)
     return out
-
-
-def precision_recall(labels, scores) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Precision, recall and thresholds, one per distinct score (highest threshold first).
-
-    A sample is predicted positive when its score >= the threshold.
-
-    Parameters
-    ----------
-    labels : (n,) array_like
-        True classes; positive when > 0.5.
-    scores : (n,) array_like of float
-        Predicted scores.
-
-    Returns
-    -------
-    precision, recall, thresholds : (k,) float64 ndarray
-        k distinct scores, descending; recall is 0 throughout without a positive label.
-
-    Raises
-    ------
-    InputError
-        When the two lengths differ.
-    """
-    y = np.asarray(labels, dtype=np.float64).ravel() > 0.5
-    s = np.asarray(scores, dtype=np.float64).ravel()
-    if len(y) != len(s):
-        raise InputError(f"{len(y)} labels but {len(s)} scores")
-    order = np.argsort(-s, kind="mergesort")
-    s, y = s[order], y[order]
-    last = np.r_[np.flatnonzero(np.diff(s) != 0), len(s) - 1]  # end of each tie group
-    tp = np.cumsum(y)[last]
-    fp = (last + 1) - tp
-    n_pos = max(int(y.sum()), 1)
-    precision = tp / np.maximum(tp + fp, 1)
-    recall = tp / n_pos
-    return precision, recall, s[last]
-
-
-def average_precision(labels, scores) -> float:
-    """AP = Σ_k (R_k − R_{k−1}) P_k over the distinct thresholds.
-
-    Parameters
-    ----------
-    labels : (n,) array_like
-        True classes; positive when > 0.5.
-    scores : (n,) array_like of float
-        Predicted scores.
-
-    Returns
-    -------
-    float
-        In [0, 1]; NaN without a positive label.
-    """
-    if not np.any(np.asarray(labels) > 0.5):
-        return float("nan")
-    precision, recall, _ = precision_recall(labels, scores)
-    return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
 
 
 def regression_report(

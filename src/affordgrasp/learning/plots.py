@@ -1,5 +1,10 @@
 """PNG plots of model metrics: precision–recall curves, GMS cumulative distributions,
-predicted vs true values (headless, matplotlib Agg)."""
+predicted vs true values.
+
+Headless without touching the caller's matplotlib: each plot is a
+:class:`matplotlib.figure.Figure` of its own (no pyplot, never ``matplotlib.use``), written
+by its Agg canvas, so a notebook's or an application's backend stays as it was.
+"""
 
 from __future__ import annotations
 
@@ -10,13 +15,12 @@ import numpy as np
 from .evaluation import gms_distribution, precision_recall
 
 
-def _figure():
-    import matplotlib
+def _subplots(*grid: int, figsize: tuple[float, float], dpi: int = 120, **kwargs):
+    """A figure of its own and its axes (``Figure.subplots``: ``grid``, ``sharex``...)."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(figsize=figsize, dpi=dpi)
+    return fig, fig.subplots(*grid, **kwargs)
 
 
 def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], positive_rate: float):
@@ -35,8 +39,7 @@ def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], posit
     -------
     pathlib.Path
     """
-    plt = _figure()
-    fig, ax = plt.subplots(figsize=(5, 4), dpi=120)
+    fig, ax = _subplots(figsize=(5, 4))
     for label, (y, s) in curves.items():
         precision, recall, _ = precision_recall(y, s)
         ax.step(np.r_[0.0, recall], np.r_[precision[0], precision], where="pre", label=label)
@@ -46,7 +49,6 @@ def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], posit
     ax.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)
 
 
@@ -66,8 +68,7 @@ def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_
     -------
     pathlib.Path
     """
-    plt = _figure()
-    fig, ax = plt.subplots(figsize=(5, 4), dpi=120)
+    fig, ax = _subplots(figsize=(5, 4))
     for label, (t, p) in runs.items():
         g = np.sort(gms_distribution(t, p, lower_is_better=lower_is_better))
         line = ax.plot(g, np.arange(1, len(g) + 1) / len(g), label=f"{label} (E={g.mean():.2f})")
@@ -77,7 +78,6 @@ def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)
 
 
@@ -96,8 +96,7 @@ def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
     -------
     pathlib.Path
     """
-    plt = _figure()
-    fig, ax = plt.subplots(figsize=(4.5, 4.5), dpi=120)
+    fig, ax = _subplots(figsize=(4.5, 4.5))
     ax.scatter(truth, pred, s=4, alpha=0.4)
     lo = float(min(np.min(truth), np.min(pred)))
     hi = float(max(np.max(truth), np.max(pred)))
@@ -105,7 +104,6 @@ def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
     ax.set(xlabel="true (normalised)", ylabel="predicted (normalised)", title=label)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)
 
 
@@ -127,9 +125,8 @@ def plot_reliability(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, bi
     """
     from .evaluation import expected_calibration_error, reliability_bins
 
-    plt = _figure()
-    fig, (ax, hist) = plt.subplots(
-        2, 1, figsize=(5, 5.5), dpi=120, sharex=True, gridspec_kw={"height_ratios": [3, 1]}
+    fig, (ax, hist) = _subplots(
+        2, 1, figsize=(5, 5.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]}
     )
     ax.plot([0, 1], [0, 1], ls="--", c="grey", label="calibrated")
     for label, (y, p) in runs.items():
@@ -151,5 +148,4 @@ def plot_reliability(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, bi
     hist.set_yscale("log")
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)

@@ -262,10 +262,25 @@ def _load_or_build_derived(obj: GraspObject) -> DerivedGeometry:
     return derived
 
 
+def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
+    """Origin of the frame the grasp simulation runs in: the bounding-box centre.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float ndarray
+        m.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        m.
+    """
+    return 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+
+
 def _build_derived(obj: GraspObject) -> DerivedGeometry:
     import trimesh
 
-    from ..grasp.policy import centred_frame_origin
     from ..grasp.surface import sample_surface
 
     mesh = obj.mesh

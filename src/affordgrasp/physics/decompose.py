@@ -14,8 +14,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +21,7 @@ import numpy as np
 import trimesh
 
 from ..caching import cache_dir
+from ..writing import atomic_write
 from . import deps
 from .settings import PhysicsSettings
 
@@ -113,11 +112,6 @@ def _write_atomic(path: Path, parts: list) -> None:
         for i, (v, f) in enumerate(parts):
             arrays[f"v{i}"] = v
             arrays[f"f{i}"] = f
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".npz")
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **arrays)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        atomic_write(path, lambda fh: np.savez(fh, **arrays))
     except OSError as exc:  # a read-only cache only costs time
         log.warning("cannot cache the decomposition in %s: %s", path.parent, exc)

@@ -12,7 +12,14 @@ ROC-AUC is the Mann–Whitney probability that a random success outranks a rando
 ties counted one half (so a predictor that is −∞ or 0 for most rows gets no credit for
 them); it is undefined (NaN) when a group has only successes or only failures. Spearman's
 ρ is the Pearson correlation of average ranks. ±∞ rank as the largest/smallest values; NaN
-rows are left out of the pair they concern.
+rows are left out of the pair they concern. The statistics live in :mod:`affordgrasp.stats`.
+
+The headline (``report["headline"]``): the AUC for ``hold_ok`` with a bootstrap 95 %
+interval of the plain, graded, robust (when the dataset has ``robust_*`` columns) and
+settled predictors (``HEADLINE``), overall, per family and among force-closure grasps
+(ε > 0). Beside it: the initial penetration distribution, the hold rate per
+initial-penetration bin and per number of coupled joints that started at their limit, and
+how many force-closure grasps the squeeze ejected.
 """
 
 from __future__ import annotations
@@ -20,15 +27,34 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
-from scipy.stats import rankdata
 
-from ..columns import HOLD_EFFORT_COLUMNS, hold_effort_sum
+from ..columns import HOLD_EFFORT_COLUMNS, hold_directions, hold_effort_sum
+from ..stats import bootstrap_auc, roc_auc, roc_curve, spearman
 
-__all__ = ["physics_report", "roc_auc", "roc_curve", "spearman"]
+__all__ = ["HEADLINE", "physics_report", "roc_auc", "roc_curve", "spearman"]
+
+# The predictors of the headline table, larger = better, with what each is.
+HEADLINE = {
+    "task_pick": "plain pick (−ΣE_h)",
+    "epsilon": "plain ε",
+    "hold_dirs": "graded: load directions with finite E_h",
+    "graded_pick": "graded pick: hold_dirs, then −ΣE_h of the finite ones",
+    "robust_hold": "robust pick score: graded hold over the perturbed copies",
+    "robust_pick": "robust: q-quantile of pick over the perturbed copies",
+    "robust_hold_dirs": "robust: mean hold_dirs over the perturbed copies",
+    "robust_fc": "robust: fraction in force closure",
+    "robust_epsilon": "robust: mean ε",
+    "settled_epsilon": "ε on the settled contacts",
+    "neg_settled_hold_effort_sum": "−ΣE_h on the settled contacts",
+    "settled_hold_dirs": "hold_dirs on the settled contacts",
+}
+# Initial penetration bins, m (as placed from the dataset row, before the back-off).
+PENETRATION_BINS = (0.0, 1e-4, 5e-4, 1e-3, 2e-3, math.inf)
 
 BINARY_OUTCOMES = ("hold_ok", "settled", "impact_ok", "press_held")
 GRADED_OUTCOMES = ("hold_directions_ok", "impact_steadiness", "press_force_n")
@@ -45,80 +71,6 @@ DESIGNED_FOR = {
 }
 
 
-def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
-    """ROC-AUC of ``score`` for binary ``label`` (ties count 1/2); NaN if one class is empty.
-
-    Parameters
-    ----------
-    score : (n,) float ndarray
-        Larger = more likely positive (±inf allowed, NaN rows dropped).
-    label : (n,) bool ndarray
-
-    Returns
-    -------
-    float
-    """
-    score = np.asarray(score, dtype=np.float64)
-    label = np.asarray(label, dtype=bool)
-    keep = ~np.isnan(score)
-    score, label = score[keep], label[keep]
-    n_pos, n_neg = int(label.sum()), int((~label).sum())
-    if n_pos == 0 or n_neg == 0:
-        return math.nan
-    ranks = rankdata(score)  # average ranks: ties count one half
-    return float((ranks[label].sum() - n_pos * (n_pos + 1) / 2) / (n_pos * n_neg))
-
-
-def roc_curve(score: np.ndarray, label: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The ROC curve at every distinct threshold, from (0, 0).
-
-    Parameters
-    ----------
-    score : (n,) float ndarray
-    label : (n,) bool ndarray
-
-    Returns
-    -------
-    fpr, tpr : float64 ndarray
-        False and true positive rates.
-    """
-    score = np.asarray(score, dtype=np.float64)
-    label = np.asarray(label, dtype=bool)
-    keep = ~np.isnan(score)
-    score, label = score[keep], label[keep]
-    order = np.argsort(-score, kind="stable")
-    s, y = score[order], label[order]
-    # The last index of every run of equal scores (±inf compare equal to themselves).
-    distinct = np.r_[np.flatnonzero(s[1:] != s[:-1]), len(s) - 1] if len(s) else np.zeros(0, int)
-    tp = np.cumsum(y)[distinct]
-    fp = np.cumsum(~y)[distinct]
-    p, n = max(int(y.sum()), 1), max(int((~y).sum()), 1)
-    return np.r_[0.0, fp / n], np.r_[0.0, tp / p]
-
-
-def spearman(x: np.ndarray, y: np.ndarray) -> float:
-    """Spearman's ρ (average ranks; ±inf rank at the ends); NaN pairs dropped.
-
-    Parameters
-    ----------
-    x, y : (n,) float ndarray
-
-    Returns
-    -------
-    float
-    """
-    x = np.asarray(x, dtype=np.float64)
-    y = np.asarray(y, dtype=np.float64)
-    keep = ~(np.isnan(x) | np.isnan(y))
-    x, y = x[keep], y[keep]
-    if len(x) < 3:
-        return math.nan
-    rx, ry = rankdata(x), rankdata(y)
-    if rx.std() == 0 or ry.std() == 0:
-        return math.nan
-    return float(np.corrcoef(rx, ry)[0, 1])
-
-
 def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
     from ..tasks import evaluate_task, list_tasks
 
@@ -133,6 +85,19 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
         "use_force": col("use_force"),
         "discharge": col("discharge"),
     }
+    preds["hold_dirs"], finite_sum = hold_directions({c: col(c) for c in HOLD_EFFORT_COLUMNS})
+    # Lexicographic: more finite directions first, then the smaller effort over them; the
+    # one-copy form of robust_hold (docs/robust.md), so the plain and robust scores compare.
+    preds["graded_pick"] = preds["hold_dirs"] - finite_sum / (finite_sum + 1.0)
+    names = set(table.column_names)
+    if "settled_epsilon" in names:
+        preds["settled_epsilon"] = col("settled_epsilon")
+        preds["neg_settled_hold_effort_sum"] = -col("settled_hold_effort_sum")
+        preds["settled_hold_dirs"] = col("settled_hold_dirs")
+    for name in sorted(names):
+        kind = table.schema.field(name).type
+        if name.startswith("robust_") and (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
+            preds[name] = col(name)
     columns = {name: col(name) for name in table.column_names if _is_metric(table, name)}
     for task in list_tasks():
         # The default mode, and the mode without the robustness threshold (τ_ε = -inf): the
@@ -191,7 +156,14 @@ def _stats(preds, outs, mask) -> dict:
     return result
 
 
-def physics_report(outcomes: pa.Table, directory: str | os.PathLike | None = None) -> dict:
+def physics_report(
+    outcomes: pa.Table,
+    directory: str | os.PathLike | None = None,
+    *,
+    n_boot: int = 1000,
+    seed: int = 0,
+    compare: Sequence[pa.Table] = (),
+) -> dict:
     """AUC and Spearman of every predictor against every outcome, overall and per family.
 
     Parameters
@@ -200,6 +172,13 @@ def physics_report(outcomes: pa.Table, directory: str | os.PathLike | None = Non
         The table of :func:`affordgrasp.physics.run.read_outcomes`.
     directory : path, optional
         If given, write report.json, report.md and PNG plots there.
+    n_boot : int
+        Bootstrap resamples of the headline intervals.
+    seed : int
+        Seed of the bootstrap (same seed, same report).
+    compare : sequence of pyarrow.Table
+        Outcomes of other runs (e.g. the other protocol): their headline over all rows is
+        reported beside this run's (``report["by_run"]``); the other tables are this run's.
 
     Returns
     -------
@@ -219,15 +198,113 @@ def physics_report(outcomes: pa.Table, directory: str | os.PathLike | None = Non
     for fam in sorted(set(families)):
         report["settled"]["families"][fam] = _stats(preds, outs, settled & (families == fam))
     report["designed_for"] = DESIGNED_FOR
+    names = set(outcomes.column_names)
+    if "protocol" in names:
+        report["protocol"] = sorted(set(outcomes.column("protocol").to_pylist()))
+    if compare:
+        runs = {}
+        for k, table in enumerate([outcomes, *compare]):
+            name = f"run {k}"
+            if "protocol" in table.column_names:
+                name = "+".join(sorted(set(table.column("protocol").to_pylist()))) or name
+            every = np.ones(table.num_rows, dtype=bool)
+            runs[name if name not in runs else f"{name} ({k})"] = _headline(
+                _predictors(table), _outcomes(table), every, n_boot, seed
+            )
+        report["by_run"] = runs
+    fc = preds["epsilon"] > 0
+    report["headline"] = {
+        "outcome": "hold_ok",
+        "predictors": {k: v for k, v in HEADLINE.items() if k in preds},
+        "all": _headline(preds, outs, np.ones(len(families), dtype=bool), n_boot, seed),
+        "families": {
+            f: _headline(preds, outs, families == f, n_boot, seed) for f in sorted(set(families))
+        },
+        "force_closure": _headline(preds, outs, fc, n_boot, seed),
+        "settled": _headline(preds, outs, settled, n_boot, seed),
+        "force_closure_families": {
+            f: _headline(preds, outs, fc & (families == f), n_boot, seed)
+            for f in sorted(set(families))
+        },
+    }
+    if "initial_penetration_m" in names:
+        report["start"] = _start_report(outcomes, outs, fc)
     if directory is not None:
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
-        from ..commands.output import to_jsonable
+        from ..jsonable import to_jsonable
 
         (directory / "report.json").write_text(json.dumps(to_jsonable(report), indent=2))
         (directory / "report.md").write_text(report_markdown(report))
         _plots(preds, outs, families, report, directory)
     return report
+
+
+def _headline(preds, outs, mask, n_boot: int, seed: int) -> dict:
+    """n, hold rate and {predictor: [AUC, low, high]} for ``hold_ok`` among ``mask``."""
+    y = outs["hold_ok"][mask]
+    valid = ~np.isnan(y)
+    label = y[valid].astype(bool)
+    aucs = {
+        p: list(bootstrap_auc(preds[p][mask][valid], label, n_boot=n_boot, seed=seed))
+        for p in HEADLINE
+        if p in preds
+    }
+    rate = float(label.mean()) if len(label) else math.nan
+    return {"n": int(valid.sum()), "hold_rate": rate, "auc": aucs}
+
+
+def _rates(outs, ejected, sel) -> dict:
+    n = int(sel.sum())
+    if n == 0:
+        return {"n": 0, "hold_rate": math.nan, "settled_rate": math.nan, "ejected_rate": math.nan}
+    return {
+        "n": n,
+        "hold_rate": float(np.nanmean(outs["hold_ok"][sel])),
+        "settled_rate": float(np.nanmean(outs["settled"][sel])),
+        "ejected_rate": float(np.mean(ejected[sel])),
+    }
+
+
+def _start_report(table: pa.Table, outs, fc) -> dict:
+    """Initial penetration, back-off, couplings at their limit, ejections."""
+
+    def col(name):
+        return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=np.float64)
+
+    initial, start = col("initial_penetration_m"), col("start_penetration_m")
+    ejected = col("ejected") > 0.5
+    at_limit = col("distal_at_limit").astype(np.int64)
+    quantiles = (0.5, 0.9, 0.99, 1.0)
+    bins = []
+    for lo, hi in zip(PENETRATION_BINS[:-1], PENETRATION_BINS[1:], strict=True):
+        sel = (initial >= lo) & (initial < hi) if lo > 0 else initial < hi
+        label = f"{lo * 1e3:g}–{hi * 1e3:g} mm" if math.isfinite(hi) else f"≥ {lo * 1e3:g} mm"
+        bins.append({"bin": label, **_rates(outs, ejected, sel)})
+    return {
+        "n": len(initial),
+        "initial_penetration_m": {
+            f"q{int(q * 100)}": float(np.quantile(initial, q)) for q in quantiles
+        }
+        if len(initial)
+        else {},
+        "start_penetration_m": {f"q{int(q * 100)}": float(np.quantile(start, q)) for q in quantiles}
+        if len(start)
+        else {},
+        "initial_over_0.5mm": float(np.mean(initial >= 5e-4)) if len(initial) else math.nan,
+        "start_under_0.5mm": float(np.mean(start < 5e-4)) if len(start) else math.nan,
+        "backed_off": float(np.mean(initial > start)) if len(start) else math.nan,
+        "by_initial_penetration": bins,
+        "by_distal_at_limit": [
+            {"count": int(k), **_rates(outs, ejected, at_limit == k)}
+            for k in range(int(at_limit.max(initial=0)) + 1)
+        ],
+        "force_closure": {
+            "n": int(fc.sum()),
+            "ejected_rate": _rates(outs, ejected, fc)["ejected_rate"],
+        },
+        "ejected_rate": float(np.mean(ejected)) if len(ejected) else math.nan,
+    }
 
 
 def _f(v: float) -> str:
@@ -247,11 +324,95 @@ def report_markdown(report: dict) -> str:
     str
     """
     lines = ["# Physics validation report", ""]
+    if "protocol" in report:
+        lines += [f"Protocol: {', '.join(report['protocol'])} (docs/physics.md).", ""]
+    if "by_run" in report:
+        lines += _runs_markdown(report["by_run"], report["headline"]["predictors"])
+    if "headline" in report:
+        lines += _headline_markdown(report["headline"])
+    if "start" in report:
+        lines += _start_markdown(report["start"])
     lines += _markdown_block(report, "")
     if "settled" in report:
         lines += ["", "# Among the grasps that settled after the squeeze", ""]
         lines += _markdown_block(report["settled"], "#")
     return "\n".join(lines) + "\n"
+
+
+def _ci(v) -> str:
+    auc, lo, hi = v
+    return "—" if math.isnan(auc) else f"{auc:.3f} [{_f(lo)}–{_f(hi)}]"
+
+
+def _headline_markdown(h: dict) -> list[str]:
+    lines = []
+    for title, overall, fams in (
+        ("all grasps", h["all"], h["families"]),
+        ("force-closure grasps (ε > 0)", h["force_closure"], h["force_closure_families"]),
+        ("grasps that settled after the squeeze", h["settled"], {}),
+    ):
+        groups = [("all", overall)] + list(fams.items())
+        lines += [
+            f"## ROC-AUC for `hold_ok` [bootstrap 95 % interval], {title}",
+            "",
+            "| predictor | " + " | ".join(f"{g} (n={v['n']})" for g, v in groups) + " |",
+            "|---" * (1 + len(groups)) + "|",
+            "| hold rate | " + " | ".join(_f(v["hold_rate"]) for _, v in groups) + " |",
+        ]
+        for p in h["predictors"]:
+            lines.append(f"| {p} | " + " | ".join(_ci(v["auc"][p]) for _, v in groups) + " |")
+        lines.append("")
+    lines += ["Predictors: " + "; ".join(f"`{k}` {v}" for k, v in h["predictors"].items()), ""]
+    return lines
+
+
+def _runs_markdown(by: dict, predictors: dict) -> list[str]:
+    groups = list(by.items())
+    lines = [
+        "## ROC-AUC for `hold_ok` per run [bootstrap 95 % interval]",
+        "",
+        "| predictor | " + " | ".join(f"{p} (n={v['n']})" for p, v in groups) + " |",
+        "|---" * (1 + len(groups)) + "|",
+        "| hold rate | " + " | ".join(_f(v["hold_rate"]) for _, v in groups) + " |",
+    ]
+    for p in predictors:
+        cells = [_ci(v["auc"][p]) if p in v["auc"] else "—" for _, v in groups]
+        lines.append(f"| {p} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
+def _start_markdown(st: dict) -> list[str]:
+    def mm(d):
+        return ", ".join(f"{k} {v * 1e3:.3f}" for k, v in d.items())
+
+    lines = [
+        "## The start of the replay",
+        "",
+        f"* initial penetration as placed (mm): {mm(st['initial_penetration_m'])}; "
+        f"{100 * st['initial_over_0.5mm']:.1f} % of rows at 0.5 mm or deeper",
+        f"* at the start of the squeeze, after the back-off (mm): "
+        f"{mm(st['start_penetration_m'])}; {100 * st['start_under_0.5mm']:.1f} % of rows "
+        "below 0.5 mm",
+        f"* the squeeze left no contact (ejected): {100 * st['ejected_rate']:.1f} % of all rows, "
+        f"{100 * st['force_closure']['ejected_rate']:.1f} % of the "
+        f"{st['force_closure']['n']} force-closure rows",
+        "",
+        "| initial penetration | n | hold | settled | ejected |",
+        "|---|---|---|---|---|",
+    ]
+    for b in st["by_initial_penetration"]:
+        lines.append(
+            f"| {b['bin']} | {b['n']} | {_f(b['hold_rate'])} | {_f(b['settled_rate'])} | "
+            f"{_f(b['ejected_rate'])} |"
+        )
+    lines += ["", "| coupled joints at their limit | n | hold | settled | ejected |"]
+    lines.append("|---|---|---|---|---|")
+    for b in st["by_distal_at_limit"]:
+        lines.append(
+            f"| {b['count']} | {b['n']} | {_f(b['hold_rate'])} | {_f(b['settled_rate'])} | "
+            f"{_f(b['ejected_rate'])} |"
+        )
+    return lines + [""]
 
 
 def _markdown_block(report: dict, deeper: str) -> list[str]:
@@ -295,11 +456,15 @@ def _markdown_block(report: dict, deeper: str) -> list[str]:
     return lines
 
 
-def _plots(preds, outs, families, report, directory: Path) -> None:
-    import matplotlib
+def _figure(**kwargs):
+    """A matplotlib Figure not attached to pyplot (the caller's backend stays as it is)."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    return Figure(**kwargs)
+
+
+def _plots(preds, outs, families, report, directory: Path) -> None:
+    _headline_roc(preds, outs, families, report, directory)
 
     for outcome, names in (
         ("hold_ok", ["epsilon", "neg_hold_effort_sum", "task_pick", "task_viable"]),
@@ -308,7 +473,8 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
     ):
         y = outs[outcome]
         valid = ~np.isnan(y)
-        fig, ax = plt.subplots(figsize=(5, 5))
+        fig = _figure(figsize=(5, 5))
+        ax = fig.subplots()
         for p in names:
             if p not in preds:
                 continue
@@ -322,11 +488,11 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
         ax.legend(loc="lower right", fontsize=8)
         fig.tight_layout()
         fig.savefig(directory / f"roc_{outcome}.png", dpi=110)
-        plt.close(fig)
 
     fams = sorted(report["families"])
     names = ["epsilon", "neg_hold_effort_sum", "task_pick", "task_viable"]
-    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(fams)), 4))
+    fig = _figure(figsize=(max(6, 1.2 * len(fams)), 4))
+    ax = fig.subplots()
     width = 0.8 / len(names)
     for i, p in enumerate(names):
         vals = [report["families"][f]["auc"]["hold_ok"].get(p, math.nan) for f in fams]
@@ -339,11 +505,11 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(directory / "auc_hold_by_family.png", dpi=110)
-    plt.close(fig)
 
-    _why_plot(preds, outs, directory, plt)
+    _why_plot(preds, outs, directory)
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig = _figure(figsize=(10, 4))
+    axes = fig.subplots(1, 2)
     for ax, (p, o, label) in zip(
         axes,
         (
@@ -364,10 +530,35 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(directory / "scatter.png", dpi=110)
-    plt.close(fig)
 
 
-def _why_plot(preds, outs, directory: Path, plt) -> None:
+def _headline_roc(preds, outs, families, report, directory: Path) -> None:
+    """ROC curves of the headline predictors for ``hold_ok``: all rows, then per family."""
+    fams = ["all", *sorted(report["families"])]
+    cols = min(4, len(fams))
+    rows = -(-len(fams) // cols)
+    fig = _figure(figsize=(4 * cols, 4 * rows))
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    y = outs["hold_ok"]
+    for ax, fam in zip(axes, fams, strict=False):
+        sel = ~np.isnan(y) if fam == "all" else ~np.isnan(y) & (families == fam)
+        h = report["headline"]["all" if fam == "all" else "families"]
+        h = h if fam == "all" else h[fam]
+        for p in report["headline"]["predictors"]:
+            fpr, tpr = roc_curve(preds[p][sel], y[sel].astype(bool))
+            ax.plot(fpr, tpr, linewidth=1, label=f"{p} {_ci(h['auc'][p])}")
+        ax.plot([0, 1], [0, 1], color="0.7", linestyle="--", linewidth=1)
+        ax.set_title(f"{fam} (n={int(sel.sum())})", fontsize=9)
+        ax.set_xlabel("false positive rate", fontsize=8)
+        ax.set_ylabel("true positive rate", fontsize=8)
+        ax.legend(loc="lower right", fontsize=5)
+    for ax in axes[len(fams) :]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    fig.savefig(directory / "roc_hold_headline.png", dpi=110)
+
+
+def _why_plot(preds, outs, directory: Path) -> None:
     """Outcome rates per ε bin: where the hold test's successes and failures sit."""
     eps = preds["epsilon"]
     positive = eps[eps > 0]
@@ -375,7 +566,8 @@ def _why_plot(preds, outs, directory: Path, plt) -> None:
     bins = [("ε = 0", eps <= 0)]
     for lo, hi in zip(edges[:-1], edges[1:], strict=False):
         bins.append((f"{lo:.3g}–{hi:.3g}", (eps > 0) & (eps >= lo) & (eps <= hi)))
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig = _figure(figsize=(8, 4))
+    ax = fig.subplots()
     x = np.arange(len(bins))
     for i, outcome in enumerate(("settled", "hold_ok")):
         rates = [float(np.nanmean(outs[outcome][sel])) if sel.any() else 0.0 for _, sel in bins]
@@ -390,4 +582,3 @@ def _why_plot(preds, outs, directory: Path, plt) -> None:
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(directory / "why_epsilon_bins.png", dpi=110)
-    plt.close(fig)

@@ -40,7 +40,7 @@ log = logging.getLogger(__name__)
 __all__ = ["REPORTED_METRICS", "PhysicsSummary", "read_outcomes", "run_physics"]
 
 FORMAT = "affordgrasp-physics"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: start, settled and protocol columns
 MANIFEST = "_physics.json"
 DEFAULT_SHARD_SIZE = 128
 
@@ -126,8 +126,12 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
             f"dataset {str(dataset_dir)!r} was generated with --no-metrics; the physics "
             "report compares metrics with outcomes: generate it with metrics"
         )
+    from ..dataset.reading import open_dataset
+
     chosen = select_objects(dataset_dir, objects)
-    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS]
+    # Robust metrics (``robust_*``) travel to the report when the dataset has them.
+    robust = [c for c in open_dataset(dataset_dir).schema.names if c.startswith("robust_")]
+    columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS, *robust]
     table = read_dataset(dataset_dir, columns=columns, objects=chosen)
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
     keep = np.isin(status, list(statuses))
@@ -458,14 +462,23 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     for name in outcomes[0] if outcomes else ():
         values = [o[name] for o in outcomes]
         table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
-    return table
+    return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 
 def _outcome_type(name: str) -> pa.DataType:
-    if name in ("contacts", "hold_directions_ok", "steps"):
+    if name in (
+        "contacts",
+        "hold_directions_ok",
+        "steps",
+        "distal_at_limit",
+        "settled_contacts",
+        "settled_hold_dirs",
+    ):
         return pa.int64()
-    if name in ("hold_ok", "settled", "impact_ok", "press_held"):
+    if name in ("hold_ok", "settled", "impact_ok", "press_held", "ejected"):
         return pa.bool_()
+    if name in ("settled_points", "settled_normals", "settled_mu"):
+        return pa.list_(pa.float64())
     return pa.float64()
 
 
@@ -518,7 +531,13 @@ def read_outcomes(out: str | os.PathLike) -> pa.Table:
     paths = sorted(out.glob("part-*.parquet"))
     if not paths:
         raise DatasetError(f"physics run {str(out)!r} has no shards yet; run it again")
-    return pa.concat_tables([pq.read_table(p) for p in paths], promote_options="default")
+    table = pa.concat_tables([pq.read_table(p) for p in paths], promote_options="default")
+    if "protocol" not in table.column_names:
+        # Shards written before the column existed: the run's manifest names the protocol.
+        settings = json.loads((out / MANIFEST).read_text()).get("settings", {})
+        name = settings.get("protocol", "affordgrasp")
+        table = table.append_column("protocol", pa.array([name] * table.num_rows, pa.string()))
+    return table
 
 
 def _hold_counts(out: Path, n_shards: int) -> dict:

@@ -14,8 +14,10 @@
 * The object collides as its convex parts (:mod:`.decompose`); its mass, centre of mass and
   inertia are those of the ORIGINAL mesh at ``settings.density``.
 * Friction: every hand geom carries μ(link material, object material) from the material
-  table, object geoms μ = 0; MuJoCo takes the larger of a pair, so each contact gets the
-  table's μ. Contacts are point contacts with friction (condim 3), as the metrics assume.
+  table (or ``settings.friction`` when set), object geoms μ = 0; MuJoCo takes the larger
+  of a pair, so each contact gets that μ. Contacts are point contacts with friction
+  (condim 3), as the metrics assume, unless ``settings.condim`` says otherwise (the
+  DexGraspBench protocol: 4, with torsional friction).
 * Two tools for the use tests, off stage during the hold test: a fixed anvil (mocap body)
   and a plate on a slide joint pushed by a force actuator; both are frictionless 10 mm
   cubes (a local obstacle at the use point that pushes only along its normal).
@@ -140,6 +142,10 @@ class Scene:
         (MuJoCo joint id, DOF index, ratio) of every closing joint.
     joint_range : (njnt, 2) float64 ndarray
         The joint limits as built (the non-backdrivable ratchet moves the model's).
+    finger_geoms : list of (k,) int ndarray
+        Per finger (the order of ``fingers``): the hand geoms its driven joint moves.
+    palm_geoms : (k,) int ndarray
+        The hand geoms no finger moves (the palm and the rigidly placed links).
     anvil_mocap : int
         Mocap index of the anvil.
     plate_body, plate_joint, plate_actuator : int
@@ -164,6 +170,8 @@ class Scene:
     plate_body: int
     plate_joint: int
     plate_actuator: int
+    finger_geoms: list
+    palm_geoms: np.ndarray
 
     @property
     def object_mass(self) -> float:
@@ -205,6 +213,9 @@ def build_scene(
     if parts is None:
         parts = convex_parts(obj.mesh, obj.mesh_hash, settings)
     mass = mass_properties(obj.mesh, density=settings.density)
+    if settings.object_mass_kg > 0:
+        # A fixed mass (the DexGraspBench protocol): the same density everywhere, scaled.
+        mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
     xml, info = _mjcf(hand, obj.name, parts, mass, settings, object_material)
     try:
         model = mj.MjModel.from_xml_string(xml)
@@ -230,6 +241,7 @@ def build_scene(
         ]
         fingers.append((act, joint(jname), direction, fl))
     plate = body("plate")
+    finger_geoms, palm_geoms = _hand_geoms(model, [f[1] for f in fingers], obj_body)
     return Scene(
         model=model,
         data=data,
@@ -249,7 +261,30 @@ def build_scene(
         plate_body=plate,
         plate_joint=joint("plate_slide"),
         plate_actuator=mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "plate_push"),
+        finger_geoms=finger_geoms,
+        palm_geoms=palm_geoms,
     )
+
+
+def _hand_geoms(model, driver_joints: list[int], object_body: int):
+    """The geoms each finger's driven joint moves, and the hand's other geoms (the palm's)."""
+    n_body = model.nbody
+    parent = model.body_parentid
+    driver_body = [int(model.jnt_bodyid[j]) for j in driver_joints]
+    owner = np.full(n_body, -1)
+    for b in range(1, n_body):
+        a = b
+        while a > 0:
+            if a in driver_body:
+                owner[b] = driver_body.index(a)
+                break
+            a = parent[a]
+    geom_body = model.geom_bodyid
+    hand = (model.geom_contype & _HAND_BITS[0]) != 0
+    hand &= geom_body != object_body
+    fingers = [np.flatnonzero(hand & (owner[geom_body] == k)) for k in range(len(driver_body))]
+    palm = np.flatnonzero(hand & (owner[geom_body] < 0))
+    return fingers, palm
 
 
 def _mjcf(hand, name, parts, mass, settings, object_material):
@@ -267,10 +302,13 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
         if link.parent is not None:
             children.setdefault(link.parent, []).append(i)
     joint_name_of_dof: dict[str, tuple[str, float]] = {}
+    # MuJoCo takes the larger friction of a pair (object geoms carry 0): torsional friction
+    # only with condim 4, rolling never.
+    tors = f"{s.torsional_friction:.6g} 0" if s.condim >= 4 else "0 0"
 
     def link_xml(i: int, indent: str) -> str:
         link = hand.links[i]
-        mu = friction_coefficient(link.material, object_material)
+        mu = s.friction or friction_coefficient(link.material, object_material)
         lines = []
         j = link.joint
         attrs = ""
@@ -298,8 +336,8 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
             mesh_name = f"hand_{i}_{k}"
             assets.append(f'    <mesh name="{mesh_name}" vertex="{_fmt(pts)}"/>\n')
             lines.append(
-                f'{indent}  <geom type="mesh" mesh="{mesh_name}" friction="{mu:.6g} 0 0" '
-                f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="3" '
+                f'{indent}  <geom type="mesh" mesh="{mesh_name}" friction="{mu:.6g} {tors}" '
+                f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="{s.condim}" '
                 f'density="1000" rgba="0.6 0.6 0.65 1"/>\n'
             )
         if not link.shapes and j is not None:
@@ -314,14 +352,14 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
 
     palm_geoms = []
     palm = hand.links[0]
-    mu_palm = friction_coefficient(palm.material, object_material)
+    mu_palm = s.friction or friction_coefficient(palm.material, object_material)
     for k, shape in enumerate(palm.shapes):
         pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
         pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]
         assets.append(f'    <mesh name="palm_{k}" vertex="{_fmt(pts)}"/>\n')
         palm_geoms.append(
-            f'      <geom type="mesh" mesh="palm_{k}" friction="{mu_palm:.6g} 0 0" '
-            f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="3"/>\n'
+            f'      <geom type="mesh" mesh="palm_{k}" friction="{mu_palm:.6g} {tors}" '
+            f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="{s.condim}"/>\n'
         )
     finger_xml = "".join(link_xml(c, "      ") for c in children.get(palm.name, []))
 
@@ -329,7 +367,7 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
     for k, (v, _f) in enumerate(parts):
         assets.append(f'    <mesh name="part_{k}" vertex="{_fmt(v)}"/>\n')
         object_geoms.append(
-            f'      <geom type="mesh" mesh="part_{k}" friction="0 0 0" condim="3" '
+            f'      <geom type="mesh" mesh="part_{k}" friction="0 0 0" condim="{s.condim}" '
             f'contype="{_OBJECT_BITS[0]}" conaffinity="{_OBJECT_BITS[1]}" mass="0" '
             'rgba="0.8 0.5 0.2 1"/>\n'
         )
@@ -372,11 +410,12 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
     xml = f"""<mujoco model="affordgrasp-{hand.name}">
   <compiler angle="radian" inertiafromgeom="true" boundmass="1e-4" boundinertia="1e-9"/>
   <option timestep="{s.timestep:.9g}" gravity="0 0 {-G if s.gravity else 0.0:.9g}"
-          integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.9g}"/>
+          integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.9g}"
+          noslip_iterations="{int(s.noslip_iterations)}"/>
   <default>
     <joint armature="0.01" damping="0.05" solreflimit="{s.contact_timeconst:.9g} 1"
            solimplimit="0.95 0.99 0.001"/>
-    <geom solref="{s.contact_timeconst:.9g} 1" solimp="0.95 0.99 0.001"/>
+    <geom solref="{s.contact_timeconst:.9g} 1" solimp="{s.contact_solimp_low:.9g} 0.99 0.001"/>
     <equality solref="{s.contact_timeconst:.9g} 1" solimp="0.95 0.99 0.001"/>
   </default>
   <asset>

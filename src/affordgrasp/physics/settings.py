@@ -14,6 +14,15 @@ from dataclasses import asdict, dataclass, fields
 from ..errors import InputError
 
 G = 9.81  # m/s^2
+PROTOCOLS = ("affordgrasp", "dgb")
+_MAY_BE_ZERO = (
+    "seed",
+    "settle_time",
+    "impact_settle",
+    "friction",
+    "noslip_iterations",
+    "object_mass_kg",
+)
 
 
 # Physical ranges (low, high, unit): what a hand grasping a hand-held object can mean. A value
@@ -102,6 +111,33 @@ class PhysicsSettings:
         coacd's tree search.
     seed : int
         coacd's random search.
+    protocol : str
+        The name of the protocol these settings follow (``"affordgrasp"`` or ``"dgb"``,
+        see :func:`protocol_settings`); recorded with the outcomes.
+    friction : float
+        0: every contact gets μ(link material, object material) from the material table;
+        > 0: every hand-object contact gets this μ.
+    torsional_friction : float
+        Torsional friction coefficient of the hand geoms, m (used with ``condim`` 4 only).
+    condim : int
+        MuJoCo contact dimensionality of hand-object contacts: 3 (point contact with
+        friction, as the metrics assume) or 4 (plus torsional friction).
+    noslip_iterations : int
+        MuJoCo's post-solve no-slip iterations (0: off).
+    contact_solimp_low : float
+        The first value of MuJoCo's contact ``solimp`` (impedance at zero penetration).
+    object_mass_kg : float
+        0: the object's mass is ``density`` × its volume; > 0: this mass, kg (centre of mass
+        and inertia scaled from the mesh's).
+    displacement_from : str
+        Where the hold test measures displacement from: ``"squeezed"`` (the pose after the
+        squeeze) or ``"placed"`` (the pose before the squeeze, as DexGraspBench).
+    backoff : bool
+        Before the squeeze, open every finger that starts deeper than ``backoff_depth_m``
+        in the object's collision geometry, and push the object off the palm, until each
+        touches at most that deep (see docs/physics.md).
+    backoff_depth_m : float
+        The deepest initial penetration the back-off leaves, m.
     """
 
     # Simulation.
@@ -150,15 +186,40 @@ class PhysicsSettings:
     coacd_mcts_nodes: int = 10
     coacd_mcts_depth: int = 3
     seed: int = 0  # coacd's random search
+    # Protocol variants (docs/physics.md lists both protocols constant by constant).
+    protocol: str = "affordgrasp"
+    friction: float = 0.0  # 0: the material table; > 0: every hand-object contact
+    torsional_friction: float = 0.005  # m: MuJoCo's default, used with condim 4 only
+    condim: int = 3  # point contacts with friction, as the metrics assume
+    noslip_iterations: int = 0
+    contact_solimp_low: float = 0.95
+    object_mass_kg: float = 0.0  # 0: density × volume
+    displacement_from: str = "squeezed"  # or "placed" (the pose before the squeeze)
+    # The start: CoACD parts stick out of the mesh that the grasp simulator used, so a
+    # grasp touching the mesh can start inside a part. Open such fingers / push the object
+    # off the palm until no hand geom is deeper than this (the simulator's stop distance).
+    backoff: bool = True
+    backoff_depth_m: float = 5e-5
 
     def __post_init__(self) -> None:
+        if self.protocol not in PROTOCOLS:
+            raise InputError(
+                f"physics protocol {self.protocol!r} is unknown; choose one of {sorted(PROTOCOLS)}"
+            )
+        if self.displacement_from not in ("squeezed", "placed"):
+            raise InputError(
+                f"physics setting displacement_from must be 'squeezed' or 'placed', got "
+                f"{self.displacement_from!r}"
+            )
+        if self.condim not in (1, 3, 4, 6):
+            raise InputError(f"physics setting condim must be 1, 3, 4 or 6, got {self.condim!r}")
         for f in fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, bool):
+            if isinstance(value, bool) or f.name in ("protocol", "displacement_from"):
                 continue
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise InputError(f"physics setting {f.name} must be a finite number, got {value!r}")
-            if f.name != "seed" and value <= 0 and f.name not in ("settle_time", "impact_settle"):
+            if value < 0 or (value == 0 and f.name not in _MAY_BE_ZERO):
                 raise InputError(f"physics setting {f.name} must be > 0, got {value!r}")
         for name, (low, high, unit) in PHYSICAL_RANGES.items():
             value = getattr(self, name)
@@ -213,3 +274,48 @@ class PhysicsSettings:
             The ``coacd_*`` settings and ``seed``.
         """
         return {k: v for k, v in self.to_dict().items() if k.startswith("coacd_") or k == "seed"}
+
+
+# DexGraspBench (its main branch, read from its code; /docs/physics.md): displacement from the
+# pose before the squeeze, 2 s per direction, fail past 5 cm or 15°, μ 0.6 with torsional
+# friction (condim 4), 2 no-slip iterations, 4 ms steps, contact solref 5 ms / solimp 0.5,
+# load 10·m·g on a 0.1 kg object.
+_DGB = {
+    "protocol": "dgb",
+    "timestep": 0.004,
+    "contact_timeconst": 0.008,  # MuJoCo clamps a time constant below 2 steps to 2 steps
+    "contact_solimp_low": 0.5,
+    "friction": 0.6,
+    "condim": 4,
+    "noslip_iterations": 2,
+    "object_mass_kg": 0.1,
+    "load_factor": 10.0,
+    "hold_ramp": 0.05,
+    "hold_time": 2.0,
+    "max_shift_m": 0.05,
+    "max_angle_rad": math.radians(15.0),
+    "displacement_from": "placed",
+}
+
+
+def protocol_settings(name: str = "affordgrasp", **overrides) -> PhysicsSettings:
+    """The settings of a named protocol, with some values replaced.
+
+    Parameters
+    ----------
+    name : {"affordgrasp", "dgb"}
+        ``"affordgrasp"``: the defaults of :class:`PhysicsSettings`; ``"dgb"``: the
+        DexGraspBench-compatible protocol (docs/physics.md lists every constant of both).
+    **overrides
+        Settings that replace the protocol's.
+
+    Returns
+    -------
+    PhysicsSettings
+    """
+    if name not in PROTOCOLS:
+        raise InputError(f"physics protocol {name!r} is unknown; choose one of {list(PROTOCOLS)}")
+    values = dict(_DGB) if name == "dgb" else {}
+    values.update(overrides)
+    values["protocol"] = name
+    return PhysicsSettings(**values)

@@ -8,7 +8,7 @@ deterministic: the same scene, grasp and settings give the same outcome bit for 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -17,11 +17,26 @@ from . import deps
 from .scene import FAR, Scene
 from .settings import G
 
-__all__ = ["HOLD_DIRECTIONS", "GraspOutcome", "set_grasp", "validate_grasp"]
+__all__ = [
+    "HOLD_DIRECTIONS",
+    "GraspOutcome",
+    "StartState",
+    "back_off",
+    "penetration_depth",
+    "set_grasp",
+    "settled_contacts",
+    "validate_grasp",
+]
 
 HOLD_DIRECTIONS = ("px", "nx", "py", "ny", "pz", "nz")
 _AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
 _TOOL_GAP = 2e-4  # m: the press plate starts this far from the use point
+_HAND_CONTYPE = 2  # the hand geoms' contype bit (scene._HAND_BITS)
+_PUSHES = 8  # pushes of the object off the rigid geoms (each resolves the deepest contact)
+_ROUNDS = 3  # push, then open the fingers; again with the fingers that could not open
+_BISECTIONS = 14  # opening a finger to first contact: 2^-14 of its opening range
+_AT_LIMIT = 1e-6  # rad or m: a coupled joint this close to its closing limit is there
+_SETTLED_CONTACT_M = 1e-3  # contacts closer than this after the squeeze count as touching
 
 
 @dataclass(frozen=True)
@@ -55,6 +70,18 @@ class GraspOutcome:
         The grasp never slipped up to the largest press force; None without a use point.
     steps : int
         Simulation steps spent.
+    initial_penetration_m, start_penetration_m, backoff_shift_m, backoff_open, distal_at_limit
+        The start (:class:`StartState`).
+    ejected : bool
+        No hand-object contact was left after the squeeze.
+    settled_points, settled_normals : (k, 3) float64 ndarray
+        The hand-object contacts after the squeeze, object frame, m, outward normals.
+    settled_mu : (k,) float64 ndarray
+        Their friction coefficients.
+    settled_epsilon : float
+        ε of those contacts (:func:`affordgrasp.metrics.epsilon.epsilon`; 0 without any).
+    settled_hold_effort : (6,) float64 ndarray
+        E_h of those contacts, N per N, +inf where infeasible.
     """
 
     contacts: int  # hand-object contacts after the squeeze
@@ -69,6 +96,17 @@ class GraspOutcome:
     press_force_n: float  # largest plate force before the use point slipped (0: not settled)
     press_held: bool | None  # the grasp never slipped up to the largest press force
     steps: int  # simulation steps spent
+    initial_penetration_m: float = 0.0
+    start_penetration_m: float = 0.0
+    backoff_shift_m: float = 0.0
+    backoff_open: float = 0.0
+    distal_at_limit: int = 0
+    ejected: bool = False
+    settled_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    settled_normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    settled_mu: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    settled_epsilon: float = 0.0
+    settled_hold_effort: np.ndarray = field(default_factory=lambda: np.full(6, np.inf))
 
     def to_row(self) -> dict:
         """The outcome as one flat row of the physics table.
@@ -77,13 +115,23 @@ class GraspOutcome:
         -------
         dict
             The scalar attributes, and ``hold_shift_{d}`` / ``hold_angle_{d}`` for each ``d`` of
-            ``HOLD_DIRECTIONS`` in place of the two arrays.
+            ``HOLD_DIRECTIONS`` in place of the two arrays; ``settled_contacts`` (count),
+            ``settled_hold_effort_sum`` (Σ E_h, +inf if a direction is infeasible) and
+            ``settled_hold_dirs`` (directions with a finite E_h) in place of
+            ``settled_hold_effort``; the settled contact arrays flattened to lists.
         """
         row = asdict(self)
         for k, d in enumerate(HOLD_DIRECTIONS):
             row[f"hold_shift_{d}"] = float(self.hold_shift_m[k])
             row[f"hold_angle_{d}"] = float(self.hold_angle_rad[k])
-        del row["hold_shift_m"], row["hold_angle_rad"]
+        del row["hold_shift_m"], row["hold_angle_rad"], row["settled_hold_effort"]
+        effort = self.settled_hold_effort
+        finite = np.isfinite(effort)
+        row["settled_contacts"] = len(self.settled_mu)
+        row["settled_hold_effort_sum"] = float(effort.sum()) if finite.all() else math.inf
+        row["settled_hold_dirs"] = int(finite.sum())
+        for name in ("settled_points", "settled_normals", "settled_mu"):
+            row[name] = [float(v) for v in np.ravel(row[name])]
         return row
 
 
@@ -108,12 +156,14 @@ def _frame_quat(z_axis: np.ndarray) -> np.ndarray:
     return q
 
 
-def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
+def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> StartState:
     """Put the scene in the grasp's state: hand joints, object pose, servos at rest.
 
     The links MuJoCo models without a joint (the Barrett spread) are placed with the hand's
-    :func:`~affordgrasp.hands.kinematics.joint_poses`; the closing joints get their values,
-    the finger servos hold them, and the couplings start from them.
+    :func:`~affordgrasp.hands.kinematics.joint_poses`; the closing joints get their values.
+    With ``settings.backoff`` the fingers and the object are then backed off to first
+    contact (:func:`back_off`); the finger servos hold the result, and the couplings start
+    from it (a follower that starts at its closing limit is held there).
 
     Parameters
     ----------
@@ -123,6 +173,12 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
         Hand → object transform, m (the dataset's ``hand_pose``).
     joints : (n_dofs,) float ndarray
         DOF values in the hand's order, rad or m (the dataset's ``joints``).
+
+    Returns
+    -------
+    StartState
+        The initial penetration as placed and after the back-off, and what the back-off
+        and the couplings did.
     """
     mj = deps.mujoco()
     m, d = scene.model, scene.data
@@ -137,7 +193,17 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
         m.body_quat[body] = _rigid_to_qpos(t)[3:]
     for jid, di, ratio in scene.closing_joints:
         d.qpos[m.jnt_qposadr[jid]] = ratio * joints[di]
-    for act, jid, _direction, followers in scene.fingers:
+    obj_in_hand = np.linalg.inv(hand_pose)
+    a = scene.object_qpos
+    d.qpos[a : a + 7] = _rigid_to_qpos(obj_in_hand)
+    _park_tools(scene)
+    initial = penetration_depth(scene)
+    shift = opened = 0.0
+    if scene.settings.backoff and initial > scene.settings.backoff_depth_m:
+        shift, opened = back_off(scene)
+    start = penetration_depth(scene)
+    at_limit = 0
+    for act, jid, direction, followers in scene.fingers:
         q0 = d.qpos[m.jnt_qposadr[jid]]
         d.ctrl[act] = q0
         ratio0 = next(r for j, _di, r in scene.closing_joints if j == jid)
@@ -145,11 +211,177 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> None:
             ratio_f = next(r for j, _di, r in scene.closing_joints if j == fj)
             a1 = ratio_f * speed_ratio / ratio0
             m.eq_data[eq, :5] = [d.qpos[m.jnt_qposadr[fj]] - a1 * q0, a1, 0.0, 0.0, 0.0]
-    obj_in_hand = np.linalg.inv(hand_pose)
-    a = scene.object_qpos
-    d.qpos[a : a + 7] = _rigid_to_qpos(obj_in_hand)
-    _park_tools(scene)
+            at_limit += _hold_follower_at_limit(m, d, eq, fj, direction * a1)
     mj.mj_forward(m, d)
+    return StartState(initial, start, shift, opened, at_limit)
+
+
+@dataclass(frozen=True)
+class StartState:
+    """How a grasp started in the engine.
+
+    Attributes
+    ----------
+    initial_penetration_m : float
+        Deepest hand-object penetration as placed from the dataset row, m (0: none).
+    start_penetration_m : float
+        The same after the back-off, when the squeeze starts, m.
+    backoff_shift_m : float
+        How far the back-off pushed the object off the palm, m.
+    backoff_open : float
+        The largest opening of a finger's driven joint by the back-off, rad or m.
+    distal_at_limit : int
+        Coupled joints that started at their closing limit (held there by the squeeze).
+    """
+
+    initial_penetration_m: float
+    start_penetration_m: float
+    backoff_shift_m: float
+    backoff_open: float
+    distal_at_limit: int
+
+
+def _contact_arrays(scene: Scene):
+    """(geom pairs (n, 2), dist (n,), normal (n, 3), pos (n, 3)) of the hand-object contacts."""
+    mj = deps.mujoco()
+    m, d = scene.model, scene.data
+    mj.mj_kinematics(m, d)
+    mj.mj_collision(m, d)
+    n = d.ncon
+    if n == 0:
+        z = np.zeros((0, 3))
+        return np.zeros((0, 2), dtype=np.int64), np.zeros(0), z, z
+    con = d.contact
+    geom = np.asarray(con.geom[:n]).copy()
+    body = m.geom_bodyid[geom]
+    obj = body == scene.object_body
+    hand = (m.geom_contype[geom] & _HAND_CONTYPE) != 0
+    keep = (obj[:, 0] & hand[:, 1]) | (obj[:, 1] & hand[:, 0])
+    return (
+        geom[keep],
+        np.asarray(con.dist[:n])[keep].copy(),
+        np.asarray(con.frame[:n, :3])[keep].copy(),
+        np.asarray(con.pos[:n])[keep].copy(),
+    )
+
+
+def penetration_depth(scene: Scene, geoms: np.ndarray | None = None) -> float:
+    """Deepest penetration of the hand in the object's collision geometry, at the current state.
+
+    Parameters
+    ----------
+    scene : Scene
+    geoms : (k,) int ndarray, optional
+        Only contacts of these hand geoms; all hand geoms when None.
+
+    Returns
+    -------
+    float
+        m, >= 0 (0: nothing penetrates).
+    """
+    pairs, dist, _n, _p = _contact_arrays(scene)
+    if geoms is not None:
+        sel = np.isin(pairs, geoms).any(axis=1)
+        dist = dist[sel]
+    return float(max(0.0, -dist.min())) if len(dist) else 0.0
+
+
+def back_off(scene: Scene) -> tuple[float, float]:
+    """Back the grasp off to first contact in the engine's collision geometry.
+
+    The object's convex parts stick out of the mesh that the grasp simulator touched, so a
+    grasp at that mesh can start inside a part. First the object is pushed off the palm
+    along the deepest palm contact's normal (a few passes), then each finger's driven joint
+    is opened by bisection until that finger is at most ``settings.backoff_depth_m`` deep.
+    A finger that is still deeper at its opening limit is treated like the palm in the next
+    round (the object is pushed off it); at most three rounds. The couplings' offsets are
+    set afterwards, from the result.
+
+    Parameters
+    ----------
+    scene : Scene
+        In the placed state of :func:`set_grasp`.
+
+    Returns
+    -------
+    shift_m : float
+        How far the object moved, m.
+    opened : float
+        The largest opening of a driven joint, rad or m.
+    """
+    d, s = scene.data, scene.settings
+    tol = s.backoff_depth_m
+    a = scene.object_qpos
+    start = d.qpos[a : a + 3].copy()
+    opened = np.zeros(len(scene.fingers))
+    rigid = scene.palm_geoms
+    for _ in range(_ROUNDS):
+        _push_object_off(scene, rigid, tol)
+        at_limit = []
+        for k, ((_a, jid, direction, _f), geoms) in enumerate(
+            zip(scene.fingers, scene.finger_geoms, strict=True)
+        ):
+            if penetration_depth(scene, geoms) > tol:
+                opened[k] += _open_finger(scene, jid, direction, geoms, tol)
+            if penetration_depth(scene, geoms) > tol:
+                at_limit.append(geoms)  # open as far as it goes: push the object instead
+        if not at_limit and penetration_depth(scene) <= tol:
+            break
+        rigid = np.concatenate([scene.palm_geoms, *at_limit])
+    return float(np.linalg.norm(d.qpos[a : a + 3] - start)), float(opened.max(initial=0.0))
+
+
+def _push_object_off(scene: Scene, geoms: np.ndarray, tol: float) -> None:
+    """Move the object along the deepest contact normal of ``geoms`` until at most ``tol``."""
+    m, d = scene.model, scene.data
+    a = scene.object_qpos
+    for _ in range(_PUSHES):
+        pairs, dist, normal, _p = _contact_arrays(scene)
+        sel = np.isin(pairs, geoms).any(axis=1)
+        if not sel.any() or -dist[sel].min() <= tol:
+            return
+        k = np.flatnonzero(sel)[np.argmin(dist[sel])]
+        # The frame's normal points from geom 0 to geom 1: away from the hand if it is geom 0.
+        sign = 1.0 if m.geom_bodyid[pairs[k, 1]] == scene.object_body else -1.0
+        d.qpos[a : a + 3] += sign * normal[k] * (-dist[k] - 0.5 * tol)
+
+
+def _open_finger(scene: Scene, jid: int, direction: float, geoms, tol: float) -> float:
+    """Open a finger's driven joint by bisection until it is at most ``tol`` deep; how far."""
+    m, d = scene.model, scene.data
+    adr = m.jnt_qposadr[jid]
+    q0 = float(d.qpos[adr])
+    limit = m.jnt_range[jid, 0] if direction > 0 else m.jnt_range[jid, 1]
+    lo, hi = 0.0, abs(q0 - limit)  # opening amount: lo penetrates, hi is as open as it gets
+    d.qpos[adr] = q0 - direction * hi
+    if penetration_depth(scene, geoms) > tol:
+        return hi
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        d.qpos[adr] = q0 - direction * mid
+        if penetration_depth(scene, geoms) <= tol:
+            hi = mid
+        else:
+            lo = mid
+    d.qpos[adr] = q0 - direction * hi
+    return hi
+
+
+def _hold_follower_at_limit(m, d, eq: int, fj: int, closing: float) -> int:
+    """Hold a coupled joint at its closing limit once it reaches it; 1 if it did now.
+
+    The coupling ``follower = a0 + a1 · driver`` would otherwise fight the limit and stop
+    the driver too (a finger whose distal is at its limit could not squeeze): at the limit
+    the follower is held where it is (a1 = 0) and the driver closes alone.
+    """
+    if m.eq_data[eq, 1] == 0.0:
+        return 0
+    q = d.qpos[m.jnt_qposadr[fj]]
+    lo, hi = m.jnt_range[fj]
+    if (closing > 0 and q >= hi - _AT_LIMIT) or (closing < 0 and q <= lo + _AT_LIMIT):
+        m.eq_data[eq, :2] = [q, 0.0]
+        return 1
+    return 0
 
 
 def _park_tools(scene: Scene) -> None:
@@ -193,6 +425,11 @@ def _squeeze(scene: Scene) -> int:
     n_ramp = max(1, round(s.squeeze_time / s.timestep))
     n_settle = round(s.settle_time / s.timestep)
     drivers = [(jid, direction, m.jnt_qposadr[jid]) for _a, jid, direction, _f in scene.fingers]
+    couplings = [
+        (eq, fj, direction)
+        for _a, _j, direction, followers in scene.fingers
+        for eq, fj, _r in followers
+    ]
     for step in range(n_ramp + n_settle):
         frac = min(1.0, (step + 1) / n_ramp)
         for act, jid, direction, _f in scene.fingers:
@@ -202,6 +439,8 @@ def _squeeze(scene: Scene) -> int:
         mj.mj_step(m, d)
         if not s.backdrivable:
             _ratchet(m, d, drivers)
+        for eq, fj, direction in couplings:
+            _hold_follower_at_limit(m, d, eq, fj, direction * m.eq_data[eq, 1])
     return n_ramp + n_settle
 
 
@@ -226,14 +465,20 @@ def _hand_contacts(scene: Scene) -> int:
     return count
 
 
-def _hold(scene: Scene, snapshot: _Snapshot, axis: np.ndarray) -> tuple[float, float, int]:
-    """Largest (shift, angle) under a load along ``axis`` (object frame); steps used."""
+def _hold(
+    scene: Scene, snapshot: _Snapshot, axis: np.ndarray, reference=None
+) -> tuple[float, float, int]:
+    """Largest (shift, angle) under a load along ``axis`` (object frame); steps used.
+
+    Displacements are measured from ``reference`` = (centre of mass (3,), quaternion (4,))
+    in the world, or from the squeezed state when None.
+    """
     mj = deps.mujoco()
     m, d, s = scene.model, scene.data, scene.settings
     snapshot.restore(scene)
     body = scene.object_body
-    com0 = d.xipos[body].copy()
-    quat0 = d.xquat[body].copy()
+    com0 = d.xipos[body].copy() if reference is None else reference[0]
+    quat0 = d.xquat[body].copy() if reference is None else reference[1]
     load = s.load_factor * scene.object_mass * G * (d.xmat[body].reshape(3, 3) @ axis)
     n_ramp = max(1, round(s.hold_ramp / s.timestep))
     n = round(s.hold_time / s.timestep)
@@ -374,9 +619,10 @@ def validate_grasp(
     GraspOutcome
     """
     s = scene.settings
-    set_grasp(scene, hand_pose, joints)
+    start = set_grasp(scene, hand_pose, joints)
     body = scene.object_body
     com_start = scene.data.xipos[body].copy()
+    quat_start = scene.data.xquat[body].copy()
     steps = _squeeze(scene)
     contacts = _hand_contacts(scene)
     squeeze_shift = float(np.linalg.norm(scene.data.xipos[body] - com_start))
@@ -384,10 +630,12 @@ def validate_grasp(
     speed = float(np.linalg.norm(scene.data.qvel[a : a + 3]))
     spin = float(np.linalg.norm(scene.data.qvel[a + 3 : a + 6]))
     settled = contacts > 0 and speed < s.settled_speed and spin < s.settled_spin
+    settled_set = settled_contacts(scene)
     snapshot = _Snapshot(scene.data)
+    reference = (com_start, quat_start) if s.displacement_from == "placed" else None
     shifts, angles = np.zeros(6), np.zeros(6)
     for k, axis in enumerate(_AXES):
-        shifts[k], angles[k], used = _hold(scene, snapshot, axis)
+        shifts[k], angles[k], used = _hold(scene, snapshot, axis, reference)
         steps += used
     ok_dir = (shifts < s.max_shift_m) & (angles < s.max_angle_rad)
     has_use = (
@@ -423,4 +671,69 @@ def validate_grasp(
         press_force_n=float(press_force),
         press_held=press_held,
         steps=steps,
+        initial_penetration_m=start.initial_penetration_m,
+        start_penetration_m=start.start_penetration_m,
+        backoff_shift_m=start.backoff_shift_m,
+        backoff_open=start.backoff_open,
+        distal_at_limit=start.distal_at_limit,
+        ejected=contacts == 0,
+        **_settled_metrics(scene, settled_set),
     )
+
+
+def settled_contacts(scene: Scene):
+    """The hand-object contacts of the current state as a contact set in the object frame.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    ContactSet
+        Points (k, 3) m and the object's outward normals, object frame; μ of each pair;
+        link = the MuJoCo body name of the hand geom. Contacts within 1 mm count.
+    """
+    from ..metrics.contacts import ContactSet
+
+    mj = deps.mujoco()
+    m, d = scene.model, scene.data
+    pairs, dist, normal, pos = _contact_arrays(scene)
+    keep = dist < _SETTLED_CONTACT_M
+    pairs, normal, pos = pairs[keep], normal[keep], pos[keep]
+    if len(pairs) == 0:
+        return ContactSet.empty()
+    body = scene.object_body
+    obj_first = m.geom_bodyid[pairs[:, 0]] == body
+    # The frame's normal points from geom 0 to geom 1: out of the object when it is geom 0.
+    outward = np.where(obj_first[:, None], normal, -normal)
+    hand_geom = np.where(obj_first, pairs[:, 1], pairs[:, 0])
+    r = d.xmat[body].reshape(3, 3)
+    points = (pos - d.xpos[body]) @ r
+    normals = outward @ r
+    mu = np.maximum(m.geom_friction[pairs[:, 0], 0], m.geom_friction[pairs[:, 1], 0])
+    names = np.array(
+        [mj.mj_id2name(m, mj.mjtObj.mjOBJ_BODY, int(m.geom_bodyid[g])) for g in hand_geom],
+        dtype=object,
+    )
+    return ContactSet(points, normals / np.linalg.norm(normals, axis=1, keepdims=True), mu, names)
+
+
+def _settled_metrics(scene: Scene, contacts) -> dict:
+    """ε and E_h of the settled contacts (the analytic metrics where the engine put them)."""
+    from ..metrics.effort import hold_effort
+    from ..metrics.epsilon import epsilon
+
+    out = {
+        "settled_points": contacts.points,
+        "settled_normals": contacts.normals,
+        "settled_mu": np.asarray(contacts.mu, dtype=np.float64),
+        "settled_epsilon": 0.0,
+        "settled_hold_effort": np.full(6, np.inf),
+    }
+    if len(contacts) == 0:
+        return out
+    center = scene.mass.center_of_mass
+    out["settled_epsilon"] = epsilon(contacts, center, scene.mass.r_max, volume=False).epsilon
+    out["settled_hold_effort"] = hold_effort(contacts, center)
+    return out

@@ -7,7 +7,14 @@ from typing import Any
 
 import numpy as np
 
-from ..columns import DERIVED_COLUMNS, HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, hold_effort_sum
+from ..columns import (
+    DERIVED_COLUMNS,
+    HOLD_DIRS,
+    HOLD_EFFORT_COLUMNS,
+    HOLD_EFFORT_SUM,
+    hold_dirs_count,
+    hold_effort_sum,
+)
 from ..errors import TaskError
 
 
@@ -21,7 +28,8 @@ class MetricColumns(Mapping):
     ----------
     columns : mapping, pyarrow.Table or pandas.DataFrame
         The metric columns of n rows; each is read once, as an (n,) float64 array, on
-        first access. ``hold_effort_sum`` is derived when the six hold efforts are there.
+        first access. ``hold_effort_sum`` and ``hold_dirs`` are derived when the six hold
+        efforts are there (a stored ``hold_dirs`` is read as it is).
     """
 
     def __init__(self, columns: Any):
@@ -34,6 +42,8 @@ class MetricColumns(Mapping):
             return self._cache[name]
         if name == HOLD_EFFORT_SUM:
             value = hold_effort_sum({c: self[c] for c in HOLD_EFFORT_COLUMNS})
+        elif name == HOLD_DIRS and name not in self._names:
+            value = hold_dirs_count({c: self[c] for c in HOLD_EFFORT_COLUMNS})
         elif name in self._names:
             value = _column_as_float(self._source, name)
         else:
@@ -44,10 +54,10 @@ class MetricColumns(Mapping):
         return value
 
     def __iter__(self):
-        return iter(list(self._names) + list(DERIVED_COLUMNS))
+        return iter(list(self._names) + [c for c in DERIVED_COLUMNS if c not in self._names])
 
     def __len__(self) -> int:
-        return len(self._names) + len(DERIVED_COLUMNS)
+        return len(self._names) + len([c for c in DERIVED_COLUMNS if c not in self._names])
 
     def __contains__(self, name: object) -> bool:
         return name in self._names or name in DERIVED_COLUMNS

@@ -16,12 +16,12 @@ matplotlib's Agg canvas and written as PNG; the viewer is one self-contained HTM
 
 from __future__ import annotations
 
-from .camera import Camera, auto_camera, framed_camera
+from .camera import Camera, framed_camera
 from .grid import grid_image, save_grid
 from .html import ViewerEntry, write_viewer
 from .overlays import OverlayStyle, draw_grasp, grasp_image, save_grasp_png
 from .plots import save_plots, summarize
-from .raycast import RayCaster, Render, render_image
+from .raycast import RayCaster, Render, auto_camera, render_image
 from .scene import GraspScene, grasp_scene
 from .showcase import draw_best
 from .sources import DatasetSource, TableSource, top_grasps

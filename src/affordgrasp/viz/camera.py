@@ -1,14 +1,15 @@
-"""Pinhole cameras and the default view of a grasp.
+"""Pinhole cameras and how the default view of a grasp is framed.
 
 Conventions (see ``docs/viewing.md``):
 
 * :class:`Camera` is a pinhole camera: ``eye`` looks at ``target``, ``up`` is up in the image,
   ``fov_deg`` is the vertical field of view. Pixel (0, 0) is the top-left corner of the image;
   x grows to the right, y downwards; a pixel's centre is at (i + 0.5, j + 0.5).
-* The default camera (:func:`auto_camera`) keeps the hand at the top of the image (image up is
-  the direction the hand came from, ``-wrist_axis``), looks at the grasp from the direction
-  among 64 fixed candidates where the most of both the object and the hand are visible, and
-  frames the object and the hand together.
+* The default camera (:func:`affordgrasp.viz.raycast.auto_camera`, chosen by casting rays)
+  keeps the hand at the top of the image (image up is the direction the hand came from,
+  ``-wrist_axis``), looks at the grasp from the direction among 64 fixed candidates where the
+  most of both the object and the hand are visible, and frames them together
+  (:func:`framed_camera`).
 """
 
 from __future__ import annotations
@@ -241,63 +242,3 @@ def framed_camera(
     distance = max(distance, float(-depth.min()) + 0.05 * float(np.linalg.norm(hi - lo)), 1e-3)
     target = t0 + shift
     return Camera(target + v * distance, target, up, fov_deg, width, height)
-
-
-def auto_camera(
-    scene: GraspScene,
-    *,
-    width: int = 512,
-    height: int = 512,
-    fov_deg: float = 30.0,
-    candidates: int = 64,
-) -> Camera:
-    """The default camera: the fixed direction that sees the most of the object and the hand.
-
-    Of ``candidates`` fixed directions, the one that sees the most of both the object and the
-    hand (and the use point), framed; image up is ``-wrist_axis``.
-
-    Parameters
-    ----------
-    scene : GraspScene
-    width, height : int
-        Pixels.
-    fov_deg : float
-        Vertical field of view, degrees.
-    candidates : int
-        Directions tried.
-
-    Returns
-    -------
-    Camera
-    """
-    from .raycast import BACKGROUND_PART, HAND_PART, OBJECT_PART, visible_from
-
-    caster = scene.caster
-    dirs = _fibonacci_sphere(candidates)
-    a = scene.wrist_axis
-    if np.all(np.isfinite(a)) and np.linalg.norm(a) > 0:
-        # Straight along the approach, the palm hides the object or the object the hand.
-        dirs = dirs[np.abs(dirs @ unit(a)) < 0.85]
-    probe = 40
-    # One framed low-resolution camera per candidate (cheap numpy), then all their rays and
-    # the use-point sight lines in one embree call.
-    cams = [framed_camera(scene, v, fov_deg=fov_deg, width=probe, height=probe) for v in dirs]
-    if not cams:
-        return framed_camera(
-            scene, np.array([0.3, -1.0, 0.5]), fov_deg=fov_deg, width=width, height=height
-        )
-    origins, rays = zip(*(c.rays() for c in cams), strict=True)
-    tri = caster.cast(np.concatenate(origins), np.concatenate(rays))["primID"]
-    part = np.where(tri >= 0, caster.face_part[np.maximum(tri, 0)], BACKGROUND_PART)
-    part = part.reshape(len(cams), probe * probe)
-    obj_px = np.count_nonzero(part == OBJECT_PART, axis=1) / part.shape[1]
-    hand_px = np.count_nonzero(part == HAND_PART, axis=1) / part.shape[1]
-    score = np.sqrt(obj_px * hand_px) if scene.hand is not None else obj_px
-    if np.all(np.isfinite(scene.use_point)):
-        eyes = np.array([c.eye for c in cams])
-        seen = visible_from(caster, eyes, np.broadcast_to(scene.use_point, eyes.shape))
-        score = np.where(seen, 1.15 * score, score)
-    # Prefer a camera above the grasp: a tiny, deterministic tie-breaker between mirror views.
-    score = score + 1e-3 * (dirs @ _image_up(scene))
-    best = dirs[int(np.argmax(score))]
-    return framed_camera(scene, best, fov_deg=fov_deg, width=width, height=height)

@@ -10,8 +10,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .camera import Camera, any_perpendicular, auto_camera, unit
-from .raycast import Render, visible
+from .camera import Camera, any_perpendicular, unit
+from .raycast import Render, auto_camera, visible
 from .scene import GraspScene
 
 
@@ -66,7 +66,7 @@ def draw_grasp(
     ax : matplotlib.axes.Axes
     scene : GraspScene
     camera : Camera, optional
-        :func:`affordgrasp.viz.camera.auto_camera` when None.
+        :func:`affordgrasp.viz.raycast.auto_camera` when None.
     style : OverlayStyle
     width, height : int
         Pixels.

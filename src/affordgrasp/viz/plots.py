@@ -241,6 +241,7 @@ def summarize(
     mode: str = "default",
     thresholds: dict[str, dict[str, float]] | None = None,
     bins: int = BINS,
+    robust: bool = False,
 ) -> DatasetSummary:
     """Two passes over ``scan(columns)`` (an iterable of tables) for :func:`save_plots`.
 
@@ -258,6 +259,8 @@ def summarize(
         Task name -> threshold overrides.
     bins : int
         Histogram bins.
+    robust : bool
+        Plot the tasks' robust scores (:func:`affordgrasp.robust.ranking_column`) instead.
 
     Returns
     -------
@@ -276,6 +279,10 @@ def summarize(
 
     def scores_of(table):
         m = numeric_columns(table)
+        if robust:
+            from ..robust import ranking_values
+
+            return {t.name: ranking_values(m, t.name) for t in tasks}
         return {
             t.name: np.asarray(
                 t.evaluate(m, mode=mode, **thresholds.get(t.name, {})), dtype=np.float64

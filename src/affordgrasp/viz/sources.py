@@ -4,7 +4,7 @@ A dataset directory is read by :func:`affordgrasp.dataset.reading.open_dataset` 
 or every ``*.parquet`` file under a directory without a manifest), streamed in batches so
 that datasets larger than memory can be ranked and plotted. :func:`top_grasps` keeps the
 best ``k`` rows per object and task with one pass over the scalar columns (ranked by
-:class:`affordgrasp.dataset.best.TopRows`), then reads back only those rows in full.
+:class:`affordgrasp.search.ranking.TopRows`), then reads back only those rows in full.
 """
 
 from __future__ import annotations
@@ -19,11 +19,12 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
-from ..dataset.best import TopRows, numeric_columns, task_values
+from ..dataset.best import numeric_columns, task_values
 from ..dataset.layout import read_manifest
 from ..dataset.reading import manifest_hand, open_dataset, read_errors
 from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
+from ..search.ranking import TopRows
 
 BATCH_ROWS = 65536
 
@@ -249,6 +250,7 @@ def top_grasps(
     top: int = 4,
     thresholds: dict[str, dict[str, float]] | None = None,
     progress=None,
+    robust: bool = False,
 ) -> dict[tuple[str, str], TaskRanking]:
     """The ``top`` best rows per (object, task) by the tasks' scores.
 
@@ -267,6 +269,8 @@ def top_grasps(
         Task name -> threshold overrides.
     progress : callable, optional
         Called with the number of rows after each batch.
+    robust : bool
+        Rank by the rows' robust scores (:func:`affordgrasp.robust.ranking_column`).
 
     Returns
     -------
@@ -290,7 +294,7 @@ def top_grasps(
         order = np.argsort(codes, kind="stable")
         bounds = np.concatenate([[0], np.cumsum(np.bincount(codes, minlength=len(names)))])
         for task in tasks:
-            scores = task_values(task, numeric, mode, thresholds.get(task.name))
+            scores = task_values(task, numeric, mode, thresholds.get(task.name), robust=robust)
             for code, name in enumerate(names):
                 rows = order[bounds[code] : bounds[code + 1]]
                 key = (name, task.name)
