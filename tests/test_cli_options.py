@@ -157,9 +157,11 @@ def test_tasks_table_prints_thresholds_in_their_units(capsys):
     assert main(["tasks"]) == 0
     table = capsys.readouterr().out
     assert "tau_angle=45°" in table  # stored as 0.785398 rad
+    assert "tau_clear=35 mm" in table
     assert "0.785398" not in table
     assert "tau_ug=3e+04 m⁻²" in table
     assert "hold_max=250 N" in table
     assert main(["tasks", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["tasks"]["cut"]["thresholds"]["default"]["tau_angle"] == pytest.approx(0.785398)
+    cut = doc["tasks"]["cut-dihedral"]["thresholds"]["default"]
+    assert cut["tau_angle"] == pytest.approx(0.785398)

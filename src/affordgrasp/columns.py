@@ -24,10 +24,19 @@ USE_METRICS: tuple[str, ...] = (
     "use_force",
     "use_edge",
     "use_edge_angle",
+    "use_wedge_angle",
+    "use_clearance",
+    "use_lever_ratio",
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
-GRASP_METRICS: tuple[str, ...] = ("epsilon", "gws_volume", "inertia", *HOLD_EFFORT_COLUMNS)
+GRASP_METRICS: tuple[str, ...] = (
+    "epsilon",
+    "gws_volume",
+    "inertia",
+    *HOLD_EFFORT_COLUMNS,
+    "contact_thickness",
+)
 
 METRIC_COLUMNS: tuple[str, ...] = (
     "epsilon",
@@ -36,6 +45,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
     "inertia",
     *HOLD_EFFORT_COLUMNS,
     *USE_METRICS,
+    "contact_thickness",
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
@@ -56,10 +66,19 @@ METRIC_UNITS: dict[str, str] = {
     "use_force": "N",
     "use_edge": "m⁻²",
     "use_edge_angle": "rad",
+    "use_wedge_angle": "rad",
+    "use_clearance": "m",
+    "use_lever_ratio": "",
+    "contact_thickness": "m",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).
-DISPLAY_UNITS: dict[str, tuple[str, float]] = {"use_edge_angle": ("°", 180.0 / math.pi)}
+DISPLAY_UNITS: dict[str, tuple[str, float]] = {
+    "use_edge_angle": ("°", 180.0 / math.pi),
+    "use_wedge_angle": ("°", 180.0 / math.pi),
+    "use_clearance": ("mm", 1000.0),
+    "contact_thickness": ("mm", 1000.0),
+}
 
 
 def display_unit(column: str) -> str:

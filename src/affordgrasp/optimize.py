@@ -348,7 +348,7 @@ def optimize(
         ``progress(total)`` returns a context manager yielding ``advance(n)``.
     uses : int
         If > 0, each simulated grasp (of CEM and of the baseline) is scored with its best
-        use point among ``uses`` uniform use directions (run ``seed + 1``), as in
+        use point among ``uses`` use points drawn by surface area (run ``seed + 1``), as in
         :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
         is found by ray casts, which cost no simulation.
     restarts, refine
@@ -411,7 +411,7 @@ def optimize(
         if uses and settings is None:
             from .pairs import UsePoints
 
-            use_points = UsePoints.of(resolved, sample_inputs(seed + 1, 0, uses)[1])
+            use_points = UsePoints.sample(resolved, uses, seed + 1)
         sim = _Simulator(
             eng,
             task_obj,

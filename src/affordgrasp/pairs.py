@@ -32,14 +32,21 @@ import pyarrow as pa
 from numba import njit
 
 from .columns import GRASP_METRICS, USE_METRICS
-from .grasp.pregrasp import sample_inputs, use_points
+from .grasp.pregrasp import sample_inputs, surface_use_directions, use_points
 from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
-from .metrics.use_geometry import use_edge, use_edge_angle
+from .metrics.use_geometry import (
+    contact_thickness,
+    use_clearance,
+    use_edge,
+    use_edge_angle,
+    use_lever_ratio,
+    use_wedge_angle,
+)
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .search.cem import cem_search, plan_runs
@@ -125,6 +132,8 @@ class UsePoints:
         U_g, m⁻².
     use_edge_angle : (m,) float64 ndarray
         rad.
+    use_wedge_angle : (m,) float64 ndarray
+        rad.
     """
 
     use_dir: np.ndarray
@@ -133,6 +142,7 @@ class UsePoints:
     triangle: np.ndarray
     use_edge: np.ndarray
     use_edge_angle: np.ndarray
+    use_wedge_angle: np.ndarray
 
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
@@ -156,10 +166,31 @@ class UsePoints:
         hit = T >= 0
         ug = np.full(len(T), np.nan)
         ang = np.full(len(T), np.nan)
+        wedge = np.full(len(T), np.nan)
         if hit.any():
             ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
             ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
-        return cls(use_dir, P, N, T, ug, ang)
+            wedge[hit] = use_wedge_angle(obj.mesh_data, P[hit], N[hit])
+        return cls(use_dir, P, N, T, ug, ang, wedge)
+
+    @classmethod
+    def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
+        """``n`` use points that cover the surface by area (their d towards surface points
+        drawn uniformly by area, :func:`~affordgrasp.grasp.pregrasp.surface_use_directions`).
+
+        Parameters
+        ----------
+        obj : GraspObject or str
+        n : int
+        seed : int
+
+        Returns
+        -------
+        UsePoints
+        """
+        obj = load_object(obj)
+        d = surface_use_directions(obj.mesh_data, obj.mass.center_of_mass, n, seed)
+        return cls.of(obj, d)
 
 
 def _contacts(table: pa.Table, rows: np.ndarray):
@@ -218,7 +249,12 @@ def pair_scores(
     obj = load_object(obj)
     t = get_task(task)
     n, m = grasps.num_rows, len(uses.triangle)
-    col = {c: grasps.column(c).to_numpy(zero_copy_only=False) for c in GRASP_COLUMNS}
+    names = set(grasps.column_names)
+    col = {
+        c: grasps.column(c).to_numpy(zero_copy_only=False)
+        for c in GRASP_COLUMNS
+        if c in names or c != "contact_thickness"
+    }
     wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
     has_contacts = grasps.column("n_contacts").to_numpy() > 0
@@ -229,6 +265,12 @@ def pair_scores(
     # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
+    all_points, all_normals, _, all_offsets = _contacts(grasps, np.arange(n))
+    if "contact_thickness" not in col:
+        # rows evaluated before the column existed: computed from their contacts
+        col["contact_thickness"] = contact_thickness(
+            obj.mesh_data, all_points, all_normals, all_offsets
+        )
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
     for first in range(0, len(with_contacts), step):
@@ -242,6 +284,11 @@ def pair_scores(
         )
         cols["use_edge"] = uses.use_edge[ui]
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
+        cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
+        cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
+        cols["use_lever_ratio"] = use_lever_ratio(
+            uses.point[ui], obj.mass.center_of_mass, wrist_point[gi], wrist_axis[gi]
+        )
         if screen and len(gi):
             cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
             cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)
@@ -325,7 +372,8 @@ def best_pairs(
     per_grasp: bool = False,
     **overrides: float,
 ) -> PairSearch:
-    """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` × ``uses`` uniform samples.
+    """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` uniform samples × ``uses`` use
+    points drawn by surface area (:meth:`UsePoints.sample`).
 
     The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate`` draws them; pass
     ``grasp_table`` to reuse evaluated rows); the use directions are drawn from run
@@ -366,8 +414,8 @@ def best_pairs(
     if grasp_table is None:
         # ε only: the search never reads the GWS volume; the returned rows carry it
         grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand, volume=False).table
-    _, d = sample_inputs(seed + 1, 0, uses)
-    use = UsePoints.of(obj, d)
+    use = UsePoints.sample(obj, uses, seed + 1)
+    d = use.use_dir
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
     # The one ranker of the package: highest F_T first, ties to the smaller grasp, then use.
     values = scores["value"]
@@ -457,9 +505,9 @@ def optimize_pairs(
 
     The search space splits as the metrics do: CEM (:func:`affordgrasp.search.cem.cem_search`,
     the optimiser of :func:`affordgrasp.optimize.optimize`) moves the pregrasp, and each
-    simulated grasp takes the best use point of a fixed uniform sample of ``uses``
-    directions (run ``seed + 1``), found as in :func:`pair_scores`. ``budget`` counts
-    simulations, as for ``optimize``.
+    simulated grasp takes the best use point of a fixed sample of ``uses`` use
+    points drawn by surface area (run ``seed + 1``), found as in :func:`pair_scores`.
+    ``budget`` counts simulations, as for ``optimize``.
 
     Parameters
     ----------
@@ -503,8 +551,8 @@ def optimize_pairs(
     obj = load_object(obj)
     get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
     plan_runs(budget, restarts, refine, population)  # a budget that cannot be split: too
-    _, d = sample_inputs(seed + 1, 0, uses)
-    use = UsePoints.of(obj, d)
+    use = UsePoints.sample(obj, uses, seed + 1)
+    d = use.use_dir
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
 

@@ -29,8 +29,13 @@ def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
     if task == "pick":
         return -hold.to_numpy()
     if task == "cut":
-        tau_angle = tasks.get_task("cut").thresholds["tau_angle"]
-        ok = (df.epsilon >= tau_eps) & (df.use_edge_angle <= tau_angle)
+        t = tasks.get_task("cut").thresholds
+        ok = (
+            (df.epsilon >= tau_eps)
+            & (df.use_wedge_angle <= t["tau_wedge"])
+            & (df.use_clearance >= t["tau_clear"])
+            & (df.contact_thickness >= t["tau_thick"])
+        )
         return np.where(ok, df.use_force, -np.inf)
     if task == "reach":
         return (df.inertia * 1e6 - df.use_edge_angle).to_numpy()

@@ -10,6 +10,7 @@ from affordgrasp.grasp.pregrasp import (
     sample_inputs,
     spherical_direction,
     start_poses,
+    surface_use_directions,
     use_points,
     validate_pregrasps,
 )
@@ -78,14 +79,39 @@ def test_use_point_is_the_farthest_hit():
     assert (tri >= 0).all()
 
 
-def test_use_ray_through_an_opening_has_no_use_point():
+def test_use_ray_through_an_opening_takes_the_far_side():
+    # the ray from the centre leaves through the opening: U is where the line meets the base,
+    # the line's hit farthest along +d
     cup = trimesh.creation.box((0.1, 0.1, 0.1)).difference(
         trimesh.creation.box(
-            (0.08, 0.08, 0.2), transform=trimesh.transformations.translation_matrix([0, 0, 0.05])
+            (0.08, 0.08, 0.18), transform=trimesh.transformations.translation_matrix([0, 0, 0.05])
         )
+    )  # 1 cm base, open top
+    pts, nrm, tri = use_points(cup, np.array([0, 0, 0.0]), np.array([[0.1, 0.95], [0.3, 0.9]]))
+    assert (tri >= 0).all()
+    np.testing.assert_allclose(pts[:, 2], [-0.04, -0.04], atol=1e-9)  # the base's inner face
+    np.testing.assert_allclose(nrm, [[0, 0, 1], [0, 0, 1]], atol=1e-9)
+
+
+def test_surface_use_directions_reach_parts_by_area():
+    # a plate (thin, large) beside a cube (the centre of mass in the cube): uniform d sees the
+    # plate's edge-on sliver; area-uniform d lands on the plate in proportion to its area
+    cube = trimesh.creation.box((0.04, 0.04, 0.04))
+    plate = trimesh.creation.box(
+        (0.1, 0.002, 0.04), transform=trimesh.transformations.translation_matrix([0.07, 0, 0])
     )
-    pts, _, tri = use_points(cup, np.array([0, 0, 0.0]), np.array([[0.0, 1.0]]))
-    assert tri[0] == -1 and np.isnan(pts[0]).all()
+    both = trimesh.util.concatenate([cube, plate])
+    center = np.zeros(3)
+    d = surface_use_directions(both, center, 4000, seed=3)
+    np.testing.assert_array_equal(d, surface_use_directions(both, center, 4000, seed=3))
+    assert d.shape == (4000, 2) and np.all(np.abs(d) <= 1)
+    pts, _, tri = use_points(both, center, d)
+    on_plate = np.mean(pts[:, 0] > 0.021)
+    share = plate.area / (plate.area + cube.area)
+    assert on_plate > 0.8 * share
+    _, d_uniform = sample_inputs(0, 0, 4000)
+    pts_u, _, _ = use_points(both, center, d_uniform)
+    assert np.mean(pts_u[:, 0] > 0.021) < 0.5 * on_plate
 
 
 def test_samples_do_not_depend_on_how_a_run_is_split():

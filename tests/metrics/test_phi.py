@@ -17,6 +17,7 @@ from affordgrasp.metrics import (
     use_edge,
     use_edge_angle,
     use_force,
+    use_wedge_angle,
 )
 from affordgrasp.metrics import phi as phi_module
 from affordgrasp.metrics.contacts import ContactSet
@@ -25,7 +26,9 @@ from affordgrasp.objects.mass import mass_properties
 EXPECTED_COLUMNS = [
     "epsilon", "gws_volume", "epsilon_reason", "inertia", "hold_effort_px", "hold_effort_nx",
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
-    "discharge", "use_force", "use_edge", "use_edge_angle",
+    "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle", "use_clearance",
+    "use_lever_ratio",
+    "contact_thickness",
 ]  # fmt: skip
 
 
@@ -86,6 +89,9 @@ def test_batch_equals_the_metric_functions(scene):
         assert cols["inertia"][i] == pytest.approx(rotational_inertia(mass, w[i], a[i]))
         assert cols["use_edge"][i] == pytest.approx(use_edge(mesh, T[i], U[i]))
         assert cols["use_edge_angle"][i] == use_edge_angle(mesh, U[i])
+        assert cols["use_wedge_angle"][i] == pytest.approx(use_wedge_angle(mesh, U[i], nU[i]))
+        near = np.linalg.norm(cs.points - U[i], axis=1).min() if len(cs) else np.inf
+        assert cols["use_clearance"][i] == pytest.approx(near)
     empty = [i for i, cs in enumerate(contacts) if len(cs) == 0]
     assert empty and all(cols["epsilon_reason"][i] == "no contact" for i in empty)
     assert all(np.isinf(cols["hold_effort_px"][i]) and cols["use_force"][i] == 0 for i in empty)

@@ -217,3 +217,84 @@ def test_use_edge_of_a_use_point_does_not_depend_on_the_batch():
     assert whole.tobytes() == alone.tobytes()
     reverse = use_edge(mesh, faces[::-1], points[::-1])[::-1]
     assert reverse.tobytes() == whole.tobytes()
+
+
+# --- wedge angle at a physical scale, use clearance ------------------------------------
+
+
+def _prism(opening_deg: float):
+    """A 60 mm wedge prism along x, apex on the x axis, opening towards +y (closed)."""
+    return wedge_prism(np.radians(opening_deg), length=0.06)
+
+
+def test_wedge_angle_known_geometries():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import use_wedge_angle
+
+    box = trimesh.creation.box(extents=(0.04, 0.04, 0.04))
+    pts = [[0, 0, 0.02], [0.02, 0, 0.02], [0.02, 0.02, 0.02]]
+    nrm = np.array([[0, 0, 1], [1, 0, 1], [1, 1, 1]], float)
+    got = np.degrees(use_wedge_angle(box, pts, nrm / np.linalg.norm(nrm, axis=1)[:, None]))
+    np.testing.assert_allclose(got, [180.0, 90.0, 45.0], atol=4.0)
+    fine = box.subdivide().subdivide().subdivide()  # the triangles do not matter
+    np.testing.assert_allclose(
+        np.degrees(use_wedge_angle(fine, pts, nrm / np.linalg.norm(nrm, axis=1)[:, None])),
+        got,
+        atol=1.0,
+    )
+    for opening in (20.0, 40.0):
+        prism = _prism(opening)
+        at_apex = np.degrees(use_wedge_angle(prism, [0.0, 0.0, 0.0], [0.0, -1.0, 0.0]))
+        assert abs(at_apex - opening) < 4.0
+
+
+def test_wedge_angle_survives_a_scanner():
+    from affordgrasp.metrics.use_geometry import use_wedge_angle
+    from affordgrasp.objects.scan import ScanSettings, scan_like
+
+    prism = _prism(20.0)
+    scan, _ = scan_like(prism, seed=0, settings=ScanSettings(noise_m=0.2e-3))
+    # use points on the rounded apex: the surface points nearest the apex line
+    x = np.linspace(-0.02, 0.02, 9)
+    probe = np.stack([x, np.full(9, -2e-3), np.zeros(9)], axis=1)
+    loc, ray, tri = scan.ray.intersects_location(probe, np.tile([0, 1.0, 0], (9, 1)), False)
+    wedge = np.degrees(use_wedge_angle(scan, loc, scan.face_normals[tri]))
+    assert np.all(wedge < 45.0) and np.median(wedge) < 35.0
+    # a flank 15 mm from the apex (the prism 5 mm thick there): no edge
+    loc2, _, tri2 = scan.ray.intersects_location([[0.0, 0.015, 0.01]], [[0, 0, -1.0]], False)
+    assert np.degrees(use_wedge_angle(scan, loc2[0], scan.face_normals[tri2[0]])) > 120.0
+
+
+def test_use_clearance_is_the_nearest_contact():
+    from affordgrasp.metrics.use_geometry import use_clearance
+
+    contacts = np.array([[0.0, 0, 0], [0.1, 0, 0], [0.0, 0.2, 0]])
+    offsets = np.array([0, 2, 2, 3])  # grasp 1 has no contact
+    U = np.array([[0.03, 0, 0], [0.0, 0, 0], [0.0, 0.25, 0]])
+    np.testing.assert_allclose(use_clearance(contacts, offsets, U), [0.03, np.inf, 0.05])
+    np.testing.assert_allclose(
+        use_clearance(contacts, offsets, U[[0, 0]], group=[2, 0]), [np.hypot(0.03, 0.2), 0.03]
+    )
+    assert np.isnan(use_clearance(contacts, offsets, [[np.nan] * 3], group=[0]))[0]
+
+
+def test_contact_thickness_is_the_chord_under_the_thinnest_contact():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import contact_thickness
+
+    plate = trimesh.creation.box(extents=(0.1, 0.05, 0.004))
+    C = np.array([[0.0, 0.0, 0.002], [0.05, 0.0, 0.0], [0.0, 0.025, 0.0]])
+    N = np.array([[0, 0, 1.0], [1.0, 0, 0], [0, 1.0, 0]])
+    got = contact_thickness(plate, C, N, [0, 1, 1, 3])  # grasp 1 has no contact
+    np.testing.assert_allclose(got, [0.004, np.inf, 0.05], rtol=1e-6)
+
+
+def test_lever_ratio_compares_distances_to_the_wrist_axis():
+    from affordgrasp.metrics.use_geometry import use_lever_ratio
+
+    U = np.array([[0.3, 0, 0.5], [0.05, 0, 0]])
+    W = np.zeros((2, 3))
+    A = np.tile([0, 0, 1.0], (2, 1))
+    np.testing.assert_allclose(use_lever_ratio(U, [0.2, 0, 0], W, A), [1.5, 0.25])

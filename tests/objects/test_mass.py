@@ -179,3 +179,27 @@ def test_parts_arguments_are_validated():
         mass_properties_parts([box, box], [1.0])
     with pytest.raises(InputError, match=r"densities\[1\]"):
         mass_properties_parts([box, box], [1.0, -2.0])
+
+
+def test_region_densities_beside_a_mesh_file(tmp_path):
+    import trimesh
+
+    from affordgrasp.errors import InputError
+    from affordgrasp.objects import load_object
+
+    path = tmp_path / "bar.stl"
+    trimesh.creation.box(extents=(0.1, 0.02, 0.02)).export(path)
+    side = tmp_path / "bar.stl.materials.toml"
+    side.write_text(
+        'density = 700.0\n[[region]]\nname = "head"\ndensity = 7850.0\n'
+        "plane_point = [0.03, 0.0, 0.0]\nplane_normal = [1.0, 0.0, 0.0]\n"
+    )
+    obj = load_object(path)
+    head, rest = 8e-6 * 7850.0, 3.2e-5 * 700.0
+    assert obj.materials
+    assert obj.mass.mass == pytest.approx(head + rest, rel=1e-6)
+    com_x = (head * 0.04 + rest * -0.01) / (head + rest)
+    np.testing.assert_allclose(obj.mass.center_of_mass, [com_x, 0, 0], atol=1e-9)
+    side.write_text("[[region]]\nname = 'x'\n")
+    with pytest.raises(InputError, match="materials.toml"):
+        load_object(path)

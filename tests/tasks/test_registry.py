@@ -24,6 +24,10 @@ def table(**overrides):
         "use_force": np.array([0.5, 1.0, 1.5, 2.0, 2.5]),
         "use_edge": np.full(n, 1e6),
         "use_edge_angle": np.full(n, math.radians(20)),
+        "use_wedge_angle": np.full(n, math.radians(20)),  # beat's tests make it blunt
+        "use_clearance": np.full(n, 0.05),
+        "contact_thickness": np.full(n, 0.02),
+        "use_lever_ratio": np.full(n, 1.2),
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -41,13 +45,14 @@ def registry():
 
 
 def test_builtin_tasks_are_listed():
-    assert {"beat", "cut", "cut-ug", "pick", "viable"} <= set(tasks.list_tasks())
+    names = {"beat", "beat-paper", "cut", "cut-dihedral", "cut-ug", "pick", "viable"}
+    assert names <= set(tasks.list_tasks())
     with pytest.raises(TaskError, match="available tasks: .*beat"):
         tasks.get_task("juggle")
 
 
-def test_beat_follows_the_paper():
-    beat = tasks.get_task("beat")
+def test_beat_paper_follows_the_paper():
+    beat = tasks.get_task("beat-paper")
     np.testing.assert_allclose(
         beat.evaluate(table()), [1e-5, 1e-5, 1e-5, 1e-5, 0.0]
     )  # I / E_i, and I / inf = 0
@@ -64,12 +69,36 @@ def test_beat_follows_the_paper():
     assert np.isfinite(beat.evaluate(low_delta, tau_delta=0.8)[1])
 
 
-def test_cut_tests_the_edge_angle_and_cut_ug_the_papers_ug():
+def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
+    beat, paper = tasks.get_task("beat"), tasks.get_task("beat-paper")
+    blunt = table(use_wedge_angle=np.full(5, math.pi))
+    np.testing.assert_array_equal(beat.evaluate(blunt), paper.evaluate(blunt))
+    sharp = table(use_wedge_angle=[math.pi, math.radians(60), math.pi, math.pi, math.pi])
+    near = table(use_wedge_angle=np.full(5, math.pi), use_clearance=[0.05, 0.05, 0.01, 0.05, 0.05])
+    assert beat.evaluate(sharp)[1] == -INF and np.isfinite(beat.evaluate(sharp)[0])
+    assert beat.evaluate(near)[2] == -INF and np.isfinite(beat.evaluate(near)[3])
+    assert beat.thresholds["tau_clear"] == tasks.TAU_CLEARANCE_DEFAULT
+    butt = table(use_wedge_angle=np.full(5, math.pi), use_lever_ratio=[0.3, 1.2, 1.2, 1.2, 1.2])
+    assert beat.evaluate(butt)[0] == -INF and np.isfinite(beat.evaluate(butt)[1])
+    nan_use = table(use_wedge_angle=[np.nan, math.pi, math.pi, math.pi, math.pi])
+    assert beat.evaluate(nan_use)[0] == -INF  # no use point: not usable
+
+
+def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
     cut = tasks.get_task("cut")
     np.testing.assert_allclose(cut.evaluate(table()), table()["use_force"])
-    blunt = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_edge=np.full(5, 1e9))
+    blunt = table(use_wedge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_edge_angle=np.full(5, 0.1))
     assert cut.evaluate(blunt)[0] == -INF and cut.evaluate(blunt)[1] == 1.0
-    assert cut.thresholds["tau_angle"] == pytest.approx(tasks.TAU_EDGE_ANGLE_DEFAULT)
+    on_blade = table(use_clearance=[0.005, 0.05, 0.05, 0.05, 0.05])
+    assert cut.evaluate(on_blade)[0] == -INF and cut.evaluate(on_blade, tau_clear=0.0)[0] == 0.5
+    thin = table(contact_thickness=[0.002, 0.02, 0.02, 0.02, 0.02])
+    assert cut.evaluate(thin)[0] == -INF and cut.evaluate(thin)[1] == 1.0
+    assert cut.thresholds["tau_thick"] == tasks.TAU_THICKNESS_DEFAULT
+    assert cut.thresholds["tau_wedge"] == pytest.approx(tasks.TAU_WEDGE_DEFAULT)
+    dihedral = tasks.get_task("cut-dihedral")
+    edge_only = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_wedge_angle=np.full(5, 3.0))
+    assert dihedral.evaluate(edge_only)[0] == -INF and dihedral.evaluate(edge_only)[1] == 1.0
+    assert dihedral.thresholds["tau_angle"] == pytest.approx(tasks.TAU_EDGE_ANGLE_DEFAULT)
     ug = tasks.get_task("cut-ug")
     flat = table(use_edge=[0.0, 1e6, 1e6, 1e6, 1e6], use_edge_angle=np.full(5, math.pi))
     assert ug.evaluate(flat)[0] == -INF and ug.evaluate(flat, tau_ug=-1.0)[0] == 0.5

@@ -43,7 +43,7 @@ def add_arguments(p) -> None:
         type=int,
         default=2000,
         metavar="M",
-        help="score each grasp with its best of M uniform use points (ray casts, no "
+        help="score each grasp with its best of M use points drawn by surface area (ray casts, no "
         "simulation; default 2000); 0: each sample keeps its own use direction",
     )
     add_robust_argument(

@@ -61,7 +61,7 @@ def add_source_arguments(p) -> None:
         type=int,
         default=2000,
         metavar="M",
-        help="for an object SOURCE, also score every grasp with each of M uniform use points "
+        help="for an object SOURCE, also score every grasp with each of M use points drawn by area "
         "(affordgrasp.pairs; default 2000, 0: only the samples' own use points)",
     )
     p.add_argument(
@@ -204,7 +204,7 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
 def with_best_pairs(obj, table, tasks, thresholds, args):
     """A table plus, per task, its best (grasp, use point) pairs.
 
-    The pairs are searched over the table's grasps and ``args.uses`` uniform use points
+    The pairs are searched over the table's grasps and ``args.uses`` use points drawn by area
     (:func:`affordgrasp.pairs.best_pairs`) and appended as ordinary rows, numbered after the
     samples. Tasks that do not read the use point add nothing.
 

@@ -18,7 +18,16 @@ Hand frame from p0 = (u1, u2, u3, u4, u5, s):
 * s ∈ [0, 1] sets the hand's pregrasp DOF (Barrett: spread = 180°·s).
 
 The use point U = DM(d, O) is the farthest intersection of the ray from the centre of mass
-along direction(d) with the surface, with the outward normal of the triangle hit.
+along direction(d) with the surface, with the outward normal of the triangle hit. Where that
+ray meets no surface (from a hollow object's cavity out through its opening), U is the
+first hit of the same line coming back from outside along -d, on the far side of the centre
+of mass: every line through the centre of mass of a container meets its wall or its base,
+so every d has a use point. (Equivalently, in both cases: the hit of the line through the
+centre of mass along d that lies farthest along +d.)
+
+Use directions for searches (:func:`surface_use_directions`) are drawn so that the use
+points cover the surface by area: a uniform d reaches a knife's blade, a thin part seen
+edge-on from the centre of mass in the handle, in a few per mille of draws.
 """
 
 from __future__ import annotations
@@ -213,8 +222,6 @@ def use_points(
         return points, normals, tris
     origins = np.repeat(np.asarray(center, dtype=np.float64)[None], n, axis=0)
     _, ray_idx, tri_idx = mesh.ray.intersects_location(origins, d, multiple_hits=True)
-    if len(tri_idx) == 0:
-        return points, normals, tris
     # Exact float64 intersection with the triangles the (float32) ray engine reported.
     tri = np.asarray(mesh.triangles, dtype=np.float64)[tri_idx]
     e1 = tri[:, 1] - tri[:, 0]
@@ -231,10 +238,77 @@ def use_points(
     first[1:] = ray_idx[order][1:] != ray_idx[order][:-1]
     keep = order[first]
     r = ray_idx[keep]
+    ahead = t[keep] > 0
+    r, keep = r[ahead], keep[ahead]
     points[r] = o[keep] + t[keep, None] * dirs[keep]
     normals[r] = np.asarray(mesh.face_normals)[tri_idx[keep]]
     tris[r] = tri_idx[keep]
+    missed = np.flatnonzero(tris < 0)
+    if missed.size:
+        # back from outside along -d: the line's hit farthest along +d, behind the centre
+        V = np.asarray(mesh.vertices, dtype=np.float64)
+        reach = float(np.linalg.norm(V - origins[0], axis=1).max()) * 1.5 + 1e-3
+        o2 = origins[missed] + reach * d[missed]
+        loc, ray2, tri2 = mesh.ray.intersects_location(o2, -d[missed], multiple_hits=True)
+        if len(tri2):
+            tri = np.asarray(mesh.triangles, dtype=np.float64)[tri2]
+            nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            back = -d[missed][ray2]
+            denom = np.einsum("ij,ij->i", nrm, back)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t2 = np.einsum("ij,ij->i", nrm, tri[:, 0] - o2[ray2]) / denom
+            t2 = np.where(np.isfinite(t2), t2, np.inf)
+            order = np.lexsort((t2, ray2))  # per ray, nearest first
+            first = np.ones(len(order), dtype=bool)
+            first[1:] = ray2[order][1:] != ray2[order][:-1]
+            pick = order[first]
+            rows = missed[ray2[pick]]
+            points[rows] = o2[ray2[pick]] + t2[pick, None] * back[pick]
+            normals[rows] = np.asarray(mesh.face_normals)[tri2[pick]]
+            tris[rows] = tri2[pick]
     return points, normals, tris
+
+
+def surface_use_directions(
+    mesh: trimesh.Trimesh, center: np.ndarray, n: int, seed: int
+) -> np.ndarray:
+    """Use directions d towards points drawn uniformly by area on the surface.
+
+    DM(d, O) of such a d is the drawn point or a point farther along the same line, so the
+    use points reach every part of the surface in proportion to its area (a knife's blade,
+    a hammer's striking face) instead of in proportion to the solid angle it subtends from
+    the centre of mass. The learning input stays d.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (``vertices``, ``faces``).
+    center : (3,) float64 ndarray
+        Centre of mass, m.
+    n : int
+        How many directions.
+    seed : int
+        Same seed, same directions.
+
+    Returns
+    -------
+    (n, 2) float64 ndarray
+        Use directions in [-1, 1]^2 (the spherical coding of the module docstring).
+    """
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces, dtype=np.int64)
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x5EED]))
+    tri = V[F]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    face = rng.choice(len(F), size=int(n), p=area / area.sum())
+    a, b = rng.random((2, int(n)))
+    flip = a + b > 1
+    a, b = np.where(flip, 1 - a, a), np.where(flip, 1 - b, b)
+    T = tri[face]
+    P = T[:, 0] + a[:, None] * (T[:, 1] - T[:, 0]) + b[:, None] * (T[:, 2] - T[:, 0])
+    d = P - np.asarray(center, dtype=np.float64).reshape(3)
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return np.stack([np.arctan2(d[:, 1], d[:, 0]) / np.pi, np.clip(d[:, 2], -1, 1)], axis=1)
 
 
 SAMPLE_BLOCK = 1024

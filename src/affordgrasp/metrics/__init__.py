@@ -16,6 +16,9 @@ function                    metric
 :func:`use_force`           U_τ
 :func:`use_edge`            U_g (paper's edge-ness)
 :func:`use_edge_angle`      sharpest convex dihedral angle near U
+:func:`use_wedge_angle`     opening angle of the solid in a 3 mm ball at U
+:func:`use_clearance`       smallest contact-to-U distance
+:func:`contact_thickness`   thinnest chord through the solid under a contact
 :func:`compute_phi`         all of them, one grasp; :func:`compute_phi_batch` for many
 ==========================  ==============================================================
 """
@@ -30,7 +33,15 @@ from .inertia import rotational_inertia
 from .lp import LPResult, LPStatus, solve_standard_lp
 from .phi import compute_phi, compute_phi_batch
 from .transmission import use_force
-from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
+from .use_geometry import (
+    EDGE_RADIUS_M,
+    contact_thickness,
+    use_clearance,
+    use_edge,
+    use_edge_angle,
+    use_lever_ratio,
+    use_wedge_angle,
+)
 
 __all__ = [
     "EDGE_RADIUS_M",
@@ -44,6 +55,7 @@ __all__ = [
     "LPStatus",
     "compute_phi",
     "compute_phi_batch",
+    "contact_thickness",
     "contact_wrenches",
     "discharge",
     "edges_per_contact",
@@ -57,6 +69,9 @@ __all__ = [
     "solve_standard_lp",
     "tangent_frames",
     "use_edge",
+    "use_clearance",
     "use_edge_angle",
     "use_force",
+    "use_lever_ratio",
+    "use_wedge_angle",
 ]

@@ -17,6 +17,10 @@ discharge                 --     δ (:mod:`.discharge`)
 use_force                 N      U_τ (:mod:`.transmission`)
 use_edge                  m⁻²    U_g (:mod:`.use_geometry`)
 use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.use_geometry`)
+use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the solid
+use_clearance             m      smallest contact-to-U distance
+use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
+contact_thickness         m      thinnest chord through the solid under a contact
 ========================  =====  ==========================================================
 
 Infeasible efforts are +inf (IEEE), never a sentinel.
@@ -47,7 +51,15 @@ from .inertia import rotational_inertia
 from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
-from .use_geometry import EDGE_RADIUS_M, use_edge, use_edge_angle
+from .use_geometry import (
+    EDGE_RADIUS_M,
+    contact_thickness,
+    use_clearance,
+    use_edge,
+    use_edge_angle,
+    use_lever_ratio,
+    use_wedge_angle,
+)
 from .validation import points_n3, stacked_contact_arrays, units_n3
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
@@ -253,6 +265,16 @@ def compute_phi_batch(
         )
         if n
         else np.zeros(0)
+    )
+    out["use_wedge_angle"] = (
+        np.asarray(use_wedge_angle(mesh, use_point, use_normal), dtype=float) if n else np.zeros(0)
+    )
+    out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
+    out["use_lever_ratio"] = (
+        use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)
+    )
+    out["contact_thickness"] = (
+        contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
     )
     return {name: out[name] for name in METRIC_COLUMNS}
 

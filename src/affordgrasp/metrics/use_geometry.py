@@ -422,3 +422,251 @@ def use_edge_angle(
             query, edge = query[facing], edge[facing]
         np.minimum.at(out, query, interior[edge])
     return float(out[0]) if single else out
+
+
+# ------------------------------------------------------------------------------------
+# wedge angle at a physical scale
+# ------------------------------------------------------------------------------------
+
+WEDGE_RADIUS_M = 0.003  # default radius of the ball of the wedge angle
+WEDGE_DIRECTIONS = 256  # rays per use point
+_WEDGE_START_M = 2e-5  # rays start this far inside the surface, along -n
+_WEDGE_SAME_HIT_M = 1e-7  # hits closer than this along one ray are one crossing
+
+
+def _fibonacci_sphere(k: int) -> np.ndarray:
+    """(k, 3) unit vectors spread evenly over the sphere (golden-angle spiral)."""
+    i = np.arange(k, dtype=np.float64) + 0.5
+    z = 1.0 - 2.0 * i / k
+    phi = np.pi * (1.0 + np.sqrt(5.0)) * i
+    s = np.sqrt(1.0 - z * z)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+
+
+def use_wedge_angle(
+    mesh,
+    use_point,
+    use_normal,
+    *,
+    radius: float = WEDGE_RADIUS_M,
+    directions: int = WEDGE_DIRECTIONS,
+) -> float | np.ndarray:
+    """Wedge angle of the solid at U at a physical scale: 2π × the part of the ball inside.
+
+    The ball of radius ``radius`` centred at U is split by the surface; the fraction f of its
+    volume inside the solid, times 2π, is the opening angle of the solid there: π on a flat
+    face, α on the apex line of a wedge of opening α (a blade's edge), less at a tip, more
+    than π in a concave corner. Computed exactly along ``directions`` rays from U (a
+    golden-angle spiral; each ray's inside length weighted by ρ² dρ, from its crossings
+    of the surface), so it depends on the ball, not on the triangles: a rounded or noisy
+    edge (0.5 mm round, 0.3 mm noise) still measures its flanks' angle, and a blade's 2 mm
+    spine, whose flanks are parallel, measures about 3π T / (4 r) (67° at T = 1.5 mm, r =
+    3 mm), not an edge. Needs a closed mesh.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (anything with ``ray.intersects_location``).
+    use_point : (3,) or (n, 3) float
+        Use points on the surface, m.
+    use_normal : (3,) or (n, 3) float
+        Outward unit normals there (the rays start 20 µm inside, along -n).
+    radius : float
+        Radius of the ball, m (default :data:`WEDGE_RADIUS_M`, 3 mm).
+    directions : int
+        Rays per use point (default :data:`WEDGE_DIRECTIONS`).
+
+    Returns
+    -------
+    float or (n,) float64 ndarray
+        rad, in [0, 2π]; a float for a single point.
+    """
+    single = np.ndim(use_point) == 1
+    P = points_n3(use_point, "use_point")
+    N = units_n3(use_normal, "use_normal")
+    if N.shape[0] != P.shape[0]:
+        raise InputError(
+            f"use_normal has {N.shape[0]} rows, expected one per use point ({P.shape[0]})"
+        )
+    radius = float(radius)
+    if not (np.isfinite(radius) and radius > 0):
+        raise InputError(f"radius must be a positive length in metres, got {radius}")
+    k = int(directions)
+    if k < 8:
+        raise InputError(f"directions must be an integer >= 8, got {directions}")
+    n = P.shape[0]
+    if n == 0:
+        return np.zeros(0)
+    S = _fibonacci_sphere(k)
+    out = np.empty(n)
+    chunk = max(1, 65536 // k)
+    for first in range(0, n, chunk):
+        p = P[first : first + chunk]
+        m = len(p)
+        origins = np.repeat(p - _WEDGE_START_M * N[first : first + chunk], k, axis=0)
+        dirs = np.tile(S, (m, 1))
+        locations, ray, _ = mesh.ray.intersects_location(origins, dirs, multiple_hits=True)
+        ray = np.asarray(ray, dtype=np.int64)
+        t = np.einsum("ij,ij->i", np.asarray(locations, dtype=np.float64) - origins[ray], dirs[ray])
+        order = np.lexsort((t, ray))
+        ray, t = ray[order], t[order]
+        # one crossing per surface: a ray through an edge reports both of its faces
+        dup = np.zeros(len(t), dtype=bool)
+        dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
+        ray, t = ray[~dup], t[~dup]
+        inside = _ray_inside(ray, t, radius, m * k)
+        out[first : first + m] = 2.0 * np.pi * inside.reshape(m, k).mean(axis=1)
+    return float(out[0]) if single else out
+
+
+def _ray_inside(ray: np.ndarray, t: np.ndarray, radius: float, n_rays: int) -> np.ndarray:
+    """Volume-weighted inside part of [0, radius] of each ray.
+
+    ``ray`` sorted, ``t`` sorted within each ray (crossing distances, m, to infinity). A ray
+    starts inside when it crosses the surface an odd number of times (parity, so a crossing
+    missed next to the start does not turn the ray inside out). From inside, with crossings
+    t1 < t2 < ... within the radius (c = (t / r)³), the inside segments are [0, t1],
+    [t2, t3], ...: Σ_k (-1)^k c_(k+1), + 1 after an even number of crossings; from outside,
+    the complement.
+    """
+    starts_inside = np.bincount(ray, minlength=n_rays) % 2 == 1
+    within = t < radius
+    ray, t = ray[within], t[within]
+    start = np.searchsorted(ray, np.arange(n_rays))
+    rank = np.arange(len(ray)) - start[ray]
+    cube = (t / radius) ** 3
+    inside = np.bincount(ray, weights=np.where(rank % 2 == 0, cube, -cube), minlength=n_rays)
+    count = np.bincount(ray, minlength=n_rays)
+    inside = inside + (count % 2 == 0)
+    return np.where(starts_inside, inside, 1.0 - inside)
+
+
+def use_clearance(contact_points, offsets, use_point, group=None) -> np.ndarray:
+    """Smallest distance from a grasp's contacts to its use point (``use_clearance``), m.
+
+    A hand that touches the working part near U (fingers on a blade) has a small clearance;
+    tasks whose use point is a working part ask for at least a hand's width.
+
+    Parameters
+    ----------
+    contact_points : (k, 3) float
+        Contacts of all grasps, stacked, m.
+    offsets : (g + 1,) int
+        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
+    use_point : (n, 3) float
+        Use points, m.
+    group : (n,) int, optional
+        The grasp of each use point (default: use point i belongs to grasp i, n = g).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        m; +inf for a grasp without contacts, NaN for a NaN use point.
+    """
+    C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
+    offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
+    U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
+    g = len(offsets) - 1
+    group = np.arange(len(U)) if group is None else np.asarray(group, dtype=np.int64).reshape(-1)
+    if group.shape[0] != U.shape[0]:
+        raise InputError(f"group has {group.shape[0]} rows, expected one per use point ({len(U)})")
+    if len(U) and (group.min() < 0 or group.max() >= g):
+        raise InputError(f"group indices must lie in [0, {g}), got {group.min()}..{group.max()}")
+    counts = np.diff(offsets)
+    kmax = int(counts.max()) if g else 0
+    out = np.full(len(U), np.inf)
+    if kmax == 0 or len(U) == 0:
+        return np.where(np.isnan(U).any(axis=1), np.nan, out)
+    padded = np.full((g, kmax, 3), np.nan)
+    owner = np.repeat(np.arange(g), counts)
+    padded[owner, np.arange(len(C)) - offsets[owner]] = C
+    for first in range(0, len(U), 65536):
+        sl = slice(first, first + 65536)
+        d = np.linalg.norm(padded[group[sl]] - U[sl, None, :], axis=2)
+        has = ~np.isnan(d)
+        out[sl] = np.where(has.any(axis=1), np.min(np.where(has, d, np.inf), axis=1), np.inf)
+    return np.where(np.isnan(U).any(axis=1), np.nan, out)
+
+
+_THICKNESS_START_M = 1e-4  # the rays start this far inside, along -n
+
+
+def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndarray:
+    """Thinnest part a grasp touches (``contact_thickness``), m.
+
+    At each contact, the length of the chord through the solid along the inward normal (the
+    first exit of a ray from just inside, along -n); per grasp the smallest. A blade, 1-5 mm
+    thick, is thin everywhere; a handle or a hammer's head is not: tasks whose working part
+    is a blade keep the hand off it with a minimum thickness.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (anything with ``ray.intersects_location``).
+    contact_points, contact_normals : (k, 3) float
+        Contacts of all grasps, stacked, m; the object's outward unit normals.
+    offsets : (g + 1,) int
+        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
+
+    Returns
+    -------
+    (g,) float64 ndarray
+        m; +inf for a grasp without contacts; a contact whose ray finds no exit (grazing an
+        edge) counts as 0.
+    """
+    C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
+    N = np.asarray(contact_normals, dtype=np.float64).reshape(-1, 3)
+    offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
+    g = len(offsets) - 1
+    out = np.full(g, np.inf)
+    if len(C) == 0:
+        return out
+    origins = C - _THICKNESS_START_M * N
+    locations, ray, _ = mesh.ray.intersects_location(origins, -N, multiple_hits=False)
+    chord = np.zeros(len(C))
+    ray = np.asarray(ray, dtype=np.int64)
+    if len(ray):
+        t = np.linalg.norm(np.asarray(locations, dtype=np.float64) - origins[ray], axis=1)
+        chord[ray] = t + _THICKNESS_START_M
+    counts = np.diff(offsets)
+    owner = np.repeat(np.arange(g), counts)
+    np.minimum.at(out, owner, chord)
+    return out
+
+
+def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
+    """How far U is from the wrist axis, relative to the centre of mass (``use_lever_ratio``).
+
+    The distance from U to the wrist axis (the line through the palm centre along the
+    approach direction) divided by the centre of mass's distance to it. A swing about that
+    axis strikes with its massive end when the ratio is at least 1: a hammer held by its
+    handle, whose steel head holds the centre of mass, strikes with the head, not with the
+    handle's end near the hand.
+
+    Parameters
+    ----------
+    use_point : (n, 3) float
+        m.
+    center_of_mass : (3,) float
+        m.
+    wrist_point : (n, 3) float
+        Palm centres, m.
+    wrist_axis : (n, 3) float
+        Unit approach directions.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Dimensionless; +inf when the axis passes through the centre of mass.
+    """
+    U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
+    W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
+    A = np.asarray(wrist_axis, dtype=np.float64).reshape(-1, 3)
+    c = np.asarray(center_of_mass, dtype=np.float64).reshape(1, 3)
+
+    def off_axis(P: np.ndarray) -> np.ndarray:
+        d = P - W
+        return np.linalg.norm(d - np.einsum("ij,ij->i", d, A)[:, None] * A, axis=1)
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return off_axis(U) / off_axis(np.broadcast_to(c, U.shape))

@@ -4,7 +4,12 @@ Spec grammar, as on the command line:
 
 * ``knife`` — a built-in family, seed 0 (the same as ``knife:0``);
 * ``knife:7`` — a family variant, the seed a non-negative integer;
-* ``path/to/mesh.off`` — a mesh file (see :func:`affordgrasp.objects.load_mesh`).
+* ``path/to/mesh.off`` — a mesh file (see :func:`affordgrasp.objects.load_mesh`);
+* a mesh file may have region densities beside it, ``<file>.materials.toml`` (a steel head
+  cut off by a plane; see :func:`_with_region_densities`);
+* any of these followed by ``~scan`` or ``~scan:K`` — its scan-like variant
+  (:mod:`affordgrasp.objects.scan`), degraded with seed K (default: the family's seed, 0
+  for a file).
 
 Family names win over a file of the same name in the working directory; write
 ``./knife`` for the file.
@@ -30,7 +35,14 @@ from affordgrasp.objects.loading import (
     prepare_mesh,
     recording_warnings,
 )
-from affordgrasp.objects.mass import MassProperties, mass_properties, material_mass_properties
+from affordgrasp.objects.mass import (
+    MassProperties,
+    mass_properties,
+    material_mass_properties,
+    plane_regions,
+    regions_on_mesh,
+)
+from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 
 if TYPE_CHECKING:
     import trimesh
@@ -298,6 +310,11 @@ def load_object(
         raise InputError(
             "the object spec is empty; give a family name (e.g. 'knife', 'knife:7') or a mesh path"
         )
+    scan = split_scan_spec(text)
+    if scan is not None and not Path(text).expanduser().exists():
+        return _resolve_scan(
+            scan[0], scan[1], size_m=size_m, units=units, density=density, materials=materials
+        )
     family, seed_text = _split_family(text)
     if family is not None:
         if size_m is not None or units is not None:
@@ -437,10 +454,11 @@ def _resolve_file(
     if key is not None:
         obj = prepared.load_mesh_file(key, path.name, source)
         if obj is not None:
-            return obj
+            return _with_region_densities(obj, path)
     with recording_warnings() as warnings:
         mesh = load_mesh(path, size_m=size_m, units=units)
     obj = _build(path.name, "mesh", mesh, density, source, load_warnings=tuple(warnings))
+    obj = _with_region_densities(obj, path)
     # not if the file changed while it was read: the mesh may be of other bytes than the key's
     if key is not None and key == prepared.mesh_file_key(
         path, size_m=size_m, units=units, density=density
@@ -503,6 +521,122 @@ def _build_family(
     )
 
 
+MATERIALS_SUFFIX = ".materials.toml"
+
+
+def _with_region_densities(obj: GraspObject, path: Path) -> GraspObject:
+    """``obj`` with the region densities of ``<path>.materials.toml`` when that file exists.
+
+    The file (TOML; lengths in metres in the loaded object's frame, densities kg/m^3)::
+
+        density = 700.0            # what no region below takes (a wooden handle)
+        [[region]]                 # in order of precedence
+        name = "head"
+        density = 7850.0           # steel
+        plane_point = [0.10, 0.0, 0.0]
+        plane_normal = [1.0, 0.0, 0.0]   # the region is the side the normal points to
+
+    Each region is the part of the mesh beyond its cutting plane
+    (:func:`~affordgrasp.objects.mass.plane_regions`): a hammer's head, an axe's head.
+    """
+    side = path.with_name(path.name + MATERIALS_SUFFIX)
+    if not side.exists():
+        return obj
+    import tomllib
+
+    try:
+        doc = tomllib.loads(side.read_text(encoding="utf-8"))
+        planes = [
+            (r.get("name", f"region {i}"), r["density"], r["plane_point"], r["plane_normal"])
+            for i, r in enumerate(doc.get("region", []))
+        ]
+        rest = doc.get("density", obj.mass.density)
+    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError) as exc:
+        raise InputError(
+            f"{side}: cannot read the region densities ({exc}); write 'density = ...' and "
+            "[[region]] tables with name, density, plane_point and plane_normal"
+        ) from None
+    regions = plane_regions(obj.mesh, rest, planes)
+    return GraspObject(
+        name=obj.name,
+        category=obj.category,
+        mesh=obj.mesh,
+        mass=material_mass_properties(obj.mesh, regions),
+        mesh_hash=obj.mesh_hash,
+        source=obj.source,
+        face_parts=obj.face_parts,
+        part_names=obj.part_names,
+        materials=True,
+        load_warnings=obj.load_warnings,
+    )
+
+
+def _resolve_scan(
+    base: str,
+    scan_seed: int | None,
+    *,
+    size_m: float | None,
+    units: str | None,
+    density: float,
+    materials: bool,
+) -> GraspObject:
+    """The scan-like variant of ``base`` (a family spec or a mesh path)."""
+    family, seed_text = _split_family(base)
+    if family is None:
+        _refuse_materials_for_file(base, materials)
+        path = Path(base).expanduser()
+        if not path.exists():
+            raise InputError(_unknown_spec_message(base))
+        crisp = _resolve_file(path, size_m=size_m, units=units, density=density)
+        seed = 0 if scan_seed is None else scan_seed
+        with recording_warnings():
+            mesh, _ = scan_like(crisp.mesh, seed=seed)
+        name = f"{crisp.name}{SCAN_SUFFIX}:{seed}"
+        return _with_region_densities(_build(name, "mesh", mesh, density, crisp.source), path)
+    if size_m is not None or units is not None:
+        raise InputError(
+            f"{base!r} is a built-in family, made at its real size in metres; size and units "
+            "options apply to mesh files only"
+        )
+    seed = _parse_seed(seed_text, family, base)
+    return _resolve_family_scan(
+        family, seed, seed if scan_seed is None else scan_seed, density, materials
+    )
+
+
+@functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
+def _resolve_family_scan(
+    family: str, seed: int, scan_seed: int, density: float, materials: bool
+) -> GraspObject:
+    from affordgrasp.objects import prepared
+
+    key = prepared.family_key(family, seed, materials, density)
+    key["scan_seed"] = int(scan_seed)
+    obj = prepared.load_family(key)
+    if obj is not None:
+        return obj
+    crisp = _resolve_family(family, seed, density, False, None, None)
+    with recording_warnings():
+        mesh, face_parts = scan_like(crisp.mesh, crisp.face_parts, seed=scan_seed)
+    regions = None
+    if materials:
+        raw = _families().make_family(family, seed=seed, materials=True)
+        regions = regions_on_mesh(mesh, raw.metadata["materials"])
+    suffix = SCAN_SUFFIX if scan_seed == seed else f"{SCAN_SUFFIX}:{scan_seed}"
+    obj = _build(
+        f"{family}:{seed}{suffix}",
+        _families().FAMILIES[family].category,
+        mesh,
+        density,
+        "family",
+        face_parts=face_parts,
+        part_names=crisp.part_names if face_parts is not None else (),
+        regions=regions,
+    )
+    prepared.store_family(key, obj)
+    return obj
+
+
 def _build(
     name: str,
     category: str,
@@ -551,6 +685,8 @@ def _reuse(
             return obj
         if obj.source != "family":
             _refuse_materials_for_file(obj.name, materials)
+        if split_scan_spec(obj.name) is not None:
+            return load_object(obj.name, materials=True)
         family, seed_text = _split_family(obj.name)
         if family is None:
             raise InputError(

@@ -38,6 +38,12 @@ def guidance(table: pa.Table, requires=()) -> np.ndarray:
     if "use_edge_angle" in requires and "use_edge_angle" in names:
         angle = np.nan_to_num(table["use_edge_angle"].to_numpy(), nan=np.pi)
         g = g + 3.0 * (1.0 - angle / np.pi)
+    if "use_wedge_angle" in requires and "use_wedge_angle" in names and "use_force" in requires:
+        wedge = np.nan_to_num(table["use_wedge_angle"].to_numpy(), nan=np.pi)
+        g = g + 3.0 * np.clip(1.0 - wedge / np.pi, 0.0, 1.0)
+    if "use_clearance" in requires and "use_clearance" in names:
+        clear = np.nan_to_num(table["use_clearance"].to_numpy(), nan=0.0, posinf=0.0)
+        g = g + 3.0 * np.clip(clear / 0.035, 0.0, 1.0)
     if "discharge" in requires and "discharge" in names:
         g = g + 3.0 * np.nan_to_num(table["discharge"].to_numpy())
     return g

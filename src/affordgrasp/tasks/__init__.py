@@ -12,13 +12,27 @@ overrides::
 
 Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
 
-* ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, else I / E_i (0 when E_i = inf);
-* ``cut``: -inf if ε < τ_ε or the use point is not on an edge sharper than τ_angle
-  (``use_edge_angle``, resolution independent), else U_τ;
-* ``cut-ug``: the paper's form, with the edge test U_g >= τ_Ug instead of the angle;
+* ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, or the use point is not blunt
+  (``use_wedge_angle`` < τ_blunt, 135°) or a contact is within τ_clear (35 mm) of it
+  (``use_clearance``) or one touches material thinner than τ_thick (8 mm,
+  ``contact_thickness``) or U is nearer the wrist axis than the centre of mass
+  (``use_lever_ratio`` < 1), else I / E_i (0 when E_i = inf);
+* ``beat-paper``: the paper's beat, without the bluntness and clearance tests;
+* ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
+  opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
+  (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), else U_τ;
+* ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
+  (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
+  rounds the mesh's edges away);
+* ``cut-ug``: the paper's form, with the edge test U_g >= τ_Ug;
+
 * ``pick``: -ΣE_h;
 * ``viable``: 1.0 if ε > τ_ε,viable and ΣE_h < 250 and E_i < τ_Ei, else 0.0 (the learning
   ground truth; :func:`is_viable` returns the boolean mask).
+
+A row without a use point (its use ray left a hollow object through its opening) has NaN
+use metrics; every comparison with NaN is false, so such a row is -inf for beat and cut,
+scores as usual for pick, and counts as not viable only through NaN ``impact_effort``.
 
 Modes: ``default`` (τ_ε = 0.014, calibrated), ``no-robustness`` (τ_ε = -inf),
 ``extra-robustness`` (τ_ε = 0.024), and the paper's literal values ``paper`` (τ_ε = 0.3;
@@ -74,12 +88,17 @@ from .registry import (
 from .task import Task, TaskFunction, make_task
 from .thresholds import (
     MODES,
+    TAU_BLUNT_DEFAULT,
+    TAU_CLEARANCE_DEFAULT,
     TAU_DELTA_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_EPS_EXTRA,
     TAU_EPS_VIABLE,
+    TAU_LEVER_DEFAULT,
+    TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
+    TAU_WEDGE_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
     VIABLE_IMPACT_MAX,
@@ -95,11 +114,16 @@ __all__ = [
     "MODES",
     "TASKS",
     "TAU_DELTA_DEFAULT",
+    "TAU_BLUNT_DEFAULT",
+    "TAU_CLEARANCE_DEFAULT",
     "TAU_EDGE_ANGLE_DEFAULT",
+    "TAU_THICKNESS_DEFAULT",
     "TAU_EPS_DEFAULT",
     "TAU_EPS_EXTRA",
+    "TAU_LEVER_DEFAULT",
     "TAU_EPS_VIABLE",
     "TAU_UG_DEFAULT",
+    "TAU_WEDGE_DEFAULT",
     "VIABLE_EPS_MIN",
     "VIABLE_HOLD_MAX",
     "VIABLE_IMPACT_MAX",

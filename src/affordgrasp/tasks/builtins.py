@@ -10,10 +10,15 @@ from ..columns import HOLD_EFFORT_COLUMNS
 from .task import Task, make_task
 from .thresholds import (
     PAPER_VIABLE,
+    TAU_BLUNT_DEFAULT,
+    TAU_CLEARANCE_DEFAULT,
     TAU_DELTA_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
+    TAU_LEVER_DEFAULT,
+    TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
+    TAU_WEDGE_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
     VIABLE_IMPACT_MAX,
@@ -21,6 +26,17 @@ from .thresholds import (
 
 
 def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    # the paper's beat, on a blunt use point with the hand off it
+    ok = (
+        (m["use_wedge_angle"] >= t["tau_blunt"])
+        & (m["use_clearance"] >= t["tau_clear"])
+        & (m["contact_thickness"] >= t["tau_thick"])
+        & (m["use_lever_ratio"] >= t["tau_lever"])
+    )
+    return np.where(ok, _beat_paper(m, t), -np.inf)
+
+
+def _beat_paper(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
     ok = (
         (m["epsilon"] >= t["tau_eps"])
         & (m["discharge"] >= t["tau_delta"])
@@ -31,6 +47,16 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    ok = (
+        (m["epsilon"] >= t["tau_eps"])
+        & (m["use_wedge_angle"] <= t["tau_wedge"])
+        & (m["use_clearance"] >= t["tau_clear"])
+        & (m["contact_thickness"] >= t["tau_thick"])
+    )
+    return np.where(ok, m["use_force"], -np.inf)
+
+
+def _cut_dihedral(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
     ok = (m["epsilon"] >= t["tau_eps"]) & (m["use_edge_angle"] <= t["tau_angle"])
     return np.where(ok, m["use_force"], -np.inf)
 
@@ -72,7 +98,8 @@ def _viable(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def builtin_tasks() -> list[Task]:
-    """Fresh Task objects of the built-in tasks: beat, cut, cut-ug, pick, viable.
+    """Fresh Task objects of the built-in tasks: beat, beat-paper, cut, cut-dihedral, cut-ug,
+    pick, viable.
 
     Returns
     -------
@@ -83,15 +110,59 @@ def builtin_tasks() -> list[Task]:
         make_task(
             "beat",
             _beat,
+            thresholds={
+                "tau_eps": TAU_EPS_DEFAULT,
+                "tau_delta": TAU_DELTA_DEFAULT,
+                "tau_blunt": TAU_BLUNT_DEFAULT,
+                "tau_clear": TAU_CLEARANCE_DEFAULT,
+                "tau_thick": TAU_THICKNESS_DEFAULT,
+                "tau_lever": TAU_LEVER_DEFAULT,
+            },
+            description="beating by a wrist rotation: I / E_i if robust and discharging, "
+            "on a blunt use point with the hand off it",
+            requires=(
+                "epsilon",
+                "discharge",
+                *HOLD_EFFORT_COLUMNS,
+                "inertia",
+                "impact_effort",
+                "use_wedge_angle",
+                "use_clearance",
+                "contact_thickness",
+                "use_lever_ratio",
+            ),
+        ),
+        make_task(
+            "beat-paper",
+            _beat_paper,
             thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_delta": TAU_DELTA_DEFAULT},
-            description="beating by a wrist rotation: I / E_i if robust and discharging",
+            description="beating as in the paper: I / E_i if robust and discharging",
             requires=("epsilon", "discharge", *HOLD_EFFORT_COLUMNS, "inertia", "impact_effort"),
         ),
         make_task(
             "cut",
             _cut,
+            thresholds={
+                "tau_eps": TAU_EPS_DEFAULT,
+                "tau_wedge": TAU_WEDGE_DEFAULT,
+                "tau_clear": TAU_CLEARANCE_DEFAULT,
+                "tau_thick": TAU_THICKNESS_DEFAULT,
+            },
+            description="cutting: U_τ if robust, the use point on an edge (wedge angle at "
+            "3 mm) and the hand off it",
+            requires=(
+                "epsilon",
+                "use_wedge_angle",
+                "use_clearance",
+                "contact_thickness",
+                "use_force",
+            ),
+        ),
+        make_task(
+            "cut-dihedral",
+            _cut_dihedral,
             thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_angle": TAU_EDGE_ANGLE_DEFAULT},
-            description="cutting: U_τ if robust and the use point is on a sharp edge (angle)",
+            description="cutting: U_τ if robust and a mesh edge near U is sharp (dihedral)",
             requires=("epsilon", "use_edge_angle", "use_force"),
         ),
         make_task(

@@ -51,6 +51,34 @@ TAU_UG_DEFAULT = 3.0e4
 # degrees where the balanced accuracy is 1.0. That is why the default "cut" tests the
 # edge angle (a deviation from the paper, whose U_g test is "cut-ug").
 TAU_EDGE_ANGLE_DEFAULT = math.radians(45.0)
+# That test sees mesh edges, so a scanned blade, whose edge the scanner rounds into a strip of
+# 30-90 degree dihedrals, has no edge. The wedge angle (use_wedge_angle: 2π × the part of a
+# 3 mm ball around U inside the solid) measures the flanks at a physical scale instead.
+# Calibrated with benchmarks/calibrate_wedge_angle.py on crisp and scan-like (~scan) blades,
+# flats, spines, handles and round parts (5 blade families + hammer, screwdriver, bottle, mug;
+# seeds 0-1 calibrate, 2-3 held out; a scan-like blade's edge labelled by its own crest, 0.7-0.9
+# mm behind the crisp edge): cutting edges read 7-51 degrees (1st-100th percentile, scan-like;
+# 10-33 crisp), other points 84 degrees and more (1st percentile); 55 degrees is the middle of
+# the plateau of the best balanced accuracy, 0.998 on the calibration seeds; held out: 0.998
+# crisp, 0.997 scan-like (the dihedral test: 1.0 crisp, 0.76 scan-like). It is the default
+# cut's test, the dihedral one the task "cut-dihedral".
+TAU_WEDGE_DEFAULT = math.radians(55.0)
+# A striking surface is blunt at the same scale: a flat face reads 180 degrees, a hammer
+# face's rounded rim 110-150, a claw's or a blade's tip less than 60.
+TAU_BLUNT_DEFAULT = math.radians(135.0)
+# The hand off the working part: the smallest contact-to-U distance of cut and beat. A
+# human index finger is 16-20 mm wide and the Barrett hand's finger links 25 mm: at 35 mm
+# no finger pad reaches the part of a blade or head within a finger's width of U.
+TAU_CLEARANCE_DEFAULT = 0.035
+# Nor anywhere else on the working part: every contact of cut and beat on material at least
+# this thick (contact_thickness, the chord through the solid along the contact's normal).
+# Blades are 1.5-5 mm thick at the spine and thinner towards the edge; the families'
+# handles 12 mm and more; 8 mm lies between.
+TAU_THICKNESS_DEFAULT = 0.008
+# Beat strikes with the massive end: U at least as far from the wrist axis as the centre of
+# mass (use_lever_ratio >= 1), so a hammer held by its handle does not strike with the
+# handle's end. On a mesh file, the massive end is where its region densities put it.
+TAU_LEVER_DEFAULT = 1.0
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE

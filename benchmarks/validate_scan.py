@@ -1,0 +1,148 @@
+"""Acceptance of the tasks on scan-like objects: right use point, hand off the working part.
+
+For each task and family, over ``--seeds`` instances, the scan-like variant
+(``family:seed~scan``, :mod:`affordgrasp.objects.scan`; beat with the families' materials)
+is searched two ways, as in ``validate_tasks.py``: brute force (``--grasps`` uniform grasps ×
+``--uses`` use points drawn by area, top ``--top`` distinct grasps) and the optimiser
+(``--budget`` simulations). Each top grasp is judged by the part labels the scan-like mesh
+keeps from its family:
+
+* cut: the use point on the ``cutting_edge`` ("use"), no contact on the blade or head
+  (``blade``, ``cutting_edge``, ``spine``, ``tip``, the axe's head parts: "hand");
+* beat: the use point on the striking face (a hammer's ``striking_face``, an axe's
+  ``poll``: "use"), every contact on the handle (``handle``, ``shaft``, ``pommel``:
+  "hand");
+* pick: the centre of mass inside the contacts' hull seen along the wrist axis
+  (``validate_tasks.surrounds_com``).
+
+``--crisp`` judges the crisp families instead (the regression check). Prints one line per
+object and a JSON summary (fractions over all top grasps; empty searches counted).
+
+Run: ``python benchmarks/validate_scan.py --seeds 5 --tasks cut,beat``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+
+sys.path.insert(0, str(Path(__file__).parent))
+from validate_tasks import surrounds_com  # noqa: E402
+
+from affordgrasp.objects import load_object  # noqa: E402
+from affordgrasp.pairs import best_pairs, optimize_pairs  # noqa: E402
+from affordgrasp.pipeline import evaluate_samples  # noqa: E402
+
+FAMILIES = {
+    "cut": ("knife", "meat_cleaver", "dagger", "sword", "axe"),
+    "beat": ("hammer", "axe"),
+    "pick": ("hammer", "knife", "mug", "bottle"),
+}
+HEAD = {"head", "striking_face", "claw", "peen", "poll", "cutting_edge"}
+WORKING = {"blade", "cutting_edge", "spine", "tip"}
+STRIKE = {"hammer": {"striking_face"}, "axe": {"poll"}}
+HANDLE = {"handle", "shaft", "pommel"}
+
+
+def judge(task: str, family: str, rows: list[dict], com: np.ndarray) -> tuple[int, int]:
+    """(use right, hand right) counts over the rows."""
+    use = hand = 0
+    for r in rows:
+        parts = set(r["contact_parts"])
+        if task == "cut":
+            use += r["use_part"] == "cutting_edge"
+            hand += not parts & (HEAD if family == "axe" else WORKING)
+        elif task == "beat":
+            use += r["use_part"] in STRIKE[family]
+            hand += bool(parts) and parts <= HANDLE
+        else:
+            ok = surrounds_com(r, com)
+            use += ok
+            hand += ok
+    return use, hand
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--grasps", type=int, default=1000)
+    parser.add_argument("--uses", type=int, default=2000)
+    parser.add_argument("--budget", type=int, default=600)
+    parser.add_argument("--top", type=int, default=10)
+    parser.add_argument("--tasks", default="cut,beat")
+    parser.add_argument("--families", default="", help="comma-separated subset")
+    parser.add_argument("--crisp", action="store_true", help="the crisp families instead")
+    parser.add_argument("--no-optimizer", action="store_true")
+    parser.add_argument("--cache", default="/tmp/affordgrasp-validation-scan")
+    args = parser.parse_args()
+    cache = Path(args.cache)
+    cache.mkdir(parents=True, exist_ok=True)
+    wanted = [f for f in args.families.split(",") if f]
+    t0 = time.perf_counter()
+    report: dict = {"settings": vars(args), "tasks": {}}
+    for task in args.tasks.split(","):
+        totals = {m: [0, 0, 0] for m in ("brute_force", "optimizer")}  # use, hand, rows
+        empty = {"brute_force": [], "optimizer": []}
+        for family in FAMILIES[task]:
+            if wanted and family not in wanted:
+                continue
+            for seed in range(args.seeds):
+                spec = f"{family}:{seed}" + ("" if args.crisp else "~scan")
+                materials = task == "beat"
+                obj = load_object(spec, materials=materials)
+                com = obj.mass.center_of_mass
+                path = cache / f"{spec.replace(':', '_')}_{args.grasps}_{materials}.parquet"
+                if path.exists():
+                    table = pq.read_table(path)
+                else:
+                    table = evaluate_samples(obj, args.grasps, seed=0, volume=False).table
+                    pq.write_table(table, path)
+                line = [task, spec]
+                found = best_pairs(
+                    obj,
+                    task,
+                    grasps=table.num_rows,
+                    uses=args.uses,
+                    seed=0,
+                    top=args.top,
+                    grasp_table=table,
+                    per_grasp=True,
+                )
+                searches = [("brute_force", found)]
+                if not args.no_optimizer:
+                    opt = optimize_pairs(
+                        obj, task, budget=args.budget, uses=args.uses, seed=seed, top=args.top
+                    )
+                    searches.append(("optimizer", opt))
+                for method, result in searches:
+                    rows = result.table.to_pylist()
+                    use, hand = judge(task, family, rows, com)
+                    totals[method][0] += use
+                    totals[method][1] += hand
+                    totals[method][2] += len(rows)
+                    if not rows:
+                        empty[method].append(spec)
+                    line.append(f"{method} use {use}/{len(rows)} hand {hand}/{len(rows)}")
+                print(*line, f"{time.perf_counter() - t0:.0f}s", flush=True)
+        report["tasks"][task] = {
+            m: {
+                "use_right": totals[m][0] / max(totals[m][2], 1),
+                "hand_right": totals[m][1] / max(totals[m][2], 1),
+                "rows": totals[m][2],
+                "empty_searches": empty[m],
+            }
+            for m in totals
+            if totals[m][2] or empty[m]
+        }
+    report["seconds"] = round(time.perf_counter() - t0, 1)
+    print(json.dumps(report, indent=1))
+
+
+if __name__ == "__main__":
+    main()
