@@ -48,3 +48,16 @@ def test_average_precision_by_hand():
     from affordgrasp.learning.evaluation import average_precision as learning_ap
 
     assert learning_ap is average_precision  # one home
+
+
+def test_calibration_by_hand_and_in_one_home():
+    from affordgrasp.learning import evaluation
+    from affordgrasp.stats import expected_calibration_error, reliability_bins
+
+    # Bin [0.2, 0.3): p = 0.2 twice, one positive (gap 0.3); bin [0.9, 1]: p = 1.0, positive.
+    labels, probs = [1, 0, 1], [0.2, 0.2, 1.0]
+    bins = reliability_bins(labels, probs, bins=10)
+    assert bins["count"][2] == 2 and bins["count"][9] == 1
+    assert expected_calibration_error(labels, probs) == pytest.approx(2 / 3 * 0.3)
+    assert evaluation.expected_calibration_error is expected_calibration_error
+    assert evaluation.reliability_bins is reliability_bins

@@ -1,7 +1,8 @@
 """Ranking statistics shared by the physics report and the learning evaluation.
 
 One home per statistic (as scikit-learn's ``metrics/_ranking.py``): ROC-AUC and its curve,
-a bootstrap interval of the AUC, Spearman's ρ, precision-recall and average precision.
+a bootstrap interval of the AUC, Spearman's ρ, precision-recall, average precision, and the
+calibration of probabilities (reliability bins, expected calibration error).
 Plain numpy/scipy over 1-D arrays; plotting lives with the callers.
 
 Validated against known cases in ``tests/test_stats.py``: a perfect ranking (AUC 1), its
@@ -21,7 +22,9 @@ from .errors import InputError
 __all__ = [
     "average_precision",
     "bootstrap_auc",
+    "expected_calibration_error",
     "precision_recall",
+    "reliability_bins",
     "roc_auc",
     "roc_curve",
     "spearman",
@@ -217,3 +220,70 @@ def average_precision(labels, scores) -> float:
         return float("nan")
     precision, recall, _ = precision_recall(labels, scores)
     return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
+
+
+def reliability_bins(labels, probabilities, *, bins: int = 10, weights=None) -> dict:
+    """Observed positive rate against mean predicted probability, in equal-width bins.
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    probabilities : (n,) array_like of float
+        Predicted probabilities in [0, 1].
+    bins : int
+        Equal-width bins over [0, 1]; a probability of exactly 1 falls in the last.
+    weights : (n,) array_like of float, optional
+        Row weights (e.g. to restore a natural class balance); 1 each when None.
+
+    Returns
+    -------
+    dict
+        ``edges`` (bins + 1,), and per bin ``count`` (weighted), ``mean_probability`` and
+        ``positive_rate`` (NaN for an empty bin).
+    """
+    y = (np.asarray(labels, dtype=np.float64).ravel() > 0.5).astype(np.float64)
+    p = np.asarray(probabilities, dtype=np.float64).ravel()
+    if len(y) != len(p):
+        raise InputError(f"{len(y)} labels but {len(p)} probabilities")
+    if not isinstance(bins, int) or bins < 1:
+        raise InputError(f"bins must be a positive integer, got {bins!r}")
+    w = np.ones(len(y)) if weights is None else np.asarray(weights, dtype=np.float64).ravel()
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which = np.clip(np.searchsorted(edges, p, side="right") - 1, 0, bins - 1)
+    count = np.bincount(which, weights=w, minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_p = np.bincount(which, weights=w * p, minlength=bins) / count
+        rate = np.bincount(which, weights=w * y, minlength=bins) / count
+    return {"edges": edges, "count": count, "mean_probability": mean_p, "positive_rate": rate}
+
+
+def expected_calibration_error(labels, probabilities, *, bins: int = 10, weights=None) -> float:
+    """ECE: the count-weighted mean gap between predicted probability and observed rate.
+
+    ECE = Σ_b (n_b / n) · |mean p_b − positive rate_b| over equal-width bins (Guo et al.
+    2017, "On calibration of modern neural networks").
+
+    Parameters
+    ----------
+    labels : (n,) array_like
+        True classes; positive when > 0.5.
+    probabilities : (n,) array_like of float
+        Predicted probabilities in [0, 1].
+    bins : int
+        Equal-width bins over [0, 1].
+    weights : (n,) array_like of float, optional
+        Row weights; 1 each when None.
+
+    Returns
+    -------
+    float
+        In [0, 1]; NaN for n = 0.
+    """
+    r = reliability_bins(labels, probabilities, bins=bins, weights=weights)
+    total = r["count"].sum()
+    if total <= 0:
+        return float("nan")
+    full = r["count"] > 0
+    gaps = np.abs(r["mean_probability"][full] - r["positive_rate"][full])
+    return float(np.sum(r["count"][full] * gaps) / total)

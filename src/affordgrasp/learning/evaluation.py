@@ -21,7 +21,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..stats import average_precision, precision_recall  # noqa: F401 - re-exported
+from ..stats import (  # noqa: F401 - re-exported
+    average_precision,
+    expected_calibration_error,
+    precision_recall,
+    reliability_bins,
+)
 
 
 def _pair(y_true, y_pred) -> tuple[np.ndarray, np.ndarray]:
@@ -230,73 +235,6 @@ def classification_report(labels, scores, *, seed: int = 0) -> dict:
             float(0.5 * (np.mean(s[pos] >= 0.5) + np.mean(s[neg] < 0.5))) if k else float("nan")
         ),
     }
-
-
-def reliability_bins(labels, probabilities, *, bins: int = 10, weights=None) -> dict:
-    """Observed positive rate against mean predicted probability, in equal-width bins.
-
-    Parameters
-    ----------
-    labels : (n,) array_like
-        True classes; positive when > 0.5.
-    probabilities : (n,) array_like of float
-        Predicted probabilities in [0, 1].
-    bins : int
-        Equal-width bins over [0, 1]; a probability of exactly 1 falls in the last.
-    weights : (n,) array_like of float, optional
-        Row weights (e.g. to restore a natural class balance); 1 each when None.
-
-    Returns
-    -------
-    dict
-        ``edges`` (bins + 1,), and per bin ``count`` (weighted), ``mean_probability`` and
-        ``positive_rate`` (NaN for an empty bin).
-    """
-    y = (np.asarray(labels, dtype=np.float64).ravel() > 0.5).astype(np.float64)
-    p = np.asarray(probabilities, dtype=np.float64).ravel()
-    if len(y) != len(p):
-        raise InputError(f"{len(y)} labels but {len(p)} probabilities")
-    if not isinstance(bins, int) or bins < 1:
-        raise InputError(f"bins must be a positive integer, got {bins!r}")
-    w = np.ones(len(y)) if weights is None else np.asarray(weights, dtype=np.float64).ravel()
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    which = np.clip(np.searchsorted(edges, p, side="right") - 1, 0, bins - 1)
-    count = np.bincount(which, weights=w, minlength=bins)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_p = np.bincount(which, weights=w * p, minlength=bins) / count
-        rate = np.bincount(which, weights=w * y, minlength=bins) / count
-    return {"edges": edges, "count": count, "mean_probability": mean_p, "positive_rate": rate}
-
-
-def expected_calibration_error(labels, probabilities, *, bins: int = 10, weights=None) -> float:
-    """ECE: the count-weighted mean gap between predicted probability and observed rate.
-
-    ECE = Σ_b (n_b / n) · |mean p_b − positive rate_b| over equal-width bins (Guo et al.
-    2017, "On calibration of modern neural networks").
-
-    Parameters
-    ----------
-    labels : (n,) array_like
-        True classes; positive when > 0.5.
-    probabilities : (n,) array_like of float
-        Predicted probabilities in [0, 1].
-    bins : int
-        Equal-width bins over [0, 1].
-    weights : (n,) array_like of float, optional
-        Row weights; 1 each when None.
-
-    Returns
-    -------
-    float
-        In [0, 1]; NaN for n = 0.
-    """
-    r = reliability_bins(labels, probabilities, bins=bins, weights=weights)
-    total = r["count"].sum()
-    if total <= 0:
-        return float("nan")
-    full = r["count"] > 0
-    gaps = np.abs(r["mean_probability"][full] - r["positive_rate"][full])
-    return float(np.sum(r["count"][full] * gaps) / total)
 
 
 def best_f1_threshold(labels, probabilities, *, weights=None) -> tuple[float, float]:
