@@ -557,6 +557,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.inertia import rotational_inertia
     from .metrics.phi import contact_metrics_batch
     from .metrics.transmission import use_force
+    from .metrics.use_geometry import contact_thickness, use_clearance, use_lever_ratio
     from .metrics.validation import units_n3
 
     mass = obj.mass
@@ -611,6 +612,15 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_force": force,
         "use_edge": np.repeat(phi["use_edge"], k_count),
         "use_edge_angle": np.repeat(phi["use_edge_angle"], k_count),
+        # the use point is not perturbed: its local shape is the grasp's own
+        "use_wedge_angle": np.repeat(phi["use_wedge_angle"], k_count),
+        # distances between the copy's contacts, its wrist and U: the shift moves all alike
+        "use_clearance": use_clearance(points, flat.offsets, shifted_use),
+        "use_lever_ratio": np.asarray(
+            use_lever_ratio(shifted_use, center, wrist_point - shift, wrist_axis), dtype=float
+        ).reshape(m),
+        # the chord under each contact, on the object where the copy touched it
+        "contact_thickness": contact_thickness(obj.mesh_data, flat.points, normals, flat.offsets),
     }
     for j, name in enumerate(HOLD_EFFORT_COLUMNS):
         cols[name] = np.ascontiguousarray(hold[:, j])
