@@ -281,9 +281,15 @@ def box_row(box_object):
     return grasp_row_on_box(box_object)
 
 
-def metric_row(rng: np.random.Generator) -> dict:
-    """Plausible metric values for a grasp row (beat, cut and pick all finite)."""
+def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
+    """Plausible metric values for a grasp row: pick finite, and beat (a blunt use point) or
+    cut (a sharp one) finite, the hand well off the use point on a thick part."""
+    wedge = rng.uniform(2.5, 3.1) if blunt else rng.uniform(0.4, 0.9)  # rad: 135° / 55° tests
     return {
+        "use_wedge_angle": float(wedge),
+        "use_clearance": float(rng.uniform(0.04, 0.1)),
+        "use_lever_ratio": float(rng.uniform(1.2, 3.0)),
+        "contact_thickness": float(rng.uniform(0.01, 0.03)),
         "epsilon": float(rng.uniform(0.31, 0.6)),
         "gws_volume": float(rng.uniform(0.0, 1e-3)),
         "epsilon_reason": "",
@@ -321,7 +327,7 @@ def write_dataset(directory: Path, objects: list, rows_per_object: int = 6, seed
             pose[:3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ pose[:3, :3]
             row["hand_pose"] = pose.reshape(-1).tolist()
             row["wrist_axis"] = pose[:3, 2].tolist()
-            row.update(metric_row(rng))
+            row.update(metric_row(rng, blunt=i % 2 == 0))
             if i % 3 == 2:  # a failure: no force closure
                 row.update(epsilon=0.0, epsilon_reason="not force closure", status="touched")
                 row.update(
