@@ -262,16 +262,48 @@ def check_table_fits(samples: int) -> None:
         When ``samples`` × ``ROW_BYTES`` exceeds half the available memory; the message
         gives both numbers and the largest count that fits.
     """
+    check_fits_in_memory(
+        "--samples",
+        samples,
+        ROW_BYTES,
+        what="of rows ",
+        advice=" here, or 'affordgrasp generate' (streams to disk)",
+    )
+
+
+def check_fits_in_memory(
+    option: str, count: int, bytes_each: int, *, what: str = "", advice: str = ""
+) -> None:
+    """Refuse a count whose items would take more than half the available memory.
+
+    Parameters
+    ----------
+    option : str
+        The command-line option that set ``count`` (named in the message).
+    count : int
+        Items the command would hold at once.
+    bytes_each : int
+        Bytes one item takes.
+    what : str
+        Words after "GB" in the message (e.g. ``"of rows "``).
+    advice : str
+        Words after the largest count that fits.
+
+    Raises
+    ------
+    InputError
+        Naming the need, the memory available and the largest count that fits.
+    """
     available = available_memory()
-    if available is None:
+    if available is None or count < 1:
         return
     budget = available // 2
-    need = int(samples) * ROW_BYTES
+    need = int(count) * bytes_each
     if need > budget:
         raise InputError(
-            f"--samples {samples} would hold about {need / 1e9:.3g} GB of rows in memory, more "
+            f"{option} {count} would hold about {need / 1e9:.3g} GB {what}in memory, more "
             f"than half of the {available / 1e9:.3g} GB available; use at most "
-            f"{budget // ROW_BYTES} here, or 'affordgrasp generate' (streams to disk)"
+            f"{budget // bytes_each}{advice}"
         )
 
 

@@ -61,11 +61,11 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..objects import load_object
-    from .common import materials_option, scale_options
+    from .common import check_fits_in_memory, materials_option, scale_options
 
     if args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
-    _check_candidates_fit(args.candidates)
+    check_fits_in_memory("--candidates", args.candidates, CANDIDATE_BYTES)
     models = args.model.split(",") if "," in args.model else args.model
     try:
         from ..learning.plan import plan
@@ -157,20 +157,3 @@ def _sensor(args):
 # Bytes per candidate while plan holds it: its float32 and uint16 depth images (64 + 32 kB
 # at 128 px), its simulated row and its share of the network's batch activations.
 CANDIDATE_BYTES = 128 * 1024
-
-
-def _check_candidates_fit(candidates: int) -> None:
-    """Refuse a candidate count whose images would not fit in memory, before any work."""
-    from .common import available_memory
-
-    available = available_memory()
-    if available is None or candidates < 1:
-        return
-    budget = available // 2
-    need = int(candidates) * CANDIDATE_BYTES
-    if need > budget:
-        raise InputError(
-            f"--candidates {candidates} would hold about {need / 1e9:.3g} GB in memory, more "
-            f"than half of the {available / 1e9:.3g} GB available; use at most "
-            f"{budget // CANDIDATE_BYTES}"
-        )
