@@ -252,29 +252,14 @@ def evaluate_decisions(
         for draw in sets:
             i = np.array([where[int(r)] for r in draw])
             s, v = true_score[i], viable[i]
-            t = 0.5 if classifier is None else _threshold(classifier, threshold)
-            lower = True if regressor is None else regressor[1]["target"]["lower_is_better"]
-            order = decision_order(
-                None if prob is None else prob[i],
-                None if pred is None else pred[i],
-                threshold=t,
-                lower_is_better=lower,
-            )
+            order = _draw_order(classifier, regressor, prob, pred, i, threshold)
             rows["model"].append(decision_measures(order, s, v))
             if first_choice is None:
                 first_choice = int(used[i[order[0]]])
             rows["random"].append(random_measures(s, v))
             rows["oracle"].append(decision_measures(oracle_order(s, v), s, v))
             if base:
-                bc, br = base
-                bt = 0.5 if bc is None else _threshold(bc, None)
-                blower = True if br is None else br[1]["target"]["lower_is_better"]
-                border = decision_order(
-                    None if bprob is None else bprob[i],
-                    None if bpred is None else bpred[i],
-                    threshold=bt,
-                    lower_is_better=blower,
-                )
+                border = _draw_order(*base, bprob, bpred, i, None)
                 rows["baseline"].append(decision_measures(border, s, v))
         entry = {"rows": n, "draws": len(sets), "candidates": min(n, candidates)}
         for key, rs in rows.items():
@@ -305,6 +290,16 @@ def evaluate_decisions(
     if physics:
         out["physics_hold_rate"] = float(np.mean(holds)) if holds else float("nan")
     return out
+
+
+def _draw_order(classifier, regressor, prob, pred, i, threshold):
+    """The decision order of one draw of candidates ``i`` for a (classifier, regressor) pair."""
+    return decision_order(
+        None if prob is None else prob[i],
+        None if pred is None else pred[i],
+        threshold=0.5 if classifier is None else _threshold(classifier, threshold),
+        lower_is_better=True if regressor is None else regressor[1]["target"]["lower_is_better"],
+    )
 
 
 def _threshold(classifier, override):
