@@ -561,7 +561,8 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.validation import units_n3
 
     mass = obj.mass
-    center = np.ascontiguousarray(mass.center_of_mass, dtype=np.float64).reshape(3)
+    # a writable copy: one kernel signature in process and in workers (see metrics.phi)
+    center = np.array(mass.center_of_mass, dtype=np.float64).reshape(3)
     m = len(flat.poses)
     no_use = np.repeat(batch.use_triangle < 0, k_count)
     use_point = np.where(no_use[:, None], center, np.repeat(batch.use_point, k_count, axis=0))

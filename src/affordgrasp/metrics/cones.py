@@ -232,5 +232,6 @@ def contact_wrenches(
         Forces (N per unit edge) then torques, columns contact-major (module docstring).
     """
     points, normals, mu = _as_contact_arrays(points, normals, mu)
-    center = np.ascontiguousarray(center, dtype=np.float64).reshape(3)
+    # a writable copy: one kernel signature whether the caller's array is read-only or not
+    center = np.array(center, dtype=np.float64).reshape(3)
     return wrench_matrix_kernel(points, normals, mu, center, float(torque_scale), bool(soft))

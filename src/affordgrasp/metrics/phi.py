@@ -206,7 +206,10 @@ def compute_phi_batch(
     ):
         if arr.shape[0] != n:
             raise InputError(f"{name} has {arr.shape[0]} rows, expected one per grasp ({n})")
-    center = np.ascontiguousarray(mass.center_of_mass, dtype=np.float64).reshape(3)
+    # A copy: the cached object's arrays are read-only, a worker's unpickled ones are not,
+    # and numba compiles a kernel once per read-only flag (a worker would compile
+    # the metric kernels on a first run that loads the shipped ones in process).
+    center = np.array(mass.center_of_mass, dtype=np.float64).reshape(3)
     r_max = float(mass.r_max)
     points, normals, mu, offsets = _stack_contacts(contacts)
 

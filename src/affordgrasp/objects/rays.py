@@ -112,7 +112,12 @@ class EmbreeRays:
         """(f, 3) float64 first vertex and (f, 3) unit normal of every face."""
         planes = getattr(self, "_planes", None)
         if planes is None:
-            planes = self._planes = (self._vertices[self._faces][:, 0, :], self._face_normals)
+            # writable C-contiguous copies: one signature of the compiled loop, whether the
+            # mesh's arrays are read-only (a cached object) or not
+            planes = self._planes = (
+                np.array(self._vertices[self._faces][:, 0, :], order="C"),
+                np.array(self._face_normals, dtype=np.float64, order="C"),
+            )
         return planes
 
     @property
