@@ -8,6 +8,7 @@ import sys
 
 from ..errors import InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
+from .common import add_robust_argument, robust_option
 
 
 def add_arguments(p) -> None:
@@ -86,6 +87,14 @@ def add_arguments(p) -> None:
         action="store_true",
         help="fingers the load can push open (default: non-backdrivable drives)",
     )
+    add_robust_argument(
+        p,
+        help="report the robust scores of the replayed rows beside their outcomes (the "
+        "report's AUC tables gain robust_hold, robust_fc, ...): a dataset generated with "
+        "--robust K keeps its columns; a plain dataset has them computed for the replayed "
+        "rows from their stored pregrasps (K perturbed copies, docs/robust.md). Default 0: "
+        "the dataset's robust columns are reported when it has them, none computed",
+    )
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
     p.add_argument(
         "--coacd-threshold",
@@ -140,6 +149,7 @@ def run(args, out) -> None:
     from .common import check_output_dir
 
     settings = _settings(args)
+    robust = robust_option(args)
     check_output_dir(args.out, "--out")
     if args.report:
         check_output_dir(args.report, "--report")
@@ -159,6 +169,7 @@ def run(args, out) -> None:
             max_per_object=args.max_per_object,
             progress=lambda total: out.progress("validating", total),
             log_message=lambda m: print(m, file=sys.stderr) if not out.json_mode else None,
+            robust=robust,
         )
     except KeyboardInterrupt:
         print(
