@@ -80,6 +80,15 @@ def add_arguments(p) -> None:
         default=None,
         help=f"jaw force, N (default {d.grip_force})",
     )
+    p.add_argument(
+        "--friction-margin",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="widen the material table's friction cones by this angle in the engine, degrees "
+        f"(default {d.friction_margin_deg:g}: the convex parts' normal error; dgb 0, it "
+        "sets μ 0.6)",
+    )
     p.add_argument("--timestep", type=float, default=None, help=f"s (default {d.timestep})")
     p.add_argument("--gravity", action="store_true", help="gravity on (-z of the hand frame)")
     p.add_argument(
@@ -116,6 +125,8 @@ def _settings(args) -> PhysicsSettings:
         for name in ("load_factor", "density", "grip_torque", "grip_force", "timestep")
         if getattr(args, name) is not None
     }
+    if args.friction_margin is not None:
+        given["friction_margin_deg"] = args.friction_margin
     return protocol_settings(
         args.protocol,
         gravity=args.gravity,
