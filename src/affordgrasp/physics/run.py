@@ -596,10 +596,11 @@ def validate_rows(
         values = [o[name] for o in outcomes]
         table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
     if robust is not None and robust.enabled:
-        for name, values in robust_of_rows(rows, hand, objects, robust, settings, soft).items():
+        scores = robust_of_rows(rows, hand, objects, robust, settings, soft)
+        for name, column in scores.items():
             if name in table.column_names:
                 table = table.drop_columns([name])
-            table = table.append_column(name, pa.array(values, type=pa.float64()))
+            table = table.append_column(name, pa.array(column, type=pa.float64()))
     return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 
