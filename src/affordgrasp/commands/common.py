@@ -328,6 +328,38 @@ def check_output_file(path: str, option: str) -> None:
     check_output_path(path, option, kind="file")
 
 
+def check_mesh_files(args) -> None:
+    """Refuse ``--mesh`` paths that are not mesh files, before any work.
+
+    They are read only when a dataset object is not a built-in family, so without this
+    check a mistyped path would be ignored in silence.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With a ``mesh`` list (``show``, ``plots``); other commands pass through.
+
+    Raises
+    ------
+    InputError
+        Naming the path and what is wrong with it.
+    """
+    import os
+
+    from ..objects.loading import SUPPORTED_EXTENSIONS
+
+    for path in getattr(args, "mesh", None) or []:
+        if not os.path.isfile(path):
+            what = "is a directory" if os.path.isdir(path) else "does not exist"
+            raise InputError(f"--mesh {path!r} {what}; give the mesh file of a dataset object")
+        ext = os.path.splitext(path)[1].lower()
+        if ext not in SUPPORTED_EXTENSIONS:
+            raise InputError(
+                f"--mesh {path!r} is not a mesh file ({ext or 'no extension'}); supported "
+                f"formats: {', '.join(SUPPORTED_EXTENSIONS)}"
+            )
+
+
 def check_output_dir(path: str, option: str) -> None:
     """Refuse an output directory that cannot be created or written, before any work.
 
