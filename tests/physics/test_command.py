@@ -132,3 +132,20 @@ def test_physics_robust_computes_the_columns_a_robust_dataset_holds(tiny_dataset
     # Another K than the dataset's is refused, naming the dataset's.
     code, _, stderr = _run(capsys, robust_ds, "--out", tmp_path / "x", "--robust", 3)
     assert code == 2 and "--robust 2" in stderr
+
+
+def test_robust_of_rows_refuses_rows_that_do_not_simulate_to_their_grasp(tiny_dataset):
+    """A stored grasp that its pregrasp no longer gives is refused, not scored as another."""
+    import numpy as np
+    import pyarrow as pa
+
+    from affordgrasp.errors import DatasetError
+    from affordgrasp.physics.run import _plan_rows, robust_of_rows
+
+    rows, manifest = _plan_rows(tiny_dataset, ("grasped",), None, 2)
+    poses = np.asarray(rows.column("hand_pose").to_pylist(), dtype=float)
+    poses[0, 3] += 1e-4  # 0.1 mm off along x
+    i = rows.column_names.index("hand_pose")
+    moved = rows.set_column(i, "hand_pose", pa.array(poses.tolist(), rows.schema.field(i).type))
+    with pytest.raises(DatasetError, match="stored grasp"):
+        robust_of_rows(moved, "parallel_jaw", manifest["objects"], robust=2)

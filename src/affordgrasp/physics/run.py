@@ -474,7 +474,7 @@ def robust_of_rows(
     rows: pa.Table,
     hand: Hand | str,
     objects: list[dict],
-    robust: RobustSettings,
+    robust: RobustSettings | int,
     settings: PhysicsSettings | None = None,
     soft: bool = False,
 ) -> dict[str, np.ndarray]:
@@ -492,8 +492,8 @@ def robust_of_rows(
         The dataset's hand.
     objects : list of dict
         The dataset manifest's object entries.
-    robust : RobustSettings
-        K >= 1 and the perturbations.
+    robust : RobustSettings or int
+        K >= 1 and the perturbations (an int: K with the default perturbations).
     settings : PhysicsSettings, optional
         Only to find the objects already loaded for the replay.
     soft : bool
@@ -502,7 +502,7 @@ def robust_of_rows(
     Returns
     -------
     dict of str to (n,) float64 ndarray
-        :func:`affordgrasp.robust.robust_column_names` of ``robust.tasks``, in row order.
+        :func:`affordgrasp.robust.robust_column_names` of the settings' tasks, in row order.
 
     Raises
     ------
@@ -513,11 +513,14 @@ def robust_of_rows(
     from ..hands import get_hand
     from ..pipeline import evaluate_inputs
 
+    wanted = robust_settings(robust)
+    if wanted is None:
+        raise InputError("robust scores need K >= 1 copies per grasp, got K = 0")
     hand = get_hand(hand)
     settings = settings or PhysicsSettings()
     by_name = {o["name"]: o for o in objects}
     names = np.asarray(rows.column("object").to_pylist(), dtype=object)
-    out = {c: np.full(len(names), np.nan) for c in robust_column_names(robust.tasks)}
+    out = {c: np.full(len(names), np.nan) for c in robust_column_names(wanted.tasks)}
     for name in dict.fromkeys(names.tolist()):
         idx = np.flatnonzero(names == name)
         sub = rows.take(pa.array(idx, type=pa.int64()))
@@ -525,7 +528,7 @@ def robust_of_rows(
         use_dir = np.asarray(sub.column("use_dir").to_pylist(), dtype=np.float64)
         obj, _parts = _entry_object(by_name[name], settings)
         table = evaluate_inputs(
-            obj, p0, use_dir.reshape(len(idx), -1), hand=hand, soft=soft, robust=robust
+            obj, p0, use_dir.reshape(len(idx), -1), hand=hand, soft=soft, robust=wanted
         ).table
         again = np.asarray(table.column("hand_pose").to_pylist(), dtype=np.float64)
         stored = np.asarray(sub.column("hand_pose").to_pylist(), dtype=np.float64)
