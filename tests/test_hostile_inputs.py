@@ -596,6 +596,16 @@ COMMAND_CASES = [
         "is not a mesh file",
     ),
     (
+        "evaluate --out a .csv name",
+        lambda d: ["evaluate", "knife", "--samples", "2", "--out", "rows.csv"],
+        "must end in .parquet",
+    ),
+    (
+        "model-eval --task unknown",
+        lambda d: ["model-eval", "default", "nodata", "--task", "nosuch"],
+        "unknown task 'nosuch'",
+    ),
+    (
         "plots --mesh a missing file",
         lambda d: ["plots", "nodata", "--mesh", "no.stl", "-o", "p"],
         "does not exist",
