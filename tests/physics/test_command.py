@@ -130,8 +130,9 @@ def test_physics_robust_computes_the_columns_a_robust_dataset_holds(tiny_dataset
         np.testing.assert_array_equal(a, b, err_msg=c)
     assert np.isfinite(computed.column("robust_fc").to_numpy()).all()
     # A resume with another K is refused (the plan records the computed robust settings).
-    code, _, stderr = _run(capsys, tiny_dataset, "--out", tmp_path / "computed", "--robust", 3)
-    assert code == 2 and "robust" in stderr
+    again = [*common[:-1], 3]
+    code, _, stderr = _run(capsys, tiny_dataset, "--out", tmp_path / "computed", *again)
+    assert code == 2 and "robust {" in stderr and "max_per_object" not in stderr
     # Another K than the dataset's is refused, naming the dataset's.
     code, _, stderr = _run(capsys, robust_ds, "--out", tmp_path / "x", "--robust", 3)
     assert code == 2 and "--robust 2" in stderr
