@@ -29,8 +29,9 @@ import pyarrow.parquet as pq
 
 from .. import __version__
 from ..columns import METRIC_COLUMNS
-from ..errors import DatasetError, bad_parameter
+from ..errors import DatasetError, InputError, bad_parameter
 from ..hands.model import Hand
+from ..robust import RobustSettings, manifest_robust, robust_column_names, robust_settings
 from ..worker_lifetime import die_with_parent
 from ..writing import atomic_write
 from .settings import PhysicsSettings
@@ -45,7 +46,8 @@ MANIFEST = "_physics.json"
 DEFAULT_SHARD_SIZE = 128
 
 KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
-STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal")
+# The grasp state, read to replay it (and, for ``robust``, to re-evaluate it), not written.
+STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal", "p0", "use_dir")
 # The dataset's numeric metric columns (not the text epsilon_reason) and the contact count,
 # carried into the outcome table for the report.
 REPORTED_METRICS = (*(c for c in METRIC_COLUMNS if c != "epsilon_reason"), "n_contacts")
@@ -66,6 +68,9 @@ class PhysicsSummary:
     elapsed_s : float
         Wall time, s.
     workers : int
+    robust : dict or None
+        With ``robust``: ``{"copies": K, "source": "dataset"}`` (the dataset's columns) or
+        ``"computed"`` (for the replayed rows); None without.
     """
 
     directory: str
@@ -79,6 +84,8 @@ class PhysicsSummary:
     busy_s: float = 0.0  # seconds the workers spent validating (sum over workers)
     cpu_s: float = 0.0  # CPU seconds the workers spent validating (fair on a shared machine)
     hold_ok: dict = field(default_factory=dict)  # object -> [held, validated]
+    # The robust columns reported: None, or {"copies": K, "source": "dataset" | "computed"}.
+    robust: dict | None = None
 
     @property
     def validations_per_s(self) -> float:
@@ -113,6 +120,7 @@ class PhysicsSummary:
             "worker_wall_s": self.busy_s,
             "worker_cpu_s": self.cpu_s,
             "hold_ok": self.hold_ok,
+            "robust": self.robust,
         }
 
 
@@ -186,6 +194,7 @@ _PLAN_KEYS = (
     "rows",
     "shard_size",
     "settings_digest",
+    "robust",
 )
 
 
@@ -247,6 +256,7 @@ def run_physics(
     max_per_object: int | None = None,
     progress: Callable | None = None,
     log_message: Callable[[str], None] | None = None,
+    robust: RobustSettings | int | None = None,
 ) -> PhysicsSummary:
     """Validate the grasps of a dataset in MuJoCo; write the outcomes as Parquet shards.
 
@@ -272,10 +282,22 @@ def run_physics(
         ``progress(total)`` is a context manager yielding ``advance(n)``.
     log_message : callable, optional
         Receives one-line messages.
+    robust : RobustSettings or int, optional
+        Report the robust scores (:mod:`affordgrasp.robust`) of the replayed rows beside
+        their outcomes: a dataset generated with the same K keeps its ``robust_*`` columns;
+        a dataset without robust columns has them computed for the replayed rows (from each
+        row's stored pregrasp, K perturbed copies, the dataset's hand and contact model).
+        None or 0: the dataset's ``robust_*`` columns travel when it has them, nothing is
+        computed.
 
     Returns
     -------
     PhysicsSummary
+
+    Raises
+    ------
+    InputError
+        For a dataset whose robust columns are of another K.
     """
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
@@ -296,6 +318,8 @@ def run_physics(
     plan = _plan_manifest(
         dataset_dir, manifest, settings, statuses, objects, max_per_object, n, shard_size
     )
+    compute = _robust_plan(dataset_dir, manifest, robust_settings(robust))
+    plan["robust"] = None if compute is None else {"source": "computed", **compute.to_dict()}
     _prepare_out(out, plan)
     from ..dataset.reading import manifest_hand
 
@@ -313,8 +337,10 @@ def run_physics(
         _entry_object(entry, settings)
     started = time.perf_counter()
     summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
+    soft = bool(manifest.get("soft", False))
     jobs = [
-        (str(out), k, rows.slice(s, e - s), hand, plan["objects"], settings) for k, s, e in pending
+        (str(out), k, rows.slice(s, e - s), hand, plan["objects"], settings, compute, soft)
+        for k, s, e in pending
     ]
     total = sum(e - s for _, s, e in pending)
     with progress(total) if progress else _null_progress() as advance:
@@ -337,6 +363,12 @@ def run_physics(
                     raise
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
+    wanted = robust_settings(robust)
+    if wanted is not None:
+        summary.robust = {
+            "copies": wanted.copies,
+            "source": "dataset" if compute is None else "computed",
+        }
     return summary
 
 
@@ -418,7 +450,107 @@ def _scene(hand_spec: str, name: str, source: str, mesh_hash: str, settings: Phy
     return build_scene(hand_from_dict(json.loads(hand_spec)), obj, settings, parts=parts)
 
 
-def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], settings) -> pa.Table:
+def _robust_plan(dataset_dir, manifest: dict, robust: RobustSettings | None):
+    """The robust settings to compute for the replayed rows, or None (read or none wanted).
+
+    A dataset generated with ``--robust K`` already holds the columns of K copies: asking
+    for K reads them, another K is refused (its columns would not be the ones asked for).
+    """
+    if robust is None:
+        return None
+    there = manifest_robust(manifest)
+    if there is None:
+        return robust
+    if there.copies != robust.copies:
+        raise InputError(
+            f"--robust {robust.copies}: the dataset in {str(dataset_dir)!r} has robust "
+            f"columns of K = {there.copies} copies; pass --robust {there.copies} (they are "
+            "read) or replay a dataset without robust columns (they are computed)"
+        )
+    return None
+
+
+def robust_of_rows(
+    rows: pa.Table,
+    hand: Hand | str,
+    objects: list[dict],
+    robust: RobustSettings | int,
+    settings: PhysicsSettings | None = None,
+    soft: bool = False,
+) -> dict[str, np.ndarray]:
+    """The robust columns of dataset rows, re-evaluated from their stored pregrasps.
+
+    Each object's rows are simulated again from ``p0`` and ``use_dir`` with K perturbed
+    copies (:func:`affordgrasp.pipeline.evaluate_inputs`); the copies depend on (seed, k)
+    only, so the values equal those a ``generate --robust K`` run writes for the same rows.
+
+    Parameters
+    ----------
+    rows : pyarrow.Table
+        Dataset rows with ``object``, ``p0``, ``use_dir`` and ``hand_pose``.
+    hand : Hand or str
+        The dataset's hand.
+    objects : list of dict
+        The dataset manifest's object entries.
+    robust : RobustSettings or int
+        K >= 1 and the perturbations (an int: K with the default perturbations).
+    settings : PhysicsSettings, optional
+        Only to find the objects already loaded for the replay.
+    soft : bool
+        The dataset's contact model (soft-finger contacts).
+
+    Returns
+    -------
+    dict of str to (n,) float64 ndarray
+        :func:`affordgrasp.robust.robust_column_names` of the settings' tasks, in row order.
+
+    Raises
+    ------
+    DatasetError
+        When a row's grasp does not come out of its pregrasp again (the dataset was made by
+        another version of the simulator), so its robust scores would describe another grasp.
+    """
+    from ..hands import get_hand
+    from ..pipeline import evaluate_inputs
+
+    wanted = robust_settings(robust)
+    if wanted is None:
+        raise InputError("robust scores need K >= 1 copies per grasp, got K = 0")
+    hand = get_hand(hand)
+    settings = settings or PhysicsSettings()
+    by_name = {o["name"]: o for o in objects}
+    names = np.asarray(rows.column("object").to_pylist(), dtype=object)
+    out = {c: np.full(len(names), np.nan) for c in robust_column_names(wanted.tasks)}
+    for name in dict.fromkeys(names.tolist()):
+        idx = np.flatnonzero(names == name)
+        sub = rows.take(pa.array(idx, type=pa.int64()))
+        p0 = np.asarray(sub.column("p0").to_pylist(), dtype=np.float64).reshape(-1, 6)
+        use_dir = np.asarray(sub.column("use_dir").to_pylist(), dtype=np.float64)
+        obj, _parts = _entry_object(by_name[name], settings)
+        table = evaluate_inputs(
+            obj, p0, use_dir.reshape(len(idx), -1), hand=hand, soft=soft, robust=wanted
+        ).table
+        again = np.asarray(table.column("hand_pose").to_pylist(), dtype=np.float64)
+        stored = np.asarray(sub.column("hand_pose").to_pylist(), dtype=np.float64)
+        if again.shape != stored.shape or not np.allclose(again, stored, rtol=0, atol=1e-9):
+            raise DatasetError(
+                f"rows of {name!r} do not simulate to their stored grasp again (the dataset "
+                "was made by another version of the grasp simulator), so robust scores "
+                "computed now would describe other grasps; regenerate it with --robust K"
+            )
+        for c in out:
+            out[c][idx] = table.column(c).to_numpy(zero_copy_only=False)
+    return out
+
+
+def validate_rows(
+    rows: pa.Table,
+    hand: Hand | str,
+    objects: list[dict],
+    settings,
+    robust: RobustSettings | None = None,
+    soft: bool = False,
+) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
     Parameters
@@ -431,6 +563,10 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     objects : list of dict
         The dataset manifest's object entries.
     settings : PhysicsSettings
+    robust : RobustSettings, optional
+        Also compute the rows' robust columns (:func:`robust_of_rows`) and add them.
+    soft : bool
+        The dataset's contact model (for ``robust``).
 
     Returns
     -------
@@ -462,6 +598,12 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     for name in outcomes[0] if outcomes else ():
         values = [o[name] for o in outcomes]
         table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
+    if robust is not None and robust.enabled:
+        scores = robust_of_rows(rows, hand, objects, robust, settings, soft)
+        for name, column in scores.items():
+            if name in table.column_names:
+                table = table.drop_columns([name])
+            table = table.append_column(name, pa.array(column, type=pa.float64()))
     return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 
@@ -482,7 +624,7 @@ def _outcome_type(name: str) -> pa.DataType:
     return pa.float64()
 
 
-def validate_shard(out, k, rows, hand, objects, settings) -> dict:
+def validate_shard(out, k, rows, hand, objects, settings, robust=None, soft=False) -> dict:
     """Validate one shard's rows and write its Parquet file atomically.
 
     Parameters
@@ -491,7 +633,7 @@ def validate_shard(out, k, rows, hand, objects, settings) -> dict:
         The run's directory.
     k : int
         Shard index.
-    rows, hand, objects, settings
+    rows, hand, objects, settings, robust, soft
         As for :func:`validate_rows`.
 
     Returns
@@ -500,7 +642,7 @@ def validate_shard(out, k, rows, hand, objects, settings) -> dict:
         ``rows``, simulation ``steps``, wall ``seconds`` and ``cpu_seconds``.
     """
     started, cpu = time.perf_counter(), time.process_time()
-    table = validate_rows(rows, hand, objects, settings)
+    table = validate_rows(rows, hand, objects, settings, robust, soft)
     seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
     path = shard_path(Path(out), k)
     meta = {b"affordgrasp_version": __version__.encode(), b"physics_settings": b""}
