@@ -28,7 +28,11 @@ REQUIRED_COLUMNS = ("object", "sample", "seed", "hand_pose", "joints")
 
 
 def open_dataset(
-    directory: str | os.PathLike, *, loose: bool = False, verify: bool = True
+    directory: str | os.PathLike,
+    *,
+    loose: bool = False,
+    verify: bool = True,
+    manifest: dict | None = None,
 ) -> pads.Dataset:
     """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order).
 
@@ -43,6 +47,9 @@ def open_dataset(
     verify : bool
         Check every shard against the checksum recorded when it was written (reads each
         file once per process; see docs/dataset.md for the cost).
+    manifest : dict, optional
+        The directory's manifest when already read (:class:`~affordgrasp.dataset.handle.Dataset`
+        passes its own); read here otherwise.
 
     Returns
     -------
@@ -57,7 +64,7 @@ def open_dataset(
     from ..schema import dataset_schema
 
     try:
-        manifest = read_manifest(directory)
+        manifest = read_manifest(directory) if manifest is None else manifest
     except DatasetError:
         if not loose:
             raise
@@ -226,7 +233,33 @@ def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -
     """
     if not wanted:
         return None
-    names = dataset_objects(directory)
+    return match_objects(dataset_objects(directory), wanted, directory)
+
+
+def match_objects(
+    names: Sequence[str], wanted: Sequence[str], where: str | os.PathLike
+) -> list[str]:
+    """The names among a dataset's objects that ``wanted`` means (``knife`` is ``knife:0``).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The dataset's objects.
+    wanted : sequence of str
+        Names, families or mesh paths.
+    where : path
+        The dataset, named in the error.
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    DatasetError
+        For a name that matches nothing (the message names the objects available).
+    """
+    names = list(names)
     chosen = []
     for w in wanted:
         w = w.strip()
@@ -238,7 +271,7 @@ def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -
             chosen.append(os.path.basename(w))
         else:
             raise DatasetError(
-                f"object {w!r} is not in dataset {str(directory)!r}; it holds: {', '.join(names)}"
+                f"object {w!r} is not in dataset {str(where)!r}; it holds: {', '.join(names)}"
             )
     return chosen
 

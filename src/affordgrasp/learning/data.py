@@ -1,9 +1,9 @@
 """Learning data from a generated dataset: inputs (p0, d, depth), targets, splits.
 
 A sample's depth image D(p0, O) is read from the dataset's ``depth_mm`` column when it was
-generated with ``--depth``; otherwise it is rendered from the object (a pure function of p0
-and the mesh; the mesh hash is checked against the manifest), so a dataset without images
-is as good for learning, only slower to load.
+generated with ``--depth``; otherwise it is rendered from the object the dataset resolves
+(:meth:`affordgrasp.dataset.handle.Dataset.object`: a pure function of p0 and the mesh, whose
+hash is checked), so a dataset without images is as good for learning, only slower to load.
 
 Splits are by object instance (conventions: Vision): the objects of the test (and
 validation) set never appear in training, and the families (categories) overlap. A split by
@@ -16,11 +16,11 @@ import logging
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
+from ..dataset.handle import Dataset, DatasetLike
 from ..errors import DatasetError, InputError
 from .targets import Target, make_target, target_rows, target_values
 
@@ -51,7 +51,7 @@ class Samples:
     depth_mm : (n, size, size) uint16 ndarray or None
         Depth images, mm; None until loaded (:func:`load_depth`).
     meta : dict
-        Where the rows come from (``directory``).
+        Where the rows come from (``directory``, and the opened ``dataset``).
     """
 
     object: np.ndarray
@@ -91,16 +91,14 @@ class Samples:
         )
 
 
-def _families(manifest: dict) -> dict[str, str]:
-    return {o["name"]: o.get("category") or o["name"].split(":")[0] for o in manifest["objects"]}
-
-
-def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None = None):
+def read_rows(
+    directory: DatasetLike, target: str | Target, *, objects: Sequence[str] | None = None
+):
     """The rows of a dataset a target is defined on, with their inputs and target values.
 
     Parameters
     ----------
-    directory : path
+    directory : path or Dataset
         A dataset generated with metrics.
     target : str or Target
         ``"viable"``, ``"hold_effort_sum"``, a metric column or ``"task:NAME"``; a Target
@@ -122,11 +120,9 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
     InputError
         When the target is not a column of the dataset.
     """
-    from ..dataset.layout import read_manifest
-    from ..dataset.reading import read_dataset
-
-    manifest = read_manifest(directory)
-    if not manifest.get("metrics", True):
+    dataset = Dataset.open(directory)
+    directory = dataset.directory
+    if not dataset.metrics:
         raise DatasetError(
             f"dataset {str(directory)!r} was generated with --no-metrics; learning needs "
             "the metric columns (generate it without --no-metrics)"
@@ -138,7 +134,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
     if name.startswith("task:"):
         columns = None  # a task may read any metric column
     try:
-        table = read_dataset(directory, columns=columns, objects=objects)
+        table = dataset.read(columns=columns, objects=objects)
     except Exception as exc:  # noqa: BLE001 - an unknown column name is bad input
         if "No match for FieldRef" in str(exc) or "not in schema" in str(exc):
             raise InputError(
@@ -159,7 +155,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
         else:
             target = make_target(name)
     mask = target_rows(target, table)
-    families = _families(manifest)
+    families = dataset.families
     obj = np.asarray(table.column("object").to_pylist(), dtype=object)[mask]
     samples = Samples(
         object=obj,
@@ -168,7 +164,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
         p0=_fixed(table, "p0", 6)[mask],
         use_dir=_fixed(table, "use_dir", 2)[mask],
         y=values[mask],
-        meta={"directory": str(directory)},
+        meta={"directory": str(directory), "dataset": dataset},
     )
     return samples, target
 
@@ -178,7 +174,7 @@ def _fixed(table, name: str, width: int) -> np.ndarray:
     return np.asarray(col.flatten(), dtype=np.float64).reshape(-1, width)
 
 
-def load_depth(samples: Samples, directory=None) -> np.ndarray:
+def load_depth(samples: Samples, directory: DatasetLike | None = None) -> np.ndarray:
     """The depth images of the samples, read from the dataset or rendered.
 
     Stored images are read in streamed batches keeping only the chosen rows, so memory is
@@ -187,30 +183,27 @@ def load_depth(samples: Samples, directory=None) -> np.ndarray:
     Parameters
     ----------
     samples : Samples
-    directory : path, optional
-        The dataset; default: ``samples.meta["directory"]``.
+    directory : path or Dataset, optional
+        The dataset; default: the one the samples were read from (``samples.meta``).
 
     Returns
     -------
     (n, 128, 128) uint16 ndarray
         Depth, mm, 0 for no return.
     """
-    from ..dataset.layout import read_manifest
-
-    directory = directory or samples.meta.get("directory")
-    if directory is None:
+    source = directory or samples.meta.get("dataset") or samples.meta.get("directory")
+    if source is None:
         raise InputError("samples without a dataset directory: pass directory=")
-    manifest = read_manifest(directory)
-    if manifest.get("depth"):
-        images = _read_stored_depth(directory, samples)
+    dataset = Dataset.open(source)
+    if dataset.depth:
+        images = _read_stored_depth(dataset, samples)
     else:
-        images = render_samples_depth(samples, manifest)
+        images = render_samples_depth(samples, dataset)
     samples.depth_mm = images
     return images
 
 
-def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
-    from ..dataset.reading import iter_batches
+def _read_stored_depth(dataset: Dataset, samples: Samples) -> np.ndarray:
     from ..vision.depth import decode_depth_column, depth_to_mm
 
     want: dict[tuple[str, int], int] = {
@@ -219,8 +212,8 @@ def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
     out = None
     found = 0
     objects = sorted(set(samples.object))
-    for batch in iter_batches(
-        directory, columns=["object", "sample", "depth_mm"], objects=objects, batch_size=4096
+    for batch in dataset.batches(
+        columns=["object", "sample", "depth_mm"], objects=objects, batch_size=4096
     ):
         names = batch.column(0).to_pylist()
         ids = batch.column(1).to_numpy()
@@ -240,14 +233,14 @@ def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
     return out if out is not None else np.zeros((0, 128, 128), dtype=np.uint16)
 
 
-def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
-    """Render D(p0, O) of every sample from its object (resolved as the manifest says).
+def render_samples_depth(samples: Samples, dataset: DatasetLike) -> np.ndarray:
+    """Render D(p0, O) of every sample from its object (as the dataset resolves it).
 
     Parameters
     ----------
     samples : Samples
-    manifest : dict
-        The dataset's manifest (objects, sources and mesh hashes).
+    dataset : path or Dataset
+        The dataset the samples come from (:meth:`Dataset.object` finds each object).
 
     Returns
     -------
@@ -259,64 +252,25 @@ def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
     DatasetError
         When an object's mesh is gone or is not the one the dataset was made with.
     """
-    from ..vision.depth import depth_to_mm
+    from ..vision.depth import depth_to_mm, renderer_for
 
+    dataset = Dataset.open(dataset)
     out = np.zeros((len(samples), 128, 128), dtype=np.uint16)
     by_object: dict[str, list[int]] = defaultdict(list)
     for i, o in enumerate(samples.object):
         by_object[o].append(i)
-    entries = {o["name"]: o for o in manifest["objects"]}
     for name, rows in by_object.items():
-        renderer = _renderer_of(entries.get(name), name)
+        try:
+            renderer = renderer_for(dataset.object(name))
+        except DatasetError as exc:
+            raise DatasetError(
+                f"{exc}; or generate the dataset with --depth to keep its images"
+            ) from None
         idx = np.asarray(rows)
         for lo in range(0, len(idx), 1024):
             part = idx[lo : lo + 1024]
             out[part] = depth_to_mm(renderer.render(samples.p0[part]))
     return out
-
-
-def _renderer_of(entry: dict | None, name: str):
-    from ..vision.depth import renderer_for
-
-    return renderer_for(object_of(entry, name))
-
-
-def object_of(entry: dict | None, name: str):
-    """The object a dataset's manifest entry names, checked against its mesh hash.
-
-    Parameters
-    ----------
-    entry : dict or None
-        The manifest's entry of the object (None: not in the manifest).
-    name : str
-        The object's name in the dataset.
-
-    Returns
-    -------
-    GraspObject
-
-    Raises
-    ------
-    DatasetError
-        When the object is not in the manifest, or its mesh is gone or changed.
-    """
-    from ..objects import load_object
-
-    if entry is None:
-        raise DatasetError(f"object {name!r} is not in the dataset's manifest")
-    spec = name if entry.get("source", "family") == "family" else entry["source"]
-    if spec != name and not Path(spec).exists():
-        raise DatasetError(
-            f"the mesh of {name!r} ({spec}) is gone and the dataset has no depth images; "
-            "generate it with --depth or restore the mesh file"
-        )
-    obj = load_object(spec)
-    if entry.get("mesh_hash") and obj.mesh_hash != entry["mesh_hash"]:
-        raise DatasetError(
-            f"object {name!r} resolves to a different mesh than the dataset's; "
-            "generate the dataset with --depth to keep its images"
-        )
-    return obj
 
 
 # ------------------------------------------------------------------------------------ splits

@@ -11,7 +11,6 @@ a directory with another plan refuses and says what differs.
 
 from __future__ import annotations
 
-import functools
 import json
 import logging
 import multiprocessing
@@ -29,6 +28,7 @@ import pyarrow.parquet as pq
 
 from .. import __version__
 from ..columns import METRIC_COLUMNS
+from ..dataset.handle import Dataset
 from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
 from ..worker_lifetime import die_with_parent
@@ -116,26 +116,20 @@ class PhysicsSummary:
         }
 
 
-def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table, dict]:
-    from ..dataset.layout import read_manifest
-    from ..dataset.reading import read_dataset, select_objects
-
-    manifest = read_manifest(dataset_dir)
-    if not manifest.get("metrics", True):
+def _plan_rows(dataset, statuses, objects, max_per_object) -> pa.Table:
+    if not dataset.metrics:
         raise DatasetError(
-            f"dataset {str(dataset_dir)!r} was generated with --no-metrics; the physics "
+            f"dataset {str(dataset.directory)!r} was generated with --no-metrics; the physics "
             "report compares metrics with outcomes: generate it with metrics"
         )
-    from ..dataset.reading import open_dataset
-
-    chosen = select_objects(dataset_dir, objects)
+    chosen = dataset.select(objects)
     # Robust metrics (``robust_*``) travel to the report when the dataset has them.
-    robust = [c for c in open_dataset(dataset_dir).schema.names if c.startswith("robust_")]
+    robust = [c for c in dataset.arrow().schema.names if c.startswith("robust_")]
     columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS, *robust]
-    table = read_dataset(dataset_dir, columns=columns, objects=chosen)
+    table = dataset.read(columns=columns, objects=chosen)
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
     keep = np.isin(status, list(statuses))
-    order_of = {o["name"]: o["index"] for o in manifest["objects"]}
+    order_of = {name: e["index"] for name, e in dataset.entries.items()}
     obj_index = np.array([order_of[n] for n in table.column("object").to_pylist()], dtype=np.int64)
     sample = table.column("sample").to_numpy()
     idx = np.flatnonzero(keep)
@@ -149,20 +143,20 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
                 counts[o] = counts.get(o, 0) + 1
                 picked.append(int(i))
         idx = np.array(picked, dtype=np.int64)
-    return table.take(pa.array(idx, type=pa.int64())), manifest
+    return table.take(pa.array(idx, type=pa.int64()))
 
 
-def _plan_manifest(dataset_dir, manifest, settings, statuses, objects, max_per_object, n, size):
+def _plan_manifest(dataset, settings, statuses, objects, max_per_object, n, size):
     return {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "affordgrasp_version": __version__,
-        "dataset": str(Path(dataset_dir).resolve()),
-        "dataset_seed": manifest["seed"],
-        "hand": manifest["hand"],
+        "dataset": str(dataset.directory.resolve()),
+        "dataset_seed": dataset.seed,
+        "hand": dataset.manifest["hand"],
         "objects": [
             {"name": o["name"], "mesh_hash": o["mesh_hash"], "source": o["source"]}
-            for o in manifest["objects"]
+            for o in dataset.entries.values()
         ],
         "statuses": list(statuses),
         "object_filter": list(objects) if objects else None,
@@ -236,7 +230,7 @@ def _shard_done(path: Path, rows: int) -> bool:
 
 
 def run_physics(
-    dataset_dir: str | os.PathLike,
+    dataset_dir: str | os.PathLike | Dataset,
     out: str | os.PathLike,
     *,
     settings: PhysicsSettings | None = None,
@@ -252,8 +246,10 @@ def run_physics(
 
     Parameters
     ----------
-    dataset_dir : path
-        A dataset written by ``affordgrasp generate``.
+    dataset_dir : path or Dataset
+        A dataset written by ``affordgrasp generate``: its rows are replayed with its hand
+        on its objects (:meth:`~affordgrasp.dataset.handle.Dataset.object`, mass properties
+        included: a dataset made with ``--materials`` is replayed with them).
     out : path
         The output directory (a finished shard is skipped when run again).
     settings : PhysicsSettings, optional
@@ -286,35 +282,52 @@ def run_physics(
     if workers <= 0:
         raise bad_parameter("workers", f"must be a positive integer, got {workers}")
     out = Path(out)
-    rows, manifest = _plan_rows(dataset_dir, statuses, objects, max_per_object)
+    dataset = Dataset.open(dataset_dir)
+    rows = _plan_rows(dataset, statuses, objects, max_per_object)
     n = rows.num_rows
     if n == 0:
         raise DatasetError(
-            f"dataset {str(dataset_dir)!r} has no rows with status {', '.join(statuses)} to "
+            f"dataset {str(dataset.directory)!r} has no rows with status {', '.join(statuses)} to "
             "validate; generate more samples or choose other objects"
         )
-    plan = _plan_manifest(
-        dataset_dir, manifest, settings, statuses, objects, max_per_object, n, shard_size
-    )
+    plan = _plan_manifest(dataset, settings, statuses, objects, max_per_object, n, shard_size)
     _prepare_out(out, plan)
-    from ..dataset.reading import manifest_hand
-
-    hand = manifest_hand(manifest)  # the dataset's own hand, custom ones included
+    hand = dataset.hand  # the dataset's own hand, custom ones included
     for stale in out.glob(".part-*.tmp-*"):
         stale.unlink(missing_ok=True)
     shards = [(k, s, min(s + shard_size, n)) for k, s in enumerate(range(0, n, shard_size))]
     pending = [sh for sh in shards if not _shard_done(shard_path(out, sh[0]), sh[2] - sh[1])]
-    needed = {rows.column("object")[s].as_py() for _, s, _ in pending}
-    entries = [o for o in plan["objects"] if o["name"] in needed]
-    # Decompose each object once, here, so the workers read the cache.
-    for entry in entries:
+    needed = {
+        name
+        for _, s, e in pending
+        for name in set(rows.column("object").slice(s, e - s).to_pylist())
+    }
+    # Resolve and decompose each object once, here: the workers get its mesh and mass
+    # properties (as generate's do) and read the decomposition from the cache.
+    from ..dataset.engines import ObjectPayload
+
+    payloads = {}
+    for name in [o for o in dataset.objects if o in needed]:
         if log_message:
-            log_message(f"convex decomposition of {entry['name']} (cached after the first run)")
-        _entry_object(entry, settings)
+            log_message(f"convex decomposition of {name} (cached after the first run)")
+        obj = dataset.object(name)
+        convex_parts_of(obj, settings)
+        payloads[name] = ObjectPayload.from_object(obj)
     started = time.perf_counter()
     summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
     jobs = [
-        (str(out), k, rows.slice(s, e - s), hand, plan["objects"], settings) for k, s, e in pending
+        (
+            str(out),
+            k,
+            rows.slice(s, e - s),
+            hand,
+            {
+                name: payloads[name]
+                for name in set(rows.column("object").slice(s, e - s).to_pylist())
+            },
+            settings,
+        )
+        for k, s, e in pending
     ]
     total = sum(e - s for _, s, e in pending)
     with progress(total) if progress else _null_progress() as advance:
@@ -384,41 +397,51 @@ def _validate_job(job) -> dict:
     return validate_shard(*job)
 
 
-@functools.cache
-def _scene_object(name: str, source: str, mesh_hash: str, settings: PhysicsSettings):
-    """The GraspObject of a manifest entry (checked against its hash) and its parts.
+def convex_parts_of(obj, settings: PhysicsSettings) -> list:
+    """The convex parts an object collides as (cached on disk per mesh and settings).
 
-    Cached per process (the idiom of :mod:`affordgrasp.caching` for hashable values): the
-    decomposition depends on the settings, so they are part of the key.
+    Parameters
+    ----------
+    obj : GraspObject
+    settings : PhysicsSettings
+
+    Returns
+    -------
+    list of (vertices, faces)
     """
-    from ..objects import load_object
     from .decompose import convex_parts
 
-    obj = load_object(name if source == "family" else source)
-    if obj.mesh_hash != mesh_hash:
-        raise DatasetError(
-            f"object {name!r} resolves to another mesh than the dataset's "
-            f"(hash {obj.mesh_hash[:12]} here vs {mesh_hash[:12]} there); "
-            "validate on the machine and software version that generated it"
-        )
-    return obj, convex_parts(obj.mesh, obj.mesh_hash, settings)
+    return convex_parts(obj.mesh, obj.mesh_hash, settings)
 
 
-def _entry_object(entry: dict, settings: PhysicsSettings):
-    return _scene_object(entry["name"], entry["source"], entry["mesh_hash"], settings)
+# Per process: compiled scenes by (hand, object, mass, settings). A scene compiles in tens
+# of ms; a shard replays hundreds of rows on it.
+_SCENES: dict[tuple, object] = {}
 
 
-@functools.cache
-def _scene(hand_spec: str, name: str, source: str, mesh_hash: str, settings: PhysicsSettings):
-    """The compiled scene of a hand (its JSON document) and an object, one per process."""
-    from ..hands import hand_from_dict
+def _scene(hand: Hand, hand_key: str, obj, settings: PhysicsSettings):
+    """The compiled scene of a hand and an object, one per process."""
     from .scene import build_scene
 
-    obj, parts = _scene_object(name, source, mesh_hash, settings)
-    return build_scene(hand_from_dict(json.loads(hand_spec)), obj, settings, parts=parts)
+    mass = obj.mass  # None only for a payload of a uniform-density object
+    key = (
+        hand_key,
+        obj.name,
+        obj.mesh_hash,
+        bool(obj.materials),
+        None if mass is None else (float(mass.mass), tuple(np.round(mass.center_of_mass, 12))),
+        settings,
+    )
+    scene = _SCENES.get(key)
+    if scene is None:
+        if not hasattr(obj, "mesh"):  # an ObjectPayload: the object as the caller resolved it
+            obj = obj.build()
+        scene = build_scene(hand, obj, settings, parts=convex_parts_of(obj, settings))
+        _SCENES[key] = scene
+    return scene
 
 
-def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], settings) -> pa.Table:
+def validate_rows(rows: pa.Table, hand: Hand | str, objects: dict, settings) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
     Parameters
@@ -428,8 +451,9 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     hand : Hand or str
         The hand the dataset was generated with
         (:func:`affordgrasp.dataset.reading.dataset_hand`), or a registered name.
-    objects : list of dict
-        The dataset manifest's object entries.
+    objects : dict of str to GraspObject or ObjectPayload
+        The object of every name in ``rows``, as the dataset resolves it
+        (:meth:`~affordgrasp.dataset.handle.Dataset.object`).
     settings : PhysicsSettings
 
     Returns
@@ -441,7 +465,6 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
 
     hand = get_hand(hand)
     hand_key = json.dumps(hand_to_dict(hand), sort_keys=True)
-    by_name = {o["name"]: o for o in objects}
     names = rows.column("object").to_pylist()
     poses = rows.column("hand_pose").to_pylist()
     joints = rows.column("joints").to_pylist()
@@ -449,8 +472,7 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     uns = rows.column("use_normal").to_pylist()
     outcomes = []
     for i in range(rows.num_rows):
-        entry = by_name[names[i]]
-        scene = _scene(hand_key, entry["name"], entry["source"], entry["mesh_hash"], settings)
+        scene = _scene(hand, hand_key, objects[names[i]], settings)
         up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
         un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
         outcome = validate_grasp(
