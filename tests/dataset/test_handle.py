@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from affordgrasp.dataset import Dataset
-from affordgrasp.dataset.handle import object_specs, resolve_object
+from affordgrasp.dataset.handle import find_object, object_specs
 from affordgrasp.errors import DatasetError
 
 
@@ -105,9 +105,9 @@ def test_scan_variants_of_mesh_files_are_degraded_again():
 
 
 def test_resolve_object_of_loose_rows_and_bad_options(box_mesh):
-    obj = resolve_object("box.stl", source=None, meshes=[str(box_mesh)])
+    obj = find_object("box.stl", source=None, meshes=[str(box_mesh)])
     assert obj.name == "box.stl"
     with pytest.raises(DatasetError, match="generated on"):
-        resolve_object("box.stl", source=None)
+        find_object("box.stl", source=None)
     with pytest.raises(ValueError, match="changed_family"):
-        resolve_object("knife", changed_family="maybe")
+        find_object("knife", changed_family="maybe")

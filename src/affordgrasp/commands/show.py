@@ -272,7 +272,7 @@ def resolve_dataset_object(
     """The GraspObject a dataset's rows were simulated on, found by name and checked by hash.
 
     The rule of :meth:`affordgrasp.dataset.handle.Dataset.object` (for loose Parquet files,
-    :func:`~affordgrasp.dataset.handle.resolve_object` on what the rows say): the ``--mesh``
+    :func:`~affordgrasp.dataset.handle.find_object` on what the rows say): the ``--mesh``
     files of that name, the recorded mesh path, files of that name under the directory,
     then the name itself (a family or a path).
 
@@ -304,7 +304,7 @@ def resolve_dataset_object(
     DatasetError
         When no candidate loads with the right mesh; the message names ``--mesh``.
     """
-    from ..dataset.handle import resolve_object
+    from ..dataset.handle import find_object
 
     dataset = getattr(source, "dataset", None)
     scale = scale or {}
@@ -312,7 +312,7 @@ def resolve_dataset_object(
         obj = dataset.object(name, meshes=meshes, changed_family="accept", **scale)
         object_hash = object_hash or dataset.mesh_hash(name)
     else:  # loose Parquet files: the rows alone say which object they are
-        obj = resolve_object(
+        obj = find_object(
             name,
             source=None,
             mesh_hash=object_hash,

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Dataset", "DatasetLike", "object_specs", "resolve_object"]
+__all__ = ["Dataset", "DatasetLike", "find_object", "object_specs"]
 
 
 class Dataset:
@@ -249,7 +249,7 @@ class Dataset:
         units: str | None = None,
         changed_family: str = "error",
     ) -> GraspObject:
-        """The object whose rows these are (:func:`resolve_object` with the manifest's facts).
+        """The object whose rows these are (:func:`find_object` with the manifest's facts).
 
         A family is rebuilt from its name (scan-like variants included) with the dataset's
         mass properties (per-part materials when it was made with ``--materials``); a mesh
@@ -268,7 +268,7 @@ class Dataset:
         units : str, optional
             Length unit of a mesh file.
         changed_family : {"error", "accept"}
-            See :func:`resolve_object`.
+            See :func:`find_object`.
 
         Returns
         -------
@@ -286,7 +286,7 @@ class Dataset:
         key = (name, tuple(meshes), size_m, units, changed_family)
         if key not in self._objects:
             entry = self._entry(name)
-            self._objects[key] = resolve_object(
+            self._objects[key] = find_object(
                 name,
                 source=entry.get("source", "family"),
                 mesh_hash=entry.get("mesh_hash"),
@@ -493,7 +493,7 @@ def object_specs(
     return list(dict.fromkeys(specs))
 
 
-def resolve_object(
+def find_object(
     name: str,
     *,
     source: str | None = "family",

@@ -4,21 +4,25 @@ Plan (a pure function of the dataset and the options): the dataset's rows with a
 status (``grasped`` by default), objects in dataset order, samples in order, optionally the
 first ``max_per_object`` of each object, cut into shards of ``shard_size`` rows. Shard *k*
 is ``part-{k:05d}.parquet`` in the output directory, written atomically (temporary file,
-fsync, rename) by the worker that computed it; a run skips every shard already there with
-the planned row count. ``_physics.json`` records the plan and the settings; a run against
-a directory with another plan refuses and says what differs.
+fsync, rename) by the calling process when its rows come back; a run skips every shard
+already there with the planned row count. ``_physics.json`` records the plan and the
+settings; a run against a directory with another plan refuses and says what differs.
+
+The shards run on the engines that generate uses (:mod:`affordgrasp.dataset.engines`: this
+process, local worker processes or Ray, every core by default), with the same stopping
+behaviour: the caller resolves each object once (:meth:`~affordgrasp.dataset.handle.Dataset.object`)
+and decomposes it, and the workers get its mesh, mass properties and convex parts in the
+run's :class:`ReplayContext`.
 """
 
 from __future__ import annotations
 
 import json
 import logging
-import multiprocessing
 import os
-import signal
 import time
+import uuid
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,7 +35,6 @@ from ..columns import METRIC_COLUMNS
 from ..dataset.handle import Dataset
 from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
-from ..worker_lifetime import die_with_parent
 from ..writing import atomic_write
 from .settings import PhysicsSettings
 
@@ -234,7 +237,9 @@ def run_physics(
     out: str | os.PathLike,
     *,
     settings: PhysicsSettings | None = None,
-    workers: int | None = 1,
+    workers: int | None = None,
+    engine: str = "local",
+    address: str | None = None,
     shard_size: int = DEFAULT_SHARD_SIZE,
     objects: Sequence[str] | None = None,
     statuses: Sequence[str] = ("grasped",),
@@ -255,7 +260,12 @@ def run_physics(
     settings : PhysicsSettings, optional
         The protocol; the defaults when None.
     workers : int, optional
-        Processes.
+        Processes (local) or CPUs (local Ray); default every core; 1 runs in this process
+        (as for :func:`affordgrasp.generate`).
+    engine : {"local", "ray"}
+        Where the shards run.
+    address : str, optional
+        An existing Ray cluster (with ``engine="ray"``).
     shard_size : int
         Rows per shard.
     objects : sequence of str, optional
@@ -272,15 +282,23 @@ def run_physics(
     Returns
     -------
     PhysicsSummary
+
+    Notes
+    -----
+    A KeyboardInterrupt (or SIGTERM) stops the workers and keeps every whole shard; calling
+    again resumes. Local workers are started with 'spawn': a script calling this with
+    ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
     """
+    from ..dataset.engines import check_engine, default_workers
+
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
         raise bad_parameter("shard_size", f"must be a positive integer, got {shard_size}")
     if max_per_object is not None and max_per_object <= 0:
         raise bad_parameter("max_per_object", f"must be a positive integer, got {max_per_object}")
-    workers = workers or len(os.sched_getaffinity(0))
-    if workers <= 0:
+    if workers is not None and (isinstance(workers, bool) or workers <= 0):
         raise bad_parameter("workers", f"must be a positive integer, got {workers}")
+    check_engine(engine, workers, address)
     out = Path(out)
     dataset = Dataset.open(dataset_dir)
     rows = _plan_rows(dataset, statuses, objects, max_per_object)
@@ -306,51 +324,118 @@ def run_physics(
     # properties (as generate's do) and read the decomposition from the cache.
     from ..dataset.engines import ObjectPayload
 
-    payloads = {}
+    payloads, parts = {}, {}
     for name in [o for o in dataset.objects if o in needed]:
         if log_message:
             log_message(f"convex decomposition of {name} (cached after the first run)")
         obj = dataset.object(name)
-        convex_parts_of(obj, settings)
+        parts[name] = convex_parts_of(obj, settings)
         payloads[name] = ObjectPayload.from_object(obj)
+    context = ReplayContext(hand=hand, objects=payloads, parts=parts, settings=settings)
+    jobs = [ReplayJob(k, rows.slice(s, e - s)) for k, s, e in pending]
     started = time.perf_counter()
-    summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
-    jobs = [
-        (
-            str(out),
-            k,
-            rows.slice(s, e - s),
-            hand,
-            {
-                name: payloads[name]
-                for name in set(rows.column("object").slice(s, e - s).to_pylist())
-            },
-            settings,
-        )
-        for k, s, e in pending
-    ]
+    summary = PhysicsSummary(
+        str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers or default_workers()
+    )
     total = sum(e - s for _, s, e in pending)
-    with progress(total) if progress else _null_progress() as advance:
-        if workers == 1 or len(jobs) <= 1:
-            for job in jobs:
-                _account(summary, validate_shard(*job), advance)
-        else:
-            ctx = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(
-                max_workers=workers,
-                mp_context=ctx,
-                initializer=_worker_init,
-                initargs=(os.getpid(),),
-            ) as pool:
-                try:
-                    for result in pool.map(_validate_job, jobs):
-                        _account(summary, result, advance)
-                except BaseException:
-                    _stop_workers(pool)
-                    raise
+    if jobs:
+        with progress(total) if progress else _null_progress() as advance:
+            _run_jobs(context, jobs, out, summary, advance, engine, workers, address)
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
     return summary
+
+
+def _run_jobs(context, jobs, out: Path, summary, advance, engine, workers, address) -> None:
+    """Run the shards' jobs on an engine; write each shard as its rows come back."""
+    from ..dataset.engines import make_engine, stop_on_signals
+
+    with (
+        stop_on_signals(),
+        make_engine(context, engine=engine, workers=workers, address=address) as eng,
+    ):
+        summary.workers = eng.workers
+        depth = 1 if eng.workers == 1 and eng.name == "local" else 2 * eng.workers
+        waiting = iter(jobs)
+        in_flight: dict = {}
+        while True:
+            while len(in_flight) < depth:
+                job = next(waiting, None)
+                if job is None:
+                    break
+                in_flight[eng.submit(job)] = job
+            if not in_flight:
+                return
+            for handle in eng.wait(list(in_flight)):
+                job = in_flight.pop(handle)
+                result = eng.result(handle)
+                write_outcome_shard(out, job.shard, result["table"], context.settings)
+                _account(summary, result, advance)
+
+
+@dataclass(frozen=True)
+class ReplayJob:
+    """The rows of one shard of a physics run.
+
+    Attributes
+    ----------
+    shard : int
+        Shard index.
+    rows : pyarrow.Table
+        Dataset rows (:data:`KEY_COLUMNS`, :data:`STATE_COLUMNS`, the metrics).
+    """
+
+    shard: int
+    rows: pa.Table
+
+
+@dataclass(frozen=True)
+class ReplayContext:
+    """What every shard of a physics run shares (sent once to each worker).
+
+    Attributes
+    ----------
+    hand : Hand
+        The dataset's hand, itself (custom hands included).
+    objects : dict of str to ObjectPayload
+        The objects as the dataset resolves them: mesh and mass properties.
+    parts : dict of str to list of (vertices, faces)
+        Their convex parts, so that no worker decomposes.
+    settings : PhysicsSettings
+    key : str
+        Identifies the run.
+    """
+
+    hand: Hand
+    objects: dict
+    parts: dict
+    settings: PhysicsSettings
+    key: str = field(default_factory=lambda: uuid.uuid4().hex)
+
+    def run(self, job: ReplayJob) -> dict:
+        """Replay one shard's rows (in whichever process the engine runs it).
+
+        Parameters
+        ----------
+        job : ReplayJob
+
+        Returns
+        -------
+        dict
+            ``table`` (the outcome table), ``rows``, simulation ``steps``, wall
+            ``seconds`` and ``cpu_seconds``.
+        """
+        started, cpu = time.perf_counter(), time.process_time()
+        table = validate_rows(job.rows, self.hand, self.objects, self.settings, parts=self.parts)
+        seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
+        steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
+        return {
+            "table": table,
+            "rows": table.num_rows,
+            "steps": steps,
+            "seconds": seconds,
+            "cpu_seconds": cpu,
+        }
 
 
 class _null_progress:
@@ -368,33 +453,6 @@ def _account(summary: PhysicsSummary, result: dict, advance) -> None:
     summary.busy_s += result["seconds"]
     summary.cpu_s += result["cpu_seconds"]
     advance(result["rows"])
-
-
-def _worker_init(parent_pid: int) -> None:
-    # Ctrl-C and a hangup reach the whole process group: the parent stops the workers (a
-    # worker's own KeyboardInterrupt would only print its traceback). A parent killed
-    # outright takes them along.
-    die_with_parent(parent_pid)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGHUP, signal.SIG_IGN)
-
-
-def _stop_workers(pool) -> None:
-    """Stop a pool at once: cancel what waits, terminate what runs (its shard is redone)."""
-    processes = list(getattr(pool, "_processes", {}).values())  # the executor's own
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in processes:
-        if proc.is_alive():
-            proc.terminate()
-    for proc in processes:
-        proc.join(timeout=5)
-        if proc.is_alive():  # pragma: no cover - stuck in native code
-            proc.kill()
-            proc.join(timeout=5)
-
-
-def _validate_job(job) -> dict:
-    return validate_shard(*job)
 
 
 def convex_parts_of(obj, settings: PhysicsSettings) -> list:
@@ -419,7 +477,7 @@ def convex_parts_of(obj, settings: PhysicsSettings) -> list:
 _SCENES: dict[tuple, object] = {}
 
 
-def _scene(hand: Hand, hand_key: str, obj, settings: PhysicsSettings):
+def _scene(hand: Hand, hand_key: str, obj, settings: PhysicsSettings, parts=None):
     """The compiled scene of a hand and an object, one per process."""
     from .scene import build_scene
 
@@ -436,12 +494,16 @@ def _scene(hand: Hand, hand_key: str, obj, settings: PhysicsSettings):
     if scene is None:
         if not hasattr(obj, "mesh"):  # an ObjectPayload: the object as the caller resolved it
             obj = obj.build()
-        scene = build_scene(hand, obj, settings, parts=convex_parts_of(obj, settings))
+        if parts is None:
+            parts = convex_parts_of(obj, settings)
+        scene = build_scene(hand, obj, settings, parts=parts)
         _SCENES[key] = scene
     return scene
 
 
-def validate_rows(rows: pa.Table, hand: Hand | str, objects: dict, settings) -> pa.Table:
+def validate_rows(
+    rows: pa.Table, hand: Hand | str, objects: dict, settings, *, parts: dict | None = None
+) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
     Parameters
@@ -455,6 +517,8 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: dict, settings) -> 
         The object of every name in ``rows``, as the dataset resolves it
         (:meth:`~affordgrasp.dataset.handle.Dataset.object`).
     settings : PhysicsSettings
+    parts : dict of str to list, optional
+        Convex parts of the objects by name; default: decomposed (or read from the cache).
 
     Returns
     -------
@@ -472,7 +536,7 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: dict, settings) -> 
     uns = rows.column("use_normal").to_pylist()
     outcomes = []
     for i in range(rows.num_rows):
-        scene = _scene(hand, hand_key, objects[names[i]], settings)
+        scene = _scene(hand, hand_key, objects[names[i]], settings, (parts or {}).get(names[i]))
         up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
         un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
         outcome = validate_grasp(
@@ -504,33 +568,33 @@ def _outcome_type(name: str) -> pa.DataType:
     return pa.float64()
 
 
-def validate_shard(out, k, rows, hand, objects, settings) -> dict:
-    """Validate one shard's rows and write its Parquet file atomically.
+def write_outcome_shard(out, k: int, table: pa.Table, settings: PhysicsSettings) -> Path:
+    """Write shard ``k``'s outcome table atomically (temporary file, fsync, rename).
 
     Parameters
     ----------
-    out : pathlib.Path
+    out : path
         The run's directory.
     k : int
         Shard index.
-    rows, hand, objects, settings
-        As for :func:`validate_rows`.
+    table : pyarrow.Table
+        :func:`validate_rows`'s table.
+    settings : PhysicsSettings
+        Recorded in the file's metadata (their digest).
 
     Returns
     -------
-    dict
-        ``rows``, simulation ``steps``, wall ``seconds`` and ``cpu_seconds``.
+    pathlib.Path
+        The shard file.
     """
-    started, cpu = time.perf_counter(), time.process_time()
-    table = validate_rows(rows, hand, objects, settings)
-    seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
     path = shard_path(Path(out), k)
-    meta = {b"affordgrasp_version": __version__.encode(), b"physics_settings": b""}
-    meta[b"physics_settings"] = settings.digest().encode()
+    meta = {
+        b"affordgrasp_version": __version__.encode(),
+        b"physics_settings": settings.digest().encode(),
+    }
     table = table.replace_schema_metadata(meta)
     atomic_write(path, lambda fh: pq.write_table(table, fh))
-    steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
-    return {"rows": table.num_rows, "steps": steps, "seconds": seconds, "cpu_seconds": cpu}
+    return path
 
 
 def read_outcomes(out: str | os.PathLike) -> pa.Table:
