@@ -35,7 +35,7 @@ from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
 from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
 from ..robust import RobustSettings
-from ..worker_lifetime import die_with_parent
+from ..worker_lifetime import Reaper, die_with_parent
 
 log = logging.getLogger(__name__)
 
@@ -623,6 +623,7 @@ class RayEngine(Engine):
         ray = require("ray", "cluster")
         self._ray = ray
         self._started = False
+        self._reaper: Reaper | None = None
         if not ray.is_initialized():
             check_ray_address(address)
             kwargs = {"address": address, "ignore_reinit_error": True, "log_to_driver": False}
@@ -634,6 +635,8 @@ class RayEngine(Engine):
                     # ray.init replaces the SIGTERM handler (with sys.exit); keep ours, which
                     # stops the run the way Ctrl-C does.
                     on_term = signal.getsignal(signal.SIGTERM)
+                    # Ray's agents outlive a driver killed with SIGKILL by a minute or more.
+                    self._reaper = Reaper()
                     ray.init(**kwargs)
                     if threading.current_thread() is threading.main_thread():
                         signal.signal(signal.SIGTERM, on_term)
@@ -665,6 +668,9 @@ class RayEngine(Engine):
     def close(self, cancel: bool = False) -> None:
         if self._started:
             self._ray.shutdown()
+        if self._reaper is not None:
+            self._reaper.close()
+            self._reaper = None
 
 
 def check_engine(engine: str, workers: int | None, address: str | None) -> None:
