@@ -24,6 +24,7 @@ from .data import (
     Samples,
     load_depth,
     read_rows,
+    sensed_depth_mm,
     split_by_family,
     split_by_object,
 )
@@ -190,31 +191,6 @@ def prepare_split(
             if sensor is not None:
                 p.depth_mm = sensed_depth_mm(p, sensor)
     return parts[0], parts[1], parts[2], target, sp
-
-
-def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
-    """The samples' depth images as a sensor model returns them.
-
-    Parameters
-    ----------
-    samples : Samples
-        With depth images.
-    sensor : SensorModel
-        The sensor (:mod:`affordgrasp.vision.sensor`).
-
-    Returns
-    -------
-    (n, h, w) uint16 ndarray
-        Depth, mm; image i's noise keyed by (CRC-32 of its object's name, its sample).
-    """
-    import zlib
-
-    from ..vision.depth import depth_from_mm, depth_to_mm
-    from ..vision.sensor import apply_sensor
-
-    ids = np.array([zlib.crc32(str(o).encode()) for o in samples.object], dtype=np.int64)
-    keys = np.c_[ids, samples.sample]
-    return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
 
 
 def train_on_dataset(

@@ -273,6 +273,31 @@ def render_samples_depth(samples: Samples, dataset: DatasetLike) -> np.ndarray:
     return out
 
 
+def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
+    """The samples' depth images as a sensor model returns them.
+
+    Parameters
+    ----------
+    samples : Samples
+        With depth images.
+    sensor : SensorModel
+        The sensor (:mod:`affordgrasp.vision.sensor`).
+
+    Returns
+    -------
+    (n, h, w) uint16 ndarray
+        Depth, mm; image i's noise keyed by (CRC-32 of its object's name, its sample).
+    """
+    import zlib
+
+    from ..vision.depth import depth_from_mm, depth_to_mm
+    from ..vision.sensor import apply_sensor
+
+    ids = np.array([zlib.crc32(str(o).encode()) for o in samples.object], dtype=np.int64)
+    keys = np.c_[ids, samples.sample]
+    return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
+
+
 # ------------------------------------------------------------------------------------ splits
 
 

@@ -37,7 +37,7 @@ class StreamedEpochs:
         Rows shuffled together before batches are cut (memory: about 35 kB a row).
     sensor : SensorModel, optional
         Apply a depth sensor model to the images
-        (:func:`~affordgrasp.learning.api.sensed_depth_mm`).
+        (:func:`~affordgrasp.learning.data.sensed_depth_mm`).
     chunk_rows : int
         Rows read from the dataset at a time.
     """
@@ -148,8 +148,7 @@ class StreamedEpochs:
     def _chunks(self, wanted: np.ndarray):
         """The wanted training rows, chunk by chunk, with their depth images."""
         from ..vision.depth import decode_depth_column, depth_to_mm
-        from .api import sensed_depth_mm
-        from .data import render_samples_depth
+        from .data import render_samples_depth, sensed_depth_mm
 
         stored = self.dataset.depth
         columns = ["object", "sample"] + (["depth_mm"] if stored and self.needs_depth else [])
