@@ -16,9 +16,11 @@ ever wrote opens (keys added later have their documented defaults when absent).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
 import os
+import re
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -35,7 +37,21 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Dataset", "DatasetLike", "find_object", "object_specs"]
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "Dataset",
+    "DatasetLike",
+    "find_object",
+    "manifest_hand",
+    "match_objects",
+    "object_filter",
+    "object_specs",
+    "open_dataset",
+    "read_errors",
+]
+
+# Columns without which Parquet files are not affordgrasp samples (see docs/conventions.md).
+REQUIRED_COLUMNS = ("object", "sample", "seed", "hand_pose", "joints")
 
 
 class Dataset:
@@ -163,8 +179,6 @@ class Dataset:
     @functools.cached_property
     def hand(self) -> Hand:
         """The hand the rows were simulated with, rebuilt from the manifest (custom ones too)."""
-        from .reading import manifest_hand
-
         return manifest_hand(self.manifest)
 
     @property
@@ -211,8 +225,6 @@ class Dataset:
         """
         if not wanted:
             return None
-        from .reading import match_objects
-
         return match_objects(self.objects, wanted, self.directory)
 
     def scale_options(self) -> dict:
@@ -315,8 +327,6 @@ class Dataset:
         return self._entry(self._name(name)).get("mesh_hash") or None
 
     def _name(self, name: str) -> str:
-        from .reading import match_objects
-
         return match_objects(self.objects, [name], self.directory)[0]
 
     def _entry(self, name: str) -> dict:
@@ -355,8 +365,6 @@ class Dataset:
             command that rewrites it).
         """
         if self._arrow is None:
-            from .reading import open_dataset
-
             self._arrow = open_dataset(self.directory, manifest=self.manifest)
         return self._arrow
 
@@ -377,8 +385,6 @@ class Dataset:
         pyarrow.Table
             One row per sample, in plan order.
         """
-        from .reading import object_filter, read_errors
-
         arrow = self.arrow()
         with read_errors(self.directory):
             return arrow.to_table(
@@ -406,8 +412,6 @@ class Dataset:
         ------
         pyarrow.RecordBatch
         """
-        from .reading import object_filter, read_errors
-
         scanner = self.arrow().scanner(
             columns=list(columns) if columns is not None else None,
             filter=object_filter(self.select(objects)),
@@ -428,8 +432,6 @@ class Dataset:
         -------
         int
         """
-        from .reading import object_filter
-
         return self.arrow().count_rows(filter=object_filter(self.select(objects)))
 
 
@@ -576,3 +578,208 @@ def find_object(
         f"cannot find the mesh that dataset object {name!r} was generated on "
         f"({mismatch or last_error}); {fix}"
     )
+
+
+# ------------------------------------------------------------------ the shards
+
+
+def open_dataset(
+    directory: str | os.PathLike,
+    *,
+    loose: bool = False,
+    verify: bool = True,
+    manifest: dict | None = None,
+) -> pads.Dataset:
+    """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order).
+
+    Parameters
+    ----------
+    directory : path
+        A directory written by ``affordgrasp generate``.
+    loose : bool
+        Also accept a directory without a (valid) manifest: every ``*.parquet`` file under it
+        (not in hidden folders) whose columns are those of sample rows, e.g. files written
+        by ``affordgrasp evaluate --out``. Their footers are checked, not checksums.
+    verify : bool
+        Check every shard against the checksum recorded when it was written (reads each
+        file once per process; see docs/dataset.md for the cost).
+    manifest : dict, optional
+        The directory's manifest when already read (:class:`~affordgrasp.dataset.handle.Dataset`
+        passes its own); read here otherwise.
+
+    Returns
+    -------
+    pyarrow.dataset.Dataset
+
+    Raises
+    ------
+    DatasetError
+        When the directory is missing, not a dataset, empty or unreadable, or a shard is
+        damaged (the message names it and the command that rewrites it).
+    """
+    import pyarrow.dataset as pads
+
+    from ..schema import dataset_schema
+    from .layout import read_manifest, shard_paths, verify_shards
+
+    try:
+        manifest = read_manifest(directory) if manifest is None else manifest
+    except DatasetError:
+        if not loose:
+            raise
+        return _open_loose_files(Path(directory))
+    paths = shard_paths(directory)
+    if not paths:
+        raise DatasetError(
+            f"dataset {str(directory)!r} has no shards yet; run the command in its "
+            "_manifest.json to generate them"
+        )
+    if verify:
+        verify_shards(Path(directory), paths, manifest)
+    from ..robust import manifest_robust
+
+    schema = dataset_schema(
+        manifest.get("metrics", True), bool(manifest.get("depth")), manifest_robust(manifest)
+    )
+    return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
+
+
+@contextlib.contextmanager
+def read_errors(where: str | os.PathLike):
+    """Turn an Arrow or OS error while reading into a DatasetError naming the damaged file.
+
+    A context manager.
+
+    Parameters
+    ----------
+    where : path
+        Named in the message when the error does not name a file.
+    """
+    import pyarrow as pa
+
+    try:
+        yield
+    except (pa.ArrowException, OSError) as exc:
+        text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        match = re.search(r"[\w./\\:-]*\.parquet", text)
+        culprit = match.group(0) if match else str(where)
+        raise DatasetError(
+            f"cannot read {culprit!r}: {text}; the file is damaged or not Parquet: delete it "
+            "(and, for a dataset, run its generate command again to rewrite it)"
+        ) from exc
+
+
+def _open_loose_files(directory: Path) -> pads.Dataset:
+    import pyarrow as pa
+    import pyarrow.dataset as pads
+    import pyarrow.parquet as pq
+
+    if not directory.is_dir():
+        raise DatasetError(f"{str(directory)!r} is not a directory")
+    files = sorted(
+        str(p)
+        for p in directory.rglob("*.parquet")
+        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(directory).parts)
+    )
+    if not files:
+        raise DatasetError(
+            f"no Parquet files under {str(directory)!r}; give a dataset directory "
+            "written by 'affordgrasp generate', or an object (family, family:seed or mesh path)"
+        )
+    for file in files:
+        # Footers only: a truncated or foreign file is named before any scan.
+        with read_errors(file):
+            try:
+                pq.read_metadata(file)
+            except (pa.ArrowException, OSError) as exc:
+                raise pa.ArrowInvalid(f"{file}: {exc}") from exc
+    with read_errors(directory):
+        dataset = pads.dataset(files, format="parquet")
+    missing = set(REQUIRED_COLUMNS) - set(dataset.schema.names)
+    if missing:
+        raise DatasetError(
+            f"the Parquet files under {str(directory)!r} lack the columns {sorted(missing)}; "
+            "they do not look like an affordgrasp dataset (see docs/conventions.md)"
+        )
+    return dataset
+
+
+def manifest_hand(manifest: dict) -> Hand:
+    """The hand a dataset was generated with, rebuilt from its manifest.
+
+    Parameters
+    ----------
+    manifest : dict
+        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.layout.read_manifest`).
+
+    Returns
+    -------
+    Hand
+        The hand recorded whole under ``hand_spec``; for a manifest written before hands
+        were recorded whole (``hand`` holds only a name), the registered hand of that name.
+    """
+    from ..hands import get_hand, hand_from_dict
+
+    spec = manifest.get("hand_spec")
+    if isinstance(spec, dict):
+        return hand_from_dict(spec)
+    return get_hand(str(manifest.get("hand") or "barrett"))
+
+
+def match_objects(
+    names: Sequence[str], wanted: Sequence[str], where: str | os.PathLike
+) -> list[str]:
+    """The names among a dataset's objects that ``wanted`` means (``knife`` is ``knife:0``).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The dataset's objects.
+    wanted : sequence of str
+        Names, families or mesh paths.
+    where : path
+        The dataset, named in the error.
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    DatasetError
+        For a name that matches nothing (the message names the objects available).
+    """
+    names = list(names)
+    chosen = []
+    for w in wanted:
+        w = w.strip()
+        if w in names:
+            chosen.append(w)
+        elif f"{w}:0" in names:
+            chosen.append(f"{w}:0")
+        elif os.path.basename(w) in names:
+            chosen.append(os.path.basename(w))
+        else:
+            raise DatasetError(
+                f"object {w!r} is not in dataset {str(where)!r}; it holds: {', '.join(names)}"
+            )
+    return chosen
+
+
+def object_filter(objects: Sequence[str] | None) -> pads.Expression | None:
+    """An Arrow filter keeping the rows of some objects.
+
+    Parameters
+    ----------
+    objects : sequence of str or None
+        Object names; None or empty keeps every row.
+
+    Returns
+    -------
+    pyarrow.dataset.Expression or None
+    """
+    if not objects:
+        return None
+    import pyarrow.dataset as pads
+
+    return pads.field("object").isin(list(objects))
