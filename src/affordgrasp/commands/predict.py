@@ -91,4 +91,3 @@ def run(args, out) -> None:
         rows.append([c, float(v.mean()), float(v.min()), float(v.max())])
     out.table(f"{table.num_rows} predictions -> {args.out}", ["name", "mean", "min", "max"], rows)
     out.result({"out": args.out, "rows": table.num_rows, "columns": table.column_names})
-
