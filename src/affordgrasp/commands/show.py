@@ -17,6 +17,7 @@ from .common import (
     add_scale_arguments,
     add_task_arguments,
     check_counts,
+    check_mesh_files,
     check_output_dir,
     load_objects,
     parse_tasks,
@@ -392,6 +393,7 @@ def run(args, out) -> None:
     from ..viz.sources import top_grasps
 
     check_counts(args)
+    check_mesh_files(args)
     check_output_dir(args.out, "--out")
     if args.top < 1:
         raise InputError(f"--top must be at least 1, got {args.top}")
