@@ -111,3 +111,20 @@ def test_resolve_object_of_loose_rows_and_bad_options(box_mesh):
         find_object("box.stl", source=None)
     with pytest.raises(ValueError, match="changed_family"):
         find_object("knife", changed_family="maybe")
+
+
+def test_the_dataset_splits_its_objects_as_training_does(tmp_path):
+    from affordgrasp.dataset.generate import generate
+    from affordgrasp.errors import InputError
+    from affordgrasp.learning.data import split_by_object as learning_split
+
+    out = tmp_path / "k"
+    generate(["knife:0", "knife:1", "knife:2", "mug:0"], 1, out, seed=0, workers=1)
+    ds = Dataset.open(out)
+    split = ds.split(seed=3)
+    assert set(split.train) | set(split.val) | set(split.test) == set(ds.objects)
+    assert split == learning_split(ds.objects, [ds.families[o] for o in ds.objects], seed=3)
+    assert len(split.test) == 1 and split.test[0].startswith("knife")
+    assert ds.split("family", test_families=[ds.families["mug:0"]]).test == ("mug:0",)
+    with pytest.raises(InputError, match="test_families"):
+        ds.split("family")

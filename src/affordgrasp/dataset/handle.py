@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from ..hands.model import Hand
     from ..objects.resolve import GraspObject
     from ..robust import RobustSettings
+    from .splits import Split
 
 log = logging.getLogger(__name__)
 
@@ -204,6 +205,49 @@ class Dataset:
     def families(self) -> dict[str, str]:
         """Object name -> its family (category; for splits by object or family)."""
         return {name: e.get("category") or name.split(":")[0] for name, e in self.entries.items()}
+
+    def split(
+        self,
+        kind: str = "object",
+        *,
+        seed: int = 0,
+        test_families: Sequence[str] | None = None,
+    ) -> Split:
+        """Its objects split for learning (:mod:`affordgrasp.dataset.splits`).
+
+        Parameters
+        ----------
+        kind : {"object", "family"}
+            Hold out object instances (families shared), or whole families.
+        seed : int
+            Seeds the draw.
+        test_families : sequence of str, optional
+            The held-out families of a split by family.
+
+        Returns
+        -------
+        Split
+
+        Raises
+        ------
+        InputError
+            For another kind, a split by family without ``test_families``, or too few
+            objects to split.
+        """
+        from .splits import split_by_family, split_by_object
+
+        names = self.objects
+        families = [self.families[n] for n in names]
+        if kind == "object":
+            return split_by_object(names, families, seed=seed)
+        if kind == "family":
+            if not test_families:
+                raise InputError(
+                    "a split by family needs test_families, the families to hold out "
+                    "(e.g. ['axe', 'mug'])"
+                )
+            return split_by_family(names, families, test_families, seed=seed)
+        raise InputError(f"unknown split {kind!r}; choose object or family")
 
     def select(self, wanted: Sequence[str] | None) -> list[str] | None:
         """Object names of the dataset matching ``wanted`` (``knife`` matches ``knife:0``).
