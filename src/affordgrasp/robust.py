@@ -466,7 +466,7 @@ def robust_columns(
 
     from .grasp.policy import object_geometry, pregrasp_starts, simulate_starts
     from .hands import get_hand
-    from .pipeline import phi_of_batch
+    from .metrics.phi_batch import phi_of_batch
 
     if not settings.enabled:
         raise InputError("robust evaluation needs K >= 1 copies (K = 0 is plain evaluation)")
