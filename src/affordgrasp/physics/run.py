@@ -320,8 +320,8 @@ def run_physics(
         for _, s, e in pending
         for name in set(rows.column("object").slice(s, e - s).to_pylist())
     }
-    # Resolve and decompose each object once, here: the workers get its mesh and mass
-    # properties (as generate's do) and read the decomposition from the cache.
+    # Resolve and decompose each object once, here: the workers get its mesh, mass
+    # properties and convex parts (as generate's get its mesh), never its files or caches.
     from ..dataset.engines import ObjectPayload
 
     payloads, parts = {}, {}
