@@ -407,6 +407,18 @@ CASES = [
         "physics setting seed must be > 0, got -1",
     ),
     (
+        ["physics", "{ds}", "--out", "{d}/ph16", "--friction-margin", "45"],
+        "physics setting friction_margin_deg = 45.0 ° is outside its physical range [0, 30]",
+    ),
+    (
+        ["physics", "{ds}", "--out", "{d}/ph17", "--friction-margin", "nan"],
+        "physics setting friction_margin_deg must be a finite number, got nan",
+    ),
+    (
+        ["physics", "{ds}", "--out", "{d}/ph18", "--robust", "-1"],
+        "--robust must be an integer >= 0 (copies per grasp), got -1",
+    ),
+    (
         ["train", "{ds}", "-o", "{d}/m9.safetensors", "--split", "family"],
         "needs --test-families, the families to hold out (e.g. axe,mu",
     ),

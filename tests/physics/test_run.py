@@ -22,7 +22,7 @@ def test_a_materials_dataset_is_replayed_with_its_materials(tmp_path, monkeypatc
     statuses = sorted(set(Dataset.open(out).read(columns=["status"])["status"].to_pylist()))
     shipped = {}
 
-    def fake_validate_rows(rows, hand, objects, settings, parts=None):
+    def fake_validate_rows(rows, hand, objects, settings, *args, **kwargs):
         shipped.update(objects)
         n = rows.num_rows
         return (

@@ -33,8 +33,9 @@ import pyarrow.parquet as pq
 from .. import __version__
 from ..columns import METRIC_COLUMNS
 from ..dataset.handle import Dataset
-from ..errors import DatasetError, bad_parameter
+from ..errors import DatasetError, InputError, bad_parameter
 from ..hands.model import Hand
+from ..robust import RobustSettings, robust_column_names, robust_settings
 from ..writing import atomic_write
 from .settings import PhysicsSettings
 
@@ -48,7 +49,8 @@ MANIFEST = "_physics.json"
 DEFAULT_SHARD_SIZE = 128
 
 KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
-STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal")
+# The grasp state, read to replay it (and, for ``robust``, to re-evaluate it), not written.
+STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal", "p0", "use_dir")
 # The dataset's numeric metric columns (not the text epsilon_reason) and the contact count,
 # carried into the outcome table for the report.
 REPORTED_METRICS = (*(c for c in METRIC_COLUMNS if c != "epsilon_reason"), "n_contacts")
@@ -69,6 +71,9 @@ class PhysicsSummary:
     elapsed_s : float
         Wall time, s.
     workers : int
+    robust : dict or None
+        With ``robust``: ``{"copies": K, "source": "dataset"}`` (the dataset's columns) or
+        ``"computed"`` (for the replayed rows); None without.
     """
 
     directory: str
@@ -82,6 +87,8 @@ class PhysicsSummary:
     busy_s: float = 0.0  # seconds the workers spent validating (sum over workers)
     cpu_s: float = 0.0  # CPU seconds the workers spent validating (fair on a shared machine)
     hold_ok: dict = field(default_factory=dict)  # object -> [held, validated]
+    # The robust columns reported: None, or {"copies": K, "source": "dataset" | "computed"}.
+    robust: dict | None = None
 
     @property
     def validations_per_s(self) -> float:
@@ -116,6 +123,7 @@ class PhysicsSummary:
             "worker_wall_s": self.busy_s,
             "worker_cpu_s": self.cpu_s,
             "hold_ok": self.hold_ok,
+            "robust": self.robust,
         }
 
 
@@ -183,6 +191,7 @@ _PLAN_KEYS = (
     "rows",
     "shard_size",
     "settings_digest",
+    "robust",
 )
 
 
@@ -246,6 +255,7 @@ def run_physics(
     max_per_object: int | None = None,
     progress: Callable | None = None,
     log_message: Callable[[str], None] | None = None,
+    robust: RobustSettings | int | None = None,
 ) -> PhysicsSummary:
     """Validate the grasps of a dataset in MuJoCo; write the outcomes as Parquet shards.
 
@@ -278,10 +288,22 @@ def run_physics(
         ``progress(total)`` is a context manager yielding ``advance(n)``.
     log_message : callable, optional
         Receives one-line messages.
+    robust : RobustSettings or int, optional
+        Report the robust scores (:mod:`affordgrasp.robust`) of the replayed rows beside
+        their outcomes: a dataset generated with the same K keeps its ``robust_*`` columns;
+        a dataset without robust columns has them computed for the replayed rows (from each
+        row's stored pregrasp, K perturbed copies, the dataset's hand and contact model).
+        None or 0: the dataset's ``robust_*`` columns travel when it has them, nothing is
+        computed.
 
     Returns
     -------
     PhysicsSummary
+
+    Raises
+    ------
+    InputError
+        For a dataset whose robust columns are of another K.
 
     Notes
     -----
@@ -309,6 +331,8 @@ def run_physics(
             "validate; generate more samples or choose other objects"
         )
     plan = _plan_manifest(dataset, settings, statuses, objects, max_per_object, n, shard_size)
+    compute = _robust_plan(dataset, robust_settings(robust))
+    plan["robust"] = None if compute is None else {"source": "computed", **compute.to_dict()}
     _prepare_out(out, plan)
     hand = dataset.hand  # the dataset's own hand, custom ones included
     for stale in out.glob(".part-*.tmp-*"):
@@ -331,7 +355,14 @@ def run_physics(
         obj = dataset.object(name)
         parts[name] = convex_parts_of(obj, settings)
         payloads[name] = ObjectPayload.from_object(obj)
-    context = ReplayContext(hand=hand, objects=payloads, parts=parts, settings=settings)
+    context = ReplayContext(
+        hand=hand,
+        objects=payloads,
+        parts=parts,
+        settings=settings,
+        robust=compute,
+        soft=dataset.soft,
+    )
     jobs = [ReplayJob(k, rows.slice(s, e - s)) for k, s, e in pending]
     started = time.perf_counter()
     summary = PhysicsSummary(
@@ -343,6 +374,12 @@ def run_physics(
             _run_jobs(context, jobs, out, summary, advance, engine, workers, address)
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
+    wanted = robust_settings(robust)
+    if wanted is not None:
+        summary.robust = {
+            "copies": wanted.copies,
+            "source": "dataset" if compute is None else "computed",
+        }
     return summary
 
 
@@ -402,6 +439,11 @@ class ReplayContext:
     parts : dict of str to list of (vertices, faces)
         Their convex parts, so that no worker decomposes.
     settings : PhysicsSettings
+    robust : RobustSettings or None
+        Robust columns to compute for the replayed rows (``--robust K`` on a dataset
+        without them; :func:`robust_of_rows`); None: none computed.
+    soft : bool
+        The dataset's contact model (for ``robust``).
     key : str
         Identifies the run.
     """
@@ -410,6 +452,8 @@ class ReplayContext:
     objects: dict
     parts: dict
     settings: PhysicsSettings
+    robust: RobustSettings | None = None
+    soft: bool = False
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
     def run(self, job: ReplayJob) -> dict:
@@ -426,7 +470,15 @@ class ReplayContext:
             ``seconds`` and ``cpu_seconds``.
         """
         started, cpu = time.perf_counter(), time.process_time()
-        table = validate_rows(job.rows, self.hand, self.objects, self.settings, parts=self.parts)
+        table = validate_rows(
+            job.rows,
+            self.hand,
+            self.objects,
+            self.settings,
+            self.robust,
+            self.soft,
+            parts=self.parts,
+        )
         seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
         steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
         return {
@@ -501,8 +553,106 @@ def _scene(hand: Hand, hand_key: str, obj, settings: PhysicsSettings, parts=None
     return scene
 
 
+def _robust_plan(dataset: Dataset, robust: RobustSettings | None):
+    """The robust settings to compute for the replayed rows, or None (read or none wanted).
+
+    A dataset generated with ``--robust K`` already holds the columns of K copies: asking
+    for K reads them, another K is refused (its columns would not be the ones asked for).
+    """
+    if robust is None:
+        return None
+    there = dataset.robust
+    if there is None:
+        return robust
+    if there.copies != robust.copies:
+        raise InputError(
+            f"--robust {robust.copies}: the dataset in {str(dataset.directory)!r} has robust "
+            f"columns of K = {there.copies} copies; pass --robust {there.copies} (they are "
+            "read) or replay a dataset without robust columns (they are computed)"
+        )
+    return None
+
+
+def robust_of_rows(
+    rows: pa.Table,
+    hand: Hand | str,
+    objects: dict,
+    robust: RobustSettings | int,
+    soft: bool = False,
+) -> dict[str, np.ndarray]:
+    """The robust columns of dataset rows, re-evaluated from their stored pregrasps.
+
+    Each object's rows are simulated again from ``p0`` and ``use_dir`` with K perturbed
+    copies (:func:`affordgrasp.pipeline.evaluate_inputs`); the copies depend on (seed, k)
+    only, so the values equal those a ``generate --robust K`` run writes for the same rows.
+
+    Parameters
+    ----------
+    rows : pyarrow.Table
+        Dataset rows with ``object``, ``p0``, ``use_dir`` and ``hand_pose``.
+    hand : Hand or str
+        The dataset's hand.
+    objects : dict of str to GraspObject or ObjectPayload
+        The object of every name in ``rows``, as the dataset resolves it
+        (:meth:`~affordgrasp.dataset.handle.Dataset.object`).
+    robust : RobustSettings or int
+        K >= 1 and the perturbations (an int: K with the default perturbations).
+    soft : bool
+        The dataset's contact model (soft-finger contacts).
+
+    Returns
+    -------
+    dict of str to (n,) float64 ndarray
+        :func:`affordgrasp.robust.robust_column_names` of the settings' tasks, in row order.
+
+    Raises
+    ------
+    DatasetError
+        When a row's grasp does not come out of its pregrasp again (the dataset was made by
+        another version of the simulator), so its robust scores would describe another grasp.
+    """
+    from ..hands import get_hand
+    from ..pipeline import evaluate_inputs
+
+    wanted = robust_settings(robust)
+    if wanted is None:
+        raise InputError("robust scores need K >= 1 copies per grasp, got K = 0")
+    hand = get_hand(hand)
+    names = np.asarray(rows.column("object").to_pylist(), dtype=object)
+    out = {c: np.full(len(names), np.nan) for c in robust_column_names(wanted.tasks)}
+    for name in dict.fromkeys(names.tolist()):
+        idx = np.flatnonzero(names == name)
+        sub = rows.take(pa.array(idx, type=pa.int64()))
+        p0 = np.asarray(sub.column("p0").to_pylist(), dtype=np.float64).reshape(-1, 6)
+        use_dir = np.asarray(sub.column("use_dir").to_pylist(), dtype=np.float64)
+        obj = objects[name]
+        if not hasattr(obj, "mesh"):  # an ObjectPayload: the object as the caller resolved it
+            obj = obj.build()
+        table = evaluate_inputs(
+            obj, p0, use_dir.reshape(len(idx), -1), hand=hand, soft=soft, robust=wanted
+        ).table
+        again = np.asarray(table.column("hand_pose").to_pylist(), dtype=np.float64)
+        stored = np.asarray(sub.column("hand_pose").to_pylist(), dtype=np.float64)
+        if again.shape != stored.shape or not np.allclose(again, stored, rtol=0, atol=1e-9):
+            raise DatasetError(
+                f"rows of {name!r} do not simulate to their stored grasp again (the dataset "
+                "was made by another version of the grasp simulator), so robust scores "
+                "computed now would describe other grasps; regenerate it with --robust K"
+            )
+        for c in out:
+            out[c][idx] = table.column(c).to_numpy(zero_copy_only=False)
+    return out
+
+
 def validate_rows(
-    rows: pa.Table, hand: Hand | str, objects: dict, settings, *, parts: dict | None = None
+    rows: pa.Table,
+    hand: Hand | str,
+    objects: dict,
+    settings,
+    robust: RobustSettings | None = None,
+    soft: bool = False,
+    *,
+    parts: dict | None = None,
 ) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
@@ -517,6 +667,10 @@ def validate_rows(
         The object of every name in ``rows``, as the dataset resolves it
         (:meth:`~affordgrasp.dataset.handle.Dataset.object`).
     settings : PhysicsSettings
+    robust : RobustSettings, optional
+        Also compute the rows' robust columns (:func:`robust_of_rows`) and add them.
+    soft : bool
+        The dataset's contact model (for ``robust``).
     parts : dict of str to list, optional
         Convex parts of the objects by name; default: decomposed (or read from the cache).
 
@@ -548,6 +702,12 @@ def validate_rows(
     for name in outcomes[0] if outcomes else ():
         values = [o[name] for o in outcomes]
         table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
+    if robust is not None and robust.enabled:
+        scores = robust_of_rows(rows, hand, objects, robust, soft)
+        for name, column in scores.items():
+            if name in table.column_names:
+                table = table.drop_columns([name])
+            table = table.append_column(name, pa.array(column, type=pa.float64()))
     return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 

@@ -40,7 +40,7 @@ from . import deps
 from .decompose import convex_parts
 from .settings import G, PhysicsSettings
 
-__all__ = ["Scene", "build_scene", "rounded_shape_points"]
+__all__ = ["Scene", "build_scene", "engine_friction", "rounded_shape_points"]
 
 FAR = 10.0  # m: where the tools wait, well away from anything
 TOOL_HALF = 0.005  # m: the anvil and the plate are 10 mm cubes (a local obstacle at U)
@@ -98,6 +98,53 @@ def rounded_shape_points(kind: str, half_extents, radius: float) -> np.ndarray:
         rim = np.where(norm > ZERO_LENGTH, xy / np.maximum(norm, ZERO_LENGTH), 0.0) * h[0]
         core = np.concatenate([rim, np.sign(d[:, 2:]) * h[2]], axis=1)
     return np.unique(np.round(core + radius * d, 12), axis=0)
+
+
+def engine_friction(settings: PhysicsSettings, mu: float) -> float:
+    """The friction coefficient the engine gives a hand-object pair whose table μ is ``mu``.
+
+    ``settings.friction`` (> 0) replaces the table. Otherwise the friction cone is widened by
+    ``settings.friction_margin_deg``: μ' = tan(atan μ + δ). A force inside the cone of
+    half-angle atan μ about the mesh's normal is inside the cone of half-angle atan μ + δ
+    about any normal within δ of it, so a grasp in force closure on the mesh stays in force
+    closure on collision geometry whose normals are off by at most δ.
+
+    Parameters
+    ----------
+    settings : PhysicsSettings
+    mu : float
+        μ of the material table, > 0.
+
+    Returns
+    -------
+    float
+    """
+    import math
+
+    if settings.friction:
+        return float(settings.friction)
+    if not settings.friction_margin_deg:
+        return float(mu)
+    return math.tan(math.atan(mu) + math.radians(settings.friction_margin_deg))
+
+
+def table_friction(settings: PhysicsSettings, mu_engine: np.ndarray) -> np.ndarray:
+    """Invert :func:`engine_friction` for table friction: the table μ of engine coefficients.
+
+    Parameters
+    ----------
+    settings : PhysicsSettings
+    mu_engine : (k,) float ndarray
+
+    Returns
+    -------
+    (k,) float64 ndarray
+        Unchanged when ``settings.friction`` is set or there is no margin.
+    """
+    mu_engine = np.asarray(mu_engine, dtype=np.float64)
+    if settings.friction or not settings.friction_margin_deg:
+        return mu_engine
+    return np.tan(np.arctan(mu_engine) - np.radians(settings.friction_margin_deg))
 
 
 def _fmt(values) -> str:
@@ -316,7 +363,7 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
 
     def link_xml(i: int, indent: str) -> str:
         link = hand.links[i]
-        mu = s.friction or friction_coefficient(link.material, object_material)
+        mu = engine_friction(s, friction_coefficient(link.material, object_material))
         lines = []
         j = link.joint
         attrs = ""
@@ -360,7 +407,7 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
 
     palm_geoms = []
     palm = hand.links[0]
-    mu_palm = s.friction or friction_coefficient(palm.material, object_material)
+    mu_palm = engine_friction(s, friction_coefficient(palm.material, object_material))
     for k, shape in enumerate(palm.shapes):
         pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
         pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]
