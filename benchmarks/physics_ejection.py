@@ -27,6 +27,7 @@ import numpy as np
 def _rows(dataset, outcomes, every):
     import pyarrow as pa
 
+    from affordgrasp.dataset import Dataset
     from affordgrasp.physics.run import _plan_rows, read_outcomes
 
     out = read_outcomes(outcomes)
@@ -38,10 +39,11 @@ def _rows(dataset, outcomes, every):
             strict=True,
         )
     )
-    rows, manifest = _plan_rows(dataset, ("grasped",), None, None)
+    dataset = Dataset.open(dataset)
+    rows = _plan_rows(dataset, ("grasped",), None, None)
     pairs = zip(rows.column("object").to_pylist(), rows.column("sample").to_pylist(), strict=True)
     sel = [i for i, k in enumerate(pairs) if k in keys][::every]
-    return rows.take(pa.array(sel, type=pa.int64())), manifest
+    return rows.take(pa.array(sel, type=pa.int64())), dataset
 
 
 def _normal_error(scene, points, normals):
@@ -75,24 +77,20 @@ def main() -> None:
     parser.add_argument("--normals", action="store_true", help="measure the normal error")
     args = parser.parse_args()
 
-    from affordgrasp.dataset.reading import manifest_hand, read_dataset
-    from affordgrasp.hands import get_hand, hand_to_dict
+    from affordgrasp.hands import hand_to_dict
     from affordgrasp.physics import trials
     from affordgrasp.physics.run import _scene
     from affordgrasp.physics.settings import protocol_settings
 
-    rows, manifest = _rows(args.dataset, args.outcomes, args.every)
-    hand_key = json.dumps(hand_to_dict(get_hand(manifest_hand(manifest))), sort_keys=True)
-    entries = {o["name"]: o for o in manifest["objects"]}
+    rows, dataset = _rows(args.dataset, args.outcomes, args.every)
+    hand_key = json.dumps(hand_to_dict(dataset.hand), sort_keys=True)
     variants = args.variant or ["ours={}", 'dgb={"protocol": "dgb"}']
     names = rows.column("object").to_pylist()
     poses = [np.array(p).reshape(4, 4) for p in rows.column("hand_pose").to_pylist()]
     joints = [np.array(j) for j in rows.column("joints").to_pylist()]
     scored = None
     if args.normals:
-        table = read_dataset(
-            args.dataset, columns=["object", "sample", "contact_points", "contact_normals"]
-        )
+        table = dataset.read(columns=["object", "sample", "contact_points", "contact_normals"])
         by_key = {
             (o, s): (np.reshape(p, (-1, 3)), np.reshape(n, (-1, 3)))
             for o, s, p, n in zip(
@@ -109,8 +107,7 @@ def main() -> None:
         started = time.process_time()
         ejected, worst = [], []
         for i, name in enumerate(names):
-            e = entries[name]
-            scene = _scene(hand_key, e["name"], e["source"], e["mesh_hash"], settings)
+            scene = _scene(dataset.hand, hand_key, dataset.object(name), settings)
             trials.set_grasp(scene, poses[i], joints[i])
             if scored is not None:
                 angles = _normal_error(scene, *scored[i])

@@ -398,6 +398,7 @@ CASES = [
         "--max-rows must be 0 (every row) or >= 2, got -5",
     ),
     (["predict", "default", "{ds}", "--out", "{d}/pr.csv"], "must end in .parquet"),
+    (["physics", "{ds}", "--out", "{d}/ph19", "--workers", "0"], "--workers must be a positive"),
     (
         ["physics", "{ds}", "--out", "{d}/ph13", "--report", "{txt}"],
         "is a file, not a directory; give a directory",

@@ -143,13 +143,15 @@ def test_robust_of_rows_refuses_rows_that_do_not_simulate_to_their_grasp(tiny_da
     import numpy as np
     import pyarrow as pa
 
+    from affordgrasp.dataset import Dataset
     from affordgrasp.errors import DatasetError
     from affordgrasp.physics.run import _plan_rows, robust_of_rows
 
-    rows, manifest = _plan_rows(tiny_dataset, ("grasped",), None, 2)
+    dataset = Dataset.open(tiny_dataset)
+    rows = _plan_rows(dataset, ("grasped",), None, 2)
     poses = np.asarray(rows.column("hand_pose").to_pylist(), dtype=float)
     poses[0, 3] += 1e-4  # 0.1 mm off along x
     i = rows.column_names.index("hand_pose")
     moved = rows.set_column(i, "hand_pose", pa.array(poses.tolist(), rows.schema.field(i).type))
     with pytest.raises(DatasetError, match="stored grasp"):
-        robust_of_rows(moved, "parallel_jaw", manifest["objects"], robust=2)
+        robust_of_rows(moved, "parallel_jaw", {"block.stl": dataset.object("block.stl")}, 2)

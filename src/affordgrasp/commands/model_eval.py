@@ -147,6 +147,14 @@ def run(args, out) -> None:
                     seed=args.seed,
                     max_rows=max_rows,
                 )
+                bsel = base[0]["selection"]
+                if bsel["subsampled"]:  # said, as for the model (never silently)
+                    print(
+                        f"model-eval: baseline {bconfig['arch']} on {bconfig['target']['name']}: "
+                        f"evaluating a uniform subsample of {bsel['rows_evaluated']} of "
+                        f"{bsel['rows_available']} rows (--max-rows)",
+                        file=sys.stderr,
+                    )
         document["models"].append(
             _pooled(args, out, model, config, rep, samples, scores, base, plots)
         )

@@ -48,7 +48,16 @@ def add_arguments(p) -> None:
         help="start where the dataset row puts the hand, even inside the object's convex parts",
     )
     p.add_argument(
-        "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
+        "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
+    )
+    p.add_argument(
+        "--engine",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
+    )
+    p.add_argument(
+        "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
     )
     p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
@@ -175,6 +184,8 @@ def run(args, out) -> None:
             args.out,
             settings=settings,
             workers=args.workers,
+            engine=args.engine,
+            address=args.address,
             shard_size=args.shard_size,
             objects=args.object,
             max_per_object=args.max_per_object,

@@ -36,6 +36,7 @@ from numba import njit
 
 from ..columns import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS
 from ..errors import InputError
+from ..kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .discharge import discharge
 from .effort import (
@@ -48,7 +49,6 @@ from .effort import (
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
 from .hull import hull_workspace
 from .inertia import rotational_inertia
-from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
 from .use_geometry import (

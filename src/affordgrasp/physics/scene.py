@@ -12,7 +12,8 @@
   Barrett distal at 1/3 of the proximal, offset so that the grasp's joint values hold).
   Links moved by a pregrasp DOF (the Barrett spread) are placed rigidly per grasp.
 * The object collides as its convex parts (:mod:`.decompose`); its mass, centre of mass and
-  inertia are those of the ORIGINAL mesh at ``settings.density``.
+  inertia are those of the ORIGINAL mesh at ``settings.density``, or its per-part
+  materials' when it has them (a dataset made with ``--materials``).
 * Friction: every hand geom carries μ(link material, object material) from the material
   table (or ``settings.friction`` when set), object geoms μ = 0; MuJoCo takes the larger
   of a pair, so each contact gets that μ. Contacts are point contacts with friction
@@ -169,7 +170,7 @@ class Scene:
         The hand modelled.
     settings : PhysicsSettings
     mass : MassProperties
-        Of the original mesh at ``settings.density``.
+        Of the original mesh at ``settings.density`` (or of its per-part materials).
     object_name : str
     n_parts : int
         Convex parts the object collides as.
@@ -241,7 +242,9 @@ def build_scene(
     hand : Hand or str
         A Hand, a registered name or a hand file.
     obj : GraspObject
-        The object, in its own frame.
+        The object, in its own frame. Its mass properties are used when they follow
+        per-part materials (``obj.materials``); otherwise the object weighs
+        ``settings.density`` × its volume (or ``settings.object_mass_kg``).
     settings : PhysicsSettings, optional
         The protocol; the defaults when None.
     object_material : str
@@ -259,10 +262,15 @@ def build_scene(
     hand = get_hand(hand)
     if parts is None:
         parts = convex_parts(obj.mesh, obj.mesh_hash, settings)
-    mass = mass_properties(obj.mesh, density=settings.density)
-    if settings.object_mass_kg > 0:
-        # A fixed mass (the DexGraspBench protocol): the same density everywhere, scaled.
-        mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
+    if getattr(obj, "materials", False) and settings.object_mass_kg <= 0:
+        # Per-part materials (a dataset made with --materials, a region densities file): the
+        # object's own mass, centre of mass and inertia, as its rows were scored with.
+        mass = obj.mass
+    else:
+        mass = mass_properties(obj.mesh, density=settings.density)
+        if settings.object_mass_kg > 0:
+            # A fixed mass (the DexGraspBench protocol): the same density everywhere, scaled.
+            mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
     xml, info = _mjcf(hand, obj.name, parts, mass, settings, object_material)
     try:
         model = mj.MjModel.from_xml_string(xml)
