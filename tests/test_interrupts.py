@@ -100,6 +100,13 @@ def _minimal_argv(parser, command: str) -> list[str]:
     return argv
 
 
+def _ctrl_c_as_in_a_terminal() -> None:
+    # A command started in the background by a shell without job control inherits SIGINT
+    # ignored, and Python keeps it so; a terminal's command has the default. Test the latter
+    # whatever started the test run.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(args: list[str]) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "affordgrasp.cli", *args],
@@ -107,6 +114,7 @@ def _start(args: list[str]) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(SRC)},
+        preexec_fn=_ctrl_c_as_in_a_terminal,
     )
 
 

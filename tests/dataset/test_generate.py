@@ -140,6 +140,13 @@ def _cli(args: list[str]) -> list[str]:
     return [sys.executable, "-m", "affordgrasp.cli", *args]
 
 
+def _ctrl_c_as_in_a_terminal() -> None:
+    # A command started in the background by a shell without job control inherits SIGINT
+    # ignored, and Python keeps it so; a terminal's command has the default. Test the latter
+    # whatever started the test run.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(cmd: list[str]) -> subprocess.Popen:
     # Its own process group, like a shell job: signals reach the workers too.
     return subprocess.Popen(
@@ -148,6 +155,7 @@ def _start(cmd: list[str]) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        preexec_fn=_ctrl_c_as_in_a_terminal,
     )
 
 
@@ -178,7 +186,7 @@ def test_ctrl_c_then_kill_9_then_resume_equals_an_uninterrupted_run(
     proc = _start(cmd)
     _wait_for_shards(out, 1, proc)
     # Frozen first, so that the interrupt lands mid-run however fast the machine finishes
-    # the remaining shards (an idle machine wrote them all before the signal arrived).
+    # the remaining shards.
     os.killpg(proc.pid, signal.SIGSTOP)
     assert len(shard_paths(out)) < total
     os.killpg(proc.pid, signal.SIGINT)
