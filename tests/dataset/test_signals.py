@@ -74,7 +74,7 @@ def _alive(pid: int) -> bool:
 )
 def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum, to_group):
     out = tmp_path / "ds"
-    args = ["generate", str(box_mesh), "--samples", "512", "--out", str(out)]
+    args = ["generate", str(box_mesh), "--samples", "256", "--out", str(out)]
     args += ["--seed", str(SEED), "--shard-size", "8", "--chunk-size", "8", "--workers", "2"]
     proc = _start(args)
     deadline = time.monotonic() + 120
@@ -88,10 +88,14 @@ def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum
     else:
         pytest.fail("the workers did not start in time")
     workers = _children(proc.pid)
+    # Frozen while the signal is sent, so that it lands mid-run however fast the machine is.
+    os.killpg(proc.pid, signal.SIGSTOP)
+    assert len(shard_paths(out)) < len(plan_shards(1, 256, 8))
     if to_group:
         os.killpg(proc.pid, signum)
     else:
         os.kill(proc.pid, signum)
+    os.killpg(proc.pid, signal.SIGCONT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + signum, err
     assert signal.Signals(signum).name in err and "Run the same command" in err
@@ -109,8 +113,8 @@ def test_signal_stops_the_workers_and_the_run_resumes(tmp_path, box_mesh, signum
     assert again.returncode == 0, err
     summary = json.loads(stdout)
     assert summary["complete"]
-    assert summary["shards_skipped"] + summary["shards_written"] == len(plan_shards(1, 512, 8))
-    assert read_dataset(out)["sample"].to_pylist() == list(range(512))
+    assert summary["shards_skipped"] + summary["shards_written"] == len(plan_shards(1, 256, 8))
+    assert read_dataset(out)["sample"].to_pylist() == list(range(256))
 
 
 def test_workers_end_when_generate_is_killed(tmp_path, box_mesh):
