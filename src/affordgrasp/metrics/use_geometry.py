@@ -637,11 +637,15 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
 def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
     """How far U is from the wrist axis, relative to the centre of mass (``use_lever_ratio``).
 
-    The distance from U to the wrist axis (the line through the palm centre along the
-    approach direction) divided by the centre of mass's distance to it. A swing about that
-    axis strikes with its massive end when the ratio is at least 1: a hammer held by its
-    handle, whose steel head holds the centre of mass, strikes with the head, not with the
-    handle's end near the hand.
+    With r_U and r_C the offsets of U and of the centre of mass from the wrist axis (the line
+    through the palm centre along the approach direction; the parts perpendicular to it), the
+    ratio is |r_U|² / (r_C · r_U): U's lever over the centre of mass's lever projected on U's
+    side. A swing about that axis strikes with its massive end when the ratio is at least 1
+    (the mass lies between the axis and U) and small (the mass near U: at most 2 puts it in
+    the outer half of the lever). A hammer held by its handle, whose steel head holds the
+    centre of mass, strikes with the head (ratio a little over 1); striking with the handle's
+    end beyond the hand puts the mass on the other side of the axis (negative), and holding
+    the head to strike with the handle puts the mass near the axis (large).
 
     Parameters
     ----------
@@ -657,7 +661,8 @@ def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.nd
     Returns
     -------
     (n,) float64 ndarray
-        Dimensionless; +inf when the axis passes through the centre of mass.
+        Dimensionless; -inf when the centre of mass is on the axis or on the other side of it
+        from U (r_C · r_U <= 0); NaN where U is NaN (no use point).
     """
     U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
     W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
@@ -666,7 +671,11 @@ def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.nd
 
     def off_axis(P: np.ndarray) -> np.ndarray:
         d = P - W
-        return np.linalg.norm(d - np.einsum("ij,ij->i", d, A)[:, None] * A, axis=1)
+        return d - np.einsum("ij,ij->i", d, A)[:, None] * A
 
+    r_u = off_axis(U)
+    r_c = off_axis(np.broadcast_to(c, U.shape))
+    along = np.einsum("ij,ij->i", r_c, r_u)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return off_axis(U) / off_axis(np.broadcast_to(c, U.shape))
+        ratio = np.einsum("ij,ij->i", r_u, r_u) / along
+    return np.where(along > 0, ratio, np.where(np.isnan(along), np.nan, -np.inf))

@@ -16,6 +16,7 @@ from .thresholds import (
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_LEVER_DEFAULT,
+    TAU_LEVER_MAX_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -32,6 +33,7 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
         & (m["use_lever_ratio"] >= t["tau_lever"])
+        & (m["use_lever_ratio"] <= t["tau_lever_max"])
     )
     return np.where(ok, _beat_paper(m, t), -np.inf)
 
@@ -117,6 +119,7 @@ def builtin_tasks() -> list[Task]:
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
                 "tau_lever": TAU_LEVER_DEFAULT,
+                "tau_lever_max": TAU_LEVER_MAX_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
             "on a blunt use point with the hand off it",

@@ -79,6 +79,11 @@ TAU_THICKNESS_DEFAULT = 0.008
 # mass (use_lever_ratio >= 1), so a hammer held by its handle does not strike with the
 # handle's end. On a mesh file, the massive end is where its region densities put it.
 TAU_LEVER_DEFAULT = 1.0
+# ... and the mass in the outer half of the lever (use_lever_ratio <= 2): holding the head
+# and striking with the handle puts the centre of mass near the wrist axis (ratio 3-15 on
+# scan-like hammers with their steel heads), striking with the handle's end beyond the
+# hand puts it on the other side (ratio -inf).
+TAU_LEVER_MAX_DEFAULT = 2.0
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
