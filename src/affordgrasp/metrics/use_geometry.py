@@ -588,6 +588,90 @@ def use_clearance(contact_points, offsets, use_point, group=None) -> np.ndarray:
     return np.where(np.isnan(U).any(axis=1), np.nan, out)
 
 
+def long_axis(inertia) -> np.ndarray:
+    """The object's long axis: the principal axis of least moment of inertia.
+
+    Parameters
+    ----------
+    inertia : (3, 3) float
+        Inertia tensor about the centre of mass, kg·m² (any density scale).
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        Unit vector (its sign is arbitrary; :func:`contact_reach` does not depend on it).
+    """
+    inertia = np.asarray(inertia, dtype=np.float64).reshape(3, 3)
+    _, vectors = np.linalg.eigh(0.5 * (inertia + inertia.T))
+    return vectors[:, 0]
+
+
+def contact_reach(
+    contact_points, offsets, use_point, center_of_mass, axis, group=None
+) -> np.ndarray:
+    """How far the hand reaches past the centre of mass towards U's end (``contact_reach``), m.
+
+    Along the object's long axis e (:func:`long_axis`), with s = ±1 the side of the centre
+    of mass c that U lies on (the sign of (U - c) · e), the largest s (p - c) · e over a
+    grasp's contacts p. Negative: every contact lies on the other side of the centre of
+    mass from U, as when a knife is held by its handle and cuts with its blade, or a hammer
+    with a steel head is held by its handle and strikes with its head; positive: some
+    contact reaches that far along the object towards the working end (a finger on the
+    blade of a cleaver, whose centre of mass lies in the blade, or on an axe's head). It
+    needs no part labels, so it holds on a scanned mesh.
+
+    Parameters
+    ----------
+    contact_points : (k, 3) float
+        Contacts of all grasps, stacked, m.
+    offsets : (g + 1,) int
+        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
+    use_point : (n, 3) float
+        Use points, m.
+    center_of_mass : (3,) float
+        m.
+    axis : (3,) float
+        The long axis (any sign).
+    group : (n,) int, optional
+        The grasp of each use point (default: use point i belongs to grasp i, n = g).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        m; -inf for a grasp without contacts, NaN for a NaN use point.
+    """
+    C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
+    offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
+    U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
+    c = np.asarray(center_of_mass, dtype=np.float64).reshape(3)
+    e = np.asarray(axis, dtype=np.float64).reshape(3)
+    norm = float(np.linalg.norm(e))
+    if not (np.isfinite(norm) and norm > 0):
+        raise InputError(f"axis must be a non-zero finite vector, got {e.tolist()}")
+    e = e / norm
+    g = len(offsets) - 1
+    if g < 0 or offsets[-1] != len(C):
+        raise InputError(
+            f"offsets must end at the number of contacts ({len(C)}), got {offsets.tolist()}"
+        )
+    group = np.arange(len(U)) if group is None else np.asarray(group, dtype=np.int64).reshape(-1)
+    if group.shape[0] != U.shape[0]:
+        raise InputError(f"group has {group.shape[0]} rows, expected one per use point ({len(U)})")
+    if len(U) and (group.min() < 0 or group.max() >= g):
+        raise InputError(f"group indices must lie in [0, {g}), got {group.min()}..{group.max()}")
+    counts = np.diff(offsets)
+    hi = np.full(g, -np.inf)
+    lo = np.full(g, np.inf)
+    if len(C):
+        owner = np.repeat(np.arange(g), counts)
+        along = (C - c) @ e
+        np.maximum.at(hi, owner, along)
+        np.minimum.at(lo, owner, along)
+    side = (U - c) @ e >= 0
+    out = np.where(side, hi[group], -lo[group])
+    return np.where(np.isnan(U).any(axis=1), np.nan, out)
+
+
 _THICKNESS_START_M = 1e-4  # the rays start this far inside, along -n
 
 

@@ -17,6 +17,7 @@ from .thresholds import (
     TAU_EPS_DEFAULT,
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
+    TAU_REACH_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -54,6 +55,7 @@ def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["use_wedge_angle"] <= t["tau_wedge"])
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
+        & (m["contact_reach"] <= t["tau_reach"])
     )
     return np.where(ok, m["use_force"], -np.inf)
 
@@ -150,14 +152,16 @@ def builtin_tasks() -> list[Task]:
                 "tau_wedge": TAU_WEDGE_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
+                "tau_reach": TAU_REACH_DEFAULT,
             },
             description="cutting: U_τ if robust, the use point on an edge (wedge angle at "
-            "3 mm) and the hand off it",
+            "3 mm) and the hand off it, behind the centre of mass",
             requires=(
                 "epsilon",
                 "use_wedge_angle",
                 "use_clearance",
                 "contact_thickness",
+                "contact_reach",
                 "use_force",
             ),
         ),

@@ -84,6 +84,13 @@ TAU_LEVER_DEFAULT = 1.0
 # scan-like hammers with their steel heads), striking with the handle's end beyond the
 # hand puts it on the other side (ratio -inf).
 TAU_LEVER_MAX_DEFAULT = 2.0
+# Cut holds the tool behind its centre of mass: no contact past it towards the use point's
+# end along the long axis (contact_reach <= 0). Clearance and thickness alone left fingers
+# on a cleaver's spine (thick along its normal, 115-121 mm from the edge) and on an axe's
+# head (14-25 mm thick): on scan-like knife, cleaver, dagger, sword and axe (seed 2-3, all
+# pairs of 3000 grasps × 2000 use points on an edge) the pairs with no contact on the blade
+# or head were 0.79-0.98 of those the thickness test kept, 0.95-1.0 with this test too.
+TAU_REACH_DEFAULT = 0.0
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
