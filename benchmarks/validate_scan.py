@@ -97,6 +97,7 @@ def main() -> None:
     parser.add_argument("--families", default="", help="comma-separated subset")
     parser.add_argument("--crisp", action="store_true", help="the crisp families instead")
     parser.add_argument("--no-optimizer", action="store_true")
+    parser.add_argument("--no-brute-force", action="store_true")
     parser.add_argument("--cache", default="/tmp/affordgrasp-validation-scan")
     args = parser.parse_args()
     cache = Path(args.cache)
@@ -122,17 +123,21 @@ def main() -> None:
                     table = evaluate_samples(obj, args.grasps, seed=0, volume=False).table
                     pq.write_table(table, path)
                 line = [task, spec]
-                found = best_pairs(
-                    obj,
-                    task,
-                    grasps=table.num_rows,
-                    uses=args.uses,
-                    seed=0,
-                    top=args.top,
-                    grasp_table=table,
-                    per_grasp=True,
+                found = (
+                    None
+                    if args.no_brute_force
+                    else best_pairs(
+                        obj,
+                        task,
+                        grasps=table.num_rows,
+                        uses=args.uses,
+                        seed=0,
+                        top=args.top,
+                        grasp_table=table,
+                        per_grasp=True,
+                    )
                 )
-                searches = [("brute_force", found)]
+                searches = [] if args.no_brute_force else [("brute_force", found)]
                 if not args.no_optimizer:
                     opt = optimize_pairs(
                         obj,
