@@ -83,6 +83,49 @@ def seed_list(text: str) -> list[int]:
     return out
 
 
+def figure(objects: list[dict], path: str) -> None:
+    """Bars per task and family: the fractions of top rows with the use point right and with
+    the hand right, brute force and optimiser side by side (counts over all seeds)."""
+    from matplotlib.figure import Figure
+
+    keys = sorted({(o["task"], o["object"].split(":")[0]) for o in objects})
+    fig = Figure(figsize=(1.4 * len(keys) + 2, 3.6))
+    ax = fig.add_subplot()
+    width = 0.2
+    for j, (method, measure) in enumerate(
+        (
+            ("brute_force", "use_right"),
+            ("brute_force", "hand_right"),
+            ("optimizer", "use_right"),
+            ("optimizer", "hand_right"),
+        )
+    ):
+        values = []
+        for task, family in keys:
+            sel = [
+                o
+                for o in objects
+                if o["task"] == task
+                and o["object"].startswith(family + ":")
+                and o["method"] == method
+            ]
+            rows = sum(o["rows"] for o in sel)
+            values.append(sum(o[measure] for o in sel) / rows if rows else np.nan)
+        x = np.arange(len(keys)) + (j - 1.5) * width
+        ax.bar(x, np.nan_to_num(values), width, label=f"{method}: {measure}")
+        for xi, v in zip(x, values, strict=True):
+            if np.isnan(v):
+                ax.text(xi, 0.02, "none", rotation=90, ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(np.arange(len(keys)), [f"{t}\n{f}" for t, f in keys], fontsize=8)
+    ax.axhline(0.9, color="k", lw=0.8, ls="--")
+    ax.set_ylim(0, 1.4)
+    ax.set_yticks([0, 0.2, 0.4, 0.6, 0.8, 0.9, 1.0])
+    ax.set_ylabel("fraction of top-10 rows")
+    ax.legend(fontsize=7, loc="upper center", ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", default="2-6", help="held out: 2-6; calibration: 0-1")
@@ -92,6 +135,9 @@ def main() -> None:
     parser.add_argument("--restarts", type=int, default=2)
     parser.add_argument("--refine", type=float, default=0.0)
     parser.add_argument("--out", default="", help="also write the JSON report and rows here")
+    parser.add_argument(
+        "--figure", default="", help="bars from the rows of these --out files (no run)", nargs="*"
+    )
     parser.add_argument("--top", type=int, default=10)
     parser.add_argument("--tasks", default="cut,beat")
     parser.add_argument("--families", default="", help="comma-separated subset")
@@ -100,6 +146,11 @@ def main() -> None:
     parser.add_argument("--no-brute-force", action="store_true")
     parser.add_argument("--cache", default="/tmp/affordgrasp-validation-scan")
     args = parser.parse_args()
+    if args.figure:
+        *sources, target = args.figure
+        objects = [o for src in sources for o in json.loads(Path(src).read_text())["objects"]]
+        figure(objects, target)
+        return
     cache = Path(args.cache)
     cache.mkdir(parents=True, exist_ok=True)
     wanted = [f for f in args.families.split(",") if f]
