@@ -70,7 +70,7 @@ METRIC_UNITS: dict[str, str] = {
     "use_wedge_angle": "rad",
     "use_clearance": "m",
     "use_lever_ratio": "",
-    "contact_reach": "m",
+    "contact_reach": "",
     "contact_thickness": "m",
 }
 
@@ -79,7 +79,6 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "use_edge_angle": ("°", 180.0 / math.pi),
     "use_wedge_angle": ("°", 180.0 / math.pi),
     "use_clearance": ("mm", 1000.0),
-    "contact_reach": ("mm", 1000.0),
     "contact_thickness": ("mm", 1000.0),
 }
 

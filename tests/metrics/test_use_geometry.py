@@ -318,13 +318,12 @@ def test_contact_reach_is_the_farthest_contact_towards_the_use_end():
     contacts = np.array([[-0.10, 0.01, 0], [-0.05, -0.01, 0], [0.02, 0.01, 0], [0.1, 0, 0.01]])
     offsets = [0, 2, 4, 4]  # grasp 0 behind the mass, grasp 1 past it, grasp 2 no contact
     U = np.array([[0.14, 0, 0], [0.14, 0, 0], [0.14, 0, 0]])
-    np.testing.assert_allclose(contact_reach(contacts, offsets, U, c, axis), [-0.05, 0.1, -np.inf])
+    expected = np.array([-0.05, 0.1, -np.inf]) / 0.14  # a fraction of U's own offset
+    np.testing.assert_allclose(contact_reach(contacts, offsets, U, c, axis), expected)
     # the sign of the axis does not matter; U on the other end mirrors the reach
-    np.testing.assert_allclose(
-        contact_reach(contacts, offsets, U, c, -axis), [-0.05, 0.1, -np.inf]
-    )
+    np.testing.assert_allclose(contact_reach(contacts, offsets, U, c, -axis), expected)
     got = contact_reach(contacts, offsets, [[-0.14, 0, 0]] * 2, c, axis, group=[0, 1])
-    np.testing.assert_allclose(got, [0.10, -0.02])
+    np.testing.assert_allclose(got, [0.10 / 0.14, -0.02 / 0.14])
     assert np.isnan(contact_reach(contacts, offsets, [[np.nan] * 3], c, axis, group=[0]))[0]
     with pytest.raises(InputError, match="axis"):
         contact_reach(contacts, offsets, U, c, [0, 0, 0])

@@ -28,7 +28,7 @@ def table(**overrides):
         "use_clearance": np.full(n, 0.05),
         "contact_thickness": np.full(n, 0.02),
         "use_lever_ratio": np.full(n, 1.2),
-        "contact_reach": np.full(n, -0.02),
+        "contact_reach": np.full(n, -0.2),
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -100,10 +100,10 @@ def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
     thin = table(contact_thickness=[0.002, 0.02, 0.02, 0.02, 0.02])
     assert cut.evaluate(thin)[0] == -INF and cut.evaluate(thin)[1] == 1.0
     assert cut.thresholds["tau_thick"] == tasks.TAU_THICKNESS_DEFAULT
-    reach = table(contact_reach=[0.01, 0.0, -0.05, -INF, 0.3])
+    reach = table(contact_reach=[0.6, 0.5, -0.05, -INF, 3.0])
     got = cut.evaluate(reach)
     assert got[0] == -INF and got[4] == -INF and np.isfinite(got[1:4]).all()
-    assert cut.evaluate(reach, tau_reach=1.0)[4] == 2.5
+    assert cut.evaluate(reach, tau_reach=INF)[4] == 2.5
     assert cut.thresholds["tau_wedge"] == pytest.approx(tasks.TAU_WEDGE_DEFAULT)
     dihedral = tasks.get_task("cut-dihedral")
     edge_only = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_wedge_angle=np.full(5, 3.0))

@@ -609,16 +609,16 @@ def long_axis(inertia) -> np.ndarray:
 def contact_reach(
     contact_points, offsets, use_point, center_of_mass, axis, group=None
 ) -> np.ndarray:
-    """How far the hand reaches past the centre of mass towards U's end (``contact_reach``), m.
+    """How far the hand reaches past the centre of mass towards U (``contact_reach``).
 
-    Along the object's long axis e (:func:`long_axis`), with s = ±1 the side of the centre
-    of mass c that U lies on (the sign of (U - c) · e), the largest s (p - c) · e over a
-    grasp's contacts p. Negative: every contact lies on the other side of the centre of
-    mass from U, as when a knife is held by its handle and cuts with its blade, or a hammer
-    with a steel head is held by its handle and strikes with its head; positive: some
-    contact reaches that far along the object towards the working end (a finger on the
-    blade of a cleaver, whose centre of mass lies in the blade, or on an axe's head). It
-    needs no part labels, so it holds on a scanned mesh.
+    Along the object's long axis e (:func:`long_axis`), with u = (U - c) · e the use point's
+    offset from the centre of mass c, the largest (p - c) · e · sign(u) over a grasp's
+    contacts p, divided by |u|: 0 when no contact lies past the centre of mass on U's side,
+    1 when one reaches as far as U does, negative when every contact lies behind the centre
+    of mass. A knife held by its handle and cutting with its blade, or a hammer with a steel
+    head held by its handle and striking with its head, reads small or negative; a finger on
+    an axe's head or a knife's blade reads near 1. It needs no part labels, so it holds on a
+    scanned mesh.
 
     Parameters
     ----------
@@ -638,7 +638,9 @@ def contact_reach(
     Returns
     -------
     (n,) float64 ndarray
-        m; -inf for a grasp without contacts, NaN for a NaN use point.
+        Dimensionless; -inf for a grasp without contacts, ±inf when U lies level with the
+        centre of mass (u = 0) and a contact lies past it (+) or none does (-), NaN for a
+        NaN use point.
     """
     C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
     offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
@@ -667,8 +669,10 @@ def contact_reach(
         along = (C - c) @ e
         np.maximum.at(hi, owner, along)
         np.minimum.at(lo, owner, along)
-    side = (U - c) @ e >= 0
-    out = np.where(side, hi[group], -lo[group])
+    u = (U - c) @ e
+    reach = np.where(u >= 0, hi[group], -lo[group])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(u != 0, reach / np.abs(u), np.where(reach > 0, np.inf, -np.inf))
     return np.where(np.isnan(U).any(axis=1), np.nan, out)
 
 

@@ -23,7 +23,8 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
 * ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
   opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
   (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), or past the centre
-  of mass towards U's end along the long axis (``contact_reach`` > τ_reach, 0), else U_τ;
+  of mass towards U along the long axis by more than half of U's offset (``contact_reach``
+  > τ_reach, 0.5), else U_τ;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
   rounds the mesh's edges away);
