@@ -23,30 +23,25 @@ def main() -> None:
     parser.add_argument("--protocol", default="affordgrasp", choices=("affordgrasp", "dgb"))
     args = parser.parse_args()
 
-    import json
-
-    from affordgrasp.dataset.reading import manifest_hand
-    from affordgrasp.hands import hand_to_dict
-    from affordgrasp.physics.run import _plan_rows, _scene, validate_rows
+    from affordgrasp.dataset import Dataset
+    from affordgrasp.physics.run import _plan_rows, validate_rows
     from affordgrasp.physics.settings import protocol_settings
 
     settings = protocol_settings(args.protocol)
-    rows, manifest = _plan_rows(args.dataset, ("grasped",), None, args.rows)
-    hand = manifest_hand(manifest)
-    hand_key = json.dumps(hand_to_dict(hand), sort_keys=True)
-    entries = {o["name"]: o for o in manifest["objects"]}
+    dataset = Dataset.open(args.dataset)
+    rows = _plan_rows(dataset, ("grasped",), None, args.rows)
+    hand = dataset.hand
     names = np.array(rows.column("object").to_pylist())
     print("| object | rows | wall ms/validation | CPU ms/validation | per core-hour (CPU) |")
     print("|---|---:|---:|---:|---:|")
     total_rows, total_cpu, total_wall = 0, 0.0, 0.0
     for name in dict.fromkeys(names):
-        e = entries[name]
-        _scene(hand_key, e["name"], e["source"], e["mesh_hash"], settings)  # not timed
+        objects = {name: dataset.object(name)}
         idx = np.flatnonzero(names == name)
         part = rows.take(idx)
-        validate_rows(part.slice(0, 1), hand, manifest["objects"], settings)  # compile
+        validate_rows(part.slice(0, 1), hand, objects, settings)  # compile, not timed
         wall, cpu = time.perf_counter(), time.process_time()
-        validate_rows(part, hand, manifest["objects"], settings)
+        validate_rows(part, hand, objects, settings)
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         n = len(idx)
         total_rows, total_cpu, total_wall = total_rows + n, total_cpu + cpu, total_wall + wall

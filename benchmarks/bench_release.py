@@ -115,6 +115,7 @@ def remove_previous_checkout(previous: Path) -> None:
 def run_worker(src: Path, spec: str, n: int) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src))
     env.pop("NUMBA_CACHE_DIR", None)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # as installed: bytecode compiled once, kept
     proc = subprocess.run(
         [sys.executable, "-c", WORKER, spec, str(n)],
         env=env,

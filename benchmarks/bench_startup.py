@@ -182,6 +182,7 @@ def run_once(
     """
     env = dict(os.environ, PYTHONPATH=str(src))
     env.pop("NUMBA_CACHE_DIR", None)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # as installed: bytecode compiled once, kept
     args = ["generate", spec, "--samples", "1", "--workers", "1", "--out", str(out), *extra]
     entry = ["-c", TIMED] if timed else ["-m", "affordgrasp.cli"]
     cmd = [sys.executable, *entry, *args]

@@ -570,6 +570,46 @@ COMMAND_CASES = [
         lambda d: ["predict", _nan_model(d), "nodata", "--out", "p.parquet"],
         "non-finite values",
     ),
+    (
+        "evaluate --tasks-file a folder",
+        lambda d: ["evaluate", "knife", "--samples", "2", "--tasks-file", str(d)],
+        "is a directory; give a .toml file",
+    ),
+    (
+        "depth --size 100000",
+        lambda d: ["depth", "knife", "--sample", "1", "--size", "100000", "-o", "d.png"],
+        "at most 4096 pixels per side",
+    ),
+    (
+        "optimize --population 0",
+        lambda d: ["optimize", "knife", "--task", "pick", "--budget", "20", "--population", "0"],
+        "must be an integer >= 2",
+    ),
+    (
+        "optimize --population 1",
+        lambda d: ["optimize", "knife", "--task", "pick", "--budget", "20", "--population", "1"],
+        "must be an integer >= 2",
+    ),
+    (
+        "show --mesh a text file",
+        lambda d: ["show", "nodata", "--task", "pick", "--mesh", _tasks_file(d), "-o", "s"],
+        "is not a mesh file",
+    ),
+    (
+        "evaluate --out a .csv name",
+        lambda d: ["evaluate", "knife", "--samples", "2", "--out", "rows.csv"],
+        "must end in .parquet",
+    ),
+    (
+        "model-eval --task unknown",
+        lambda d: ["model-eval", "default", "nodata", "--task", "nosuch"],
+        "unknown task 'nosuch'",
+    ),
+    (
+        "plots --mesh a missing file",
+        lambda d: ["plots", "nodata", "--mesh", "no.stl", "-o", "p"],
+        "does not exist",
+    ),
 ]
 
 

@@ -19,7 +19,8 @@ name                   what
 ``ContactSet``         contacts from any source, for the metric functions
                        (:mod:`affordgrasp.metrics`)
 ``evaluate``           simulate and score grasps: an :class:`Evaluation`
-``generate``           a sharded, resumable Parquet dataset
+``generate``           a sharded, resumable Parquet dataset (``.dataset`` opens it)
+``Dataset``            a dataset directory opened once: plan, hand, objects, rows
 ``read_dataset``       a dataset as an Arrow table
 ``best_grasps``        the argmax of a task over a dataset
 ``plan``               a grasp chosen by learned models from camera-in-hand views, checked
@@ -59,6 +60,7 @@ _EXPORTS = {
     "evaluate": "affordgrasp.pipeline",
     "Evaluation": "affordgrasp.pipeline",
     "generate": "affordgrasp.dataset.generate",
+    "Dataset": "affordgrasp.dataset.handle",
     "read_dataset": "affordgrasp.dataset.reading",
     "best_grasps": "affordgrasp.dataset.best",
     "plan": "affordgrasp.learning.plan",
@@ -69,6 +71,7 @@ _EXPORTS = {
 if TYPE_CHECKING:
     from .dataset.best import best_grasps
     from .dataset.generate import generate
+    from .dataset.handle import Dataset
     from .dataset.reading import read_dataset
     from .hands import Hand, get_hand, list_hands, load_hand, register_hand, save_hand
     from .learning.plan import Plan, plan
@@ -94,6 +97,7 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "ContactSet",
+    "Dataset",
     "Evaluation",
     "GraspObject",
     "Hand",

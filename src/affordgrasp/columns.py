@@ -6,7 +6,7 @@ Plain Python and numpy: no numba, no pyarrow, so that anything may import it che
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -197,3 +197,31 @@ def hold_directions(values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     parts = np.asarray([values[c] for c in HOLD_EFFORT_COLUMNS], dtype=np.float64)
     finite = np.isfinite(parts)
     return finite.sum(axis=0).astype(np.float64), np.where(finite, parts, 0.0).sum(axis=0)
+
+
+def robust_column_names(tasks: Sequence[str]) -> tuple[str, ...]:
+    """Names of the robust columns, in table order (:mod:`affordgrasp.robust` fills them).
+
+    Parameters
+    ----------
+    tasks : sequence of str
+        Tasks summarised.
+
+    Returns
+    -------
+    tuple of str
+        ``hold_dirs``, ``robust_fc``, ``robust_epsilon``, ``robust_viable``,
+        ``robust_hold_dirs``, ``robust_hold``, then ``robust_p_<task>`` and
+        ``robust_<task>`` per task.
+    """
+    names = [
+        "hold_dirs",
+        "robust_fc",
+        "robust_epsilon",
+        "robust_viable",
+        "robust_hold_dirs",
+        "robust_hold",
+    ]
+    for t in tasks:
+        names += [f"robust_p_{t}", f"robust_{t}"]
+    return tuple(names)

@@ -1,7 +1,7 @@
 """The compiled kernels as a whole: load them (or compile them) at once, and build caches.
 
 The simulation and the metrics run in numba kernels. numba compiles a kernel at its first
-call and caches the machine code on disk (see :mod:`affordgrasp.metrics.kernel_cache`), so
+call and caches the machine code on disk (see :mod:`affordgrasp.kernel_cache`), so
 only the very first run on a machine pays the compilation (about a minute on one core).
 Building the package runs ``python -m affordgrasp.compiled`` (see ``setup.py``), so an
 installed package ships with the caches of the machine it was built on and its first run

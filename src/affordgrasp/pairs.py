@@ -317,7 +317,8 @@ def pair_scores(
     rows = np.unique(gi)
     points, normals, mu, offsets = _contacts(grasps, rows)
     local = np.searchsorted(rows, gi)
-    center = np.ascontiguousarray(obj.mass.center_of_mass, dtype=np.float64)
+    # a writable copy: one kernel signature in process and in workers (see metrics.phi)
+    center = np.array(obj.mass.center_of_mass, dtype=np.float64)
     impact, force, redo = pair_lp_metrics(
         points,
         normals,

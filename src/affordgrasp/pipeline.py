@@ -17,12 +17,11 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from .columns import USE_METRICS
 from .errors import InputError
-from .grasp.policy import SimulationBatch, simulate
+from .grasp.policy import simulate
 from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
-from .metrics.phi import compute_phi_batch
+from .metrics.phi_batch import phi_of_batch
 from .objects import GraspObject, load_object
 from .robust import RobustSettings, robust_columns, robust_settings
 from .schema import append_float_columns, batch_to_table, robust_fields
@@ -101,59 +100,6 @@ class Evaluation:
     def to_pandas(self):
         """The table as a pandas DataFrame (needs pandas)."""
         return self.table.to_pandas()
-
-
-def phi_of_batch(
-    obj: GraspObject, batch: SimulationBatch, *, soft: bool = False, volume: bool = False
-) -> dict:
-    """Φ for every row of a simulation batch.
-
-    A row whose use ray left the object without a hit (from the cavity of a hollow object
-    through its opening) has no use point: its use metrics are NaN (undefined), the others
-    are computed as usual.
-
-    Parameters
-    ----------
-    obj : GraspObject
-        The object simulated.
-    batch : SimulationBatch
-        n grasps with their contacts (m, object frame), use points and wrist axes.
-    soft : bool
-        Soft-finger cones.
-    volume : bool
-        Also compute ``gws_volume``, the 6-volume of the grasp wrench space (the full 6-D
-        hull of every force-closure grasp, most of the metric cost on enveloping grasps).
-        False (default): ε alone, the same ε from the exact best-first hull, and
-        ``gws_volume`` None (a null column). The paper's Φ has no volume and no task uses it.
-
-    Returns
-    -------
-    dict of str to (n,) ndarray
-        Column name → float64 array (``epsilon_reason``: object array of str;
-        ``gws_volume``: None when not computed).
-    """
-    no_use = batch.use_triangle < 0
-    use_point = np.where(no_use[:, None], obj.mass.center_of_mass, batch.use_point)
-    use_normal = np.where(no_use[:, None], [1.0, 0.0, 0.0], batch.use_normal)
-    use_triangle = np.where(no_use, 0, batch.use_triangle)
-    phi: dict = compute_phi_batch(
-        obj.mass,
-        obj.mesh_data,  # the mesh's arrays, normals and adjacency; no trimesh needed
-        batch.contacts,
-        use_point,
-        use_normal,
-        use_triangle,
-        batch.wrist_point,
-        batch.wrist_axis,
-        soft=soft,
-        volume=volume,
-    )
-    if no_use.any():
-        for name in USE_METRICS:
-            phi[name] = np.where(no_use, np.nan, phi[name])
-    if not volume:
-        phi["gws_volume"] = None  # not computed: a null column, never a number
-    return phi
 
 
 def evaluate_inputs(

@@ -72,6 +72,7 @@ from typing import Any
 
 import numpy as np
 
+from . import columns
 from .columns import HOLD_EFFORT_COLUMNS, USE_METRICS
 from .errors import InputError
 
@@ -365,21 +366,10 @@ def robust_column_names(tasks: Sequence[str] = DEFAULT_TASKS) -> tuple[str, ...]
     Returns
     -------
     tuple of str
-        ``hold_dirs``, ``robust_fc``, ``robust_epsilon``, ``robust_viable``,
-        ``robust_hold_dirs``, ``robust_hold``, then ``robust_p_<task>`` and
-        ``robust_<task>`` per task.
+        :func:`affordgrasp.columns.robust_column_names` of ``tasks`` (their one owner, so
+        that the sample schema names them without importing this module).
     """
-    names = [
-        "hold_dirs",
-        "robust_fc",
-        "robust_epsilon",
-        "robust_viable",
-        "robust_hold_dirs",
-        "robust_hold",
-    ]
-    for t in tasks:
-        names += [f"robust_p_{t}", f"robust_{t}"]
-    return tuple(names)
+    return columns.robust_column_names(tasks)
 
 
 def ranking_column(task: str) -> str:
@@ -476,7 +466,7 @@ def robust_columns(
 
     from .grasp.policy import object_geometry, pregrasp_starts, simulate_starts
     from .hands import get_hand
-    from .pipeline import phi_of_batch
+    from .metrics.phi_batch import phi_of_batch
 
     if not settings.enabled:
         raise InputError("robust evaluation needs K >= 1 copies (K = 0 is plain evaluation)")
@@ -567,7 +557,8 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.validation import units_n3
 
     mass = obj.mass
-    center = np.ascontiguousarray(mass.center_of_mass, dtype=np.float64).reshape(3)
+    # a writable copy: one kernel signature in process and in workers (see metrics.phi)
+    center = np.array(mass.center_of_mass, dtype=np.float64).reshape(3)
     m = len(flat.poses)
     no_use = np.repeat(batch.use_triangle < 0, k_count)
     use_point = np.where(no_use[:, None], center, np.repeat(batch.use_point, k_count, axis=0))

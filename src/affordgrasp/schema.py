@@ -55,7 +55,7 @@ DEPTH_FIELD = pa.field(DEPTH_COLUMN, pa.binary())
 
 
 def robust_fields(tasks) -> list[pa.Field]:
-    """The float64 fields of robust evaluation (:func:`affordgrasp.robust.robust_column_names`).
+    """The float64 fields of robust evaluation (:func:`affordgrasp.columns.robust_column_names`).
 
     Parameters
     ----------
@@ -66,7 +66,7 @@ def robust_fields(tasks) -> list[pa.Field]:
     -------
     list of pyarrow.Field
     """
-    from .robust import robust_column_names
+    from .columns import robust_column_names
 
     return [pa.field(name, _f64) for name in robust_column_names(tuple(tasks))]
 

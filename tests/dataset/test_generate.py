@@ -177,7 +177,12 @@ def test_ctrl_c_then_kill_9_then_resume_equals_an_uninterrupted_run(
     # Ctrl-C (SIGINT to the process group, as a terminal sends it): a clean stop.
     proc = _start(cmd)
     _wait_for_shards(out, 1, proc)
+    # Frozen first, so that the interrupt lands mid-run however fast the machine finishes
+    # the remaining shards (an idle machine wrote them all before the signal arrived).
+    os.killpg(proc.pid, signal.SIGSTOP)
+    assert len(shard_paths(out)) < total
     os.killpg(proc.pid, signal.SIGINT)
+    os.killpg(proc.pid, signal.SIGCONT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert "Run the same command to finish" in err

@@ -228,3 +228,60 @@ def test_generate_on_a_silent_ray_address_exits_2_then_obeys_sigterm(
     assert proc.returncode == 128 + signal.SIGTERM, err
     assert "stopped by SIGTERM" in err
     assert time.monotonic() - signalled < 15
+
+
+_REAPED_PARENT = (
+    "import subprocess, sys, time\n"
+    "from affordgrasp.worker_lifetime import Reaper\n"
+    "reaper = Reaper(interval=0.1)\n"
+    "assert reaper.running\n"
+    # Its own session: a child that would survive its parent (and any group kill).
+    "child = subprocess.Popen(['sleep', '60'], start_new_session=True)\n"
+    "time.sleep(0.5)\n"  # the watcher has noted it
+    "print(child.pid, flush=True)\n"
+    "if sys.argv[1] == 'close':\n"
+    "    reaper.close()\n"
+    "    sys.exit(0)\n"
+    "time.sleep(60)\n"
+)
+
+
+def _reaped_parent(mode: str) -> tuple[subprocess.Popen, int]:
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the reaper reads /proc (Linux only)")
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _REAPED_PARENT, mode],
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(SRC)},
+    )
+    line = proc.stdout.readline()
+    assert line.strip().isdigit(), proc.communicate(timeout=30)
+    return proc, int(line)
+
+
+def test_reaper_kills_the_descendants_of_a_killed_parent():
+    """kill -9 of a parent with a Reaper: a detached child of it ends within 5 s."""
+    proc, child = _reaped_parent("wait")
+    try:
+        proc.kill()
+        proc.communicate(timeout=30)
+        killed = time.monotonic()
+        while _alive(child) and time.monotonic() < killed + 5:
+            time.sleep(0.05)
+        assert not _alive(child), "the child outlived its killed parent by 5 s"
+    finally:
+        if _alive(child):
+            os.kill(child, signal.SIGKILL)
+
+
+def test_reaper_closed_leaves_children_alone():
+    """A parent that closes its Reaper and exits: the watcher kills nothing."""
+    proc, child = _reaped_parent("close")
+    try:
+        assert proc.wait(timeout=30) == 0
+        time.sleep(0.5)
+        assert _alive(child), "a closed reaper killed a child"
+    finally:
+        if _alive(child):
+            os.kill(child, signal.SIGKILL)

@@ -255,6 +255,17 @@ def test_model_eval_decides_beside_a_pose_only_baseline(tiny_dataset, tmp_path, 
     assert set(entry) >= {"model", "baseline", "random", "oracle"}
     assert entry["baseline"]["top1_percentile"] <= entry["oracle"]["top1_percentile"]
 
+    # A baseline's subsample is said too, on stderr and in the JSON, never silently.
+    rc = main(
+        ["model-eval", str(pose), str(tiny_dataset), "--baseline", str(pose), "--max-rows", "10"]
+        + ["--objects", "all", "--no-decisions", "--json"]
+    )
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    base = json.loads(captured.out)["models"][0]["baseline"]
+    assert base["selection"]["subsampled"] and base["selection"]["rows_evaluated"] == 10
+    assert "baseline pose on n_contacts: evaluating a uniform subsample of 10" in captured.err
+
 
 def test_decisions_replay_the_choice_in_physics(tiny_dataset):
     pytest.importorskip("mujoco")

@@ -216,3 +216,22 @@ def test_without_volume_every_other_column_is_the_same(scene):
             np.testing.assert_allclose(fast[name], full[name], rtol=1e-9, atol=1e-12)
         elif name != "gws_volume":
             np.testing.assert_array_equal(fast[name], full[name])
+
+
+def test_read_only_and_writable_objects_run_one_compiled_kernel(scene):
+    # A cached object's arrays are read-only, a worker's unpickled copy's are writable;
+    # numba types (and compiles) a kernel once per read-only flag, so a worker would
+    # compile the metric kernels that the package ships for the in-process run.
+    import dataclasses
+
+    mesh, mass, *rest = scene
+    center = np.array(mass.center_of_mass)
+    frozen = center.copy()
+    frozen.flags.writeable = False
+    runs, signatures = [], []
+    for c in (frozen, center):
+        runs.append(compute_phi_batch(dataclasses.replace(mass, center_of_mass=c), mesh, *rest))
+        signatures.append(set(phi_module.contact_metrics_batch.signatures))
+    assert signatures[0] == signatures[1]
+    for name in runs[0]:
+        np.testing.assert_array_equal(runs[0][name], runs[1][name])

@@ -101,3 +101,57 @@ def test_physics_command_dgb_protocol_and_bad_protocol(tiny_dataset, tmp_path, c
     assert max(table.column("start_penetration_m").to_pylist()) <= 5e-5
     code, _, stderr = _run(capsys, tiny_dataset, "--out", tmp_path / "x", "--protocol", "bogus")
     assert code == 2 and "bogus" in stderr
+
+
+def test_physics_robust_computes_the_columns_a_robust_dataset_holds(tiny_dataset, tmp_path, capsys):
+    """--robust K on a plain dataset computes, for the replayed rows, the very robust columns
+    that ``generate --robust K`` writes for them; on a robust dataset it reads them."""
+    import numpy as np
+
+    from affordgrasp.dataset.generate import generate
+    from affordgrasp.dataset.layout import read_manifest
+
+    mesh = read_manifest(tiny_dataset)["objects"][0]["source"]
+    robust_ds = tmp_path / "robust-ds"
+    generate([mesh], 24, robust_ds, seed=2, workers=1, shard_size=12, hand="parallel_jaw", robust=2)
+    common = ["--max-per-object", 2, "--workers", 1, "--robust", 2]
+    code, stdout, _ = _run(capsys, tiny_dataset, "--out", tmp_path / "computed", *common)
+    assert code == 0
+    assert json.loads(stdout)["summary"]["robust"] == {"copies": 2, "source": "computed"}
+    code, stdout, _ = _run(capsys, robust_ds, "--out", tmp_path / "read", *common)
+    assert code == 0
+    assert json.loads(stdout)["summary"]["robust"] == {"copies": 2, "source": "dataset"}
+    computed, read = pq.read_table(tmp_path / "computed"), pq.read_table(tmp_path / "read")
+    names = [c for c in read.column_names if c.startswith("robust_")]
+    assert {"robust_hold", "robust_fc", "robust_pick"} <= set(names)
+    for c in names:
+        a = np.asarray(computed.column(c).to_pylist(), dtype=float)
+        b = np.asarray(read.column(c).to_pylist(), dtype=float)
+        np.testing.assert_array_equal(a, b, err_msg=c)
+    assert np.isfinite(computed.column("robust_fc").to_numpy()).all()
+    # A resume with another K is refused (the plan records the computed robust settings).
+    again = [*common[:-1], 3]
+    code, _, stderr = _run(capsys, tiny_dataset, "--out", tmp_path / "computed", *again)
+    assert code == 2 and "robust {" in stderr and "max_per_object" not in stderr
+    # Another K than the dataset's is refused, naming the dataset's.
+    code, _, stderr = _run(capsys, robust_ds, "--out", tmp_path / "x", "--robust", 3)
+    assert code == 2 and "--robust 2" in stderr
+
+
+def test_robust_of_rows_refuses_rows_that_do_not_simulate_to_their_grasp(tiny_dataset):
+    """A stored grasp that its pregrasp no longer gives is refused, not scored as another."""
+    import numpy as np
+    import pyarrow as pa
+
+    from affordgrasp.dataset import Dataset
+    from affordgrasp.errors import DatasetError
+    from affordgrasp.physics.run import _plan_rows, robust_of_rows
+
+    dataset = Dataset.open(tiny_dataset)
+    rows = _plan_rows(dataset, ("grasped",), None, 2)
+    poses = np.asarray(rows.column("hand_pose").to_pylist(), dtype=float)
+    poses[0, 3] += 1e-4  # 0.1 mm off along x
+    i = rows.column_names.index("hand_pose")
+    moved = rows.set_column(i, "hand_pose", pa.array(poses.tolist(), rows.schema.field(i).type))
+    with pytest.raises(DatasetError, match="stored grasp"):
+        robust_of_rows(moved, "parallel_jaw", {"block.stl": dataset.object("block.stl")}, 2)

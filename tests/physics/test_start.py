@@ -114,3 +114,28 @@ def test_dgb_scene_has_the_protocol_mass_and_friction(box_object):
     assert np.allclose(m.geom_friction[hand, 0], 0.6)
     assert np.all(m.geom_condim[hand] == 4)
     assert m.opt.noslip_iterations == 2
+
+
+def test_friction_margin_widens_the_cones_and_settled_metrics_keep_the_table_mu(box_object):
+    """μ' = tan(atan μ + δ) on every hand geom; the settled contacts report the table's μ."""
+    from affordgrasp.materials import friction_coefficient
+    from affordgrasp.physics.scene import engine_friction, table_friction
+
+    s = PhysicsSettings(friction_margin_deg=10.0)
+    # Analytic: a 0.4 cone (21.80°) widened by 10° is 31.80°: tan = 0.6200.
+    assert engine_friction(s, 0.4) == pytest.approx(math.tan(math.atan(0.4) + math.radians(10)))
+    assert engine_friction(s, 0.4) == pytest.approx(0.62, abs=1e-3)
+    assert table_friction(s, np.array([engine_friction(s, 0.3)]))[0] == pytest.approx(0.3)
+    assert engine_friction(PhysicsSettings(friction_margin_deg=0.0), 0.4) == 0.4
+    assert engine_friction(protocol_settings("dgb", friction_margin_deg=10.0), 0.4) == 0.6
+    scene = build_scene("parallel_jaw", box_object, s)
+    mu = friction_coefficient(scene.hand.links[1].material, "plastic")  # rubber jaws: 1.0
+    mu_palm = friction_coefficient(scene.hand.links[0].material, "plastic")
+    friction = scene.model.geom_friction[:, 0]
+    assert np.allclose(friction[scene.finger_geoms[0]], engine_friction(s, mu))
+    assert np.allclose(friction[scene.palm_geoms], engine_friction(s, mu_palm))
+    pose, joints = jaw_grasp(TOUCH - 5e-5, TOUCH - 5e-5)
+    out = validate_grasp(scene, pose, joints)
+    assert len(out.settled_mu) >= 2 and np.allclose(out.settled_mu, mu)
+    with pytest.raises(InputError, match="friction_margin_deg"):
+        PhysicsSettings(friction_margin_deg=45.0)

@@ -307,7 +307,7 @@ def check_fits_in_memory(
         )
 
 
-def check_output_file(path: str, option: str) -> None:
+def check_output_file(path: str, option: str, suffix: str | None = None) -> None:
     """Refuse an output file that cannot be written, before the work that fills it.
 
     Parameters
@@ -316,16 +316,56 @@ def check_output_file(path: str, option: str) -> None:
         The file.
     option : str
         The option that named it (``--out``), for the message.
+    suffix : str, optional
+        The extension the file must have (``".parquet"``), so that rows are not written
+        in silence under a name that promises another format.
 
     Raises
     ------
     InputError
-        When ``path`` is a directory, or its folder is missing or not writable
-        (:func:`affordgrasp.writing.check_output_path`).
+        When ``path`` is a directory, has another extension than ``suffix``, or its folder
+        is missing or not writable (:func:`affordgrasp.writing.check_output_path`).
     """
     from ..writing import check_output_path
 
     check_output_path(path, option, kind="file")
+    if suffix is not None and not str(path).lower().endswith(suffix):
+        raise InputError(
+            f"{option} {str(path)!r} must end in {suffix}: the rows are written in that "
+            "format, whatever the name says"
+        )
+
+
+def check_mesh_files(args) -> None:
+    """Refuse ``--mesh`` paths that are not mesh files, before any work.
+
+    They are read only when a dataset object is not a built-in family, so without this
+    check a mistyped path would be ignored in silence.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With a ``mesh`` list (``show``, ``plots``); other commands pass through.
+
+    Raises
+    ------
+    InputError
+        Naming the path and what is wrong with it.
+    """
+    import os
+
+    from ..objects.loading import SUPPORTED_EXTENSIONS
+
+    for path in getattr(args, "mesh", None) or []:
+        if not os.path.isfile(path):
+            what = "is a directory" if os.path.isdir(path) else "does not exist"
+            raise InputError(f"--mesh {path!r} {what}; give the mesh file of a dataset object")
+        ext = os.path.splitext(path)[1].lower()
+        if ext not in SUPPORTED_EXTENSIONS:
+            raise InputError(
+                f"--mesh {path!r} is not a mesh file ({ext or 'no extension'}); supported "
+                f"formats: {', '.join(SUPPORTED_EXTENSIONS)}"
+            )
 
 
 def check_output_dir(path: str, option: str) -> None:

@@ -124,7 +124,7 @@ def run(args, out) -> None:
 
     check_counts(args)
     if args.out:
-        check_output_file(args.out, "--out")
+        check_output_file(args.out, "--out", suffix=".parquet")
     if args.tasks_file:
         load_task_file(args.tasks_file)
     robust = robust_option(args)

@@ -111,6 +111,10 @@ def run(args, out) -> None:
         )
     if args.threshold is not None and not 0.0 <= args.threshold <= 1.0:
         raise InputError(f"--threshold must be a probability in [0, 1], got {args.threshold}")
+    if not args.no_decisions:
+        from ..tasks import get_task
+
+        get_task(args.task).thresholds_for(args.mode)  # an unknown task or mode: refused now
     if args.plots:
         from .common import check_output_dir
 
@@ -143,6 +147,14 @@ def run(args, out) -> None:
                     seed=args.seed,
                     max_rows=max_rows,
                 )
+                bsel = base[0]["selection"]
+                if bsel["subsampled"]:  # said, as for the model (never silently)
+                    print(
+                        f"model-eval: baseline {bconfig['arch']} on {bconfig['target']['name']}: "
+                        f"evaluating a uniform subsample of {bsel['rows_evaluated']} of "
+                        f"{bsel['rows_available']} rows (--max-rows)",
+                        file=sys.stderr,
+                    )
         document["models"].append(
             _pooled(args, out, model, config, rep, samples, scores, base, plots)
         )

@@ -8,6 +8,7 @@ import sys
 
 from ..errors import InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
+from .common import add_robust_argument, robust_option
 
 
 def add_arguments(p) -> None:
@@ -47,7 +48,16 @@ def add_arguments(p) -> None:
         help="start where the dataset row puts the hand, even inside the object's convex parts",
     )
     p.add_argument(
-        "--workers", type=int, default=None, metavar="K", help="processes (default: all cores)"
+        "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
+    )
+    p.add_argument(
+        "--engine",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
+    )
+    p.add_argument(
+        "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
     )
     p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
@@ -79,12 +89,29 @@ def add_arguments(p) -> None:
         default=None,
         help=f"jaw force, N (default {d.grip_force})",
     )
+    p.add_argument(
+        "--friction-margin",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="widen the material table's friction cones by this angle in the engine, degrees "
+        f"(default {d.friction_margin_deg:g}: the convex parts' normal error; dgb 0, it "
+        "sets μ 0.6)",
+    )
     p.add_argument("--timestep", type=float, default=None, help=f"s (default {d.timestep})")
     p.add_argument("--gravity", action="store_true", help="gravity on (-z of the hand frame)")
     p.add_argument(
         "--backdrivable",
         action="store_true",
         help="fingers the load can push open (default: non-backdrivable drives)",
+    )
+    add_robust_argument(
+        p,
+        help="report the robust scores of the replayed rows beside their outcomes (the "
+        "report's AUC tables gain robust_hold, robust_fc, ...): a dataset generated with "
+        "--robust K keeps its columns; a plain dataset has them computed for the replayed "
+        "rows from their stored pregrasps (K perturbed copies, docs/robust.md). Default 0: "
+        "the dataset's robust columns are reported when it has them, none computed",
     )
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
     p.add_argument(
@@ -107,6 +134,8 @@ def _settings(args) -> PhysicsSettings:
         for name in ("load_factor", "density", "grip_torque", "grip_force", "timestep")
         if getattr(args, name) is not None
     }
+    if args.friction_margin is not None:
+        given["friction_margin_deg"] = args.friction_margin
     return protocol_settings(
         args.protocol,
         gravity=args.gravity,
@@ -140,6 +169,7 @@ def run(args, out) -> None:
     from .common import check_output_dir
 
     settings = _settings(args)
+    robust = robust_option(args)
     check_output_dir(args.out, "--out")
     if args.report:
         check_output_dir(args.report, "--report")
@@ -154,11 +184,14 @@ def run(args, out) -> None:
             args.out,
             settings=settings,
             workers=args.workers,
+            engine=args.engine,
+            address=args.address,
             shard_size=args.shard_size,
             objects=args.object,
             max_per_object=args.max_per_object,
             progress=lambda total: out.progress("validating", total),
             log_message=lambda m: print(m, file=sys.stderr) if not out.json_mode else None,
+            robust=robust,
         )
     except KeyboardInterrupt:
         print(

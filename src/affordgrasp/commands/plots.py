@@ -7,7 +7,13 @@ for the tasks asked (default beat, cut, pick), ``affordances.png`` into OUTDIR.
 
 from __future__ import annotations
 
-from .common import add_task_arguments, check_counts, check_output_dir, parse_tasks
+from .common import (
+    add_task_arguments,
+    check_counts,
+    check_mesh_files,
+    check_output_dir,
+    parse_tasks,
+)
 from .show import add_source_arguments, open_sources
 
 DEFAULT_TASKS = "beat,cut,pick"
@@ -66,6 +72,7 @@ def run(args, out) -> None:
     from ..viz.plots import save_plots, summarize
 
     check_counts(args)
+    check_mesh_files(args)
     check_output_dir(args.out, "--out")
     if not 5 <= args.bins <= 500:
         raise InputError(f"--bins must be between 5 and 500, got {args.bins}")

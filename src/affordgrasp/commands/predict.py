@@ -65,7 +65,7 @@ def run(args, out) -> None:
     """
     import pyarrow.parquet as pq
 
-    from ..dataset.reading import read_manifest
+    from ..dataset.handle import Dataset
     from ..learning.api import predict_dataset
     from .common import check_output_file
 
@@ -73,9 +73,9 @@ def run(args, out) -> None:
         raise InputError(f"--out {args.out!r} must end in .parquet")
     check_output_file(args.out, "--out")
     models = load_models(args.model)  # a foreign or broken model file: refused first
-    read_manifest(args.dataset)
-    with out.progress("predicting", _rows(args.dataset, args.object)) as advance:
-        table = predict_dataset(models, args.dataset, objects=args.object, progress=advance)
+    dataset = Dataset.open(args.dataset)
+    with out.progress("predicting", dataset.count_rows(args.object)) as advance:
+        table = predict_dataset(models, dataset, objects=args.object, progress=advance)
     table = table.replace_schema_metadata(
         {
             "affordgrasp_models": ",".join(
@@ -91,10 +91,3 @@ def run(args, out) -> None:
         rows.append([c, float(v.mean()), float(v.min()), float(v.max())])
     out.table(f"{table.num_rows} predictions -> {args.out}", ["name", "mean", "min", "max"], rows)
     out.result({"out": args.out, "rows": table.num_rows, "columns": table.column_names})
-
-
-def _rows(dataset, objects) -> int:
-    from ..dataset.reading import object_filter, open_dataset, select_objects
-
-    ds = open_dataset(dataset)
-    return ds.count_rows(filter=object_filter(select_objects(dataset, objects)))

@@ -8,16 +8,16 @@ evaluated first. Several sources and several tasks (``--task beat,cut,pick``) ma
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
-from ..errors import DatasetError, InputError
+from ..errors import InputError
 from .common import (
     HAND_HELP,
     add_robust_argument,
     add_scale_arguments,
     add_task_arguments,
     check_counts,
+    check_mesh_files,
     check_output_dir,
     load_objects,
     parse_tasks,
@@ -272,8 +272,10 @@ def resolve_dataset_object(
 ):
     """The GraspObject a dataset's rows were simulated on, found by name and checked by hash.
 
-    Candidates, in order: the ``--mesh`` files of that name, files of that name under the
-    dataset directory, then the name itself (a family or a path).
+    The rule of :meth:`affordgrasp.dataset.handle.Dataset.object` (for loose Parquet files,
+    :func:`~affordgrasp.dataset.handle.find_object` on what the rows say): the ``--mesh``
+    files of that name, the recorded mesh path, files of that name under the directory,
+    then the name itself (a family or a path).
 
     Parameters
     ----------
@@ -291,8 +293,8 @@ def resolve_dataset_object(
     scale : dict, optional
         ``size_m`` / ``units`` for mesh files, as when the dataset was made.
     materials : bool
-        Per-part materials for a family (``--materials``); a dataset directory's manifest
-        says so itself.
+        Per-part materials for a family of loose rows (``--materials``); a dataset says so
+        itself.
 
     Returns
     -------
@@ -300,51 +302,33 @@ def resolve_dataset_object(
 
     Raises
     ------
-    InputError
+    DatasetError
         When no candidate loads with the right mesh; the message names ``--mesh``.
     """
-    from ..objects import load_object
-    from ..objects.resolve import is_family_spec
+    from ..dataset.handle import find_object
 
-    candidates: list[str] = []
-    for m in meshes:
-        if os.path.basename(m) == name or Path(m).stem == Path(name).stem:
-            candidates.append(m)
-    directory = getattr(source, "directory", None)
-    if directory is not None:
-        from ..dataset.layout import read_manifest
-
-        try:
-            materials = materials or bool(read_manifest(directory).get("materials", False))
-        except DatasetError:
-            pass  # no manifest to read: the rows say nothing of the mass
-        candidates.extend(str(p) for p in sorted(Path(directory).rglob(name)) if p.is_file())
-    candidates.append(name)
-    last_error = None
-    for spec in candidates:
-        try:
-            options = {"materials": materials} if is_family_spec(spec) else (scale or {})
-            obj = load_object(spec, **options)
-        except InputError as exc:
-            last_error = exc
-            continue
-        if object_hash and obj.mesh_hash != object_hash:
-            if obj.source == "family":
-                out.text(
-                    f"[yellow]warning:[/] object {name!r}: the family now builds a different mesh "
-                    "than the dataset's (another affordgrasp version?); drawing it anyway"
-                )
-                return obj
-            last_error = InputError(
-                f"object {name!r}: the mesh at {spec!r} is not the one the dataset was generated "
-                "on (its hash differs); pass the exact mesh with --mesh PATH"
-            )
-            continue
-        return obj
-    raise InputError(
-        f"cannot find the mesh of dataset object {name!r}: it is not a built-in family and no "
-        f"file of that name was found; pass it with --mesh PATH ({last_error})"
-    )
+    dataset = getattr(source, "dataset", None)
+    scale = scale or {}
+    if dataset is not None and name in dataset.entries:
+        obj = dataset.object(name, meshes=meshes, changed_family="accept", **scale)
+        object_hash = object_hash or dataset.mesh_hash(name)
+    else:  # loose Parquet files: the rows alone say which object they are
+        obj = find_object(
+            name,
+            source=None,
+            mesh_hash=object_hash,
+            meshes=meshes,
+            directory=getattr(source, "directory", None),
+            materials=materials,
+            changed_family="accept",
+            **scale,
+        )
+    if object_hash and obj.mesh_hash != object_hash:  # only a family is accepted so
+        out.text(
+            f"[yellow]warning:[/] object {name!r}: the family now builds a different mesh "
+            "than the dataset's (another affordgrasp version?); drawing it anyway"
+        )
+    return obj
 
 
 def objects_of(rankings, sources_by_object, args, out) -> dict:
@@ -409,6 +393,7 @@ def run(args, out) -> None:
     from ..viz.sources import top_grasps
 
     check_counts(args)
+    check_mesh_files(args)
     check_output_dir(args.out, "--out")
     if args.top < 1:
         raise InputError(f"--top must be at least 1, got {args.top}")

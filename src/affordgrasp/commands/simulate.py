@@ -39,7 +39,7 @@ def run(args, out) -> None:
 
     check_counts(args)
     if args.out:
-        check_output_file(args.out, "--out")
+        check_output_file(args.out, "--out", suffix=".parquet")
     obj = load_object(args.object, size_m=args.size_m, units=args.units, materials=args.materials)
     # Simulation only; ``--metrics +volume`` adds Φ with the GWS volume to the rows.
     table, spent, wall = run_batches(args, out, obj, metrics=bool(optional_metrics(args)))

@@ -3,8 +3,28 @@
 * ``schema``: the columns of a sample row (conventions: Sample columns);
 * ``generate``: sharded, deterministic, resumable Parquet datasets (``layout`` on disk,
   ``engines`` for local processes or Ray, ``card`` for the dataset card);
+* ``handle``: :class:`Dataset`, a dataset directory opened once (plan, hand, objects,
+  rows): what every consumer of a dataset takes;
 * ``reading``: a dataset directory as one Arrow dataset;
 * ``best``: brute-force argmax of a task over a dataset.
 
 See docs/dataset.md.
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .handle import Dataset
+
+__all__ = ["Dataset"]
+
+
+def __getattr__(name: str) -> Any:
+    # Imported on first use, so that importing a sibling module stays light.
+    if name == "Dataset":
+        from .handle import Dataset
+
+        return Dataset
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

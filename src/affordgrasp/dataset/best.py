@@ -29,8 +29,9 @@ from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold
 from ..errors import DatasetError, bad_parameter
 from ..search.ranking import TopRows  # noqa: F401  (re-exported: its former home)
 from ..tasks import Task, get_task
-from .layout import read_manifest, write_bytes_atomic
-from .reading import open_dataset, read_errors, select_objects
+from .handle import Dataset, DatasetLike
+from .layout import write_bytes_atomic
+from .reading import read_errors
 
 AFFORDANCE_COLUMN = "affordance"
 RANK_COLUMN = "rank"
@@ -154,7 +155,7 @@ def task_values(
 
 
 def best_grasps(
-    directory: str | os.PathLike,
+    directory: DatasetLike,
     task: str | Task,
     *,
     mode: str = "default",
@@ -168,7 +169,7 @@ def best_grasps(
 
     Parameters
     ----------
-    directory : path
+    directory : path or Dataset
         A dataset written by :func:`affordgrasp.generate`.
     task : str or Task
         A registered task name or a :class:`~affordgrasp.tasks.Task`.
@@ -198,23 +199,24 @@ def best_grasps(
     """
     if not isinstance(top, int) or top < 1:
         raise bad_parameter("top", f"must be a positive integer, got {top!r}")
-    manifest = read_manifest(directory)
-    if not manifest.get("metrics", True):
+    ds = Dataset.open(directory)
+    directory = ds.directory
+    if not ds.metrics:
         raise DatasetError(
             f"dataset {str(directory)!r} was generated with --no-metrics, so it has no metrics "
             "to score; generate it again without --no-metrics"
         )
     task_obj = get_task(task) if isinstance(task, str) else task
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
-    names = [o["name"] for o in manifest["objects"]]
-    chosen = select_objects(directory, objects)
-    dataset = open_dataset(directory)
+    names = ds.objects
+    chosen = ds.select(objects)
+    dataset = ds.arrow()
     flt = pads.field("object").isin(chosen) if chosen else None
     metric_cols = [c for c in METRIC_COLUMNS if c in dataset.schema.names]
     if robust:
         from ..robust import ranking_column
 
-        if not manifest.get("robust"):
+        if ds.robust is None:
             raise DatasetError(
                 f"dataset {str(directory)!r} has no robust columns; generate it with "
                 "--robust K to rank by a robust score, or drop --robust"

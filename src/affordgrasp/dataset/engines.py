@@ -5,6 +5,11 @@ inputs, of one object), through the same function, :func:`run_job`, and hands th
 Arrow table back to the caller, which alone writes files. So the output does not depend on the
 engine or on the number of workers; only where the computing happens changes.
 
+A run's context says what its jobs do: :class:`RunContext` evaluates grasps (generate,
+optimise); another stage brings its own context (any picklable object with a ``key`` and a
+``run(job)`` method, e.g. the physics replay's) and gets the same engines, defaults and
+stopping behaviour.
+
 Workers never resolve object specs: the caller resolves each object once and ships its
 mesh (:class:`ObjectPayload`); a worker rebuilds the object and checks its mesh hash. So a
 cluster's machines need affordgrasp installed, but neither the mesh files nor the time to
@@ -30,7 +35,7 @@ from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
 from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
 from ..robust import RobustSettings
-from ..worker_lifetime import die_with_parent
+from ..worker_lifetime import Reaper, die_with_parent
 
 log = logging.getLogger(__name__)
 
@@ -169,6 +174,55 @@ class RunContext:
     robust: RobustSettings | None = None
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
+    def run(self, job: Job) -> pa.Table:
+        """Evaluate one job (in the process this context is installed in).
+
+        Parameters
+        ----------
+        job : Job
+
+        Returns
+        -------
+        pyarrow.Table
+            One row per sample (``dataset_schema``), with ``depth_mm`` when the run renders
+            depth.
+        """
+        from ..pipeline import evaluate_inputs, evaluate_samples
+
+        _install_context(self)  # its objects are rebuilt once per process
+        ctx = self
+        obj = _object(job.object_index)
+        if job.p0 is None:
+            table = evaluate_samples(
+                obj,
+                job.n,
+                seed=ctx.seed,
+                start=job.start,
+                hand=ctx.hand,
+                soft=ctx.soft,
+                metrics=ctx.metrics,
+                volume=ctx.volume,
+                robust=ctx.robust,
+            ).table
+        else:
+            table = evaluate_inputs(
+                obj,
+                job.p0,
+                job.use_dir,
+                hand=ctx.hand,
+                seed=ctx.seed,
+                sample_start=job.start,
+                soft=ctx.soft,
+                metrics=ctx.metrics,
+                volume=ctx.volume,
+                robust=ctx.robust,
+            ).table
+        if ctx.depth:
+            from ..vision.depth import depth_column
+
+            table = table.append_column(*depth_column(obj, table))
+        return table
+
 
 @dataclass(frozen=True)
 class Job:
@@ -216,56 +270,26 @@ def _object(index: int):
     return obj
 
 
-def run_job(job: Job, context: RunContext | None = None) -> pa.Table:
-    """Evaluate one job in this process; the same function on every engine.
+def run_job(job, context=None):
+    """Run one job in this process; the same function on every engine.
 
     Parameters
     ----------
-    job : Job
-    context : RunContext, optional
-        Installed first when given (a worker started without it, or the inline engine).
+    job : Job or object
+        A unit of work of the installed context.
+    context : RunContext or object, optional
+        Installed first when given (a worker started without it, or the inline engine):
+        anything with a ``key`` (str) and a ``run(job)`` method.
 
     Returns
     -------
-    pyarrow.Table
-        One row per sample (``dataset_schema``), with ``depth_mm`` when the run renders depth.
+    object
+        ``context.run(job)``: for a :class:`RunContext`, one row per sample
+        (``dataset_schema``), with ``depth_mm`` when the run renders depth.
     """
-    from ..pipeline import evaluate_inputs, evaluate_samples
-
     if context is not None:
         _install_context(context)
-    ctx = _CONTEXT
-    obj = _object(job.object_index)
-    if job.p0 is None:
-        table = evaluate_samples(
-            obj,
-            job.n,
-            seed=ctx.seed,
-            start=job.start,
-            hand=ctx.hand,
-            soft=ctx.soft,
-            metrics=ctx.metrics,
-            volume=ctx.volume,
-            robust=ctx.robust,
-        ).table
-    else:
-        table = evaluate_inputs(
-            obj,
-            job.p0,
-            job.use_dir,
-            hand=ctx.hand,
-            seed=ctx.seed,
-            sample_start=job.start,
-            soft=ctx.soft,
-            metrics=ctx.metrics,
-            volume=ctx.volume,
-            robust=ctx.robust,
-        ).table
-    if ctx.depth:
-        from ..vision.depth import depth_column
-
-        table = table.append_column(*depth_column(obj, table))
-    return table
+    return _CONTEXT.run(job)
 
 
 def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
@@ -328,8 +352,8 @@ class Engine:
         """
         raise NotImplementedError
 
-    def result(self, handle) -> pa.Table:
-        """The table of a finished job.
+    def result(self, handle):
+        """The result of a finished job.
 
         Parameters
         ----------
@@ -338,7 +362,8 @@ class Engine:
 
         Returns
         -------
-        pyarrow.Table
+        object
+            What the context's ``run(job)`` returned (a table, for a :class:`RunContext`).
         """
         raise NotImplementedError
 
@@ -598,6 +623,7 @@ class RayEngine(Engine):
         ray = require("ray", "cluster")
         self._ray = ray
         self._started = False
+        self._reaper: Reaper | None = None
         if not ray.is_initialized():
             check_ray_address(address)
             kwargs = {"address": address, "ignore_reinit_error": True, "log_to_driver": False}
@@ -609,6 +635,8 @@ class RayEngine(Engine):
                     # ray.init replaces the SIGTERM handler (with sys.exit); keep ours, which
                     # stops the run the way Ctrl-C does.
                     on_term = signal.getsignal(signal.SIGTERM)
+                    # Ray's agents outlive a driver killed with SIGKILL by a minute or more.
+                    self._reaper = Reaper()
                     ray.init(**kwargs)
                     if threading.current_thread() is threading.main_thread():
                         signal.signal(signal.SIGTERM, on_term)
@@ -640,6 +668,9 @@ class RayEngine(Engine):
     def close(self, cancel: bool = False) -> None:
         if self._started:
             self._ray.shutdown()
+        if self._reaper is not None:
+            self._reaper.close()
+            self._reaper = None
 
 
 def check_engine(engine: str, workers: int | None, address: str | None) -> None:

@@ -44,6 +44,7 @@ from .engines import (
     make_engine,
     stop_on_signals,
 )
+from .handle import Dataset
 from .layout import (
     DEFAULT_SHARD_SIZE,
     FORMAT,
@@ -83,6 +84,11 @@ class GenerationSummary:
         Wall time, s.
     engine : str
     workers : int
+    status_counts : dict
+        Object -> status -> rows.
+    dataset : Dataset or None
+        The dataset, opened (:class:`~affordgrasp.dataset.handle.Dataset`): what every
+        consumer of it takes (``train_on_dataset(summary.dataset)``...).
     """
 
     directory: str
@@ -96,6 +102,7 @@ class GenerationSummary:
     engine: str
     workers: int
     status_counts: dict[str, dict[str, int]] = field(default_factory=dict)
+    dataset: Dataset | None = field(default=None, repr=False, compare=False)
 
     @property
     def grasps_per_s(self) -> float:
@@ -441,6 +448,7 @@ def generate(
             engine=engine_name,
             workers=n_workers,
             status_counts=_status_counts(resolved, infos),
+            dataset=Dataset(directory, manifest),
         )
         if todo or card_module.read_card(directory) is None:  # a no-op run changes nothing
             _write_card_after(

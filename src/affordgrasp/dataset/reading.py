@@ -5,131 +5,48 @@ these functions add the checks: that the directory is an affordgrasp dataset, wh
 holds, and that every shard is the file that was written (its checksum, see
 :func:`affordgrasp.dataset.layout.verify_shards`). A file that cannot be read is reported as
 a :class:`~affordgrasp.errors.DatasetError` naming it, never as a raw Arrow error.
+
+They take a directory and open it each call; :class:`~affordgrasp.dataset.handle.Dataset`
+(which they use) opens it once for many reads.
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
-import re
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pyarrow as pa
-import pyarrow.dataset as pads
-import pyarrow.parquet as pq
 
-from ..errors import DatasetError
 from ..hands.model import Hand
-from .layout import manifest_volume, read_manifest, shard_paths, verify_shards
+from .handle import (
+    REQUIRED_COLUMNS,
+    Dataset,
+    manifest_hand,
+    match_objects,
+    object_filter,
+    open_dataset,
+    read_errors,
+)
+from .layout import read_manifest
 
-# Columns without which Parquet files are not affordgrasp samples (see docs/conventions.md).
-REQUIRED_COLUMNS = ("object", "sample", "seed", "hand_pose", "joints")
-
-
-def open_dataset(
-    directory: str | os.PathLike, *, loose: bool = False, verify: bool = True
-) -> pads.Dataset:
-    """The shards of a dataset directory as one ``pyarrow.dataset.Dataset`` (plan order).
-
-    Parameters
-    ----------
-    directory : path
-        A directory written by ``affordgrasp generate``.
-    loose : bool
-        Also accept a directory without a (valid) manifest: every ``*.parquet`` file under it
-        (not in hidden folders) whose columns are those of sample rows, e.g. files written
-        by ``affordgrasp evaluate --out``. Their footers are checked, not checksums.
-    verify : bool
-        Check every shard against the checksum recorded when it was written (reads each
-        file once per process; see docs/dataset.md for the cost).
-
-    Returns
-    -------
-    pyarrow.dataset.Dataset
-
-    Raises
-    ------
-    DatasetError
-        When the directory is missing, not a dataset, empty or unreadable, or a shard is
-        damaged (the message names it and the command that rewrites it).
-    """
-    from ..schema import dataset_schema
-
-    try:
-        manifest = read_manifest(directory)
-    except DatasetError:
-        if not loose:
-            raise
-        return _open_loose_files(Path(directory))
-    paths = shard_paths(directory)
-    if not paths:
-        raise DatasetError(
-            f"dataset {str(directory)!r} has no shards yet; run the command in its "
-            "_manifest.json to generate them"
-        )
-    if verify:
-        verify_shards(Path(directory), paths, manifest)
-    from ..robust import manifest_robust
-
-    schema = dataset_schema(
-        manifest.get("metrics", True), bool(manifest.get("depth")), manifest_robust(manifest)
-    )
-    return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
-
-
-@contextlib.contextmanager
-def read_errors(where: str | os.PathLike):
-    """Turn an Arrow or OS error while reading into a DatasetError naming the damaged file.
-
-    A context manager.
-
-    Parameters
-    ----------
-    where : path
-        Named in the message when the error does not name a file.
-    """
-    try:
-        yield
-    except (pa.ArrowException, OSError) as exc:
-        text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        match = re.search(r"[\w./\\:-]*\.parquet", text)
-        culprit = match.group(0) if match else str(where)
-        raise DatasetError(
-            f"cannot read {culprit!r}: {text}; the file is damaged or not Parquet: delete it "
-            "(and, for a dataset, run its generate command again to rewrite it)"
-        ) from exc
-
-
-def _open_loose_files(directory: Path) -> pads.Dataset:
-    if not directory.is_dir():
-        raise DatasetError(f"{str(directory)!r} is not a directory")
-    files = sorted(
-        str(p)
-        for p in directory.rglob("*.parquet")
-        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(directory).parts)
-    )
-    if not files:
-        raise DatasetError(
-            f"no Parquet files under {str(directory)!r}; give a dataset directory "
-            "written by 'affordgrasp generate', or an object (family, family:seed or mesh path)"
-        )
-    for file in files:
-        # Footers only: a truncated or foreign file is named before any scan.
-        with read_errors(file):
-            try:
-                pq.read_metadata(file)
-            except (pa.ArrowException, OSError) as exc:
-                raise pa.ArrowInvalid(f"{file}: {exc}") from exc
-    with read_errors(directory):
-        dataset = pads.dataset(files, format="parquet")
-    missing = set(REQUIRED_COLUMNS) - set(dataset.schema.names)
-    if missing:
-        raise DatasetError(
-            f"the Parquet files under {str(directory)!r} lack the columns {sorted(missing)}; "
-            "they do not look like an affordgrasp dataset (see docs/conventions.md)"
-        )
-    return dataset
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "Dataset",
+    "dataset_dir",
+    "dataset_hand",
+    "dataset_objects",
+    "dataset_volume",
+    "iter_batches",
+    "manifest_hand",
+    "match_objects",
+    "object_filter",
+    "open_dataset",
+    "read_dataset",
+    "read_errors",
+    "read_manifest",
+    "select_objects",
+]
 
 
 def dataset_volume(directory: str | os.PathLike) -> bool:
@@ -148,29 +65,7 @@ def dataset_volume(directory: str | os.PathLike) -> bool:
     -------
     bool
     """
-    return manifest_volume(read_manifest(directory))
-
-
-def manifest_hand(manifest: dict) -> Hand:
-    """The hand a dataset was generated with, rebuilt from its manifest.
-
-    Parameters
-    ----------
-    manifest : dict
-        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.layout.read_manifest`).
-
-    Returns
-    -------
-    Hand
-        The hand recorded whole under ``hand_spec``; for a manifest written before hands
-        were recorded whole (``hand`` holds only a name), the registered hand of that name.
-    """
-    from ..hands import get_hand, hand_from_dict
-
-    spec = manifest.get("hand_spec")
-    if isinstance(spec, dict):
-        return hand_from_dict(spec)
-    return get_hand(str(manifest.get("hand") or "barrett"))
+    return Dataset.open(directory).volume
 
 
 def dataset_hand(directory: str | os.PathLike) -> Hand:
@@ -186,7 +81,7 @@ def dataset_hand(directory: str | os.PathLike) -> Hand:
     Hand
         See :func:`manifest_hand`.
     """
-    return manifest_hand(read_manifest(directory))
+    return Dataset.open(directory).hand
 
 
 def dataset_objects(directory: str | os.PathLike) -> list[str]:
@@ -201,7 +96,7 @@ def dataset_objects(directory: str | os.PathLike) -> list[str]:
     -------
     list of str
     """
-    return [o["name"] for o in read_manifest(directory)["objects"]]
+    return Dataset.open(directory).objects
 
 
 def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -> list[str] | None:
@@ -224,40 +119,7 @@ def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -
     DatasetError
         For a name that matches nothing (the message names the objects available).
     """
-    if not wanted:
-        return None
-    names = dataset_objects(directory)
-    chosen = []
-    for w in wanted:
-        w = w.strip()
-        if w in names:
-            chosen.append(w)
-        elif f"{w}:0" in names:
-            chosen.append(f"{w}:0")
-        elif os.path.basename(w) in names:
-            chosen.append(os.path.basename(w))
-        else:
-            raise DatasetError(
-                f"object {w!r} is not in dataset {str(directory)!r}; it holds: {', '.join(names)}"
-            )
-    return chosen
-
-
-def object_filter(objects: Sequence[str] | None) -> pads.Expression | None:
-    """An Arrow filter keeping the rows of some objects.
-
-    Parameters
-    ----------
-    objects : sequence of str or None
-        Object names; None or empty keeps every row.
-
-    Returns
-    -------
-    pyarrow.dataset.Expression or None
-    """
-    if not objects:
-        return None
-    return pads.field("object").isin(list(objects))
+    return Dataset.open(directory).select(wanted)
 
 
 def iter_batches(
@@ -284,14 +146,9 @@ def iter_batches(
     ------
     pyarrow.RecordBatch
     """
-    dataset = open_dataset(directory)
-    scanner = dataset.scanner(
-        columns=list(columns) if columns is not None else None,
-        filter=object_filter(select_objects(directory, objects)),
-        batch_size=batch_size,
+    yield from Dataset.open(directory).batches(
+        columns=columns, objects=objects, batch_size=batch_size
     )
-    with read_errors(directory):
-        yield from scanner.to_batches()
 
 
 def read_dataset(
@@ -316,12 +173,7 @@ def read_dataset(
     pyarrow.Table
         One row per sample, in plan order. Use :func:`iter_batches` for larger datasets.
     """
-    dataset = open_dataset(directory)
-    with read_errors(directory):
-        return dataset.to_table(
-            columns=list(columns) if columns is not None else None,
-            filter=object_filter(select_objects(directory, objects)),
-        )
+    return Dataset.open(directory).read(columns=columns, objects=objects)
 
 
 def dataset_dir(path: str | os.PathLike) -> Path:

@@ -29,7 +29,7 @@ from ..hands.kinematics import (
     mul4_into,
     shape_poses,
 )
-from ..metrics.kernel_cache import install_package_stamp
+from ..kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

@@ -32,10 +32,10 @@ from ..errors import InputError
 from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
-from ..metrics.contacts import ContactSet
 from ..objects.prepared import centred_frame_origin  # noqa: F401  (re-exported: its former home)
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
+from .contacts import ContactSet
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
 from .surface import SurfaceSample
 

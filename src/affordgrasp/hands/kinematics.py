@@ -16,7 +16,7 @@ from numba import njit
 
 from ..caching import IdentityCache
 from ..errors import HandError
-from ..metrics.kernel_cache import install_package_stamp
+from ..kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

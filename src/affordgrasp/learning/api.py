@@ -18,11 +18,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dataset.handle import Dataset, DatasetLike
 from ..errors import InputError
 from .data import (
     Samples,
     load_depth,
     read_rows,
+    sensed_depth_mm,
     split_by_family,
     split_by_object,
 )
@@ -96,7 +98,7 @@ def _subsample(idx: np.ndarray, k: int | None, seed: int) -> np.ndarray:
 
 
 def prepare_split(
-    dataset,
+    dataset: DatasetLike,
     target: str | Target,
     *,
     split: str = "object",
@@ -117,7 +119,7 @@ def prepare_split(
 
     Parameters
     ----------
-    dataset : path
+    dataset : path or Dataset
         A dataset generated with metrics.
     target : str or Target
         What to learn (:func:`~affordgrasp.learning.data.read_rows`).
@@ -146,6 +148,7 @@ def prepare_split(
     target : Target
     split : Split
     """
+    dataset = Dataset.open(dataset)
     samples, target = read_rows(dataset, target)
     if len(samples) == 0:
         raise InputError(f"dataset {str(dataset)!r} has no rows for target {target.name!r}")
@@ -190,33 +193,8 @@ def prepare_split(
     return parts[0], parts[1], parts[2], target, sp
 
 
-def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
-    """The samples' depth images as a sensor model returns them.
-
-    Parameters
-    ----------
-    samples : Samples
-        With depth images.
-    sensor : SensorModel
-        The sensor (:mod:`affordgrasp.vision.sensor`).
-
-    Returns
-    -------
-    (n, h, w) uint16 ndarray
-        Depth, mm; image i's noise keyed by (CRC-32 of its object's name, its sample).
-    """
-    import zlib
-
-    from ..vision.depth import depth_from_mm, depth_to_mm
-    from ..vision.sensor import apply_sensor
-
-    ids = np.array([zlib.crc32(str(o).encode()) for o in samples.object], dtype=np.int64)
-    keys = np.c_[ids, samples.sample]
-    return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
-
-
 def train_on_dataset(
-    dataset,
+    dataset: DatasetLike,
     *,
     arch: str = "cnn",
     target: str = "viable",
@@ -239,8 +217,8 @@ def train_on_dataset(
 
     Parameters
     ----------
-    dataset : path
-        A dataset generated with metrics.
+    dataset : path or Dataset
+        A dataset generated with metrics (opened once: :class:`~affordgrasp.dataset.Dataset`).
     arch : str
         One of :data:`~affordgrasp.learning.models.ARCHITECTURES`.
     target : str
@@ -296,6 +274,7 @@ def train_on_dataset(
     from .io import save_model
 
     settings = settings or TrainSettings()
+    dataset = Dataset.open(dataset)
     if prepared is None:
         prepared = prepare_split(
             dataset,
@@ -490,7 +469,9 @@ def prediction_column(config: dict) -> str:
     return "viable_prob" if tgt["kind"] == "classification" else f"pred_{tgt['name']}"
 
 
-def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, progress=None):
+def predict_dataset(
+    models, dataset: DatasetLike, *, objects=None, batch_size: int = 2048, progress=None
+):
     """One row per sample of a dataset: object, sample and each model's prediction.
 
     The dataset is streamed in batches (memory-bounded); depth images are read when stored,
@@ -500,7 +481,7 @@ def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, pr
     ----------
     models : list of (torch.nn.Module, dict)
         Models and their configs.
-    dataset : path
+    dataset : path or Dataset
         A generated dataset.
     objects : sequence of str, optional
         Predict only these objects.
@@ -521,21 +502,18 @@ def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, pr
     """
     import pyarrow as pa
 
-    from ..dataset.layout import read_manifest
-    from ..dataset.reading import iter_batches, select_objects
     from ..vision.depth import decode_depth_column, depth_to_mm
-    from .data import _families, render_samples_depth
+    from .data import render_samples_depth
 
-    manifest = read_manifest(dataset)
-    families = _families(manifest)
-    stored = bool(manifest.get("depth"))
+    dataset = Dataset.open(dataset)
+    families = dataset.families
+    stored = dataset.depth
     needs_depth = any(c["arch"] != "pose" for _, c in models)
     columns = ["object", "sample", "p0", "use_dir"] + (
         ["depth_mm"] if stored and needs_depth else []
     )
-    chosen = select_objects(dataset, objects)
     parts = []
-    for batch in iter_batches(dataset, columns=columns, objects=chosen, batch_size=batch_size):
+    for batch in dataset.batches(columns=columns, objects=objects, batch_size=batch_size):
         tab = pa.Table.from_batches([batch])
         obj = np.asarray(tab.column("object").to_pylist(), dtype=object)
         s = Samples(
@@ -550,7 +528,7 @@ def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, pr
             if stored:
                 s.depth_mm = depth_to_mm(decode_depth_column(tab.column("depth_mm")))
             else:
-                s.depth_mm = render_samples_depth(s, manifest)
+                s.depth_mm = render_samples_depth(s, dataset)
         cols = {"object": pa.array(list(obj), pa.string()), "sample": pa.array(s.sample)}
         for model, config in models:
             cols[prediction_column(config)] = pa.array(predictions_of(model, config, s))
@@ -562,7 +540,9 @@ def predict_dataset(models, dataset, *, objects=None, batch_size: int = 2048, pr
     return pa.concat_tables(parts)
 
 
-def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0, max_rows=None):
+def evaluate_on_dataset(
+    model, config: dict, dataset: DatasetLike, *, objects="test", seed=0, max_rows=None
+):
     """Metrics of a model on a dataset's rows of its target.
 
     Parameters
@@ -570,7 +550,7 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
     model : torch.nn.Module
     config : dict
         The model's config.
-    dataset : path
+    dataset : path or Dataset
         A dataset generated with metrics.
     objects : "test", "all" or sequence of str
         The model's held-out test objects, every object, or the objects named. When none of
@@ -598,6 +578,7 @@ def evaluate_on_dataset(model, config: dict, dataset, *, objects="test", seed=0,
         When none of the named objects is in the dataset.
     """
     tgt = Target.from_dict(config["target"])
+    dataset = Dataset.open(dataset)
     samples, _ = read_rows(dataset, tgt)
     if objects == "test":
         split = config.get("training", {}).get("split", {})

@@ -1,13 +1,13 @@
 """Learning data from a generated dataset: inputs (p0, d, depth), targets, splits.
 
 A sample's depth image D(p0, O) is read from the dataset's ``depth_mm`` column when it was
-generated with ``--depth``; otherwise it is rendered from the object (a pure function of p0
-and the mesh; the mesh hash is checked against the manifest), so a dataset without images
-is as good for learning, only slower to load.
+generated with ``--depth``; otherwise it is rendered from the object the dataset resolves
+(:meth:`affordgrasp.dataset.handle.Dataset.object`: a pure function of p0 and the mesh, whose
+hash is checked), so a dataset without images is as good for learning, only slower to load.
 
-Splits are by object instance (conventions: Vision): the objects of the test (and
-validation) set never appear in training, and the families (categories) overlap. A split by
-family holds out whole families instead.
+Splits are by object instance (conventions: Vision; :mod:`affordgrasp.dataset.splits`): the
+objects of the test (and validation) set never appear in training, and the families
+(categories) overlap. A split by family holds out whole families instead.
 """
 
 from __future__ import annotations
@@ -16,11 +16,12 @@ import logging
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
+from ..dataset.handle import Dataset, DatasetLike
+from ..dataset.splits import Split, split_by_family, split_by_object  # noqa: F401 - their former home
 from ..errors import DatasetError, InputError
 from .targets import Target, make_target, target_rows, target_values
 
@@ -51,7 +52,7 @@ class Samples:
     depth_mm : (n, size, size) uint16 ndarray or None
         Depth images, mm; None until loaded (:func:`load_depth`).
     meta : dict
-        Where the rows come from (``directory``).
+        Where the rows come from (``directory``, and the opened ``dataset``).
     """
 
     object: np.ndarray
@@ -91,16 +92,14 @@ class Samples:
         )
 
 
-def _families(manifest: dict) -> dict[str, str]:
-    return {o["name"]: o.get("category") or o["name"].split(":")[0] for o in manifest["objects"]}
-
-
-def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None = None):
+def read_rows(
+    directory: DatasetLike, target: str | Target, *, objects: Sequence[str] | None = None
+):
     """The rows of a dataset a target is defined on, with their inputs and target values.
 
     Parameters
     ----------
-    directory : path
+    directory : path or Dataset
         A dataset generated with metrics.
     target : str or Target
         ``"viable"``, ``"hold_effort_sum"``, a metric column or ``"task:NAME"``; a Target
@@ -122,11 +121,9 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
     InputError
         When the target is not a column of the dataset.
     """
-    from ..dataset.layout import read_manifest
-    from ..dataset.reading import read_dataset
-
-    manifest = read_manifest(directory)
-    if not manifest.get("metrics", True):
+    dataset = Dataset.open(directory)
+    directory = dataset.directory
+    if not dataset.metrics:
         raise DatasetError(
             f"dataset {str(directory)!r} was generated with --no-metrics; learning needs "
             "the metric columns (generate it without --no-metrics)"
@@ -138,7 +135,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
     if name.startswith("task:"):
         columns = None  # a task may read any metric column
     try:
-        table = read_dataset(directory, columns=columns, objects=objects)
+        table = dataset.read(columns=columns, objects=objects)
     except Exception as exc:  # noqa: BLE001 - an unknown column name is bad input
         if "No match for FieldRef" in str(exc) or "not in schema" in str(exc):
             raise InputError(
@@ -159,7 +156,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
         else:
             target = make_target(name)
     mask = target_rows(target, table)
-    families = _families(manifest)
+    families = dataset.families
     obj = np.asarray(table.column("object").to_pylist(), dtype=object)[mask]
     samples = Samples(
         object=obj,
@@ -168,7 +165,7 @@ def read_rows(directory, target: str | Target, *, objects: Sequence[str] | None 
         p0=_fixed(table, "p0", 6)[mask],
         use_dir=_fixed(table, "use_dir", 2)[mask],
         y=values[mask],
-        meta={"directory": str(directory)},
+        meta={"directory": str(directory), "dataset": dataset},
     )
     return samples, target
 
@@ -178,7 +175,7 @@ def _fixed(table, name: str, width: int) -> np.ndarray:
     return np.asarray(col.flatten(), dtype=np.float64).reshape(-1, width)
 
 
-def load_depth(samples: Samples, directory=None) -> np.ndarray:
+def load_depth(samples: Samples, directory: DatasetLike | None = None) -> np.ndarray:
     """The depth images of the samples, read from the dataset or rendered.
 
     Stored images are read in streamed batches keeping only the chosen rows, so memory is
@@ -187,30 +184,27 @@ def load_depth(samples: Samples, directory=None) -> np.ndarray:
     Parameters
     ----------
     samples : Samples
-    directory : path, optional
-        The dataset; default: ``samples.meta["directory"]``.
+    directory : path or Dataset, optional
+        The dataset; default: the one the samples were read from (``samples.meta``).
 
     Returns
     -------
     (n, 128, 128) uint16 ndarray
         Depth, mm, 0 for no return.
     """
-    from ..dataset.layout import read_manifest
-
-    directory = directory or samples.meta.get("directory")
-    if directory is None:
+    source = directory or samples.meta.get("dataset") or samples.meta.get("directory")
+    if source is None:
         raise InputError("samples without a dataset directory: pass directory=")
-    manifest = read_manifest(directory)
-    if manifest.get("depth"):
-        images = _read_stored_depth(directory, samples)
+    dataset = Dataset.open(source)
+    if dataset.depth:
+        images = _read_stored_depth(dataset, samples)
     else:
-        images = render_samples_depth(samples, manifest)
+        images = render_samples_depth(samples, dataset)
     samples.depth_mm = images
     return images
 
 
-def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
-    from ..dataset.reading import iter_batches
+def _read_stored_depth(dataset: Dataset, samples: Samples) -> np.ndarray:
     from ..vision.depth import decode_depth_column, depth_to_mm
 
     want: dict[tuple[str, int], int] = {
@@ -219,8 +213,8 @@ def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
     out = None
     found = 0
     objects = sorted(set(samples.object))
-    for batch in iter_batches(
-        directory, columns=["object", "sample", "depth_mm"], objects=objects, batch_size=4096
+    for batch in dataset.batches(
+        columns=["object", "sample", "depth_mm"], objects=objects, batch_size=4096
     ):
         names = batch.column(0).to_pylist()
         ids = batch.column(1).to_numpy()
@@ -240,14 +234,14 @@ def _read_stored_depth(directory, samples: Samples) -> np.ndarray:
     return out if out is not None else np.zeros((0, 128, 128), dtype=np.uint16)
 
 
-def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
-    """Render D(p0, O) of every sample from its object (resolved as the manifest says).
+def render_samples_depth(samples: Samples, dataset: DatasetLike) -> np.ndarray:
+    """Render D(p0, O) of every sample from its object (as the dataset resolves it).
 
     Parameters
     ----------
     samples : Samples
-    manifest : dict
-        The dataset's manifest (objects, sources and mesh hashes).
+    dataset : path or Dataset
+        The dataset the samples come from (:meth:`Dataset.object` finds each object).
 
     Returns
     -------
@@ -259,15 +253,20 @@ def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
     DatasetError
         When an object's mesh is gone or is not the one the dataset was made with.
     """
-    from ..vision.depth import depth_to_mm
+    from ..vision.depth import depth_to_mm, renderer_for
 
+    dataset = Dataset.open(dataset)
     out = np.zeros((len(samples), 128, 128), dtype=np.uint16)
     by_object: dict[str, list[int]] = defaultdict(list)
     for i, o in enumerate(samples.object):
         by_object[o].append(i)
-    entries = {o["name"]: o for o in manifest["objects"]}
     for name, rows in by_object.items():
-        renderer = _renderer_of(entries.get(name), name)
+        try:
+            renderer = renderer_for(dataset.object(name))
+        except DatasetError as exc:
+            raise DatasetError(
+                f"{exc}; or generate the dataset with --depth to keep its images"
+            ) from None
         idx = np.asarray(rows)
         for lo in range(0, len(idx), 1024):
             part = idx[lo : lo + 1024]
@@ -275,185 +274,29 @@ def render_samples_depth(samples: Samples, manifest: dict) -> np.ndarray:
     return out
 
 
-def _renderer_of(entry: dict | None, name: str):
-    from ..vision.depth import renderer_for
-
-    return renderer_for(object_of(entry, name))
-
-
-def object_of(entry: dict | None, name: str):
-    """The object a dataset's manifest entry names, checked against its mesh hash.
+def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
+    """The samples' depth images as a sensor model returns them.
 
     Parameters
     ----------
-    entry : dict or None
-        The manifest's entry of the object (None: not in the manifest).
-    name : str
-        The object's name in the dataset.
+    samples : Samples
+        With depth images.
+    sensor : SensorModel
+        The sensor (:mod:`affordgrasp.vision.sensor`).
 
     Returns
     -------
-    GraspObject
-
-    Raises
-    ------
-    DatasetError
-        When the object is not in the manifest, or its mesh is gone or changed.
+    (n, h, w) uint16 ndarray
+        Depth, mm; image i's noise keyed by (CRC-32 of its object's name, its sample).
     """
-    from ..objects import load_object
+    import zlib
 
-    if entry is None:
-        raise DatasetError(f"object {name!r} is not in the dataset's manifest")
-    spec = name if entry.get("source", "family") == "family" else entry["source"]
-    if spec != name and not Path(spec).exists():
-        raise DatasetError(
-            f"the mesh of {name!r} ({spec}) is gone and the dataset has no depth images; "
-            "generate it with --depth or restore the mesh file"
-        )
-    obj = load_object(spec)
-    if entry.get("mesh_hash") and obj.mesh_hash != entry["mesh_hash"]:
-        raise DatasetError(
-            f"object {name!r} resolves to a different mesh than the dataset's; "
-            "generate the dataset with --depth to keep its images"
-        )
-    return obj
+    from ..vision.depth import depth_from_mm, depth_to_mm
+    from ..vision.sensor import apply_sensor
 
-
-# ------------------------------------------------------------------------------------ splits
-
-
-@dataclass(frozen=True)
-class Split:
-    """Object names of each part of a split (disjoint).
-
-    Attributes
-    ----------
-    train, val, test : tuple of str
-        Sorted object names.
-    kind : str
-        ``"object"`` (instances held out) or ``"family"`` (whole families held out).
-    """
-
-    train: tuple[str, ...]
-    val: tuple[str, ...]
-    test: tuple[str, ...]
-    kind: str = "object"
-
-    def to_dict(self) -> dict:
-        """The split as JSON-ready data.
-
-        Returns
-        -------
-        dict
-            ``kind``, ``train``, ``val``, ``test`` (lists).
-        """
-        return {
-            "kind": self.kind,
-            "train": list(self.train),
-            "val": list(self.val),
-            "test": list(self.test),
-        }
-
-    def part_of(self, objects: np.ndarray, part: str) -> np.ndarray:
-        """Which objects belong to one part of the split.
-
-        Parameters
-        ----------
-        objects : (n,) ndarray of str
-        part : str
-            ``"train"``, ``"val"`` or ``"test"``.
-
-        Returns
-        -------
-        (n,) bool ndarray
-        """
-        return np.isin(objects, list(getattr(self, part)))
-
-
-def split_by_object(
-    objects: Sequence[str], families: Sequence[str], *, seed: int = 0, fraction=(0.15, 0.15)
-) -> Split:
-    """Hold out object instances, family by family, so that categories overlap.
-
-    A family with n >= 3 instances gives max(1, round(f·n)) to validation and to test; one
-    with 2 gives one to test; one with 1 goes to training.
-
-    Parameters
-    ----------
-    objects, families : sequence of str
-        Object of each row and its family (repeats allowed).
-    seed : int
-        Seeds the shuffle within each family.
-    fraction : (float, float)
-        f of validation and of test.
-
-    Returns
-    -------
-    Split
-
-    Raises
-    ------
-    InputError
-        When no family has two instances (nothing to test on).
-    """
-    by_family: dict[str, list[str]] = defaultdict(list)
-    for o, f in sorted(set(zip(objects, families, strict=True))):
-        by_family[f].append(o)
-    rng = np.random.default_rng(seed)
-    train, val, test = [], [], []
-    for fam in sorted(by_family):
-        names = list(by_family[fam])
-        rng.shuffle(names)
-        n = len(names)
-        n_val = max(1, round(fraction[0] * n)) if n >= 3 else 0
-        n_test = max(1, round(fraction[1] * n)) if n >= 2 else 0
-        test += names[:n_test]
-        val += names[n_test : n_test + n_val]
-        train += names[n_test + n_val :]
-    if not train or not test:
-        raise InputError(
-            "a split by object needs at least 2 instances of some family (e.g. knife:0 knife:1)"
-        )
-    return Split(tuple(sorted(train)), tuple(sorted(val)), tuple(sorted(test)), "object")
-
-
-def split_by_family(
-    objects: Sequence[str], families: Sequence[str], test_families: Sequence[str], *, seed=0
-) -> Split:
-    """Hold out whole families for test; validation takes instances of the remaining families.
-
-    Parameters
-    ----------
-    objects, families : sequence of str
-        Object of each row and its family.
-    test_families : sequence of str
-        Families of the test set.
-    seed : int
-        Seeds the validation draw (:func:`split_by_object` with no test fraction).
-
-    Returns
-    -------
-    Split
-
-    Raises
-    ------
-    InputError
-        When a test family is not in the data, or nothing is left to train or test on.
-    """
-    pairs = sorted(set(zip(objects, families, strict=True)))
-    known = {f for _, f in pairs}
-    unknown = sorted(set(test_families) - known)
-    if unknown:
-        raise InputError(f"families {unknown} are not in the dataset; it holds {sorted(known)}")
-    test = [o for o, f in pairs if f in set(test_families)]
-    rest = [(o, f) for o, f in pairs if f not in set(test_families)]
-    if not rest or not test:
-        raise InputError("a split by family needs a family to test on and one to train on")
-    inner = split_by_object(
-        [o for o, _ in rest], [f for _, f in rest], seed=seed, fraction=(0.15, 0)
-    )
-    train = [o for o in inner.train] + list(inner.test)
-    return Split(tuple(sorted(train)), inner.val, tuple(sorted(test)), "family")
+    ids = np.array([zlib.crc32(str(o).encode()) for o in samples.object], dtype=np.int64)
+    keys = np.c_[ids, samples.sample]
+    return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
 
 
 def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np.ndarray:

@@ -188,11 +188,10 @@ def evaluate_decisions(
         median over every decision), ``physics_hold_rate`` (with ``physics``), ``rule``
         and the settings.
     """
-    from ..dataset.layout import read_manifest
-    from ..dataset.reading import manifest_hand, open_dataset, read_dataset
+    from ..dataset.handle import Dataset
     from ..tasks import get_task, is_viable
     from ..vision.depth import decode_depth_column, depth_to_mm
-    from .data import Samples, _families, load_depth, object_of
+    from .data import Samples, load_depth
     from .plan import model_order, replay, rule_of, split_models
 
     if candidates < 1 or draws < 1:
@@ -201,19 +200,18 @@ def evaluate_decisions(
     task_obj.thresholds_for(mode)
     classifier, regressor = split_models(models)
     base = split_models(baseline) if baseline else None
-    manifest = read_manifest(dataset)
-    families = _families(manifest)
-    entries = {o["name"]: o for o in manifest["objects"]}
+    dataset = Dataset.open(dataset)
+    families = dataset.families
     needs_depth = any(c["arch"] != "pose" for _, c in [*models, *(baseline or [])])
-    stored = bool(manifest.get("depth")) and needs_depth
-    names = [c for c in open_dataset(dataset).schema.names if c != "depth_mm" or stored]
+    stored = dataset.depth and needs_depth
+    names = [c for c in dataset.arrow().schema.names if c != "depth_mm" or stored]
     per: dict[str, dict] = {}
     decisions: dict[str, list[float]] = {"model": [], "random": [], "oracle": []}
     if base:
         decisions["baseline"] = []
     holds = []
     for k, name in enumerate(sorted(objects)):
-        table = read_dataset(dataset, columns=names, objects=[name])
+        table = dataset.read(columns=names, objects=[name])
         n = table.num_rows
         if n == 0:
             continue
@@ -235,7 +233,7 @@ def evaluate_decisions(
             p0,
             d,
             np.full(len(used), np.nan),
-            meta={"directory": str(dataset)},
+            meta={"directory": str(dataset.directory), "dataset": dataset},
         )
         if stored:  # read with the rows: one pass over the object's shards
             samples.depth_mm = depth_to_mm(decode_depth_column(sub.column("depth_mm")))
@@ -266,15 +264,17 @@ def evaluate_decisions(
             entry[key] = _mean(rs)
             decisions[key] += [r["top1_percentile"] for r in rs]
         if physics and first_choice is not None:
-            obj = object_of(entries.get(name), name)
-            outcome = replay(obj, manifest_hand(manifest), table.slice(first_choice, 1))
+            obj = dataset.object(name)
+            outcome = replay(obj, dataset.hand, table.slice(first_choice, 1))
             entry["physics"] = outcome
             holds.append(bool(outcome.get("hold_ok")))
         per[name] = entry
         if progress is not None:
             progress(1)
     if not per:
-        raise InputError(f"none of the objects {list(objects)} has rows in {str(dataset)!r}")
+        raise InputError(
+            f"none of the objects {list(objects)} has rows in {str(dataset.directory)!r}"
+        )
     out = {
         "task": task_obj.name,
         "mode": mode,

@@ -37,7 +37,7 @@ class StreamedEpochs:
         Rows shuffled together before batches are cut (memory: about 35 kB a row).
     sensor : SensorModel, optional
         Apply a depth sensor model to the images
-        (:func:`~affordgrasp.learning.api.sensed_depth_mm`).
+        (:func:`~affordgrasp.learning.data.sensed_depth_mm`).
     chunk_rows : int
         Rows read from the dataset at a time.
     """
@@ -53,16 +53,15 @@ class StreamedEpochs:
         sensor=None,
         chunk_rows: int = 4096,
     ):
-        from ..dataset.layout import read_manifest
+        from ..dataset.handle import Dataset
 
-        self.dataset = dataset
+        self.dataset = Dataset.open(dataset)
         self.config = config
         self.train = train
         self.batch_size = int(batch_size)
         self.buffer_rows = max(int(buffer_rows), self.batch_size)
         self.sensor = sensor
         self.chunk_rows = int(chunk_rows)
-        self.manifest = read_manifest(dataset)
         self.target = Target.from_dict(config["target"])
         self.needs_depth = config["arch"] != "pose"
         self._index = {
@@ -148,16 +147,14 @@ class StreamedEpochs:
 
     def _chunks(self, wanted: np.ndarray):
         """The wanted training rows, chunk by chunk, with their depth images."""
-        from ..dataset.reading import iter_batches
         from ..vision.depth import decode_depth_column, depth_to_mm
-        from .api import sensed_depth_mm
-        from .data import render_samples_depth
+        from .data import render_samples_depth, sensed_depth_mm
 
-        stored = bool(self.manifest.get("depth"))
+        stored = self.dataset.depth
         columns = ["object", "sample"] + (["depth_mm"] if stored and self.needs_depth else [])
         objects = sorted(set(self.train.object.tolist()))
-        for batch in iter_batches(
-            self.dataset, columns=columns, objects=objects, batch_size=self.chunk_rows
+        for batch in self.dataset.batches(
+            columns=columns, objects=objects, batch_size=self.chunk_rows
         ):
             names = batch.column(0).to_pylist()
             ids = batch.column(1).to_numpy()
@@ -175,7 +172,7 @@ class StreamedEpochs:
                     images = decode_depth_column(batch.column(2).take(np.asarray(pos)))
                     part.depth_mm = depth_to_mm(images)
                 else:
-                    part.depth_mm = render_samples_depth(part, self.manifest)
+                    part.depth_mm = render_samples_depth(part, self.dataset)
                 if self.sensor is not None:
                     part.depth_mm = sensed_depth_mm(part, self.sensor)
             yield part

@@ -32,8 +32,8 @@ import numpy as np
 from numba import njit
 
 from ..errors import InputError
+from ..kernel_cache import install_package_stamp
 from ..tolerances import CONE_AXIS_SWITCH
-from .kernel_cache import install_package_stamp
 
 # before the first @njit of the metrics: every kernel module imports this one first
 install_package_stamp()
@@ -232,5 +232,6 @@ def contact_wrenches(
         Forces (N per unit edge) then torques, columns contact-major (module docstring).
     """
     points, normals, mu = _as_contact_arrays(points, normals, mu)
-    center = np.ascontiguousarray(center, dtype=np.float64).reshape(3)
+    # a writable copy: one kernel signature whether the caller's array is read-only or not
+    center = np.array(center, dtype=np.float64).reshape(3)
     return wrench_matrix_kernel(points, normals, mu, center, float(torque_scale), bool(soft))

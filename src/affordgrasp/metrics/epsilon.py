@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..kernel_cache import install_package_stamp
 from .cones import contact_wrenches, wrench_matrix_kernel
 from .hull import (
     HULL_DEGENERATE,
@@ -44,7 +45,6 @@ from .hull import (
     hull_workspace,
     store_volume,
 )
-from .kernel_cache import install_package_stamp
 from .lp import FAILED, OPTIMAL, simplex_standard
 from .validation import contact_arrays, point3, positive_length
 

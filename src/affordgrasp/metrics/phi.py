@@ -21,7 +21,7 @@ use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the 
 use_clearance             m      smallest contact-to-U distance
 use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
-contact_reach             m      farthest contact past the centre of mass towards U's end
+contact_reach             --     farthest contact past the centre of mass towards U, over U's offset
 ========================  =====  ==========================================================
 
 Infeasible efforts are +inf (IEEE), never a sentinel.
@@ -37,6 +37,7 @@ from numba import njit
 
 from ..columns import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS
 from ..errors import InputError
+from ..kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .discharge import discharge
 from .effort import (
@@ -49,7 +50,6 @@ from .effort import (
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
 from .hull import hull_workspace
 from .inertia import rotational_inertia
-from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
 from .use_geometry import (
@@ -209,7 +209,10 @@ def compute_phi_batch(
     ):
         if arr.shape[0] != n:
             raise InputError(f"{name} has {arr.shape[0]} rows, expected one per grasp ({n})")
-    center = np.ascontiguousarray(mass.center_of_mass, dtype=np.float64).reshape(3)
+    # A copy: the cached object's arrays are read-only, a worker's unpickled ones are not,
+    # and numba compiles a kernel once per read-only flag (a worker would compile
+    # the metric kernels on a first run that loads the shipped ones in process).
+    center = np.array(mass.center_of_mass, dtype=np.float64).reshape(3)
     r_max = float(mass.r_max)
     points, normals, mu, offsets = _stack_contacts(contacts)
 

@@ -20,9 +20,9 @@ import numpy as np
 from numba import njit
 
 from ..errors import InternalError
+from ..kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .effort import use_wrench
-from .kernel_cache import install_package_stamp
 from .lp import OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
 from .validation import contact_arrays, point3, unit3
 

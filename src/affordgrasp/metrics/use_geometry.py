@@ -505,11 +505,9 @@ def use_wedge_angle(
         m = len(p)
         origins = np.repeat(p - _WEDGE_START_M * N[first : first + chunk], k, axis=0)
         dirs = np.tile(S, (m, 1))
-        locations, ray, _ = mesh.ray.intersects_location(origins, dirs, multiple_hits=True)
-        ray = np.asarray(ray, dtype=np.int64)
-        t = np.einsum("ij,ij->i", np.asarray(locations, dtype=np.float64) - origins[ray], dirs[ray])
-        order = np.lexsort((t, ray))
-        ray, t = ray[order], t[order]
+        ray, locations = _crossings(mesh.ray, origins, dirs)
+        t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
+        ray, t = _sorted_by_ray(ray, t)
         # one crossing per surface: a ray through an edge reports both of its faces
         dup = np.zeros(len(t), dtype=bool)
         dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
@@ -517,6 +515,37 @@ def use_wedge_angle(
         inside = _ray_inside(ray, t, radius, m * k)
         out[first : first + m] = 2.0 * np.pi * inside.reshape(m, k).mean(axis=1)
     return float(out[0]) if single else out
+
+
+def _crossings(caster, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ray and point of every crossing of the rays with the mesh ((m,) int64, (m, 3) float64):
+    the compiled loop on Embree (the same bits, twice as fast), else the caster's own."""
+    from ..objects.rays import EmbreeRays
+
+    if isinstance(caster, EmbreeRays):
+        from .ray_crossings import all_crossings
+
+        _, ray, locations = all_crossings(caster, origins, dirs)
+        return ray, locations
+    locations, ray, _ = caster.intersects_location(origins, dirs, multiple_hits=True)
+    return np.asarray(ray, dtype=np.int64), np.asarray(locations, dtype=np.float64)
+
+
+def _sorted_by_ray(ray: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The crossings ordered by ray, then by distance (``np.lexsort((t, ray))``).
+
+    The hits of one ray come in the order the ray met them, so a stable sort by ray alone
+    is nearly always that order already (a few times faster than the two-key sort); if
+    some ray's distances do not increase, the two-key sort decides.
+    """
+    order = np.argsort(ray, kind="stable")
+    ray_sorted, t_sorted = ray[order], t[order]
+    if np.isnan(t).any() or np.any(
+        (ray_sorted[1:] == ray_sorted[:-1]) & (t_sorted[1:] < t_sorted[:-1])
+    ):
+        order = np.lexsort((t, ray))
+        return ray[order], t[order]
+    return ray_sorted, t_sorted
 
 
 def _ray_inside(ray: np.ndarray, t: np.ndarray, radius: float, n_rays: int) -> np.ndarray:

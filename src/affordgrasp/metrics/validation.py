@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..grasp.contacts import check_contact_arrays  # its home: the stage that makes contacts
 from ..tolerances import UNIT_NORMAL, ZERO_LENGTH
 
 
@@ -101,48 +102,6 @@ def stacked_contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray
         rows = np.isin(owner, owner[off])
         normals[rows] = normals[rows] / length[rows, None]
     return points, normals, mu, offsets
-
-
-def check_contact_arrays(
-    points: np.ndarray, normals: np.ndarray, mu: np.ndarray, *, normalise: bool = False
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The one check of contact arrays (shapes, finiteness, ``mu >= 0``, non-zero normals).
-
-    Normals are rescaled to unit length when ``normalise`` is set or when one of them is
-    off by more than 1e-12 (the cones assume unit normals; a ContactSet built directly,
-    without :meth:`ContactSet.from_arrays`, may not have them).
-
-    Parameters
-    ----------
-    points : (k, 3) float64 ndarray
-        m.
-    normals : (k, 3) float64 ndarray
-        Outward normals.
-    mu : (k,) float64 ndarray
-        Friction coefficients, >= 0.
-    normalise : bool
-        Always rescale the normals.
-
-    Returns
-    -------
-    points, normals, mu
-        The same shapes, float64; normals unit.
-    """
-    if not (points.shape == normals.shape and mu.shape[0] == points.shape[0]):
-        raise InputError(
-            f"inconsistent contact arrays: points {points.shape}, normals {normals.shape}, "
-            f"mu {mu.shape}"
-        )
-    if not (np.all(np.isfinite(points)) and np.all(np.isfinite(normals))):
-        raise InputError("contact points and normals must be finite (found NaN or inf)")
-    if np.any(~np.isfinite(mu)) or np.any(mu < 0):
-        raise InputError(f"friction coefficients must be finite and >= 0, got {mu}")
-    length = np.linalg.norm(normals, axis=1)
-    if np.any(length < ZERO_LENGTH):
-        raise InputError("every contact normal must be non-zero")
-    if normalise or np.any(np.abs(length - 1.0) > UNIT_NORMAL):
-        normals = np.ascontiguousarray(normals / length[:, None])
-    return points, normals, mu
 
 
 def point3(x, name: str) -> np.ndarray:

@@ -97,8 +97,76 @@ class EmbreeRays:
         )
 
     def _run(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        return self.first_faces_scene(*self.to_scene(origins, directions))
+
+    # The pieces of the multiple-hit loop, for a caller that runs the loop itself
+    # (``affordgrasp.metrics.ray_crossings``, compiled) on the same rays.
+
+    @property
+    def ray_offset(self) -> float:
+        """How far a ray restarts past a hit, m (doubled for a repeated face)."""
+        return max(_RAY_OFFSET_FLOOR, self._mesh_scale * _RAY_OFFSET_FACTOR)
+
+    @property
+    def face_planes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(f, 3) float64 first vertex and (f, 3) unit normal of every face."""
+        planes = getattr(self, "_planes", None)
+        if planes is None:
+            # writable C-contiguous copies: one signature of the compiled loop, whether the
+            # mesh's arrays are read-only (a cached object) or not
+            planes = self._planes = (
+                np.array(self._vertices[self._faces][:, 0, :], order="C"),
+                np.array(self._face_normals, dtype=np.float64, order="C"),
+            )
+        return planes
+
+    @property
+    def scene_frame(self) -> tuple[np.ndarray, float]:
+        """Embree's frame: a point x is ``(x - origin) * scale`` there, in float32."""
+        return self._origin, self._scale
+
+    def unit_directions(self, directions: np.ndarray) -> np.ndarray:
+        """Directions made unit as the ray loop makes them.
+
+        Parameters
+        ----------
+        directions : (n, 3) float64 ndarray
+
+        Returns
+        -------
+        (n, 3) float64 ndarray
+        """
+        return _unitize(directions)
+
+    def to_scene(self, origins: np.ndarray, directions: np.ndarray):
+        """Rays in Embree's frame.
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float array_like
+            m; unit directions.
+
+        Returns
+        -------
+        origins, directions : (n, 3) float32 ndarray
+        """
         scaled = (np.array(origins, dtype=np.float64) - self._origin) * self._scale
-        return self._scene.run(scaled.astype(_EMBREE_DTYPE), directions.astype(_EMBREE_DTYPE))
+        return scaled.astype(_EMBREE_DTYPE), directions.astype(_EMBREE_DTYPE)
+
+    def first_faces_scene(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """The face each ray hits first.
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float32 ndarray
+            In Embree's frame (:meth:`to_scene`).
+
+        Returns
+        -------
+        (n,) int ndarray
+            Face index, -1 for a miss.
+        """
+        return self._scene.run(origins, directions)
 
     def intersects_id(
         self,
@@ -139,8 +207,7 @@ class EmbreeRays:
         if multiple_hits or return_locations:
             base_offset = max(_RAY_OFFSET_FLOOR, self._mesh_scale * _RAY_OFFSET_FACTOR)
             ray_offsets = ray_directions * base_offset
-            plane_origins = self._vertices[self._faces][:, 0, :]
-            plane_normals = self._face_normals
+            plane_origins, plane_normals = self.face_planes
         last_hit = np.full(len(ray_origins), -1, dtype=np.int64)
         live = np.arange(len(ray_origins))
         for _depth in range(max_hits):

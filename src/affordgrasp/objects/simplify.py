@@ -14,9 +14,12 @@ the simplified one, so the result comes with a number, not a hope:
   reported maximum is exact when no more than ``REFINED`` points needed refining, and can
   otherwise only overstate the error.
 
-One costly pass takes the mesh to ``MAX_FACES`` triangles; cheaper passes then halve it
-while the measured distance stays within the tolerance. A mesh that misses the tolerance even
-at ``MAX_FACES`` is kept at that size and the warning says so, with the distance. Validated
+One costly pass takes the mesh to ``FIRST_FACES`` triangles (a second one, from the original,
+to ``MAX_FACES`` only when that misses the tolerance); cheaper passes then halve it while the
+measured distance stays within the tolerance. A mesh that misses the tolerance even at
+``MAX_FACES`` is kept at that size and the warning says so, with the distance. Going to
+``FIRST_FACES`` in one pass rather than through ``MAX_FACES`` saves a pass and a distance
+check on the common scan (2 M triangles: 10.0 -> see benchmarks/RESULTS.md). Validated
 (tests) against trimesh's exact closest points and on a sphere and a torus, whose volumes
 are known.
 """
@@ -42,8 +45,10 @@ __all__ = [
 LARGE_MESH_FACES = 200_000
 # The geometric tolerance of that simplification, m (one-sided distance, see above).
 SIMPLIFY_TOLERANCE_M = 1e-4
-# The first pass decimates to this many triangles (or half the mesh), then halves while the
-# tolerance holds, down to MIN_FACES (still finer than 1.4 mm samples on a hand-held tool).
+# The first pass decimates to FIRST_FACES triangles (or half the mesh); if that misses the
+# tolerance, one pass from the original to MAX_FACES; then halves while the tolerance holds,
+# down to MIN_FACES (still finer than 1.4 mm samples on a hand-held tool).
+FIRST_FACES = 200_000
 MAX_FACES = 400_000
 MIN_FACES = 25_000
 DISTANCE_SAMPLES = 20_000
@@ -171,10 +176,11 @@ def simplify_to_tolerance(
 ) -> tuple[np.ndarray, np.ndarray, Simplification]:
     """Decimate a mesh to the fewest triangles tried whose measured distance is within tolerance.
 
-    The mesh is decimated once to ``max_faces`` (the costly pass over the full mesh), then
-    halved again and again from there (each pass cheaper than the one before) while the
-    distance, always measured from the original's vertices, stays within ``tolerance`` and
-    the count above ``min_faces``.
+    The mesh is decimated once to ``FIRST_FACES`` triangles (the costly pass over the full
+    mesh; ``max_faces`` if fewer) and, only if that misses the tolerance, once more from the
+    original to ``max_faces``; then halved again and again (each pass cheaper than the one
+    before) while the distance, always measured from the original's vertices, stays within
+    ``tolerance`` and the count above ``min_faces``.
 
     Parameters
     ----------
@@ -185,7 +191,7 @@ def simplify_to_tolerance(
     tolerance : float
         Largest accepted one-sided distance, in the units of ``vertices``.
     max_faces : int, optional
-        Triangles of the first pass; default ``MAX_FACES`` or half the mesh's, if fewer.
+        The most triangles kept; default ``MAX_FACES`` or half the mesh's, if fewer.
     min_faces : int
         No pass goes below this.
     seed : int
@@ -196,15 +202,15 @@ def simplify_to_tolerance(
     vertices : (v', 3) float64 ndarray
     faces : (f', 3) int64 ndarray
     report : Simplification
-        ``report.within_tolerance`` is False when even the first pass missed it (its
-        result is returned, with the distance measured).
+        ``report.within_tolerance`` is False when even ``max_faces`` triangles missed it
+        (that result is returned, with the distance measured).
     """
     import fast_simplification
 
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
     faces = np.ascontiguousarray(faces, dtype=np.int64)
-    first = int(max_faces or min(MAX_FACES, len(faces) // 2))
-    if first >= len(faces) or first < 4:
+    cap = int(max_faces or min(MAX_FACES, len(faces) // 2))
+    if cap >= len(faces) or cap < 4:
         return vertices, faces, Simplification(len(faces), len(faces), float(tolerance), 0.0, 0)
     rng = np.random.default_rng(seed)
     mask = np.zeros(len(vertices), dtype=bool)
@@ -221,7 +227,9 @@ def simplify_to_tolerance(
         log.debug("simplified %d -> %d triangles: distance %.3g", len(faces), len(f), distance)
         return v, f, Simplification(len(faces), len(f), float(tolerance), distance, len(points))
 
-    best = attempt(vertices, faces, first)
+    best = attempt(vertices, faces, min(FIRST_FACES, cap))
+    if not best[2].within_tolerance and len(best[1]) < cap:
+        return attempt(vertices, faces, cap)
     while best[2].within_tolerance and len(best[1]) // 2 >= min_faces:
         smaller = attempt(best[0], best[1], len(best[1]) // 2)
         if not smaller[2].within_tolerance:

@@ -4,22 +4,25 @@ Plan (a pure function of the dataset and the options): the dataset's rows with a
 status (``grasped`` by default), objects in dataset order, samples in order, optionally the
 first ``max_per_object`` of each object, cut into shards of ``shard_size`` rows. Shard *k*
 is ``part-{k:05d}.parquet`` in the output directory, written atomically (temporary file,
-fsync, rename) by the worker that computed it; a run skips every shard already there with
-the planned row count. ``_physics.json`` records the plan and the settings; a run against
-a directory with another plan refuses and says what differs.
+fsync, rename) by the calling process when its rows come back; a run skips every shard
+already there with the planned row count. ``_physics.json`` records the plan and the
+settings; a run against a directory with another plan refuses and says what differs.
+
+The shards run on the engines that generate uses (:mod:`affordgrasp.dataset.engines`: this
+process, local worker processes or Ray, every core by default), with the same stopping
+behaviour: the caller resolves each object once (:meth:`~affordgrasp.dataset.handle.Dataset.object`)
+and decomposes it, and the workers get its mesh, mass properties and convex parts in the
+run's :class:`ReplayContext`.
 """
 
 from __future__ import annotations
 
-import functools
 import json
 import logging
-import multiprocessing
 import os
-import signal
 import time
+import uuid
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,9 +32,10 @@ import pyarrow.parquet as pq
 
 from .. import __version__
 from ..columns import METRIC_COLUMNS
-from ..errors import DatasetError, bad_parameter
+from ..dataset.handle import Dataset
+from ..errors import DatasetError, InputError, bad_parameter
 from ..hands.model import Hand
-from ..worker_lifetime import die_with_parent
+from ..robust import RobustSettings, robust_column_names, robust_settings
 from ..writing import atomic_write
 from .settings import PhysicsSettings
 
@@ -45,7 +49,8 @@ MANIFEST = "_physics.json"
 DEFAULT_SHARD_SIZE = 128
 
 KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
-STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal")
+# The grasp state, read to replay it (and, for ``robust``, to re-evaluate it), not written.
+STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal", "p0", "use_dir")
 # The dataset's numeric metric columns (not the text epsilon_reason) and the contact count,
 # carried into the outcome table for the report.
 REPORTED_METRICS = (*(c for c in METRIC_COLUMNS if c != "epsilon_reason"), "n_contacts")
@@ -66,6 +71,9 @@ class PhysicsSummary:
     elapsed_s : float
         Wall time, s.
     workers : int
+    robust : dict or None
+        With ``robust``: ``{"copies": K, "source": "dataset"}`` (the dataset's columns) or
+        ``"computed"`` (for the replayed rows); None without.
     """
 
     directory: str
@@ -79,6 +87,8 @@ class PhysicsSummary:
     busy_s: float = 0.0  # seconds the workers spent validating (sum over workers)
     cpu_s: float = 0.0  # CPU seconds the workers spent validating (fair on a shared machine)
     hold_ok: dict = field(default_factory=dict)  # object -> [held, validated]
+    # The robust columns reported: None, or {"copies": K, "source": "dataset" | "computed"}.
+    robust: dict | None = None
 
     @property
     def validations_per_s(self) -> float:
@@ -113,29 +123,24 @@ class PhysicsSummary:
             "worker_wall_s": self.busy_s,
             "worker_cpu_s": self.cpu_s,
             "hold_ok": self.hold_ok,
+            "robust": self.robust,
         }
 
 
-def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table, dict]:
-    from ..dataset.layout import read_manifest
-    from ..dataset.reading import read_dataset, select_objects
-
-    manifest = read_manifest(dataset_dir)
-    if not manifest.get("metrics", True):
+def _plan_rows(dataset, statuses, objects, max_per_object) -> pa.Table:
+    if not dataset.metrics:
         raise DatasetError(
-            f"dataset {str(dataset_dir)!r} was generated with --no-metrics; the physics "
+            f"dataset {str(dataset.directory)!r} was generated with --no-metrics; the physics "
             "report compares metrics with outcomes: generate it with metrics"
         )
-    from ..dataset.reading import open_dataset
-
-    chosen = select_objects(dataset_dir, objects)
+    chosen = dataset.select(objects)
     # Robust metrics (``robust_*``) travel to the report when the dataset has them.
-    robust = [c for c in open_dataset(dataset_dir).schema.names if c.startswith("robust_")]
+    robust = [c for c in dataset.arrow().schema.names if c.startswith("robust_")]
     columns = [*KEY_COLUMNS, *STATE_COLUMNS, *REPORTED_METRICS, *robust]
-    table = read_dataset(dataset_dir, columns=columns, objects=chosen)
+    table = dataset.read(columns=columns, objects=chosen)
     status = np.asarray(table.column("status").to_pylist(), dtype=object)
     keep = np.isin(status, list(statuses))
-    order_of = {o["name"]: o["index"] for o in manifest["objects"]}
+    order_of = {name: e["index"] for name, e in dataset.entries.items()}
     obj_index = np.array([order_of[n] for n in table.column("object").to_pylist()], dtype=np.int64)
     sample = table.column("sample").to_numpy()
     idx = np.flatnonzero(keep)
@@ -149,20 +154,20 @@ def _plan_rows(dataset_dir, statuses, objects, max_per_object) -> tuple[pa.Table
                 counts[o] = counts.get(o, 0) + 1
                 picked.append(int(i))
         idx = np.array(picked, dtype=np.int64)
-    return table.take(pa.array(idx, type=pa.int64())), manifest
+    return table.take(pa.array(idx, type=pa.int64()))
 
 
-def _plan_manifest(dataset_dir, manifest, settings, statuses, objects, max_per_object, n, size):
+def _plan_manifest(dataset, settings, statuses, objects, max_per_object, n, size):
     return {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "affordgrasp_version": __version__,
-        "dataset": str(Path(dataset_dir).resolve()),
-        "dataset_seed": manifest["seed"],
-        "hand": manifest["hand"],
+        "dataset": str(dataset.directory.resolve()),
+        "dataset_seed": dataset.seed,
+        "hand": dataset.manifest["hand"],
         "objects": [
             {"name": o["name"], "mesh_hash": o["mesh_hash"], "source": o["source"]}
-            for o in manifest["objects"]
+            for o in dataset.entries.values()
         ],
         "statuses": list(statuses),
         "object_filter": list(objects) if objects else None,
@@ -186,6 +191,7 @@ _PLAN_KEYS = (
     "rows",
     "shard_size",
     "settings_digest",
+    "robust",
 )
 
 
@@ -236,30 +242,40 @@ def _shard_done(path: Path, rows: int) -> bool:
 
 
 def run_physics(
-    dataset_dir: str | os.PathLike,
+    dataset_dir: str | os.PathLike | Dataset,
     out: str | os.PathLike,
     *,
     settings: PhysicsSettings | None = None,
-    workers: int | None = 1,
+    workers: int | None = None,
+    engine: str = "local",
+    address: str | None = None,
     shard_size: int = DEFAULT_SHARD_SIZE,
     objects: Sequence[str] | None = None,
     statuses: Sequence[str] = ("grasped",),
     max_per_object: int | None = None,
     progress: Callable | None = None,
     log_message: Callable[[str], None] | None = None,
+    robust: RobustSettings | int | None = None,
 ) -> PhysicsSummary:
     """Validate the grasps of a dataset in MuJoCo; write the outcomes as Parquet shards.
 
     Parameters
     ----------
-    dataset_dir : path
-        A dataset written by ``affordgrasp generate``.
+    dataset_dir : path or Dataset
+        A dataset written by ``affordgrasp generate``: its rows are replayed with its hand
+        on its objects (:meth:`~affordgrasp.dataset.handle.Dataset.object`, mass properties
+        included: a dataset made with ``--materials`` is replayed with them).
     out : path
         The output directory (a finished shard is skipped when run again).
     settings : PhysicsSettings, optional
         The protocol; the defaults when None.
     workers : int, optional
-        Processes.
+        Processes (local) or CPUs (local Ray); default every core; 1 runs in this process
+        (as for :func:`affordgrasp.generate`).
+    engine : {"local", "ray"}
+        Where the shards run.
+    address : str, optional
+        An existing Ray cluster (with ``engine="ray"``).
     shard_size : int
         Rows per shard.
     objects : sequence of str, optional
@@ -272,72 +288,206 @@ def run_physics(
         ``progress(total)`` is a context manager yielding ``advance(n)``.
     log_message : callable, optional
         Receives one-line messages.
+    robust : RobustSettings or int, optional
+        Report the robust scores (:mod:`affordgrasp.robust`) of the replayed rows beside
+        their outcomes: a dataset generated with the same K keeps its ``robust_*`` columns;
+        a dataset without robust columns has them computed for the replayed rows (from each
+        row's stored pregrasp, K perturbed copies, the dataset's hand and contact model).
+        None or 0: the dataset's ``robust_*`` columns travel when it has them, nothing is
+        computed.
 
     Returns
     -------
     PhysicsSummary
+
+    Raises
+    ------
+    InputError
+        For a dataset whose robust columns are of another K.
+
+    Notes
+    -----
+    A KeyboardInterrupt (or SIGTERM) stops the workers and keeps every whole shard; calling
+    again resumes. Local workers are started with 'spawn': a script calling this with
+    ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
     """
+    from ..dataset.engines import check_engine, default_workers
+
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
         raise bad_parameter("shard_size", f"must be a positive integer, got {shard_size}")
     if max_per_object is not None and max_per_object <= 0:
         raise bad_parameter("max_per_object", f"must be a positive integer, got {max_per_object}")
-    workers = workers or len(os.sched_getaffinity(0))
-    if workers <= 0:
+    if workers is not None and (isinstance(workers, bool) or workers <= 0):
         raise bad_parameter("workers", f"must be a positive integer, got {workers}")
+    check_engine(engine, workers, address)
     out = Path(out)
-    rows, manifest = _plan_rows(dataset_dir, statuses, objects, max_per_object)
+    dataset = Dataset.open(dataset_dir)
+    rows = _plan_rows(dataset, statuses, objects, max_per_object)
     n = rows.num_rows
     if n == 0:
         raise DatasetError(
-            f"dataset {str(dataset_dir)!r} has no rows with status {', '.join(statuses)} to "
+            f"dataset {str(dataset.directory)!r} has no rows with status {', '.join(statuses)} to "
             "validate; generate more samples or choose other objects"
         )
-    plan = _plan_manifest(
-        dataset_dir, manifest, settings, statuses, objects, max_per_object, n, shard_size
-    )
+    plan = _plan_manifest(dataset, settings, statuses, objects, max_per_object, n, shard_size)
+    compute = _robust_plan(dataset, robust_settings(robust))
+    plan["robust"] = None if compute is None else {"source": "computed", **compute.to_dict()}
     _prepare_out(out, plan)
-    from ..dataset.reading import manifest_hand
-
-    hand = manifest_hand(manifest)  # the dataset's own hand, custom ones included
+    hand = dataset.hand  # the dataset's own hand, custom ones included
     for stale in out.glob(".part-*.tmp-*"):
         stale.unlink(missing_ok=True)
     shards = [(k, s, min(s + shard_size, n)) for k, s in enumerate(range(0, n, shard_size))]
     pending = [sh for sh in shards if not _shard_done(shard_path(out, sh[0]), sh[2] - sh[1])]
-    needed = {rows.column("object")[s].as_py() for _, s, _ in pending}
-    entries = [o for o in plan["objects"] if o["name"] in needed]
-    # Decompose each object once, here, so the workers read the cache.
-    for entry in entries:
+    needed = {
+        name
+        for _, s, e in pending
+        for name in set(rows.column("object").slice(s, e - s).to_pylist())
+    }
+    # Resolve and decompose each object once, here: the workers get its mesh, mass
+    # properties and convex parts (as generate's get its mesh), never its files or caches.
+    from ..dataset.engines import ObjectPayload
+
+    payloads, parts = {}, {}
+    for name in [o for o in dataset.objects if o in needed]:
         if log_message:
-            log_message(f"convex decomposition of {entry['name']} (cached after the first run)")
-        _entry_object(entry, settings)
+            log_message(f"convex decomposition of {name} (cached after the first run)")
+        obj = dataset.object(name)
+        parts[name] = convex_parts_of(obj, settings)
+        payloads[name] = ObjectPayload.from_object(obj)
+    context = ReplayContext(
+        hand=hand,
+        objects=payloads,
+        parts=parts,
+        settings=settings,
+        robust=compute,
+        soft=dataset.soft,
+    )
+    jobs = [ReplayJob(k, rows.slice(s, e - s)) for k, s, e in pending]
     started = time.perf_counter()
-    summary = PhysicsSummary(str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers)
-    jobs = [
-        (str(out), k, rows.slice(s, e - s), hand, plan["objects"], settings) for k, s, e in pending
-    ]
+    summary = PhysicsSummary(
+        str(out), n, 0, len(shards) - len(pending), 0, 0.0, workers or default_workers()
+    )
     total = sum(e - s for _, s, e in pending)
-    with progress(total) if progress else _null_progress() as advance:
-        if workers == 1 or len(jobs) <= 1:
-            for job in jobs:
-                _account(summary, validate_shard(*job), advance)
-        else:
-            ctx = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(
-                max_workers=workers,
-                mp_context=ctx,
-                initializer=_worker_init,
-                initargs=(os.getpid(),),
-            ) as pool:
-                try:
-                    for result in pool.map(_validate_job, jobs):
-                        _account(summary, result, advance)
-                except BaseException:
-                    _stop_workers(pool)
-                    raise
+    if jobs:
+        with progress(total) if progress else _null_progress() as advance:
+            _run_jobs(context, jobs, out, summary, advance, engine, workers, address)
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
+    wanted = robust_settings(robust)
+    if wanted is not None:
+        summary.robust = {
+            "copies": wanted.copies,
+            "source": "dataset" if compute is None else "computed",
+        }
     return summary
+
+
+def _run_jobs(context, jobs, out: Path, summary, advance, engine, workers, address) -> None:
+    """Run the shards' jobs on an engine; write each shard as its rows come back."""
+    from ..dataset.engines import make_engine, stop_on_signals
+
+    with (
+        stop_on_signals(),
+        make_engine(context, engine=engine, workers=workers, address=address) as eng,
+    ):
+        summary.workers = eng.workers
+        depth = 1 if eng.workers == 1 and eng.name == "local" else 2 * eng.workers
+        waiting = iter(jobs)
+        in_flight: dict = {}
+        while True:
+            while len(in_flight) < depth:
+                job = next(waiting, None)
+                if job is None:
+                    break
+                in_flight[eng.submit(job)] = job
+            if not in_flight:
+                return
+            for handle in eng.wait(list(in_flight)):
+                job = in_flight.pop(handle)
+                result = eng.result(handle)
+                write_outcome_shard(out, job.shard, result["table"], context.settings)
+                _account(summary, result, advance)
+
+
+@dataclass(frozen=True)
+class ReplayJob:
+    """The rows of one shard of a physics run.
+
+    Attributes
+    ----------
+    shard : int
+        Shard index.
+    rows : pyarrow.Table
+        Dataset rows (:data:`KEY_COLUMNS`, :data:`STATE_COLUMNS`, the metrics).
+    """
+
+    shard: int
+    rows: pa.Table
+
+
+@dataclass(frozen=True)
+class ReplayContext:
+    """What every shard of a physics run shares (sent once to each worker).
+
+    Attributes
+    ----------
+    hand : Hand
+        The dataset's hand, itself (custom hands included).
+    objects : dict of str to ObjectPayload
+        The objects as the dataset resolves them: mesh and mass properties.
+    parts : dict of str to list of (vertices, faces)
+        Their convex parts, so that no worker decomposes.
+    settings : PhysicsSettings
+    robust : RobustSettings or None
+        Robust columns to compute for the replayed rows (``--robust K`` on a dataset
+        without them; :func:`robust_of_rows`); None: none computed.
+    soft : bool
+        The dataset's contact model (for ``robust``).
+    key : str
+        Identifies the run.
+    """
+
+    hand: Hand
+    objects: dict
+    parts: dict
+    settings: PhysicsSettings
+    robust: RobustSettings | None = None
+    soft: bool = False
+    key: str = field(default_factory=lambda: uuid.uuid4().hex)
+
+    def run(self, job: ReplayJob) -> dict:
+        """Replay one shard's rows (in whichever process the engine runs it).
+
+        Parameters
+        ----------
+        job : ReplayJob
+
+        Returns
+        -------
+        dict
+            ``table`` (the outcome table), ``rows``, simulation ``steps``, wall
+            ``seconds`` and ``cpu_seconds``.
+        """
+        started, cpu = time.perf_counter(), time.process_time()
+        table = validate_rows(
+            job.rows,
+            self.hand,
+            self.objects,
+            self.settings,
+            self.robust,
+            self.soft,
+            parts=self.parts,
+        )
+        seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
+        steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
+        return {
+            "table": table,
+            "rows": table.num_rows,
+            "steps": steps,
+            "seconds": seconds,
+            "cpu_seconds": cpu,
+        }
 
 
 class _null_progress:
@@ -357,68 +507,153 @@ def _account(summary: PhysicsSummary, result: dict, advance) -> None:
     advance(result["rows"])
 
 
-def _worker_init(parent_pid: int) -> None:
-    # Ctrl-C and a hangup reach the whole process group: the parent stops the workers (a
-    # worker's own KeyboardInterrupt would only print its traceback). A parent killed
-    # outright takes them along.
-    die_with_parent(parent_pid)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGHUP, signal.SIG_IGN)
+def convex_parts_of(obj, settings: PhysicsSettings) -> list:
+    """The convex parts an object collides as (cached on disk per mesh and settings).
 
+    Parameters
+    ----------
+    obj : GraspObject
+    settings : PhysicsSettings
 
-def _stop_workers(pool) -> None:
-    """Stop a pool at once: cancel what waits, terminate what runs (its shard is redone)."""
-    processes = list(getattr(pool, "_processes", {}).values())  # the executor's own
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in processes:
-        if proc.is_alive():
-            proc.terminate()
-    for proc in processes:
-        proc.join(timeout=5)
-        if proc.is_alive():  # pragma: no cover - stuck in native code
-            proc.kill()
-            proc.join(timeout=5)
-
-
-def _validate_job(job) -> dict:
-    return validate_shard(*job)
-
-
-@functools.cache
-def _scene_object(name: str, source: str, mesh_hash: str, settings: PhysicsSettings):
-    """The GraspObject of a manifest entry (checked against its hash) and its parts.
-
-    Cached per process (the idiom of :mod:`affordgrasp.caching` for hashable values): the
-    decomposition depends on the settings, so they are part of the key.
+    Returns
+    -------
+    list of (vertices, faces)
     """
-    from ..objects import load_object
     from .decompose import convex_parts
 
-    obj = load_object(name if source == "family" else source)
-    if obj.mesh_hash != mesh_hash:
-        raise DatasetError(
-            f"object {name!r} resolves to another mesh than the dataset's "
-            f"(hash {obj.mesh_hash[:12]} here vs {mesh_hash[:12]} there); "
-            "validate on the machine and software version that generated it"
-        )
-    return obj, convex_parts(obj.mesh, obj.mesh_hash, settings)
+    return convex_parts(obj.mesh, obj.mesh_hash, settings)
 
 
-def _entry_object(entry: dict, settings: PhysicsSettings):
-    return _scene_object(entry["name"], entry["source"], entry["mesh_hash"], settings)
+# Per process: compiled scenes by (hand, object, mass, settings). A scene compiles in tens
+# of ms; a shard replays hundreds of rows on it.
+_SCENES: dict[tuple, object] = {}
 
 
-@functools.cache
-def _scene(hand_spec: str, name: str, source: str, mesh_hash: str, settings: PhysicsSettings):
-    """The compiled scene of a hand (its JSON document) and an object, one per process."""
-    from ..hands import hand_from_dict
+def _scene(hand: Hand, hand_key: str, obj, settings: PhysicsSettings, parts=None):
+    """The compiled scene of a hand and an object, one per process."""
     from .scene import build_scene
 
-    obj, parts = _scene_object(name, source, mesh_hash, settings)
-    return build_scene(hand_from_dict(json.loads(hand_spec)), obj, settings, parts=parts)
+    mass = obj.mass  # None only for a payload of a uniform-density object
+    key = (
+        hand_key,
+        obj.name,
+        obj.mesh_hash,
+        bool(obj.materials),
+        None if mass is None else (float(mass.mass), tuple(np.round(mass.center_of_mass, 12))),
+        settings,
+    )
+    scene = _SCENES.get(key)
+    if scene is None:
+        if not hasattr(obj, "mesh"):  # an ObjectPayload: the object as the caller resolved it
+            obj = obj.build()
+        if parts is None:
+            parts = convex_parts_of(obj, settings)
+        scene = build_scene(hand, obj, settings, parts=parts)
+        _SCENES[key] = scene
+    return scene
 
 
-def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], settings) -> pa.Table:
+def _robust_plan(dataset: Dataset, robust: RobustSettings | None):
+    """The robust settings to compute for the replayed rows, or None (read or none wanted).
+
+    A dataset generated with ``--robust K`` already holds the columns of K copies: asking
+    for K reads them, another K is refused (its columns would not be the ones asked for).
+    """
+    if robust is None:
+        return None
+    there = dataset.robust
+    if there is None:
+        return robust
+    if there.copies != robust.copies:
+        raise InputError(
+            f"--robust {robust.copies}: the dataset in {str(dataset.directory)!r} has robust "
+            f"columns of K = {there.copies} copies; pass --robust {there.copies} (they are "
+            "read) or replay a dataset without robust columns (they are computed)"
+        )
+    return None
+
+
+def robust_of_rows(
+    rows: pa.Table,
+    hand: Hand | str,
+    objects: dict,
+    robust: RobustSettings | int,
+    soft: bool = False,
+) -> dict[str, np.ndarray]:
+    """The robust columns of dataset rows, re-evaluated from their stored pregrasps.
+
+    Each object's rows are simulated again from ``p0`` and ``use_dir`` with K perturbed
+    copies (:func:`affordgrasp.pipeline.evaluate_inputs`); the copies depend on (seed, k)
+    only, so the values equal those a ``generate --robust K`` run writes for the same rows.
+
+    Parameters
+    ----------
+    rows : pyarrow.Table
+        Dataset rows with ``object``, ``p0``, ``use_dir`` and ``hand_pose``.
+    hand : Hand or str
+        The dataset's hand.
+    objects : dict of str to GraspObject or ObjectPayload
+        The object of every name in ``rows``, as the dataset resolves it
+        (:meth:`~affordgrasp.dataset.handle.Dataset.object`).
+    robust : RobustSettings or int
+        K >= 1 and the perturbations (an int: K with the default perturbations).
+    soft : bool
+        The dataset's contact model (soft-finger contacts).
+
+    Returns
+    -------
+    dict of str to (n,) float64 ndarray
+        :func:`affordgrasp.robust.robust_column_names` of the settings' tasks, in row order.
+
+    Raises
+    ------
+    DatasetError
+        When a row's grasp does not come out of its pregrasp again (the dataset was made by
+        another version of the simulator), so its robust scores would describe another grasp.
+    """
+    from ..hands import get_hand
+    from ..pipeline import evaluate_inputs
+
+    wanted = robust_settings(robust)
+    if wanted is None:
+        raise InputError("robust scores need K >= 1 copies per grasp, got K = 0")
+    hand = get_hand(hand)
+    names = np.asarray(rows.column("object").to_pylist(), dtype=object)
+    out = {c: np.full(len(names), np.nan) for c in robust_column_names(wanted.tasks)}
+    for name in dict.fromkeys(names.tolist()):
+        idx = np.flatnonzero(names == name)
+        sub = rows.take(pa.array(idx, type=pa.int64()))
+        p0 = np.asarray(sub.column("p0").to_pylist(), dtype=np.float64).reshape(-1, 6)
+        use_dir = np.asarray(sub.column("use_dir").to_pylist(), dtype=np.float64)
+        obj = objects[name]
+        if not hasattr(obj, "mesh"):  # an ObjectPayload: the object as the caller resolved it
+            obj = obj.build()
+        table = evaluate_inputs(
+            obj, p0, use_dir.reshape(len(idx), -1), hand=hand, soft=soft, robust=wanted
+        ).table
+        again = np.asarray(table.column("hand_pose").to_pylist(), dtype=np.float64)
+        stored = np.asarray(sub.column("hand_pose").to_pylist(), dtype=np.float64)
+        if again.shape != stored.shape or not np.allclose(again, stored, rtol=0, atol=1e-9):
+            raise DatasetError(
+                f"rows of {name!r} do not simulate to their stored grasp again (the dataset "
+                "was made by another version of the grasp simulator), so robust scores "
+                "computed now would describe other grasps; regenerate it with --robust K"
+            )
+        for c in out:
+            out[c][idx] = table.column(c).to_numpy(zero_copy_only=False)
+    return out
+
+
+def validate_rows(
+    rows: pa.Table,
+    hand: Hand | str,
+    objects: dict,
+    settings,
+    robust: RobustSettings | None = None,
+    soft: bool = False,
+    *,
+    parts: dict | None = None,
+) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
     Parameters
@@ -428,9 +663,16 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     hand : Hand or str
         The hand the dataset was generated with
         (:func:`affordgrasp.dataset.reading.dataset_hand`), or a registered name.
-    objects : list of dict
-        The dataset manifest's object entries.
+    objects : dict of str to GraspObject or ObjectPayload
+        The object of every name in ``rows``, as the dataset resolves it
+        (:meth:`~affordgrasp.dataset.handle.Dataset.object`).
     settings : PhysicsSettings
+    robust : RobustSettings, optional
+        Also compute the rows' robust columns (:func:`robust_of_rows`) and add them.
+    soft : bool
+        The dataset's contact model (for ``robust``).
+    parts : dict of str to list, optional
+        Convex parts of the objects by name; default: decomposed (or read from the cache).
 
     Returns
     -------
@@ -441,7 +683,6 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
 
     hand = get_hand(hand)
     hand_key = json.dumps(hand_to_dict(hand), sort_keys=True)
-    by_name = {o["name"]: o for o in objects}
     names = rows.column("object").to_pylist()
     poses = rows.column("hand_pose").to_pylist()
     joints = rows.column("joints").to_pylist()
@@ -449,8 +690,7 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     uns = rows.column("use_normal").to_pylist()
     outcomes = []
     for i in range(rows.num_rows):
-        entry = by_name[names[i]]
-        scene = _scene(hand_key, entry["name"], entry["source"], entry["mesh_hash"], settings)
+        scene = _scene(hand, hand_key, objects[names[i]], settings, (parts or {}).get(names[i]))
         up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
         un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
         outcome = validate_grasp(
@@ -462,6 +702,12 @@ def validate_rows(rows: pa.Table, hand: Hand | str, objects: list[dict], setting
     for name in outcomes[0] if outcomes else ():
         values = [o[name] for o in outcomes]
         table = table.append_column(name, pa.array(values, type=_outcome_type(name)))
+    if robust is not None and robust.enabled:
+        scores = robust_of_rows(rows, hand, objects, robust, soft)
+        for name, column in scores.items():
+            if name in table.column_names:
+                table = table.drop_columns([name])
+            table = table.append_column(name, pa.array(column, type=pa.float64()))
     return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 
@@ -482,33 +728,33 @@ def _outcome_type(name: str) -> pa.DataType:
     return pa.float64()
 
 
-def validate_shard(out, k, rows, hand, objects, settings) -> dict:
-    """Validate one shard's rows and write its Parquet file atomically.
+def write_outcome_shard(out, k: int, table: pa.Table, settings: PhysicsSettings) -> Path:
+    """Write shard ``k``'s outcome table atomically (temporary file, fsync, rename).
 
     Parameters
     ----------
-    out : pathlib.Path
+    out : path
         The run's directory.
     k : int
         Shard index.
-    rows, hand, objects, settings
-        As for :func:`validate_rows`.
+    table : pyarrow.Table
+        :func:`validate_rows`'s table.
+    settings : PhysicsSettings
+        Recorded in the file's metadata (their digest).
 
     Returns
     -------
-    dict
-        ``rows``, simulation ``steps``, wall ``seconds`` and ``cpu_seconds``.
+    pathlib.Path
+        The shard file.
     """
-    started, cpu = time.perf_counter(), time.process_time()
-    table = validate_rows(rows, hand, objects, settings)
-    seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
     path = shard_path(Path(out), k)
-    meta = {b"affordgrasp_version": __version__.encode(), b"physics_settings": b""}
-    meta[b"physics_settings"] = settings.digest().encode()
+    meta = {
+        b"affordgrasp_version": __version__.encode(),
+        b"physics_settings": settings.digest().encode(),
+    }
     table = table.replace_schema_metadata(meta)
     atomic_write(path, lambda fh: pq.write_table(table, fh))
-    steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
-    return {"rows": table.num_rows, "steps": steps, "seconds": seconds, "cpu_seconds": cpu}
+    return path
 
 
 def read_outcomes(out: str | os.PathLike) -> pa.Table:

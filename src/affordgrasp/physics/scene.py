@@ -12,7 +12,8 @@
   Barrett distal at 1/3 of the proximal, offset so that the grasp's joint values hold).
   Links moved by a pregrasp DOF (the Barrett spread) are placed rigidly per grasp.
 * The object collides as its convex parts (:mod:`.decompose`); its mass, centre of mass and
-  inertia are those of the ORIGINAL mesh at ``settings.density``.
+  inertia are those of the ORIGINAL mesh at ``settings.density``, or its per-part
+  materials' when it has them (a dataset made with ``--materials``).
 * Friction: every hand geom carries μ(link material, object material) from the material
   table (or ``settings.friction`` when set), object geoms μ = 0; MuJoCo takes the larger
   of a pair, so each contact gets that μ. Contacts are point contacts with friction
@@ -39,7 +40,7 @@ from . import deps
 from .decompose import convex_parts
 from .settings import G, PhysicsSettings
 
-__all__ = ["Scene", "build_scene", "rounded_shape_points"]
+__all__ = ["Scene", "build_scene", "engine_friction", "rounded_shape_points"]
 
 FAR = 10.0  # m: where the tools wait, well away from anything
 TOOL_HALF = 0.005  # m: the anvil and the plate are 10 mm cubes (a local obstacle at U)
@@ -99,6 +100,53 @@ def rounded_shape_points(kind: str, half_extents, radius: float) -> np.ndarray:
     return np.unique(np.round(core + radius * d, 12), axis=0)
 
 
+def engine_friction(settings: PhysicsSettings, mu: float) -> float:
+    """The friction coefficient the engine gives a hand-object pair whose table μ is ``mu``.
+
+    ``settings.friction`` (> 0) replaces the table. Otherwise the friction cone is widened by
+    ``settings.friction_margin_deg``: μ' = tan(atan μ + δ). A force inside the cone of
+    half-angle atan μ about the mesh's normal is inside the cone of half-angle atan μ + δ
+    about any normal within δ of it, so a grasp in force closure on the mesh stays in force
+    closure on collision geometry whose normals are off by at most δ.
+
+    Parameters
+    ----------
+    settings : PhysicsSettings
+    mu : float
+        μ of the material table, > 0.
+
+    Returns
+    -------
+    float
+    """
+    import math
+
+    if settings.friction:
+        return float(settings.friction)
+    if not settings.friction_margin_deg:
+        return float(mu)
+    return math.tan(math.atan(mu) + math.radians(settings.friction_margin_deg))
+
+
+def table_friction(settings: PhysicsSettings, mu_engine: np.ndarray) -> np.ndarray:
+    """Invert :func:`engine_friction` for table friction: the table μ of engine coefficients.
+
+    Parameters
+    ----------
+    settings : PhysicsSettings
+    mu_engine : (k,) float ndarray
+
+    Returns
+    -------
+    (k,) float64 ndarray
+        Unchanged when ``settings.friction`` is set or there is no margin.
+    """
+    mu_engine = np.asarray(mu_engine, dtype=np.float64)
+    if settings.friction or not settings.friction_margin_deg:
+        return mu_engine
+    return np.tan(np.arctan(mu_engine) - np.radians(settings.friction_margin_deg))
+
+
 def _fmt(values) -> str:
     return " ".join(f"{v:.9g}" for v in np.asarray(values, dtype=np.float64).ravel())
 
@@ -122,7 +170,7 @@ class Scene:
         The hand modelled.
     settings : PhysicsSettings
     mass : MassProperties
-        Of the original mesh at ``settings.density``.
+        Of the original mesh at ``settings.density`` (or of its per-part materials).
     object_name : str
     n_parts : int
         Convex parts the object collides as.
@@ -194,7 +242,9 @@ def build_scene(
     hand : Hand or str
         A Hand, a registered name or a hand file.
     obj : GraspObject
-        The object, in its own frame.
+        The object, in its own frame. Its mass properties are used when they follow
+        per-part materials (``obj.materials``); otherwise the object weighs
+        ``settings.density`` × its volume (or ``settings.object_mass_kg``).
     settings : PhysicsSettings, optional
         The protocol; the defaults when None.
     object_material : str
@@ -212,10 +262,15 @@ def build_scene(
     hand = get_hand(hand)
     if parts is None:
         parts = convex_parts(obj.mesh, obj.mesh_hash, settings)
-    mass = mass_properties(obj.mesh, density=settings.density)
-    if settings.object_mass_kg > 0:
-        # A fixed mass (the DexGraspBench protocol): the same density everywhere, scaled.
-        mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
+    if getattr(obj, "materials", False) and settings.object_mass_kg <= 0:
+        # Per-part materials (a dataset made with --materials, a region densities file): the
+        # object's own mass, centre of mass and inertia, as its rows were scored with.
+        mass = obj.mass
+    else:
+        mass = mass_properties(obj.mesh, density=settings.density)
+        if settings.object_mass_kg > 0:
+            # A fixed mass (the DexGraspBench protocol): the same density everywhere, scaled.
+            mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
     xml, info = _mjcf(hand, obj.name, parts, mass, settings, object_material)
     try:
         model = mj.MjModel.from_xml_string(xml)
@@ -308,7 +363,7 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
 
     def link_xml(i: int, indent: str) -> str:
         link = hand.links[i]
-        mu = s.friction or friction_coefficient(link.material, object_material)
+        mu = engine_friction(s, friction_coefficient(link.material, object_material))
         lines = []
         j = link.joint
         attrs = ""
@@ -352,7 +407,7 @@ def _mjcf(hand, name, parts, mass, settings, object_material):
 
     palm_geoms = []
     palm = hand.links[0]
-    mu_palm = s.friction or friction_coefficient(palm.material, object_material)
+    mu_palm = engine_friction(s, friction_coefficient(palm.material, object_material))
     for k, shape in enumerate(palm.shapes):
         pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
         pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..hands.kinematics import joint_poses, kinematic_tree
 from . import deps
-from .scene import FAR, Scene
+from .scene import FAR, Scene, table_friction
 from .settings import G
 
 __all__ = [
@@ -712,6 +712,7 @@ def settled_contacts(scene: Scene):
     points = (pos - d.xpos[body]) @ r
     normals = outward @ r
     mu = np.maximum(m.geom_friction[pairs[:, 0], 0], m.geom_friction[pairs[:, 1], 0])
+    mu = table_friction(scene.settings, mu)  # the metrics' μ, without the engine's margin
     names = np.array(
         [mj.mj_id2name(m, mj.mjtObj.mjOBJ_BODY, int(m.geom_bodyid[g])) for g in hand_geom],
         dtype=object,

@@ -247,7 +247,7 @@ def cem_maximize(
     """
     if not isinstance(budget, int) or budget < 1:
         raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
-    pop = population or default_population(budget)
+    pop = default_population(budget) if population is None else population
     if pop < 2:
         raise InputError(f"the population must be at least 2, got {pop}")
     if not 0 < elite_fraction <= 0.5:
@@ -377,6 +377,15 @@ def plan_runs(
     """
     if isinstance(restarts, bool) or not isinstance(restarts, int | np.integer) or restarts < 1:
         raise bad_parameter("restarts", f"must be a positive integer, got {restarts!r}")
+    if population is not None and (
+        isinstance(population, bool)
+        or not isinstance(population, int | np.integer)
+        or population < 2
+    ):
+        # Checked here, before any work: 0 must not silently mean the default.
+        raise bad_parameter(
+            "population", f"must be an integer >= 2 (or None for the default), got {population!r}"
+        )
     if isinstance(refine, bool) or not isinstance(refine, float | int) or not 0 <= refine < 1:
         raise bad_parameter("refine", f"must be a share in [0, 1), got {refine!r}")
     n_refine = int(round(float(refine) * budget)) if isinstance(budget, int | np.integer) else 0

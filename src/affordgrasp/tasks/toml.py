@@ -38,6 +38,12 @@ def read_task_file(path: str | os.PathLike) -> list[Task]:
             doc = tomllib.load(fh)
     except FileNotFoundError:
         raise TaskError(f"task file {str(path)!r} does not exist") from None
+    except IsADirectoryError:
+        raise TaskError(f"task file {str(path)!r} is a directory; give a .toml file") from None
+    except PermissionError:
+        raise TaskError(f"task file {str(path)!r} cannot be read (permission denied)") from None
+    except UnicodeDecodeError as exc:
+        raise TaskError(f"task file {str(path)!r} is not UTF-8 text ({exc.reason})") from None
     except tomllib.TOMLDecodeError as exc:
         raise TaskError(f"task file {str(path)!r} is not valid TOML: {exc}") from None
     section = doc.get("tasks")

@@ -28,6 +28,9 @@ import numpy as np
 from ..errors import InputError
 from ..grasp.pregrasp import hand_rotations, validate_pregrasps
 
+# Pixels per side at most: a 4096 x 4096 float64 image is 128 MB (and each render holds a few).
+MAX_CAMERA_SIZE = 4096
+
 
 @dataclass(frozen=True)
 class DepthCamera:
@@ -36,7 +39,7 @@ class DepthCamera:
     Attributes
     ----------
     size : int
-        Pixels per side, >= 2.
+        Pixels per side, 2 to ``MAX_CAMERA_SIZE``.
     fov_deg : float
         Field of view, degrees.
     """
@@ -47,6 +50,12 @@ class DepthCamera:
     def __post_init__(self):
         if not isinstance(self.size, int) or isinstance(self.size, bool) or self.size < 2:
             raise InputError(f"camera size must be an integer >= 2, got {self.size!r}")
+        if self.size > MAX_CAMERA_SIZE:
+            raise InputError(
+                f"camera size {self.size} is too large: at most {MAX_CAMERA_SIZE} pixels per "
+                f"side (a {self.size} x {self.size} image would need "
+                f"{self.size**2 * 8 / 2**30:.3g} GiB per copy)"
+            )
         if not 0.0 < float(self.fov_deg) < 180.0:
             raise InputError(
                 f"camera field of view must be in (0, 180) degrees, got {self.fov_deg}"

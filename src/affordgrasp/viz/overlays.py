@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .camera import Camera, any_perpendicular, unit
-from .raycast import Render, auto_camera, visible
+from .raycast import Render, auto_camera, caster_of, visible
 from .scene import GraspScene
 
 
@@ -77,7 +77,7 @@ def draw_grasp(
     -------
     Render
     """
-    caster = scene.caster
+    caster = caster_of(scene)
     if camera is None:
         camera = auto_camera(scene, width=width, height=height)
     render = caster.render(camera, supersample=supersample)
@@ -105,7 +105,7 @@ def draw_overlays(
     style : OverlayStyle
     """
     camera = render.camera
-    caster = scene.caster if caster is None else caster
+    caster = caster_of(scene) if caster is None else caster
     length = style.normal_length * scene.size
     lw = style.line_width
     ms = style.marker_size

@@ -3,9 +3,9 @@
 The object and the posed hand are cast in one scene; each pixel is shaded by its normal
 (Lambert, two lights fixed to the camera, a flat colour per part: the object grey, the palm
 and fingers blue) and silhouettes are outlined so the picture reads at thumbnail size. The
-result depends only on the inputs (no randomness, no GL). A scene builds its caster once
-(:attr:`GraspScene.caster`): the default camera, the image and the visibility tests of the
-overlays all cast into the same one. The default camera (:func:`auto_camera`) is the fixed
+result depends only on the inputs (no randomness, no GL). A scene's caster is built once
+(:func:`caster_of`): the default camera, the image and the visibility tests of the overlays
+all cast into the same one. The default camera (:func:`auto_camera`) is the fixed
 direction whose rays see the most of the object and the hand.
 """
 
@@ -62,7 +62,7 @@ class RayCaster:
     """The scene's triangles in one embree scene, with shading data per face corner.
 
     Rays are cast in float32 relative to ``origin`` (the scene's centre) to keep precision.
-    Build one with :meth:`RayCaster.of_scene`.
+    Get a scene's with :func:`caster_of` (built once per scene).
 
     Attributes
     ----------
@@ -105,7 +105,7 @@ class RayCaster:
 
     @classmethod
     def of_scene(cls, scene: GraspScene) -> RayCaster:
-        """The caster of a grasp scene (use :attr:`GraspScene.caster`: it is built once).
+        """A new caster of a grasp scene (use :func:`caster_of`: it is built once per scene).
 
         Parameters
         ----------
@@ -165,6 +165,22 @@ def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -
 
 
 _OBJECT_CORNER_NORMALS: IdentityCache[np.ndarray] = IdentityCache()
+_CASTERS: IdentityCache[RayCaster] = IdentityCache()
+
+
+def caster_of(scene: GraspScene) -> RayCaster:
+    """The scene's triangles in one ray-casting scene, built once per scene.
+
+    Parameters
+    ----------
+    scene : GraspScene
+
+    Returns
+    -------
+    RayCaster
+        The same one for every call with this scene (held as long as the scene).
+    """
+    return _CASTERS.get(scene, lambda: RayCaster.of_scene(scene))
 
 
 def _object_corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
@@ -214,7 +230,7 @@ def render_image(scene: GraspScene, camera: Camera, *, supersample: int = 2) -> 
     -------
     Render
     """
-    return scene.caster.render(camera, supersample=supersample)
+    return caster_of(scene).render(camera, supersample=supersample)
 
 
 def _render(caster: RayCaster, camera: Camera, *, supersample: int = 2) -> Render:
@@ -355,7 +371,7 @@ def auto_camera(
     -------
     Camera
     """
-    caster = scene.caster
+    caster = caster_of(scene)
     dirs = _fibonacci_sphere(candidates)
     a = scene.wrist_axis
     if np.all(np.isfinite(a)) and np.linalg.norm(a) > 0:

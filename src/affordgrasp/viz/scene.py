@@ -7,8 +7,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
@@ -16,9 +14,6 @@ import trimesh
 from ..errors import InputError
 from ..hands import Hand, get_hand
 from ..hands.meshes import HandMesh, posed_hand_mesh
-
-if TYPE_CHECKING:
-    from .raycast import RayCaster
 
 
 @dataclass(frozen=True)
@@ -67,13 +62,6 @@ class GraspScene:
         """Diagonal of the bounding box of the object and the hand, metres."""
         lo, hi = scene_bounds(self)
         return float(np.linalg.norm(hi - lo))
-
-    @cached_property
-    def caster(self) -> RayCaster:
-        """The scene's triangles in one ray-casting scene, built once per scene."""
-        from .raycast import RayCaster
-
-        return RayCaster.of_scene(self)
 
 
 def _vec(row: Mapping, name: str, width: int) -> np.ndarray:

@@ -20,8 +20,8 @@ import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
 from ..dataset.best import numeric_columns, task_values
-from ..dataset.layout import read_manifest
-from ..dataset.reading import manifest_hand, open_dataset, read_errors
+from ..dataset.handle import Dataset
+from ..dataset.reading import open_dataset, read_errors
 from ..errors import DatasetError, bad_parameter
 from ..hands.model import Hand
 from ..search.ranking import TopRows
@@ -157,25 +157,34 @@ class DatasetSource(GraspSource):
     hand : Hand or None
         The hand the dataset's manifest records (filled in on construction; None for a
         directory without a manifest).
+    dataset : Dataset or None
+        The opened dataset (filled in on construction; None for a directory of loose
+        Parquet files, whose rows alone say what they are).
     """
 
     directory: Path
     name: str = ""
     files: list[str] = field(default_factory=list)
     hand: Hand | None = None
+    dataset: Dataset | None = None
 
     def __post_init__(self) -> None:
+        if isinstance(self.directory, Dataset):
+            self.dataset = self.directory
         self.directory = Path(self.directory)
         self.name = self.name or str(self.directory)
-        self._dataset = open_dataset(self.directory, loose=True)
-        self.files = list(self._dataset.files)
-        if self.hand is None:
+        if self.dataset is None:
             try:
-                manifest = read_manifest(self.directory)
+                self.dataset = Dataset.open(self.directory)
             except DatasetError:
-                manifest = None  # loose Parquet files: the rows' hand column names the hand
-            if manifest is not None:
-                self.hand = manifest_hand(manifest)
+                self.dataset = None  # loose Parquet files: the rows' hand column names the hand
+        if self.dataset is not None:
+            self._dataset = self.dataset.arrow()
+        else:
+            self._dataset = open_dataset(self.directory, loose=True)
+        self.files = list(self._dataset.files)
+        if self.hand is None and self.dataset is not None:
+            self.hand = self.dataset.hand
 
     def schema(self) -> pa.Schema:
         return self._dataset.schema
