@@ -73,7 +73,15 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
 
 def test_optimizer_over_grasps_with_their_best_use_point():
     found = optimize_pairs(
-        "meat_cleaver", "cut", budget=200, uses=1500, seed=0, top=5, population=50, tau_thick=0.0
+        "meat_cleaver",
+        "cut",
+        budget=200,
+        uses=1500,
+        seed=0,
+        top=5,
+        population=50,
+        tau_thick=0.0,
+        tau_reach=np.inf,
     )  # the search, not the thresholds: a 200-grasp search rarely holds the handle only
     values = found.table.column("value").to_numpy()
     assert found.grasps == 200 and found.candidates >= 1
@@ -96,7 +104,7 @@ def test_best_pairs_per_grasp_ranks_each_grasp_once_with_its_best_use():
     # cut pairs; at unit density it finds none
     cleaver = load_object("meat_cleaver", materials=True)
     table = evaluate_samples(cleaver, 120, seed=0).table
-    kw = dict(grasps=120, uses=400, top=4, grasp_table=table, tau_thick=0.0)
+    kw = dict(grasps=120, uses=400, top=4, grasp_table=table, tau_thick=0.0, tau_reach=np.inf)
     pairs = best_pairs(cleaver, "cut", **kw)
     grasps = best_pairs(cleaver, "cut", per_grasp=True, **kw)
     assert grasps.candidates == pairs.candidates >= 4
@@ -106,7 +114,9 @@ def test_best_pairs_per_grasp_ranks_each_grasp_once_with_its_best_use():
     assert np.all(np.diff(values) <= 1e-12)
     assert values[0] == pytest.approx(pairs.table.column("value").to_numpy()[0], rel=1e-9)
     # the best pair of each listed grasp: no other use point of it scores higher
-    scores = pair_scores(cleaver, table, UsePoints.sample(cleaver, 400, 1), "cut", tau_thick=0.0)
+    scores = pair_scores(
+        cleaver, table, UsePoints.sample(cleaver, 400, 1), "cut", tau_thick=0.0, tau_reach=np.inf
+    )
     best, _ = best_use_per_grasp(scores, 120)
     np.testing.assert_allclose(np.sort(best[np.isfinite(best)])[::-1][: len(values)], values)
 
@@ -128,7 +138,8 @@ def test_optimize_command_finds_a_default_mode_cut_with_use_points(capsys):
     from affordgrasp.cli import main
 
     argv = ["optimize", "meat_cleaver", "--task", "cut", "--budget", "100", "--population", "50"]
-    argv += ["--threshold", "tau_thick=0"]  # a 100-sample search rarely holds the handle only
+    argv += ["--threshold", "tau_thick=0", "--threshold", "tau_reach=inf"]  # a 100-sample
+    # search rarely holds the handle only
     code = main([*argv, "--uses", "1000", "--workers", "1", "--json"])
     doc = json.loads(capsys.readouterr().out)
     assert code == 0

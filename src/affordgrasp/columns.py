@@ -27,6 +27,7 @@ USE_METRICS: tuple[str, ...] = (
     "use_wedge_angle",
     "use_clearance",
     "use_lever_ratio",
+    "contact_reach",
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
@@ -69,6 +70,7 @@ METRIC_UNITS: dict[str, str] = {
     "use_wedge_angle": "rad",
     "use_clearance": "m",
     "use_lever_ratio": "",
+    "contact_reach": "",
     "contact_thickness": "m",
 }
 

@@ -40,7 +40,9 @@ from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
+    contact_reach,
     contact_thickness,
+    long_axis,
     use_clearance,
     use_edge,
     use_edge_angle,
@@ -286,6 +288,14 @@ def pair_scores(
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
         cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
         cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
+        cols["contact_reach"] = contact_reach(
+            all_points,
+            all_offsets,
+            uses.point[ui],
+            obj.mass.center_of_mass,
+            long_axis(obj.mass.inertia),
+            gi,
+        )
         cols["use_lever_ratio"] = use_lever_ratio(
             uses.point[ui], obj.mass.center_of_mass, wrist_point[gi], wrist_axis[gi]
         )

@@ -547,7 +547,13 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.inertia import rotational_inertia
     from .metrics.phi import contact_metrics_batch
     from .metrics.transmission import use_force
-    from .metrics.use_geometry import contact_thickness, use_clearance, use_lever_ratio
+    from .metrics.use_geometry import (
+        contact_reach,
+        contact_thickness,
+        long_axis,
+        use_clearance,
+        use_lever_ratio,
+    )
     from .metrics.validation import units_n3
 
     mass = obj.mass
@@ -607,6 +613,9 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_wedge_angle": np.repeat(phi["use_wedge_angle"], k_count),
         # distances between the copy's contacts, its wrist and U: the shift moves all alike
         "use_clearance": use_clearance(points, flat.offsets, shifted_use),
+        "contact_reach": contact_reach(
+            points, flat.offsets, shifted_use, center, long_axis(mass.inertia)
+        ),
         "use_lever_ratio": np.asarray(
             use_lever_ratio(shifted_use, center, wrist_point - shift, wrist_axis), dtype=float
         ).reshape(m),

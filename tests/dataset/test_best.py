@@ -35,6 +35,7 @@ def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
             & (df.use_wedge_angle <= t["tau_wedge"])
             & (df.use_clearance >= t["tau_clear"])
             & (df.contact_thickness >= t["tau_thick"])
+            & (df.contact_reach <= t["tau_reach"])
         )
         return np.where(ok, df.use_force, -np.inf)
     if task == "reach":

@@ -298,3 +298,34 @@ def test_lever_ratio_compares_distances_to_the_wrist_axis():
     W = np.zeros((2, 3))
     A = np.tile([0, 0, 1.0], (2, 1))
     np.testing.assert_allclose(use_lever_ratio(U, [0.2, 0, 0], W, A), [1.5, 0.25])
+    # signed: the mass on the other side of the axis from U, or on it, is -inf; NaN stays NaN
+    other = np.array([[-0.1, 0, 0], [0.1, 0, 0], [np.nan, 0, 0]])
+    got = use_lever_ratio(other, [0.2, 0, 0], np.zeros((3, 3)), np.tile([0, 0, 1.0], (3, 1)))
+    assert got[0] == -np.inf and got[1] == pytest.approx(0.5) and np.isnan(got[2])
+    # only the lever's projection counts: the mass off to the side of U's lever
+    side = use_lever_ratio([[0.2, 0, 0]], [0.1, 0.3, 0], np.zeros((1, 3)), [[0, 0, 1.0]])
+    np.testing.assert_allclose(side, [2.0])
+
+
+def test_contact_reach_is_the_farthest_contact_towards_the_use_end():
+    from affordgrasp.metrics.use_geometry import contact_reach, long_axis
+
+    # a rod along x: the long axis is x (either sign)
+    rod = trimesh.creation.box(extents=(0.3, 0.02, 0.02))
+    axis = long_axis(rod.moment_inertia)
+    assert abs(axis[0]) == pytest.approx(1.0)
+    c = np.zeros(3)
+    contacts = np.array([[-0.10, 0.01, 0], [-0.05, -0.01, 0], [0.02, 0.01, 0], [0.1, 0, 0.01]])
+    offsets = [0, 2, 4, 4]  # grasp 0 behind the mass, grasp 1 past it, grasp 2 no contact
+    U = np.array([[0.14, 0, 0], [0.14, 0, 0], [0.14, 0, 0]])
+    expected = np.array([-0.05, 0.1, -np.inf]) / 0.14  # a fraction of U's own offset
+    np.testing.assert_allclose(contact_reach(contacts, offsets, U, c, axis), expected)
+    # the sign of the axis does not matter; U on the other end mirrors the reach
+    np.testing.assert_allclose(contact_reach(contacts, offsets, U, c, -axis), expected)
+    got = contact_reach(contacts, offsets, [[-0.14, 0, 0]] * 2, c, axis, group=[0, 1])
+    np.testing.assert_allclose(got, [0.10 / 0.14, -0.02 / 0.14])
+    assert np.isnan(contact_reach(contacts, offsets, [[np.nan] * 3], c, axis, group=[0]))[0]
+    with pytest.raises(InputError, match="axis"):
+        contact_reach(contacts, offsets, U, c, [0, 0, 0])
+    with pytest.raises(InputError, match="offsets"):
+        contact_reach(contacts, [0, 2, 3], U[:2], c, axis)

@@ -28,6 +28,7 @@ def table(**overrides):
         "use_clearance": np.full(n, 0.05),
         "contact_thickness": np.full(n, 0.02),
         "use_lever_ratio": np.full(n, 1.2),
+        "contact_reach": np.full(n, -0.2),
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -80,6 +81,11 @@ def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
     assert beat.thresholds["tau_clear"] == tasks.TAU_CLEARANCE_DEFAULT
     butt = table(use_wedge_angle=np.full(5, math.pi), use_lever_ratio=[0.3, 1.2, 1.2, 1.2, 1.2])
     assert beat.evaluate(butt)[0] == -INF and np.isfinite(beat.evaluate(butt)[1])
+    held_by_head = table(use_wedge_angle=np.full(5, math.pi), use_lever_ratio=[6.0, 2.0, 1.2, 1, 1])
+    assert beat.evaluate(held_by_head)[0] == -INF
+    assert np.isfinite(beat.evaluate(held_by_head)[1:]).all()  # 1 <= ratio <= 2 passes
+    beyond_hand = table(use_wedge_angle=np.full(5, math.pi), use_lever_ratio=[-INF, 1, 1, 1, 1])
+    assert beat.evaluate(beyond_hand)[0] == -INF
     nan_use = table(use_wedge_angle=[np.nan, math.pi, math.pi, math.pi, math.pi])
     assert beat.evaluate(nan_use)[0] == -INF  # no use point: not usable
 
@@ -94,6 +100,10 @@ def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
     thin = table(contact_thickness=[0.002, 0.02, 0.02, 0.02, 0.02])
     assert cut.evaluate(thin)[0] == -INF and cut.evaluate(thin)[1] == 1.0
     assert cut.thresholds["tau_thick"] == tasks.TAU_THICKNESS_DEFAULT
+    reach = table(contact_reach=[0.6, 0.5, -0.05, -INF, 3.0])
+    got = cut.evaluate(reach)
+    assert got[0] == -INF and got[4] == -INF and np.isfinite(got[1:4]).all()
+    assert cut.evaluate(reach, tau_reach=INF)[4] == 2.5
     assert cut.thresholds["tau_wedge"] == pytest.approx(tasks.TAU_WEDGE_DEFAULT)
     dihedral = tasks.get_task("cut-dihedral")
     edge_only = table(use_edge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_wedge_angle=np.full(5, 3.0))

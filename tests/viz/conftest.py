@@ -288,7 +288,7 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
     return {
         "use_wedge_angle": float(wedge),
         "use_clearance": float(rng.uniform(0.04, 0.1)),
-        "use_lever_ratio": float(rng.uniform(1.2, 3.0)),
+        "use_lever_ratio": float(rng.uniform(1.1, 1.9)),
         "contact_thickness": float(rng.uniform(0.01, 0.03)),
         "epsilon": float(rng.uniform(0.31, 0.6)),
         "gws_volume": float(rng.uniform(0.0, 1e-3)),
@@ -303,6 +303,7 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
         "use_force": float(rng.uniform(0.1, 5.0)),
         "use_edge": float(rng.uniform(4e4, 1e5)),
         "use_edge_angle": float(rng.uniform(0.2, 0.5)),
+        "contact_reach": float(rng.uniform(-0.1, -0.01)),
     }
 
 

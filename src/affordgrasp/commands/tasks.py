@@ -12,6 +12,8 @@ THRESHOLD_COLUMNS = {
     "tau_clear": "use_clearance",
     "tau_thick": "contact_thickness",
     "tau_lever": "use_lever_ratio",
+    "tau_lever_max": "use_lever_ratio",
+    "tau_reach": "contact_reach",
     "tau_ug": "use_edge",
     "eps_min": "epsilon",
     "hold_max": "hold_effort_sum",

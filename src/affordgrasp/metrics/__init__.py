@@ -35,7 +35,9 @@ from .phi import compute_phi, compute_phi_batch
 from .transmission import use_force
 from .use_geometry import (
     EDGE_RADIUS_M,
+    contact_reach,
     contact_thickness,
+    long_axis,
     use_clearance,
     use_edge,
     use_edge_angle,
@@ -55,6 +57,7 @@ __all__ = [
     "LPStatus",
     "compute_phi",
     "compute_phi_batch",
+    "contact_reach",
     "contact_thickness",
     "contact_wrenches",
     "discharge",
@@ -72,6 +75,7 @@ __all__ = [
     "use_clearance",
     "use_edge_angle",
     "use_force",
+    "long_axis",
     "use_lever_ratio",
     "use_wedge_angle",
 ]

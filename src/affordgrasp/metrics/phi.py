@@ -21,6 +21,7 @@ use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the 
 use_clearance             m      smallest contact-to-U distance
 use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
+contact_reach             --     farthest contact past the centre of mass towards U, over U's offset
 ========================  =====  ==========================================================
 
 Infeasible efforts are +inf (IEEE), never a sentinel.
@@ -53,7 +54,9 @@ from .lp import OPTIMAL
 from .transmission import use_force, use_force_kernel
 from .use_geometry import (
     EDGE_RADIUS_M,
+    contact_reach,
     contact_thickness,
+    long_axis,
     use_clearance,
     use_edge,
     use_edge_angle,
@@ -275,6 +278,11 @@ def compute_phi_batch(
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
     out["use_lever_ratio"] = (
         use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)
+    )
+    out["contact_reach"] = (
+        contact_reach(points, offsets, use_point, center, long_axis(mass.inertia))
+        if n
+        else np.zeros(0)
     )
     out["contact_thickness"] = (
         contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)

@@ -617,6 +617,94 @@ def use_clearance(contact_points, offsets, use_point, group=None) -> np.ndarray:
     return np.where(np.isnan(U).any(axis=1), np.nan, out)
 
 
+def long_axis(inertia) -> np.ndarray:
+    """The object's long axis: the principal axis of least moment of inertia.
+
+    Parameters
+    ----------
+    inertia : (3, 3) float
+        Inertia tensor about the centre of mass, kg·m² (any density scale).
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        Unit vector (its sign is arbitrary; :func:`contact_reach` does not depend on it).
+    """
+    inertia = np.asarray(inertia, dtype=np.float64).reshape(3, 3)
+    _, vectors = np.linalg.eigh(0.5 * (inertia + inertia.T))
+    return vectors[:, 0]
+
+
+def contact_reach(
+    contact_points, offsets, use_point, center_of_mass, axis, group=None
+) -> np.ndarray:
+    """How far the hand reaches past the centre of mass towards U (``contact_reach``).
+
+    Along the object's long axis e (:func:`long_axis`), with u = (U - c) · e the use point's
+    offset from the centre of mass c, the largest (p - c) · e · sign(u) over a grasp's
+    contacts p, divided by |u|: 0 when no contact lies past the centre of mass on U's side,
+    1 when one reaches as far as U does, negative when every contact lies behind the centre
+    of mass. A knife held by its handle and cutting with its blade, or a hammer with a steel
+    head held by its handle and striking with its head, reads small or negative; a finger on
+    an axe's head or a knife's blade reads near 1. It needs no part labels, so it holds on a
+    scanned mesh.
+
+    Parameters
+    ----------
+    contact_points : (k, 3) float
+        Contacts of all grasps, stacked, m.
+    offsets : (g + 1,) int
+        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
+    use_point : (n, 3) float
+        Use points, m.
+    center_of_mass : (3,) float
+        m.
+    axis : (3,) float
+        The long axis (any sign).
+    group : (n,) int, optional
+        The grasp of each use point (default: use point i belongs to grasp i, n = g).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Dimensionless; -inf for a grasp without contacts, ±inf when U lies level with the
+        centre of mass (u = 0) and a contact lies past it (+) or none does (-), NaN for a
+        NaN use point.
+    """
+    C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
+    offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
+    U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
+    c = np.asarray(center_of_mass, dtype=np.float64).reshape(3)
+    e = np.asarray(axis, dtype=np.float64).reshape(3)
+    norm = float(np.linalg.norm(e))
+    if not (np.isfinite(norm) and norm > 0):
+        raise InputError(f"axis must be a non-zero finite vector, got {e.tolist()}")
+    e = e / norm
+    g = len(offsets) - 1
+    if g < 0 or offsets[-1] != len(C):
+        raise InputError(
+            f"offsets must end at the number of contacts ({len(C)}), got {offsets.tolist()}"
+        )
+    group = np.arange(len(U)) if group is None else np.asarray(group, dtype=np.int64).reshape(-1)
+    if group.shape[0] != U.shape[0]:
+        raise InputError(f"group has {group.shape[0]} rows, expected one per use point ({len(U)})")
+    if len(U) and (group.min() < 0 or group.max() >= g):
+        raise InputError(f"group indices must lie in [0, {g}), got {group.min()}..{group.max()}")
+    counts = np.diff(offsets)
+    hi = np.full(g, -np.inf)
+    lo = np.full(g, np.inf)
+    if len(C):
+        owner = np.repeat(np.arange(g), counts)
+        along = (C - c) @ e
+        np.maximum.at(hi, owner, along)
+        np.minimum.at(lo, owner, along)
+    u = (U - c) @ e
+    reach = np.where(u >= 0, hi[group], -lo[group])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(u != 0, reach / np.abs(u), np.where(reach > 0, np.inf, -np.inf))
+    return np.where(np.isnan(U).any(axis=1), np.nan, out)
+
+
 _THICKNESS_START_M = 1e-4  # the rays start this far inside, along -n
 
 
@@ -666,11 +754,15 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
 def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
     """How far U is from the wrist axis, relative to the centre of mass (``use_lever_ratio``).
 
-    The distance from U to the wrist axis (the line through the palm centre along the
-    approach direction) divided by the centre of mass's distance to it. A swing about that
-    axis strikes with its massive end when the ratio is at least 1: a hammer held by its
-    handle, whose steel head holds the centre of mass, strikes with the head, not with the
-    handle's end near the hand.
+    With r_U and r_C the offsets of U and of the centre of mass from the wrist axis (the line
+    through the palm centre along the approach direction; the parts perpendicular to it), the
+    ratio is |r_U|² / (r_C · r_U): U's lever over the centre of mass's lever projected on U's
+    side. A swing about that axis strikes with its massive end when the ratio is at least 1
+    (the mass lies between the axis and U) and small (the mass near U: at most 2 puts it in
+    the outer half of the lever). A hammer held by its handle, whose steel head holds the
+    centre of mass, strikes with the head (ratio a little over 1); striking with the handle's
+    end beyond the hand puts the mass on the other side of the axis (negative), and holding
+    the head to strike with the handle puts the mass near the axis (large).
 
     Parameters
     ----------
@@ -686,7 +778,8 @@ def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.nd
     Returns
     -------
     (n,) float64 ndarray
-        Dimensionless; +inf when the axis passes through the centre of mass.
+        Dimensionless; -inf when the centre of mass is on the axis or on the other side of it
+        from U (r_C · r_U <= 0); NaN where U is NaN (no use point).
     """
     U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
     W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
@@ -695,7 +788,11 @@ def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.nd
 
     def off_axis(P: np.ndarray) -> np.ndarray:
         d = P - W
-        return np.linalg.norm(d - np.einsum("ij,ij->i", d, A)[:, None] * A, axis=1)
+        return d - np.einsum("ij,ij->i", d, A)[:, None] * A
 
+    r_u = off_axis(U)
+    r_c = off_axis(np.broadcast_to(c, U.shape))
+    along = np.einsum("ij,ij->i", r_c, r_u)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return off_axis(U) / off_axis(np.broadcast_to(c, U.shape))
+        ratio = np.einsum("ij,ij->i", r_u, r_u) / along
+    return np.where(along > 0, ratio, np.where(np.isnan(along), np.nan, -np.inf))

@@ -16,11 +16,15 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
   (``use_wedge_angle`` < τ_blunt, 135°) or a contact is within τ_clear (35 mm) of it
   (``use_clearance``) or one touches material thinner than τ_thick (8 mm,
   ``contact_thickness``) or U is nearer the wrist axis than the centre of mass
-  (``use_lever_ratio`` < 1), else I / E_i (0 when E_i = inf);
+  (``use_lever_ratio`` < 1, signed: the centre of mass on U's side of the axis) or the
+  mass is in the inner half of the lever (``use_lever_ratio`` > 2), else I / E_i (0 when
+  E_i = inf);
 * ``beat-paper``: the paper's beat, without the bluntness and clearance tests;
 * ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
   opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
-  (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), else U_τ;
+  (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), or past the centre
+  of mass towards U along the long axis by more than half of U's offset (``contact_reach``
+  > τ_reach, 0.5), else U_τ;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
   rounds the mesh's edges away);
@@ -96,6 +100,8 @@ from .thresholds import (
     TAU_EPS_EXTRA,
     TAU_EPS_VIABLE,
     TAU_LEVER_DEFAULT,
+    TAU_LEVER_MAX_DEFAULT,
+    TAU_REACH_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -121,6 +127,8 @@ __all__ = [
     "TAU_EPS_DEFAULT",
     "TAU_EPS_EXTRA",
     "TAU_LEVER_DEFAULT",
+    "TAU_LEVER_MAX_DEFAULT",
+    "TAU_REACH_DEFAULT",
     "TAU_EPS_VIABLE",
     "TAU_UG_DEFAULT",
     "TAU_WEDGE_DEFAULT",

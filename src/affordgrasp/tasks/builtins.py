@@ -16,6 +16,8 @@ from .thresholds import (
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_LEVER_DEFAULT,
+    TAU_LEVER_MAX_DEFAULT,
+    TAU_REACH_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -32,6 +34,7 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
         & (m["use_lever_ratio"] >= t["tau_lever"])
+        & (m["use_lever_ratio"] <= t["tau_lever_max"])
     )
     return np.where(ok, _beat_paper(m, t), -np.inf)
 
@@ -52,6 +55,7 @@ def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["use_wedge_angle"] <= t["tau_wedge"])
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
+        & (m["contact_reach"] <= t["tau_reach"])
     )
     return np.where(ok, m["use_force"], -np.inf)
 
@@ -117,6 +121,7 @@ def builtin_tasks() -> list[Task]:
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
                 "tau_lever": TAU_LEVER_DEFAULT,
+                "tau_lever_max": TAU_LEVER_MAX_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
             "on a blunt use point with the hand off it",
@@ -147,14 +152,16 @@ def builtin_tasks() -> list[Task]:
                 "tau_wedge": TAU_WEDGE_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
+                "tau_reach": TAU_REACH_DEFAULT,
             },
             description="cutting: U_τ if robust, the use point on an edge (wedge angle at "
-            "3 mm) and the hand off it",
+            "3 mm) and the hand off it, behind the centre of mass",
             requires=(
                 "epsilon",
                 "use_wedge_angle",
                 "use_clearance",
                 "contact_thickness",
+                "contact_reach",
                 "use_force",
             ),
         ),

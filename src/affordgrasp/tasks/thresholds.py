@@ -79,6 +79,22 @@ TAU_THICKNESS_DEFAULT = 0.008
 # mass (use_lever_ratio >= 1), so a hammer held by its handle does not strike with the
 # handle's end. On a mesh file, the massive end is where its region densities put it.
 TAU_LEVER_DEFAULT = 1.0
+# ... and the mass in the outer half of the lever (use_lever_ratio <= 2): holding the head
+# and striking with the handle puts the centre of mass near the wrist axis (ratio 3-15 on
+# scan-like hammers with their steel heads), striking with the handle's end beyond the
+# hand puts it on the other side (ratio -inf).
+TAU_LEVER_MAX_DEFAULT = 2.0
+# Cut holds the tool from behind its centre of mass: no contact past it towards U by more
+# than half of U's own offset from it, along the long axis (contact_reach <= 0.5). The
+# clearance and thickness tests alone left fingers on an axe's head (14-25 mm thick) and a
+# cleaver's spine. Default mode, scan-like seeds 2-5, every grasp of 3000 with a finite cut
+# (benchmarks/validate_scan.py tables): grasps with no contact on the blade or head, without
+# this test / at 0.5 / at 0 (the contacts behind the centre of mass): axe 0.62 (21 grasps) /
+# 1.00 (13) / 1.00 (8); dagger 0.96 (25) / 1.00 (24) / none; knife 0.91 (11) / 0.91 (11) /
+# none; cleaver 0.62 (16) / 0.62 (16) / 0.82 (11). A knife's and a dagger's centre of mass
+# lies in the handle, 3-5 cm behind the blade, so that robust grasps reach past it; a
+# cleaver's lies in its blade, and 0.5 does not move its fingers off the spine.
+TAU_REACH_DEFAULT = 0.5
 
 # viable grasp (paper §III-B; conventions: Tasks), calibrated as above; "paper" mode: 0.15, 250, 100
 VIABLE_EPS_MIN = TAU_EPS_VIABLE
