@@ -132,7 +132,7 @@ def check_against_reference(cloud, points, chain, s_max, s, point, shape):
         assert s <= grid[reached[0]]
 
 
-@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("seed", range(3))
 def test_approach_stops_where_the_reference_says(seed):
     rng = np.random.default_rng(seed)
     dofs = get_hand("barrett").open_dofs(rng.uniform())
