@@ -12,7 +12,11 @@ from pathlib import Path
 
 import pytest
 
-SRC = str(Path(__file__).resolve().parents[1] / "src")
+import affordgrasp
+
+# The folder that holds the package under test (site-packages for an installed copy, whose
+# kernels ship compiled; src/ in a checkout), so that a fresh process imports the same copy.
+SRC = str(Path(affordgrasp.__file__).resolve().parents[1])
 
 
 def fresh_process_modules(code: str, **env: str) -> set[str]:

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import trimesh
 
+import affordgrasp
 import affordgrasp.objects as objects
 from affordgrasp.errors import InputError, MeshError
 from affordgrasp.objects import GraspObject, load_object, mesh_hash
@@ -218,7 +219,8 @@ def test_family_aliases_resolve_to_the_family():
     assert load_object("cleaver:2").name == "meat_cleaver:2"
 
 
-SRC = str(Path(__file__).resolve().parents[2] / "src")
+# The folder that holds the package under test (site-packages for an installed copy).
+SRC = str(Path(affordgrasp.__file__).resolve().parents[1])
 
 FACES_AT = """
 import json, sys

@@ -635,6 +635,15 @@ def long_axis(inertia) -> np.ndarray:
     return vectors[:, 0]
 
 
+def _along(vectors: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """(n,) the rows of (n, 3) ``vectors`` dotted with ``e``, the same bits for any n.
+
+    ``vectors @ e`` goes through BLAS, whose blocking depends on the number of rows, so a
+    row's last bit would depend on the batch it is evaluated in.
+    """
+    return vectors[:, 0] * e[0] + vectors[:, 1] * e[1] + vectors[:, 2] * e[2]
+
+
 def contact_reach(
     contact_points, offsets, use_point, center_of_mass, axis, group=None
 ) -> np.ndarray:
@@ -695,10 +704,10 @@ def contact_reach(
     lo = np.full(g, np.inf)
     if len(C):
         owner = np.repeat(np.arange(g), counts)
-        along = (C - c) @ e
+        along = _along(C - c, e)
         np.maximum.at(hi, owner, along)
         np.minimum.at(lo, owner, along)
-    u = (U - c) @ e
+    u = _along(U - c, e)
     reach = np.where(u >= 0, hi[group], -lo[group])
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(u != 0, reach / np.abs(u), np.where(reach > 0, np.inf, -np.inf))
