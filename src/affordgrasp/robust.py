@@ -321,11 +321,6 @@ def _matmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Dot products over the last axis (length 3), term by term in a fixed order."""
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
-
-
 def _matvec(a: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Batched a @ v term by term: a (..., 3, 3), v (..., 3) → (..., 3)."""
     return (
@@ -465,6 +460,7 @@ def robust_columns(
     import time
 
     from .grasp.policy import object_geometry, pregrasp_starts, simulate_starts
+    from .grasp.pregrasp import dot3
     from .hands import get_hand
     from .metrics.phi_batch import phi_of_batch
 
@@ -486,10 +482,10 @@ def robust_columns(
     z = starts[:, :3, 2]
     start_origin = starts[:, :3, 3]
     stop = batch.hand_pose[:, :3, 3] - geom.origin
-    depth = _dot3(stop - start_origin, z)  # term by term: the same whatever the batch
+    depth = dot3(stop - start_origin, z)  # term by term: the same whatever the batch
     missed = np.asarray(batch.status == "missed")
     centre = 0.5 * (geom.hull_vertices.min(axis=0) + geom.hull_vertices.max(axis=0))
-    depth = np.where(missed, _dot3(centre[None] - start_origin, z), depth)
+    depth = np.where(missed, dot3(centre[None] - start_origin, z), depth)
     if settings.translation_m == 0.0 and settings.rotation_rad == 0.0:
         backoff = np.zeros((n, k_count))  # every copy is the unperturbed grasp
     else:

@@ -161,14 +161,11 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..dataset.best import best_grasps, write_best
-    from ..errors import InputError
 
-    if args.out and not str(args.out).endswith(".parquet"):
-        raise InputError(f"--out must name a .parquet file, got {args.out!r}")
     if args.out:
         from .common import check_output_file
 
-        check_output_file(args.out, "--out")
+        check_output_file(args.out, "--out", suffix=".parquet")
 
     robust = check_dataset_robust(args.directory, args.robust)
     result = best_grasps(

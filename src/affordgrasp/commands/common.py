@@ -317,8 +317,8 @@ def check_output_file(path: str, option: str, suffix: str | None = None) -> None
     option : str
         The option that named it (``--out``), for the message.
     suffix : str, optional
-        The extension the file must have (``".parquet"``), so that rows are not written
-        in silence under a name that promises another format.
+        The extension the file must have (``".parquet"``, ``".safetensors"``), so that
+        nothing is written in silence under a name that promises another format.
 
     Raises
     ------
@@ -329,11 +329,8 @@ def check_output_file(path: str, option: str, suffix: str | None = None) -> None
     from ..writing import check_output_path
 
     check_output_path(path, option, kind="file")
-    if suffix is not None and not str(path).lower().endswith(suffix):
-        raise InputError(
-            f"{option} {str(path)!r} must end in {suffix}: the rows are written in that "
-            "format, whatever the name says"
-        )
+    if suffix is not None and not str(path).endswith(suffix):
+        raise InputError(f"{option} {str(path)!r} must end in {suffix}")
 
 
 def check_mesh_files(args) -> None:

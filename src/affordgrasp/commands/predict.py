@@ -69,9 +69,7 @@ def run(args, out) -> None:
     from ..learning.api import predict_dataset
     from .common import check_output_file
 
-    if not args.out.endswith(".parquet"):
-        raise InputError(f"--out {args.out!r} must end in .parquet")
-    check_output_file(args.out, "--out")
+    check_output_file(args.out, "--out", suffix=".parquet")
     models = load_models(args.model)  # a foreign or broken model file: refused first
     dataset = Dataset.open(args.dataset)
     with out.progress("predicting", dataset.count_rows(args.object)) as advance:

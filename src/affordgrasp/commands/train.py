@@ -123,12 +123,9 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..learning.training import TrainSettings
-
-    if not args.out.endswith(".safetensors"):
-        raise InputError(f"--out {args.out!r} must end in .safetensors")
     from .common import check_output_file
 
-    check_output_file(args.out, "--out")
+    check_output_file(args.out, "--out", suffix=".safetensors")
     for name in ("epochs", "batch_size", "patience", "max_train", "members"):
         if getattr(args, name) < 1:
             raise InputError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")

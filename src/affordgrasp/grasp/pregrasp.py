@@ -137,8 +137,21 @@ def hand_rotations(p0: np.ndarray) -> np.ndarray:
     return np.stack([x, y, z], axis=-1)
 
 
-def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Dot products over the last axis (length 3), broadcast, in a fixed order."""
+def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot products over the last axis (length 3), broadcast, term by term in a fixed order.
+
+    ``a @ b`` goes through BLAS, whose blocking depends on the number of rows, so a row's last
+    bit would depend on the batch it is evaluated in; this does not.
+
+    Parameters
+    ----------
+    a, b : (..., 3) float ndarray
+        Broadcast against each other.
+
+    Returns
+    -------
+    (...) float64 ndarray
+    """
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
@@ -173,13 +186,13 @@ def start_poses(
     # products are summed term by term, not by a matmul: BLAS rounds a matrix product and a
     # matrix-vector product (a batch of one) differently, and a sample's start pose must
     # not depend on the batch it is simulated in.
-    px = _dot3(hull_vertices[:, None, :], rot[None, :, :, 0])
-    py = _dot3(hull_vertices[:, None, :], rot[None, :, :, 1])
+    px = dot3(hull_vertices[:, None, :], rot[None, :, :, 0])
+    py = dot3(hull_vertices[:, None, :], rot[None, :, :, 1])
     xlo, xhi = px.min(axis=0), px.max(axis=0)
     ylo, yhi = py.min(axis=0), py.max(axis=0)
     x = (xlo + xhi) / 2 + p0[:, 3] * (xhi - xlo) / 2
     y = (ylo + yhi) / 2 + p0[:, 4] * (yhi - ylo) / 2
-    z = _dot3(rot[:, :, 2], centre) - radius - hand_reach
+    z = dot3(rot[:, :, 2], centre) - radius - hand_reach
     origin = rot[:, :, 0] * x[:, None] + rot[:, :, 1] * y[:, None] + rot[:, :, 2] * z[:, None]
     poses = np.zeros((len(p0), 4, 4))
     poses[:, :3, :3] = rot

@@ -46,6 +46,7 @@ import numpy as np
 
 from ..caching import IdentityCache
 from ..errors import InputError
+from ..grasp.pregrasp import dot3
 from ..tolerances import FLAT_DIHEDRAL
 from .validation import points_n3, units_n3
 
@@ -570,6 +571,18 @@ def _ray_inside(ray: np.ndarray, t: np.ndarray, radius: float, n_rays: int) -> n
     return np.where(starts_inside, inside, 1.0 - inside)
 
 
+def _use_point_groups(group, n_uses: int, n_grasps: int) -> np.ndarray:
+    """(n,) int64: the grasp of each use point (default: use point i is grasp i), checked."""
+    group = np.arange(n_uses) if group is None else np.asarray(group, dtype=np.int64).reshape(-1)
+    if group.shape[0] != n_uses:
+        raise InputError(f"group has {group.shape[0]} rows, expected one per use point ({n_uses})")
+    if n_uses and (group.min() < 0 or group.max() >= n_grasps):
+        raise InputError(
+            f"group indices must lie in [0, {n_grasps}), got {group.min()}..{group.max()}"
+        )
+    return group
+
+
 def use_clearance(contact_points, offsets, use_point, group=None) -> np.ndarray:
     """Smallest distance from a grasp's contacts to its use point (``use_clearance``), m.
 
@@ -596,11 +609,7 @@ def use_clearance(contact_points, offsets, use_point, group=None) -> np.ndarray:
     offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
     U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
     g = len(offsets) - 1
-    group = np.arange(len(U)) if group is None else np.asarray(group, dtype=np.int64).reshape(-1)
-    if group.shape[0] != U.shape[0]:
-        raise InputError(f"group has {group.shape[0]} rows, expected one per use point ({len(U)})")
-    if len(U) and (group.min() < 0 or group.max() >= g):
-        raise InputError(f"group indices must lie in [0, {g}), got {group.min()}..{group.max()}")
+    group = _use_point_groups(group, len(U), g)
     counts = np.diff(offsets)
     kmax = int(counts.max()) if g else 0
     out = np.full(len(U), np.inf)
@@ -633,15 +642,6 @@ def long_axis(inertia) -> np.ndarray:
     inertia = np.asarray(inertia, dtype=np.float64).reshape(3, 3)
     _, vectors = np.linalg.eigh(0.5 * (inertia + inertia.T))
     return vectors[:, 0]
-
-
-def _along(vectors: np.ndarray, e: np.ndarray) -> np.ndarray:
-    """(n,) the rows of (n, 3) ``vectors`` dotted with ``e``, the same bits for any n.
-
-    ``vectors @ e`` goes through BLAS, whose blocking depends on the number of rows, so a
-    row's last bit would depend on the batch it is evaluated in.
-    """
-    return vectors[:, 0] * e[0] + vectors[:, 1] * e[1] + vectors[:, 2] * e[2]
 
 
 def contact_reach(
@@ -694,20 +694,16 @@ def contact_reach(
         raise InputError(
             f"offsets must end at the number of contacts ({len(C)}), got {offsets.tolist()}"
         )
-    group = np.arange(len(U)) if group is None else np.asarray(group, dtype=np.int64).reshape(-1)
-    if group.shape[0] != U.shape[0]:
-        raise InputError(f"group has {group.shape[0]} rows, expected one per use point ({len(U)})")
-    if len(U) and (group.min() < 0 or group.max() >= g):
-        raise InputError(f"group indices must lie in [0, {g}), got {group.min()}..{group.max()}")
+    group = _use_point_groups(group, len(U), g)
     counts = np.diff(offsets)
     hi = np.full(g, -np.inf)
     lo = np.full(g, np.inf)
     if len(C):
         owner = np.repeat(np.arange(g), counts)
-        along = _along(C - c, e)
+        along = dot3(C - c, e)
         np.maximum.at(hi, owner, along)
         np.minimum.at(lo, owner, along)
-    u = _along(U - c, e)
+    u = dot3(U - c, e)
     reach = np.where(u >= 0, hi[group], -lo[group])
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(u != 0, reach / np.abs(u), np.where(reach > 0, np.inf, -np.inf))
