@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from terminal import as_in_a_terminal
 
 import affordgrasp
 from affordgrasp import cli
@@ -100,21 +101,13 @@ def _minimal_argv(parser, command: str) -> list[str]:
     return argv
 
 
-def _ctrl_c_as_in_a_terminal() -> None:
-    # A command started in the background by a shell without job control inherits SIGINT
-    # ignored, and Python keeps it so; a terminal's command has the default. Test the latter
-    # whatever started the test run.
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def _start(args: list[str]) -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, "-m", "affordgrasp.cli", *args],
+        as_in_a_terminal([sys.executable, "-m", "affordgrasp.cli", *args]),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         env={**os.environ, "PYTHONPATH": str(SRC)},
-        preexec_fn=_ctrl_c_as_in_a_terminal,
     )
 
 
@@ -134,6 +127,7 @@ def test_signal_during_evaluate_kernels(tmp_path, signum):
     while _cpu_seconds(proc.pid) < 5.0 and time.monotonic() < deadline:
         assert proc.poll() is None, proc.communicate()
         time.sleep(0.05)
+    assert _cpu_seconds(proc.pid) >= 5.0, "the command did not start working within 60 s"
     proc.send_signal(signum)
     # the chunk in flight finishes first: slow on a loaded machine
     _, err = proc.communicate(timeout=90)

@@ -14,6 +14,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pytest
 from dataset_support import SAMPLES, SEED, SHARD_SIZE
+from terminal import as_in_a_terminal
 
 from affordgrasp.dataset.generate import generate
 from affordgrasp.dataset.layout import plan_shards, shard_paths
@@ -140,22 +141,14 @@ def _cli(args: list[str]) -> list[str]:
     return [sys.executable, "-m", "affordgrasp.cli", *args]
 
 
-def _ctrl_c_as_in_a_terminal() -> None:
-    # A command started in the background by a shell without job control inherits SIGINT
-    # ignored, and Python keeps it so; a terminal's command has the default. Test the latter
-    # whatever started the test run.
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def _start(cmd: list[str]) -> subprocess.Popen:
     # Its own process group, like a shell job: signals reach the workers too.
     return subprocess.Popen(
-        cmd,
+        as_in_a_terminal(cmd),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
-        preexec_fn=_ctrl_c_as_in_a_terminal,
     )
 
 

@@ -12,6 +12,7 @@ import os
 import queue
 import shutil
 import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -38,6 +39,21 @@ def find_chromium() -> str | None:
     return None
 
 
+# Moves the two pipe ends (argv 1 and 2) to fds 3 and 4 and execs the rest of argv. Both
+# ends are first copied above fd 4 (a pipe may itself be fd 3 or 4), as copies closed on exec,
+# so that only fds 3 and 4 reach the browser.
+_WIRE_PIPES = """
+import fcntl, os, sys
+ends = [int(a) for a in sys.argv[1:3]]
+moved = [fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 5) for fd in ends]
+for fd in ends:
+    os.close(fd)
+os.dup2(moved[0], 3)
+os.dup2(moved[1], 4)
+os.execv(sys.argv[3], sys.argv[3:])
+"""
+
+
 class Browser:
     """A headless Chromium page driven over the DevTools protocol."""
 
@@ -45,13 +61,6 @@ class Browser:
         self._profile = tempfile.mkdtemp(prefix="affordgrasp-chromium-")
         to_child_r, self._to_child = os.pipe()
         self._from_child, from_child_w = os.pipe()
-
-        def wire_pipes():  # in the child: the protocol reads fd 3 and writes fd 4
-            # Move both ends out of the way first: a pipe may itself be fd 3 or 4.
-            read_end = os.dup(to_child_r)
-            write_end = os.dup(from_child_w)
-            os.dup2(read_end, 3, inheritable=True)
-            os.dup2(write_end, 4, inheritable=True)
 
         args = [
             executable,
@@ -74,15 +83,15 @@ class Browser:
             "--remote-debugging-pipe",
             "about:blank",
         ]
+        # The protocol reads fd 3 and writes fd 4: a short launcher moves the pipes there
+        # and execs the browser (preexec_fn could, but it runs Python between fork and exec,
+        # which can deadlock when this process has other threads, as it does).
         self.proc = subprocess.Popen(
-            args,
+            [sys.executable, "-c", _WIRE_PIPES, str(to_child_r), str(from_child_w), *args],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
-            preexec_fn=wire_pipes,
-            # Python's own descriptors are not inheritable (PEP 446): only the two dup2'ed
-            # protocol pipes reach the browser.
-            close_fds=False,
+            pass_fds=(to_child_r, from_child_w),
         )
         os.close(to_child_r)
         os.close(from_child_w)
