@@ -23,7 +23,7 @@ Seeds: the wedge angle and the beat thresholds were calibrated on seeds 0-1, so 
 acceptance numbers are measured on the held-out seeds 2-6 (``--seeds 2-6``, the default);
 ``--seeds 0-1`` gives the calibration seeds' numbers.
 
-Run: ``python benchmarks/validate_scan.py --seeds 2-6 --tasks cut,beat,pick``.
+Run: ``python studies/validate_scan.py --seeds 2-6 --tasks cut,beat,pick``.
 """
 
 from __future__ import annotations
