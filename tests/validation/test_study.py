@@ -118,3 +118,30 @@ def test_settings_refused_before_any_work(changes, fragment, tmp_path):
         vt.validate_tasks(settings, tmp_path / "out")
     assert fragment in str(err.value)
     assert not (tmp_path / "out").exists()
+
+
+def test_figures_are_the_modes_of_each_task_and_of_the_knife(tmp_path):
+    settings = vt.ValidationSettings(
+        seeds=1,
+        grasps=30,
+        uses=30,
+        tasks=("beat",),
+        families=("hammer",),
+        optimizer=False,
+        cell_px=48,
+    )
+    vt.validate_tasks(settings, tmp_path / "o", cache=tmp_path / "c")
+    names = sorted(p.name for p in (tmp_path / "o").iterdir())
+    assert names == [
+        "modes_knife.json",
+        "validation.json",
+        "validation_beat.png",
+        "validation_modes_knife.png",
+    ]
+    for png in ("validation_beat.png", "validation_modes_knife.png"):
+        assert (tmp_path / "o" / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    modes = json.loads((tmp_path / "o" / "modes_knife.json").read_text())
+    assert sorted(modes) == sorted(f"{t}/{m}" for t in ("beat", "cut") for m in vt.MODES)
+    # the figures drew the first families of the task from the same cached grasp tables
+    cached = sorted(p.name for p in (tmp_path / "c").glob("*_0_30_unit.parquet"))
+    assert cached == [f"{f}_0_30_unit.parquet" for f in ("axe", "hammer", "knife", "meat_cleaver")]
