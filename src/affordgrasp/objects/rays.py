@@ -12,7 +12,7 @@ unit normal, barycentric coordinates). Its backends:
   rasteriser (:mod:`affordgrasp.vision.engines`; they sit with the depth images they make
   fastest).
 
-``tests/objects/test_rays.py`` checks that every backend gives the same hits on the same
+``tests/vision/test_engines.py`` checks that every backend gives the same hits on the same
 rays against a box and a sphere (analytic distances).
 
 :class:`EmbreeRays` answers trimesh's ray queries without importing trimesh: importing

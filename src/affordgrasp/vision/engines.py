@@ -21,7 +21,7 @@ The engines:
   image) from which a vertex lies nearer than ``near`` along the view, or behind it, is left
   to a ray engine, as projection cannot handle it.
 
-``tests/objects/test_rays.py`` checks that all of them give the same hits on the same rays
+``tests/vision/test_engines.py`` checks that all of them give the same hits on the same rays
 (a box and a sphere, analytic distances); ``tests/vision/test_depth.py`` and
 ``tests/vision/test_raster.py`` compare their images.
 """
@@ -42,7 +42,17 @@ _F32 = np.float32
 
 @functools.lru_cache(maxsize=8)
 def camera_rays(camera: DepthCamera) -> np.ndarray:
-    """(size*size, 3) float32 ndarray: the camera-frame ray of every pixel, row-major, z = 1."""
+    """The camera-frame ray of every pixel, as the engines cast them (cached, read-only).
+
+    Parameters
+    ----------
+    camera : DepthCamera
+
+    Returns
+    -------
+    (size*size, 3) float32 ndarray
+        Row-major, z = 1.
+    """
     rays = camera.ray_directions().reshape(-1, 3).astype(_F32)
     rays.flags.writeable = False
     return rays
@@ -456,8 +466,8 @@ def _triangle_at(
             q = np.cross(s, e1)
             v = np.einsum("nk,ntk->nt", d[:, 0], q) * inv
             t = np.einsum("tk,ntk->nt", e2, q) * inv
-        tol = 1e-6
-        inside = (u >= -tol) & (v >= -tol) & (u + v <= 1 + tol) & np.isfinite(t)
+            tol = 1e-6
+            inside = (u >= -tol) & (v >= -tol) & (u + v <= 1 + tol) & np.isfinite(t)
         miss = np.where(inside, np.abs(t - distance[lo : lo + chunk, None]), np.inf)
         best = np.argmin(miss, axis=1)
         rows = np.arange(len(best))
