@@ -293,14 +293,23 @@ class RasterEngine:
         fallback=None,
     ) -> None:
         self.centre = np.asarray(centre, dtype=np.float64)
-        self._vertices = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64) - self.centre)
+        self._mesh_vertices = np.asarray(vertices, dtype=np.float64)
+        self._vertices = np.ascontiguousarray(self._mesh_vertices - self.centre)
         self._faces = np.ascontiguousarray(faces, dtype=np.int64)
-        self._triangles = np.asarray(vertices, dtype=np.float64)[self._faces]
-        self.normals = unit_face_normals(self._triangles)
         self.cull = bool(cull)
         self.near = float(near)
         self._fallback_factory = fallback
         self._fallback = None
+
+    @functools.cached_property
+    def triangles(self) -> np.ndarray:
+        """(t, 3, 3) float64 ndarray: the triangles, mesh frame, m (built when first cast)."""
+        return self._mesh_vertices[self._faces]
+
+    @functools.cached_property
+    def normals(self) -> np.ndarray:
+        """(t, 3) float64 ndarray: unit normal of every triangle, as wound."""
+        return unit_face_normals(self.triangles)
 
     def fallback(self):
         """The ray engine for the views the rasteriser leaves (built once).
@@ -409,7 +418,7 @@ class RasterEngine:
         hit = done & (distance > 0)
         if hit.any():
             triangle[hit], uv[hit] = _triangle_at(
-                self._triangles, origins[hit], directions[hit], distance[hit]
+                self.triangles, origins[hit], directions[hit], distance[hit]
             )
         hits = ray_hits(distance, triangle, self.normals, uv)
         if not done.all():
