@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from affordgrasp.objects.rays import EmbreeRays, EmbreeScene, RayHits, embree_available
+from affordgrasp.objects.rays import (
+    EmbreeRays,
+    EmbreeScene,
+    RayCaster,
+    RayHits,
+    embree_available,
+)
 from affordgrasp.vision import packets
 from affordgrasp.vision.engines import EmbreeEngine, PacketEngine, RasterEngine, view_rotations
 
@@ -105,6 +111,7 @@ def test_every_backend_hits_a_box_at_the_analytic_distance():
     origins, dirs, t, normal = box_rays(np.random.default_rng(0), 150)
     found = {}
     for name, backend in backends(mesh).items():
+        assert isinstance(backend, RayCaster), name
         hits = backend.cast(origins, dirs)
         check_hits(hits, mesh, origins, dirs, t, normal, dist_tol=1e-6, normal_tol=1e-9)
         found[name] = hits
@@ -182,3 +189,15 @@ def test_view_rotations_are_right_handed_with_the_axis_as_z():
         rot.transpose(0, 2, 1) @ rot, np.broadcast_to(np.eye(3), rot.shape), atol=1e-12
     )
     np.testing.assert_allclose(np.linalg.det(rot), 1.0, atol=1e-12)
+
+
+def test_the_viewers_caster_casts_through_the_interface():
+    from affordgrasp.viz.raycast import SceneCaster, caster_of
+    from affordgrasp.viz.scene import GraspScene
+
+    mesh = box_mesh()
+    caster = caster_of(GraspScene(object_mesh=mesh, hand=None))
+    assert isinstance(caster, SceneCaster) and isinstance(caster, RayCaster)
+    origins, dirs, t, normal = box_rays(np.random.default_rng(3), 50)
+    hits = caster.cast(origins, dirs)
+    check_hits(hits, mesh, origins, dirs, t, normal, dist_tol=1e-6, normal_tol=1e-9)

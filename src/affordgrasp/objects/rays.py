@@ -27,7 +27,7 @@ caller falls back to trimesh's own engine.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -69,6 +69,7 @@ class RayHits:
         return self.triangle >= 0
 
 
+@runtime_checkable
 class RayCaster(Protocol):
     """What every ray-casting backend does: the first hit of each ray on its triangles."""
 
