@@ -1,9 +1,23 @@
-"""Ray queries on a prepared mesh with Embree, without importing trimesh.
+"""One ray-casting interface (:class:`RayCaster`) and its Embree backend.
 
-The simulator and the dataset cast rays at objects (use points, the face under a contact).
-``trimesh`` casts them through Embree (``trimesh.ray.ray_pyembree``), but importing trimesh
-costs about half a second (it imports much of scipy), most of a command's start-up. This
-module makes the same Embree calls on the same float32 data, step for step as trimesh 4-5's
+Every ray cast in the package goes through one interface: ``cast(origins, directions)``
+returns the first hit of each ray as :class:`RayHits` (distance along the ray, triangle,
+unit normal, barycentric coordinates). Its backends:
+
+* :class:`EmbreeScene` (here): Embree through ``embreex``, one ray per call, robust
+  (watertight) scene in float32, relative to a chosen origin and scale. The objects' ray
+  queries (:class:`EmbreeRays`), the viewer (:mod:`affordgrasp.viz.raycast`) and the
+  reference depth engine use it;
+* the Embree library that ``embreex`` ships, called in 16-ray packets, and the z-buffer
+  rasteriser (:mod:`affordgrasp.vision.engines`; they sit with the depth images they make
+  fastest).
+
+``tests/vision/test_engines.py`` checks that every backend gives the same hits on the same
+rays against a box and a sphere (analytic distances).
+
+:class:`EmbreeRays` answers trimesh's ray queries without importing trimesh: importing
+trimesh costs about half a second (it imports much of scipy), most of a command's start-up.
+It makes the same Embree calls on the same float32 data, step for step as trimesh 4-5's
 ``RayMeshIntersector`` (mesh scaled to a 100-unit box, hits advanced along the ray by the
 same offsets), so the faces and points hit are the same bits; tests compare the two on
 random rays. Without Embree (``embreex`` missing), :class:`EmbreeRays` is not used and the
@@ -12,12 +26,115 @@ caller falls back to trimesh's own engine.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
 import numpy as np
 
 _EMBREE_DTYPE = np.float32
 _RAY_OFFSET_FACTOR = 1e-6
 _RAY_OFFSET_FLOOR = 1e-8
 _TOL_ZERO = float(np.finfo(np.float64).resolution * 100)  # trimesh.util.TOL_ZERO
+_EMBREE_MISS = 1e30  # Embree reports a miss as tfar = 1e37
+
+
+@dataclass(frozen=True)
+class RayHits:
+    """The first hit of each of n rays.
+
+    Attributes
+    ----------
+    distance : (n,) float64 ndarray
+        Ray parameter t of the hit: the point is ``origin + t * direction`` (m along the ray
+        when the direction is unit; the depth along the optical axis for camera rays with
+        z = 1); +inf for a miss.
+    triangle : (n,) int64 ndarray
+        Index of the triangle hit, -1 for a miss.
+    normal : (n, 3) float64 ndarray
+        Unit normal of the triangle hit, as wound (outward on an outward-oriented mesh);
+        0 for a miss.
+    barycentric : (n, 2) float64 ndarray
+        (u, v) of the hit in its triangle (a, b, c): the point is
+        ``(1 − u − v)·a + u·b + v·c``; NaN for a miss.
+    """
+
+    distance: np.ndarray
+    triangle: np.ndarray
+    normal: np.ndarray
+    barycentric: np.ndarray
+
+    @property
+    def hit(self) -> np.ndarray:
+        """(n,) bool ndarray: whether each ray hit."""
+        return self.triangle >= 0
+
+
+@runtime_checkable
+class RayCaster(Protocol):
+    """What every ray-casting backend does: the first hit of each ray on its triangles."""
+
+    def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
+        """First hits of rays.
+
+        Parameters
+        ----------
+        origins : (n, 3) float array_like
+            In the frame of the triangles, m.
+        directions : (n, 3) float array_like
+            Need not be unit (the distance is then in units of the direction's length).
+
+        Returns
+        -------
+        RayHits
+        """
+        ...
+
+
+def unit_face_normals(triangles: np.ndarray) -> np.ndarray:
+    """Unit normals of triangles as wound, ``(b − a) × (c − a)``; 0 for a degenerate one.
+
+    Parameters
+    ----------
+    triangles : (t, 3, 3) float ndarray
+        m.
+
+    Returns
+    -------
+    (t, 3) float64 ndarray
+    """
+    tri = np.asarray(triangles, dtype=np.float64)
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    norm = np.linalg.norm(normal, axis=1, keepdims=True)
+    return np.divide(normal, norm, out=np.zeros_like(normal), where=norm > 0)
+
+
+def ray_hits(
+    distance: np.ndarray, triangle: np.ndarray, face_normals: np.ndarray, uv: np.ndarray
+) -> RayHits:
+    """:class:`RayHits` from a backend's raw answer (misses: triangle < 0).
+
+    Parameters
+    ----------
+    distance : (n,) float ndarray
+        Ray parameter of each hit (any value for a miss).
+    triangle : (n,) int ndarray
+        -1 for a miss.
+    face_normals : (t, 3) float ndarray
+        Unit normal of every triangle.
+    uv : (n, 2) float ndarray
+        Barycentric (u, v) of each hit.
+
+    Returns
+    -------
+    RayHits
+    """
+    triangle = np.asarray(triangle).astype(np.int64)
+    hit = triangle >= 0
+    distance = np.where(hit, np.asarray(distance, dtype=np.float64), np.inf)
+    normal = np.zeros((len(triangle), 3))
+    normal[hit] = face_normals[triangle[hit]]
+    barycentric = np.where(hit[:, None], np.asarray(uv, dtype=np.float64), np.nan)
+    return RayHits(distance, triangle, normal, barycentric)
 
 
 def embree_available() -> bool:
@@ -62,8 +179,146 @@ def _planes_lines(plane_origins, plane_normals, line_origins, line_directions):
     return on_plane, valid
 
 
-class EmbreeRays:
-    """First and all hits of rays on a triangle mesh (Embree, float32).
+class EmbreeScene:
+    """Triangles in one Embree scene (``embreex``, one ray per call, robust, float32).
+
+    The :class:`RayCaster` backend that casts any rays. Embree is float32: the triangles
+    and the rays are moved to the scene's frame, ``(x − origin)·scale``, before rounding,
+    so an origin near the triangles keeps the precision.
+
+    Parameters
+    ----------
+    vertices : (v, 3) or (t, 3, 3) float ndarray
+        The vertices (with ``faces``) or the triangles (without), m.
+    faces : (t, 3) int ndarray, optional
+        Vertex indices of each triangle.
+    origin : (3,) float ndarray, optional
+        The scene frame's origin, m (default 0).
+    scale : float
+        Scene units per metre.
+    face_normals : (t, 3) float ndarray, optional
+        Unit normal of each triangle (default: from the winding, :func:`unit_face_normals`).
+    """
+
+    def __init__(
+        self,
+        vertices: np.ndarray,
+        faces: np.ndarray | None = None,
+        *,
+        origin: np.ndarray | None = None,
+        scale: float = 1.0,
+        face_normals: np.ndarray | None = None,
+    ) -> None:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+
+        self._vertices = np.asarray(vertices, dtype=np.float64)
+        self._faces = None if faces is None else np.asarray(faces)
+        self._origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
+        self._scale = float(scale)
+        self._face_normals = None if face_normals is None else np.asarray(face_normals)
+        scaled = (self._vertices - self._origin) * self._scale
+        self._scene = rtcore_scene.EmbreeScene()
+        if self._faces is None:
+            TriangleMesh(scene=self._scene, vertices=scaled.astype(_EMBREE_DTYPE))
+        else:
+            TriangleMesh(
+                scene=self._scene,
+                vertices=scaled.astype(_EMBREE_DTYPE),
+                indices=self._faces.view(np.ndarray).astype(np.int32),
+            )
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(t, 3, 3) float64 ndarray: the triangles, m."""
+        if self._faces is None:
+            return self._vertices
+        return self._vertices[self._faces]
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(t, 3) float64 ndarray: unit normal of every triangle."""
+        if self._face_normals is None:
+            self._face_normals = unit_face_normals(self.triangles)
+        return self._face_normals
+
+    @property
+    def scene_frame(self) -> tuple[np.ndarray, float]:
+        """Embree's frame: a point x is ``(x - origin) * scale`` there, in float32."""
+        return self._origin, self._scale
+
+    def to_scene(self, origins: np.ndarray, directions: np.ndarray):
+        """Rays in Embree's frame.
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float array_like
+            m; directions as given (not made unit).
+
+        Returns
+        -------
+        origins, directions : (n, 3) float32 ndarray
+        """
+        scaled = (np.array(origins, dtype=np.float64) - self._origin) * self._scale
+        return scaled.astype(_EMBREE_DTYPE), np.asarray(directions).astype(_EMBREE_DTYPE)
+
+    def first_faces_scene(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """The face each ray hits first.
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float32 ndarray
+            In Embree's frame (:meth:`to_scene`).
+
+        Returns
+        -------
+        (n,) int ndarray
+            Face index, -1 for a miss.
+        """
+        return self._scene.run(origins, directions)
+
+    def distances_scene(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """Ray parameter of each first hit, in the scene's units, 0 for a miss.
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float32 ndarray
+            In Embree's frame (:meth:`to_scene`).
+
+        Returns
+        -------
+        (n,) float32 ndarray
+        """
+        t = self._scene.run(origins, directions, query="DISTANCE")
+        return np.where(t < _EMBREE_MISS, t, 0.0).astype(np.float32)
+
+    def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
+        """First hits of rays (the :class:`RayCaster` interface).
+
+        Parameters
+        ----------
+        origins : (n, 3) float array_like
+            m.
+        directions : (n, 3) float array_like
+            Need not be unit.
+
+        Returns
+        -------
+        RayHits
+        """
+        o, d = self.to_scene(origins, directions)
+        res = self._scene.run(o, d, output=1)
+        uv = np.column_stack([res["u"], res["v"]])
+        return ray_hits(
+            res["tfar"].astype(np.float64) / self._scale, res["primID"], self.normals, uv
+        )
+
+
+class EmbreeRays(EmbreeScene):
+    """First and all hits of rays on a triangle mesh (Embree, float32), as trimesh casts them.
+
+    An :class:`EmbreeScene` in trimesh's frame (the mesh moved to its lowest corner and
+    scaled to a 100-unit box), with trimesh's ray queries.
 
     Parameters
     ----------
@@ -79,21 +334,14 @@ class EmbreeRays:
     def __init__(
         self, vertices: np.ndarray, faces: np.ndarray, face_normals: np.ndarray, scale: float
     ) -> None:
-        from embreex import rtcore_scene
-        from embreex.mesh_construction import TriangleMesh
-
-        self._vertices = np.asarray(vertices, dtype=np.float64)
-        self._faces = np.asarray(faces)
-        self._face_normals = np.asarray(face_normals, dtype=np.float64)
+        vertices = np.asarray(vertices, dtype=np.float64)
         self._mesh_scale = float(scale)
-        self._origin = self._vertices.min(axis=0)
-        self._scale = float(100.0 / self._mesh_scale)
-        scaled = (self._vertices - self._origin) * self._scale
-        self._scene = rtcore_scene.EmbreeScene()
-        TriangleMesh(
-            scene=self._scene,
-            vertices=scaled.astype(_EMBREE_DTYPE),
-            indices=self._faces.view(np.ndarray).astype(np.int32),
+        super().__init__(
+            vertices,
+            faces,
+            origin=vertices.min(axis=0),
+            scale=float(100.0 / self._mesh_scale),
+            face_normals=np.asarray(face_normals, dtype=np.float64),
         )
 
     def _run(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
@@ -116,14 +364,9 @@ class EmbreeRays:
             # mesh's arrays are read-only (a cached object) or not
             planes = self._planes = (
                 np.array(self._vertices[self._faces][:, 0, :], order="C"),
-                np.array(self._face_normals, dtype=np.float64, order="C"),
+                np.array(self.normals, dtype=np.float64, order="C"),
             )
         return planes
-
-    @property
-    def scene_frame(self) -> tuple[np.ndarray, float]:
-        """Embree's frame: a point x is ``(x - origin) * scale`` there, in float32."""
-        return self._origin, self._scale
 
     def unit_directions(self, directions: np.ndarray) -> np.ndarray:
         """Directions made unit as the ray loop makes them.
@@ -137,36 +380,6 @@ class EmbreeRays:
         (n, 3) float64 ndarray
         """
         return _unitize(directions)
-
-    def to_scene(self, origins: np.ndarray, directions: np.ndarray):
-        """Rays in Embree's frame.
-
-        Parameters
-        ----------
-        origins, directions : (n, 3) float array_like
-            m; unit directions.
-
-        Returns
-        -------
-        origins, directions : (n, 3) float32 ndarray
-        """
-        scaled = (np.array(origins, dtype=np.float64) - self._origin) * self._scale
-        return scaled.astype(_EMBREE_DTYPE), directions.astype(_EMBREE_DTYPE)
-
-    def first_faces_scene(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
-        """The face each ray hits first.
-
-        Parameters
-        ----------
-        origins, directions : (n, 3) float32 ndarray
-            In Embree's frame (:meth:`to_scene`).
-
-        Returns
-        -------
-        (n,) int ndarray
-            Face index, -1 for a miss.
-        """
-        return self._scene.run(origins, directions)
 
     def intersects_id(
         self,

@@ -1,8 +1,12 @@
 """Vision (conventions: Vision, paper §III-B): the camera in the hand, depth images, point clouds.
 
-* ``camera``: intrinsics (``DepthCamera``) and the camera pose of a pregrasp;
+* ``camera``: the package's one pinhole model (``PinholeCamera``), the depth camera's
+  intrinsics (``DepthCamera``) and the camera pose of a pregrasp;
 * ``depth``: D(p0, O) (``DepthRenderer``), uint16-millimetre encoding, PNG views;
-* ``raster``: the default engine, z-buffer rasterisation of the triangles;
+* ``engines``: the engines that make the images, backends of the ray-casting interface
+  (:class:`affordgrasp.objects.rays.RayCaster`): ``RasterEngine``, ``PacketEngine``,
+  ``EmbreeEngine``;
+* ``raster``: the default engine's kernel, z-buffer rasterisation of the triangles;
 * ``packets``: Embree rays in 16-ray packets (the reference ``embreex`` casts one per call);
 * ``points``: the equivalent fixed-size point clouds;
 * ``sensor``: a depth sensor's noise and lost returns (``SensorModel``), off by default.
@@ -10,7 +14,7 @@
 See docs/vision.md for every convention.
 """
 
-from .camera import DepthCamera, ObjectFrame, camera_poses
+from .camera import DepthCamera, ObjectFrame, PinholeCamera, camera_poses
 from .depth import (
     DepthRenderer,
     depth_from_mm,
@@ -27,6 +31,7 @@ __all__ = [
     "DepthCamera",
     "DepthRenderer",
     "ObjectFrame",
+    "PinholeCamera",
     "SensorModel",
     "apply_sensor",
     "camera_poses",

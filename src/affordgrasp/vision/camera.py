@@ -1,6 +1,10 @@
-"""The camera in the hand (conventions: Vision; paper §III-B): intrinsics, pose from the pregrasp.
+"""Cameras (conventions: Vision; paper §III-B): the pinhole model, the camera in the hand.
 
-Conventions (docs/vision.md repeats them with a worked example):
+:class:`PinholeCamera` is the one camera geometry of the package (pixel rays, projection,
+intrinsics); the depth camera (:class:`DepthCamera`) and the viewer's camera
+(:class:`affordgrasp.viz.camera.Camera`) are both pinhole cameras.
+
+Conventions of the camera in the hand (docs/vision.md repeats them with a worked example):
 
 * Pinhole camera, square image of ``size`` × ``size`` pixels (default 128), field of view
   ``fov_deg`` (default 60°) across the full width and the full height.
@@ -32,16 +36,168 @@ from ..grasp.pregrasp import hand_rotations, validate_pregrasps
 MAX_CAMERA_SIZE = 4096
 
 
+class PinholeCamera:
+    """The pinhole geometry every camera of the package shares (written once, here).
+
+    A subclass provides ``width`` and ``height`` (pixels) and ``fov_deg`` (the vertical
+    field of view, degrees; square pixels). Camera frame: +x right in the image (columns
+    grow along it), +y down (rows grow along it), +z forward along the optical axis (the
+    OpenCV convention). The pixel in row r, column c looks along
+    ``((c + 0.5 − width/2)·k, (r + 0.5 − height/2)·k, 1)`` with
+    ``k = tan(fov/2) / (height/2)`` (:attr:`pixel_scale`).
+
+    Pixel coordinates (u along the columns, v along the rows) put the centre of pixel
+    (r, c) at ``(c + PIXEL_CENTRE, r + PIXEL_CENTRE)``: 0 (OpenCV, the depth camera) or 0.5
+    (the corner of the image at 0, the viewer's camera).
+    """
+
+    width: int
+    height: int
+    fov_deg: float
+    PIXEL_CENTRE = 0.0
+
+    @property
+    def pixel_scale(self) -> float:
+        """k: tangent of the angle per pixel at the centre, tan(fov/2) / (height/2)."""
+        return math.tan(math.radians(self.fov_deg) / 2.0) / (self.height / 2.0)
+
+    @property
+    def focal_px(self) -> float:
+        """The focal length fx = fy, pixels (1 / :attr:`pixel_scale`)."""
+        return 1.0 / self.pixel_scale
+
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        """(cx, cy): the pixel coordinates of the optical axis (the image centre)."""
+        offset = self.PIXEL_CENTRE - 0.5
+        return self.width / 2.0 + offset, self.height / 2.0 + offset
+
+    def intrinsics(self) -> np.ndarray:
+        """The intrinsic matrix in this camera's pixel coordinates.
+
+        Returns
+        -------
+        (3, 3) float64 ndarray
+            K = [[f, 0, cx], [0, f, cy], [0, 0, 1]], pixels.
+        """
+        f = self.focal_px
+        cx, cy = self.principal_point
+        return np.array([[f, 0.0, cx], [0.0, f, cy], [0.0, 0.0, 1.0]])
+
+    def ray_directions(self) -> np.ndarray:
+        """The camera-frame ray through every pixel centre.
+
+        Returns
+        -------
+        (height, width, 3) float64 ndarray
+            Indexed (row, column); z component 1, so a ray's parameter is the depth.
+        """
+        k = self.pixel_scale
+        x = (np.arange(self.width) + 0.5 - self.width / 2.0) * k
+        y = (np.arange(self.height) + 0.5 - self.height / 2.0) * k
+        xx, yy = np.meshgrid(x, y)  # x varies along columns, y along rows
+        return np.stack([xx, yy, np.ones_like(xx)], axis=-1)
+
+    def pixel_rays(self, uv: np.ndarray) -> np.ndarray:
+        """Camera-frame rays through pixel coordinates.
+
+        Parameters
+        ----------
+        uv : (n, 2) float array_like
+            Pixel coordinates (u along the columns, v along the rows).
+
+        Returns
+        -------
+        (n, 3) float64 ndarray
+            z component 1: the point at depth d along the optical axis is ``d * ray``.
+        """
+        uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+        cx, cy = self.principal_point
+        k = self.pixel_scale
+        return np.column_stack([(uv[:, 0] - cx) * k, (uv[:, 1] - cy) * k, np.ones(len(uv))])
+
+    def project_camera(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel coordinates of camera-frame points, and their depth.
+
+        Parameters
+        ----------
+        points : (n, 3) float array_like
+            Camera frame, m.
+
+        Returns
+        -------
+        uv : (n, 2) float64 ndarray
+            Pixel coordinates; NaN for points not in front of the camera (z <= 1e-9 m).
+        depth : (n,) float64 ndarray
+            z, m.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        return self._project(p[:, 0], p[:, 1], p[:, 2])
+
+    def _project(self, x: np.ndarray, y: np.ndarray, z: np.ndarray):
+        f = self.focal_px
+        cx, cy = self.principal_point
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = np.column_stack([cx + f * x / z, cy + f * y / z])
+        uv[z <= 1e-9] = np.nan
+        return uv, z
+
+    def world_rays(self, rotation: np.ndarray) -> np.ndarray:
+        """The ray through every pixel centre in the world frame, unit length, row-major.
+
+        Parameters
+        ----------
+        rotation : (3, 3) float ndarray
+            Camera → world: its columns are the camera's x (right), y (down) and z
+            (forward) axes in the world frame.
+
+        Returns
+        -------
+        (height*width, 3) float64 ndarray
+        """
+        rays = self.ray_directions().reshape(-1, 3)
+        d = rotation[:, 2] + rays[:, :1] * rotation[:, 0] + rays[:, 1:2] * rotation[:, 1]
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        return d
+
+    def project_world(
+        self, points: np.ndarray, rotation: np.ndarray, position: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel coordinates of world points seen from a pose, and their depth.
+
+        Parameters
+        ----------
+        points : (n, 3) float array_like
+            World frame, m.
+        rotation : (3, 3) float ndarray
+            Camera → world (see :meth:`world_rays`).
+        position : (3,) float ndarray
+            The camera's centre, world frame, m.
+
+        Returns
+        -------
+        uv : (n, 2) float64 ndarray
+            NaN for points not in front of the camera.
+        depth : (n,) float64 ndarray
+            Along the optical axis, m.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3) - position
+        return self._project(p @ rotation[:, 0], p @ rotation[:, 1], p @ rotation[:, 2])
+
+
 @dataclass(frozen=True)
-class DepthCamera:
+class DepthCamera(PinholeCamera):
     """Intrinsics of the camera in the hand: ``size`` × ``size`` pixels, ``fov_deg`` wide.
+
+    The geometry is :class:`PinholeCamera`'s, with OpenCV pixel coordinates (pixel centres
+    at integers).
 
     Attributes
     ----------
     size : int
         Pixels per side, 2 to ``MAX_CAMERA_SIZE``.
     fov_deg : float
-        Field of view, degrees.
+        Field of view, degrees (across the full width and the full height).
     """
 
     size: int = 128
@@ -62,43 +218,19 @@ class DepthCamera:
             )
 
     @property
-    def pixel_scale(self) -> float:
-        """k: tangent of the angle per pixel at the centre, tan(fov/2) / (size/2)."""
-        return math.tan(math.radians(self.fov_deg) / 2.0) / (self.size / 2.0)
+    def width(self) -> int:  # type: ignore[override]
+        """Pixels (= ``size``)."""
+        return self.size
 
     @property
-    def focal_px(self) -> float:
-        """OpenCV fx = fy, pixels."""
-        return 1.0 / self.pixel_scale
+    def height(self) -> int:  # type: ignore[override]
+        """Pixels (= ``size``)."""
+        return self.size
 
     @property
     def principal_px(self) -> float:
         """OpenCV cx = cy, pixels (the image centre, between the two middle pixels)."""
         return (self.size - 1) / 2.0
-
-    def intrinsics(self) -> np.ndarray:
-        """The OpenCV intrinsic matrix (pixel coordinates of pixel centres are integers).
-
-        Returns
-        -------
-        (3, 3) float64 ndarray
-            K = [[f, 0, c], [0, f, c], [0, 0, 1]], f and c in pixels.
-        """
-        f, c = self.focal_px, self.principal_px
-        return np.array([[f, 0.0, c], [0.0, f, c], [0.0, 0.0, 1.0]])
-
-    def ray_directions(self) -> np.ndarray:
-        """The camera-frame ray of every pixel.
-
-        Returns
-        -------
-        (size, size, 3) float64 ndarray
-            Indexed (row, column); z component 1, so a ray's parameter is the depth.
-        """
-        k = self.pixel_scale
-        coord = (np.arange(self.size) + 0.5 - self.size / 2.0) * k
-        x, y = np.meshgrid(coord, coord)  # x varies along columns, y along rows
-        return np.stack([x, y, np.ones_like(x)], axis=-1)
 
 
 @dataclass(frozen=True)

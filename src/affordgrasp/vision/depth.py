@@ -3,9 +3,10 @@
 Depth is the distance along the optical axis (the camera-frame z of the first surface a
 pixel's ray meets), metres, float32; a pixel whose ray misses the object is 0 (no return,
 as real depth cameras report). See ``camera`` for the conventions and docs/vision.md for a
-description precise enough to re-render the pixels. By default the triangles are
-rasterised with a z-buffer (:mod:`affordgrasp.vision.raster`, the same pixels up to
-rounding); rays cast by Embree (:mod:`affordgrasp.vision.packets`, ``embreex``) are the
+description precise enough to re-render the pixels. The images are made by one of the
+engines of :mod:`affordgrasp.vision.engines` (backends of the package's one ray-casting
+interface): by default the triangles are rasterised with a z-buffer (the same pixels up to
+rounding); rays cast by Embree (16-ray packets, or ``embreex`` one ray per call) are the
 reference and the fallback.
 
 Validated against analytic cases (a plane and a sphere at known distances) in
@@ -22,10 +23,10 @@ import numpy as np
 from ..errors import InputError
 from ..grasp.pregrasp import validate_pregrasps
 from .camera import DepthCamera, ObjectFrame, camera_poses
+from .engines import EmbreeEngine, PacketEngine, RasterEngine
 
 # Images per Embree call: 64 images = 1 M rays, about 25 MB of ray arrays.
 IMAGES_PER_CALL = 64
-_MISS = 1e30  # Embree reports a miss as tfar = 1e37
 
 ENGINES = ("auto", "raster", "packets", "embreex")
 
@@ -47,12 +48,12 @@ class DepthRenderer:
     camera : DepthCamera, optional
         Intrinsics; the default camera when None.
     engine : {"auto", "raster", "packets", "embreex"}
-        How the image is made: ``"raster"`` (z-buffered triangles, see
-        :mod:`affordgrasp.vision.raster`; images it cannot make, from a camera almost
-        touching the object, are ray cast), ``"packets"`` (Embree rays in 16-ray packets
-        from a compiled loop, see :mod:`affordgrasp.vision.packets`), ``"embreex"`` (one
-        Embree ray per call, robust scene: the reference) or ``"auto"`` (``"raster"``, the
-        fastest on every built-in object).
+        How the image is made (:mod:`affordgrasp.vision.engines`): ``"raster"`` (z-buffered
+        triangles, see :mod:`affordgrasp.vision.raster`; images it cannot make, from a
+        camera almost touching the object, are ray cast), ``"packets"`` (Embree rays in
+        16-ray packets from a compiled loop, see :mod:`affordgrasp.vision.packets`),
+        ``"embreex"`` (one Embree ray per call, robust scene: the reference) or ``"auto"``
+        (``"raster"``, the fastest on every built-in object).
     """
 
     def __init__(self, mesh, camera: DepthCamera | None = None, *, engine: str = "auto"):
@@ -61,57 +62,33 @@ class DepthRenderer:
         self.camera = camera or DepthCamera()
         self.frame = ObjectFrame.of(mesh)
         self.engine = "raster" if engine == "auto" else engine
-        self._rays_cam = self.camera.ray_directions().reshape(-1, 3).astype(np.float32)
-        # Embree is float32: cast relative to the object's centre to keep the precision.
-        self._triangles = np.ascontiguousarray(
-            np.asarray(mesh.triangles, dtype=np.float64) - self.frame.centre, dtype=np.float32
-        )
-        self._packets = None
-        if self.engine == "packets":
+        triangles = np.asarray(mesh.triangles, dtype=np.float64)
+        centre = self.frame.centre
+
+        def ray_engine():
+            # Packets where the library loads (1-2 s, once), else one ray per call.
             from . import packets
 
-            self._packets = packets.engine()
-            if self._packets is None:
-                raise InputError(
-                    "the packet depth engine needs the Embree 4 library of embreex; "
-                    "use engine='embreex' or 'raster'"
-                )
-        self._scene_handle = None
-        self._scene = None
-        self._hull = np.ascontiguousarray(self.frame.vertices - self.frame.centre)
+            if packets.available():
+                return PacketEngine(triangles, centre, self.frame.vertices)
+            return EmbreeEngine(triangles, centre)
+
+        self.caster: EmbreeEngine | PacketEngine | RasterEngine
         if self.engine == "raster":
             from .raster import closed_outward
 
-            self._vertices = np.ascontiguousarray(
-                np.asarray(mesh.vertices, dtype=np.float64) - self.frame.centre
+            self.caster = RasterEngine(
+                mesh.vertices,
+                mesh.faces,
+                centre,
+                cull=closed_outward(mesh),
+                near=NEAR_FRACTION * self.frame.length,
+                fallback=ray_engine,
             )
-            self._faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
-            self._cull = closed_outward(mesh)
+        elif self.engine == "packets":
+            self.caster = PacketEngine(triangles, centre, self.frame.vertices)
         else:
-            self._ray_scene()
-
-    def _ray_scene(self) -> None:
-        """Build the Embree scene (once; the raster engine needs it only for its fallback)."""
-        if self._scene_handle is not None or self._scene is not None:
-            return
-        if self.engine == "raster":  # packets where the library loads (1-2 s, once)
-            from . import packets
-
-            self._packets = packets.engine()
-        if self._packets is not None:
-            self._scene_handle = self._packets.scene(self._triangles)
-        else:
-            from embreex import rtcore_scene
-            from embreex.mesh_construction import TriangleMesh
-
-            self._scene = rtcore_scene.EmbreeScene()
-            TriangleMesh(self._scene, self._triangles)
-
-    def __del__(self):
-        handle = getattr(self, "_scene_handle", None)
-        if handle is not None and self._packets is not None:
-            self._packets.release(handle)
-            self._scene_handle = None
+            self.caster = EmbreeEngine(triangles, centre)
 
     def poses(self, p0) -> np.ndarray:
         """Camera poses of pregrasps.
@@ -169,66 +146,10 @@ class DepthRenderer:
         poses = np.asarray(poses, dtype=np.float64)
         if poses.ndim != 3 or poses.shape[1:] != (4, 4):
             raise InputError(f"camera poses must have shape (n, 4, 4), got {poses.shape}")
-        n, size = len(poses), self.camera.size
-        out = np.zeros((n, size, size), dtype=np.float32)
-        if n == 0:
-            return out
-        if self.engine == "raster":
-            from .raster import rasterise
-
-            done = np.ones(n, dtype=np.bool_)
-            rasterise(
-                self._vertices,
-                self._faces,
-                np.ascontiguousarray(poses[:, :3, :3]),
-                np.ascontiguousarray(poses[:, :3, 3] - self.frame.centre),
-                self.camera.focal_px,
-                self.camera.principal_px,
-                size,
-                NEAR_FRACTION * self.frame.length,
-                self._cull,
-                out,
-                done,
-            )
-            if not done.all():
-                self._ray_scene()
-                out[~done] = self._cast(poses[~done], images_per_call)
-            return out
-        return self._cast(poses, images_per_call)
-
-    def _cast(self, poses: np.ndarray, images_per_call: int) -> np.ndarray:
-        """Depth images by Embree rays (packets, else one ray per call)."""
-        n, size = len(poses), self.camera.size
-        out = np.zeros((n, size, size), dtype=np.float32)
-        if self._packets is not None:
-            rot = np.ascontiguousarray(poses[:, :3, :3], dtype=np.float32)
-            origin = np.ascontiguousarray(poses[:, :3, 3] - self.frame.centre, dtype=np.float32)
-            self._packets.kernel(
-                self._scene_handle,
-                self._rays_cam,
-                rot,
-                origin,
-                self._hull,
-                self.camera.focal_px,
-                self.camera.principal_px,
-                size,
-                out,
-            )
-            return out
-        per_image = self._rays_cam.shape[0]
-        for lo in range(0, n, images_per_call):
-            hi = min(n, lo + images_per_call)
-            rot = poses[lo:hi, :3, :3]
-            origin = poses[lo:hi, :3, 3] - self.frame.centre
-            # Direction with camera-frame z = 1: Embree's t is then the depth along the axis.
-            # (b, pixels, 3): each camera ray turned into the object frame (a batched matmul;
-            # einsum is 20x slower here).
-            dirs = np.matmul(self._rays_cam[None], rot.transpose(0, 2, 1).astype(np.float32))
-            origins = np.repeat(origin.astype(np.float32), per_image, axis=0)
-            t = self._scene.run(origins, dirs.reshape(-1, 3), query="DISTANCE")
-            t = np.where(t < _MISS, t, 0.0).astype(np.float32)
-            out[lo:hi] = t.reshape(hi - lo, size, size)
-        return out
+        if len(poses) == 0:
+            size = self.camera.size
+            return np.zeros((0, size, size), dtype=np.float32)
+        return self.caster.render(poses, self.camera, images_per_call=images_per_call)
 
 
 _RENDERERS: OrderedDict = OrderedDict()

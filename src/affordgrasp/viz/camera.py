@@ -2,9 +2,11 @@
 
 Conventions (see ``docs/viewing.md``):
 
-* :class:`Camera` is a pinhole camera: ``eye`` looks at ``target``, ``up`` is up in the image,
-  ``fov_deg`` is the vertical field of view. Pixel (0, 0) is the top-left corner of the image;
-  x grows to the right, y downwards; a pixel's centre is at (i + 0.5, j + 0.5).
+* :class:`Camera` is a pinhole camera (the package's one pinhole geometry,
+  :class:`affordgrasp.vision.camera.PinholeCamera`) posed by ``eye`` looking at ``target``,
+  ``up`` up in the image; ``fov_deg`` is the vertical field of view. Pixel coordinates (0, 0)
+  are the top-left corner of the image; x grows to the right, y downwards; a pixel's centre
+  is at (i + 0.5, j + 0.5).
 * The default camera (:func:`affordgrasp.viz.raycast.auto_camera`, chosen by casting rays)
   keeps the hand at the top of the image (image up is the direction the hand came from,
   ``-wrist_axis``), looks at the grasp from the direction among 64 fixed candidates where the
@@ -19,12 +21,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import InputError
+from ..vision.camera import PinholeCamera
 from .scene import GraspScene, scene_bounds, scene_points
 
 
 @dataclass(frozen=True)
-class Camera:
-    """A pinhole camera.
+class Camera(PinholeCamera):
+    """A pinhole camera looking from ``eye`` at ``target``.
+
+    Pixel coordinates put the image's top-left corner at (0, 0) (pixel centres at
+    (i + 0.5, j + 0.5)); the geometry is :class:`~affordgrasp.vision.camera.PinholeCamera`'s.
 
     Attributes
     ----------
@@ -42,6 +48,7 @@ class Camera:
     fov_deg: float = 30.0
     width: int = 512
     height: int = 512
+    PIXEL_CENTRE = 0.5
 
     def __post_init__(self) -> None:
         for name in ("eye", "target", "up"):
@@ -76,10 +83,15 @@ class Camera:
         up = np.cross(right, forward)
         return right, up, forward
 
-    @property
-    def focal_px(self) -> float:
-        """The focal length in pixels, from the vertical field of view and the height."""
-        return 0.5 * self.height / np.tan(np.deg2rad(self.fov_deg) / 2.0)
+    def rotation(self) -> np.ndarray:
+        """Camera → world rotation (columns: right, down, forward; OpenCV's camera frame).
+
+        Returns
+        -------
+        (3, 3) float64 ndarray
+        """
+        right, up, forward = self.basis()
+        return np.column_stack([right, -up, forward])
 
     def with_size(self, width: int, height: int) -> Camera:
         """The same camera at another image size (same field of view).
@@ -105,12 +117,7 @@ class Camera:
         directions : (h*w, 3) float64 ndarray
             Unit directions in the world frame.
         """
-        right, up, forward = self.basis()
-        x = (np.arange(self.width) + 0.5 - 0.5 * self.width) / self.focal_px
-        y = (np.arange(self.height) + 0.5 - 0.5 * self.height) / self.focal_px
-        xx, yy = np.meshgrid(x, y)
-        d = forward + xx.reshape(-1, 1) * right - yy.reshape(-1, 1) * up
-        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        d = self.world_rays(self.rotation())
         return np.broadcast_to(self.eye, d.shape).copy(), d
 
     def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -128,14 +135,8 @@ class Camera:
         distance : (n,) float64 ndarray
             From the eye, m.
         """
+        uv, _ = self.project_world(points, self.rotation(), self.eye)
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3) - self.eye
-        right, up, forward = self.basis()
-        z = p @ forward
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = 0.5 * self.width + self.focal_px * (p @ right) / z
-            v = 0.5 * self.height - self.focal_px * (p @ up) / z
-        uv = np.column_stack([u, v])
-        uv[z <= 1e-9] = np.nan
         return uv, np.linalg.norm(p, axis=1)
 
 

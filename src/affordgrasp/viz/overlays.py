@@ -100,7 +100,7 @@ def draw_overlays(
     scene : GraspScene
     render : Render
         The image drawn in ``ax`` (its camera projects the overlays).
-    caster : RayCaster, optional
+    caster : SceneCaster, optional
         For hiding occluded marks; the scene's when None.
     style : OverlayStyle
     """

@@ -1,9 +1,11 @@
-"""Ray casting a grasp scene (embree through ``embreex``): shaded colours, depth, parts.
+"""Ray casting a grasp scene: shaded colours, depth, parts.
 
-The object and the posed hand are cast in one scene; each pixel is shaded by its normal
-(Lambert, two lights fixed to the camera, a flat colour per part: the object grey, the palm
-and fingers blue) and silhouettes are outlined so the picture reads at thumbnail size. The
-result depends only on the inputs (no randomness, no GL). A scene's caster is built once
+The object and the posed hand are cast in one scene (the package's ray-casting
+interface, :class:`affordgrasp.objects.rays.RayCaster`, with its Embree backend); each
+pixel is shaded by its normal (Lambert, two lights fixed to the camera, a flat colour per
+part: the object grey, the palm and fingers blue) and silhouettes are outlined so the
+picture reads at thumbnail size. The result depends only on the inputs (no randomness, no
+GL). A scene's caster is built once
 (:func:`caster_of`): the default camera, the image and the visibility tests of the overlays
 all cast into the same one. The default camera (:func:`auto_camera`) is the fixed
 direction whose rays see the most of the object and the hand.
@@ -17,6 +19,7 @@ import numpy as np
 import trimesh
 
 from ..caching import IdentityCache
+from ..objects.rays import EmbreeScene, RayHits
 from .camera import Camera, _fibonacci_sphere, _image_up, framed_camera, unit
 from .scene import GraspScene, scene_bounds
 
@@ -58,18 +61,16 @@ class Render:
 
 
 @dataclass(frozen=True)
-class RayCaster:
-    """The scene's triangles in one embree scene, with shading data per face corner.
+class SceneCaster:
+    """The scene's triangles behind the ray-casting interface, with shading data per face.
 
-    Rays are cast in float32 relative to ``origin`` (the scene's centre) to keep precision.
-    Get a scene's with :func:`caster_of` (built once per scene).
+    Rays are cast in float32 relative to the scene's centre to keep precision. Get a scene's
+    with :func:`caster_of` (built once per scene).
 
     Attributes
     ----------
-    scene : object
-        The embree scene.
-    origin : (3,) float64 ndarray
-        m.
+    rays : EmbreeScene
+        The object's and the hand's triangles (object first), origin at the scene's centre.
     corner_normals : (f, 3, 3) float ndarray
         Shading normals per face corner.
     face_color : (f, 3) float ndarray
@@ -78,33 +79,34 @@ class RayCaster:
         OBJECT_PART / HAND_PART per face.
     """
 
-    scene: object
-    origin: np.ndarray  # (3,)
+    rays: EmbreeScene
     corner_normals: np.ndarray  # (f, 3, 3)
     face_color: np.ndarray  # (f, 3)
     face_part: np.ndarray  # (f,) int8
 
-    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> dict:
-        """First hits of rays.
+    @property
+    def origin(self) -> np.ndarray:
+        """(3,) float64 ndarray: the centre the rays are cast relative to, m."""
+        return self.rays.scene_frame[0]
+
+    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> RayHits:
+        """First hits of rays (the :class:`~affordgrasp.objects.rays.RayCaster` interface).
 
         Parameters
         ----------
         origins : (n, 3) array_like of float
             World frame, m.
         dirs : (n, 3) array_like of float
-            Directions (unit length for ``tfar`` in m).
+            Directions (unit length for distances in m).
 
         Returns
         -------
-        dict
-            embree's ``primID`` (n,) (-1: miss), ``tfar`` (n,) distance along the ray, ``u`` and
-            ``v`` (n,) barycentric coordinates of the hit.
+        RayHits
         """
-        o = (np.asarray(origins, dtype=np.float64) - self.origin).astype(np.float32)
-        return self.scene.run(o, np.asarray(dirs, dtype=np.float32), output=1)
+        return self.rays.cast(origins, dirs)
 
     @classmethod
-    def of_scene(cls, scene: GraspScene) -> RayCaster:
+    def of_scene(cls, scene: GraspScene) -> SceneCaster:
         """A new caster of a grasp scene (use :func:`caster_of`: it is built once per scene).
 
         Parameters
@@ -113,7 +115,7 @@ class RayCaster:
 
         Returns
         -------
-        RayCaster
+        SceneCaster
         """
         return _build_caster(scene)
 
@@ -165,10 +167,10 @@ def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -
 
 
 _OBJECT_CORNER_NORMALS: IdentityCache[np.ndarray] = IdentityCache()
-_CASTERS: IdentityCache[RayCaster] = IdentityCache()
+_CASTERS: IdentityCache[SceneCaster] = IdentityCache()
 
 
-def caster_of(scene: GraspScene) -> RayCaster:
+def caster_of(scene: GraspScene) -> SceneCaster:
     """The scene's triangles in one ray-casting scene, built once per scene.
 
     Parameters
@@ -177,10 +179,10 @@ def caster_of(scene: GraspScene) -> RayCaster:
 
     Returns
     -------
-    RayCaster
+    SceneCaster
         The same one for every call with this scene (held as long as the scene).
     """
-    return _CASTERS.get(scene, lambda: RayCaster.of_scene(scene))
+    return _CASTERS.get(scene, lambda: SceneCaster.of_scene(scene))
 
 
 def _object_corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
@@ -188,9 +190,7 @@ def _object_corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
     return _OBJECT_CORNER_NORMALS.get(mesh, lambda: corner_normals(mesh), version=hash(mesh))
 
 
-def _build_caster(scene: GraspScene) -> RayCaster:
-    from embreex import mesh_construction, rtcore_scene
-
+def _build_caster(scene: GraspScene) -> SceneCaster:
     meshes = [scene.object_mesh]
     normals = [_object_corner_normals(scene.object_mesh)]
     colors = [np.broadcast_to(OBJECT_COLOR, (len(scene.object_mesh.faces), 3))]
@@ -204,12 +204,9 @@ def _build_caster(scene: GraspScene) -> RayCaster:
         parts.append(np.full(len(hm.faces), HAND_PART, dtype=np.int8))
     lo, hi = scene_bounds(scene)
     origin = 0.5 * (lo + hi)
-    triangles = np.concatenate([np.asarray(m.triangles) for m in meshes]) - origin
-    ray_scene = rtcore_scene.EmbreeScene()
-    mesh_construction.TriangleMesh(scene=ray_scene, vertices=triangles.astype(np.float32))
-    return RayCaster(
-        ray_scene,
-        origin,
+    triangles = np.concatenate([np.asarray(m.triangles) for m in meshes])
+    return SceneCaster(
+        EmbreeScene(triangles, origin=origin),
         np.concatenate(normals),
         np.concatenate(colors),
         np.concatenate(parts),
@@ -233,17 +230,15 @@ def render_image(scene: GraspScene, camera: Camera, *, supersample: int = 2) -> 
     return caster_of(scene).render(camera, supersample=supersample)
 
 
-def _render(caster: RayCaster, camera: Camera, *, supersample: int = 2) -> Render:
+def _render(caster: SceneCaster, camera: Camera, *, supersample: int = 2) -> Render:
     s = max(1, int(supersample))
     big = camera.with_size(camera.width * s, camera.height * s)
     origins, dirs = big.rays()
-    res = caster.cast(origins, dirs)
+    hits = caster.cast(origins, dirs)
     h, w = big.height, big.width
-    tri = res["primID"].astype(np.int64)
-    hit = tri >= 0
-    t = tri[hit]
-    u = res["u"][hit].astype(np.float64)
-    v = res["v"][hit].astype(np.float64)
+    hit = hits.hit
+    t = hits.triangle[hit]
+    u, v = hits.barycentric[hit].T
     bary = np.column_stack([1.0 - u - v, u, v])
     n = np.einsum("nc,nck->nk", bary, caster.corner_normals[t])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
@@ -256,7 +251,7 @@ def _render(caster: RayCaster, camera: Camera, *, supersample: int = 2) -> Rende
     colors = np.tile(BACKGROUND, (h * w, 1))
     colors[hit] = np.clip(caster.face_color[t] * lambert[:, None], 0.0, 1.0)
     depth = np.full(h * w, np.inf)
-    depth[hit] = res["tfar"][hit]
+    depth[hit] = hits.distance[hit]
     part = np.zeros(h * w, dtype=np.int8)
     part[hit] = caster.face_part[t]
     colors = colors.reshape(h, w, 3)
@@ -297,12 +292,14 @@ def _outline(depth: np.ndarray, part: np.ndarray, tol: float) -> np.ndarray:
     return edge
 
 
-def visible(caster: RayCaster, camera: Camera, points: np.ndarray, tol: float = 2e-3) -> np.ndarray:
+def visible(
+    caster: SceneCaster, camera: Camera, points: np.ndarray, tol: float = 2e-3
+) -> np.ndarray:
     """Whether each point is seen by the camera (nothing nearer along its ray).
 
     Parameters
     ----------
-    caster : RayCaster
+    caster : SceneCaster
     camera : Camera
     points : (n, 3) float ndarray
         m.
@@ -318,13 +315,13 @@ def visible(caster: RayCaster, camera: Camera, points: np.ndarray, tol: float = 
 
 
 def visible_from(
-    caster: RayCaster, eyes: np.ndarray, points: np.ndarray, tol: float = 2e-3
+    caster: SceneCaster, eyes: np.ndarray, points: np.ndarray, tol: float = 2e-3
 ) -> np.ndarray:
     """Whether each point is seen from its eye.
 
     Parameters
     ----------
-    caster : RayCaster
+    caster : SceneCaster
     eyes : (n, 3) float ndarray
         m.
     points : (n, 3) float ndarray
@@ -339,9 +336,7 @@ def visible_from(
     d = np.asarray(points, dtype=np.float64) - eyes
     dist = np.linalg.norm(d, axis=1)
     d = d / dist[:, None]
-    res = caster.cast(eyes, d)
-    first = np.where(res["primID"] >= 0, res["tfar"], np.inf)
-    return first >= dist - tol
+    return caster.cast(eyes, d).distance >= dist - tol
 
 
 def auto_camera(
@@ -386,7 +381,7 @@ def auto_camera(
             scene, np.array([0.3, -1.0, 0.5]), fov_deg=fov_deg, width=width, height=height
         )
     origins, rays = zip(*(c.rays() for c in cams), strict=True)
-    tri = caster.cast(np.concatenate(origins), np.concatenate(rays))["primID"]
+    tri = caster.cast(np.concatenate(origins), np.concatenate(rays)).triangle
     part = np.where(tri >= 0, caster.face_part[np.maximum(tri, 0)], BACKGROUND_PART)
     part = part.reshape(len(cams), probe * probe)
     obj_px = np.count_nonzero(part == OBJECT_PART, axis=1) / part.shape[1]
@@ -400,3 +395,7 @@ def auto_camera(
     score = score + 1e-3 * (dirs @ _image_up(scene))
     best = dirs[int(np.argmax(score))]
     return framed_camera(scene, best, fov_deg=fov_deg, width=width, height=height)
+
+
+# The name this class had before the ray-casting interface took ``RayCaster``.
+RayCaster = SceneCaster
