@@ -145,3 +145,15 @@ def test_figures_are_the_modes_of_each_task_and_of_the_knife(tmp_path):
     # the figures drew the first families of the task from the same cached grasp tables
     cached = sorted(p.name for p in (tmp_path / "c").glob("*_0_30_unit.parquet"))
     assert cached == [f"{f}_0_30_unit.parquet" for f in ("axe", "hammer", "knife", "meat_cleaver")]
+
+
+def test_command_prints_a_table_per_family_and_task(tmp_path, capsys):
+    argv = ["validate", "-o", str(tmp_path / "o"), "--tasks", "beat", "--families", "hammer"]
+    assert main([*argv, "--grasps", "20", "--uses", "20", "--no-optimizer"]) == 0
+    out = capsys.readouterr().out
+    assert "top-10 grasps judged right" in out and "brute force" in out
+    header = next(line for line in out.splitlines() if "family" in line)
+    assert "brute force" in header and "optimizer" not in header  # --no-optimizer
+    assert f"report: {tmp_path / 'o'}/validation.json" in out.replace("\n", "")
+    rows = [line for line in out.splitlines() if "beat" in line and "│" in line]
+    assert len(rows) == 2  # hammer, then all

@@ -192,6 +192,16 @@ def run(args, out) -> None:
         ["task", "family", *[f"{m.replace('_', ' ')}" for m in methods]],
         rows,
     )
+    empty = [
+        task
+        for task, result in report["tasks"].items()
+        if not any(result["summary"][m]["top_grasps"] for m in methods)
+    ]
+    if empty:
+        out.text(
+            f"no grasp passed the thresholds of {', '.join(empty)} in these searches: larger "
+            "--grasps, --uses and --budget (or --full) find them"
+        )
     out.text(f"report: {args.out}/validation.json")
     out.result(report)
 
@@ -201,7 +211,7 @@ def _cells(hits: dict, methods: list[str]) -> list[str]:
     cells = []
     for method in methods:
         right, judged = hits[method]
-        cells.append(f"{right}/{judged} ({100 * right / judged:.0f}%)" if judged else "0/0")
+        cells.append(f"{right}/{judged} ({100 * right / judged:.0f}%)" if judged else "none found")
     return cells
 
 
