@@ -152,7 +152,7 @@ def test_command_prints_a_table_per_family_and_task(tmp_path, capsys):
     assert main([*argv, "--grasps", "20", "--uses", "20", "--no-optimizer"]) == 0
     out = capsys.readouterr().out
     assert "top-10 grasps judged right" in out and "brute force" in out
-    header = next(line for line in out.splitlines() if "family" in line)
+    header = next(line for line in out.splitlines() if "┃" in line and "family" in line)
     assert "brute force" in header and "optimizer" not in header  # --no-optimizer
     assert f"report: {tmp_path / 'o'}/validation.json" in out.replace("\n", "")
     rows = [line for line in out.splitlines() if "beat" in line and "│" in line]
