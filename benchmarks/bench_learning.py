@@ -1,6 +1,6 @@
 """The paper's Table II protocol on held-out objects, classifier AP, and K-candidate ranking.
 
-    python benchmarks/train_default_models.py --data DATA        # dataset + shipped models
+    python tools/train_default_models.py --data DATA        # dataset + shipped models
     python benchmarks/bench_learning.py --data DATA --models DIR --plots DIR --json out.json
 
 On the dataset of ``train_default_models.py`` (13 families x 5 instances x 1500 samples,

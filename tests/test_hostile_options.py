@@ -481,6 +481,31 @@ CASES = [
         ["optimize", "knife", "--task", "pick", "--budget", "20", "--robust", "-2"],
         "--robust must be an integer >= 0 (copies per grasp), got -2",
     ),
+    (["validate", "-o", "{d}/v1", "--seeds", "0"], "--seeds must be a positive integer, got 0"),
+    (["validate", "-o", "{d}/v2", "--uses", "-4"], "--uses must be a positive integer, got -4"),
+    (
+        ["validate", "-o", "{d}/v3", "--grasps", "100", "--also-grasps", "100"],
+        "--also-grasps must lie in [0, grasps) = [0, 100), got 100",
+    ),
+    (
+        ["validate", "-o", "{d}/v4", "--also-grasps", "-1"],
+        "--also-grasps must lie in [0, grasps) = [0, 100), got -1",
+    ),
+    (["validate", "-o", "{d}/v5", "--refine", "1"], "--refine must lie in [0, 1), got 1.0"),
+    (
+        ["validate", "-o", "{d}/v6", "--tasks", "cutt"],
+        "which the validation does not judge (did you mean 'cut'?)",
+    ),
+    (
+        ["validate", "-o", "{d}/v7", "--tasks", "cut", "--families", "mug"],
+        "has 'mug', which no task of cut judges; choose among axe, dagger",
+    ),
+    (
+        ["validate", "-o", "{d}/v8", "--no-optimizer", "--no-brute-force"],
+        "--no-optimizer and --no-brute-force leave nothing to run; drop one",
+    ),
+    (["validate", "-o", "{txt}"], "is a file, not a directory; give a directory"),
+    (["validate", "-o", "{d}/v9", "--seeds", "two"], "argument --seeds: invalid int value"),
 ]
 
 

@@ -41,3 +41,21 @@ def test_no_library_module_switches_the_backend_or_uses_pyplot():
         if pattern.search(line)
     ]
     assert offenders == []
+
+
+def test_tests_import_nothing_from_the_script_folders():
+    # benchmarks/ (timings), studies/ (research) and tools/ (maintenance) are scripts: what
+    # a test needs of them belongs in the package. A test that loads code by path (or puts
+    # a folder on sys.path) and names one of those folders is one that imports a script.
+    here = Path(__file__).resolve().parent
+    loads = re.compile(r"spec_from_file_location|run_path|sys\.path\.(insert|append)")
+    names = re.compile(r"[\"'/](benchmarks|studies|tools)[\"'/]")
+    imports = re.compile(r"^\s*(from|import)\s+(benchmarks|studies|tools)\b", re.MULTILINE)
+    offenders = []
+    for path in sorted(here.rglob("*.py")):
+        if path == Path(__file__).resolve():
+            continue
+        text = path.read_text(encoding="utf-8")
+        if (loads.search(text) and names.search(text)) or imports.search(text):
+            offenders.append(str(path.relative_to(ROOT)))
+    assert not offenders, offenders

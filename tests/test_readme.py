@@ -72,3 +72,16 @@ def test_readme_python_block_runs_and_prints_what_it_says(code):
     assert len(checks) == 1, "every README Python block needs its check in tests/test_readme.py"
     namespace, lines = run_block(code)
     checks[0](namespace, lines)
+
+
+def test_the_module_table_names_every_module_of_the_package():
+    import affordgrasp
+
+    table = README.read_text().split("## The pipeline", 1)[1].split("\n## ", 1)[0]
+    named = set(re.findall(r"`affordgrasp\.(\w+)`", table))
+    src = Path(affordgrasp.__file__).resolve().parent
+    modules = {p.stem for p in src.glob("*.py") if not p.stem.startswith("_")}
+    packages = {p.parent.name for p in src.glob("*/__init__.py")}
+    assert modules | packages, src
+    assert sorted((modules | packages) - named) == []
+    assert sorted(named - (modules | packages)) == []

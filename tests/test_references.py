@@ -1,4 +1,5 @@
-"""The repository documents itself: no reference to a SPEC document it does not contain."""
+"""The repository documents itself: no reference to a SPEC document it does not contain, and
+every repository path it names exists."""
 
 import re
 from pathlib import Path
@@ -6,7 +7,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SCANNED = ["src", "docs", "examples", "benchmarks", "README.md"]
+SCANNED = ["src", "docs", "examples", "benchmarks", "studies", "tools", "README.md"]
 WORD = re.compile(r"\bSPEC\b")  # case-sensitive: "spec" (an object spec) is a word of the API
 
 
@@ -59,3 +60,27 @@ def test_the_pattern_catches_a_reference_and_spares_the_word_spec():
     assert WORD.search('"""Linear programs (SPEC §2.4)."""')
     assert WORD.search("the SPEC's normalised ε")
     assert not WORD.search("an object spec, a Spec grammar, USE_SPECULAR")
+
+
+# A path into the repository's own folders, as prose and comments name it ("see
+# studies/validate_scan.py"); CHANGELOG.md is not scanned: it names files as they were.
+PATH = re.compile(r"(?<![\w/.-])((?:benchmarks|studies|tools|docs|examples|tests|src)/[\w./-]*\w)")
+
+
+def test_every_named_repository_path_exists():
+    missing = []
+    for path in scanned_files():
+        if path.suffix not in {".py", ".md", ".toml"}:
+            continue
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            for match in PATH.finditer(line):
+                if not (ROOT / match.group(1)).exists():
+                    missing.append(f"{path.relative_to(ROOT)}:{number}: {match.group(1)}")
+    assert not missing, "named but not in the repository:\n" + "\n".join(missing)
+
+
+def test_the_path_pattern_finds_repository_paths_only():
+    found = PATH.findall(
+        "see studies/validate_scan.py, `tools/x.py`; src/affordgrasp/ and a/docs/y"
+    )
+    assert found == ["studies/validate_scan.py", "tools/x.py", "src/affordgrasp"]

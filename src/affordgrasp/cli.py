@@ -34,6 +34,7 @@ COMMANDS = {
     "predict": "predict with a trained (or the shipped) model on every sample of a dataset",
     "model-eval": "evaluate a model on held-out objects beside baselines, with plots",
     "plan": "choose a grasp from camera-in-hand views with learned models, and check it",
+    "validate": "the paper's validation: judge the best cut, beat and pick grasps by object parts",
 }
 
 

@@ -32,6 +32,11 @@ def stop_on_signals(signals=STOP_SIGNALS):
     ----------
     signals : tuple of signal.Signals
         The signals handled; the previous handlers come back on exit.
+
+    Yields
+    ------
+    None
+        The block runs with the handlers in place.
     """
     if threading.current_thread() is not threading.main_thread():
         yield

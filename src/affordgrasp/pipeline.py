@@ -98,7 +98,13 @@ class Evaluation:
         return task.evaluate(self.table, mode, **thresholds)
 
     def to_pandas(self):
-        """The table as a pandas DataFrame (needs pandas)."""
+        """The table as a pandas DataFrame (needs pandas).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per sample, the columns of :attr:`table`.
+        """
         return self.table.to_pandas()
 
 

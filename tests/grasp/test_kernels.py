@@ -17,9 +17,9 @@ from scipy.spatial.transform import Rotation
 
 from affordgrasp.grasp import kernels
 from affordgrasp.grasp.policy import HIT_EPS, close_fingers, hand_arrays
-from affordgrasp.grasp.surface import group_into_cells
 from affordgrasp.hands import get_hand
 from affordgrasp.hands.kinematics import REVOLUTE
+from affordgrasp.objects.surface import group_into_cells
 from affordgrasp.tolerances import JOINT_AT_LIMIT
 
 HIT = 1e-3  # m: coarse enough for a 2000-step reference grid to resolve the stopping gap
@@ -246,7 +246,7 @@ def test_closing_every_finger_is_the_breakaway_loop(hand_name):
         )
         dofs = hand.open_dofs(rng.uniform())
         pose = np.eye(4)
-        got = close_fingers(hand, SimpleNamespace(cloud=cloud), pose, dofs)
+        got = close_fingers(hand, SimpleNamespace(**cloud._asdict()), pose, dofs)
         want = breakaway_reference(hand, cloud, np.eye(3), np.zeros(3), dofs)
         np.testing.assert_array_equal(got, want)
 

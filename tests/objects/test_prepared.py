@@ -130,7 +130,7 @@ def test_an_entry_of_other_code_or_libraries_is_not_used(cache, monkeypatch):
 def test_a_family_entry_whose_mesh_does_not_hash_to_its_hash_is_refused(cache):
     load_object("tumbler")
     key = prepared.family_key("tumbler", 0, False, 1.0)
-    obj = prepared.load_family(key)
+    obj = GraspObject(**prepared.load_family(key))
     forged = GraspObject(
         obj.name,
         obj.category,

@@ -698,6 +698,11 @@ def read_errors(where: str | os.PathLike):
     ----------
     where : path
         Named in the message when the error does not name a file.
+
+    Yields
+    ------
+    None
+        The block runs inside; an Arrow or OS error it raises leaves as a DatasetError.
     """
     import pyarrow as pa
 

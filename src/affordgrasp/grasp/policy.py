@@ -33,11 +33,11 @@ from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
 from ..objects.prepared import centred_frame_origin  # noqa: F401  (re-exported: its former home)
+from ..objects.surface import SurfaceSample
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .contacts import ContactSet
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
-from .surface import SurfaceSample
 
 if TYPE_CHECKING:
     from ..objects.prepared import MeshData
@@ -420,6 +420,30 @@ def hand_reach(hand: Hand, dofs: np.ndarray) -> float:
     return reach
 
 
+def sample_cloud(samples: SurfaceSample) -> kernels.SampleCloud:
+    """An object's surface samples as the kernels take them.
+
+    Parameters
+    ----------
+    samples : SurfaceSample
+        The object's surface samples and their two levels of cells.
+
+    Returns
+    -------
+    SampleCloud
+        The points and both cell levels (the arrays themselves, not copies).
+    """
+    return kernels.SampleCloud(
+        samples.points,
+        samples.cell_start,
+        samples.cell_center,
+        samples.cell_radius,
+        samples.coarse_start,
+        samples.coarse_center,
+        samples.coarse_radius,
+    )
+
+
 def close_fingers(
     hand: Hand, samples: SurfaceSample, pose: np.ndarray, dofs: np.ndarray
 ) -> np.ndarray:
@@ -442,7 +466,7 @@ def close_fingers(
     """
     dofs = np.array(dofs, dtype=np.float64)
     kernels.close_fingers(
-        samples.cloud,
+        sample_cloud(samples),
         np.ascontiguousarray(pose[:3, :3], dtype=np.float64),
         np.ascontiguousarray(pose[:3, 3], dtype=np.float64),
         hand_arrays(hand).kernel,
@@ -574,7 +598,7 @@ def simulate_starts(
     samples = geom.samples
     joints = _open_dofs(hand, s)
     poses, touched, offsets, point, shape, normal = kernels.simulate_batch(
-        samples.cloud,
+        sample_cloud(samples),
         samples.normals,
         samples.sharp,
         np.ascontiguousarray(starts, dtype=np.float64),

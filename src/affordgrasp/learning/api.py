@@ -65,7 +65,7 @@ def pretrained_path(kind: str) -> Path:
     if not path.is_file():
         raise InputError(
             f"the shipped {kind} is missing ({path}); rebuild it with "
-            "'python benchmarks/train_default_models.py'"
+            "'python tools/train_default_models.py'"
         )
     return path
 

@@ -18,7 +18,7 @@ Flaws, measured rather than hidden: U_g scales as 1/h² with the size h of the f
 neighbourhood (a finely meshed edge has a large curvature, a coarsely meshed one a small
 one), and over one flank of an acute wedge the opposite flank folds back under the
 fitting plane, so sharp edges score lower than blunt creases. On the built-in blades it
-does not separate cutting edges from other points (``benchmarks/calibrate_use_edge.py``,
+does not separate cutting edges from other points (``studies/calibrate_use_edge.py``,
 numbers in :data:`affordgrasp.tasks.TAU_UG_DEFAULT`); the edge angle below does.
 
 **Sharpest-edge angle** (resolution independent): the smallest interior dihedral angle

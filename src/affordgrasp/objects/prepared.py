@@ -18,7 +18,7 @@ Three kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.ca
   with the same vertices and faces shares it.
 
 Every key also holds a **stamp**: a format number, a hash of the sources that compute the
-entries (``affordgrasp/objects``, ``grasp/surface.py``, ``grasp/policy.py``) and a
+entries (``affordgrasp/objects``, ``grasp/policy.py``) and a
 fingerprint of the installed numpy, trimesh, scipy and manifold3d. An entry written under
 another key, that fails its checksum or that cannot be read is rebuilt and overwritten,
 never trusted (:func:`affordgrasp.caching.read_arrays`); a loaded family's vertices and
@@ -48,14 +48,14 @@ from ..caching import IdentityCache, cache_dir, read_arrays, write_arrays
 if TYPE_CHECKING:
     import trimesh
 
-    from ..grasp.surface import SurfaceSample
     from .mass import MassProperties
     from .resolve import GraspObject
+    from .surface import SurfaceSample
 
 FORMAT = 1
 _T = TypeVar("_T")
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
-_STAMPED_SOURCES = ("objects", "grasp/surface.py", "grasp/policy.py")
+_STAMPED_SOURCES = ("objects", "grasp/policy.py")
 _STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d", "fast_simplification")
 
 
@@ -83,6 +83,30 @@ def stamp() -> str:
             digest.update(f"{package}|{origin}|{st.st_size}|{st.st_mtime_ns}".encode())
         else:
             digest.update(f"{package}|missing".encode())
+    return digest.hexdigest()
+
+
+def mesh_hash(mesh: trimesh.Trimesh) -> str:
+    """SHA-256 hex digest of a mesh's geometry.
+
+    The bytes hashed are the vertices as little-endian float64 (n, 3), C order, followed by
+    the faces as little-endian int64 (m, 3), C order; anyone can recompute it.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Vertices (n, 3) in metres, faces (m, 3).
+
+    Returns
+    -------
+    str
+        64 lowercase hex digits.
+    """
+    vertices = np.ascontiguousarray(mesh.vertices, dtype="<f8")
+    faces = np.ascontiguousarray(mesh.faces, dtype="<i8")
+    digest = hashlib.sha256()
+    digest.update(vertices.tobytes())
+    digest.update(faces.tobytes())
     return digest.hexdigest()
 
 
@@ -281,7 +305,7 @@ def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
 def _build_derived(obj: GraspObject) -> DerivedGeometry:
     import trimesh
 
-    from ..grasp.surface import sample_surface
+    from .surface import sample_surface
 
     mesh = obj.mesh
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
@@ -334,7 +358,7 @@ def _derived_to_arrays(d: DerivedGeometry) -> dict[str, np.ndarray]:
 def _derived_from_arrays(
     vertices: np.ndarray, faces: np.ndarray, content_hash: str, a: dict[str, np.ndarray]
 ) -> DerivedGeometry:
-    from ..grasp.surface import SurfaceSample
+    from .surface import SurfaceSample
 
     origin = a["origin"]
     n_faces = len(faces)
@@ -399,7 +423,7 @@ def _family_path(key: dict[str, Any]) -> Path:
     return _entry_path(f"family-{key['family']}-{key['seed']}-{name}")
 
 
-def load_family(key: dict[str, Any]) -> GraspObject | None:
+def load_family(key: dict[str, Any]) -> dict[str, Any] | None:
     """The resolved family stored under ``key``, or None (missing, stale or corrupt).
 
     Parameters
@@ -409,23 +433,24 @@ def load_family(key: dict[str, Any]) -> GraspObject | None:
 
     Returns
     -------
-    GraspObject or None
-        Its ``mesh`` is built (with trimesh) only when accessed.
+    dict or None
+        The keyword arguments of its :class:`~affordgrasp.objects.GraspObject` (which
+        :func:`~affordgrasp.objects.load_object` makes); its ``mesh`` is a
+        :class:`MeshData`, built into a trimesh only when accessed.
     """
-    from .resolve import GraspObject
 
-    def build(a: dict[str, np.ndarray], mesh: MeshData, mass: MassProperties) -> GraspObject:
-        return GraspObject(
-            name=str(a["name"]),
-            category=str(a["category"]),
-            mesh=mesh,
-            mass=mass,
-            mesh_hash=mesh.content_hash,
-            source="family",
-            face_parts=a["face_parts"] if "face_parts" in a else None,
-            part_names=tuple(str(p) for p in a["part_names"]),
-            materials=bool(a["materials"]),
-        )
+    def build(a: dict[str, np.ndarray], mesh: MeshData, mass: MassProperties) -> dict[str, Any]:
+        return {
+            "name": str(a["name"]),
+            "category": str(a["category"]),
+            "mesh": mesh,
+            "mass": mass,
+            "mesh_hash": mesh.content_hash,
+            "source": "family",
+            "face_parts": a["face_parts"] if "face_parts" in a else None,
+            "part_names": tuple(str(p) for p in a["part_names"]),
+            "materials": bool(a["materials"]),
+        }
 
     return _load_object(_family_path(key), key, build)
 
@@ -565,7 +590,7 @@ def _file_path(key: dict[str, Any]) -> Path:
     return _entry_path(f"file-{key['sha256'][:16]}-{name}")
 
 
-def load_mesh_file(key: dict[str, Any], name: str, source: str) -> GraspObject | None:
+def load_mesh_file(key: dict[str, Any], name: str, source: str) -> dict[str, Any] | None:
     """The resolved mesh file stored under ``key``, or None (missing, stale or corrupt).
 
     Logs again the warnings that resolving it logged.
@@ -581,24 +606,25 @@ def load_mesh_file(key: dict[str, Any], name: str, source: str) -> GraspObject |
 
     Returns
     -------
-    GraspObject or None
-        Its ``mesh`` is built (with trimesh) only when accessed.
+    dict or None
+        The keyword arguments of its :class:`~affordgrasp.objects.GraspObject` (which
+        :func:`~affordgrasp.objects.load_object` makes); its ``mesh`` is a
+        :class:`MeshData`, built into a trimesh only when accessed.
     """
-    from .resolve import GraspObject
 
     def build(
         a: dict[str, np.ndarray], mesh: MeshData, mass: MassProperties
-    ) -> tuple[GraspObject, list[str]]:
-        obj = GraspObject(
-            name=name,
-            category="mesh",
-            mesh=mesh,
-            mass=mass,
-            mesh_hash=mesh.content_hash,
-            source=source,
-            load_warnings=tuple(str(w) for w in a["warnings"]),
-        )
-        return obj, [str(w) for w in a["warnings"]]
+    ) -> tuple[dict[str, Any], list[str]]:
+        fields = {
+            "name": name,
+            "category": "mesh",
+            "mesh": mesh,
+            "mass": mass,
+            "mesh_hash": mesh.content_hash,
+            "source": source,
+            "load_warnings": tuple(str(w) for w in a["warnings"]),
+        }
+        return fields, [str(w) for w in a["warnings"]]
 
     found = _load_object(_file_path(key), key, build)
     if found is None:
@@ -639,8 +665,6 @@ def _mesh_to_arrays(obj: GraspObject) -> dict[str, np.ndarray]:
 
 def _mesh_from_arrays(a: dict[str, np.ndarray]) -> MeshData | None:
     """The stored mesh, or None when its vertices and faces do not hash to its hash."""
-    from .resolve import mesh_hash
-
     vertices = a["vertices"]
     faces = a["faces"]
     digest = str(a["mesh_hash"])

@@ -18,7 +18,6 @@ Family names win over a file of the same name in the working directory; write
 from __future__ import annotations
 
 import functools
-import hashlib
 import math
 import os
 from dataclasses import dataclass
@@ -42,6 +41,7 @@ from affordgrasp.objects.mass import (
     plane_regions,
     regions_on_mesh,
 )
+from affordgrasp.objects.prepared import mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 
 if TYPE_CHECKING:
@@ -216,30 +216,6 @@ class GraspObject:
 
             faces[missed] = closest_faces(mesh, points[missed])
         return faces
-
-
-def mesh_hash(mesh: trimesh.Trimesh) -> str:
-    """SHA-256 hex digest of a mesh's geometry.
-
-    The bytes hashed are the vertices as little-endian float64 (n, 3), C order, followed by
-    the faces as little-endian int64 (m, 3), C order; anyone can recompute it.
-
-    Parameters
-    ----------
-    mesh : trimesh.Trimesh
-        Vertices (n, 3) in metres, faces (m, 3).
-
-    Returns
-    -------
-    str
-        64 lowercase hex digits.
-    """
-    vertices = np.ascontiguousarray(mesh.vertices, dtype="<f8")
-    faces = np.ascontiguousarray(mesh.faces, dtype="<i8")
-    digest = hashlib.sha256()
-    digest.update(vertices.tobytes())
-    digest.update(faces.tobytes())
-    return digest.hexdigest()
 
 
 def list_families() -> list[str]:
@@ -452,9 +428,9 @@ def _resolve_file(
     key = prepared.mesh_file_key(path, size_m=size_m, units=units, density=density)
     source = str(path.resolve())
     if key is not None:
-        obj = prepared.load_mesh_file(key, path.name, source)
-        if obj is not None:
-            return _with_region_densities(obj, path)
+        fields = prepared.load_mesh_file(key, path.name, source)
+        if fields is not None:
+            return _with_region_densities(GraspObject(**fields), path)
     with recording_warnings() as warnings:
         mesh = load_mesh(path, size_m=size_m, units=units)
     obj = _build(path.name, "mesh", mesh, density, source, load_warnings=tuple(warnings))
@@ -482,10 +458,11 @@ def _resolve_family(
         return _build_family(family, seed, density, materials, size_m, units)
     # Built once per machine: later processes load the arrays (see objects/prepared.py).
     key = prepared.family_key(family, seed, materials, density)
-    obj = prepared.load_family(key)
-    if obj is None:
-        obj = _build_family(family, seed, density, materials, size_m, units)
-        prepared.store_family(key, obj)
+    fields = prepared.load_family(key)
+    if fields is not None:
+        return GraspObject(**fields)
+    obj = _build_family(family, seed, density, materials, size_m, units)
+    prepared.store_family(key, obj)
     return obj
 
 
@@ -612,9 +589,9 @@ def _resolve_family_scan(
 
     key = prepared.family_key(family, seed, materials, density)
     key["scan_seed"] = int(scan_seed)
-    obj = prepared.load_family(key)
-    if obj is not None:
-        return obj
+    fields = prepared.load_family(key)
+    if fields is not None:
+        return GraspObject(**fields)
     crisp = _resolve_family(family, seed, density, False, None, None)
     with recording_warnings():
         mesh, face_parts = scan_like(crisp.mesh, crisp.face_parts, seed=scan_seed)

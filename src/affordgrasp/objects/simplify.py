@@ -1,7 +1,7 @@
 """Large scans made small: quadric decimation checked against a stated geometric tolerance.
 
 A scan of 0.1-2 M triangles is far finer than what grasp simulation resolves (surface samples
-1.4 mm apart, see ``grasp.surface``), and its preparation (repair, surface samples, caches)
+1.4 mm apart, see ``objects.surface``), and its preparation (repair, surface samples, caches)
 grows with its size. :func:`simplify_to_tolerance` decimates it with ``fast-simplification``
 (Fast-Quadric-Mesh-Simplification) and then *measures* how far the original surface lies from
 the simplified one, so the result comes with a number, not a hope:

@@ -20,10 +20,32 @@ def _require(name: str):
 
 
 def mujoco():
-    """The ``mujoco`` module (MuJoCo's official Python bindings)."""
+    """The ``mujoco`` module (MuJoCo's official Python bindings).
+
+    Returns
+    -------
+    module
+        ``mujoco``, imported.
+
+    Raises
+    ------
+    MissingDependencyError
+        When it is not installed, naming the extra that installs it.
+    """
     return _require("mujoco")
 
 
 def coacd():
-    """The ``coacd`` module (approximate convex decomposition)."""
+    """The ``coacd`` module (approximate convex decomposition).
+
+    Returns
+    -------
+    module
+        ``coacd``, imported.
+
+    Raises
+    ------
+    MissingDependencyError
+        When it is not installed, naming the extra that installs it.
+    """
     return _require("coacd")

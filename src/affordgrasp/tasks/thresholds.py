@@ -14,7 +14,7 @@ from collections.abc import Mapping
 # % of the samples and 0.5 none on any tool, although the paper shows "extra robustness" grasps on a
 # knife (its Fig. 7): that scale does not reproduce the paper's thresholds either, and it depends on
 # the length unit. So the defaults stay on the normalised ε and are calibrated by a stated rule
-# (benchmarks/calibrate_thresholds.py, 11 families of the paper's categories x 4000 uniform samples,
+# (studies/calibrate_thresholds.py, 11 families of the paper's categories x 4000 uniform samples,
 # seed 0): τ_ε of the viable grasp is the value at which 5 % of the samples are viable (the paper's
 # 20 M of 400 M), with E_i < 1e5 N per N·m, the paper's 100 with torques in N·mm (E_i is linear in
 # the torque, so this is a unit conversion); the task thresholds keep the paper's ratios 0.15 : 0.3
@@ -26,7 +26,7 @@ TAU_DELTA_DEFAULT = 0.95  # paper, Table I
 PAPER_TAU_EPS_DEFAULT = 0.3  # paper, Table I, literal
 PAPER_TAU_EPS_EXTRA = 0.5  # paper, Table I, "extra robustness required", literal
 
-# Edge thresholds, calibrated with benchmarks/calibrate_use_edge.py on the built-in
+# Edge thresholds, calibrated with studies/calibrate_use_edge.py on the built-in
 # families (knife, meat_cleaver, axe, dagger, sword; 6 seeds each; 300 direction-mapping
 # use points + 300 surface samples + 100 cutting-edge samples per mesh; "edge" = within
 # 0.5 mm of the geometric cutting edge, about 3.1k points; "other" = farther than 3 mm on
@@ -54,7 +54,7 @@ TAU_EDGE_ANGLE_DEFAULT = math.radians(45.0)
 # That test sees mesh edges, so a scanned blade, whose edge the scanner rounds into a strip of
 # 30-90 degree dihedrals, has no edge. The wedge angle (use_wedge_angle: 2π × the part of a
 # 3 mm ball around U inside the solid) measures the flanks at a physical scale instead.
-# Calibrated with benchmarks/calibrate_wedge_angle.py on crisp and scan-like (~scan) blades,
+# Calibrated with studies/calibrate_wedge_angle.py on crisp and scan-like (~scan) blades,
 # flats, spines, handles and round parts (5 blade families + hammer, screwdriver, bottle, mug;
 # seeds 0-1 calibrate, 2-3 held out; a scan-like blade's edge labelled by its own crest, 0.7-0.9
 # mm behind the crisp edge): cutting edges read 7-51 degrees (1st-100th percentile, scan-like;
@@ -88,7 +88,7 @@ TAU_LEVER_MAX_DEFAULT = 2.0
 # than half of U's own offset from it, along the long axis (contact_reach <= 0.5). The
 # clearance and thickness tests alone left fingers on an axe's head (14-25 mm thick) and a
 # cleaver's spine. Default mode, scan-like seeds 2-5, every grasp of 3000 with a finite cut
-# (benchmarks/validate_scan.py tables): grasps with no contact on the blade or head, without
+# (studies/validate_scan.py tables): grasps with no contact on the blade or head, without
 # this test / at 0.5 / at 0 (the contacts behind the centre of mass): axe 0.62 (21 grasps) /
 # 1.00 (13) / 1.00 (8); dagger 0.96 (25) / 1.00 (24) / none; knife 0.91 (11) / 0.91 (11) /
 # none; cleaver 0.62 (16) / 0.62 (16) / 0.82 (11). A knife's and a dagger's centre of mass

@@ -2,8 +2,8 @@
 
 For each task and family, over ``--seeds`` instances, the scan-like variant
 (``family:seed~scan``, :mod:`affordgrasp.objects.scan`; beat with the families' materials)
-is searched two ways, as in ``validate_tasks.py``: brute force (``--grasps`` uniform grasps ×
-``--uses`` use points drawn by area, top ``--top`` distinct grasps) and the optimiser
+is searched two ways, as in ``affordgrasp validate``: brute force (``--grasps`` uniform
+grasps × ``--uses`` use points drawn by area, top ``--top`` distinct grasps) and the optimiser
 (``--budget`` simulations). Each top grasp is judged by the part labels the scan-like mesh
 keeps from its family:
 
@@ -14,7 +14,7 @@ keeps from its family:
   "hand"); "working end" also counts the use points anywhere on the head (its side
   faces, a peen or claw, an axe's edge: the massive end, but not the striking face);
 * pick: the centre of mass inside the contacts' hull seen along the wrist axis
-  (``validate_tasks.surrounds_com``).
+  (:func:`affordgrasp.validation.surrounds_com`).
 
 ``--crisp`` judges the crisp families instead (the regression check). Prints one line per
 object and a JSON summary (fractions over all top grasps; empty searches counted).
@@ -23,26 +23,23 @@ Seeds: the wedge angle and the beat thresholds were calibrated on seeds 0-1, so 
 acceptance numbers are measured on the held-out seeds 2-6 (``--seeds 2-6``, the default);
 ``--seeds 0-1`` gives the calibration seeds' numbers.
 
-Run: ``python benchmarks/validate_scan.py --seeds 2-6 --tasks cut,beat,pick``.
+Run: ``python studies/validate_scan.py --seeds 2-6 --tasks cut,beat,pick``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
 
-sys.path.insert(0, str(Path(__file__).parent))
-from validate_tasks import surrounds_com  # noqa: E402
-
-from affordgrasp.objects import load_object  # noqa: E402
-from affordgrasp.pairs import best_pairs, optimize_pairs  # noqa: E402
-from affordgrasp.pipeline import evaluate_samples  # noqa: E402
+from affordgrasp.objects import load_object
+from affordgrasp.pairs import best_pairs, optimize_pairs
+from affordgrasp.pipeline import evaluate_samples
+from affordgrasp.validation import surrounds_com
 
 FAMILIES = {
     "cut": ("knife", "meat_cleaver", "dagger", "sword", "axe"),

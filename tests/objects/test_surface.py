@@ -1,4 +1,4 @@
-"""Surface samples (grasp/surface.py): spacing, and memory bounded by construction."""
+"""Surface samples (objects/surface.py): spacing, and memory bounded by construction."""
 
 import logging
 import tracemalloc
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from affordgrasp.grasp.surface import DEFAULT_SPACING, sample_count_bound, sample_surface
 from affordgrasp.objects import GraspObject, mass_properties, mesh_hash
+from affordgrasp.objects.surface import DEFAULT_SPACING, sample_count_bound, sample_surface
 
 
 def test_count_bound_holds_and_default_spacing_is_kept_on_tools():
@@ -32,7 +32,7 @@ def test_huge_meshes_are_sampled_in_bounded_memory(size_m, caplog):
     mesh = trimesh.creation.box((size_m,) * 3)
     tracemalloc.start()
     try:
-        with caplog.at_level(logging.WARNING, logger="affordgrasp.grasp.surface"):
+        with caplog.at_level(logging.WARNING, logger="affordgrasp.objects.surface"):
             s = sample_surface(mesh, max_points=50_000)
         peak = tracemalloc.get_traced_memory()[1]
     finally:

@@ -19,7 +19,7 @@ package ships (conventions: Metrics, U_g):
 For each threshold candidate the balanced accuracy (mean of the edge pass rate and the
 other fail rate) is computed; the printed recommendation is the best one, rounded.
 
-Run: ``python benchmarks/calibrate_use_edge.py [--seeds 6] [--rays 300] [--json]``.
+Run: ``python studies/calibrate_use_edge.py [--seeds 6] [--rays 300] [--json]``.
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
 """Learning curve: held-out scores against the amount of training data.
 
-    python benchmarks/learning_curve.py --data DATA --out DIR
-    python benchmarks/learning_curve.py --data DATA --out DIR --points none   # table + fit
+    python studies/learning_curve.py --data DATA --out DIR
+    python studies/learning_curve.py --data DATA --out DIR --points none   # table + fit
 
-The shipped regressor's recipe (``train_default_models.py``: CNN on canonicalised depth,
+The shipped regressor's recipe (``tools/train_default_models.py``: CNN on canonicalised depth,
 ranking loss, ≤ 20 epochs with early stopping, the still-viable of 3 perturbed copies of
 each viable training grasp, σ 0.02; one network, ``--seed``) is trained on nested subsets
 of the training data and scored on the split's held-out test objects, always the same
@@ -30,6 +30,9 @@ least-squares fit of comparison accuracy against log(training rows), with the ro
 uniform samples and CPU-hours of simulation it would take to reach ``--goal`` if the trend
 held, are printed from every file in DIR. ``--rate-file`` names a JSON with the measured
 simulation cost (``cpu_s_per_sample``, from generating samples with depth) for the last.
+
+The subsets, the fit and the settings check are :mod:`affordgrasp.learning.curve`; the
+perturbed copies :mod:`affordgrasp.learning.augment`.
 """
 
 from __future__ import annotations
@@ -41,41 +44,18 @@ import time
 from pathlib import Path
 
 import numpy as np
-from more_viable_rows import concatenate, perturbed_rows
+
+from affordgrasp.errors import InputError
+from affordgrasp.learning.augment import concatenate_samples, perturbed_rows
+from affordgrasp.learning.curve import (
+    check_settings,
+    curve_settings,
+    fit_log_trend,
+    keep_mask,
+    object_order,
+)
 
 DEFAULT_POINTS = "objects:0.25,objects:0.5,samples:0.25,samples:0.5,all"
-
-
-def object_order(objects, families, seed: int) -> list[str]:
-    """Training objects, one of every family in turn (seeded)."""
-    rng = np.random.default_rng(seed)
-    by_family: dict[str, list[str]] = {}
-    for name, fam in sorted(set(zip(objects, families, strict=True))):
-        by_family.setdefault(fam, []).append(name)
-    fams = [str(f) for f in rng.permutation(sorted(by_family))]
-    queues = {f: [str(o) for o in rng.permutation(by_family[f])] for f in fams}
-    order = []
-    while any(queues.values()):
-        for f in fams:
-            if queues[f]:
-                order.append(queues[f].pop(0))
-    return order
-
-
-def keep_mask(samples, point: str, order: list[str], per_object: int) -> np.ndarray:
-    """Rows of the training samples that a point keeps."""
-    if point == "all":
-        return np.ones(len(samples.object), bool)
-    kind, _, frac = point.partition(":")
-    f = float(frac)
-    if not 0 < f <= (math.inf if kind == "samples" else 1):
-        raise SystemExit(f"point {point!r}: the fraction must be in (0, 1] (samples: > 0)")
-    if kind == "objects":
-        n = max(1, round(f * len(order)))
-        return np.isin(samples.object, order[:n])
-    if kind == "samples":
-        return samples.sample < round(f * per_object)
-    raise SystemExit(f"unknown point {point!r}; use objects:F, samples:F or all")
 
 
 def copies_of(train, out: Path, copies: int, sigma: float, chunk: int):
@@ -116,7 +96,7 @@ def copies_of(train, out: Path, copies: int, sigma: float, chunk: int):
         "cpu_s": time.process_time() - cpu,
         "wall_s": time.perf_counter() - wall,
     }
-    rows = concatenate(parts, train.meta)
+    rows = concatenate_samples(parts, train.meta)
     origin = np.concatenate(sources)
     np.savez_compressed(
         cache,
@@ -270,7 +250,7 @@ def run_point(args, model_kind: str, point: str, cache: dict) -> dict:
             result["copies_simulated"] = int(keep.sum()) * args.copies
             result["copies_viable"] = int(sum(len(p) for p in parts[1:]))
             result["copies_cpu_s_per_copy"] = cpu / tried if tried else float("nan")
-        prepared = (concatenate(parts, train.meta), val, test, target, sp)
+        prepared = (concatenate_samples(parts, train.meta), val, test, target, sp)
     else:
         if base != per_object:
             raise SystemExit("the classifier's points need --base-samples = the dataset's samples")
@@ -278,40 +258,6 @@ def run_point(args, model_kind: str, point: str, cache: dict) -> dict:
         result["train_positives"] = int((prepared[0].y > 0.5).sum())
     result.update(train_point(model_kind, prepared, args.data, args.seed))
     return result
-
-
-def fit(points: list[dict], goal: float) -> dict | None:
-    """comparison = a + b·ln(rows): least squares, standard errors, rows to reach the goal."""
-    x = np.log([p["train_rows"] for p in points])
-    y = np.array([p["comparison_accuracy"] for p in points])
-    n = len(x)
-    if n < 3 or np.ptp(x) == 0:
-        return None
-    xm, ym = x.mean(), y.mean()
-    sxx = float(((x - xm) ** 2).sum())
-    b = float(((x - xm) * (y - ym)).sum() / sxx)
-    resid = y - (ym + b * (x - xm))
-    s = math.sqrt(float((resid**2).sum()) / (n - 2))
-    se_b, se_mean = s / math.sqrt(sxx), s / math.sqrt(n)
-
-    def rows_for(slope: float) -> float:
-        if slope <= 0:
-            return math.inf
-        exponent = xm + (goal - ym) / slope
-        # A nearly flat curve puts the goal beyond any float: never reached, not an overflow.
-        return math.exp(exponent) if exponent < 700.0 else math.inf
-
-    return {
-        "n": n,
-        "slope_per_ln_rows": b,
-        "slope_se": se_b,
-        "per_doubling": b * math.log(2),
-        "residual_sd": s,
-        "mean_se": se_mean,
-        "rows_for_goal": rows_for(b),
-        "rows_for_goal_slope_plus_se": rows_for(b + se_b),
-        "rows_for_goal_slope_minus_se": rows_for(b - se_b),
-    }
 
 
 def summarise(out: Path, goal: float, rate: dict | None) -> None:
@@ -350,7 +296,7 @@ def summarise(out: Path, goal: float, rate: dict | None) -> None:
         full = [r for r in reg if r["point"] == "all"]
         seeds = ",".join(str(k) for k in sorted({r["seed"] for r in reg}))
         for name, pts in curves.items():
-            f = fit(pts, goal)
+            f = fit_log_trend(pts, goal)
             if f is None:
                 continue
             print(
@@ -384,26 +330,6 @@ def cost(full: dict, f: dict, rate: dict) -> None:
         )
 
 
-def run_settings(args) -> dict:
-    """What a point's result depends on besides its file name (model, copies, seed, point)."""
-    return {
-        "data": str(Path(args.data).resolve()),
-        "order_seed": args.order_seed,
-        "sigma": args.sigma,
-        "base_samples": args.base_samples,
-    }
-
-
-def check_settings(path: Path, settings: dict) -> None:
-    """Refuse to reuse a finished point measured with other settings (a resumed run is fine)."""
-    stored = json.loads(path.read_text()).get("settings")
-    if stored != settings:
-        raise SystemExit(
-            f"{path} was measured with {stored}, not {settings}: use another --out, "
-            "or delete that file to measure it again"
-        )
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True, help="the shipped models' dataset")
@@ -432,7 +358,7 @@ def main() -> None:
         ["classifier"] if args.classifier else []
     )
     points = [] if args.points == "none" else args.points.split(",")
-    settings = run_settings(args)
+    settings = curve_settings(args.data, args.order_seed, args.sigma, args.base_samples)
     cache: dict = {}
     for kind in kinds:
         for point in points:
@@ -451,4 +377,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except InputError as exc:
+        raise SystemExit(f"learning_curve.py: error: {exc}") from None

@@ -1,16 +1,17 @@
 """Do more viable rows per training object help the ΣE_h regressor on held-out objects?
 
-    python benchmarks/more_viable_rows.py --data DATA --copies 3 --sigma 0.02 --epochs 20
+    python studies/more_viable_rows.py --data DATA --copies 3 --sigma 0.02 --epochs 20
 
 Uniform sampling finds few viable grasps (5.8 % on the shipped models' dataset, ~90 per
 training object), and ΣE_h is rough in the pregrasp (``target_roughness.py``). This adds
 rows where they are cheap to find: each viable training grasp is perturbed ``--copies``
 times by Gaussian noise of standard deviation σ in p0 (p0's own units, clipped; the use
 direction kept) and simulated again; the copies that stay viable join the training rows,
-with their depth images rendered. The test objects are the split's held-out objects, as
-in ``bench_learning.py``; nothing of them is simulated again. The same recipe (CNN,
-ranking loss, canonical depth, seed 0) is trained on the original rows and on the
-augmented rows and both are scored on the same test rows.
+with their depth images rendered (:mod:`affordgrasp.learning.augment`). The test objects
+are the split's held-out objects, as in ``benchmarks/bench_learning.py``; nothing of them
+is simulated again. The same recipe (CNN, ranking loss, canonical depth, seed 0) is
+trained on the original rows and on the augmented rows and both are scored on the same
+test rows.
 """
 
 from __future__ import annotations
@@ -22,70 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def perturbed_rows(train, *, copies: int, sigma: float, seed: int, origins: bool = False):
-    """Viable re-simulations of the training rows' perturbed pregrasps, as Samples.
-
-    Returns the parts (one Samples per object with viable copies) and the number of copies
-    simulated; with ``origins``, also each part's row numbers in ``train`` (the grasp each
-    copy perturbs).
-    """
-    from affordgrasp.learning.data import Samples
-    from affordgrasp.learning.targets import target_values
-    from affordgrasp.objects import load_object
-    from affordgrasp.pipeline import evaluate_inputs
-    from affordgrasp.tasks import MetricColumns, is_viable
-    from affordgrasp.vision import depth_to_mm, renderer_for
-
-    rng = np.random.default_rng(seed)
-    parts = []
-    sources = []
-    tried = 0
-    for name in sorted(set(train.object)):
-        rows = np.flatnonzero(train.object == name)
-        p0 = np.repeat(train.p0[rows], copies, axis=0)
-        use = np.repeat(train.use_dir[rows], copies, axis=0)
-        q = p0 + rng.normal(0.0, sigma, p0.shape)
-        q[:, :5] = np.clip(q[:, :5], -1.0, 1.0)
-        q[:, 5] = np.clip(q[:, 5], 0.0, 1.0)
-        table = evaluate_inputs(name, q, use).table
-        ok = is_viable(MetricColumns(table))
-        tried += len(q)
-        if not ok.any():
-            continue
-        y = target_values("hold_effort_sum", table)[ok]
-        images = depth_to_mm(renderer_for(load_object(name)).render(q[ok]))
-        sources.append(np.repeat(rows, copies)[ok])
-        parts.append(
-            Samples(
-                np.full(int(ok.sum()), name, dtype=object),
-                np.full(int(ok.sum()), train.family[rows[0]], dtype=object),
-                np.full(int(ok.sum()), -1, dtype=np.int64),
-                q[ok],
-                use[ok],
-                y,
-                images,
-                dict(train.meta),
-            )
-        )
-    if origins:
-        return parts, tried, sources
-    return parts, tried
-
-
-def concatenate(parts, meta):
-    from affordgrasp.learning.data import Samples
-
-    if not parts:
-        raise SystemExit("no perturbed copy was viable: nothing to add (try a smaller --sigma)")
-    return Samples(
-        *(
-            np.concatenate([getattr(p, f) for p in parts])
-            for f in Samples.__dataclass_fields__
-            if f not in ("meta",)
-        ),
-        meta=dict(meta),
-    )
+from affordgrasp.learning.augment import concatenate_samples, perturbed_rows
 
 
 def within_objects(truth, scores, objects):
@@ -128,7 +66,7 @@ def main() -> None:
         f"{sim_cpu:.0f} CPU-s",
         flush=True,
     )
-    augmented = concatenate([train, *extra], train.meta)
+    augmented = concatenate_samples([train, *extra], train.meta)
     results = {"sigma": args.sigma, "copies": args.copies, "rows": {}, "simulation_cpu_s": sim_cpu}
     truth = test.y
     for label, rows in (("original", train), ("augmented", augmented)):

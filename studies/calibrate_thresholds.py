@@ -21,7 +21,7 @@ normalised ε at which 5 % of the uniform samples are viable (the paper: 20 M of
 with E_i < 1e5 N per N·m (the paper's 100 per N·mm) and ΣE_h < 250 N per N; the task
 thresholds keep the paper's ratios, default = 2 × and extra robustness = 10/3 × that value.
 
-Run: ``python benchmarks/epsilon_scale.py DATASET [--json]`` where DATASET was written by
+Run: ``python studies/calibrate_thresholds.py DATASET [--json]`` where DATASET was written by
 ``affordgrasp generate <families> --samples 4000 --seed 0``.
 """
 

@@ -1,6 +1,6 @@
 """How rough is ΣE_h in the pregrasp? The ceiling it sets on any learned ranking.
 
-    python benchmarks/target_roughness.py --data DATA --objects axe:2 bottle:2 mug:1
+    python studies/target_roughness.py --data DATA --objects axe:2 bottle:2 mug:1
 
 For the viable grasps of each object of a generated dataset, the pregrasp p0 is perturbed
 by Gaussian noise of standard deviation σ (in p0's own units: [-1, 1] for u1..u5, [0, 1]

@@ -1,6 +1,6 @@
 """Which force-closure grasps does the squeeze eject, and which protocol constant moves it?
 
-    python benchmarks/physics_ejection.py DATASET OUTCOMES [--variant NAME=JSON ...]
+    python studies/physics_ejection.py DATASET OUTCOMES [--variant NAME=JSON ...]
                                           [--every N] [--normals]
 
 DATASET is a directory written by ``affordgrasp generate``; OUTCOMES a physics run of it

@@ -2,7 +2,7 @@
 
 One command, deterministic (seed 0, one torch thread):
 
-    python benchmarks/train_default_models.py --data /tmp/affordgrasp-train65
+    python tools/train_default_models.py --data /tmp/affordgrasp-train65
 
 1. generates (or resumes) the training dataset: 13 families x 5 instances (variants 0-4) x
    1500 uniform samples, seed 0, with depth images (16 min on 2 shared cores);
@@ -11,7 +11,7 @@ One command, deterministic (seed 0, one torch thread):
 3. trains the CNN classifier (target ``viable``, balanced) and the CNN regressor (target
    ``hold_effort_sum`` on viable grasps, normalised from [0, 250]; an ensemble of 3
    networks, trained on the viable training grasps plus the still-viable of 3 perturbed
-   copies of each, simulated again: ``more_viable_rows.py``) and writes them to
+   copies of each, simulated again: :mod:`affordgrasp.learning.augment`) and writes them to
    ``src/affordgrasp/learning/pretrained/`` (or ``--out``; ``--models regressor`` rebuilds
    one).
 
@@ -53,7 +53,7 @@ REGRESSOR = {
     "arch": "cnn",
     "target": "hold_effort_sum",
     "rank_weight": 1.0,
-    # more viable rows near the viable training grasps (benchmarks/more_viable_rows.py):
+    # more viable rows near the viable training grasps (affordgrasp.learning.augment):
     # each perturbed 3 times (σ 0.02 in p0's units, seed 0) and simulated again
     "more_viable": {"copies": 3, "sigma": 0.02, "seed": 0},
     "epochs": 20,
@@ -89,7 +89,7 @@ def ship(path: Path, more_viable: dict | None = None) -> None:
             f"; + the still-viable of {more_viable['copies']} perturbed copies of each viable "
             f"training grasp (sigma {more_viable['sigma']}, seed {more_viable['seed']})"
         )
-    config["training"]["dataset"] = f"{dataset} (benchmarks/train_default_models.py)"
+    config["training"]["dataset"] = f"{dataset} (tools/train_default_models.py)"
     save_model(path, model, config)
 
 
@@ -104,7 +104,7 @@ def train(directory: Path, recipe: dict, out: Path, epochs: int) -> dict:
     prepared = None
     extra = recipe.get("more_viable")
     if extra:
-        from more_viable_rows import concatenate, perturbed_rows
+        from affordgrasp.learning.augment import concatenate_samples, perturbed_rows
 
         rows, val, test, target, split = prepare_split(directory, recipe["target"], seed=0)
         parts, tried = perturbed_rows(
@@ -116,7 +116,7 @@ def train(directory: Path, recipe: dict, out: Path, epochs: int) -> dict:
             f"({time.perf_counter() - started:.0f} s)",
             flush=True,
         )
-        prepared = (concatenate([rows, *parts], rows.meta), val, test, target, split)
+        prepared = (concatenate_samples([rows, *parts], rows.meta), val, test, target, split)
     _, config = train_on_dataset(
         directory,
         arch=recipe["arch"],

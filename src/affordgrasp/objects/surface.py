@@ -3,7 +3,9 @@
 Every vertex, points along every edge and a barycentric lattice inside every triangle, no
 two neighbours farther apart than ``spacing``. Sharp features (edges whose faces meet at
 more than ``SHARP_ANGLE``, and their vertices) are flagged: the object's normal is not
-defined there, so a contact on them takes the link's normal instead (see ``policy``).
+defined there, so a contact on them takes the link's normal instead (see
+:mod:`affordgrasp.grasp.policy`, which hands them to the kernels as a
+:class:`~affordgrasp.grasp.kernels.SampleCloud`).
 
 Because every hand link is rounded by a radius r, a link touching the surface between
 samples can sink into the true mesh by at most about spacing**2 / (4 r): 0.1 mm for the
@@ -18,8 +20,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-
-from .kernels import SampleCloud
 
 if TYPE_CHECKING:
     import trimesh
@@ -68,19 +68,6 @@ class SurfaceSample:
     coarse_start: np.ndarray
     coarse_center: np.ndarray
     coarse_radius: np.ndarray
-
-    @property
-    def cloud(self) -> SampleCloud:
-        """The points and both cell levels as the kernels take them."""
-        return SampleCloud(
-            self.points,
-            self.cell_start,
-            self.cell_center,
-            self.cell_radius,
-            self.coarse_start,
-            self.coarse_center,
-            self.coarse_radius,
-        )
 
 
 def _runs(keys: np.ndarray) -> np.ndarray:

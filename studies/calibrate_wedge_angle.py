@@ -17,7 +17,7 @@ families, with the labels of ``calibrate_use_edge.py``:
   threshold maximises the balanced accuracy on the calibration seeds (crisp and scan-like
   pooled), and the held-out seeds are reported apart, per variant.
 
-Run: ``python benchmarks/calibrate_wedge_angle.py [--seeds 2] [--rays 150] [--json]``.
+Run: ``python studies/calibrate_wedge_angle.py [--seeds 2] [--rays 150] [--json]``.
 """
 
 from __future__ import annotations

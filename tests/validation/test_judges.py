@@ -1,18 +1,11 @@
-"""The judges of benchmarks/validate_tasks.py (docs/validation.md section 5)."""
-
-import importlib.util
-from pathlib import Path
+"""The judges of the paper's validation (docs/validation.md section 5)."""
 
 import numpy as np
 import pyarrow as pa
 import pytest
 
+from affordgrasp import validation as vt
 from affordgrasp.objects import load_object
-
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "validate_tasks.py"
-_SPEC = importlib.util.spec_from_file_location("validate_tasks", _PATH)
-vt = importlib.util.module_from_spec(_SPEC)
-_SPEC.loader.exec_module(vt)
 
 
 @pytest.fixture(scope="module")
@@ -109,18 +102,3 @@ def test_brute_force_on_the_first_grasps_is_the_smaller_brute_force(hammer):
     ok = vt.judge("pick", "hammer", alone.table, hammer.mass.center_of_mass)
     assert first["hits"] == [sum(ok), len(ok)] and first["top1"] == (ok[0] if ok else None)
     assert first["labels"] == first["hits"]  # pick has no head-region rule
-
-
-@pytest.mark.parametrize("also", ["100", "-1"])
-def test_also_grasps_outside_the_brute_force_is_refused(also, tmp_path):
-    import subprocess
-    import sys
-
-    run = subprocess.run(
-        [sys.executable, str(_PATH), "--grasps", "100", "--also-grasps", also]
-        + ["--cache", str(tmp_path / "c"), "--out", str(tmp_path / "o")],
-        capture_output=True,
-        text=True,
-    )
-    assert run.returncode == 2 and "--also-grasps must lie in [0, --grasps)" in run.stderr
-    assert not (tmp_path / "o").exists()
