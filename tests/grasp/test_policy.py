@@ -266,8 +266,10 @@ def test_every_family_no_interpenetration_and_contacts_within_tolerance(family):
 def test_results_do_not_depend_on_where_the_object_sits(offset_m):
     # The simulation runs in a frame centred on the object: a cube 10 m or 1e6 m from its
     # mesh origin gave other contact counts in ~10 % of grasps and moved contacts by up to
-    # 60 mm. What remains is a sample of the surface grid (1.4 mm) flipping on rare
-    # grasps where two samples tie to within the rounding of the input coordinates.
+    # 60 mm. What remains is a sample of the surface grid flipping to a neighbour (1.4 mm
+    # along the grid, 2.0 mm across its diagonal) on rare grasps where two samples tie to
+    # within the rounding of the input coordinates (a cube's face against a flat link:
+    # every sample under the link touches at the same instant).
     from affordgrasp.pipeline import evaluate_samples
 
     def cube_at(offset):
@@ -295,7 +297,7 @@ def test_results_do_not_depend_on_where_the_object_sits(offset_m):
         same_count += 1
         if len(a):
             move = np.linalg.norm(a[:, None] - b[None], axis=2).min(axis=1).max()
-            assert move <= 1.5e-3
+            assert move <= 2.0e-3
     assert same_count >= 0.97 * n
     np.testing.assert_allclose(
         np.array(moved.column("use_point").to_pylist()) - offset,

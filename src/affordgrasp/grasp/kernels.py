@@ -49,6 +49,11 @@ class SampleCloud(NamedTuple):
         Offsets of each fine cell's points.
     cell_center, cell_radius : (c, 3), (c,) float64 ndarray
         A bounding sphere per fine cell, m.
+    cell_normal : (c, 3) float64 ndarray
+        Unit normal of each fine cell's best-fit plane through its centre.
+    cell_slab : (c, 2) float64 ndarray
+        Largest distance of the cell's points from that plane and from the normal line
+        through the centre, m: the points lie in a flat cylinder around the centre.
     coarse_start : (k + 1,) int ndarray
         Offsets of each coarse cell's fine cells.
     coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
@@ -59,6 +64,8 @@ class SampleCloud(NamedTuple):
     cell_start: np.ndarray
     cell_center: np.ndarray
     cell_radius: np.ndarray
+    cell_normal: np.ndarray
+    cell_slab: np.ndarray
     coarse_start: np.ndarray
     coarse_center: np.ndarray
     coarse_radius: np.ndarray
@@ -254,6 +261,48 @@ def sdf_local(x, y, z, kind, hx, hy, hz, r):
     return np.sqrt(ox * ox + oz * oz) + min(max(dr, dz), 0.0) - r
 
 
+@njit(cache=True, inline="always")
+def _sdf_subgradient(x, y, z, kind, hx, hy, hz):
+    """A unit subgradient of :func:`sdf_local` at a point of the shape frame.
+
+    The signed distance to a convex core (a box, a cylinder) is convex, so for every point
+    p: sdf(p) >= sdf(c) + g . (p - c) with g a subgradient at c; outside the core g is the
+    direction from the closest core point, inside it the normal of the nearest face.
+    """
+    if kind == BOX:
+        qx = abs(x) - hx
+        qy = abs(y) - hy
+        qz = abs(z) - hz
+        sx = 1.0 if x >= 0.0 else -1.0
+        sy = 1.0 if y >= 0.0 else -1.0
+        sz = 1.0 if z >= 0.0 else -1.0
+        ox = max(qx, 0.0)
+        oy = max(qy, 0.0)
+        oz = max(qz, 0.0)
+        o = np.sqrt(ox * ox + oy * oy + oz * oz)
+        if o > 0.0:
+            return sx * ox / o, sy * oy / o, sz * oz / o
+        if qx >= qy and qx >= qz:
+            return sx, 0.0, 0.0
+        if qy >= qz:
+            return 0.0, sy, 0.0
+        return 0.0, 0.0, sz
+    rho = np.sqrt(x * x + y * y)
+    dr = rho - hx
+    dz = abs(z) - hz
+    sz = 1.0 if z >= 0.0 else -1.0
+    ux = x / rho if rho > 0.0 else 1.0
+    uy = y / rho if rho > 0.0 else 0.0
+    orr = max(dr, 0.0)
+    oz = max(dz, 0.0)
+    o = np.sqrt(orr * orr + oz * oz)
+    if o > 0.0:
+        return ux * orr / o, uy * orr / o, sz * oz / o
+    if dr >= dz:
+        return ux, uy, 0.0
+    return 0.0, 0.0, sz
+
+
 @njit(cache=True)
 def sdf_at(px, py, pz, poses, s, kinds, halves, radii):
     """Signed distance of a hand-frame point to shape ``s`` of a set of shapes.
@@ -287,6 +336,51 @@ def sdf_at(px, py, pz, poses, s, kinds, halves, radii):
     y = poses[s, 0, 1] * dx + poses[s, 1, 1] * dy + poses[s, 2, 1] * dz
     z = poses[s, 0, 2] * dx + poses[s, 1, 2] * dy + poses[s, 2, 2] * dz
     return sdf_local(x, y, z, kinds[s], halves[s, 0], halves[s, 1], halves[s, 2], radii[s])
+
+
+@njit(cache=True, inline="always")
+def flat_cell_sdf_at(px, py, pz, poses, s, kinds, halves, radii, nx, ny, nz, thick, spread,
+                     radius):  # fmt: skip
+    """A lower bound on the signed distance of every point of a flat cell to shape ``s``.
+
+    The cell's points lie within ``thick`` of the plane through the hand-frame point p with
+    unit normal n, within ``spread`` of the normal line and within ``radius`` of p. The
+    shape's signed distance is convex (:func:`_sdf_subgradient`), so every point is at
+    least sdf(p) - (|g.n| thick + |g_t| spread) from it, g its subgradient at p; never
+    below the sphere's sdf(p) - radius.
+
+    Parameters
+    ----------
+    px, py, pz : float
+        The cell's centre, hand frame, m.
+    poses, s, kinds, halves, radii
+        As for :func:`sdf_at`.
+    nx, ny, nz : float
+        The cell plane's unit normal, hand frame.
+    thick, spread, radius : float
+        m.
+
+    Returns
+    -------
+    float
+        m.
+    """
+    dx = px - poses[s, 0, 3]
+    dy = py - poses[s, 1, 3]
+    dz = pz - poses[s, 2, 3]
+    x = poses[s, 0, 0] * dx + poses[s, 1, 0] * dy + poses[s, 2, 0] * dz
+    y = poses[s, 0, 1] * dx + poses[s, 1, 1] * dy + poses[s, 2, 1] * dz
+    z = poses[s, 0, 2] * dx + poses[s, 1, 2] * dy + poses[s, 2, 2] * dz
+    kind = kinds[s]
+    d = sdf_local(x, y, z, kind, halves[s, 0], halves[s, 1], halves[s, 2], radii[s])
+    gx, gy, gz = _sdf_subgradient(x, y, z, kind, halves[s, 0], halves[s, 1], halves[s, 2])
+    gn = abs(
+        gx * (poses[s, 0, 0] * nx + poses[s, 1, 0] * ny + poses[s, 2, 0] * nz)
+        + gy * (poses[s, 0, 1] * nx + poses[s, 1, 1] * ny + poses[s, 2, 1] * nz)
+        + gz * (poses[s, 0, 2] * nx + poses[s, 1, 2] * ny + poses[s, 2, 2] * nz)
+    )
+    gn = min(gn, 1.0)
+    return d - min(gn * thick + np.sqrt(1.0 - gn * gn) * spread, radius)
 
 
 @njit(cache=True)
@@ -357,6 +451,14 @@ def _to_hand(points, i, rot, trans, out):
     out[0] = dx * rot[0, 0] + dy * rot[1, 0] + dz * rot[2, 0]
     out[1] = dx * rot[0, 1] + dy * rot[1, 1] + dz * rot[2, 1]
     out[2] = dx * rot[0, 2] + dy * rot[1, 2] + dz * rot[2, 2]
+
+
+@njit(cache=True)
+def _to_hand_direction(vectors, i, rot, out):
+    """out = vectors[i] @ rot: an object-frame direction in the hand frame."""
+    out[0] = vectors[i, 0] * rot[0, 0] + vectors[i, 1] * rot[1, 0] + vectors[i, 2] * rot[2, 0]
+    out[1] = vectors[i, 0] * rot[0, 1] + vectors[i, 1] * rot[1, 1] + vectors[i, 2] * rot[2, 1]
+    out[2] = vectors[i, 0] * rot[0, 2] + vectors[i, 1] * rot[1, 2] + vectors[i, 2] * rot[2, 2]
 
 
 @njit(cache=True)
@@ -459,7 +561,8 @@ def _chain_frames(chain, s_max):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
+def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, ny, nz, thick,
+                 spread):  # fmt: skip
     """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
@@ -480,12 +583,24 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
     trig : (m, 2) float64 ndarray
         cos and sin of each joint's value at s (:func:`_set_trig`): many queries in a row
         share their s (the children of a cell), so the search computes them once per s.
+    flat : bool
+        The point is the centre of a fine cell whose points lie within ``thick`` of the
+        plane through it with hand-frame unit normal (nx, ny, nz) and within ``spread`` of
+        the normal line: the distance returned is then a lower bound on every point's,
+        per shape sdf(c) - (|g.n| thick + |g_t| spread) with g the shape's subgradient at c
+        (convexity, see :func:`_sdf_subgradient`), never below the sphere's sdf(c) - grow.
+        Several times tighter than the sphere where a link faces a flat patch, which then
+        opens later or not at all. False (a literal at every call): a point or a sphere,
+        and the normal's arithmetic is compiled away.
     returns : (smallest distance, its shape, the safe step in s)
     """
     ib = frames.inv_base
     x = ib[0, 0] * px + ib[0, 1] * py + ib[0, 2] * pz + ib[0, 3]
     y = ib[1, 0] * px + ib[1, 1] * py + ib[1, 2] * pz + ib[1, 3]
     z = ib[2, 0] * px + ib[2, 1] * py + ib[2, 2] * pz + ib[2, 3]
+    vx = ib[0, 0] * nx + ib[0, 1] * ny + ib[0, 2] * nz
+    vy = ib[1, 0] * nx + ib[1, 1] * ny + ib[1, 2] * nz
+    vz = ib[2, 0] * nx + ib[2, 1] * ny + ib[2, 2] * nz
     d_min = np.inf
     q_min = -1
     step = np.inf
@@ -502,6 +617,12 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
             io[j, 1, 0] * x + io[j, 1, 1] * y + io[j, 1, 2] * z + io[j, 1, 3],
             io[j, 2, 0] * x + io[j, 2, 1] * y + io[j, 2, 2] * z + io[j, 2, 3],
         )
+        if flat:
+            vx, vy, vz = (
+                io[j, 0, 0] * vx + io[j, 0, 1] * vy + io[j, 0, 2] * vz,
+                io[j, 1, 0] * vx + io[j, 1, 1] * vy + io[j, 1, 2] * vz,
+                io[j, 2, 0] * vx + io[j, 2, 1] * vy + io[j, 2, 2] * vz,
+            )
         q = chain.q0[j] + chain.speeds[j] * s
         ax = chain.axes[j, 0]
         ay = chain.axes[j, 1]
@@ -523,6 +644,13 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
             cz = ax * y - ay * x
             x, y, z = (x * c - cx * sn + ax * dot, y * c - cy * sn + ay * dot,
                        z * c - cz * sn + az * dot)  # fmt: skip
+            if flat:
+                dot = (ax * vx + ay * vy + az * vz) * (1.0 - c)
+                cx = ay * vz - az * vy
+                cy = az * vx - ax * vz
+                cz = ax * vy - ay * vx
+                vx, vy, vz = (vx * c - cx * sn + ax * dot, vy * c - cy * sn + ay * dot,
+                              vz * c - cz * sn + az * dot)  # fmt: skip
             bound += abs(chain.speeds[j]) * (r + frames.chain_len[j])
         else:
             x -= ax * q
@@ -538,6 +666,16 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig):
             lz = it[sq, 2, 0] * x + it[sq, 2, 1] * y + it[sq, 2, 2] * z + it[sq, 2, 3]
             d = sdf_local(lx, ly, lz, shapes.kinds[sq], halves[sq, 0], halves[sq, 1],
                           halves[sq, 2], shapes.radii[sq])  # fmt: skip
+            if flat:
+                gx, gy, gz = _sdf_subgradient(lx, ly, lz, shapes.kinds[sq], halves[sq, 0],
+                                              halves[sq, 1], halves[sq, 2])  # fmt: skip
+                gn = abs(
+                    gx * (it[sq, 0, 0] * vx + it[sq, 0, 1] * vy + it[sq, 0, 2] * vz)
+                    + gy * (it[sq, 1, 0] * vx + it[sq, 1, 1] * vy + it[sq, 1, 2] * vz)
+                    + gz * (it[sq, 2, 0] * vx + it[sq, 2, 1] * vy + it[sq, 2, 2] * vz)
+                )
+                gn = min(gn, 1.0)
+                d -= min(gn * thick + np.sqrt(1.0 - gn * gn) * spread, grow)
             d_joint = min(d_joint, d)
             if d < d_min:
                 d_min = d
@@ -670,7 +808,7 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
             else:
                 _set_trig(mid, chain, trig)
                 dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps, 0.0,
-                                        trig)  # fmt: skip
+                                        trig, False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
             if dm <= hit_eps:
                 hi = mid
             else:
@@ -682,7 +820,7 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
                 counts[REFINE_QUERIES] += 1
                 _set_trig(hi, chain, trig)
                 _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps, 0.0,
-                                          trig)  # fmt: skip
+                                          trig, False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
             first = hi
             first_p = i
             first_q = q_hi
@@ -866,7 +1004,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             continue
         counts[QUERIES] += 1
         _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
-                                  margin + radius, radius, trig)  # fmt: skip
+                                  margin + radius, radius, trig, False, 0.0, 0.0, 0.0, 0.0,
+                                  0.0)  # fmt: skip
         if step < s_max:
             counts[PUSHES] += 1
             size = _heap_push(heap_key, heap_ident, heap_prev, size, step, code * slots, 0.0)
@@ -874,6 +1013,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     hits = np.empty((64, 4))
     nh = 0
     ph = np.empty(3)
+    nh_dir = np.empty(3)
     for _ in range(100_000_000):
         if n_stack > 0:
             n_stack -= 1
@@ -904,17 +1044,44 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 _to_hand(cloud.cell_center, c, rot, trans, ph)
             counts[QUERIES] += 1
             if translation:
-                d = _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move) - radius
+                if coarse:
+                    d = (
+                        _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move)
+                        - radius
+                    )
+                else:
+                    # a fine cell: a flat cylinder (see flat_cell_sdf_at); a translation
+                    # moves the point, not the direction
+                    _to_hand_direction(cloud.cell_normal, c, rot, nh_dir)
+                    d = flat_cell_sdf_at(ph[0] - a_move[0] * s, ph[1] - a_move[1] * s,
+                                         ph[2] - a_move[2] * s, shape_buf, q, shapes.kinds,
+                                         shapes.halves, shapes.radii, nh_dir[0], nh_dir[1],
+                                         nh_dir[2], cloud.cell_slab[c, 0],
+                                         cloud.cell_slab[c, 1], radius)  # fmt: skip
                 touching = d <= hit_eps
                 nxt = s + d - margin
-            else:
+            elif coarse:
                 dx = ph[0] - o0[0]
                 dy = ph[1] - o0[1]
                 dz = ph[2] - o0[2]
                 r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
                 d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames,
-                                          margin + radius, radius, trig)  # fmt: skip
+                                          margin + radius, radius, trig, False, 0.0, 0.0, 0.0,
+                                          0.0, 0.0)  # fmt: skip
                 touching = d - radius <= hit_eps
+                nxt = s + step
+            else:
+                # a fine cell: its points lie in a flat cylinder (see _chain_touch's flat)
+                dx = ph[0] - o0[0]
+                dy = ph[1] - o0[1]
+                dz = ph[2] - o0[2]
+                r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
+                _to_hand_direction(cloud.cell_normal, c, rot, nh_dir)
+                d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin,
+                                          radius, trig, True, nh_dir[0], nh_dir[1], nh_dir[2],
+                                          cloud.cell_slab[c, 0],
+                                          cloud.cell_slab[c, 1])  # fmt: skip
+                touching = d <= hit_eps
                 nxt = s + step
             if touching:
                 # Everything inside is still clear at s_prev and goes on from s, one level
@@ -965,15 +1132,16 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz)
-            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, 0.0, trig)
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, 0.0, trig,
+                                      False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
             pressing = False
             if d <= hit_eps:
                 counts[QUERIES] += 1
                 s_probe = s + PROBE
                 _set_trig(s_probe, chain, trig_probe)
-                d_next, _, _ = _chain_touch(
-                    ph[0], ph[1], ph[2], s_probe, r, chain, frames, margin, 0.0, trig_probe
-                )
+                d_next, _, _ = _chain_touch(ph[0], ph[1], ph[2], s_probe, r, chain, frames,
+                                            margin, 0.0, trig_probe, False, 0.0, 0.0, 0.0, 0.0,
+                                            0.0)  # fmt: skip
                 pressing = d_next < d
             # A point inside the hit level that is not pressed (receding or sliding) has no
             # safe step from its distance; it moves on by a small fixed one (a few µm of
@@ -1407,6 +1575,7 @@ def touching_points(cloud, rot, trans, shapes, tol):
         rho[s] = _bounding_radius(kinds[s], halves[s], radii[s]) + tol
     tmp = np.empty(3)
     ph = np.empty(3)
+    normal = np.empty(3)
     for kk in range(coarse_center.shape[0]):
         _to_hand(coarse_center, kk, rot, trans, tmp)
         near = False
@@ -1422,6 +1591,7 @@ def touching_points(cloud, rot, trans, shapes, tol):
             continue
         for c in range(coarse_start[kk], coarse_start[kk + 1]):
             _to_hand(cell_center, c, rot, trans, tmp)
+            _to_hand_direction(cloud.cell_normal, c, rot, normal)
             for s in range(ns):
                 dx = tmp[0] - poses[s, 0, 3]
                 dy = tmp[1] - poses[s, 1, 3]
@@ -1429,8 +1599,10 @@ def touching_points(cloud, rot, trans, shapes, tol):
                 rr = rho[s] + cell_radius[c]
                 if dx * dx + dy * dy + dz * dz > rr * rr:
                     continue
-                dc = sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii)
-                if dc - cell_radius[c] > tol:
+                dc = flat_cell_sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii,
+                                      normal[0], normal[1], normal[2], cloud.cell_slab[c, 0],
+                                      cloud.cell_slab[c, 1], cell_radius[c])  # fmt: skip
+                if dc > tol:
                     continue
                 for i in range(cell_start[c], cell_start[c + 1]):
                     _to_hand(points, i, rot, trans, ph)

@@ -438,6 +438,8 @@ def sample_cloud(samples: SurfaceSample) -> kernels.SampleCloud:
         samples.cell_start,
         samples.cell_center,
         samples.cell_radius,
+        samples.cell_normal,
+        samples.cell_slab,
         samples.coarse_start,
         samples.coarse_center,
         samples.coarse_radius,

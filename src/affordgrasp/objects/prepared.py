@@ -219,6 +219,8 @@ _SAMPLE_FIELDS = (
     "cell_start",
     "cell_center",
     "cell_radius",
+    "cell_normal",
+    "cell_slab",
     "coarse_start",
     "coarse_center",
     "coarse_radius",

@@ -52,6 +52,10 @@ class SurfaceSample:
         Offsets of each fine cell's points.
     cell_center, cell_radius : (c, 3), (c,) float64 ndarray
         A bounding sphere of each fine cell's points, m.
+    cell_normal, cell_slab : (c, 3), (c, 2) float64 ndarray
+        Each fine cell's best-fit plane through its centre (unit normal) and the largest
+        distances of its points from that plane and from the normal line, m (see
+        :func:`group_into_cells`).
     coarse_start : (k + 1,) int ndarray
         Offsets of each coarse cell's (3 x 3 x 3) fine cells.
     coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
@@ -65,6 +69,8 @@ class SurfaceSample:
     cell_start: np.ndarray
     cell_center: np.ndarray
     cell_radius: np.ndarray
+    cell_normal: np.ndarray
+    cell_slab: np.ndarray
     coarse_start: np.ndarray
     coarse_center: np.ndarray
     coarse_radius: np.ndarray
@@ -85,6 +91,24 @@ def _spheres(p: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return center, np.maximum.reduceat(dist, start[:-1]) + 1e-9
 
 
+def _slabs(p: np.ndarray, start: np.ndarray, center: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each cell's best-fit plane through ``center`` (the normal: the covariance's
+    eigenvector of the smallest eigenvalue) and the largest distances of its points from
+    the plane and from the normal line (plus 1 nm, as the spheres), (c, 3) and (c, 2)."""
+    counts = np.diff(start)
+    owner = np.repeat(np.arange(len(counts)), counts)
+    q = p - center[owner]
+    cov = np.add.reduceat(q[:, :, None] * q[:, None, :], start[:-1], axis=0)
+    normal = np.ascontiguousarray(np.linalg.eigh(cov)[1][:, :, 0])
+    along = np.sum(q * normal[owner], axis=1)
+    across = np.linalg.norm(q - along[:, None] * normal[owner], axis=1)
+    slab = np.stack(
+        [np.maximum.reduceat(np.abs(along), start[:-1]), np.maximum.reduceat(across, start[:-1])],
+        axis=1,
+    )
+    return normal, slab + 1e-9
+
+
 def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     """Order of the points by coarse then fine cell, and both levels' offsets and spheres.
 
@@ -99,7 +123,11 @@ def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     -------
     order : (n,) int ndarray
     fine : tuple
-        (start, center, radius) of the fine cells.
+        (start, center, radius, normal, slab) of the fine cells: a bounding sphere, and a
+        flat cylinder around the same centre (the best-fit plane's unit normal, the points'
+        largest distances from the plane and from the normal line). A fine cell of a
+        surface is nearly flat: the contact search bounds its points' distance to a link
+        through the cylinder, several times tighter than through the sphere.
     coarse : tuple
         (start into the fine cells, center, radius) of the coarse cells.
     """
@@ -110,12 +138,13 @@ def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     p = points[order]
     fine_start = _runs(np.concatenate([coarse[order], fine[order]], axis=1))
     fine_center, fine_radius = _spheres(p, fine_start)
+    fine_normal, fine_slab = _slabs(p, fine_start, fine_center)
     coarse_of_fine = coarse[order][fine_start[:-1]]
     coarse_runs = _runs(coarse_of_fine)
     coarse_center, coarse_radius = _spheres(p, fine_start[coarse_runs])
     return (
         order,
-        (fine_start, fine_center, fine_radius),
+        (fine_start, fine_center, fine_radius, fine_normal, fine_slab),
         (coarse_runs, coarse_center, coarse_radius),
     )
 
