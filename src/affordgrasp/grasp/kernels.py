@@ -221,6 +221,11 @@ PUSHES = 1
 QUERIES = 2
 REFINE_QUERIES = 3
 N_COUNTS = 4
+# A fine cell thinner than this fraction of its radius across its best-fit plane is bounded
+# by that plane's flat cylinder (flat_cell_sdf_at), a thicker one (a thin wall's two sides
+# in one cell, a sharp bend) by its sphere: there the cylinder is hardly tighter and costs a
+# subgradient per query.
+FLAT_CELL = 0.4
 
 
 @njit(cache=True, fastmath=False)
@@ -1044,7 +1049,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 _to_hand(cloud.cell_center, c, rot, trans, ph)
             counts[QUERIES] += 1
             if translation:
-                if coarse:
+                if coarse or cloud.cell_slab[c, 0] >= FLAT_CELL * radius:
                     d = (
                         _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move)
                         - radius
@@ -1060,7 +1065,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                                          cloud.cell_slab[c, 1], radius)  # fmt: skip
                 touching = d <= hit_eps
                 nxt = s + d - margin
-            elif coarse:
+            elif coarse or cloud.cell_slab[c, 0] >= FLAT_CELL * radius:
                 dx = ph[0] - o0[0]
                 dy = ph[1] - o0[1]
                 dz = ph[2] - o0[2]
@@ -1599,9 +1604,14 @@ def touching_points(cloud, rot, trans, shapes, tol):
                 rr = rho[s] + cell_radius[c]
                 if dx * dx + dy * dy + dz * dz > rr * rr:
                     continue
-                dc = flat_cell_sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii,
-                                      normal[0], normal[1], normal[2], cloud.cell_slab[c, 0],
-                                      cloud.cell_slab[c, 1], cell_radius[c])  # fmt: skip
+                if cloud.cell_slab[c, 0] < FLAT_CELL * cell_radius[c]:
+                    dc = flat_cell_sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves,
+                                          radii, normal[0], normal[1], normal[2],
+                                          cloud.cell_slab[c, 0], cloud.cell_slab[c, 1],
+                                          cell_radius[c])  # fmt: skip
+                else:
+                    dc = sdf_at(tmp[0], tmp[1], tmp[2], poses, s, kinds, halves, radii)
+                    dc -= cell_radius[c]
                 if dc > tol:
                     continue
                 for i in range(cell_start[c], cell_start[c + 1]):
