@@ -127,7 +127,8 @@ def check_dataset_robust(directory, k: int) -> bool:
     """
     from pathlib import Path
 
-    from ..dataset.layout import MANIFEST_NAME, read_manifest
+    from ..dataset.handle import Dataset
+    from ..dataset.layout import MANIFEST_NAME
     from ..errors import InputError
 
     if k < 0:
@@ -137,7 +138,8 @@ def check_dataset_robust(directory, k: int) -> bool:
     manifest_path = Path(directory).expanduser() / MANIFEST_NAME
     if not manifest_path.exists():
         return True  # a folder of evaluated tables: its rows must carry the robust columns
-    there = (read_manifest(directory).get("robust") or {}).get("copies", 0)
+    settings = Dataset.open(directory).robust
+    there = settings.copies if settings is not None else 0
     if there != k:
         raise InputError(
             f"--robust {k}: the dataset in {str(directory)!r} has "

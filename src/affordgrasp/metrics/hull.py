@@ -893,7 +893,13 @@ def _hull(P, nearest_only):
 
 @njit(cache=True)
 def hull_workspace():
-    """An empty facet store for :func:`build_hull` to reuse from one hull to the next."""
+    """An empty facet store for :func:`build_hull` to reuse from one hull to the next.
+
+    Returns
+    -------
+    FacetStore
+        Room for 512 facets; :func:`build_hull` grows it when a hull needs more.
+    """
     return _facet_store(512)
 
 
