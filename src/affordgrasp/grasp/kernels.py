@@ -308,6 +308,16 @@ def _sdf_subgradient(x, y, z, kind, hx, hy, hz):
     return 0.0, 0.0, sz
 
 
+@njit(cache=True, inline="always")
+def _flat_slack(x, y, z, kind, hx, hy, hz, nx, ny, nz, thick, spread, grow):
+    """How far below a shape's sdf at a flat cell's centre (x, y, z) any of its points can
+    be: |g.n| thick + |g_t| spread (g the subgradient there, n the cell's unit normal, both
+    in the shape's frame), at most the sphere's ``grow``."""
+    gx, gy, gz = _sdf_subgradient(x, y, z, kind, hx, hy, hz)
+    gn = min(abs(gx * nx + gy * ny + gz * nz), 1.0)
+    return min(gn * thick + np.sqrt(1.0 - gn * gn) * spread, grow)
+
+
 @njit(cache=True)
 def sdf_at(px, py, pz, poses, s, kinds, halves, radii):
     """Signed distance of a hand-frame point to shape ``s`` of a set of shapes.
@@ -377,15 +387,17 @@ def flat_cell_sdf_at(px, py, pz, poses, s, kinds, halves, radii, nx, ny, nz, thi
     y = poses[s, 0, 1] * dx + poses[s, 1, 1] * dy + poses[s, 2, 1] * dz
     z = poses[s, 0, 2] * dx + poses[s, 1, 2] * dy + poses[s, 2, 2] * dz
     kind = kinds[s]
-    d = sdf_local(x, y, z, kind, halves[s, 0], halves[s, 1], halves[s, 2], radii[s])
-    gx, gy, gz = _sdf_subgradient(x, y, z, kind, halves[s, 0], halves[s, 1], halves[s, 2])
-    gn = abs(
-        gx * (poses[s, 0, 0] * nx + poses[s, 1, 0] * ny + poses[s, 2, 0] * nz)
-        + gy * (poses[s, 0, 1] * nx + poses[s, 1, 1] * ny + poses[s, 2, 1] * nz)
-        + gz * (poses[s, 0, 2] * nx + poses[s, 1, 2] * ny + poses[s, 2, 2] * nz)
-    )
-    gn = min(gn, 1.0)
-    return d - min(gn * thick + np.sqrt(1.0 - gn * gn) * spread, radius)
+    hx = halves[s, 0]
+    hy = halves[s, 1]
+    hz = halves[s, 2]
+    d = sdf_local(x, y, z, kind, hx, hy, hz, radii[s])
+    return d - _flat_slack(
+        x, y, z, kind, hx, hy, hz,
+        poses[s, 0, 0] * nx + poses[s, 1, 0] * ny + poses[s, 2, 0] * nz,
+        poses[s, 0, 1] * nx + poses[s, 1, 1] * ny + poses[s, 2, 1] * nz,
+        poses[s, 0, 2] * nx + poses[s, 1, 2] * ny + poses[s, 2, 2] * nz,
+        thick, spread, radius,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -672,15 +684,13 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
             d = sdf_local(lx, ly, lz, shapes.kinds[sq], halves[sq, 0], halves[sq, 1],
                           halves[sq, 2], shapes.radii[sq])  # fmt: skip
             if flat:
-                gx, gy, gz = _sdf_subgradient(lx, ly, lz, shapes.kinds[sq], halves[sq, 0],
-                                              halves[sq, 1], halves[sq, 2])  # fmt: skip
-                gn = abs(
-                    gx * (it[sq, 0, 0] * vx + it[sq, 0, 1] * vy + it[sq, 0, 2] * vz)
-                    + gy * (it[sq, 1, 0] * vx + it[sq, 1, 1] * vy + it[sq, 1, 2] * vz)
-                    + gz * (it[sq, 2, 0] * vx + it[sq, 2, 1] * vy + it[sq, 2, 2] * vz)
-                )
-                gn = min(gn, 1.0)
-                d -= min(gn * thick + np.sqrt(1.0 - gn * gn) * spread, grow)
+                d -= _flat_slack(
+                    lx, ly, lz, shapes.kinds[sq], halves[sq, 0], halves[sq, 1], halves[sq, 2],
+                    it[sq, 0, 0] * vx + it[sq, 0, 1] * vy + it[sq, 0, 2] * vz,
+                    it[sq, 1, 0] * vx + it[sq, 1, 1] * vy + it[sq, 1, 2] * vz,
+                    it[sq, 2, 0] * vx + it[sq, 2, 1] * vy + it[sq, 2, 2] * vz,
+                    thick, spread, grow,
+                )  # fmt: skip
             d_joint = min(d_joint, d)
             if d < d_min:
                 d_min = d
