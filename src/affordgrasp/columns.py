@@ -25,6 +25,8 @@ USE_METRICS: tuple[str, ...] = (
     "use_edge",
     "use_edge_angle",
     "use_wedge_angle",
+    "use_wedge_angle_fine",
+    "use_edge_span",
     "use_clearance",
     "use_lever_ratio",
     "contact_reach",
@@ -68,6 +70,8 @@ METRIC_UNITS: dict[str, str] = {
     "use_edge": "m⁻²",
     "use_edge_angle": "rad",
     "use_wedge_angle": "rad",
+    "use_wedge_angle_fine": "rad",
+    "use_edge_span": "",
     "use_clearance": "m",
     "use_lever_ratio": "",
     "contact_reach": "",
@@ -78,6 +82,7 @@ METRIC_UNITS: dict[str, str] = {
 DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "use_edge_angle": ("°", 180.0 / math.pi),
     "use_wedge_angle": ("°", 180.0 / math.pi),
+    "use_wedge_angle_fine": ("°", 180.0 / math.pi),
     "use_clearance": ("mm", 1000.0),
     "contact_thickness": ("mm", 1000.0),
 }

@@ -47,7 +47,7 @@ from .metrics.use_geometry import (
     use_edge,
     use_edge_angle,
     use_lever_ratio,
-    use_wedge_angle,
+    use_wedge_shape,
 )
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
@@ -136,6 +136,10 @@ class UsePoints:
         rad.
     use_wedge_angle : (m,) float64 ndarray
         rad.
+    use_wedge_angle_fine : (m,) float64 ndarray
+        rad (2 mm ball).
+    use_edge_span : (m,) float64 ndarray
+        Dimensionless.
     """
 
     use_dir: np.ndarray
@@ -145,6 +149,8 @@ class UsePoints:
     use_edge: np.ndarray
     use_edge_angle: np.ndarray
     use_wedge_angle: np.ndarray
+    use_wedge_angle_fine: np.ndarray
+    use_edge_span: np.ndarray
 
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
@@ -169,11 +175,14 @@ class UsePoints:
         ug = np.full(len(T), np.nan)
         ang = np.full(len(T), np.nan)
         wedge = np.full(len(T), np.nan)
+        fine = np.full(len(T), np.nan)
+        span = np.full(len(T), np.nan)
         if hit.any():
             ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
             ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
-            wedge[hit] = use_wedge_angle(obj.mesh_data, P[hit], N[hit])
-        return cls(use_dir, P, N, T, ug, ang, wedge)
+            shape = use_wedge_shape(obj.mesh_data, P[hit], N[hit])
+            wedge[hit], fine[hit], span[hit] = shape.angle, shape.inner_angle, shape.span
+        return cls(use_dir, P, N, T, ug, ang, wedge, fine, span)
 
     @classmethod
     def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
@@ -287,6 +296,8 @@ def pair_scores(
         cols["use_edge"] = uses.use_edge[ui]
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
         cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
+        cols["use_wedge_angle_fine"] = uses.use_wedge_angle_fine[ui]
+        cols["use_edge_span"] = uses.use_edge_span[ui]
         cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
         cols["contact_reach"] = contact_reach(
             all_points,

@@ -607,6 +607,8 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_edge_angle": np.repeat(phi["use_edge_angle"], k_count),
         # the use point is not perturbed: its local shape is the grasp's own
         "use_wedge_angle": np.repeat(phi["use_wedge_angle"], k_count),
+        "use_wedge_angle_fine": np.repeat(phi["use_wedge_angle_fine"], k_count),
+        "use_edge_span": np.repeat(phi["use_edge_span"], k_count),
         # distances between the copy's contacts, its wrist and U: the shift moves all alike
         "use_clearance": use_clearance(points, flat.offsets, shifted_use),
         "contact_reach": contact_reach(

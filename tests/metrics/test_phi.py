@@ -18,6 +18,7 @@ from affordgrasp.metrics import (
     use_edge_angle,
     use_force,
     use_wedge_angle,
+    use_wedge_shape,
 )
 from affordgrasp.metrics import phi as phi_module
 from affordgrasp.metrics.contacts import ContactSet
@@ -26,8 +27,8 @@ from affordgrasp.objects.mass import mass_properties
 EXPECTED_COLUMNS = [
     "epsilon", "gws_volume", "epsilon_reason", "inertia", "hold_effort_px", "hold_effort_nx",
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
-    "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle", "use_clearance",
-    "use_lever_ratio", "contact_reach",
+    "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle",
+    "use_wedge_angle_fine", "use_edge_span", "use_clearance", "use_lever_ratio", "contact_reach",
     "contact_thickness",
 ]  # fmt: skip
 
@@ -90,6 +91,9 @@ def test_batch_equals_the_metric_functions(scene):
         assert cols["use_edge"][i] == pytest.approx(use_edge(mesh, T[i], U[i]))
         assert cols["use_edge_angle"][i] == use_edge_angle(mesh, U[i])
         assert cols["use_wedge_angle"][i] == pytest.approx(use_wedge_angle(mesh, U[i], nU[i]))
+        shape = use_wedge_shape(mesh, U[i], nU[i])
+        assert cols["use_wedge_angle_fine"][i] == pytest.approx(shape.inner_angle[0])
+        assert cols["use_edge_span"][i] == pytest.approx(shape.span[0])
         near = np.linalg.norm(cs.points - U[i], axis=1).min() if len(cs) else np.inf
         assert cols["use_clearance"][i] == pytest.approx(near)
     empty = [i for i, cs in enumerate(contacts) if len(cs) == 0]

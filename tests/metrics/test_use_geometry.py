@@ -266,6 +266,74 @@ def test_wedge_angle_survives_a_scanner():
     assert np.degrees(use_wedge_angle(scan, loc2[0], scan.face_normals[tri2[0]])) > 120.0
 
 
+def test_edge_span_tells_an_edge_from_a_tip_and_a_corner():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import use_edge_span, use_wedge_angle, use_wedge_shape
+
+    # along a wedge of any opening the inside directions span the edge's line: λ2 = 1/3
+    for opening in (20.0, 40.0):
+        prism = _prism(opening)
+        shape = use_wedge_shape(prism, [[0.0, 0.0, 0.0]], [[0.0, -1.0, 0.0]])
+        assert shape.span[0] == pytest.approx(1 / 3, abs=0.02)
+        assert shape.angle[0] == use_wedge_angle(prism, [0.0, 0.0, 0.0], [0.0, -1.0, 0.0])
+    # a thin plate (2 mm): its 90° corner is a quarter disc (1/2 - 1/π = 0.18), its straight
+    # edge a half disc (1/2), its flat a slab (close to 1/2 too: the flat is thinner than the
+    # ball); a cone's tip about 0
+    plate = trimesh.creation.box(extents=(0.04, 0.04, 0.002))
+    pts = np.array([[0.02, 0.02, 0.0], [0.02, 0.0, 0.0]])
+    nrm = np.array([[1.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+    span = use_edge_span(plate, pts, nrm)
+    assert span[0] == pytest.approx(0.5 - 1 / np.pi, abs=0.03) and span[1] > 0.4
+    cone = trimesh.creation.cone(0.005, 0.03, sections=64)
+    tip = use_edge_span(cone, [0.0, 0.0, 0.03], [0.0, 0.0, 1.0])
+    assert isinstance(tip, float) and tip < 0.05
+    # the triangles do not matter
+    fine = plate.subdivide().subdivide().subdivide()
+    np.testing.assert_allclose(use_edge_span(fine, pts, nrm), span, atol=0.01)
+
+
+def test_edge_span_survives_a_scanner():
+    from affordgrasp.metrics.use_geometry import use_wedge_shape
+    from affordgrasp.objects.scan import ScanSettings, scan_like
+
+    prism = _prism(20.0)
+    scan, _ = scan_like(prism, seed=0, settings=ScanSettings(noise_m=0.2e-3))
+    x = np.linspace(-0.02, 0.02, 9)
+    probe = np.stack([x, np.full(9, -2e-3), np.zeros(9)], axis=1)
+    loc, _, tri = scan.ray.intersects_location(probe, np.tile([0, 1.0, 0], (9, 1)), False)
+    shape = use_wedge_shape(scan, loc, scan.face_normals[tri])
+    # the rounded crest spreads the inside directions a little towards the half disc of a
+    # plate's straight edge (1/2), never towards a corner's or a tip's
+    assert np.all((shape.span > 0.3) & (shape.span < 0.45))
+    # the prism's end (rounded by the scanner): the apex line stops there, the span drops
+    # below every point along the edge (0.13 on the crisp prism)
+    loc2, _, tri2 = scan.ray.intersects_location([[0.0299, -2e-3, 0]], [[0, 1.0, 0]], False)
+    end = use_wedge_shape(scan, loc2, scan.face_normals[tri2])
+    assert end.span[0] < 0.3 and end.span[0] < shape.span.min() - 0.05
+
+
+def test_wedge_angle_fine_sees_a_thin_flat_but_not_an_edge():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import use_wedge_shape
+
+    # a wedge's apex reads its opening at any scale
+    prism = _prism(20.0)
+    apex = use_wedge_shape(prism, [[0.0, 0.0, 0.0]], [[0.0, -1.0, 0.0]])
+    assert abs(np.degrees(apex.inner_angle[0]) - np.degrees(apex.angle[0])) < 1.0
+    # a 1 mm plate's flat: the slab's part of the ball, 2π (3 T / (4 r) - T³ / (4 r³)), is
+    # 86.7° at r = 3 mm, 123.8° at 2 mm, 153.3° at 1.5 mm
+    plate = trimesh.creation.box(extents=(0.05, 0.05, 0.001))
+    flat = use_wedge_shape(plate, [[0.0, 0.0, 0.0005]], [[0.0, 0.0, 1.0]])
+    assert np.degrees(flat.angle[0]) == pytest.approx(86.7, abs=3.0)
+    assert np.degrees(flat.inner_angle[0]) == pytest.approx(123.8, abs=3.0)
+    half = use_wedge_shape(plate, [[0.0, 0.0, 0.0005]], [[0.0, 0.0, 1.0]], inner_radius=0.0015)
+    assert np.degrees(half.inner_angle[0]) == pytest.approx(153.3, abs=4.0)
+    assert half.angle[0] == flat.angle[0] and half.span[0] == flat.span[0]
+
+
 def test_use_clearance_is_the_nearest_contact():
     from affordgrasp.metrics.use_geometry import use_clearance
 

@@ -25,6 +25,8 @@ def table(**overrides):
         "use_edge": np.full(n, 1e6),
         "use_edge_angle": np.full(n, math.radians(20)),
         "use_wedge_angle": np.full(n, math.radians(20)),  # beat's tests make it blunt
+        "use_wedge_angle_fine": np.full(n, math.radians(20)),
+        "use_edge_span": np.full(n, 1.0 / 3.0),
         "use_clearance": np.full(n, 0.05),
         "contact_thickness": np.full(n, 0.02),
         "use_lever_ratio": np.full(n, 1.2),
@@ -46,7 +48,7 @@ def registry():
 
 
 def test_builtin_tasks_are_listed():
-    names = {"beat", "beat-paper", "cut", "cut-dihedral", "cut-ug", "pick", "viable"}
+    names = {"beat", "beat-paper", "cut", "cut-wedge", "cut-dihedral", "cut-ug", "pick", "viable"}
     assert names <= set(tasks.list_tasks())
     with pytest.raises(TaskError, match="available tasks: .*beat"):
         tasks.get_task("juggle")
@@ -114,6 +116,29 @@ def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
     assert ug.evaluate(flat)[0] == -INF and ug.evaluate(flat, tau_ug=-1.0)[0] == 0.5
     assert ug.evaluate(flat)[1] == 1.0  # U_g alone decides, whatever the angle
     assert ug.thresholds["tau_ug"] == tasks.TAU_UG_DEFAULT
+
+
+def test_cut_rejects_thin_flats_tips_and_corners_and_cut_wedge_keeps_them():
+    cut, plain = tasks.get_task("cut"), tasks.get_task("cut-wedge")
+    fine = math.radians(100.0)  # a thin flat: an edge in the 3 mm ball, not in the 2 mm one
+    corner = 0.12  # a blade's point or a cleaver's heel: the inside directions in a sector
+    cols = table(
+        use_wedge_angle_fine=[fine, math.radians(20), 0.3, 0.3, 0.3],
+        use_edge_span=[1 / 3, corner, 0.5, 1 / 3, 0.3],
+    )
+    got = cut.evaluate(cols)
+    assert got[0] == -INF and got[1] == -INF and np.isfinite(got[2:]).all()
+    np.testing.assert_allclose(plain.evaluate(cols), cols["use_force"])  # the 3 mm test alone
+    # each new test is a threshold that can be relaxed; the previous tests still apply
+    assert cut.evaluate(cols, tau_wedge_fine=math.pi)[0] == 0.5
+    assert cut.evaluate(cols, tau_span=0.0)[1] == 1.0
+    blunt = table(use_wedge_angle=np.full(5, math.pi))
+    assert np.all(cut.evaluate(blunt) == -INF) and np.all(plain.evaluate(blunt) == -INF)
+    assert np.isnan(cut.evaluate(table(use_edge_span=[np.nan, 0.3, 0.3, 0.3, 0.3]))).sum() == 0
+    assert cut.evaluate(table(use_edge_span=[np.nan, 0.3, 0.3, 0.3, 0.3]))[0] == -INF
+    assert cut.thresholds["tau_wedge_fine"] == pytest.approx(tasks.TAU_WEDGE_FINE_DEFAULT)
+    assert cut.thresholds["tau_span"] == pytest.approx(tasks.TAU_SPAN_DEFAULT)
+    assert 0.18 < tasks.TAU_SPAN_DEFAULT < 1 / 3  # between a 90° corner and an edge
 
 
 def test_pick_and_viable():

@@ -9,6 +9,8 @@ THRESHOLD_COLUMNS = {
     "tau_angle": "use_edge_angle",
     "tau_wedge": "use_wedge_angle",
     "tau_blunt": "use_wedge_angle",
+    "tau_wedge_fine": "use_wedge_angle_fine",
+    "tau_span": "use_edge_span",
     "tau_clear": "use_clearance",
     "tau_thick": "contact_thickness",
     "tau_lever": "use_lever_ratio",

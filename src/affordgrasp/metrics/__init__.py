@@ -17,6 +17,7 @@ function                    metric
 :func:`use_edge`            U_g (paper's edge-ness)
 :func:`use_edge_angle`      sharpest convex dihedral angle near U
 :func:`use_wedge_angle`     opening angle of the solid in a 3 mm ball at U
+:func:`use_wedge_shape`     the same, in a 2 mm ball, and the edge span, from one ray cast
 :func:`use_clearance`       smallest contact-to-U distance
 :func:`contact_thickness`   thinnest chord through the solid under a contact
 :func:`compute_phi`         all of them, one grasp; :func:`compute_phi_batch` for many
@@ -35,14 +36,17 @@ from .phi import compute_phi, compute_phi_batch
 from .transmission import use_force
 from .use_geometry import (
     EDGE_RADIUS_M,
+    WedgeShape,
     contact_reach,
     contact_thickness,
     long_axis,
     use_clearance,
     use_edge,
     use_edge_angle,
+    use_edge_span,
     use_lever_ratio,
     use_wedge_angle,
+    use_wedge_shape,
 )
 
 __all__ = [
@@ -78,4 +82,7 @@ __all__ = [
     "long_axis",
     "use_lever_ratio",
     "use_wedge_angle",
+    "use_wedge_shape",
+    "use_edge_span",
+    "WedgeShape",
 ]

@@ -18,6 +18,8 @@ use_force                 N      U_τ (:mod:`.transmission`)
 use_edge                  m⁻²    U_g (:mod:`.use_geometry`)
 use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.use_geometry`)
 use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the solid
+use_wedge_angle_fine      rad    the same in a 2 mm ball (same rays)
+use_edge_span             --     λ2 of the inside directions' second moment (same rays)
 use_clearance             m      smallest contact-to-U distance
 use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
@@ -61,7 +63,7 @@ from .use_geometry import (
     use_edge,
     use_edge_angle,
     use_lever_ratio,
-    use_wedge_angle,
+    use_wedge_shape,
 )
 from .validation import points_n3, stacked_contact_arrays, units_n3
 
@@ -272,9 +274,10 @@ def compute_phi_batch(
         if n
         else np.zeros(0)
     )
-    out["use_wedge_angle"] = (
-        np.asarray(use_wedge_angle(mesh, use_point, use_normal), dtype=float) if n else np.zeros(0)
-    )
+    wedge = use_wedge_shape(mesh, use_point, use_normal) if n else None
+    out["use_wedge_angle"] = wedge.angle if wedge is not None else np.zeros(0)
+    out["use_wedge_angle_fine"] = wedge.inner_angle if wedge is not None else np.zeros(0)
+    out["use_edge_span"] = wedge.span if wedge is not None else np.zeros(0)
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
     out["use_lever_ratio"] = (
         use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)

@@ -42,6 +42,8 @@ computed once and cached for as long as the mesh object lives unmodified.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..caching import IdentityCache
@@ -431,6 +433,7 @@ def use_edge_angle(
 
 WEDGE_RADIUS_M = 0.003  # default radius of the ball of the wedge angle
 WEDGE_DIRECTIONS = 256  # rays per use point
+WEDGE_INNER_RADIUS_M = 0.002  # radius of the inner ball (use_wedge_angle_fine)
 _WEDGE_START_M = 2e-5  # rays start this far inside the surface, along -n
 _WEDGE_SAME_HIT_M = 1e-7  # hits closer than this along one ray are one crossing
 
@@ -462,7 +465,8 @@ def use_wedge_angle(
     of the surface), so it depends on the ball, not on the triangles: a rounded or noisy
     edge (0.5 mm round, 0.3 mm noise) still measures its flanks' angle, and a blade's 2 mm
     spine, whose flanks are parallel, measures about 3π T / (4 r) (67° at T = 1.5 mm, r =
-    3 mm), not an edge. Needs a closed mesh.
+    3 mm), not an edge. Needs a closed mesh. :func:`use_wedge_shape` gives the same angle
+    with the shape measures of the same rays.
 
     Parameters
     ----------
@@ -482,7 +486,77 @@ def use_wedge_angle(
     float or (n,) float64 ndarray
         rad, in [0, 2π]; a float for a single point.
     """
-    single = np.ndim(use_point) == 1
+    shape = use_wedge_shape(mesh, use_point, use_normal, radius=radius, directions=directions)
+    return float(shape.angle[0]) if np.ndim(use_point) == 1 else shape.angle
+
+
+@dataclass(frozen=True)
+class WedgeShape:
+    """The solid in a ball at U, from one set of rays (:func:`use_wedge_shape`).
+
+    Attributes
+    ----------
+    angle : (n,) float64 ndarray
+        ``use_wedge_angle``: 2π × the part of the ball of radius r inside, rad.
+    inner_angle : (n,) float64 ndarray
+        The same in the concentric ball of radius ``inner_radius``, rad
+        (``use_wedge_angle_fine``).
+    span : (n,) float64 ndarray
+        ``use_edge_span``: the middle eigenvalue of the inside-weighted second moment of the
+        ray directions in the ball of radius r, in [0, 1/2]; dimensionless.
+    """
+
+    angle: np.ndarray
+    inner_angle: np.ndarray
+    span: np.ndarray
+
+
+def use_wedge_shape(
+    mesh,
+    use_point,
+    use_normal,
+    *,
+    radius: float = WEDGE_RADIUS_M,
+    inner_radius: float = WEDGE_INNER_RADIUS_M,
+    directions: int = WEDGE_DIRECTIONS,
+) -> WedgeShape:
+    """Wedge angle at two scales and edge span at U, from one ray cast.
+
+    The rays of :func:`use_wedge_angle` also say *where* the solid lies around U. With w_k
+    the volume-weighted inside part of ray k (direction s_k) in the ball of radius r, the
+    second moment ``M = Σ w_k s_k s_kᵀ / Σ w_k`` has eigenvalues λ1 ≥ λ2 ≥ λ3 (sum 1), and
+    the **edge span** is λ2. Along a wedge of any opening the inside directions fill its
+    sector of azimuth and every inclination to the edge line, so the component along the
+    edge is uniform on [-1, 1] and λ2 = 1/3 (λ1 ≈ 2/3 along the bisector, λ3 ≈ 0 across
+    the blade); at a sharp tip (a cone, a blade's point) they lie in a narrow cone and λ2
+    ≈ 0; at a thin plate's 90° corner (a cleaver's heel) in a quarter disc,
+    λ2 = 1/2 - 1/π ≈ 0.18; a thin plate's straight edge (a half disc) gives 1/2 and a flat
+    face 1/3. So a small wedge angle with a small span is a tip or a thin part's corner,
+    not an edge to cut with. The **inner angle** is the wedge angle of the ball of radius
+    ``inner_radius`` on the same rays (their crossings within it): a blade thinner than the
+    3 mm ball reads as an edge over its whole flat (3π T / (4 r)), while in a 2 mm ball its
+    flat reads 1.5 × larger and the crest of its cutting edge does not change.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (anything with ``ray.intersects_location``).
+    use_point : (3,) or (n, 3) float
+        Use points on the surface, m.
+    use_normal : (3,) or (n, 3) float
+        Outward unit normals there (the rays start 20 µm inside, along -n).
+    radius : float
+        Radius of the ball, m (default :data:`WEDGE_RADIUS_M`, 3 mm).
+    inner_radius : float
+        Radius of the inner ball, m (default :data:`WEDGE_INNER_RADIUS_M`, 2 mm).
+    directions : int
+        Rays per use point (default :data:`WEDGE_DIRECTIONS`).
+
+    Returns
+    -------
+    WedgeShape
+        (n,) arrays, also for a single point; a span of 1/3 where no ray is inside.
+    """
     P = points_n3(use_point, "use_point")
     N = units_n3(use_normal, "use_normal")
     if N.shape[0] != P.shape[0]:
@@ -492,14 +566,16 @@ def use_wedge_angle(
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0):
         raise InputError(f"radius must be a positive length in metres, got {radius}")
+    inner_radius = float(inner_radius)
+    if not (np.isfinite(inner_radius) and inner_radius > 0):
+        raise InputError(f"inner_radius must be a positive length in metres, got {inner_radius}")
     k = int(directions)
     if k < 8:
         raise InputError(f"directions must be an integer >= 8, got {directions}")
     n = P.shape[0]
-    if n == 0:
-        return np.zeros(0)
     S = _fibonacci_sphere(k)
-    out = np.empty(n)
+    angle, inner, span = np.empty(n), np.empty(n), np.empty(n)
+    outer = np.einsum("ki,kj->kij", S, S).reshape(k, 9)
     chunk = max(1, 65536 // k)
     for first in range(0, n, chunk):
         p = P[first : first + chunk]
@@ -513,9 +589,37 @@ def use_wedge_angle(
         dup = np.zeros(len(t), dtype=bool)
         dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
         ray, t = ray[~dup], t[~dup]
-        inside = _ray_inside(ray, t, radius, m * k)
-        out[first : first + m] = 2.0 * np.pi * inside.reshape(m, k).mean(axis=1)
-    return float(out[0]) if single else out
+        w = _ray_inside(ray, t, radius, m * k).reshape(m, k)
+        angle[first : first + m] = 2.0 * np.pi * w.mean(axis=1)
+        w_in = _ray_inside(ray, t, inner_radius, m * k).reshape(m, k)
+        inner[first : first + m] = 2.0 * np.pi * w_in.mean(axis=1)
+        total = w.sum(axis=1)
+        moment = (w @ outer).reshape(m, 3, 3) / np.where(total > 0, total, 1.0)[:, None, None]
+        moment[total <= 0] = np.eye(3) / 3.0
+        span[first : first + m] = np.linalg.eigvalsh(moment)[:, 1]
+    return WedgeShape(angle, inner, span)
+
+
+def use_edge_span(mesh, use_point, use_normal, **kwargs) -> float | np.ndarray:
+    """``use_edge_span``: λ2 of the directions inside a 3 mm ball at U (:func:`use_wedge_shape`).
+
+    About 1/3 along an edge or a flat, 1/2 along a thin plate's straight edge, 0.18 at a
+    thin plate's 90° corner, near 0 at a sharp tip.
+
+    Parameters
+    ----------
+    mesh, use_point, use_normal
+        As for :func:`use_wedge_shape`.
+    **kwargs
+        ``radius``, ``directions``.
+
+    Returns
+    -------
+    float or (n,) float64 ndarray
+        Dimensionless, in [0, 1/2]; a float for a single point.
+    """
+    shape = use_wedge_shape(mesh, use_point, use_normal, **kwargs)
+    return float(shape.span[0]) if np.ndim(use_point) == 1 else shape.span
 
 
 def _crossings(caster, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,11 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
   opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
   (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), or past the centre
   of mass towards U along the long axis by more than half of U's offset (``contact_reach``
-  > τ_reach, 0.5), else U_τ;
+  > τ_reach, 0.5), or the use point is a thin flat, a tip or a thin part's corner rather
+  than an edge (``use_wedge_angle_fine``, the same opening within 2 mm, > τ_wedge_fine, or
+  ``use_edge_span`` < τ_span), else U_τ;
+* ``cut-wedge``: cut with the 3 mm wedge test alone (without ``use_wedge_angle_fine`` and
+  ``use_edge_span``);
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
   rounds the mesh's edges away);
@@ -102,9 +106,11 @@ from .thresholds import (
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
     TAU_REACH_DEFAULT,
+    TAU_SPAN_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
+    TAU_WEDGE_FINE_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
     VIABLE_IMPACT_MAX,
@@ -131,7 +137,9 @@ __all__ = [
     "TAU_REACH_DEFAULT",
     "TAU_EPS_VIABLE",
     "TAU_UG_DEFAULT",
+    "TAU_SPAN_DEFAULT",
     "TAU_WEDGE_DEFAULT",
+    "TAU_WEDGE_FINE_DEFAULT",
     "VIABLE_EPS_MIN",
     "VIABLE_HOLD_MAX",
     "VIABLE_IMPACT_MAX",

@@ -18,9 +18,11 @@ from .thresholds import (
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
     TAU_REACH_DEFAULT,
+    TAU_SPAN_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
+    TAU_WEDGE_FINE_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
     VIABLE_IMPACT_MAX,
@@ -50,6 +52,14 @@ def _beat_paper(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarr
 
 
 def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    # an edge, not a thin flat (the 2 mm ball) nor a tip or a thin part's corner (the span)
+    edge = (m["use_wedge_angle_fine"] <= t["tau_wedge_fine"]) & (
+        m["use_edge_span"] >= t["tau_span"]
+    )
+    return np.where(edge, _cut_wedge(m, t), -np.inf)
+
+
+def _cut_wedge(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
     ok = (
         (m["epsilon"] >= t["tau_eps"])
         & (m["use_wedge_angle"] <= t["tau_wedge"])
@@ -102,8 +112,8 @@ def _viable(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def builtin_tasks() -> list[Task]:
-    """Fresh Task objects of the built-in tasks: beat, beat-paper, cut, cut-dihedral, cut-ug,
-    pick, viable.
+    """Fresh Task objects of the built-in tasks: beat, beat-paper, cut, cut-wedge, cut-dihedral,
+    cut-ug, pick, viable.
 
     Returns
     -------
@@ -150,12 +160,38 @@ def builtin_tasks() -> list[Task]:
             thresholds={
                 "tau_eps": TAU_EPS_DEFAULT,
                 "tau_wedge": TAU_WEDGE_DEFAULT,
+                "tau_wedge_fine": TAU_WEDGE_FINE_DEFAULT,
+                "tau_span": TAU_SPAN_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
                 "tau_reach": TAU_REACH_DEFAULT,
             },
-            description="cutting: U_τ if robust, the use point on an edge (wedge angle at "
-            "3 mm) and the hand off it, behind the centre of mass",
+            description="cutting: U_τ if robust, the use point on an edge (wedge angles at "
+            "3 and 2 mm, edge span: not a thin flat, a tip or a corner) and the hand off it, "
+            "behind the centre of mass",
+            requires=(
+                "epsilon",
+                "use_wedge_angle",
+                "use_wedge_angle_fine",
+                "use_edge_span",
+                "use_clearance",
+                "contact_thickness",
+                "contact_reach",
+                "use_force",
+            ),
+        ),
+        make_task(
+            "cut-wedge",
+            _cut_wedge,
+            thresholds={
+                "tau_eps": TAU_EPS_DEFAULT,
+                "tau_wedge": TAU_WEDGE_DEFAULT,
+                "tau_clear": TAU_CLEARANCE_DEFAULT,
+                "tau_thick": TAU_THICKNESS_DEFAULT,
+                "tau_reach": TAU_REACH_DEFAULT,
+            },
+            description="cutting with the 3 mm wedge test alone: U_τ if robust, the use point "
+            "on an edge (wedge angle at 3 mm) and the hand off it, behind the centre of mass",
             requires=(
                 "epsilon",
                 "use_wedge_angle",

@@ -63,6 +63,17 @@ TAU_EDGE_ANGLE_DEFAULT = math.radians(45.0)
 # crisp, 0.997 scan-like (the dihedral test: 1.0 crisp, 0.76 scan-like). It is the default
 # cut's test, the dihedral one the task "cut-dihedral".
 TAU_WEDGE_DEFAULT = math.radians(55.0)
+# The 3 mm ball cannot tell a blade's edge from a thin part: a knife's flat beside its bevel
+# (0.9-2 mm thick) or the spine near its point reads 3π T / (4 r), under 55 degrees, and
+# the ball's inside directions at a blade's point or a cleaver's heel are as few as on an
+# edge. The same rays tell them apart (use_wedge_shape): in a 2 mm ball a thin flat reads
+# 1.5 × more (use_wedge_angle_fine <= tau_wedge_fine) and the crest of an edge does not
+# change; at a tip or a thin part's corner the inside directions lie in a cone or a sector
+# (use_edge_span, λ2 of their second moment: 1/3 along any wedge, 0.18 at a thin plate's
+# 90-degree corner, about 0 at a sharp tip; use_edge_span >= tau_span). Calibrated with
+# studies/calibrate_wedge_angle.py (docs/validation.md §7).
+TAU_WEDGE_FINE_DEFAULT = math.radians(65.0)
+TAU_SPAN_DEFAULT = 0.30
 # A striking surface is blunt at the same scale: a flat face reads 180 degrees, a hammer
 # face's rounded rim 110-150, a claw's or a blade's tip less than 60.
 TAU_BLUNT_DEFAULT = math.radians(135.0)
