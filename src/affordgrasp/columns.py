@@ -39,6 +39,7 @@ GRASP_METRICS: tuple[str, ...] = (
     "inertia",
     *HOLD_EFFORT_COLUMNS,
     "contact_thickness",
+    "contact_width",
 )
 
 METRIC_COLUMNS: tuple[str, ...] = (
@@ -49,6 +50,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
     *HOLD_EFFORT_COLUMNS,
     *USE_METRICS,
     "contact_thickness",
+    "contact_width",
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
@@ -76,6 +78,7 @@ METRIC_UNITS: dict[str, str] = {
     "use_lever_ratio": "",
     "contact_reach": "",
     "contact_thickness": "m",
+    "contact_width": "m",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).
@@ -85,6 +88,7 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "use_wedge_angle_fine": ("°", 180.0 / math.pi),
     "use_clearance": ("mm", 1000.0),
     "contact_thickness": ("mm", 1000.0),
+    "contact_width": ("mm", 1000.0),
 }
 
 

@@ -42,6 +42,7 @@ from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
     contact_reach,
     contact_thickness,
+    contact_width,
     long_axis,
     use_clearance,
     use_edge,
@@ -204,6 +205,10 @@ class UsePoints:
         return cls.of(obj, d)
 
 
+# grasp metrics added after datasets were written: computed from the contacts when absent
+_LATE_GRASP_METRICS = {"contact_thickness": contact_thickness, "contact_width": contact_width}
+
+
 def _contacts(table: pa.Table, rows: np.ndarray):
     pts = table.column("contact_points").to_pylist()
     nrm = table.column("contact_normals").to_pylist()
@@ -264,7 +269,7 @@ def pair_scores(
     col = {
         c: grasps.column(c).to_numpy(zero_copy_only=False)
         for c in GRASP_COLUMNS
-        if c in names or c != "contact_thickness"
+        if c in names or c not in _LATE_GRASP_METRICS
     }
     wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
@@ -277,11 +282,10 @@ def pair_scores(
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
     all_points, all_normals, _, all_offsets = _contacts(grasps, np.arange(n))
-    if "contact_thickness" not in col:
-        # rows evaluated before the column existed: computed from their contacts
-        col["contact_thickness"] = contact_thickness(
-            obj.mesh_data, all_points, all_normals, all_offsets
-        )
+    # rows evaluated before these columns existed: computed from their contacts
+    for name, metric in _LATE_GRASP_METRICS.items():
+        if name not in col:
+            col[name] = metric(obj.mesh_data, all_points, all_normals, all_offsets)
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
     for first in range(0, len(with_contacts), step):

@@ -546,6 +546,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.use_geometry import (
         contact_reach,
         contact_thickness,
+        contact_width,
         long_axis,
         use_clearance,
         use_lever_ratio,
@@ -619,6 +620,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         ).reshape(m),
         # the chord under each contact, on the object where the copy touched it
         "contact_thickness": contact_thickness(obj.mesh_data, flat.points, normals, flat.offsets),
+        "contact_width": contact_width(obj.mesh_data, flat.points, normals, flat.offsets),
     }
     for j, name in enumerate(HOLD_EFFORT_COLUMNS):
         cols[name] = np.ascontiguousarray(hold[:, j])

@@ -29,7 +29,7 @@ EXPECTED_COLUMNS = [
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
     "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle",
     "use_wedge_angle_fine", "use_edge_span", "use_clearance", "use_lever_ratio", "contact_reach",
-    "contact_thickness",
+    "contact_thickness", "contact_width",
 ]  # fmt: skip
 
 

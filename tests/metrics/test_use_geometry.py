@@ -359,6 +359,29 @@ def test_contact_thickness_is_the_chord_under_the_thinnest_contact():
     np.testing.assert_allclose(got, [0.004, np.inf, 0.05], rtol=1e-6)
 
 
+def test_contact_width_measures_across_the_part():
+    from affordgrasp.metrics.use_geometry import contact_thickness, contact_width
+
+    # a cleaver's blade: 100 x 60 x 3 mm; a finger on its spine (normal +y) has a 60 mm chord
+    # along the normal, but the part is 3 mm wide across
+    plate = trimesh.creation.box(extents=(0.1, 0.06, 0.003))
+    C = np.array([[0.0, 0.03, 0.0], [0.01, 0.0, 0.0015]])
+    N = np.array([[0, 1.0, 0], [0, 0, 1.0]])
+    np.testing.assert_allclose(contact_thickness(plate, C, N, [0, 1, 2]), [0.06, 0.003], rtol=1e-6)
+    np.testing.assert_allclose(contact_width(plate, C, N, [0, 1, 2]), [0.003, 0.003], rtol=1e-6)
+    # a round handle, 16 mm across: the same along the normal and across
+    handle = trimesh.creation.cylinder(radius=0.008, height=0.1, sections=256)
+    got = contact_width(
+        handle, [[0.008, 0, 0.01], [0, -0.008, 0.0]], [[1.0, 0, 0], [0, -1.0, 0]], [0, 2]
+    )
+    assert got[0] == pytest.approx(0.016, rel=1e-3)
+    # the grasp's narrowest contact decides; no contact: +inf
+    both = contact_width(plate, C, N, [0, 2, 2])
+    assert both[0] == pytest.approx(0.003) and both[1] == np.inf
+    with pytest.raises(InputError, match="directions"):
+        contact_width(plate, C, N, [0, 2], directions=0)
+
+
 def test_lever_ratio_compares_distances_to_the_wrist_axis():
     from affordgrasp.metrics.use_geometry import use_lever_ratio
 

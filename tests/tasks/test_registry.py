@@ -29,6 +29,7 @@ def table(**overrides):
         "use_edge_span": np.full(n, 1.0 / 3.0),
         "use_clearance": np.full(n, 0.05),
         "contact_thickness": np.full(n, 0.02),
+        "contact_width": np.full(n, 0.015),
         "use_lever_ratio": np.full(n, 1.2),
         "contact_reach": np.full(n, -0.2),
     }
@@ -139,6 +140,11 @@ def test_cut_rejects_thin_flats_tips_and_corners_and_cut_wedge_keeps_them():
     assert cut.thresholds["tau_wedge_fine"] == pytest.approx(tasks.TAU_WEDGE_FINE_DEFAULT)
     assert cut.thresholds["tau_span"] == pytest.approx(tasks.TAU_SPAN_DEFAULT)
     assert 0.18 < tasks.TAU_SPAN_DEFAULT < 1 / 3  # between a 90° corner and an edge
+    # a finger on a spine: thick along its normal, 3 mm across
+    spine = table(contact_width=[0.003, 0.015, 0.015, 0.015, 0.015])
+    assert cut.evaluate(spine)[0] == -INF and plain.evaluate(spine)[0] == 0.5
+    assert cut.evaluate(spine, tau_width=0.0)[0] == 0.5
+    assert cut.thresholds["tau_width"] == tasks.TAU_WIDTH_DEFAULT
 
 
 def test_pick_and_viable():

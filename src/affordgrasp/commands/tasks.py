@@ -13,6 +13,7 @@ THRESHOLD_COLUMNS = {
     "tau_span": "use_edge_span",
     "tau_clear": "use_clearance",
     "tau_thick": "contact_thickness",
+    "tau_width": "contact_width",
     "tau_lever": "use_lever_ratio",
     "tau_lever_max": "use_lever_ratio",
     "tau_reach": "contact_reach",

@@ -20,6 +20,7 @@ function                    metric
 :func:`use_wedge_shape`     the same, in a 2 mm ball, and the edge span, from one ray cast
 :func:`use_clearance`       smallest contact-to-U distance
 :func:`contact_thickness`   thinnest chord through the solid under a contact
+:func:`contact_width`       narrowest part under a contact, across the part
 :func:`compute_phi`         all of them, one grasp; :func:`compute_phi_batch` for many
 ==========================  ==============================================================
 """
@@ -39,6 +40,7 @@ from .use_geometry import (
     WedgeShape,
     contact_reach,
     contact_thickness,
+    contact_width,
     long_axis,
     use_clearance,
     use_edge,
@@ -63,6 +65,7 @@ __all__ = [
     "compute_phi_batch",
     "contact_reach",
     "contact_thickness",
+    "contact_width",
     "contact_wrenches",
     "discharge",
     "edges_per_contact",

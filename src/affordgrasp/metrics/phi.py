@@ -23,6 +23,7 @@ use_edge_span             --     λ2 of the inside directions' second moment (sa
 use_clearance             m      smallest contact-to-U distance
 use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
+contact_width             m      narrowest part under a contact, across the part
 contact_reach             --     farthest contact past the centre of mass towards U, over U's offset
 ========================  =====  ==========================================================
 
@@ -58,6 +59,7 @@ from .use_geometry import (
     EDGE_RADIUS_M,
     contact_reach,
     contact_thickness,
+    contact_width,
     long_axis,
     use_clearance,
     use_edge,
@@ -290,6 +292,7 @@ def compute_phi_batch(
     out["contact_thickness"] = (
         contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
     )
+    out["contact_width"] = contact_width(mesh, points, normals, offsets) if n else np.zeros(0)
     return {name: out[name] for name in METRIC_COLUMNS}
 
 

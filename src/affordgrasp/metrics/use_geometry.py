@@ -860,6 +860,79 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
     return out
 
 
+WIDTH_DIRECTIONS = 6  # directions across the part, per contact, of contact_width
+
+
+def _first_exit(mesh, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """(k,) distance from each origin to the first surface along its direction, m; inf if none."""
+    out = np.full(len(origins), np.inf)
+    if len(origins) == 0:
+        return out
+    locations, ray, _ = mesh.ray.intersects_location(origins, dirs, multiple_hits=False)
+    ray = np.asarray(ray, dtype=np.int64)
+    if len(ray):
+        out[ray] = np.linalg.norm(np.asarray(locations, dtype=np.float64) - origins[ray], axis=1)
+    return out
+
+
+def contact_width(
+    mesh, contact_points, contact_normals, offsets, directions: int = WIDTH_DIRECTIONS
+) -> np.ndarray:
+    """Narrowest part a grasp touches, measured across the part (``contact_width``), m.
+
+    At each contact, the chord through the solid along the inward normal (as
+    :func:`contact_thickness`), then from that chord's midpoint, the chords across the part
+    along ``directions`` directions perpendicular to the normal (half-turn evenly spaced);
+    the contact's width is the smallest of them, and a grasp's the smallest over its
+    contacts. A finger on a handle reads the handle's section (12 mm and more); a finger on
+    a blade's spine reads the blade's thickness (2-5 mm), though its chord along the normal
+    runs down the blade's height: the thickness test alone lets a hand hold a cleaver by its
+    spine.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (anything with ``ray.intersects_location``); closed.
+    contact_points, contact_normals : (k, 3) float
+        Contacts of all grasps, stacked, m; the object's outward unit normals.
+    offsets : (g + 1,) int
+        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
+    directions : int
+        Directions across the part per contact (default :data:`WIDTH_DIRECTIONS`).
+
+    Returns
+    -------
+    (g,) float64 ndarray
+        m; +inf for a grasp without contacts; a contact whose normal ray finds no exit
+        (grazing an edge) counts as 0.
+    """
+    C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
+    N = np.asarray(contact_normals, dtype=np.float64).reshape(-1, 3)
+    offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
+    k = int(directions)
+    if k < 1:
+        raise InputError(f"directions must be a positive integer, got {directions}")
+    g = len(offsets) - 1
+    out = np.full(g, np.inf)
+    if len(C) == 0:
+        return out
+    origins = C - _THICKNESS_START_M * N
+    along = _first_exit(mesh, origins, -N)
+    width = np.where(np.isfinite(along), along + _THICKNESS_START_M, 0.0)
+    inside = np.isfinite(along)
+    if inside.any():
+        centre = origins[inside] - 0.5 * along[inside, None] * N[inside]
+        e1, e2 = _frames(N[inside])
+        for angle in np.arange(k) * np.pi / k:
+            d = np.cos(angle) * e1 + np.sin(angle) * e2
+            chord = _first_exit(mesh, centre, d) + _first_exit(mesh, centre, -d)
+            width[inside] = np.minimum(width[inside], chord)
+    counts = np.diff(offsets)
+    owner = np.repeat(np.arange(g), counts)
+    np.minimum.at(out, owner, width)
+    return out
+
+
 def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
     """How far U is from the wrist axis, relative to the centre of mass (``use_lever_ratio``).
 

@@ -26,9 +26,10 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
   of mass towards U along the long axis by more than half of U's offset (``contact_reach``
   > τ_reach, 0.5), or the use point is a thin flat, a tip or a thin part's corner rather
   than an edge (``use_wedge_angle_fine``, the same opening within 2 mm, > τ_wedge_fine, or
-  ``use_edge_span`` < τ_span), else U_τ;
+  ``use_edge_span`` < τ_span), or a contact is on a part narrower than τ_width (8 mm)
+  across (``contact_width``: a finger on a blade's spine), else U_τ;
 * ``cut-wedge``: cut with the 3 mm wedge test alone (without ``use_wedge_angle_fine`` and
-  ``use_edge_span``);
+  ``use_edge_span``) and without the width test;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
   rounds the mesh's edges away);
@@ -111,6 +112,7 @@ from .thresholds import (
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
     TAU_WEDGE_FINE_DEFAULT,
+    TAU_WIDTH_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
     VIABLE_IMPACT_MAX,
@@ -140,6 +142,7 @@ __all__ = [
     "TAU_SPAN_DEFAULT",
     "TAU_WEDGE_DEFAULT",
     "TAU_WEDGE_FINE_DEFAULT",
+    "TAU_WIDTH_DEFAULT",
     "VIABLE_EPS_MIN",
     "VIABLE_HOLD_MAX",
     "VIABLE_IMPACT_MAX",

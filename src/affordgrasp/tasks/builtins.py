@@ -23,6 +23,7 @@ from .thresholds import (
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
     TAU_WEDGE_FINE_DEFAULT,
+    TAU_WIDTH_DEFAULT,
     VIABLE_EPS_MIN,
     VIABLE_HOLD_MAX,
     VIABLE_IMPACT_MAX,
@@ -52,11 +53,14 @@ def _beat_paper(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarr
 
 
 def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
-    # an edge, not a thin flat (the 2 mm ball) nor a tip or a thin part's corner (the span)
-    edge = (m["use_wedge_angle_fine"] <= t["tau_wedge_fine"]) & (
-        m["use_edge_span"] >= t["tau_span"]
+    # an edge, not a thin flat (the 2 mm ball) nor a tip or a thin part's corner (the span);
+    # every contact on a part at least tau_width across (a handle, not a blade's spine)
+    ok = (
+        (m["use_wedge_angle_fine"] <= t["tau_wedge_fine"])
+        & (m["use_edge_span"] >= t["tau_span"])
+        & (m["contact_width"] >= t["tau_width"])
     )
-    return np.where(edge, _cut_wedge(m, t), -np.inf)
+    return np.where(ok, _cut_wedge(m, t), -np.inf)
 
 
 def _cut_wedge(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
@@ -164,11 +168,12 @@ def builtin_tasks() -> list[Task]:
                 "tau_span": TAU_SPAN_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
+                "tau_width": TAU_WIDTH_DEFAULT,
                 "tau_reach": TAU_REACH_DEFAULT,
             },
             description="cutting: U_τ if robust, the use point on an edge (wedge angles at "
             "3 and 2 mm, edge span: not a thin flat, a tip or a corner) and the hand off it, "
-            "behind the centre of mass",
+            "on parts at least 8 mm across, behind the centre of mass",
             requires=(
                 "epsilon",
                 "use_wedge_angle",
@@ -176,6 +181,7 @@ def builtin_tasks() -> list[Task]:
                 "use_edge_span",
                 "use_clearance",
                 "contact_thickness",
+                "contact_width",
                 "contact_reach",
                 "use_force",
             ),

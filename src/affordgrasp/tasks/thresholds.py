@@ -86,6 +86,11 @@ TAU_CLEARANCE_DEFAULT = 0.035
 # Blades are 1.5-5 mm thick at the spine and thinner towards the edge; the families'
 # handles 12 mm and more; 8 mm lies between.
 TAU_THICKNESS_DEFAULT = 0.008
+# Measured across the part, not only along the normal (contact_width: the chords through
+# the middle of the normal chord, perpendicular to it): a finger on a cleaver's spine has a
+# normal chord down the blade's height (50 mm and more) but touches a part 3-5 mm across.
+# Cut asks every contact to be on a part at least as wide as the thickness test asks.
+TAU_WIDTH_DEFAULT = 0.008
 # Beat strikes with the massive end: U at least as far from the wrist axis as the centre of
 # mass (use_lever_ratio >= 1), so a hammer held by its handle does not strike with the
 # handle's end. On a mesh file, the massive end is where its region densities put it.
