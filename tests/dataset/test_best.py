@@ -33,8 +33,11 @@ def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
         ok = (
             (df.epsilon >= tau_eps)
             & (df.use_wedge_angle <= t["tau_wedge"])
+            & (df.use_wedge_angle_fine <= t["tau_wedge_fine"])
+            & (df.use_edge_span >= t["tau_span"])
             & (df.use_clearance >= t["tau_clear"])
             & (df.contact_thickness >= t["tau_thick"])
+            & (df.contact_width >= t["tau_width"])
             & (df.contact_reach <= t["tau_reach"])
         )
         return np.where(ok, df.use_force, -np.inf)

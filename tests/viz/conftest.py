@@ -296,9 +296,12 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
     wedge = rng.uniform(2.5, 3.1) if blunt else rng.uniform(0.4, 0.9)  # rad: 135° / 55° tests
     return {
         "use_wedge_angle": float(wedge),
+        "use_wedge_angle_fine": float(wedge),
+        "use_edge_span": float(rng.uniform(0.31, 0.4)),
         "use_clearance": float(rng.uniform(0.04, 0.1)),
         "use_lever_ratio": float(rng.uniform(1.1, 1.9)),
         "contact_thickness": float(rng.uniform(0.01, 0.03)),
+        "contact_width": float(rng.uniform(0.01, 0.03)),
         "epsilon": float(rng.uniform(0.31, 0.6)),
         "gws_volume": float(rng.uniform(0.0, 1e-3)),
         "epsilon_reason": "",
