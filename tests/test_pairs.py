@@ -81,6 +81,7 @@ def test_optimizer_over_grasps_with_their_best_use_point():
         top=5,
         population=50,
         tau_thick=0.0,
+        tau_width=0.0,
         tau_reach=np.inf,
     )  # the search, not the thresholds: a 200-grasp search rarely holds the handle only
     values = found.table.column("value").to_numpy()
@@ -104,7 +105,15 @@ def test_best_pairs_per_grasp_ranks_each_grasp_once_with_its_best_use():
     # cut pairs; at unit density it finds none
     cleaver = load_object("meat_cleaver", materials=True)
     table = evaluate_samples(cleaver, 120, seed=0).table
-    kw = dict(grasps=120, uses=400, top=4, grasp_table=table, tau_thick=0.0, tau_reach=np.inf)
+    kw = dict(
+        grasps=120,
+        uses=400,
+        top=4,
+        grasp_table=table,
+        tau_thick=0.0,
+        tau_width=0.0,
+        tau_reach=np.inf,
+    )
     pairs = best_pairs(cleaver, "cut", **kw)
     grasps = best_pairs(cleaver, "cut", per_grasp=True, **kw)
     assert grasps.candidates == pairs.candidates >= 4
@@ -115,7 +124,13 @@ def test_best_pairs_per_grasp_ranks_each_grasp_once_with_its_best_use():
     assert values[0] == pytest.approx(pairs.table.column("value").to_numpy()[0], rel=1e-9)
     # the best pair of each listed grasp: no other use point of it scores higher
     scores = pair_scores(
-        cleaver, table, UsePoints.sample(cleaver, 400, 1), "cut", tau_thick=0.0, tau_reach=np.inf
+        cleaver,
+        table,
+        UsePoints.sample(cleaver, 400, 1),
+        "cut",
+        tau_thick=0.0,
+        tau_width=0.0,
+        tau_reach=np.inf,
     )
     best, _ = best_use_per_grasp(scores, 120)
     np.testing.assert_allclose(np.sort(best[np.isfinite(best)])[::-1][: len(values)], values)
@@ -138,7 +153,8 @@ def test_optimize_command_finds_a_default_mode_cut_with_use_points(capsys):
     from affordgrasp.cli import main
 
     argv = ["optimize", "meat_cleaver", "--task", "cut", "--budget", "100", "--population", "50"]
-    argv += ["--threshold", "tau_thick=0", "--threshold", "tau_reach=inf"]  # a 100-sample
+    argv += ["--threshold", "tau_thick=0", "--threshold", "tau_width=0"]
+    argv += ["--threshold", "tau_reach=inf"]  # a 100-sample
     # search rarely holds the handle only
     code = main([*argv, "--uses", "1000", "--workers", "1", "--json"])
     doc = json.loads(capsys.readouterr().out)
