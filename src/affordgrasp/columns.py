@@ -37,6 +37,7 @@ GRASP_METRICS: tuple[str, ...] = (
     "inertia",
     *HOLD_EFFORT_COLUMNS,
     "contact_thickness",
+    "epsilon_hand",
 )
 
 METRIC_COLUMNS: tuple[str, ...] = (
@@ -47,6 +48,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
     *HOLD_EFFORT_COLUMNS,
     *USE_METRICS,
     "contact_thickness",
+    "epsilon_hand",
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
@@ -72,6 +74,7 @@ METRIC_UNITS: dict[str, str] = {
     "use_lever_ratio": "",
     "contact_reach": "",
     "contact_thickness": "m",
+    "epsilon_hand": "",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).

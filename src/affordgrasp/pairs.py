@@ -37,6 +37,7 @@ from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
+from .metrics.epsilon_hand import epsilon_hand
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
@@ -62,6 +63,8 @@ GRASP_COLUMNS = GRASP_METRICS
 # columns that depend on the use point: a task that reads none of them scores a grasp the
 # same with every use point, so one use point per grasp is enough
 USE_COLUMNS = frozenset(USE_METRICS)
+# grasp columns that tables evaluated by earlier versions lack (computed from the contacts)
+_LATER_GRASP_COLUMNS = frozenset({"contact_thickness", "epsilon_hand"})
 # most favourable values of the LP metrics, for the screen
 _SCREEN_FORCE = 1e12
 _SCREEN_IMPACT = 0.0
@@ -255,7 +258,7 @@ def pair_scores(
     col = {
         c: grasps.column(c).to_numpy(zero_copy_only=False)
         for c in GRASP_COLUMNS
-        if c in names or c != "contact_thickness"
+        if c in names or c not in _LATER_GRASP_COLUMNS
     }
     wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
@@ -267,11 +270,21 @@ def pair_scores(
     # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
-    all_points, all_normals, _, all_offsets = _contacts(grasps, np.arange(n))
+    all_points, all_normals, all_mu, all_offsets = _contacts(grasps, np.arange(n))
+    # rows evaluated before these columns existed: computed from their contacts
     if "contact_thickness" not in col:
-        # rows evaluated before the column existed: computed from their contacts
         col["contact_thickness"] = contact_thickness(
             obj.mesh_data, all_points, all_normals, all_offsets
+        )
+    if "epsilon_hand" not in col:
+        col["epsilon_hand"] = epsilon_hand(
+            all_points,
+            all_normals,
+            all_mu,
+            all_offsets,
+            obj.mass.center_of_mass,
+            obj.mass.r_max,
+            col["epsilon"],
         )
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
