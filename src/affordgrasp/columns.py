@@ -40,6 +40,7 @@ GRASP_METRICS: tuple[str, ...] = (
     *HOLD_EFFORT_COLUMNS,
     "contact_thickness",
     "contact_width",
+    "epsilon_hand",
 )
 
 METRIC_COLUMNS: tuple[str, ...] = (
@@ -51,6 +52,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
     *USE_METRICS,
     "contact_thickness",
     "contact_width",
+    "epsilon_hand",
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
@@ -79,6 +81,7 @@ METRIC_UNITS: dict[str, str] = {
     "contact_reach": "",
     "contact_thickness": "m",
     "contact_width": "m",
+    "epsilon_hand": "",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).

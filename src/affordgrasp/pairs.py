@@ -37,6 +37,7 @@ from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
+from .metrics.epsilon_hand import epsilon_hand
 from .metrics.lp import OPTIMAL
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
@@ -63,6 +64,8 @@ GRASP_COLUMNS = GRASP_METRICS
 # columns that depend on the use point: a task that reads none of them scores a grasp the
 # same with every use point, so one use point per grasp is enough
 USE_COLUMNS = frozenset(USE_METRICS)
+# grasp columns that tables evaluated by earlier versions lack (computed from the contacts)
+_LATER_GRASP_COLUMNS = frozenset({"contact_thickness", "contact_width", "epsilon_hand"})
 # most favourable values of the LP metrics, for the screen
 _SCREEN_FORCE = 1e12
 _SCREEN_IMPACT = 0.0
@@ -205,10 +208,6 @@ class UsePoints:
         return cls.of(obj, d)
 
 
-# grasp metrics added after datasets were written: computed from the contacts when absent
-_LATE_GRASP_METRICS = {"contact_thickness": contact_thickness, "contact_width": contact_width}
-
-
 def _contacts(table: pa.Table, rows: np.ndarray):
     pts = table.column("contact_points").to_pylist()
     nrm = table.column("contact_normals").to_pylist()
@@ -269,7 +268,7 @@ def pair_scores(
     col = {
         c: grasps.column(c).to_numpy(zero_copy_only=False)
         for c in GRASP_COLUMNS
-        if c in names or c not in _LATE_GRASP_METRICS
+        if c in names or c not in _LATER_GRASP_COLUMNS
     }
     wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
@@ -281,11 +280,24 @@ def pair_scores(
     # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
-    all_points, all_normals, _, all_offsets = _contacts(grasps, np.arange(n))
+    all_points, all_normals, all_mu, all_offsets = _contacts(grasps, np.arange(n))
     # rows evaluated before these columns existed: computed from their contacts
-    for name, metric in _LATE_GRASP_METRICS.items():
-        if name not in col:
-            col[name] = metric(obj.mesh_data, all_points, all_normals, all_offsets)
+    if "contact_thickness" not in col:
+        col["contact_thickness"] = contact_thickness(
+            obj.mesh_data, all_points, all_normals, all_offsets
+        )
+    if "epsilon_hand" not in col:
+        col["epsilon_hand"] = epsilon_hand(
+            all_points,
+            all_normals,
+            all_mu,
+            all_offsets,
+            obj.mass.center_of_mass,
+            obj.mass.r_max,
+            col["epsilon"],
+        )
+    if "contact_width" not in col:
+        col["contact_width"] = contact_width(obj.mesh_data, all_points, all_normals, all_offsets)
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
     for first in range(0, len(with_contacts), step):

@@ -540,6 +540,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.discharge import discharge
     from .metrics.effort import hold_effort, impact_effort
     from .metrics.epsilon import epsilon
+    from .metrics.epsilon_hand import epsilon_hand
     from .metrics.inertia import rotational_inertia
     from .metrics.phi import contact_metrics_batch
     from .metrics.transmission import use_force
@@ -621,6 +622,9 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         # the chord under each contact, on the object where the copy touched it
         "contact_thickness": contact_thickness(obj.mesh_data, flat.points, normals, flat.offsets),
         "contact_width": contact_width(obj.mesh_data, flat.points, normals, flat.offsets),
+        "epsilon_hand": epsilon_hand(
+            points, normals, mu, flat.offsets, center, float(mass.r_max), eps, soft=bool(soft)
+        ),
     }
     for j, name in enumerate(HOLD_EFFORT_COLUMNS):
         cols[name] = np.ascontiguousarray(hold[:, j])

@@ -25,6 +25,7 @@ use_lever_ratio           --     U's distance to the wrist axis / the centre of 
 contact_thickness         m      thinnest chord through the solid under a contact
 contact_width             m      narrowest part under a contact, across the part
 contact_reach             --     farthest contact past the centre of mass towards U, over U's offset
+epsilon_hand              --     ε with torques / min(r_max, 0.25 m) (:mod:`.epsilon_hand`)
 ========================  =====  ==========================================================
 
 Infeasible efforts are +inf (IEEE), never a sentinel.
@@ -51,6 +52,7 @@ from .effort import (
     use_wrench,
 )
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
+from .epsilon_hand import epsilon_hand
 from .hull import hull_workspace
 from .inertia import rotational_inertia
 from .lp import OPTIMAL
@@ -293,6 +295,9 @@ def compute_phi_batch(
         contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
     )
     out["contact_width"] = contact_width(mesh, points, normals, offsets) if n else np.zeros(0)
+    out["epsilon_hand"] = epsilon_hand(
+        points, normals, mu, offsets, center, r_max, eps, soft=bool(soft)
+    )
     return {name: out[name] for name in METRIC_COLUMNS}
 
 

@@ -13,8 +13,9 @@ import pyarrow as pa
 def guidance(table: pa.Table, requires=()) -> np.ndarray:
     """How close each grasp came to a usable one.
 
-    Contacts made, plus 100 ε, plus, for a task that reads them (``requires``), how sharp
-    the use point is (3 (1 - angle / π)) and how well it discharges the swing (3 δ).
+    Contacts made, plus 100 ε (``epsilon_hand`` for a task that reads it), plus, for a task
+    that reads them (``requires``), how sharp the use point is (3 (1 - angle / π)) and how
+    well it discharges the swing (3 δ).
     Ranks infeasible (−∞) samples among themselves while CEM has too few feasible ones: more
     links touching and force closure make every task's thresholds likelier to pass, and
     the use terms lead the use direction towards an edge or a discharging point, which
@@ -32,7 +33,9 @@ def guidance(table: pa.Table, requires=()) -> np.ndarray:
     (n,) float64 ndarray
     """
     n = table["n_contacts"].to_numpy().astype(np.float64)
-    eps = table["epsilon"].to_numpy() if "epsilon" in table.column_names else 0.0
+    # the ε the task gates on: at a hand's torque length for beat and cut (long objects)
+    eps_column = "epsilon_hand" if "epsilon_hand" in requires else "epsilon"
+    eps = table[eps_column].to_numpy() if eps_column in table.column_names else 0.0
     g = n + 100.0 * np.nan_to_num(eps)
     names = table.column_names
     if "use_edge_angle" in requires and "use_edge_angle" in names:

@@ -39,12 +39,19 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["use_lever_ratio"] >= t["tau_lever"])
         & (m["use_lever_ratio"] <= t["tau_lever_max"])
     )
-    return np.where(ok, _beat_paper(m, t), -np.inf)
+    # ε at a hand's torque length: the same gate as ε within 0.25 m, the same torque beyond
+    return np.where(ok, _beat_formula(m, t, m["epsilon_hand"]), -np.inf)
 
 
 def _beat_paper(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    return _beat_formula(m, t, m["epsilon"])
+
+
+def _beat_formula(
+    m: Mapping[str, np.ndarray], t: Mapping[str, float], eps: np.ndarray
+) -> np.ndarray:
     ok = (
-        (m["epsilon"] >= t["tau_eps"])
+        (eps >= t["tau_eps"])
         & (m["discharge"] >= t["tau_delta"])
         & np.isfinite(m["hold_effort_sum"])
     )
@@ -65,7 +72,7 @@ def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 def _cut_wedge(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
     ok = (
-        (m["epsilon"] >= t["tau_eps"])
+        (m["epsilon_hand"] >= t["tau_eps"])
         & (m["use_wedge_angle"] <= t["tau_wedge"])
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
@@ -140,7 +147,7 @@ def builtin_tasks() -> list[Task]:
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
             "on a blunt use point with the hand off it",
             requires=(
-                "epsilon",
+                "epsilon_hand",
                 "discharge",
                 *HOLD_EFFORT_COLUMNS,
                 "inertia",
@@ -175,7 +182,7 @@ def builtin_tasks() -> list[Task]:
             "3 and 2 mm, edge span: not a thin flat, a tip or a corner) and the hand off it, "
             "on parts at least 8 mm across, behind the centre of mass",
             requires=(
-                "epsilon",
+                "epsilon_hand",
                 "use_wedge_angle",
                 "use_wedge_angle_fine",
                 "use_edge_span",
@@ -199,7 +206,7 @@ def builtin_tasks() -> list[Task]:
             description="cutting with the 3 mm wedge test alone: U_τ if robust, the use point "
             "on an edge (wedge angle at 3 mm) and the hand off it, behind the centre of mass",
             requires=(
-                "epsilon",
+                "epsilon_hand",
                 "use_wedge_angle",
                 "use_clearance",
                 "contact_thickness",
