@@ -39,6 +39,7 @@ from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.epsilon_hand import epsilon_hand
 from .metrics.lp import OPTIMAL
+from .metrics.striking import use_depth, use_relief, use_swing_cosine
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
     contact_reach,
@@ -139,6 +140,8 @@ class UsePoints:
         rad.
     use_wedge_angle : (m,) float64 ndarray
         rad.
+    use_depth, use_relief : (m,) float64 ndarray
+        m (:mod:`affordgrasp.metrics.striking`).
     """
 
     use_dir: np.ndarray
@@ -148,6 +151,8 @@ class UsePoints:
     use_edge: np.ndarray
     use_edge_angle: np.ndarray
     use_wedge_angle: np.ndarray
+    use_depth: np.ndarray
+    use_relief: np.ndarray
 
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
@@ -172,11 +177,15 @@ class UsePoints:
         ug = np.full(len(T), np.nan)
         ang = np.full(len(T), np.nan)
         wedge = np.full(len(T), np.nan)
+        depth = np.full(len(T), np.nan)
+        relief = np.full(len(T), np.nan)
         if hit.any():
             ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
             ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
             wedge[hit] = use_wedge_angle(obj.mesh_data, P[hit], N[hit])
-        return cls(use_dir, P, N, T, ug, ang, wedge)
+            depth[hit] = use_depth(obj.mesh_data, P[hit], N[hit])
+            relief[hit] = use_relief(obj.mesh_data, P[hit], N[hit])
+        return cls(use_dir, P, N, T, ug, ang, wedge, depth, relief)
 
     @classmethod
     def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
@@ -300,6 +309,11 @@ def pair_scores(
         cols["use_edge"] = uses.use_edge[ui]
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
         cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
+        cols["use_depth"] = uses.use_depth[ui]
+        cols["use_relief"] = uses.use_relief[ui]
+        cols["use_swing_cosine"] = use_swing_cosine(
+            uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]
+        )
         cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
         cols["contact_reach"] = contact_reach(
             all_points,

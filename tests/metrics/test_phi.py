@@ -27,7 +27,8 @@ EXPECTED_COLUMNS = [
     "epsilon", "gws_volume", "epsilon_reason", "inertia", "hold_effort_px", "hold_effort_nx",
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
     "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle", "use_clearance",
-    "use_lever_ratio", "contact_reach",
+    "use_lever_ratio", "contact_reach", "use_depth", "use_relief",
+    "use_swing_cosine",
     "contact_thickness", "epsilon_hand",
 ]  # fmt: skip
 

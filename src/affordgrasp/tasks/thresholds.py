@@ -84,6 +84,11 @@ TAU_LEVER_DEFAULT = 1.0
 # scan-like hammers with their steel heads), striking with the handle's end beyond the
 # hand puts it on the other side (ratio -inf).
 TAU_LEVER_MAX_DEFAULT = 2.0
+# The striking surface itself (metrics.striking): a hammer's face or an axe's poll ends a
+# head that is deep behind it and flat around it. PLACEHOLDER
+TAU_DEPTH_DEFAULT = 0.045
+TAU_RELIEF_DEFAULT = 0.0005
+TAU_SWING_DEFAULT = 0.8
 # Cut holds the tool from behind its centre of mass: no contact past it towards U by more
 # than half of U's own offset from it, along the long axis (contact_reach <= 0.5). The
 # clearance and thickness tests alone left fingers on an axe's head (14-25 mm thick) and a
