@@ -54,7 +54,7 @@ from .metrics.use_geometry import (
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .search.cem import cem_search, plan_runs
-from .search.guidance import guidance
+from .search.guidance import guidance, swing_alignment
 from .search.ranking import TopRows, top_indices
 from .tasks import MetricColumns, get_task
 
@@ -372,6 +372,21 @@ def pair_scores(
     return {"grasp": gi, "use": ui, "value": np.where(np.isnan(values), -np.inf, values), **cols}
 
 
+def pair_guidance(rows: pa.Table, task, mode, overrides, uses: UsePoints, eps_column=()):
+    """A pair search's guidance: :func:`~affordgrasp.search.guidance.guidance` of the rows
+    plus 3 × their :func:`~affordgrasp.search.guidance.swing_alignment` with ``uses``
+    (grasps with contacts only)."""
+    n = rows.num_rows
+    g = guidance(rows, eps_column)
+    if n:
+        wp = np.asarray(rows.column("wrist_point").to_pylist(), float).reshape(n, 3)
+        wa = np.asarray(rows.column("wrist_axis").to_pylist(), float).reshape(n, 3)
+        touched = rows.column("n_contacts").to_numpy() > 0
+        align = np.nan_to_num(swing_alignment(task, mode, overrides, uses, wp, wa))
+        g = g + 3.0 * np.where(touched, align, 0.0)
+    return g
+
+
 @dataclass(frozen=True)
 class PairSearch:
     """Result of :func:`best_pairs`.
@@ -593,6 +608,9 @@ def optimize_pairs(
     d = use.use_dir
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
+    t = get_task(task)
+    # the rows' own use points are not the pairs': the guidance reads their ε column only
+    eps_column = tuple(c for c in ("epsilon_hand",) if c in t.requires)
 
     def objective(x: np.ndarray):
         # ε only (volume=False): the search never reads the GWS volume, whose 6-D hull is
@@ -603,7 +621,7 @@ def optimize_pairs(
         counts["lp"] += len(scores["value"])
         counts["finite"] += int(np.sum(scores["value"] > -np.inf))
         found.append((x[:, :6].copy(), best, best_use))
-        return best, guidance(rows)
+        return best, pair_guidance(rows, t, mode, overrides, use, eps_column)
 
     def first_generation(start: int, stop: int) -> np.ndarray:
         # run r's first generation: the next uniform samples of run ``seed``; run 0 is the
