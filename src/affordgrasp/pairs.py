@@ -375,7 +375,27 @@ def pair_scores(
 def pair_guidance(rows: pa.Table, task, mode, overrides, uses: UsePoints, eps_column=()):
     """A pair search's guidance: :func:`~affordgrasp.search.guidance.guidance` of the rows
     plus 3 × their :func:`~affordgrasp.search.guidance.swing_alignment` with ``uses``
-    (grasps with contacts only)."""
+    (grasps with contacts only).
+
+    Parameters
+    ----------
+    rows : pyarrow.Table
+        The simulated grasps (evaluated rows; their own use points are not read).
+    task : Task
+        The task searched.
+    mode : str
+        Threshold mode.
+    overrides : mapping of str to float
+        Threshold values that replace the mode's.
+    uses : UsePoints
+        The search's use points.
+    eps_column : tuple of str
+        ``("epsilon_hand",)`` to rank by it instead of ``epsilon``.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+    """
     n = rows.num_rows
     g = guidance(rows, eps_column)
     if n:
