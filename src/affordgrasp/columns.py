@@ -30,6 +30,9 @@ USE_METRICS: tuple[str, ...] = (
     "use_clearance",
     "use_lever_ratio",
     "contact_reach",
+    "use_depth",
+    "use_relief",
+    "use_swing_cosine",
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
@@ -82,6 +85,9 @@ METRIC_UNITS: dict[str, str] = {
     "contact_thickness": "m",
     "contact_width": "m",
     "epsilon_hand": "",
+    "use_depth": "m",
+    "use_relief": "m",
+    "use_swing_cosine": "",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).
@@ -92,6 +98,8 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "use_clearance": ("mm", 1000.0),
     "contact_thickness": ("mm", 1000.0),
     "contact_width": ("mm", 1000.0),
+    "use_depth": ("mm", 1000.0),
+    "use_relief": ("mm", 1000.0),
 }
 
 

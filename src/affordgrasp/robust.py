@@ -543,6 +543,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.epsilon_hand import epsilon_hand
     from .metrics.inertia import rotational_inertia
     from .metrics.phi import contact_metrics_batch
+    from .metrics.striking import use_swing_cosine
     from .metrics.transmission import use_force
     from .metrics.use_geometry import (
         contact_reach,
@@ -611,6 +612,11 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_wedge_angle": np.repeat(phi["use_wedge_angle"], k_count),
         "use_wedge_angle_fine": np.repeat(phi["use_wedge_angle_fine"], k_count),
         "use_edge_span": np.repeat(phi["use_edge_span"], k_count),
+        "use_depth": np.repeat(phi["use_depth"], k_count),
+        "use_relief": np.repeat(phi["use_relief"], k_count),
+        "use_swing_cosine": use_swing_cosine(
+            shifted_use, use_normal, wrist_point - shift, wrist_axis
+        ),
         # distances between the copy's contacts, its wrist and U: the shift moves all alike
         "use_clearance": use_clearance(points, flat.offsets, shifted_use),
         "contact_reach": contact_reach(

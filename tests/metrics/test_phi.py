@@ -29,6 +29,7 @@ EXPECTED_COLUMNS = [
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
     "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle",
     "use_wedge_angle_fine", "use_edge_span", "use_clearance", "use_lever_ratio", "contact_reach",
+    "use_depth", "use_relief", "use_swing_cosine",
     "contact_thickness", "contact_width", "epsilon_hand",
 ]  # fmt: skip
 

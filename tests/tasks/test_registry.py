@@ -32,6 +32,9 @@ def table(**overrides):
         "contact_width": np.full(n, 0.015),
         "use_lever_ratio": np.full(n, 1.2),
         "contact_reach": np.full(n, -0.2),
+        "use_depth": np.full(n, 0.08),  # a hammer's face: the head's length behind it
+        "use_relief": np.full(n, 1e-4),  # and flat around it
+        "use_swing_cosine": np.full(n, 0.99),  # struck square
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
@@ -92,6 +95,27 @@ def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
     assert beat.evaluate(beyond_hand)[0] == -INF
     nan_use = table(use_wedge_angle=[np.nan, math.pi, math.pi, math.pi, math.pi])
     assert beat.evaluate(nan_use)[0] == -INF  # no use point: not usable
+
+
+def test_beat_strikes_with_a_deep_flat_surface():
+    beat, paper = tasks.get_task("beat"), tasks.get_task("beat-paper")
+    blunt = dict(use_wedge_angle=np.full(5, math.pi))
+    # a side face of the head (25 mm behind it), a claw, a ball peen (1 mm off its plane at
+    # 5 mm), a ring that leaves the part (inf), and a face
+    cols = table(
+        **blunt,
+        use_depth=[0.025, 0.008, 0.09, 0.09, 0.09],
+        use_relief=[1e-4, 1e-4, 1e-3, INF, 1e-4],
+    )
+    got = beat.evaluate(cols)
+    assert np.all(got[:4] == -INF) and np.isfinite(got[4])
+    assert np.isfinite(paper.evaluate(cols)[:4]).all()  # the paper's form reads neither
+    assert beat.thresholds["tau_depth"] == tasks.TAU_DEPTH_DEFAULT
+    assert beat.thresholds["tau_relief"] == tasks.TAU_RELIEF_DEFAULT
+    relaxed = beat.evaluate(cols, tau_depth=0.0, tau_relief=INF)
+    assert np.isfinite(relaxed).all()
+    nan_depth = table(**blunt, use_depth=[np.nan, 0.09, 0.09, 0.09, 0.09])
+    assert beat.evaluate(nan_depth)[0] == -INF
 
 
 def test_beat_and_cut_gate_epsilon_at_the_hand_length_the_paper_variants_epsilon():

@@ -318,6 +318,10 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
         "contact_reach": float(rng.uniform(-0.1, -0.01)),
     }
     row["epsilon_hand"] = row["epsilon"]  # objects within 0.25 m
+    # a deep, flat striking surface when blunt; an edge has little behind it
+    row["use_depth"] = 0.08 if blunt else 0.002
+    row["use_relief"] = 1e-4 if blunt else 2e-3
+    row["use_swing_cosine"] = 0.99
     return row
 
 

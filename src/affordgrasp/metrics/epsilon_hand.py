@@ -1,11 +1,11 @@
 """ε at a hand's torque length (``epsilon_hand``): the robustness gate of long objects.
 
-GraspIt!'s ε (:mod:`.epsilon`, SPEC §2.4) divides every torque by r_max, the largest distance
-from the centre of mass to the surface. The same hold then gives a smaller ε on a longer
-object: a torque of 1 N·m is 1 / r_max in the wrench space, so a sword (r_max 0.53-0.73 m) needs
-three times the torque of a knife (0.17-0.24 m) for the same ε, and the tasks' τ_ε, calibrated
-on the built-in families (most of them within 0.25 m), is out of reach on it (2 of 15,000
-uniform grasps of scan-like swords; docs/validation.md §7).
+GraspIt!'s ε (:mod:`.epsilon`, conventions: Metrics) divides every torque by r_max, the
+largest distance from the centre of mass to the surface. The same hold then gives a smaller
+ε on a longer object: a torque of 1 N·m is 1 / r_max in the wrench space, so a sword (r_max
+0.53-0.73 m) needs three times the torque of a knife (0.17-0.24 m) for the same ε, and the
+tasks' τ_ε, calibrated on the built-in families (most of them within 0.25 m), is out of
+reach on it (2 of 15,000 uniform grasps of scan-like swords; docs/validation.md §7).
 
 ``epsilon_hand`` is the same ε with torques divided by L = min(r_max, r_ref) instead, r_ref =
 :data:`EPSILON_HAND_LENGTH_M` (0.25 m: the largest r_max of the one-hand tools the thresholds

@@ -25,6 +25,9 @@ use_lever_ratio           --     U's distance to the wrist axis / the centre of 
 contact_thickness         m      thinnest chord through the solid under a contact
 contact_width             m      narrowest part under a contact, across the part
 contact_reach             --     farthest contact past the centre of mass towards U, over U's offset
+use_depth                 m      the solid's depth behind U along -n (:mod:`.striking`)
+use_relief                m      U's and a 5 mm ring's largest distance from their plane
+use_swing_cosine          --     cosine between U's normal and its swing velocity
 epsilon_hand              --     ε with torques / min(r_max, 0.25 m) (:mod:`.epsilon_hand`)
 ========================  =====  ==========================================================
 
@@ -56,6 +59,7 @@ from .epsilon_hand import epsilon_hand
 from .hull import hull_workspace
 from .inertia import rotational_inertia
 from .lp import OPTIMAL
+from .striking import use_depth, use_relief, use_swing_cosine
 from .transmission import use_force, use_force_kernel
 from .use_geometry import (
     EDGE_RADIUS_M,
@@ -283,6 +287,9 @@ def compute_phi_batch(
     out["use_wedge_angle_fine"] = wedge.inner_angle if wedge is not None else np.zeros(0)
     out["use_edge_span"] = wedge.span if wedge is not None else np.zeros(0)
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
+    out["use_depth"] = np.asarray(use_depth(mesh, use_point, use_normal), dtype=float)
+    out["use_relief"] = np.asarray(use_relief(mesh, use_point, use_normal), dtype=float)
+    out["use_swing_cosine"] = use_swing_cosine(use_point, use_normal, wrist_point, wrist_axis)
     out["use_lever_ratio"] = (
         use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)
     )

@@ -13,12 +13,15 @@ from .thresholds import (
     TAU_BLUNT_DEFAULT,
     TAU_CLEARANCE_DEFAULT,
     TAU_DELTA_DEFAULT,
+    TAU_DEPTH_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
     TAU_REACH_DEFAULT,
+    TAU_RELIEF_DEFAULT,
     TAU_SPAN_DEFAULT,
+    TAU_SWING_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -38,6 +41,9 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["contact_thickness"] >= t["tau_thick"])
         & (m["use_lever_ratio"] >= t["tau_lever"])
         & (m["use_lever_ratio"] <= t["tau_lever_max"])
+        & (m["use_depth"] >= t["tau_depth"])
+        & (m["use_relief"] <= t["tau_relief"])
+        & (m["use_swing_cosine"] >= t["tau_swing"])
     )
     # ε at a hand's torque length: the same gate as ε within 0.25 m, the same torque beyond
     return np.where(ok, _beat_formula(m, t, m["epsilon_hand"]), -np.inf)
@@ -143,9 +149,12 @@ def builtin_tasks() -> list[Task]:
                 "tau_thick": TAU_THICKNESS_DEFAULT,
                 "tau_lever": TAU_LEVER_DEFAULT,
                 "tau_lever_max": TAU_LEVER_MAX_DEFAULT,
+                "tau_depth": TAU_DEPTH_DEFAULT,
+                "tau_relief": TAU_RELIEF_DEFAULT,
+                "tau_swing": TAU_SWING_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
-            "on a blunt use point with the hand off it",
+            "on a flat, blunt use point at the end of a deep part, with the hand off it",
             requires=(
                 "epsilon_hand",
                 "discharge",
@@ -156,6 +165,9 @@ def builtin_tasks() -> list[Task]:
                 "use_clearance",
                 "contact_thickness",
                 "use_lever_ratio",
+                "use_depth",
+                "use_relief",
+                "use_swing_cosine",
             ),
         ),
         make_task(
