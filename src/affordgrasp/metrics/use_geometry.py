@@ -594,7 +594,10 @@ def use_wedge_shape(
         w_in = _ray_inside(ray, t, inner_radius, m * k).reshape(m, k)
         inner[first : first + m] = 2.0 * np.pi * w_in.mean(axis=1)
         total = w.sum(axis=1)
-        moment = (w @ outer).reshape(m, 3, 3) / np.where(total > 0, total, 1.0)[:, None, None]
+        # einsum's own loop, not a BLAS product: each point's sum runs in the same order
+        # whatever else is in the batch, so the span does not depend on the batch's size
+        moment = np.einsum("mk,kq->mq", w, outer).reshape(m, 3, 3)
+        moment /= np.where(total > 0, total, 1.0)[:, None, None]
         moment[total <= 0] = np.eye(3) / 3.0
         span[first : first + m] = np.linalg.eigvalsh(moment)[:, 1]
     return WedgeShape(angle, inner, span)
