@@ -17,6 +17,8 @@ def _uses(points, normals, depth=0.09, relief=1e-4, wedge=np.pi):
         use_edge=np.zeros(n),
         use_edge_angle=np.full(n, np.pi),
         use_wedge_angle=np.full(n, wedge),
+        use_wedge_angle_fine=np.full(n, wedge),
+        use_edge_span=np.full(n, 1.0 / 3.0),
         use_depth=np.full(n, depth),
         use_relief=np.full(n, relief),
     )
