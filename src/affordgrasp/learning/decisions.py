@@ -208,3 +208,41 @@ def decision_threshold(config: dict) -> float:
             "pass a threshold explicitly or retrain the model"
         )
     return float(value)
+
+
+def oracle_hit_rate(rows: int, good: int, candidates: int) -> float:
+    """Chance that ``candidates`` rows drawn without replacement hold at least one good row.
+
+    The best a decider can do: the oracle chooses a good (e.g. viable) grasp exactly when
+    one is among the candidates. Exact (hypergeometric), no draws.
+
+    Parameters
+    ----------
+    rows : int
+        Rows to draw from (an object's simulated grasps).
+    good : int
+        How many of them are good, 0 <= good <= rows.
+    candidates : int
+        Candidates drawn; more than ``rows`` gives NaN (the rows do not allow it).
+
+    Returns
+    -------
+    float
+        1 − C(rows − good, candidates) / C(rows, candidates), in [0, 1]; NaN when
+        ``candidates > rows``.
+
+    Raises
+    ------
+    InputError
+        When the counts are negative or ``good > rows``.
+    """
+    if rows < 0 or good < 0 or candidates < 0 or good > rows:
+        raise InputError(
+            f"oracle_hit_rate needs 0 <= good <= rows and candidates >= 0, got rows={rows}, "
+            f"good={good}, candidates={candidates}"
+        )
+    if candidates > rows:
+        return float("nan")
+    from scipy.stats import hypergeom
+
+    return float(hypergeom(rows, good, candidates).sf(0))
