@@ -199,6 +199,12 @@ def main() -> None:
         action="store_true",
         help="store the classifiers' prior-shift calibration (train --calibrate)",
     )
+    parser.add_argument(
+        "--members",
+        type=int,
+        default=None,
+        help="networks per regressor ensemble (default: the recipe's, 3)",
+    )
     args = parser.parse_args()
     models = set(args.models.split(","))
     if not models or models - {"classifier", "regressor"}:
@@ -217,6 +223,8 @@ def main() -> None:
     text = dataset_recipe(args.samples, args.robust)
     for name in targets:
         prefix, classifier, regressor = recipes[name]
+        if args.members is not None:
+            regressor = dict(regressor, members=args.members)
         for kind, recipe in (("classifier", classifier), ("regressor", regressor)):
             if kind in models:
                 out = args.out / f"{prefix}_{kind}.safetensors"
