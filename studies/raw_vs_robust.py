@@ -309,7 +309,8 @@ def main() -> None:
     result["decisions"] = decide(
         deciders, objects, truth, candidates=args.candidates, draws=args.draws, seed=args.seed
     )
-    counts = [c for c in (16, 32, 64, 128, 256, 512, 1024) if c > 0]
+    most = min(int((objects == o).sum()) for o in result["objects"])
+    counts = [c for c in (16, 32, 64, 128, 256, 512, 1024) if c <= most]
     oracle = {}
     for lab, y in (("viable", viable), ("robust_viable>=0.5", rv >= ROBUST_LEVEL)):
         per = {}
