@@ -28,6 +28,9 @@ USE_METRICS: tuple[str, ...] = (
     "use_clearance",
     "use_lever_ratio",
     "contact_reach",
+    "use_depth",
+    "use_relief",
+    "use_swing_cosine",
 )
 
 # Numeric metrics that depend on the grasp only (not on the use point).
@@ -37,6 +40,7 @@ GRASP_METRICS: tuple[str, ...] = (
     "inertia",
     *HOLD_EFFORT_COLUMNS,
     "contact_thickness",
+    "epsilon_hand",
 )
 
 METRIC_COLUMNS: tuple[str, ...] = (
@@ -47,6 +51,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
     *HOLD_EFFORT_COLUMNS,
     *USE_METRICS,
     "contact_thickness",
+    "epsilon_hand",
 )
 
 # Columns computed from the metric columns (tasks may read them by name).
@@ -72,6 +77,10 @@ METRIC_UNITS: dict[str, str] = {
     "use_lever_ratio": "",
     "contact_reach": "",
     "contact_thickness": "m",
+    "epsilon_hand": "",
+    "use_depth": "m",
+    "use_relief": "m",
+    "use_swing_cosine": "",
 }
 
 # Tables show these columns in another unit than the data: (unit shown, factor).
@@ -80,6 +89,8 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "use_wedge_angle": ("°", 180.0 / math.pi),
     "use_clearance": ("mm", 1000.0),
     "contact_thickness": ("mm", 1000.0),
+    "use_depth": ("mm", 1000.0),
+    "use_relief": ("mm", 1000.0),
 }
 
 

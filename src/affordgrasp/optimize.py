@@ -442,6 +442,13 @@ def optimize(
             adv(len(x))
             best["cem"] = _better(best["cem"], sim.found(scored, done["n"]))
             done["n"] += len(x)
+            if use_points is not None:  # pairs: the rows' own use points are not scored
+                from .pairs import pair_guidance
+
+                eps_column = tuple(c for c in ("epsilon_hand",) if c in task_obj.requires)
+                return scored.values, pair_guidance(
+                    scored.table, task_obj, mode, thresholds or {}, use_points, eps_column
+                )
             return scored.values, guidance(scored.table, task_obj.requires)
 
         trace = cem_search(

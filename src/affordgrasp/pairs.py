@@ -37,7 +37,9 @@ from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
 from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
+from .metrics.epsilon_hand import epsilon_hand
 from .metrics.lp import OPTIMAL
+from .metrics.striking import use_depth, use_relief, use_swing_cosine
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
     contact_reach,
@@ -52,7 +54,7 @@ from .metrics.use_geometry import (
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .search.cem import cem_search, plan_runs
-from .search.guidance import guidance
+from .search.guidance import guidance, swing_alignment
 from .search.ranking import TopRows, top_indices
 from .tasks import MetricColumns, get_task
 
@@ -62,6 +64,8 @@ GRASP_COLUMNS = GRASP_METRICS
 # columns that depend on the use point: a task that reads none of them scores a grasp the
 # same with every use point, so one use point per grasp is enough
 USE_COLUMNS = frozenset(USE_METRICS)
+# grasp columns that tables evaluated by earlier versions lack (computed from the contacts)
+_LATER_GRASP_COLUMNS = frozenset({"contact_thickness", "epsilon_hand"})
 # most favourable values of the LP metrics, for the screen
 _SCREEN_FORCE = 1e12
 _SCREEN_IMPACT = 0.0
@@ -136,6 +140,8 @@ class UsePoints:
         rad.
     use_wedge_angle : (m,) float64 ndarray
         rad.
+    use_depth, use_relief : (m,) float64 ndarray
+        m (:mod:`affordgrasp.metrics.striking`).
     """
 
     use_dir: np.ndarray
@@ -145,6 +151,8 @@ class UsePoints:
     use_edge: np.ndarray
     use_edge_angle: np.ndarray
     use_wedge_angle: np.ndarray
+    use_depth: np.ndarray
+    use_relief: np.ndarray
 
     @classmethod
     def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
@@ -169,11 +177,15 @@ class UsePoints:
         ug = np.full(len(T), np.nan)
         ang = np.full(len(T), np.nan)
         wedge = np.full(len(T), np.nan)
+        depth = np.full(len(T), np.nan)
+        relief = np.full(len(T), np.nan)
         if hit.any():
             ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
             ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
             wedge[hit] = use_wedge_angle(obj.mesh_data, P[hit], N[hit])
-        return cls(use_dir, P, N, T, ug, ang, wedge)
+            depth[hit] = use_depth(obj.mesh_data, P[hit], N[hit])
+            relief[hit] = use_relief(obj.mesh_data, P[hit], N[hit])
+        return cls(use_dir, P, N, T, ug, ang, wedge, depth, relief)
 
     @classmethod
     def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
@@ -255,7 +267,7 @@ def pair_scores(
     col = {
         c: grasps.column(c).to_numpy(zero_copy_only=False)
         for c in GRASP_COLUMNS
-        if c in names or c != "contact_thickness"
+        if c in names or c not in _LATER_GRASP_COLUMNS
     }
     wrist_point = np.asarray(grasps.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wrist_axis = np.asarray(grasps.column("wrist_axis").to_pylist(), float).reshape(n, 3)
@@ -267,11 +279,21 @@ def pair_scores(
     # grasps in blocks of at most _BLOCK_PAIRS pairs: the screened pairs are a small part of
     # G × U, so memory follows them, not the product (the same pairs in the same order)
     with_contacts = np.flatnonzero(has_contacts)
-    all_points, all_normals, _, all_offsets = _contacts(grasps, np.arange(n))
+    all_points, all_normals, all_mu, all_offsets = _contacts(grasps, np.arange(n))
+    # rows evaluated before these columns existed: computed from their contacts
     if "contact_thickness" not in col:
-        # rows evaluated before the column existed: computed from their contacts
         col["contact_thickness"] = contact_thickness(
             obj.mesh_data, all_points, all_normals, all_offsets
+        )
+    if "epsilon_hand" not in col:
+        col["epsilon_hand"] = epsilon_hand(
+            all_points,
+            all_normals,
+            all_mu,
+            all_offsets,
+            obj.mass.center_of_mass,
+            obj.mass.r_max,
+            col["epsilon"],
         )
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
@@ -287,6 +309,11 @@ def pair_scores(
         cols["use_edge"] = uses.use_edge[ui]
         cols["use_edge_angle"] = uses.use_edge_angle[ui]
         cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
+        cols["use_depth"] = uses.use_depth[ui]
+        cols["use_relief"] = uses.use_relief[ui]
+        cols["use_swing_cosine"] = use_swing_cosine(
+            uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]
+        )
         cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
         cols["contact_reach"] = contact_reach(
             all_points,
@@ -343,6 +370,41 @@ def pair_scores(
     cols["use_force"] = force
     values = t.evaluate(MetricColumns(cols), mode, **overrides) if len(gi) else np.zeros(0)
     return {"grasp": gi, "use": ui, "value": np.where(np.isnan(values), -np.inf, values), **cols}
+
+
+def pair_guidance(rows: pa.Table, task, mode, overrides, uses: UsePoints, eps_column=()):
+    """A pair search's guidance: :func:`~affordgrasp.search.guidance.guidance` of the rows
+    plus 3 × their :func:`~affordgrasp.search.guidance.swing_alignment` with ``uses``
+    (grasps with contacts only).
+
+    Parameters
+    ----------
+    rows : pyarrow.Table
+        The simulated grasps (evaluated rows; their own use points are not read).
+    task : Task
+        The task searched.
+    mode : str
+        Threshold mode.
+    overrides : mapping of str to float
+        Threshold values that replace the mode's.
+    uses : UsePoints
+        The search's use points.
+    eps_column : tuple of str
+        ``("epsilon_hand",)`` to rank by it instead of ``epsilon``.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+    """
+    n = rows.num_rows
+    g = guidance(rows, eps_column)
+    if n:
+        wp = np.asarray(rows.column("wrist_point").to_pylist(), float).reshape(n, 3)
+        wa = np.asarray(rows.column("wrist_axis").to_pylist(), float).reshape(n, 3)
+        touched = rows.column("n_contacts").to_numpy() > 0
+        align = np.nan_to_num(swing_alignment(task, mode, overrides, uses, wp, wa))
+        g = g + 3.0 * np.where(touched, align, 0.0)
+    return g
 
 
 @dataclass(frozen=True)
@@ -566,6 +628,9 @@ def optimize_pairs(
     d = use.use_dir
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
+    t = get_task(task)
+    # the rows' own use points are not the pairs': the guidance reads their ε column only
+    eps_column = tuple(c for c in ("epsilon_hand",) if c in t.requires)
 
     def objective(x: np.ndarray):
         # ε only (volume=False): the search never reads the GWS volume, whose 6-D hull is
@@ -576,7 +641,7 @@ def optimize_pairs(
         counts["lp"] += len(scores["value"])
         counts["finite"] += int(np.sum(scores["value"] > -np.inf))
         found.append((x[:, :6].copy(), best, best_use))
-        return best, guidance(rows)
+        return best, pair_guidance(rows, t, mode, overrides, use, eps_column)
 
     def first_generation(start: int, stop: int) -> np.ndarray:
         # run r's first generation: the next uniform samples of run ``seed``; run 0 is the

@@ -540,8 +540,10 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.discharge import discharge
     from .metrics.effort import hold_effort, impact_effort
     from .metrics.epsilon import epsilon
+    from .metrics.epsilon_hand import epsilon_hand
     from .metrics.inertia import rotational_inertia
     from .metrics.phi import contact_metrics_batch
+    from .metrics.striking import use_swing_cosine
     from .metrics.transmission import use_force
     from .metrics.use_geometry import (
         contact_reach,
@@ -607,6 +609,11 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_edge_angle": np.repeat(phi["use_edge_angle"], k_count),
         # the use point is not perturbed: its local shape is the grasp's own
         "use_wedge_angle": np.repeat(phi["use_wedge_angle"], k_count),
+        "use_depth": np.repeat(phi["use_depth"], k_count),
+        "use_relief": np.repeat(phi["use_relief"], k_count),
+        "use_swing_cosine": use_swing_cosine(
+            shifted_use, use_normal, wrist_point - shift, wrist_axis
+        ),
         # distances between the copy's contacts, its wrist and U: the shift moves all alike
         "use_clearance": use_clearance(points, flat.offsets, shifted_use),
         "contact_reach": contact_reach(
@@ -617,6 +624,9 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         ).reshape(m),
         # the chord under each contact, on the object where the copy touched it
         "contact_thickness": contact_thickness(obj.mesh_data, flat.points, normals, flat.offsets),
+        "epsilon_hand": epsilon_hand(
+            points, normals, mu, flat.offsets, center, float(mass.r_max), eps, soft=bool(soft)
+        ),
     }
     for j, name in enumerate(HOLD_EFFORT_COLUMNS):
         cols[name] = np.ascontiguousarray(hold[:, j])

@@ -31,7 +31,7 @@ def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
     if task == "cut":
         t = tasks.get_task("cut").thresholds
         ok = (
-            (df.epsilon >= tau_eps)
+            (df.epsilon_hand >= tau_eps)
             & (df.use_wedge_angle <= t["tau_wedge"])
             & (df.use_clearance >= t["tau_clear"])
             & (df.contact_thickness >= t["tau_thick"])

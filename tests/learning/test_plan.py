@@ -9,6 +9,7 @@ pytest.importorskip("torch")
 
 import affordgrasp as ag  # noqa: E402
 from affordgrasp.cli import main  # noqa: E402
+from affordgrasp.errors import InputError  # noqa: E402
 from affordgrasp.learning.decisions import decision_order, true_percentiles  # noqa: E402
 
 
@@ -73,3 +74,29 @@ def test_plan_with_a_sensor_sees_other_images_of_the_same_candidates(box_mesh):
     assert np.array_equal(exact.p0, sensed.p0)
     np.testing.assert_array_equal(exact.true_score, sensed.true_score)
     assert not np.array_equal(exact.probability, sensed.probability)
+
+
+def test_plan_offset_range_scales_the_candidates_offsets_only(box_mesh, capsys):
+    from affordgrasp.commands.plan import OFFSET_RANGE_HELP
+    from affordgrasp.grasp.pregrasp import sample_inputs
+    from affordgrasp.learning.plan import OFFSET_RANGE
+
+    assert OFFSET_RANGE_HELP == OFFSET_RANGE
+    uniform = ag.plan(str(box_mesh), "pick", candidates=5, seed=4, offset_range=1.0)
+    near = ag.plan(str(box_mesh), "pick", candidates=5, seed=4)
+    p0, d = sample_inputs(4, 0, 5)
+    np.testing.assert_array_equal(uniform.p0, p0)
+    np.testing.assert_array_equal(uniform.use_dir, d)
+    # the default: the same draws, the offsets (u4, u5) scaled into [-R, R]²
+    np.testing.assert_array_equal(near.p0[:, [0, 1, 2, 5]], p0[:, [0, 1, 2, 5]])
+    np.testing.assert_array_equal(near.p0[:, 3:5], OFFSET_RANGE * p0[:, 3:5])
+    np.testing.assert_array_equal(near.use_dir, d)
+    assert near.offset_range == OFFSET_RANGE and near.summary()["offset_range"] == OFFSET_RANGE
+    for bad in (0.0, -0.5, 1.5, float("nan"), "wide"):
+        with pytest.raises(InputError, match="offset_range"):
+            ag.plan(str(box_mesh), "pick", candidates=2, offset_range=bad)
+    rc = main(["plan", str(box_mesh), "--candidates", "3", "--offset-range", "1", "--json"])
+    assert rc == 0, capsys.readouterr().err
+    assert json.loads(capsys.readouterr().out)["offset_range"] == 1.0
+    assert main(["plan", str(box_mesh), "--offset-range", "2"]) == 2
+    assert "offset_range" in capsys.readouterr().err

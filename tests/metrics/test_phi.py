@@ -27,8 +27,9 @@ EXPECTED_COLUMNS = [
     "epsilon", "gws_volume", "epsilon_reason", "inertia", "hold_effort_px", "hold_effort_nx",
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
     "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle", "use_clearance",
-    "use_lever_ratio", "contact_reach",
-    "contact_thickness",
+    "use_lever_ratio", "contact_reach", "use_depth", "use_relief",
+    "use_swing_cosine",
+    "contact_thickness", "epsilon_hand",
 ]  # fmt: skip
 
 
@@ -92,6 +93,7 @@ def test_batch_equals_the_metric_functions(scene):
         assert cols["use_wedge_angle"][i] == pytest.approx(use_wedge_angle(mesh, U[i], nU[i]))
         near = np.linalg.norm(cs.points - U[i], axis=1).min() if len(cs) else np.inf
         assert cols["use_clearance"][i] == pytest.approx(near)
+        assert cols["epsilon_hand"][i] == cols["epsilon"][i]  # r_max 0.07 m: within 0.25 m
     empty = [i for i, cs in enumerate(contacts) if len(cs) == 0]
     assert empty and all(cols["epsilon_reason"][i] == "no contact" for i in empty)
     assert all(np.isinf(cols["hold_effort_px"][i]) and cols["use_force"][i] == 0 for i in empty)
@@ -212,7 +214,7 @@ def test_without_volume_every_other_column_is_the_same(scene):
     assert np.all(np.isnan(fast["gws_volume"][closure]))
     assert np.all(fast["gws_volume"][~closure] == 0.0)
     for name in full:
-        if name == "epsilon":
+        if name in ("epsilon", "epsilon_hand"):
             np.testing.assert_allclose(fast[name], full[name], rtol=1e-9, atol=1e-12)
         elif name != "gws_volume":
             np.testing.assert_array_equal(fast[name], full[name])

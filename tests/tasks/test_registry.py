@@ -29,10 +29,14 @@ def table(**overrides):
         "contact_thickness": np.full(n, 0.02),
         "use_lever_ratio": np.full(n, 1.2),
         "contact_reach": np.full(n, -0.2),
+        "use_depth": np.full(n, 0.08),  # a hammer's face: the head's length behind it
+        "use_relief": np.full(n, 1e-4),  # and flat around it
+        "use_swing_cosine": np.full(n, 0.99),  # struck square
     }
     for s in ("px", "nx", "py", "ny", "pz", "nz"):
         cols[f"hold_effort_{s}"] = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
     cols.update({k: np.asarray(v, dtype=float) for k, v in overrides.items()})
+    cols.setdefault("epsilon_hand", cols["epsilon"])  # an object within 0.25 m
     return cols
 
 
@@ -88,6 +92,52 @@ def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
     assert beat.evaluate(beyond_hand)[0] == -INF
     nan_use = table(use_wedge_angle=[np.nan, math.pi, math.pi, math.pi, math.pi])
     assert beat.evaluate(nan_use)[0] == -INF  # no use point: not usable
+
+
+def test_beat_strikes_with_a_deep_flat_surface():
+    beat, paper = tasks.get_task("beat"), tasks.get_task("beat-paper")
+    blunt = dict(use_wedge_angle=np.full(5, math.pi))
+    # a side face of the head (25 mm behind it), a claw, a ball peen (1 mm off its plane at
+    # 5 mm), a ring that leaves the part (inf), and a face
+    cols = table(
+        **blunt,
+        use_depth=[0.025, 0.008, 0.09, 0.09, 0.09],
+        use_relief=[1e-4, 1e-4, 1e-3, INF, 1e-4],
+    )
+    got = beat.evaluate(cols)
+    assert np.all(got[:4] == -INF) and np.isfinite(got[4])
+    assert np.isfinite(paper.evaluate(cols)[:4]).all()  # the paper's form reads neither
+    assert beat.thresholds["tau_depth"] == tasks.TAU_DEPTH_DEFAULT
+    assert beat.thresholds["tau_relief"] == tasks.TAU_RELIEF_DEFAULT
+    relaxed = beat.evaluate(cols, tau_depth=0.0, tau_relief=INF)
+    assert np.isfinite(relaxed).all()
+    nan_depth = table(**blunt, use_depth=[np.nan, 0.09, 0.09, 0.09, 0.09])
+    assert beat.evaluate(nan_depth)[0] == -INF
+
+
+def test_beat_and_cut_gate_epsilon_at_the_hand_length_the_paper_variants_epsilon():
+    # a sword: ε (torques / r_max) below τ_ε, the same grasp's ε at 0.25 m above it
+    long = table(
+        epsilon=np.full(5, 0.01),
+        epsilon_hand=[0.01, 0.02, 0.02, 0.02, 0.02],
+        use_wedge_angle=np.full(5, math.pi),
+    )
+    beat = tasks.get_task("beat").evaluate(long)
+    assert beat[0] == -INF and np.isfinite(beat[1:]).all()
+    assert np.all(tasks.get_task("beat-paper").evaluate(long) == -INF)
+    edge = dict(long, use_wedge_angle=np.full(5, 0.3))
+    cut = tasks.get_task("cut").evaluate(edge)
+    assert cut[0] == -INF and np.isfinite(cut[1:]).all()
+    assert np.all(tasks.get_task("cut-dihedral").evaluate(edge) == -INF)
+    assert np.all(tasks.get_task("cut-ug").evaluate(edge) == -INF)
+    # viability (learning ground truth) stays on ε
+    weak = dict(edge, epsilon=np.full(5, 0.005))
+    assert np.all(tasks.get_task("viable").evaluate(weak) == 0.0)
+    # the modes set τ_ε of the same column
+    assert np.all(tasks.get_task("beat").evaluate(long, mode="extra-robustness") == -INF)
+    # rows written before the column existed are gated on ε itself
+    old = {k: v for k, v in long.items() if k != "epsilon_hand"}
+    assert np.all(tasks.get_task("beat").evaluate(old) == -INF)
 
 
 def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():

@@ -294,7 +294,7 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
     """Plausible metric values for a grasp row: pick finite, and beat (a blunt use point) or
     cut (a sharp one) finite, the hand well off the use point on a thick part."""
     wedge = rng.uniform(2.5, 3.1) if blunt else rng.uniform(0.4, 0.9)  # rad: 135° / 55° tests
-    return {
+    row = {
         "use_wedge_angle": float(wedge),
         "use_clearance": float(rng.uniform(0.04, 0.1)),
         "use_lever_ratio": float(rng.uniform(1.1, 1.9)),
@@ -314,6 +314,12 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
         "use_edge_angle": float(rng.uniform(0.2, 0.5)),
         "contact_reach": float(rng.uniform(-0.1, -0.01)),
     }
+    row["epsilon_hand"] = row["epsilon"]  # objects within 0.25 m
+    # a deep, flat striking surface when blunt; an edge has little behind it
+    row["use_depth"] = 0.08 if blunt else 0.002
+    row["use_relief"] = 1e-4 if blunt else 2e-3
+    row["use_swing_cosine"] = 0.99
+    return row
 
 
 def write_dataset(directory: Path, objects: list, rows_per_object: int = 6, seed: int = 0) -> Path:
@@ -339,7 +345,8 @@ def write_dataset(directory: Path, objects: list, rows_per_object: int = 6, seed
             row["wrist_axis"] = pose[:3, 2].tolist()
             row.update(metric_row(rng, blunt=i % 2 == 0))
             if i % 3 == 2:  # a failure: no force closure
-                row.update(epsilon=0.0, epsilon_reason="not force closure", status="touched")
+                row.update(epsilon=0.0, epsilon_hand=0.0, epsilon_reason="not force closure")
+                row["status"] = "touched"
                 row.update(
                     {f"hold_effort_{s}": np.inf for s in ("px", "nx", "py", "ny", "pz", "nz")}
                 )

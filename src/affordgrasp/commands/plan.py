@@ -7,6 +7,10 @@ import sys
 
 from ..errors import InputError, MissingDependencyError
 
+# learning.plan.OFFSET_RANGE, written out so that building the parser imports no learning
+# module (a test checks that the two agree)
+OFFSET_RANGE_HELP = 0.25
+
 
 def add_arguments(p) -> None:
     """Add the options of ``affordgrasp plan`` to its parser.
@@ -35,6 +39,14 @@ def add_arguments(p) -> None:
         help="classifier decision threshold (default: the one stored in the model, else 0.5)",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the candidates (default 0)")
+    p.add_argument(
+        "--offset-range",
+        type=float,
+        default=None,
+        metavar="R",
+        help="the candidates' approach-line offsets (u4, u5) are drawn in [-R, R]^2 (default "
+        f"{OFFSET_RANGE_HELP}: near the object's centre; 1: uniform, as datasets are generated)",
+    )
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     p.add_argument(
         "--physics",
@@ -97,6 +109,7 @@ def run(args, out) -> None:
         physics=args.physics,
         threshold=args.threshold,
         sensor=_sensor(args),
+        **({} if args.offset_range is None else {"offset_range": args.offset_range}),
         progress=progress,
     )
     doc = result.summary()

@@ -22,6 +22,10 @@ use_clearance             m      smallest contact-to-U distance
 use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
 contact_reach             --     farthest contact past the centre of mass towards U, over U's offset
+use_depth                 m      the solid's depth behind U along -n (:mod:`.striking`)
+use_relief                m      U's and a 5 mm ring's largest distance from their plane
+use_swing_cosine          --     cosine between U's normal and its swing velocity
+epsilon_hand              --     ε with torques / min(r_max, 0.25 m) (:mod:`.epsilon_hand`)
 ========================  =====  ==========================================================
 
 Infeasible efforts are +inf (IEEE), never a sentinel.
@@ -48,9 +52,11 @@ from .effort import (
     use_wrench,
 )
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
+from .epsilon_hand import epsilon_hand
 from .hull import hull_workspace
 from .inertia import rotational_inertia
 from .lp import OPTIMAL
+from .striking import use_depth, use_relief, use_swing_cosine
 from .transmission import use_force, use_force_kernel
 from .use_geometry import (
     EDGE_RADIUS_M,
@@ -276,6 +282,9 @@ def compute_phi_batch(
         np.asarray(use_wedge_angle(mesh, use_point, use_normal), dtype=float) if n else np.zeros(0)
     )
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
+    out["use_depth"] = np.asarray(use_depth(mesh, use_point, use_normal), dtype=float)
+    out["use_relief"] = np.asarray(use_relief(mesh, use_point, use_normal), dtype=float)
+    out["use_swing_cosine"] = use_swing_cosine(use_point, use_normal, wrist_point, wrist_axis)
     out["use_lever_ratio"] = (
         use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)
     )
@@ -286,6 +295,9 @@ def compute_phi_batch(
     )
     out["contact_thickness"] = (
         contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
+    )
+    out["epsilon_hand"] = epsilon_hand(
+        points, normals, mu, offsets, center, r_max, eps, soft=bool(soft)
     )
     return {name: out[name] for name in METRIC_COLUMNS}
 

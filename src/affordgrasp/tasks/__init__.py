@@ -12,17 +12,22 @@ overrides::
 
 Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
 
-* ``beat``: -inf if ε < τ_ε or δ < τ_δ or ΣE_h = inf, or the use point is not blunt
+* ``beat``: -inf if ε < τ_ε (``epsilon_hand``: torques over min(r_max, 0.25 m)) or δ < τ_δ
+  or ΣE_h = inf, or the use point is not blunt
   (``use_wedge_angle`` < τ_blunt, 135°) or a contact is within τ_clear (35 mm) of it
   (``use_clearance``) or one touches material thinner than τ_thick (8 mm,
   ``contact_thickness``) or U is nearer the wrist axis than the centre of mass
   (``use_lever_ratio`` < 1, signed: the centre of mass on U's side of the axis) or the
-  mass is in the inner half of the lever (``use_lever_ratio`` > 2), else I / E_i (0 when
-  E_i = inf);
-* ``beat-paper``: the paper's beat, without the bluntness and clearance tests;
-* ``cut``: -inf if ε < τ_ε, or the use point is not on an edge (``use_wedge_angle``, the
-  opening of the solid within 3 mm, > τ_wedge, 55°), or a contact is within τ_clear
-  (35 mm) of it or on material thinner than τ_thick (8 mm: the blade), or past the centre
+  mass is in the inner half of the lever (``use_lever_ratio`` > 2), or U is not a striking
+  surface: less than τ_depth of solid behind it (``use_depth``), its surroundings off their
+  plane by more than τ_relief within 5 mm (``use_relief``), or its normal off its swing
+  velocity (``use_swing_cosine`` < τ_swing), else I / E_i (0 when E_i = inf);
+* ``beat-paper``: the paper's beat (on ``epsilon``), without the tests of the use point and
+  the hand;
+* ``cut``: -inf if ε < τ_ε (``epsilon_hand``), or the use point is not on an edge
+  (``use_wedge_angle``, the opening of the solid within 3 mm, > τ_wedge, 55°), or a
+  contact is within τ_clear (35 mm) of it or on material thinner than τ_thick (8 mm: the
+  blade), or past the centre
   of mass towards U along the long axis by more than half of U's offset (``contact_reach``
   > τ_reach, 0.5), else U_τ;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
@@ -95,6 +100,7 @@ from .thresholds import (
     TAU_BLUNT_DEFAULT,
     TAU_CLEARANCE_DEFAULT,
     TAU_DELTA_DEFAULT,
+    TAU_DEPTH_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_EPS_EXTRA,
@@ -102,6 +108,8 @@ from .thresholds import (
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
     TAU_REACH_DEFAULT,
+    TAU_RELIEF_DEFAULT,
+    TAU_SWING_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -120,6 +128,9 @@ __all__ = [
     "MODES",
     "TASKS",
     "TAU_DELTA_DEFAULT",
+    "TAU_DEPTH_DEFAULT",
+    "TAU_RELIEF_DEFAULT",
+    "TAU_SWING_DEFAULT",
     "TAU_BLUNT_DEFAULT",
     "TAU_CLEARANCE_DEFAULT",
     "TAU_EDGE_ANGLE_DEFAULT",

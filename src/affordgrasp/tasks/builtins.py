@@ -13,11 +13,14 @@ from .thresholds import (
     TAU_BLUNT_DEFAULT,
     TAU_CLEARANCE_DEFAULT,
     TAU_DELTA_DEFAULT,
+    TAU_DEPTH_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
     TAU_REACH_DEFAULT,
+    TAU_RELIEF_DEFAULT,
+    TAU_SWING_DEFAULT,
     TAU_THICKNESS_DEFAULT,
     TAU_UG_DEFAULT,
     TAU_WEDGE_DEFAULT,
@@ -35,13 +38,23 @@ def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         & (m["contact_thickness"] >= t["tau_thick"])
         & (m["use_lever_ratio"] >= t["tau_lever"])
         & (m["use_lever_ratio"] <= t["tau_lever_max"])
+        & (m["use_depth"] >= t["tau_depth"])
+        & (m["use_relief"] <= t["tau_relief"])
+        & (m["use_swing_cosine"] >= t["tau_swing"])
     )
-    return np.where(ok, _beat_paper(m, t), -np.inf)
+    # ε at a hand's torque length: the same gate as ε within 0.25 m, the same torque beyond
+    return np.where(ok, _beat_formula(m, t, m["epsilon_hand"]), -np.inf)
 
 
 def _beat_paper(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+    return _beat_formula(m, t, m["epsilon"])
+
+
+def _beat_formula(
+    m: Mapping[str, np.ndarray], t: Mapping[str, float], eps: np.ndarray
+) -> np.ndarray:
     ok = (
-        (m["epsilon"] >= t["tau_eps"])
+        (eps >= t["tau_eps"])
         & (m["discharge"] >= t["tau_delta"])
         & np.isfinite(m["hold_effort_sum"])
     )
@@ -51,7 +64,7 @@ def _beat_paper(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarr
 
 def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
     ok = (
-        (m["epsilon"] >= t["tau_eps"])
+        (m["epsilon_hand"] >= t["tau_eps"])
         & (m["use_wedge_angle"] <= t["tau_wedge"])
         & (m["use_clearance"] >= t["tau_clear"])
         & (m["contact_thickness"] >= t["tau_thick"])
@@ -122,11 +135,14 @@ def builtin_tasks() -> list[Task]:
                 "tau_thick": TAU_THICKNESS_DEFAULT,
                 "tau_lever": TAU_LEVER_DEFAULT,
                 "tau_lever_max": TAU_LEVER_MAX_DEFAULT,
+                "tau_depth": TAU_DEPTH_DEFAULT,
+                "tau_relief": TAU_RELIEF_DEFAULT,
+                "tau_swing": TAU_SWING_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
-            "on a blunt use point with the hand off it",
+            "on a flat, blunt use point at the end of a deep part, with the hand off it",
             requires=(
-                "epsilon",
+                "epsilon_hand",
                 "discharge",
                 *HOLD_EFFORT_COLUMNS,
                 "inertia",
@@ -135,6 +151,9 @@ def builtin_tasks() -> list[Task]:
                 "use_clearance",
                 "contact_thickness",
                 "use_lever_ratio",
+                "use_depth",
+                "use_relief",
+                "use_swing_cosine",
             ),
         ),
         make_task(
@@ -157,7 +176,7 @@ def builtin_tasks() -> list[Task]:
             description="cutting: U_τ if robust, the use point on an edge (wedge angle at "
             "3 mm) and the hand off it, behind the centre of mass",
             requires=(
-                "epsilon",
+                "epsilon_hand",
                 "use_wedge_angle",
                 "use_clearance",
                 "contact_thickness",

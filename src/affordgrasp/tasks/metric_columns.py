@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
 from typing import Any
 
@@ -17,6 +18,9 @@ from ..columns import (
 )
 from ..errors import TaskError
 
+log = logging.getLogger(__name__)
+EPSILON_HAND = "epsilon_hand"
+
 
 class MetricColumns(Mapping):
     """Read-only view of metric columns as float64 arrays, with derived columns.
@@ -29,7 +33,8 @@ class MetricColumns(Mapping):
     columns : mapping, pyarrow.Table or pandas.DataFrame
         The metric columns of n rows; each is read once, as an (n,) float64 array, on
         first access. ``hold_effort_sum`` and ``hold_dirs`` are derived when the six hold
-        efforts are there (a stored ``hold_dirs`` is read as it is).
+        efforts are there (a stored ``hold_dirs`` is read as it is); a missing
+        ``epsilon_hand`` (rows of an earlier version) is read as ``epsilon``, with a warning.
     """
 
     def __init__(self, columns: Any):
@@ -46,6 +51,15 @@ class MetricColumns(Mapping):
             value = hold_dirs_count({c: self[c] for c in HOLD_EFFORT_COLUMNS})
         elif name in self._names:
             value = _column_as_float(self._source, name)
+        elif name == EPSILON_HAND and "epsilon" in self._names:
+            # rows written before the column existed: ε itself, which it equals on every
+            # object within 0.25 m of its centre of mass (stricter on longer ones)
+            log.warning(
+                "no %s column (rows written by an earlier version): using epsilon, which is "
+                "stricter on objects longer than 0.25 m; evaluate the rows again to get it",
+                EPSILON_HAND,
+            )
+            value = self["epsilon"]
         else:
             raise TaskError(
                 f"metric column {name!r} is missing; available: {', '.join(sorted(self._names))}"

@@ -84,6 +84,29 @@ TAU_LEVER_DEFAULT = 1.0
 # scan-like hammers with their steel heads), striking with the handle's end beyond the
 # hand puts it on the other side (ratio -inf).
 TAU_LEVER_MAX_DEFAULT = 2.0
+# The striking surface itself (metrics.striking), which the tests above do not tell from the
+# other blunt surfaces of the same head (a claw, a ball peen, the head's side faces and top).
+# Calibrated with studies/calibrate_striking.py on hammer and axe seeds 0-1, crisp and ~scan
+# (3000 use points by area each, the blunt ones; seeds 0-1 are both claw hammers, so the
+# peen's bound comes from its geometry): behind a striking face or a poll lies the head's
+# length, behind the head's side faces its width. use_depth, 5th/50th/95th percentile,
+# scan-like: hammer head (sides, claw) 9/25/33 mm, axe head (cheeks) 4/22/59 mm, the handle
+# 19-23/21-26/31-39 mm; striking face 11/37/104 mm (its 1.5 mm chamfer and noisy normals near
+# the rim read the head's diameter), poll 18/66/115 mm. 45 mm lies between the widths (22-32
+# mm) and the lengths (60 mm and more): it keeps 46 % of the blunt face points and 76 % of the
+# poll's (64 % and 100 % crisp) and 3.5 % / 8 % of the other head points (the top of the head,
+# where the ray runs down the handle, and an axe's beard).
+TAU_DEPTH_DEFAULT = 0.045
+# A ball peen (radius 11-15 mm) is as deep as the face: its surface leaves the plane fitted to
+# U and a 5 mm ring by 0.76-1.07 mm (8/9 of the sag); a flat face with a scanner's noise by 0.1-0.3
+# mm (the face points that pass the depth test: 0.5 mm keeps 25 % of all blunt face points
+# scan-like, 42 % crisp, against 26 % / 49 % at 0.8 mm). 0.5 mm lies below the flattest peen.
+TAU_RELIEF_DEFAULT = 0.0005
+# ... struck square: U's normal within 37 degrees of its swing velocity. The grasps that pass
+# every other test of beat on hammer:0~scan and axe:0~scan strike with the face at cosines of
+# 0.81-1.0 (5th-100th percentile) and, with δ >= 0.95 still, with the top of the head (its
+# normal along the lever, the palm off the handle's line) at 0.15-0.65 (5th-75th).
+TAU_SWING_DEFAULT = 0.8
 # Cut holds the tool from behind its centre of mass: no contact past it towards U by more
 # than half of U's own offset from it, along the long axis (contact_reach <= 0.5). The
 # clearance and thickness tests alone left fingers on an axe's head (14-25 mm thick) and a
