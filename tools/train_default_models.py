@@ -18,6 +18,13 @@ One command, deterministic (seed 0, one torch thread):
 The printed test metrics are on the held-out objects. Every part is deterministic: on an
 unchanged simulation the command reproduces the shipped files (docs/learning.md, "Shipped
 models", with the time it took).
+
+``--robust K`` generates the dataset with robust labels (docs/robust.md) and ``--targets
+robust`` trains the same two recipes on the robust targets instead (the classifier on
+``robust_viable>=0.5``, the regressor on the graded ``robust_hold`` over every row, without
+the perturbed copies, which would need their own robust labels), written as
+``robust_classifier.safetensors`` and ``robust_regressor.safetensors`` (docs/learning.md,
+"Raw vs robust targets").
 """
 
 from __future__ import annotations
@@ -62,12 +69,29 @@ REGRESSOR = {
 }
 
 
-def make_dataset(directory: Path, samples: int, workers: int | None) -> None:
+# The same recipes on the robust targets (docs/robust.md): the classifier learns whether at
+# least half of the 25 perturbed copies stay viable (Dex-Net's robust label reads the same
+# way: success more often than not under the perturbations); the regressor learns pick's
+# graded robust score on every row (load directions held on average, then the effort).
+ROBUST_CLASSIFIER = dict(CLASSIFIER, target="robust_viable>=0.5")
+ROBUST_REGRESSOR = {
+    k: v for k, v in dict(REGRESSOR, target="robust_hold").items() if k != "more_viable"
+}
+
+
+def make_dataset(directory: Path, samples: int, workers: int | None, robust: int = 0) -> None:
     from affordgrasp.dataset.generate import generate
 
     started = time.perf_counter()
     summary = generate(
-        OBJECTS, samples, directory, seed=0, workers=workers, depth=True, shard_size=samples
+        OBJECTS,
+        samples,
+        directory,
+        seed=0,
+        workers=workers,
+        depth=True,
+        shard_size=samples,
+        robust=robust or None,
     )
     print(
         f"dataset {directory}: {summary.samples_written} samples written now, "
@@ -78,12 +102,17 @@ def make_dataset(directory: Path, samples: int, workers: int | None) -> None:
 DATASET = "13 families x 5 instances (variants 0-4) x 1500 uniform samples, seed 0"
 
 
-def ship(path: Path, more_viable: dict | None = None) -> None:
+def dataset_recipe(samples: int = 1500, robust: int = 0) -> str:
+    """The training dataset in words (recorded in the model files)."""
+    text = DATASET.replace("1500 uniform samples", f"{samples} uniform samples")
+    return text + (f", robust labels K = {robust}" if robust else "")
+
+
+def ship(path: Path, more_viable: dict | None = None, dataset: str = DATASET) -> None:
     """Record the dataset by its recipe, not by this machine's path (weights unchanged)."""
     from affordgrasp.learning.io import load_model, save_model
 
     model, config = load_model(path)
-    dataset = DATASET
     if more_viable:
         dataset += (
             f"; + the still-viable of {more_viable['copies']} perturbed copies of each viable "
@@ -93,7 +122,15 @@ def ship(path: Path, more_viable: dict | None = None) -> None:
     save_model(path, model, config)
 
 
-def train(directory: Path, recipe: dict, out: Path, epochs: int) -> dict:
+def train(
+    directory: Path,
+    recipe: dict,
+    out: Path,
+    epochs: int,
+    *,
+    calibrate: bool = False,
+    dataset: str = DATASET,
+) -> dict:
     from affordgrasp.learning.api import prepare_split, train_on_dataset
     from affordgrasp.learning.training import TrainSettings
 
@@ -127,8 +164,9 @@ def train(directory: Path, recipe: dict, out: Path, epochs: int) -> dict:
         log_target=recipe.get("log", False),
         members=recipe.get("members", 1),
         prepared=prepared,
+        calibrate=calibrate,
     )
-    ship(out, extra)
+    ship(out, extra, dataset)
     tr = config["training"]
     print(
         f"{out.name}: {tr['rows']} rows, {len(tr['history'])} epochs (best {tr['best_epoch']}), "
@@ -147,16 +185,50 @@ def main() -> None:
     parser.add_argument(
         "--models", default="classifier,regressor", help="which models to rebuild (comma-separated)"
     )
+    parser.add_argument(
+        "--robust", type=int, default=0, help="robust labels with K copies (default 0: none)"
+    )
+    parser.add_argument(
+        "--targets",
+        default="raw",
+        help="raw (viable, hold_effort_sum: the shipped models), robust (robust_viable>=0.5, "
+        "robust_hold; needs a dataset with robust labels) or raw,robust",
+    )
+    parser.add_argument(
+        "--calibrate",
+        action="store_true",
+        help="store the classifiers' prior-shift calibration (train --calibrate)",
+    )
+    parser.add_argument(
+        "--members",
+        type=int,
+        default=None,
+        help="networks per regressor ensemble (default: the recipe's, 3)",
+    )
     args = parser.parse_args()
     models = set(args.models.split(","))
     if not models or models - {"classifier", "regressor"}:
         parser.error(f"--models {args.models!r}: name classifier, regressor or both")
-    make_dataset(args.data, args.samples, args.workers)
+    targets = args.targets.split(",")
+    if not targets or set(targets) - {"raw", "robust"}:
+        parser.error(f"--targets {args.targets!r}: name raw, robust or both")
+    if "robust" in targets and args.robust <= 0:
+        parser.error("--targets robust needs robust labels: pass --robust K (e.g. 25)")
+    make_dataset(args.data, args.samples, args.workers, args.robust)
     args.out.mkdir(parents=True, exist_ok=True)
-    if "classifier" in models:
-        train(args.data, CLASSIFIER, args.out / "default_classifier.safetensors", args.epochs)
-    if "regressor" in models:
-        train(args.data, REGRESSOR, args.out / "default_regressor.safetensors", args.epochs)
+    recipes = {
+        "raw": (("default", CLASSIFIER, REGRESSOR)),
+        "robust": (("robust", ROBUST_CLASSIFIER, ROBUST_REGRESSOR)),
+    }
+    text = dataset_recipe(args.samples, args.robust)
+    for name in targets:
+        prefix, classifier, regressor = recipes[name]
+        if args.members is not None:
+            regressor = dict(regressor, members=args.members)
+        for kind, recipe in (("classifier", classifier), ("regressor", regressor)):
+            if kind in models:
+                out = args.out / f"{prefix}_{kind}.safetensors"
+                train(args.data, recipe, out, args.epochs, calibrate=args.calibrate, dataset=text)
 
 
 if __name__ == "__main__":

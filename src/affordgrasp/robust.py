@@ -614,9 +614,10 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_edge_span": np.repeat(phi["use_edge_span"], k_count),
         "use_depth": np.repeat(phi["use_depth"], k_count),
         "use_relief": np.repeat(phi["use_relief"], k_count),
-        "use_swing_cosine": use_swing_cosine(
-            shifted_use, use_normal, wrist_point - shift, wrist_axis
-        ),
+        "use_swing_cosine": np.asarray(
+            use_swing_cosine(shifted_use, use_normal, wrist_point - shift, wrist_axis),
+            dtype=float,
+        ).reshape(m),
         # distances between the copy's contacts, its wrist and U: the shift moves all alike
         "use_clearance": use_clearance(points, flat.offsets, shifted_use),
         "contact_reach": contact_reach(

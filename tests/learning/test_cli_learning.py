@@ -279,3 +279,27 @@ def test_decisions_replay_the_choice_in_physics(tiny_dataset):
     outcome = res["per_object"]["knife:0"]["physics"]
     assert isinstance(outcome["hold_ok"], bool)
     assert res["physics_hold_rate"] == float(outcome["hold_ok"])
+
+
+def test_thresholded_target_and_robust_decisions(tiny_dataset, tmp_path, capsys):
+    # a thresholded column is a classifier target (here a plain column, for speed)
+    model = tmp_path / "c.safetensors"
+    args = ["train", str(tiny_dataset), "--target", "n_contacts>=3", "--epochs", "1"]
+    rc = main([*args, "-o", str(model), "--json"])
+    assert rc == 0, capsys.readouterr().err
+    target = json.loads(capsys.readouterr().out)["config"]["target"]
+    assert target["kind"] == "classification" and target["name"] == "n_contacts>=3"
+    # a dataset with robust labels: the decisions report the chosen grasp's robust rate
+    from affordgrasp.dataset.generate import generate
+
+    robust = tmp_path / "robust"
+    generate(["knife:0"], 12, robust, seed=0, workers=1, depth=True, robust=2)
+    rc = main(
+        ["model-eval", str(model), str(robust), "--objects", "all", "--candidates", "64", "--json"]
+    )
+    assert rc == 0, capsys.readouterr().err
+    entry = json.loads(capsys.readouterr().out)["decisions"]["per_object"]["knife:0"]
+    rate = pq.read_table(robust).column("robust_viable").to_numpy()
+    # every row is a candidate: random's expectation is the object's mean rate
+    assert entry["random"]["top1_robust_viable"] == pytest.approx(rate.mean())
+    assert entry["model"]["top1_robust_viable"] in set(rate.tolist())

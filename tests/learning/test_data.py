@@ -5,7 +5,13 @@ import pytest
 
 from affordgrasp.errors import InputError
 from affordgrasp.learning.data import balanced_indices, split_by_family, split_by_object
-from affordgrasp.learning.targets import make_target
+from affordgrasp.learning.targets import (
+    make_target,
+    target_column,
+    target_rows,
+    target_values,
+    threshold_target,
+)
 
 OBJECTS = [f"{f}:{i}" for f in ("knife", "mug", "axe") for i in range(5)] + ["cone:0"]
 FAMILIES = [o.split(":")[0] for o in OBJECTS]
@@ -48,3 +54,19 @@ def test_targets():
     lg = make_target("impact_effort", np.linspace(0, 100, 101), log=True)
     np.testing.assert_allclose(lg.denormalise(lg.normalise(np.array([5.0, 50.0]))), [5, 50])
     assert make_target("viable").kind == "classification"
+
+
+def test_thresholded_classification_target():
+    t = make_target("robust_viable>=0.50")
+    assert (t.name, t.kind, t.rows) == ("robust_viable>=0.5", "classification", "all")
+    assert threshold_target(t.name) == ("robust_viable", 0.5)
+    assert target_column(t.name) == "robust_viable"
+    assert target_column("viable") is None and target_column("task:pick") is None
+    assert target_column("robust_hold") == "robust_hold"
+    columns = {"robust_viable": np.array([0.0, 0.48, 0.5, 0.52, 1.0, np.nan])}
+    # the level itself counts as reached; an unknown (NaN) rate does not
+    assert target_values(t.name, columns).tolist() == [0, 0, 1, 1, 1, 0]
+    assert target_rows(t, columns).all()
+    for bad in ("robust_viable>=", ">=0.5", "robust_viable>=high", "robust_viable>=inf"):
+        with pytest.raises(InputError, match="COLUMN>=LEVEL"):
+            make_target(bad)

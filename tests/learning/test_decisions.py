@@ -8,6 +8,7 @@ from affordgrasp.learning.decisions import (
     decision_measures,
     decision_order,
     decision_threshold,
+    oracle_hit_rate,
     oracle_order,
     random_measures,
     true_percentiles,
@@ -64,6 +65,33 @@ def test_measures_random_and_oracle():
     r = random_measures(score, viable)
     assert r["top1_viable"] == pytest.approx(0.5) and r["top1_feasible"] == pytest.approx(4 / 6)
     assert r["top1_percentile"] == pytest.approx(50.0)
+
+
+def test_robust_viable_rate_of_the_choice():
+    score = np.array([-np.inf, -10.0, -5.0])
+    viable = np.array([False, True, True])
+    rv = np.array([0.2, 0.4, 0.9])
+    m = decision_measures(np.array([1, 2, 0]), score, viable, robust_viable=rv)
+    assert m["top1_robust_viable"] == 0.4
+    assert "top1_robust_viable" not in decision_measures(np.array([1, 2, 0]), score, viable)
+    assert random_measures(score, viable, robust_viable=rv)["top1_robust_viable"] == pytest.approx(
+        0.5
+    )
+
+
+def test_oracle_hit_rate_is_exact():
+    from itertools import combinations
+
+    good = np.array([True, False, False, True, False, False, False])
+    for k in range(len(good) + 1):  # enumerate every candidate set
+        sets = list(combinations(range(len(good)), k))
+        expected = np.mean([good[list(c)].any() for c in sets])
+        assert oracle_hit_rate(len(good), int(good.sum()), k) == pytest.approx(expected)
+    assert oracle_hit_rate(4, 1, 2) == pytest.approx(1 - 3 / 6)
+    assert oracle_hit_rate(10, 0, 5) == 0.0 and oracle_hit_rate(10, 1, 10) == 1.0
+    assert np.isnan(oracle_hit_rate(10, 3, 11))  # more candidates than rows
+    with pytest.raises(InputError, match="good <= rows"):
+        oracle_hit_rate(3, 4, 2)
 
 
 def test_decision_threshold_stored_or_default():

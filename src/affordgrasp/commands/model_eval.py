@@ -306,7 +306,10 @@ def _decisions(args, out, models, baseline, objects) -> dict:
     deciders = ["model"] + (["baseline"] if baseline else []) + ["random", "oracle"]
     header = ["measure", "models", *(["baseline"] if baseline else []), "random", "oracle"]
     rows = []
-    for label, key in DECISION_ROWS:
+    labels = list(DECISION_ROWS)
+    if "top1_robust_viable" in res["mean"]["model"]:  # a dataset with robust labels
+        labels.insert(2, ("chosen grasp robust viable rate (mean)", "top1_robust_viable"))
+    for label, key in labels:
         rows.append([label, *[res["mean"][d][key] for d in deciders]])
     rows.append(
         ["chosen grasp percentile (median)", *[res["median_percentile"][d] for d in deciders]]

@@ -26,7 +26,8 @@ def add_arguments(p) -> None:
         "--target",
         default="viable",
         help="viable (classifier), hold_effort_sum (regressor on viable grasps, as the paper), "
-        "a metric column or task:NAME (default viable)",
+        "COLUMN>=LEVEL (classifier, e.g. 'robust_viable>=0.5' on a --robust dataset), "
+        "a metric column (regressor, e.g. robust_hold) or task:NAME (default viable)",
     )
     p.add_argument("-o", "--out", required=True, metavar="FILE", help="model.safetensors")
     p.add_argument("--split", choices=("object", "family"), default="object")

@@ -23,7 +23,14 @@ from ..columns import HOLD_EFFORT_COLUMNS
 from ..dataset.handle import Dataset, DatasetLike
 from ..dataset.splits import Split, split_by_family, split_by_object  # noqa: F401 - their former home
 from ..errors import DatasetError, InputError
-from .targets import Target, make_target, target_rows, target_values
+from .targets import (
+    Target,
+    make_target,
+    target_column,
+    target_rows,
+    target_values,
+    threshold_target,
+)
 
 log = logging.getLogger(__name__)
 
@@ -102,7 +109,8 @@ def read_rows(
     directory : path or Dataset
         A dataset generated with metrics.
     target : str or Target
-        ``"viable"``, ``"hold_effort_sum"``, a metric column or ``"task:NAME"``; a Target
+        ``"viable"``, ``"hold_effort_sum"``, a metric column, ``"COLUMN>=LEVEL"`` or
+        ``"task:NAME"``; a Target
         keeps its scale. For a generic column given by name, the scale is set from these rows
         (pass the training rows' Target to the other splits).
     objects : sequence of str, optional
@@ -129,8 +137,8 @@ def read_rows(
             "the metric columns (generate it without --no-metrics)"
         )
     name = target if isinstance(target, str) else target.name
-    derived = name in ("viable", "hold_effort_sum") or name.startswith("task:")
-    extra = [] if derived or name in METRIC_INPUTS else [name]
+    column = target_column(name)
+    extra = [] if column is None or column in METRIC_INPUTS else [column]
     columns = list(INPUT_COLUMNS) + list(METRIC_INPUTS) + extra
     if name.startswith("task:"):
         columns = None  # a task may read any metric column
@@ -140,7 +148,8 @@ def read_rows(
         if "No match for FieldRef" in str(exc) or "not in schema" in str(exc):
             raise InputError(
                 f"target {name!r} is not a column of {str(directory)!r}; use 'viable', "
-                "'hold_effort_sum', a metric column (e.g. epsilon) or task:NAME"
+                "'hold_effort_sum', a metric column (e.g. epsilon), COLUMN>=LEVEL (e.g. "
+                "robust_viable>=0.5, on a dataset generated with --robust K) or task:NAME"
             ) from None
         raise
     if name.startswith("task:"):
@@ -149,7 +158,7 @@ def read_rows(
         get_task(name[5:])  # an unknown task: a TaskError naming the known ones
     values = target_values(name, table)
     if isinstance(target, str):
-        if name not in ("viable", "hold_effort_sum"):
+        if name not in ("viable", "hold_effort_sum") and threshold_target(name) is None:
             provisional = Target(name, "regression", "finite")
             mask = target_rows(provisional, table)
             target = make_target(name, values[mask])

@@ -127,7 +127,8 @@ def object_mean_baseline(objects, truth, *, lower_is_better: bool = True, seed: 
 
 
 def _mean(rows: list[dict]) -> dict:
-    return {k: float(np.mean([r[k] for r in rows])) for k in MEASURES}
+    keys = [*MEASURES, *(["top1_robust_viable"] if "top1_robust_viable" in rows[0] else [])]
+    return {k: float(np.mean([r[k] for r in rows])) for k in keys}
 
 
 def evaluate_decisions(
@@ -183,7 +184,8 @@ def evaluate_decisions(
     -------
     dict
         ``per_object`` (object → ``rows``, ``draws``, ``model``, ``random``, ``oracle``
-        and ``baseline`` measures averaged over its draws, ``physics``), ``mean`` (each
+        and ``baseline`` measures averaged over its draws, with ``top1_robust_viable``
+        when the dataset has robust labels, ``physics``), ``mean`` (each
         decider's measures averaged over objects), ``median_percentile`` (each decider's
         median over every decision), ``physics_hold_rate`` (with ``physics``), ``rule``
         and the settings.
@@ -244,21 +246,27 @@ def evaluate_decisions(
             _, bprob, bpred = model_order(*base, samples)
         true_score = task_obj.evaluate(sub, mode)
         viable = is_viable(sub)
+        robust = (
+            sub.column("robust_viable").to_numpy(zero_copy_only=False).astype(np.float64)
+            if "robust_viable" in sub.column_names
+            else None
+        )
         where = {int(r): i for i, r in enumerate(used)}
         rows: dict[str, list[dict]] = {key: [] for key in decisions}
         first_choice = None
         for draw in sets:
             i = np.array([where[int(r)] for r in draw])
             s, v = true_score[i], viable[i]
+            rv = None if robust is None else robust[i]
             order = _draw_order(classifier, regressor, prob, pred, i, threshold)
-            rows["model"].append(decision_measures(order, s, v))
+            rows["model"].append(decision_measures(order, s, v, robust_viable=rv))
             if first_choice is None:
                 first_choice = int(used[i[order[0]]])
-            rows["random"].append(random_measures(s, v))
-            rows["oracle"].append(decision_measures(oracle_order(s, v), s, v))
+            rows["random"].append(random_measures(s, v, robust_viable=rv))
+            rows["oracle"].append(decision_measures(oracle_order(s, v), s, v, robust_viable=rv))
             if base:
                 border = _draw_order(*base, bprob, bpred, i, None)
-                rows["baseline"].append(decision_measures(border, s, v))
+                rows["baseline"].append(decision_measures(border, s, v, robust_viable=rv))
         entry = {"rows": n, "draws": len(sets), "candidates": min(n, candidates)}
         for key, rs in rows.items():
             entry[key] = _mean(rs)

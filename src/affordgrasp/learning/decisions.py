@@ -100,7 +100,12 @@ def true_percentiles(true_score: np.ndarray) -> np.ndarray:
 
 
 def decision_measures(
-    order: np.ndarray, true_score: np.ndarray, viable: np.ndarray, *, k: int = 5
+    order: np.ndarray,
+    true_score: np.ndarray,
+    viable: np.ndarray,
+    *,
+    k: int = 5,
+    robust_viable: np.ndarray | None = None,
 ) -> dict:
     """How good a ranking's choices truly are.
 
@@ -114,13 +119,17 @@ def decision_measures(
         Simulated viability per candidate.
     k : int
         How many first choices the precision counts.
+    robust_viable : (n,) array_like of float, optional
+        The candidates' robust viable rate (the share of their perturbed copies that stay
+        viable, docs/robust.md), when known.
 
     Returns
     -------
     dict
         ``chosen`` (index), ``top1_viable`` and ``top1_feasible`` (0 or 1),
         ``top1_percentile`` (:func:`true_percentiles`), ``top1_score`` (F_T) and
-        ``topk_precision`` (viable share of the first min(k, n) choices).
+        ``topk_precision`` (viable share of the first min(k, n) choices); with
+        ``robust_viable``, ``top1_robust_viable`` (the chosen grasp's rate).
     """
     order = np.asarray(order, dtype=np.int64)
     s = np.asarray(true_score, dtype=np.float64).ravel()
@@ -128,7 +137,7 @@ def decision_measures(
     if len(order) == 0:
         raise InputError("no candidates to choose from")
     c = int(order[0])
-    return {
+    out = {
         "chosen": c,
         "top1_viable": float(ok[c]),
         "top1_feasible": float(np.isfinite(s[c])),
@@ -136,6 +145,9 @@ def decision_measures(
         "top1_score": float(s[c]),
         "topk_precision": float(ok[order[:k]].mean()),
     }
+    if robust_viable is not None:
+        out["top1_robust_viable"] = float(np.asarray(robust_viable, dtype=np.float64)[c])
+    return out
 
 
 def oracle_order(true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:
@@ -155,7 +167,13 @@ def oracle_order(true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:
     return np.lexsort((~np.asarray(viable, dtype=bool).ravel(), -s))
 
 
-def random_measures(true_score: np.ndarray, viable: np.ndarray, *, k: int = 5) -> dict:
+def random_measures(
+    true_score: np.ndarray,
+    viable: np.ndarray,
+    *,
+    k: int = 5,
+    robust_viable: np.ndarray | None = None,
+) -> dict:
     """The expected measures of a uniformly random choice (exact, no draws).
 
     Parameters
@@ -164,21 +182,27 @@ def random_measures(true_score: np.ndarray, viable: np.ndarray, *, k: int = 5) -
     viable : (n,) array_like of bool
     k : int
         As for :func:`decision_measures`.
+    robust_viable : (n,) array_like of float, optional
+        As for :func:`decision_measures`.
 
     Returns
     -------
     dict
         ``top1_viable``, ``top1_feasible``, ``top1_percentile`` (50 by construction) and
-        ``topk_precision`` (the viable share), each an expectation.
+        ``topk_precision`` (the viable share), each an expectation; with
+        ``robust_viable``, ``top1_robust_viable`` (its mean).
     """
     s = np.asarray(true_score, dtype=np.float64).ravel()
     ok = np.asarray(viable, dtype=bool).ravel()
-    return {
+    out = {
         "top1_viable": float(ok.mean()),
         "top1_feasible": float(np.isfinite(s).mean()),
         "top1_percentile": float(true_percentiles(s).mean()),
         "topk_precision": float(ok.mean()),
     }
+    if robust_viable is not None:
+        out["top1_robust_viable"] = float(np.mean(np.asarray(robust_viable, dtype=np.float64)))
+    return out
 
 
 DEFAULT_THRESHOLD = 0.5
@@ -208,3 +232,41 @@ def decision_threshold(config: dict) -> float:
             "pass a threshold explicitly or retrain the model"
         )
     return float(value)
+
+
+def oracle_hit_rate(rows: int, good: int, candidates: int) -> float:
+    """Chance that ``candidates`` rows drawn without replacement hold at least one good row.
+
+    The best a decider can do: the oracle chooses a good (e.g. viable) grasp exactly when
+    one is among the candidates. Exact (hypergeometric), no draws.
+
+    Parameters
+    ----------
+    rows : int
+        Rows to draw from (an object's simulated grasps).
+    good : int
+        How many of them are good, 0 <= good <= rows.
+    candidates : int
+        Candidates drawn; more than ``rows`` gives NaN (the rows do not allow it).
+
+    Returns
+    -------
+    float
+        1 − C(rows − good, candidates) / C(rows, candidates), in [0, 1]; NaN when
+        ``candidates > rows``.
+
+    Raises
+    ------
+    InputError
+        When the counts are negative or ``good > rows``.
+    """
+    if rows < 0 or good < 0 or candidates < 0 or good > rows:
+        raise InputError(
+            f"oracle_hit_rate needs 0 <= good <= rows and candidates >= 0, got rows={rows}, "
+            f"good={good}, candidates={candidates}"
+        )
+    if candidates > rows:
+        return float("nan")
+    from scipy.stats import hypergeom
+
+    return float(hypergeom(rows, good, candidates).sf(0))

@@ -8,6 +8,10 @@
   affordance F_T in the default mode): regression on the rows where it is finite,
   normalised linearly from the training rows' [min, 99th percentile] to [0, 1].
 
+* ``COLUMN>=LEVEL``, e.g. ``robust_viable>=0.5``: classification of the rows where a column
+  reaches a level (a robust label: the share of perturbed copies that stay viable,
+  docs/robust.md); every row is learned and evaluated.
+
 ``log`` (an option, not the paper's): the target is log1p(value − low) before the linear
 normalisation, which tames the heavy tail of efforts.
 """
@@ -121,6 +125,62 @@ class Target:
         return self.low + s * (self.high - self.low)
 
 
+def threshold_target(name: str) -> tuple[str, float] | None:
+    """The column and level of a thresholded classification target ``COLUMN>=LEVEL``.
+
+    Parameters
+    ----------
+    name : str
+        A target name.
+
+    Returns
+    -------
+    (str, float) or None
+        The column and the level; None when ``name`` is not of that form.
+
+    Raises
+    ------
+    InputError
+        When the form is used but the column is empty or the level not a finite number.
+    """
+    if ">=" not in name:
+        return None
+    column, _, level = name.partition(">=")
+    column = column.strip()
+    try:
+        value = float(level)
+    except ValueError:
+        value = float("nan")
+    if not column or not np.isfinite(value):
+        raise InputError(
+            f"target {name!r}: a thresholded target is COLUMN>=LEVEL with a finite level, "
+            "e.g. robust_viable>=0.5"
+        )
+    return column, value
+
+
+def target_column(name: str) -> str | None:
+    """The stored column a target reads beyond the metric inputs, if any.
+
+    Parameters
+    ----------
+    name : str
+        A target name.
+
+    Returns
+    -------
+    str or None
+        The column (a generic column, or the column of ``COLUMN>=LEVEL``); None for the
+        derived targets (``viable``, ``hold_effort_sum``, ``task:NAME``).
+    """
+    thresholded = threshold_target(name)
+    if thresholded is not None:
+        return thresholded[0]
+    if name in ("viable", HOLD_EFFORT_SUM) or name.startswith("task:"):
+        return None
+    return name
+
+
 def target_values(name: str, columns) -> np.ndarray:
     """The raw value of a target on the rows of a table of metric columns.
 
@@ -139,6 +199,10 @@ def target_values(name: str, columns) -> np.ndarray:
     metrics = columns if isinstance(columns, MetricColumns) else MetricColumns(columns)
     if name == "viable":
         return is_viable(metrics).astype(np.float64)
+    thresholded = threshold_target(name)
+    if thresholded is not None:
+        column, level = thresholded
+        return (np.asarray(metrics[column], dtype=np.float64) >= level).astype(np.float64)
     if name.startswith("task:"):
         return np.asarray(evaluate_task(name[5:], metrics), dtype=np.float64)
     return np.asarray(metrics[name], dtype=np.float64)
@@ -172,7 +236,7 @@ def make_target(name: str, train_values: np.ndarray | None = None, *, log: bool 
     Parameters
     ----------
     name : str
-        A task, a metric column or a derived target.
+        A task, a metric column, ``COLUMN>=LEVEL`` or a derived target.
     train_values : (n,) float ndarray, optional
         Training values of a generic column: their finite minimum and 99th percentile
         set ``low``/``high``.
@@ -190,6 +254,10 @@ def make_target(name: str, train_values: np.ndarray | None = None, *, log: bool 
     lower = name in LOWER_IS_BETTER
     if name == "viable":
         return Target("viable", "classification", "all")
+    thresholded = threshold_target(name)
+    if thresholded is not None:
+        column, level = thresholded
+        return Target(f"{column}>={level:g}", "classification", "all")
     if name == "hold_effort_sum":
         return Target(name, "regression", "viable", 0.0, HOLD_EFFORT_MAX, log, lower)
     if train_values is None:
