@@ -147,8 +147,10 @@ def use_relief(
     x = np.concatenate([[0.0], radius * np.cos(angle)])
     y = np.concatenate([[0.0], radius * np.sin(angle)])
     with np.errstate(invalid="ignore"):
-        a = (z @ x) / (x @ x)
-        b = (z @ y) / (y @ y)
+        # einsum's own loop, not a BLAS product: a row's sums must not depend on how many
+        # rows the batch has (a dataset's rows are the same in any batch)
+        a = np.einsum("ij,j->i", z, x) / np.einsum("j,j->", x, x)
+        b = np.einsum("ij,j->i", z, y) / np.einsum("j,j->", y, y)
         c = z.mean(axis=1)
         residual = np.abs(z - a[:, None] * x - b[:, None] * y - c[:, None])
     out = np.where(np.isfinite(t.reshape(n, k)).all(axis=1), residual.max(axis=1), np.inf)
