@@ -77,7 +77,7 @@ def test_plan_with_a_sensor_sees_other_images_of_the_same_candidates(box_mesh):
 
 
 def test_plan_offset_range_scales_the_candidates_offsets_only(box_mesh, capsys):
-    from affordgrasp.commands.plan import OFFSET_RANGE_HELP
+    from affordgrasp.grasp.pregrasp import PLAN_OFFSET_RANGE as OFFSET_RANGE_HELP
     from affordgrasp.grasp.pregrasp import sample_inputs
     from affordgrasp.learning.plan import OFFSET_RANGE
 

@@ -6,10 +6,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import InputError, MissingDependencyError
-
-# learning.plan.OFFSET_RANGE, written out so that building the parser imports no learning
-# module (a test checks that the two agree)
-OFFSET_RANGE_HELP = 0.25
+from ..grasp.pregrasp import PLAN_OFFSET_RANGE
 
 
 def add_arguments(p) -> None:
@@ -45,7 +42,7 @@ def add_arguments(p) -> None:
         default=None,
         metavar="R",
         help="the candidates' approach-line offsets (u4, u5) are drawn in [-R, R]^2 (default "
-        f"{OFFSET_RANGE_HELP}: near the object's centre; 1: uniform, as datasets are generated)",
+        f"{PLAN_OFFSET_RANGE}: near the object's centre; 1: uniform, as datasets are generated)",
     )
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     p.add_argument(

@@ -31,6 +31,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..errors import InputError
+from ..grasp.pregrasp import PLAN_OFFSET_RANGE
 from .decisions import (
     decision_measures,
     decision_order,
@@ -40,12 +41,7 @@ from .decisions import (
     true_percentiles,
 )
 
-# The candidates' approach-line offsets (u4, u5) are drawn in [-OFFSET_RANGE, OFFSET_RANGE]²:
-# uniform offsets put most approach lines near or past the object's outline (on 26 objects
-# the models never saw, 11 % of uniform grasps with |(u4, u5)| < 0.4 are viable, 3 % of those
-# beyond 0.8). Chosen on validation objects (variants 7 and 8 of the families, 6 seeds of 64
-# candidates each; docs/learning.md) among 0.25, 0.35, 0.5, 0.7 and 1.
-OFFSET_RANGE = 0.25
+OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from .validation import points_n3, units_n3
+from .use_geometry import _first_exit
+from .validation import points_n3, use_normals_n3
 
 RELIEF_RADIUS_M = 0.005  # ring radius of use_relief
 RELIEF_RAYS = 8  # rays on the ring
@@ -41,22 +42,12 @@ def _first_hits(mesh, origins: np.ndarray, directions: np.ndarray) -> np.ndarray
     caster = mesh.ray
     if hasattr(caster, "cast"):  # objects.rays backends
         return np.asarray(caster.cast(origins, directions).distance, dtype=np.float64)
-    locations, ray, _ = caster.intersects_location(origins, directions, multiple_hits=False)
-    out = np.full(len(origins), np.inf)
-    ray = np.asarray(ray, dtype=np.int64)
-    if len(ray):
-        out[ray] = np.linalg.norm(np.asarray(locations, float) - origins[ray], axis=1)
-    return out
+    return _first_exit(mesh, origins, directions)
 
 
 def _checked(use_point, use_normal) -> tuple[np.ndarray, np.ndarray]:
     P = points_n3(use_point, "use_point")
-    N = units_n3(use_normal, "use_normal")
-    if N.shape[0] != P.shape[0]:
-        raise InputError(
-            f"use_normal has {N.shape[0]} rows, expected one per use point ({P.shape[0]})"
-        )
-    return P, N
+    return P, use_normals_n3(use_normal, P)
 
 
 def use_depth(mesh, use_point, use_normal) -> float | np.ndarray:

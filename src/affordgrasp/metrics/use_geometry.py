@@ -50,7 +50,7 @@ from ..caching import IdentityCache
 from ..errors import InputError
 from ..grasp.pregrasp import dot3
 from ..tolerances import FLAT_DIHEDRAL
-from .validation import points_n3, units_n3
+from .validation import points_n3, use_normals_n3
 
 EDGE_RADIUS_M = 0.003  # default search radius of the sharpest-edge angle
 EDGE_FACING_TOL_RAD = float(np.radians(5.0))  # use normal off an edge's normal fan, at most
@@ -407,13 +407,7 @@ def use_edge_angle(
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0):
         raise InputError(f"radius must be a positive length in metres, got {radius}")
-    normals = None
-    if use_normal is not None:
-        normals = units_n3(use_normal, "use_normal")
-        if normals.shape[0] != P.shape[0]:
-            raise InputError(
-                f"use_normal has {normals.shape[0]} rows, expected one per use point ({P.shape[0]})"
-            )
+    normals = None if use_normal is None else use_normals_n3(use_normal, P)
     out = np.full(P.shape[0], np.pi)
     samples, owner, A, B, interior, spacing, N1, N2 = _edge_index(mesh, radius)
     if owner.size and P.shape[0]:
@@ -558,11 +552,7 @@ def use_wedge_shape(
         (n,) arrays, also for a single point; a span of 1/3 where no ray is inside.
     """
     P = points_n3(use_point, "use_point")
-    N = units_n3(use_normal, "use_normal")
-    if N.shape[0] != P.shape[0]:
-        raise InputError(
-            f"use_normal has {N.shape[0]} rows, expected one per use point ({P.shape[0]})"
-        )
+    N = use_normals_n3(use_normal, P)
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0):
         raise InputError(f"radius must be a positive length in metres, got {radius}")

@@ -188,6 +188,29 @@ def units_n3(x, name: str) -> np.ndarray:
     return x / n[:, None]
 
 
+def use_normals_n3(use_normal, use_points: np.ndarray) -> np.ndarray:
+    """Outward unit normals at the use points, one per point, checked.
+
+    Parameters
+    ----------
+    use_normal : array_like of float
+        The normals given (``use_normal``).
+    use_points : (n, 3) float64 ndarray
+        The use points they belong to, already checked (:func:`points_n3`).
+
+    Returns
+    -------
+    (n, 3) float64 ndarray
+        Unit rows.
+    """
+    N = units_n3(use_normal, "use_normal")
+    if N.shape[0] != use_points.shape[0]:
+        raise InputError(
+            f"use_normal has {N.shape[0]} rows, expected one per use point ({use_points.shape[0]})"
+        )
+    return N
+
+
 def positive_length(r: float, name: str) -> float:
     """A finite length > 0, in metres, or an InputError naming ``name``.
 
