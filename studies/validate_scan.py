@@ -37,6 +37,7 @@ import numpy as np
 import pyarrow.parquet as pq
 
 from affordgrasp.objects import load_object
+from affordgrasp.optimize import targeted_best_pairs, targeted_pairs
 from affordgrasp.pairs import best_pairs, optimize_pairs
 from affordgrasp.pipeline import evaluate_samples
 from affordgrasp.validation import surrounds_com
@@ -142,6 +143,14 @@ def main() -> None:
     parser.add_argument("--no-optimizer", action="store_true")
     parser.add_argument("--no-brute-force", action="store_true")
     parser.add_argument("--cache", default="/tmp/affordgrasp-validation-scan")
+    parser.add_argument(
+        "--search",
+        choices=("plain", "targeted"),
+        default="targeted",
+        help="use points by area and contacts-and-ε guidance (plain: best_pairs, "
+        "optimize_pairs), or use points that pass the task's use-point tests and guidance "
+        "relative to the thresholds (targeted: targeted_best_pairs, targeted_pairs)",
+    )
     args = parser.parse_args()
     if args.figure:
         *sources, target = args.figure
@@ -171,9 +180,13 @@ def main() -> None:
                     table = evaluate_samples(obj, args.grasps, seed=0, volume=False).table
                     pq.write_table(table, path)
                 line = [task, spec]
+                targeted = args.search == "targeted"
+                started = time.perf_counter()
                 found = (
                     None
                     if args.no_brute_force
+                    else targeted_best_pairs(obj, task, table, uses=args.uses, seed=0, top=args.top)
+                    if targeted
                     else best_pairs(
                         obj,
                         task,
@@ -185,9 +198,11 @@ def main() -> None:
                         per_grasp=True,
                     )
                 )
+                seconds = {"brute_force": time.perf_counter() - started}
                 searches = [] if args.no_brute_force else [("brute_force", found)]
                 if not args.no_optimizer:
-                    opt = optimize_pairs(
+                    started = time.perf_counter()
+                    opt = (targeted_pairs if targeted else optimize_pairs)(
                         obj,
                         task,
                         budget=args.budget,
@@ -197,6 +212,7 @@ def main() -> None:
                         restarts=args.restarts,
                         refine=args.refine,
                     )
+                    seconds["optimizer"] = time.perf_counter() - started
                     searches.append(("optimizer", opt))
                 for method, result in searches:
                     rows = result.table.to_pylist()
@@ -214,10 +230,14 @@ def main() -> None:
                             "use_right": use,
                             "hand_right": hand,
                             "working_end": end,
+                            "seconds": round(seconds[method], 1),
                             "use_parts": [r["use_part"] for r in rows],
                             "contact_parts": [sorted(set(r["contact_parts"])) for r in rows],
                         }
                     )
+                    sampling = getattr(result, "sampling", None)
+                    if sampling is not None:
+                        report["objects"][-1]["use_sampling"] = sampling.to_dict()
                     if not rows:
                         empty[method].append(spec)
                     line.append(f"{method} use {use}/{len(rows)} hand {hand}/{len(rows)}")

@@ -487,3 +487,432 @@ def optimize(
         random_values=random_values,
         elapsed_s=time.perf_counter() - started,
     )
+
+
+# ---------------------------------------------------- pair searches aimed at the task's tests
+
+# columns of a use point, each with the function that computes it (the lean cast computes
+# only those the task reads)
+_USE_POINT_COLUMNS = (
+    "use_edge",
+    "use_edge_angle",
+    "use_wedge_angle",
+    "use_wedge_angle_fine",
+    "use_edge_span",
+    "use_depth",
+    "use_relief",
+)
+
+
+@dataclass(frozen=True)
+class UseSampling:
+    """How a pair search's use points were drawn (:func:`passing_use_points`).
+
+    Attributes
+    ----------
+    drawn : int
+        Use points drawn by area, in all.
+    passing : int
+        Of them, how many pass the task's tests of the use point alone.
+    kept : int
+        Use points the search scores (``passing`` capped at the number asked for, or the
+        plain sample on a fallback).
+    fallback : bool
+        No drawn use point passed (or the task has no test of the use point alone): the
+        search scores the plain sample by area.
+    tested : bool
+        The task has tests of the use point alone.
+    """
+
+    drawn: int
+    passing: int
+    kept: int
+    fallback: bool
+    tested: bool = True
+
+    def describe(self) -> str:
+        """One line for the command's output."""
+        if not self.tested:
+            return f"use points: {self.kept:,} drawn by area"
+        if self.fallback:
+            return (
+                f"use points: none of {self.drawn:,} drawn by area passes the task's tests of "
+                f"the use point alone; scoring {self.kept:,} plain area samples"
+            )
+        return (
+            f"use points: {self.kept:,} that pass the task's tests of the use point alone "
+            f"({self.passing:,} of {self.drawn:,} drawn by area)"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return {
+            "drawn": self.drawn,
+            "passing": self.passing,
+            "kept": self.kept,
+            "fallback": self.fallback,
+            "tested": self.tested,
+        }
+
+
+def _cast_use_points(obj, use_dir: np.ndarray, columns):
+    """:class:`~affordgrasp.pairs.UsePoints` of ``use_dir`` with only ``columns`` of the use
+    point computed (the others NaN): the use-point tests of a task read a few of them, and
+    the dihedral angle alone costs more than the rest together."""
+    from .grasp.pregrasp import use_points
+    from .metrics.striking import use_depth, use_relief
+    from .metrics.use_geometry import use_edge, use_edge_angle, use_wedge_shape
+    from .pairs import UsePoints
+
+    P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
+    hit = T >= 0
+    out = {c: np.full(len(T), np.nan) for c in _USE_POINT_COLUMNS}
+    if hit.any():
+        Ph, Nh = P[hit], N[hit]
+        if "use_edge" in columns:
+            out["use_edge"][hit] = use_edge(obj.mesh, T[hit], Ph)
+        if "use_edge_angle" in columns:
+            out["use_edge_angle"][hit] = use_edge_angle(obj.mesh, Ph, use_normal=Nh)
+        if {"use_wedge_angle", "use_wedge_angle_fine", "use_edge_span"} & set(columns):
+            shape = use_wedge_shape(obj.mesh_data, Ph, Nh)
+            out["use_wedge_angle"][hit] = shape.angle
+            out["use_wedge_angle_fine"][hit] = shape.inner_angle
+            out["use_edge_span"][hit] = shape.span
+        if "use_depth" in columns:
+            out["use_depth"][hit] = use_depth(obj.mesh_data, Ph, Nh)
+        if "use_relief" in columns:
+            out["use_relief"][hit] = use_relief(obj.mesh_data, Ph, Nh)
+    return UsePoints(use_dir, P, N, T, **out)
+
+
+def _take(uses, index: np.ndarray):
+    """The use points ``index`` of a :class:`~affordgrasp.pairs.UsePoints`."""
+    from dataclasses import fields
+
+    return type(uses)(**{f.name: getattr(uses, f.name)[index] for f in fields(uses)})
+
+
+def _join(parts: list):
+    """One :class:`~affordgrasp.pairs.UsePoints` of several, in order."""
+    from dataclasses import fields
+
+    first = parts[0]
+    return type(first)(
+        **{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(first)}
+    )
+
+
+def passing_use_points(
+    obj,
+    task,
+    n: int,
+    seed: int,
+    *,
+    mode: str = "default",
+    thresholds: Mapping[str, float] | None = None,
+    max_draws: int | None = None,
+):
+    """``n`` use points, drawn by area, that pass the task's tests of the use point alone.
+
+    Use points are drawn by surface area in batches of ``n`` (batch 0 is
+    :meth:`~affordgrasp.pairs.UsePoints.sample` with ``seed``; batch k ≥ 1 uses a seed
+    derived from (``seed``, k)) until ``n`` of them pass the tests of ``task`` that the use
+    point alone decides (:func:`~affordgrasp.search.guidance.use_only_passes`: a cutting
+    edge for ``cut``, a deep, flat, blunt face for ``beat``), or ``max_draws`` have been
+    drawn. A cutting edge is about 1 % of a blade's surface: the plain sample of 2000 holds
+    some 20 edge points, this one up to ``n``. When none passes, or the task has no such
+    test, the plain sample (batch 0) is returned and ``fallback`` says so.
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+    task : str or Task
+    n : int
+        Use points wanted.
+    seed : int
+        Same seed, same use points.
+    mode : str
+        Threshold mode.
+    thresholds : mapping of str to float, optional
+        Threshold values that replace the mode's.
+    max_draws : int, optional
+        At most this many use points are drawn (default ``16 n``).
+
+    Returns
+    -------
+    uses : UsePoints
+        The use points, in the order drawn; only the columns the task reads are computed
+        (the others are NaN).
+    sampling : UseSampling
+    """
+    from .grasp.pregrasp import surface_use_directions
+    from .objects import load_object
+    from .search.guidance import USE_ONLY, use_only_passes
+    from .tasks import get_task
+
+    obj = load_object(obj)
+    t = get_task(task) if isinstance(task, str) else task
+    overrides = dict(thresholds or {})
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise bad_parameter("uses", f"must be a positive integer, got {n!r}")
+    limit = 16 * n if max_draws is None else int(max_draws)
+    if limit < n:
+        raise bad_parameter("max_draws", f"must be at least uses ({n}), got {max_draws!r}")
+    columns = set(t.requires) & USE_ONLY
+    center = obj.mass.center_of_mass
+    tested = bool(columns)
+    kept, first, drawn, passing = [], None, 0, 0
+    k = 0
+    while drawn < limit:
+        batch_seed = seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
+        size = min(n, limit - drawn)
+        d = surface_use_directions(obj.mesh_data, center, size, batch_seed)
+        batch = _cast_use_points(obj, d, columns if tested else set(_USE_POINT_COLUMNS))
+        drawn += size
+        k += 1
+        if first is None:
+            first = batch
+        if not tested:
+            break
+        ok = np.flatnonzero(use_only_passes(t, mode, overrides, batch))
+        passing += ok.size
+        if ok.size:
+            kept.append(_take(batch, ok))
+        if sum(len(p.triangle) for p in kept) >= n:
+            break
+    if not kept:
+        return first, UseSampling(drawn, passing, len(first.triangle), True, tested)
+    uses = _join(kept)
+    uses = _take(uses, np.arange(min(n, len(uses.triangle))))
+    return uses, UseSampling(drawn, passing, len(uses.triangle), False)
+
+
+@dataclass(frozen=True)
+class TargetedSearch:
+    """Result of :func:`targeted_pairs` and :func:`targeted_best_pairs`.
+
+    Attributes
+    ----------
+    table : pyarrow.Table
+        The top pairs as evaluated rows (p0 of the grasp, d of the use point), best first,
+        with a ``value`` column.
+    grasps : int
+        Grasps simulated (or scored, for the brute force).
+    candidates : int
+        Pairs with a finite F_T.
+    lp_pairs : int
+        Pairs that needed the LPs.
+    use_points : UsePoints
+        The use points scored.
+    sampling : UseSampling
+        How they were drawn.
+    """
+
+    table: pa.Table
+    grasps: int
+    candidates: int
+    lp_pairs: int
+    use_points: object
+    sampling: UseSampling
+
+    @property
+    def uses(self) -> int:
+        """Use points scored."""
+        return len(self.use_points.triangle)
+
+
+def _pair_search_guidance(obj, rows, task, mode, overrides, uses):
+    """Threshold-relative guidance (:func:`~affordgrasp.search.guidance.threshold_guidance`);
+    for a task without known threshold tests, the contacts-and-ε guidance of
+    :func:`affordgrasp.pairs.pair_guidance`."""
+    from .search.guidance import threshold_guidance
+
+    g = threshold_guidance(obj, rows, task, mode, overrides, uses)
+    if g is not None:
+        return g
+    from .pairs import pair_guidance
+
+    eps_column = tuple(c for c in ("epsilon_hand",) if c in task.requires)
+    return pair_guidance(rows, task, mode, overrides, uses, eps_column)
+
+
+def _rows_of_pairs(obj, p0, use_dir, task, mode, hand, seed, overrides) -> pa.Table:
+    """The pairs (p0, d) re-simulated as ordinary rows, with their F_T as ``value``."""
+    from .pipeline import evaluate_inputs
+
+    rows = evaluate_inputs(
+        obj, np.reshape(p0, (-1, 6)), np.reshape(use_dir, (-1, 2)), hand=hand, seed=seed
+    ).table
+    value = task.evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
+    return rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
+
+
+def targeted_pairs(
+    obj,
+    task: str,
+    *,
+    mode: str = "default",
+    budget: int = 2000,
+    uses: int = 2000,
+    seed: int = 0,
+    top: int = 10,
+    population: int | None = None,
+    hand: Hand | str = "barrett",
+    restarts: int = 1,
+    refine: float = 0.0,
+    max_draws: int | None = None,
+    **overrides: float,
+) -> TargetedSearch:
+    """The cross-entropy method over p0, aimed at the task's tests: each grasp scored with
+    its best of ``uses`` use points that pass the task's tests of the use point alone.
+
+    As :func:`affordgrasp.pairs.optimize_pairs` (CEM moves the pregrasp; each simulated
+    grasp takes its best use point, found by ray casts and the pair LPs), with two changes
+    that aim the search at a small feasible set (a blade's edge, a hammer's face, held by
+    its handle, ε-robust):
+
+    * the use points are :func:`passing_use_points` (run ``seed + 1``): every one passes
+      the tests the use point alone decides, so the best of ``uses`` is over edge or face
+      points only (the plain sample when none passes);
+    * while no grasp is feasible, CEM ranks the grasps by
+      :func:`~affordgrasp.search.guidance.threshold_guidance` (each test of the task as a
+      hinge at its threshold, the best over the use points), so it climbs towards passing
+      every test at once; a task without known threshold tests keeps
+      :func:`affordgrasp.pairs.pair_guidance`.
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+    task : str
+    mode : str
+    budget : int
+        Simulations.
+    uses : int
+        Use points wanted.
+    seed : int
+    top : int
+        Distinct pairs returned.
+    population : int, optional
+    hand : str or Hand
+    restarts : int
+    refine : float
+        As for :func:`affordgrasp.pairs.optimize_pairs`.
+    max_draws : int, optional
+        Use points drawn at most (:func:`passing_use_points`).
+    **overrides : float
+        Threshold values that replace the mode's.
+
+    Returns
+    -------
+    TargetedSearch
+    """
+    from .grasp.pregrasp import sample_inputs
+    from .objects import load_object
+    from .pairs import best_use_per_grasp, pair_scores
+    from .pipeline import evaluate_inputs
+    from .search.ranking import top_indices
+    from .tasks import get_task
+
+    obj = load_object(obj)
+    t = get_task(task)
+    t.thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
+    plan_runs(budget, restarts, refine, population)
+    use, sampling = passing_use_points(
+        obj, t, uses, seed + 1, mode=mode, thresholds=overrides, max_draws=max_draws
+    )
+    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    counts = {"lp": 0, "finite": 0}
+
+    def objective(x: np.ndarray):
+        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed, volume=False).table
+        scores = pair_scores(obj, rows, use, task, mode, **overrides)
+        best, best_use = best_use_per_grasp(scores, len(x))
+        counts["lp"] += len(scores["value"])
+        counts["finite"] += int(np.sum(scores["value"] > -np.inf))
+        found.append((x[:, :6].copy(), best, best_use))
+        return best, _pair_search_guidance(obj, rows, t, mode, overrides, use)
+
+    def first_generation(start: int, stop: int) -> np.ndarray:
+        return np.concatenate(sample_inputs(seed, start, stop), axis=1)
+
+    cem_search(
+        objective,
+        budget=budget,
+        seed=seed,
+        restarts=restarts,
+        refine=refine,
+        population=population,
+        first_generation=first_generation,
+    )
+    p0 = np.concatenate([f[0] for f in found])
+    value = np.concatenate([f[1] for f in found])
+    use_idx = np.concatenate([f[2] for f in found])
+    ok = np.flatnonzero(value > -np.inf)
+    key = np.concatenate([p0[ok], use_idx[ok, None].astype(float)], axis=1)
+    _, first = np.unique(key, axis=0, return_index=True)
+    ok = ok[np.sort(first)]
+    pick = ok[top_indices(value[ok], top)]
+    rows = _rows_of_pairs(obj, p0[pick], use.use_dir[use_idx[pick]], t, mode, hand, seed, overrides)
+    return TargetedSearch(rows, int(len(value)), counts["finite"], counts["lp"], use, sampling)
+
+
+def targeted_best_pairs(
+    obj,
+    task: str,
+    grasp_table: pa.Table,
+    *,
+    mode: str = "default",
+    uses: int = 2000,
+    seed: int = 0,
+    top: int = 10,
+    hand: Hand | str = "barrett",
+    max_draws: int | None = None,
+    **overrides: float,
+) -> TargetedSearch:
+    """The brute force of :func:`affordgrasp.pairs.best_pairs` (``per_grasp=True``: the top
+    ``top`` distinct grasps, each with its best use point) over use points that pass the
+    task's tests of the use point alone (:func:`passing_use_points`, run ``seed + 1``).
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+    task : str
+    grasp_table : pyarrow.Table
+        Evaluated rows (the grasps).
+    mode : str
+    uses : int
+        Use points wanted.
+    seed : int
+        The run seed of the rows (the re-simulated top rows use it too).
+    top : int
+    hand : str or Hand
+    max_draws : int, optional
+    **overrides : float
+
+    Returns
+    -------
+    TargetedSearch
+    """
+    from .objects import load_object
+    from .pairs import best_use_per_grasp, pair_scores
+    from .search.ranking import TopRows
+    from .tasks import get_task
+
+    obj = load_object(obj)
+    t = get_task(task)
+    t.thresholds_for(mode, **overrides)
+    use, sampling = passing_use_points(
+        obj, t, uses, seed + 1, mode=mode, thresholds=overrides, max_draws=max_draws
+    )
+    scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
+    n = grasp_table.num_rows
+    best_value, best_use = best_use_per_grasp(scores, n)
+    ranked = TopRows(top, 2)
+    ranked.add(best_value, np.arange(n), best_use)
+    grasp_index, use_index = ranked.keys
+    p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
+    rows = _rows_of_pairs(
+        obj, p0[grasp_index], use.use_dir[use_index], t, mode, hand, seed, overrides
+    )
+    candidates = int(np.count_nonzero(scores["value"] > -np.inf))
+    return TargetedSearch(rows, n, candidates, int(len(scores["value"])), use, sampling)
