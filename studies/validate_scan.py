@@ -145,11 +145,12 @@ def main() -> None:
     parser.add_argument("--cache", default="/tmp/affordgrasp-validation-scan")
     parser.add_argument(
         "--search",
-        choices=("plain", "targeted"),
+        choices=("plain", "guidance", "uses", "targeted"),
         default="targeted",
-        help="use points by area and contacts-and-ε guidance (plain: best_pairs, "
-        "optimize_pairs), or use points that pass the task's use-point tests and guidance "
-        "relative to the thresholds (targeted: targeted_best_pairs, targeted_pairs)",
+        help="plain: use points by area and contacts-and-ε guidance (best_pairs, "
+        "optimize_pairs); targeted: use points that pass the task's use-point tests and "
+        "guidance relative to the thresholds (targeted_best_pairs, targeted_pairs); "
+        "guidance / uses: one of the two changes alone",
     )
     args = parser.parse_args()
     if args.figure:
@@ -180,7 +181,9 @@ def main() -> None:
                     table = evaluate_samples(obj, args.grasps, seed=0, volume=False).table
                     pq.write_table(table, path)
                 line = [task, spec]
-                targeted = args.search == "targeted"
+                targeted = args.search != "plain"
+                passing = args.search in ("uses", "targeted")
+                guide = args.search in ("guidance", "targeted")
                 started = time.perf_counter()
                 found = (
                     None
@@ -211,6 +214,7 @@ def main() -> None:
                         top=args.top,
                         restarts=args.restarts,
                         refine=args.refine,
+                        **({"passing_uses": passing, "threshold_guide": guide} if targeted else {}),
                     )
                     seconds["optimizer"] = time.perf_counter() - started
                     searches.append(("optimizer", opt))

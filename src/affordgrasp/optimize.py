@@ -9,7 +9,13 @@ and, with the same simulation budget, runs uniform random sampling:
 * the first generation of CEM is the run's uniform samples 0..m-1 (the samples ``generate``
   and the random baseline use), so CEM starts where random sampling starts, and the
   baseline reuses those rows;
-* with ``uses`` > 0 each grasp is scored with its best use point (:mod:`affordgrasp.pairs`).
+* with ``uses`` > 0 each grasp is scored with its best use point (:mod:`affordgrasp.pairs`)
+  of use points that pass the task's tests of the use point alone
+  (:func:`passing_use_points`), and CEM's guidance is relative to the task's thresholds
+  (:func:`~affordgrasp.search.guidance.threshold_guidance`).
+
+:func:`targeted_pairs` and :func:`targeted_best_pairs` are the pair searches (optimiser and
+brute force, top rows) with the same use points and guidance.
 
 The method itself (``cem_maximize``, ``CEMState``, ``CEMTrace``, ``uniform_inputs``...) lives
 in :mod:`affordgrasp.search.cem` and is re-exported here.
@@ -129,6 +135,8 @@ class OptimizationResult:
         F_T of the random samples (None without the baseline).
     elapsed_s : float
         Wall time, s.
+    use_sampling : UseSampling or None
+        How the use points were drawn (None without use points).
     """
 
     object: str
@@ -141,6 +149,7 @@ class OptimizationResult:
     cem_trace: CEMTrace
     random_values: np.ndarray | None
     elapsed_s: float
+    use_sampling: UseSampling | None = None
 
     @property
     def cem_evaluations_to_match_random(self) -> int | None:
@@ -166,7 +175,8 @@ class OptimizationResult:
             ``object``, ``task``, ``mode``, ``budget``, ``seed``; ``cem`` and ``random``
             (:meth:`Found.to_dict` or None); ``cem_finite`` and ``random_finite`` (finite
             evaluations); ``cem_evaluations_to_match_random``,
-            ``random_fraction_at_least_cem``; ``generations``; ``elapsed_s``.
+            ``random_fraction_at_least_cem``; ``generations``; ``elapsed_s``;
+            ``use_points`` (:meth:`UseSampling.to_dict`, or None without use points).
         """
         return {
             "object": self.object,
@@ -186,6 +196,7 @@ class OptimizationResult:
             "random_fraction_at_least_cem": self.random_fraction_at_least_cem,
             "generations": self.cem_trace.generations,
             "elapsed_s": self.elapsed_s,
+            "use_points": self.use_sampling.to_dict() if self.use_sampling else None,
         }
 
 
@@ -348,9 +359,12 @@ def optimize(
         ``progress(total)`` returns a context manager yielding ``advance(n)``.
     uses : int
         If > 0, each simulated grasp (of CEM and of the baseline) is scored with its best
-        use point among ``uses`` use points drawn by surface area (run ``seed + 1``), as in
-        :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
-        is found by ray casts, which cost no simulation.
+        use point among ``uses`` use points drawn by surface area (run ``seed + 1``) that
+        pass the task's tests of the use point alone (:func:`passing_use_points`; the plain
+        sample when none does), as in :mod:`affordgrasp.pairs`: the search then moves the
+        grasp only, and the use point is found by ray casts, which cost no simulation.
+        CEM's guidance is then relative to the task's thresholds
+        (:func:`~affordgrasp.search.guidance.threshold_guidance`).
     restarts, refine
         Independent CEM runs sharing the budget, and the share of it that continues the
         best of them (:func:`affordgrasp.search.cem.cem_search`); 1 and 0: one run.
@@ -407,11 +421,12 @@ def optimize(
         make_engine(context, engine=engine, workers=workers, address=address) as eng,
         bar as adv,
     ):
-        use_points = None
+        use_points = sampling = None
         if uses and settings is None:
-            from .pairs import UsePoints
-
-            use_points = UsePoints.sample(resolved, uses, seed + 1)
+            # use points that pass the task's tests of the use point alone (an edge, a face)
+            use_points, sampling = passing_use_points(
+                resolved, task_obj, uses, seed + 1, mode=mode, thresholds=thresholds
+            )
         sim = _Simulator(
             eng,
             task_obj,
@@ -443,11 +458,8 @@ def optimize(
             best["cem"] = _better(best["cem"], sim.found(scored, done["n"]))
             done["n"] += len(x)
             if use_points is not None:  # pairs: the rows' own use points are not scored
-                from .pairs import pair_guidance
-
-                eps_column = tuple(c for c in ("epsilon_hand",) if c in task_obj.requires)
-                return scored.values, pair_guidance(
-                    scored.table, task_obj, mode, thresholds or {}, use_points, eps_column
+                return scored.values, _pair_search_guidance(
+                    resolved, scored.table, task_obj, mode, dict(thresholds or {}), use_points
                 )
             return scored.values, guidance(scored.table, task_obj.requires)
 
@@ -486,6 +498,7 @@ def optimize(
         cem_trace=trace,
         random_values=random_values,
         elapsed_s=time.perf_counter() - started,
+        use_sampling=sampling,
     )
 
 
@@ -721,13 +734,25 @@ class TargetedSearch:
         return len(self.use_points.triangle)
 
 
-def _pair_search_guidance(obj, rows, task, mode, overrides, uses):
+def _search_use_points(obj, task, n, seed, mode, overrides, max_draws, passing):
+    """:func:`passing_use_points`, or (``passing`` False) the plain sample by area."""
+    if passing:
+        return passing_use_points(
+            obj, task, n, seed, mode=mode, thresholds=overrides, max_draws=max_draws
+        )
+    from .pairs import UsePoints
+
+    use = UsePoints.sample(obj, n, seed)
+    return use, UseSampling(n, 0, n, True, tested=False)
+
+
+def _pair_search_guidance(obj, rows, task, mode, overrides, uses, thresholds=True):
     """Threshold-relative guidance (:func:`~affordgrasp.search.guidance.threshold_guidance`);
-    for a task without known threshold tests, the contacts-and-ε guidance of
-    :func:`affordgrasp.pairs.pair_guidance`."""
+    for a task without known threshold tests (or ``thresholds`` False), the contacts-and-ε
+    guidance of :func:`affordgrasp.pairs.pair_guidance`."""
     from .search.guidance import threshold_guidance
 
-    g = threshold_guidance(obj, rows, task, mode, overrides, uses)
+    g = threshold_guidance(obj, rows, task, mode, overrides, uses) if thresholds else None
     if g is not None:
         return g
     from .pairs import pair_guidance
@@ -761,6 +786,8 @@ def targeted_pairs(
     restarts: int = 1,
     refine: float = 0.0,
     max_draws: int | None = None,
+    passing_uses: bool = True,
+    threshold_guide: bool = True,
     **overrides: float,
 ) -> TargetedSearch:
     """The cross-entropy method over p0, aimed at the task's tests: each grasp scored with
@@ -799,6 +826,9 @@ def targeted_pairs(
         As for :func:`affordgrasp.pairs.optimize_pairs`.
     max_draws : int, optional
         Use points drawn at most (:func:`passing_use_points`).
+    passing_uses, threshold_guide : bool
+        Each change on its own (False: the plain sample by area, and the guidance of
+        :func:`affordgrasp.pairs.pair_guidance`); both False is ``optimize_pairs``.
     **overrides : float
         Threshold values that replace the mode's.
 
@@ -817,8 +847,8 @@ def targeted_pairs(
     t = get_task(task)
     t.thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
     plan_runs(budget, restarts, refine, population)
-    use, sampling = passing_use_points(
-        obj, t, uses, seed + 1, mode=mode, thresholds=overrides, max_draws=max_draws
+    use, sampling = _search_use_points(
+        obj, t, uses, seed + 1, mode, overrides, max_draws, passing_uses
     )
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
@@ -830,7 +860,7 @@ def targeted_pairs(
         counts["lp"] += len(scores["value"])
         counts["finite"] += int(np.sum(scores["value"] > -np.inf))
         found.append((x[:, :6].copy(), best, best_use))
-        return best, _pair_search_guidance(obj, rows, t, mode, overrides, use)
+        return best, _pair_search_guidance(obj, rows, t, mode, overrides, use, threshold_guide)
 
     def first_generation(start: int, stop: int) -> np.ndarray:
         return np.concatenate(sample_inputs(seed, start, stop), axis=1)
@@ -867,6 +897,7 @@ def targeted_best_pairs(
     top: int = 10,
     hand: Hand | str = "barrett",
     max_draws: int | None = None,
+    passing_uses: bool = True,
     **overrides: float,
 ) -> TargetedSearch:
     """The brute force of :func:`affordgrasp.pairs.best_pairs` (``per_grasp=True``: the top
@@ -887,6 +918,8 @@ def targeted_best_pairs(
     top : int
     hand : str or Hand
     max_draws : int, optional
+    passing_uses : bool
+        False: the plain sample by area (then this is ``best_pairs``).
     **overrides : float
 
     Returns
@@ -901,8 +934,8 @@ def targeted_best_pairs(
     obj = load_object(obj)
     t = get_task(task)
     t.thresholds_for(mode, **overrides)
-    use, sampling = passing_use_points(
-        obj, t, uses, seed + 1, mode=mode, thresholds=overrides, max_draws=max_draws
+    use, sampling = _search_use_points(
+        obj, t, uses, seed + 1, mode, overrides, max_draws, passing_uses
     )
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
     n = grasp_table.num_rows

@@ -43,8 +43,9 @@ def add_arguments(p) -> None:
         type=int,
         default=2000,
         metavar="M",
-        help="score each grasp with its best of M use points drawn by surface area (ray casts, no "
-        "simulation; default 2000); 0: each sample keeps its own use direction",
+        help="score each grasp with its best of M use points drawn by surface area that pass the "
+        "task's tests of the use point alone (ray casts, no simulation; default 2000); 0: each "
+        "sample keeps its own use direction",
     )
     add_robust_argument(
         p,
@@ -105,6 +106,8 @@ def run(args, out) -> None:
         progress=lambda total: out.progress("optimising", total),
         robust=robust_option(args),
     )
+    if result.use_sampling is not None:
+        out.text(result.use_sampling.describe())
     shown = shown_metrics(args.task)
     rows = []
     for label, found in (("cross-entropy", result.cem), ("uniform random", result.random)):

@@ -194,19 +194,24 @@ def open_sources(args, out, tasks=(), thresholds=None) -> list:
                 robust=robust,
             ).table
         if getattr(args, "uses", 0) and robust is None:  # robust scores keep their own use
-            table = with_best_pairs(obj, table, tasks, thresholds or {}, args)
+            table = with_best_pairs(obj, table, tasks, thresholds or {}, args, out)
         sources.append(
             TableSource(table, name=obj.name, objects={obj.name: obj}, hand=get_hand(args.hand))
         )
     return sources
 
 
-def with_best_pairs(obj, table, tasks, thresholds, args):
+def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
     """A table plus, per task, its best (grasp, use point) pairs.
 
     The pairs are searched over the table's grasps and ``args.uses`` use points drawn by area
     (:func:`affordgrasp.pairs.best_pairs`) and appended as ordinary rows, numbered after the
-    samples. Tasks that do not read the use point add nothing.
+    samples. Tasks that do not read the use point add nothing. Where that finds no pair (a
+    cutting edge is about 1 % of a blade's surface, a hammer's face as little), the same
+    grasps are scored with ``args.uses`` use points that pass the task's tests of the use
+    point alone (:func:`affordgrasp.optimize.targeted_best_pairs`), and where that finds none
+    either, a search aimed at the task's tests simulates ``args.samples`` more grasps
+    (:func:`affordgrasp.optimize.targeted_pairs`); ``out`` says which did.
 
     Parameters
     ----------
@@ -217,7 +222,9 @@ def with_best_pairs(obj, table, tasks, thresholds, args):
     thresholds : dict
         Task name -> threshold overrides.
     args : argparse.Namespace
-        ``uses``, ``mode``, ``seed``, ``top`` and ``hand``.
+        ``uses``, ``samples``, ``mode``, ``seed``, ``top`` and ``hand``.
+    out : Output, optional
+        Where the fallbacks are reported.
 
     Returns
     -------
@@ -231,27 +238,43 @@ def with_best_pairs(obj, table, tasks, thresholds, args):
     """
     import pyarrow as pa
 
+    from ..optimize import targeted_best_pairs, targeted_pairs
     from ..pairs import USE_COLUMNS, best_pairs
 
     if args.uses < 0:
         raise InputError(f"--uses must be a non-negative integer, got {args.uses}")
+    say = out.text if out is not None else (lambda text: None)
     extra = []
     for task in tasks:
         if not USE_COLUMNS & set(task.requires):
             continue  # the task ignores the use point: the samples already say it all
-        found = best_pairs(
-            obj,
-            task.name,
+        common = dict(
             mode=args.mode,
             uses=args.uses,
             seed=args.seed,
             top=args.top,
             hand=args.hand,
-            grasp_table=table,
             **(thresholds.get(task.name) or {}),
         )
-        if found.table.num_rows:
-            extra.append(found.table.drop_columns(["value"]))
+        found = best_pairs(obj, task.name, grasp_table=table, **common).table
+        if not found.num_rows:
+            aimed = targeted_best_pairs(obj, task.name, table, **common)
+            found = aimed.table
+            say(
+                f"{task.name}: no pair of the {table.num_rows:,} grasps with {args.uses:,} use "
+                f"points by area passes; {aimed.sampling.describe()}: "
+                f"{found.num_rows} grasps found"
+            )
+            if not found.num_rows and args.samples > 0:
+                budget = max(int(args.samples), 40)
+                searched = targeted_pairs(obj, task.name, budget=budget, **common)
+                found = searched.table
+                say(
+                    f"{task.name}: a search aimed at the task's tests, {budget:,} more "
+                    f"simulations: {found.num_rows} grasps found"
+                )
+        if found.num_rows:
+            extra.append(found.drop_columns(["value"]))
     if not extra:
         return table
     rows = pa.concat_tables(extra).cast(table.schema)
