@@ -194,3 +194,45 @@ def test_optimize_simulates_the_object_with_its_materials(wrist_inertia_task):
     for name in ("inertia", "use_edge_angle"):
         assert result.cem.row[name] == pytest.approx(again[name], rel=1e-12)
         assert result.cem.row[name] != pytest.approx(uniform[name], rel=1e-6)
+
+
+def test_passing_use_points_pass_the_use_only_tests_and_repeat_per_seed():
+    from affordgrasp.optimize import passing_use_points
+    from affordgrasp.pairs import UsePoints
+    from affordgrasp.search.guidance import use_only_passes
+
+    cut = tasks.get_task("cut")
+    uses, sampling = passing_use_points("knife", cut, 12, seed=5, max_draws=600)
+    assert not sampling.fallback and sampling.tested
+    assert len(uses.triangle) == sampling.kept == min(12, sampling.passing) > 0
+    assert use_only_passes(cut, "default", {}, uses).all()
+    # the same points, cast with every column: the edge tests pass on them too
+    full = UsePoints.of("knife", uses.use_dir)
+    np.testing.assert_array_equal(full.point, uses.point)
+    assert np.all(full.use_wedge_angle <= cut.thresholds["tau_wedge"])
+    again, _ = passing_use_points("knife", cut, 12, seed=5, max_draws=600)
+    assert again.use_dir.tobytes() == uses.use_dir.tobytes()
+    other, _ = passing_use_points("knife", cut, 12, seed=6, max_draws=600)
+    assert other.use_dir.tobytes() != uses.use_dir.tobytes()
+    # a plain sample by area holds fewer edge points than it draws
+    plain = UsePoints.sample("knife", 12, 5)
+    assert use_only_passes(cut, "default", {}, plain).sum() < 12
+
+
+def test_passing_use_points_fall_back_to_the_plain_sample_and_say_so():
+    from affordgrasp.optimize import passing_use_points
+    from affordgrasp.pairs import UsePoints
+
+    cut = tasks.get_task("cut")
+    # no point of a knife is a 0.01 rad wedge: nothing passes
+    uses, sampling = passing_use_points(
+        "knife", cut, 10, seed=2, thresholds={"tau_wedge": 0.01}, max_draws=30
+    )
+    assert sampling.fallback and sampling.passing == 0 and sampling.drawn == 30
+    assert "none of 30" in sampling.describe()
+    np.testing.assert_array_equal(uses.use_dir, UsePoints.sample("knife", 10, 2).use_dir)
+    # pick reads no column of the use point: the plain sample, as before
+    _, pick = passing_use_points("knife", tasks.get_task("pick"), 10, seed=2)
+    assert not pick.tested and pick.kept == 10
+    with pytest.raises(InputError, match="uses"):
+        passing_use_points("knife", cut, 0, seed=2)

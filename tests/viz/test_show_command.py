@@ -172,3 +172,68 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
     doc = json.loads(stdout)
     assert [b["rank"] for b in doc["best"]] == [1, 2, 3]
     assert doc["rankings"] == [{"object": "bar.stl", "task": "pick", "scored": 6, "accepted": 4}]
+
+
+def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
+    """No pair by area: the use points that pass the task's use tests, then a search aimed
+    at its tests; each step is said, and the rows found are appended (the searches are
+    replaced here by stand-ins that record their calls)."""
+    import types
+
+    import pyarrow as pa
+
+    import affordgrasp.optimize
+    import affordgrasp.pairs
+    from affordgrasp.commands.show import with_best_pairs
+    from affordgrasp.optimize import UseSampling
+    from affordgrasp.pipeline import evaluate_samples
+    from affordgrasp.tasks import get_task
+
+    table = evaluate_samples("hammer", 6, seed=1, volume=False).table
+    found = table.slice(0, 2).append_column("value", pa.array([2.0, 1.0]))
+    none = found.slice(0, 0)
+    calls = []
+    sampling = UseSampling(drawn=800, passing=40, kept=40, fallback=False)
+
+    def result(rows):
+        return types.SimpleNamespace(table=rows, sampling=sampling)
+
+    def fake(name, rows):
+        def search(obj, task, *args, **kwargs):
+            calls.append((name, task, kwargs.get("budget"), kwargs.get("uses")))
+            return result(rows)
+
+        return search
+
+    said = []
+    out = types.SimpleNamespace(text=said.append)
+    args = types.SimpleNamespace(
+        uses=50, samples=300, mode="default", seed=0, top=2, hand="barrett"
+    )
+    cut = get_task("cut")
+    # the brute force finds pairs: nothing else runs, nothing is said
+    monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", found))
+    monkeypatch.setattr(affordgrasp.optimize, "targeted_best_pairs", fake("passing uses", found))
+    monkeypatch.setattr(affordgrasp.optimize, "targeted_pairs", fake("search", found))
+    grown = with_best_pairs("hammer", table, [cut], {}, args, out)
+    assert [c[0] for c in calls] == ["brute force"] and not said
+    assert grown.num_rows == table.num_rows + 2
+    # nothing by area: the passing use points find the rows
+    calls.clear()
+    monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", none))
+    grown = with_best_pairs("hammer", table, [cut], {}, args, out)
+    assert [c[0] for c in calls] == ["brute force", "passing uses"]
+    assert grown.num_rows == table.num_rows + 2
+    assert "40 that pass" in said[-1] and "2 grasps found" in said[-1]
+    # nothing there either: the search, with --samples simulations
+    calls.clear()
+    monkeypatch.setattr(affordgrasp.optimize, "targeted_best_pairs", fake("passing uses", none))
+    grown = with_best_pairs("hammer", table, [cut], {}, args, out)
+    assert [c[0] for c in calls] == ["brute force", "passing uses", "search"]
+    assert calls[-1][2] == 300 and calls[-1][3] == 50
+    assert "300 more simulations: 2 grasps found" in said[-1]
+    assert grown.column("sample").to_pylist()[-2:] == [6, 7]
+    # pick reads no use point: no pair search at all
+    calls.clear()
+    assert with_best_pairs("hammer", table, [get_task("pick")], {}, args, out) is table
+    assert not calls

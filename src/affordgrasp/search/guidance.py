@@ -212,7 +212,7 @@ def task_tests(task, mode: str = "default", overrides=None) -> list[ThresholdTes
     return tests
 
 
-def test_closeness(tests, columns) -> np.ndarray:
+def threshold_closeness(tests, columns) -> np.ndarray:
     """How close each row comes to passing each test: a hinge at the threshold.
 
     1 for a row that passes; below, 1 - shortfall / |τ| (a column at half an ``>=``
@@ -346,7 +346,7 @@ def threshold_guidance(
     """A pair search's guidance relative to the task's thresholds.
 
     Each test of the task (:func:`task_tests`) scores a hinge, 1 when passed and its share
-    of the threshold below (:func:`test_closeness`); a grasp scores the largest sum of
+    of the threshold below (:func:`threshold_closeness`); a grasp scores the largest sum of
     hinges over the use points that pass the tests of the use point alone (all hit use
     points when none does), plus 0.05 per contact as a tie-break. Grasps without contacts
     score 0. A grasp that passes more tests, or comes closer to them, ranks higher, so the
@@ -399,19 +399,19 @@ def threshold_guidance(
             )
             for t in grasp_tests
         }
-        base = test_closeness(grasp_tests, cols).sum(axis=1)
+        base = threshold_closeness(grasp_tests, cols).sum(axis=1)
     best = np.zeros(n)
     if passing.size:
         use_score = np.zeros(passing.size)
         if use_tests:
             ucols = {t.column: np.asarray(getattr(uses, t.column))[passing] for t in use_tests}
-            use_score = test_closeness(use_tests, ucols).sum(axis=1)
+            use_score = threshold_closeness(use_tests, ucols).sum(axis=1)
         gi, ui = np.meshgrid(touched, np.arange(passing.size), indexing="ij")
         gi, ui = gi.ravel(), ui.ravel()
         score = use_score[ui]
         if pair_tests:
             pcols = pair_columns(obj, rows, uses, passing[ui], gi)
-            score = score + test_closeness(pair_tests, pcols).sum(axis=1)
+            score = score + threshold_closeness(pair_tests, pcols).sum(axis=1)
         best[touched] = score.reshape(touched.size, passing.size).max(axis=1)
     out[touched] = base[touched] + best[touched] + 0.05 * n_contacts[touched]
     return out
