@@ -544,7 +544,12 @@ class UseSampling:
     tested: bool = True
 
     def describe(self) -> str:
-        """One line for the command's output."""
+        """One line for the command's output.
+
+        Returns
+        -------
+        str
+        """
         if not self.tested:
             return f"use points: {self.kept:,} drawn by area"
         if self.fallback:
@@ -558,7 +563,13 @@ class UseSampling:
         )
 
     def to_dict(self) -> dict:
-        """JSON-ready fields."""
+        """JSON-ready fields.
+
+        Returns
+        -------
+        dict
+            ``drawn``, ``passing``, ``kept``, ``fallback``, ``tested``.
+        """
         return {
             "drawn": self.drawn,
             "passing": self.passing,

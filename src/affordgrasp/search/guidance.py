@@ -172,7 +172,19 @@ USE_ONLY = frozenset(
 
 @dataclass(frozen=True)
 class ThresholdTest:
-    """One test of a task: ``column >= tau`` (sense +1) or ``column <= tau`` (sense -1)."""
+    """One test of a task: ``column >= tau`` (sense +1) or ``column <= tau`` (sense -1).
+
+    Attributes
+    ----------
+    threshold : str
+        The threshold's name (``tau_eps``).
+    column : str
+        The metric column it tests.
+    sense : int
+        +1 or -1.
+    tau : float
+        Its value in the mode searched.
+    """
 
     threshold: str
     column: str
