@@ -161,6 +161,10 @@ def test_optimize_cli_reports_a_parallel_jaw_row(wrist_inertia_task, box_mesh, c
     doc = json.loads(capsys.readouterr().out)
     assert doc["cem"]["row"]["hand"] == "parallel_jaw"
     assert doc["random"]["row"]["hand"] == "parallel_jaw"
+    # the task reads no column of the use point: the plain sample, and the JSON says so
+    assert doc["use_points"]["kept"] == 8 and not doc["use_points"]["tested"]
+    code = main(args + ["--budget", "40", "--uses", "8", "--passing-uses", "--workers", "1"])
+    assert code == 0 and "use points: 8 drawn by area" in capsys.readouterr().out
 
 
 def test_optimize_with_restarts_keeps_the_budget_and_the_baseline(wrist_inertia_task, box_mesh):

@@ -9,10 +9,11 @@ and, with the same simulation budget, runs uniform random sampling:
 * the first generation of CEM is the run's uniform samples 0..m-1 (the samples ``generate``
   and the random baseline use), so CEM starts where random sampling starts, and the
   baseline reuses those rows;
-* with ``uses`` > 0 each grasp is scored with its best use point (:mod:`affordgrasp.pairs`)
-  of use points that pass the task's tests of the use point alone
-  (:func:`passing_use_points`), and CEM's guidance is relative to the task's thresholds
-  (:func:`~affordgrasp.search.guidance.threshold_guidance`).
+* with ``uses`` > 0 each grasp is scored with its best use point (:mod:`affordgrasp.pairs`),
+  and CEM's guidance is relative to the task's thresholds
+  (:func:`~affordgrasp.search.guidance.threshold_guidance`); with ``passing_uses`` the use
+  points are those that pass the task's tests of the use point alone
+  (:func:`passing_use_points`).
 
 :func:`targeted_pairs` and :func:`targeted_best_pairs` are the pair searches (optimiser and
 brute force, top rows) with the same use points and guidance.
@@ -325,6 +326,7 @@ def optimize(
     restarts: int = 1,
     refine: float = 0.0,
     robust=None,
+    passing_uses: bool = False,
 ) -> OptimizationResult:
     """Maximise F_T of ``task`` on ``obj`` with CEM; also uniform random sampling, same budget.
 
@@ -359,12 +361,10 @@ def optimize(
         ``progress(total)`` returns a context manager yielding ``advance(n)``.
     uses : int
         If > 0, each simulated grasp (of CEM and of the baseline) is scored with its best
-        use point among ``uses`` use points drawn by surface area (run ``seed + 1``) that
-        pass the task's tests of the use point alone (:func:`passing_use_points`; the plain
-        sample when none does), as in :mod:`affordgrasp.pairs`: the search then moves the
-        grasp only, and the use point is found by ray casts, which cost no simulation.
-        CEM's guidance is then relative to the task's thresholds
-        (:func:`~affordgrasp.search.guidance.threshold_guidance`).
+        use point among ``uses`` use points drawn by surface area (run ``seed + 1``), as in
+        :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
+        is found by ray casts, which cost no simulation. CEM's guidance is then relative
+        to the task's thresholds (:func:`~affordgrasp.search.guidance.threshold_guidance`).
     restarts, refine
         Independent CEM runs sharing the budget, and the share of it that continues the
         best of them (:func:`affordgrasp.search.cem.cem_search`); 1 and 0: one run.
@@ -372,6 +372,9 @@ def optimize(
         Score every grasp by its robust score (:mod:`affordgrasp.robust`: K perturbed
         copies each, so a grasp costs K + 1 simulations; ``budget`` counts grasps). Each
         grasp then keeps its own use direction (``uses`` is not applied).
+    passing_uses : bool
+        With ``uses``: the use points are :func:`passing_use_points` (drawn until
+        ``uses`` pass the task's tests of the use point alone) instead of the plain sample.
 
     Returns
     -------
@@ -423,9 +426,15 @@ def optimize(
     ):
         use_points = sampling = None
         if uses and settings is None:
-            # use points that pass the task's tests of the use point alone (an edge, a face)
-            use_points, sampling = passing_use_points(
-                resolved, task_obj, uses, seed + 1, mode=mode, thresholds=thresholds
+            use_points, sampling = _search_use_points(
+                resolved,
+                task_obj,
+                uses,
+                seed + 1,
+                mode,
+                dict(thresholds or {}),
+                None,
+                passing_uses,
             )
         sim = _Simulator(
             eng,
@@ -535,6 +544,9 @@ class UseSampling:
         search scores the plain sample by area.
     tested : bool
         The task has tests of the use point alone.
+    only_passing : bool
+        The use points were drawn until enough pass (:func:`passing_use_points`); False:
+        the plain sample by area (``passing`` then counts those of it that pass).
     """
 
     drawn: int
@@ -542,6 +554,7 @@ class UseSampling:
     kept: int
     fallback: bool
     tested: bool = True
+    only_passing: bool = True
 
     def describe(self) -> str:
         """One line for the command's output.
@@ -552,6 +565,11 @@ class UseSampling:
         """
         if not self.tested:
             return f"use points: {self.kept:,} drawn by area"
+        if not self.only_passing:
+            return (
+                f"use points: {self.kept:,} drawn by area, {self.passing:,} of them pass the "
+                "task's tests of the use point alone"
+            )
         if self.fallback:
             return (
                 f"use points: none of {self.drawn:,} drawn by area passes the task's tests of "
@@ -568,7 +586,7 @@ class UseSampling:
         Returns
         -------
         dict
-            ``drawn``, ``passing``, ``kept``, ``fallback``, ``tested``.
+            ``drawn``, ``passing``, ``kept``, ``fallback``, ``tested``, ``only_passing``.
         """
         return {
             "drawn": self.drawn,
@@ -576,6 +594,7 @@ class UseSampling:
             "kept": self.kept,
             "fallback": self.fallback,
             "tested": self.tested,
+            "only_passing": self.only_passing,
         }
 
 
@@ -752,9 +771,12 @@ def _search_use_points(obj, task, n, seed, mode, overrides, max_draws, passing):
             obj, task, n, seed, mode=mode, thresholds=overrides, max_draws=max_draws
         )
     from .pairs import UsePoints
+    from .search.guidance import USE_ONLY, use_only_passes
 
     use = UsePoints.sample(obj, n, seed)
-    return use, UseSampling(n, 0, n, True, tested=False)
+    passing_count = int(use_only_passes(task, mode, overrides, use).sum())
+    tested = bool(set(task.requires) & USE_ONLY)
+    return use, UseSampling(n, passing_count, n, False, tested=tested, only_passing=False)
 
 
 def _pair_search_guidance(obj, rows, task, mode, overrides, uses, thresholds=True):
@@ -797,26 +819,21 @@ def targeted_pairs(
     restarts: int = 1,
     refine: float = 0.0,
     max_draws: int | None = None,
-    passing_uses: bool = True,
+    passing_uses: bool = False,
     threshold_guide: bool = True,
     **overrides: float,
 ) -> TargetedSearch:
-    """The cross-entropy method over p0, aimed at the task's tests: each grasp scored with
-    its best of ``uses`` use points that pass the task's tests of the use point alone.
+    """The cross-entropy method over p0, aimed at the task's tests.
 
     As :func:`affordgrasp.pairs.optimize_pairs` (CEM moves the pregrasp; each simulated
-    grasp takes its best use point, found by ray casts and the pair LPs), with two changes
-    that aim the search at a small feasible set (a blade's edge, a hammer's face, held by
-    its handle, ε-robust):
-
-    * the use points are :func:`passing_use_points` (run ``seed + 1``): every one passes
-      the tests the use point alone decides, so the best of ``uses`` is over edge or face
-      points only (the plain sample when none passes);
-    * while no grasp is feasible, CEM ranks the grasps by
-      :func:`~affordgrasp.search.guidance.threshold_guidance` (each test of the task as a
-      hinge at its threshold, the best over the use points), so it climbs towards passing
-      every test at once; a task without known threshold tests keeps
-      :func:`affordgrasp.pairs.pair_guidance`.
+    grasp takes its best of ``uses`` use points drawn by area, run ``seed + 1``, found by
+    ray casts and the pair LPs), but while no grasp is feasible CEM ranks the grasps by
+    :func:`~affordgrasp.search.guidance.threshold_guidance` (each test of the task as a
+    hinge at its threshold, the best over the use points that pass the tests of the use
+    point alone), so it climbs towards passing every test at once (ε-robust, the hand off
+    the working part, a swing that meets the face) rather than towards more contacts. A
+    task without known threshold tests keeps :func:`affordgrasp.pairs.pair_guidance`.
+    With ``passing_uses`` the use points are :func:`passing_use_points` instead.
 
     Parameters
     ----------
@@ -837,9 +854,15 @@ def targeted_pairs(
         As for :func:`affordgrasp.pairs.optimize_pairs`.
     max_draws : int, optional
         Use points drawn at most (:func:`passing_use_points`).
-    passing_uses, threshold_guide : bool
-        Each change on its own (False: the plain sample by area, and the guidance of
-        :func:`affordgrasp.pairs.pair_guidance`); both False is ``optimize_pairs``.
+    passing_uses : bool
+        Score :func:`passing_use_points` instead of the plain sample by area (run
+        ``seed + 1``). Off by default: it finds more pairs, but the best of many candidates
+        also finds the few use points that pass the task's tests off the working part
+        (a thin knife spine, a hammer's claw), where F_T can be larger (docs/validation.md
+        §7, "Searches aimed at the task's tests").
+    threshold_guide : bool
+        False: the guidance of :func:`affordgrasp.pairs.pair_guidance`; both False is
+        ``optimize_pairs``.
     **overrides : float
         Threshold values that replace the mode's.
 

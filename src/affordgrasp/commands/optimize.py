@@ -43,9 +43,14 @@ def add_arguments(p) -> None:
         type=int,
         default=2000,
         metavar="M",
-        help="score each grasp with its best of M use points drawn by surface area that pass the "
-        "task's tests of the use point alone (ray casts, no simulation; default 2000); 0: each "
-        "sample keeps its own use direction",
+        help="score each grasp with its best of M use points drawn by surface area (ray casts, no "
+        "simulation; default 2000); 0: each sample keeps its own use direction",
+    )
+    p.add_argument(
+        "--passing-uses",
+        action="store_true",
+        help="draw use points by area until M pass the task's tests of the use point alone "
+        "(an edge for cut, a face for beat) and score only those",
     )
     add_robust_argument(
         p,
@@ -105,6 +110,7 @@ def run(args, out) -> None:
         refine=args.refine,
         progress=lambda total: out.progress("optimising", total),
         robust=robust_option(args),
+        passing_uses=args.passing_uses,
     )
     if result.use_sampling is not None:
         out.text(result.use_sampling.describe())
