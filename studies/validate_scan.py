@@ -72,6 +72,24 @@ def judge(task: str, family: str, rows: list[dict], com: np.ndarray) -> tuple[in
     return use, hand, end
 
 
+def show_search(obj, task: str, line: list):
+    """The rows ``affordgrasp show OBJECT --task TASK`` adds with its defaults (its brute
+    force, then its fallbacks), as a result with a ``table``; what it said goes on ``line``."""
+    from types import SimpleNamespace
+
+    from affordgrasp.commands.show import with_best_pairs
+    from affordgrasp.tasks import get_task
+
+    samples = evaluate_samples(obj, 1000, seed=0).table
+    args = SimpleNamespace(uses=2000, samples=1000, mode="default", seed=0, top=4, hand="barrett")
+    said: list[str] = []
+    table = with_best_pairs(
+        obj, samples, [get_task(task)], {}, args, SimpleNamespace(text=said.append)
+    )
+    line.extend(f"[show: {s}]" for s in said)
+    return SimpleNamespace(table=table.slice(samples.num_rows))
+
+
 def seed_list(text: str) -> list[int]:
     """``2-6`` or ``0,1,4`` to a list of seeds."""
     out: list[int] = []
@@ -142,6 +160,12 @@ def main() -> None:
     parser.add_argument("--crisp", action="store_true", help="the crisp families instead")
     parser.add_argument("--no-optimizer", action="store_true")
     parser.add_argument("--no-brute-force", action="store_true")
+    parser.add_argument(
+        "--show",
+        action="store_true",
+        help="also the search of `affordgrasp show OBJECT --task T` with its defaults (1000 "
+        "grasps of seed 0, 2000 use points, top 4, and its fallbacks)",
+    )
     parser.add_argument("--cache", default="/tmp/affordgrasp-validation-scan")
     parser.add_argument(
         "--search",
@@ -164,8 +188,9 @@ def main() -> None:
     t0 = time.perf_counter()
     report: dict = {"settings": vars(args), "tasks": {}, "objects": []}
     for task in args.tasks.split(","):
-        totals = {m: [0, 0, 0, 0] for m in ("brute_force", "optimizer")}  # use, hand, rows, end
-        empty = {"brute_force": [], "optimizer": []}
+        methods = ("brute_force", "optimizer", "show")
+        totals = {m: [0, 0, 0, 0] for m in methods}  # use, hand, rows, end
+        empty = {m: [] for m in methods}
         for family in FAMILIES[task]:
             if wanted and family not in wanted:
                 continue
@@ -218,6 +243,10 @@ def main() -> None:
                     )
                     seconds["optimizer"] = time.perf_counter() - started
                     searches.append(("optimizer", opt))
+                if args.show:
+                    started = time.perf_counter()
+                    searches.append(("show", show_search(obj, task, line)))
+                    seconds["show"] = time.perf_counter() - started
                 for method, result in searches:
                     rows = result.table.to_pylist()
                     use, hand, end = judge(task, family, rows, com)
