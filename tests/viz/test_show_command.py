@@ -225,13 +225,13 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     assert [c[0] for c in calls] == ["brute force", "passing uses"]
     assert grown.num_rows == table.num_rows + 2
     assert "40 that pass" in said[-1] and "2 grasps found" in said[-1]
-    # nothing there either: the search, with --samples simulations
+    # nothing there either: the search, with 2 x --samples simulations
     calls.clear()
     monkeypatch.setattr(affordgrasp.optimize, "targeted_best_pairs", fake("passing uses", none))
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
     assert [c[0] for c in calls] == ["brute force", "passing uses", "search"]
-    assert calls[-1][2] == 300 and calls[-1][3] == 50
-    assert "300 more simulations: 2 grasps found" in said[-1]
+    assert calls[-1][2] == 600 and calls[-1][3] == 50
+    assert "600 more simulations in 2 restarts: 2 grasps found" in said[-1]
     assert grown.column("sample").to_pylist()[-2:] == [6, 7]
     # pick reads no use point: no pair search at all
     calls.clear()
