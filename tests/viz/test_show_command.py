@@ -175,9 +175,8 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
 
 
 def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
-    """No pair by area: the use points that pass the task's use tests, then a search aimed
-    at its tests; each step is said, and the rows found are appended (the searches are
-    replaced here by stand-ins that record their calls)."""
+    """No pair by area: a search aimed at the task's tests, said, its rows appended (the
+    searches are replaced here by stand-ins that record their calls)."""
     import types
 
     import pyarrow as pa
@@ -185,7 +184,6 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     import affordgrasp.optimize
     import affordgrasp.pairs
     from affordgrasp.commands.show import with_best_pairs
-    from affordgrasp.optimize import UseSampling
     from affordgrasp.pipeline import evaluate_samples
     from affordgrasp.tasks import get_task
 
@@ -193,15 +191,11 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     found = table.slice(0, 2).append_column("value", pa.array([2.0, 1.0]))
     none = found.slice(0, 0)
     calls = []
-    sampling = UseSampling(drawn=800, passing=40, kept=40, fallback=False)
-
-    def result(rows):
-        return types.SimpleNamespace(table=rows, sampling=sampling)
 
     def fake(name, rows):
         def search(obj, task, *args, **kwargs):
-            calls.append((name, task, kwargs.get("budget"), kwargs.get("uses")))
-            return result(rows)
+            calls.append((name, task, kwargs.get("budget"), kwargs.get("restarts")))
+            return types.SimpleNamespace(table=rows)
 
         return search
 
@@ -213,26 +207,23 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     cut = get_task("cut")
     # the brute force finds pairs: nothing else runs, nothing is said
     monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", found))
-    monkeypatch.setattr(affordgrasp.optimize, "targeted_best_pairs", fake("passing uses", found))
     monkeypatch.setattr(affordgrasp.optimize, "targeted_pairs", fake("search", found))
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
     assert [c[0] for c in calls] == ["brute force"] and not said
     assert grown.num_rows == table.num_rows + 2
-    # nothing by area: the passing use points find the rows
+    # nothing by area: the search, 2 x --samples simulations in 2 restarts
     calls.clear()
     monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", none))
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
-    assert [c[0] for c in calls] == ["brute force", "passing uses"]
-    assert grown.num_rows == table.num_rows + 2
-    assert "40 that pass" in said[-1] and "2 grasps found" in said[-1]
-    # nothing there either: the search, with 2 x --samples simulations
-    calls.clear()
-    monkeypatch.setattr(affordgrasp.optimize, "targeted_best_pairs", fake("passing uses", none))
-    grown = with_best_pairs("hammer", table, [cut], {}, args, out)
-    assert [c[0] for c in calls] == ["brute force", "passing uses", "search"]
-    assert calls[-1][2] == 600 and calls[-1][3] == 50
+    assert [c[0] for c in calls] == ["brute force", "search"]
+    assert calls[-1][2:] == (600, 2)
+    assert "no pair of the 6 grasps with 50 use points" in said[-1]
     assert "600 more simulations in 2 restarts: 2 grasps found" in said[-1]
     assert grown.column("sample").to_pylist()[-2:] == [6, 7]
+    # nothing found at all: the samples alone, and it says so
+    monkeypatch.setattr(affordgrasp.optimize, "targeted_pairs", fake("search", none))
+    assert with_best_pairs("hammer", table, [cut], {}, args, out) is table
+    assert said[-1].endswith("0 grasps found")
     # pick reads no use point: no pair search at all
     calls.clear()
     assert with_best_pairs("hammer", table, [get_task("pick")], {}, args, out) is table

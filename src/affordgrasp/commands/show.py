@@ -206,12 +206,11 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
 
     The pairs are searched over the table's grasps and ``args.uses`` use points drawn by area
     (:func:`affordgrasp.pairs.best_pairs`) and appended as ordinary rows, numbered after the
-    samples. Tasks that do not read the use point add nothing. Where that finds no pair (a
-    cutting edge is about 1 % of a blade's surface, a hammer's face as little), the same
-    grasps are scored with ``args.uses`` use points that pass the task's tests of the use
-    point alone (:func:`affordgrasp.optimize.targeted_best_pairs`), and where that finds none
-    either, a search aimed at the task's tests simulates 2 × ``args.samples`` more grasps in
-    two restarts (:func:`affordgrasp.optimize.targeted_pairs`); ``out`` says which did.
+    samples. Tasks that do not read the use point add nothing. Where that finds no pair (on
+    a scan-like blade 1000 grasps hold a handful of ε-robust ones), a search aimed at the
+    task's tests (:func:`affordgrasp.optimize.targeted_pairs`, the guidance of
+    ``optimize --uses``) simulates 2 × ``args.samples`` more grasps in two restarts, and
+    ``out`` says so.
 
     Parameters
     ----------
@@ -238,7 +237,7 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
     """
     import pyarrow as pa
 
-    from ..optimize import targeted_best_pairs, targeted_pairs
+    from ..optimize import targeted_pairs
     from ..pairs import USE_COLUMNS, best_pairs
 
     if args.uses < 0:
@@ -257,24 +256,17 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
             **(thresholds.get(task.name) or {}),
         )
         found = best_pairs(obj, task.name, grasp_table=table, **common).table
-        if not found.num_rows:
-            aimed = targeted_best_pairs(obj, task.name, table, **common)
-            found = aimed.table
+        if not found.num_rows and args.samples > 0:
+            # two runs of --samples each: on the scan-like blades and hammers one run of 1000
+            # met no feasible grasp where two did; scoring the same grasps with use points
+            # that pass the use-point tests found none on any of them (docs/validation.md §7)
+            budget = 2 * max(int(args.samples), 40)
+            found = targeted_pairs(obj, task.name, budget=budget, restarts=2, **common).table
             say(
                 f"{task.name}: no pair of the {table.num_rows:,} grasps with {args.uses:,} use "
-                f"points by area passes; {aimed.sampling.describe()}: "
-                f"{found.num_rows} grasps found"
+                f"points by area passes; a search aimed at the task's tests, {budget:,} more "
+                f"simulations in 2 restarts: {found.num_rows} grasps found"
             )
-            if not found.num_rows and args.samples > 0:
-                # two restarts of --samples each: on the scan-like blades and hammers a run of
-                # 1000 met no feasible grasp where two runs of 1000 did (docs/validation.md §7)
-                budget = 2 * max(int(args.samples), 40)
-                searched = targeted_pairs(obj, task.name, budget=budget, restarts=2, **common)
-                found = searched.table
-                say(
-                    f"{task.name}: a search aimed at the task's tests, {budget:,} more "
-                    f"simulations in 2 restarts: {found.num_rows} grasps found"
-                )
         if found.num_rows:
             extra.append(found.drop_columns(["value"]))
     if not extra:
