@@ -211,14 +211,14 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
     assert [c[0] for c in calls] == ["brute force"] and not said
     assert grown.num_rows == table.num_rows + 2
-    # nothing by area: the search, 2 x --samples simulations in 2 restarts
+    # nothing by area: the search, 4 x --samples simulations in 2 restarts
     calls.clear()
     monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", none))
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
     assert [c[0] for c in calls] == ["brute force", "search"]
-    assert calls[-1][2:] == (600, 2)
+    assert calls[-1][2:] == (1200, 2)
     assert "no pair of the 6 grasps with 50 use points" in said[-1]
-    assert "600 more simulations in 2 restarts: 2 grasps found" in said[-1]
+    assert "1,200 more simulations in 2 restarts: 2 grasps found" in said[-1]
     assert grown.column("sample").to_pylist()[-2:] == [6, 7]
     # nothing found at all: the samples alone, and it says so
     monkeypatch.setattr(affordgrasp.optimize, "targeted_pairs", fake("search", none))

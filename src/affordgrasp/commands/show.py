@@ -209,7 +209,7 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
     samples. Tasks that do not read the use point add nothing. Where that finds no pair (on
     a scan-like blade 1000 grasps hold a handful of ε-robust ones), a search aimed at the
     task's tests (:func:`affordgrasp.optimize.targeted_pairs`, the guidance of
-    ``optimize --uses``) simulates 2 × ``args.samples`` more grasps in two restarts, and
+    ``optimize --uses``) simulates 4 × ``args.samples`` more grasps in two restarts, and
     ``out`` says so.
 
     Parameters
@@ -257,10 +257,10 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
         )
         found = best_pairs(obj, task.name, grasp_table=table, **common).table
         if not found.num_rows and args.samples > 0:
-            # two runs of --samples each: on the scan-like blades and hammers one run of 1000
-            # met no feasible grasp where two did; scoring the same grasps with use points
-            # that pass the use-point tests found none on any of them (docs/validation.md §7)
-            budget = 2 * max(int(args.samples), 40)
+            # two runs of 2 x --samples each: on the scan-like blades, hammers and axes, runs
+            # of 1000 met no feasible grasp where longer ones did; scoring the same grasps
+            # with use points that pass the use-point tests found none (docs/validation.md §7)
+            budget = 4 * max(int(args.samples), 40)
             found = targeted_pairs(obj, task.name, budget=budget, restarts=2, **common).table
             say(
                 f"{task.name}: no pair of the {table.num_rows:,} grasps with {args.uses:,} use "
