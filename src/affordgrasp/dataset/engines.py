@@ -26,6 +26,7 @@ import socket
 import threading
 import time
 import uuid
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -272,9 +273,14 @@ class Job:
     use_dir: np.ndarray | None = None
 
 
-# Per process: the context of the current run and its rebuilt objects.
+# Per process: the context of the current run and its most recently used rebuilt objects.
+# Bounded: a run of a thousand objects would otherwise keep every prepared object (its
+# surface samples, acceleration structures and Embree scenes) alive in every worker. Jobs
+# come object by object (shards are planned object-major), so a worker holds at most a few
+# objects at once and rebuilds none of them.
 _CONTEXT: RunContext | None = None
-_OBJECTS: dict[int, object] = {}
+_OBJECTS: OrderedDict[int, object] = OrderedDict()
+_KEEP_OBJECTS = 8
 
 
 def _install_context(context: RunContext) -> None:
@@ -289,6 +295,10 @@ def _object(index: int):
     if obj is None:
         obj = _CONTEXT.objects[index].build()
         _OBJECTS[index] = obj
+        while len(_OBJECTS) > _KEEP_OBJECTS:
+            _OBJECTS.popitem(last=False)
+    else:
+        _OBJECTS.move_to_end(index)
     return obj
 
 
