@@ -19,7 +19,8 @@ from terminal import as_in_a_terminal
 from affordgrasp.dataset.generate import generate
 from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
-from affordgrasp.errors import DatasetError, HandError
+from affordgrasp.errors import DatasetError, HandError, InputError
+from affordgrasp.grasp.pregrasp import object_stream_seed
 
 
 def rows_of(table: pa.Table, obj: str, start: int, stop: int) -> pa.Table:
@@ -72,7 +73,8 @@ def test_reference_rows_are_every_sample_in_order(reference_table):
     for name in ("knife:0", "box.stl"):
         rows = rows_of(reference_table, name, 0, SAMPLES)
         assert rows["sample"].to_pylist() == list(range(SAMPLES))
-    assert set(reference_table["seed"].to_pylist()) == {SEED}
+        # each object draws from its own stream, recorded in its rows
+        assert set(rows["seed"].to_pylist()) == {object_stream_seed(SEED, name)}
     # Unstable samples are written too.
     assert {"missed", "touched", "grasped"} & set(reference_table["status"].to_pylist())
     assert len(set(reference_table["status"].to_pylist())) >= 2
@@ -81,8 +83,50 @@ def test_reference_rows_are_every_sample_in_order(reference_table):
 def test_rows_equal_a_direct_evaluation(reference_table):
     from affordgrasp.pipeline import evaluate_samples
 
-    direct = evaluate_samples("knife", 12, seed=SEED, start=40).table
+    # the row's seed column is the seed to evaluate it again with
+    direct = evaluate_samples("knife", 12, seed=object_stream_seed(SEED, "knife:0"), start=40).table
     same_rows(rows_of(reference_table, "knife:0", 40, 52), direct)
+
+
+def test_objects_draw_different_samples_unless_streams_are_shared(tmp_path, object_specs):
+    # per-object streams (the default): no pregrasp is repeated across objects, the
+    # learning datasets' need; shared: sample i is the same pregrasp on every object
+    def inputs(table, name):
+        rows = rows_of(table, name, 0, 6)
+        return np.asarray(rows["p0"].to_pylist()), set(rows["seed"].to_pylist())
+
+    per = read_dataset(generate(object_specs, 6, tmp_path / "per", seed=SEED, workers=1).directory)
+    (a, sa), (b, sb) = inputs(per, "knife:0"), inputs(per, "box.stl")
+    assert sa != sb and not np.any(np.all(np.isclose(a[:, None], b[None]), axis=2))
+    shared = generate(object_specs, 6, tmp_path / "shared", seed=SEED, workers=1, streams="shared")
+    table = read_dataset(shared.directory)
+    (a, sa), (b, sb) = inputs(table, "knife:0"), inputs(table, "box.stl")
+    assert sa == sb == {SEED} and np.array_equal(a, b)
+    same_rows(rows_of(table, "knife:0", 0, 6), evaluate_samples_of("knife", 6, SEED))
+    with pytest.raises(DatasetError, match="shared streams there vs per-object here"):
+        generate(object_specs, 6, tmp_path / "shared", seed=SEED, streams="per-object")
+    # a resume without --streams keeps the dataset's own
+    again = generate(object_specs, 6, tmp_path / "shared", seed=SEED, workers=1)
+    assert again.complete and again.samples_written == 0
+    with pytest.raises(InputError, match="streams"):
+        generate(object_specs, 6, tmp_path / "bad", seed=SEED, streams="each")
+
+
+def test_a_manifest_without_streams_resumes_as_shared(tmp_path, object_specs):
+    out = tmp_path / "old"
+    generate(object_specs, 4, out, seed=SEED, workers=1, streams="shared")
+    path = out / "_manifest.json"
+    manifest = json.loads(path.read_text())
+    del manifest["sample_streams"]  # as written before streams were recorded
+    path.write_text(json.dumps(manifest))
+    summary = generate(object_specs, 4, out, seed=SEED, workers=1)
+    assert summary.complete and summary.samples_written == 0
+
+
+def evaluate_samples_of(name: str, n: int, seed: int) -> pa.Table:
+    from affordgrasp.pipeline import evaluate_samples
+
+    return evaluate_samples(name, n, seed=seed).table
 
 
 def test_rows_do_not_depend_on_workers_or_shard_boundaries(tmp_path, object_specs, reference_table):
@@ -227,7 +271,8 @@ def test_generate_uses_the_hand_object_it_is_given(tmp_path, box_mesh):
     generate([str(box_mesh)], 6, tmp_path / "custom", seed=3, workers=1, hand=custom)
     got = read_dataset(tmp_path / "custom")
     assert {len(j) for j in got["joints"].to_pylist()} == {len(custom.dofs)}
-    expected = evaluate_samples(str(box_mesh), 6, seed=3, hand=custom).table
+    seed = got["seed"][0].as_py()
+    expected = evaluate_samples(str(box_mesh), 6, seed=seed, hand=custom).table
     assert got["joints"].to_pylist() == expected["joints"].to_pylist()
     assert got["epsilon"].to_pylist() == expected["epsilon"].to_pylist()
 
@@ -350,3 +395,26 @@ def test_the_gws_volume_is_computed_on_request_recorded_and_resumed(tmp_path):
     assert again.shards_skipped == 2
     with pytest.raises(DatasetError, match="GWS volume computed .--metrics .volume. there vs not"):
         generate(["knife"], 6, full, seed=3, workers=1, shard_size=3)
+
+
+def test_a_worker_keeps_a_few_objects_and_rebuilds_one_that_left(monkeypatch):
+    # a run of many objects must not keep every prepared object alive in a worker
+    from affordgrasp.dataset import engines
+    from affordgrasp.objects import load_object
+    from affordgrasp.pipeline import evaluate_samples
+
+    monkeypatch.setattr(engines, "_KEEP_OBJECTS", 2)
+    objects = [load_object(f"knife:{v}") for v in range(4)]
+    context = engines.RunContext(
+        objects=tuple(engines.ObjectPayload.from_object(o) for o in objects),
+        hand="barrett",
+        seed=SEED,
+    )
+    first = engines.run_job(engines.Job(0, 0, 3), context)
+    for index in (1, 2, 3):
+        engines.run_job(engines.Job(index, 0, 3), context)
+        assert len(engines._OBJECTS) <= 2
+    assert list(engines._OBJECTS) == [2, 3]
+    again = engines.run_job(engines.Job(0, 0, 3), context)  # rebuilt: the same rows
+    same_rows(again, first)
+    same_rows(first, evaluate_samples("knife:0", 3, seed=SEED).table)

@@ -30,7 +30,12 @@ def add_arguments(p) -> None:
         metavar="I",
         help="the pregrasp of sample I of a generated run (with --seed); default sample 0",
     )
-    p.add_argument("--seed", type=int, default=0, help="run seed for --sample (default 0)")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of --sample (default 0; a dataset row: its seed column)",
+    )
     p.add_argument(
         "-o",
         "--out",

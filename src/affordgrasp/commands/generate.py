@@ -32,6 +32,14 @@ def add_arguments(p) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="dataset directory (resumable)")
     p.add_argument("--seed", type=int, default=0, help="seed of the uniform samples (default 0)")
     p.add_argument(
+        "--streams",
+        choices=("per-object", "shared"),
+        default=None,
+        help="per-object: each object draws its own samples (the default for a new dataset; "
+        "what a learning dataset needs); shared: sample i is the same pregrasp on every "
+        "object. A resume keeps the dataset's own",
+    )
+    p.add_argument(
         "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
     )
     p.add_argument(
@@ -87,6 +95,8 @@ def command_line(args) -> list[str]:
     cmd = ["affordgrasp", "generate", *args.objects, "--samples", str(args.samples)]
     cmd += ["--out", str(args.out), "--seed", str(args.seed), "--hand", args.hand]
     cmd += ["--shard-size", str(args.shard_size)]
+    if getattr(args, "streams", None):
+        cmd += ["--streams", args.streams]
     if args.size_m is not None:
         cmd += ["--size-m", repr(args.size_m)]
     if args.units is not None:
@@ -149,6 +159,7 @@ def run(args, out) -> None:
             command=cmd,
             progress=lambda total: out.progress("generating", total),
             robust=robust,
+            streams=args.streams,
         )
     except KeyboardInterrupt:
         print(

@@ -26,6 +26,7 @@ import socket
 import threading
 import time
 import uuid
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -154,6 +155,9 @@ class RunContext:
         would be looked up again there, and a custom hand named "barrett" replaced).
     seed : int
         The run's seed.
+    object_seeds : tuple of int, optional
+        Each object's sample seed, by index (a run with per-object streams); None: every
+        object draws from ``seed``.
     metrics, soft, depth : bool
         Metric columns, soft-finger contacts, depth images.
     volume : bool
@@ -167,12 +171,30 @@ class RunContext:
     # would be looked up again there, and a custom hand named "barrett" replaced).
     hand: Hand | str = "barrett"
     seed: int = 0
+    object_seeds: tuple[int, ...] | None = None
     metrics: bool = True
     soft: bool = False
     depth: bool = False
     volume: bool = False
     robust: RobustSettings | None = None
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
+
+    def seed_of(self, object_index: int) -> int:
+        """The seed object ``object_index`` draws its samples from.
+
+        Parameters
+        ----------
+        object_index : int
+            Index into :attr:`objects`.
+
+        Returns
+        -------
+        int
+            Its entry of ``object_seeds``, or the run's seed when the run shares one stream.
+        """
+        if self.object_seeds is None:
+            return self.seed
+        return self.object_seeds[object_index]
 
     def run(self, job: Job) -> pa.Table:
         """Evaluate one job (in the process this context is installed in).
@@ -192,11 +214,12 @@ class RunContext:
         _install_context(self)  # its objects are rebuilt once per process
         ctx = self
         obj = _object(job.object_index)
+        seed = ctx.seed_of(job.object_index)
         if job.p0 is None:
             table = evaluate_samples(
                 obj,
                 job.n,
-                seed=ctx.seed,
+                seed=seed,
                 start=job.start,
                 hand=ctx.hand,
                 soft=ctx.soft,
@@ -210,7 +233,7 @@ class RunContext:
                 job.p0,
                 job.use_dir,
                 hand=ctx.hand,
-                seed=ctx.seed,
+                seed=seed,
                 sample_start=job.start,
                 soft=ctx.soft,
                 metrics=ctx.metrics,
@@ -250,9 +273,14 @@ class Job:
     use_dir: np.ndarray | None = None
 
 
-# Per process: the context of the current run and its rebuilt objects.
+# Per process: the context of the current run and its most recently used rebuilt objects.
+# Bounded: a run of a thousand objects would otherwise keep every prepared object (its
+# surface samples, acceleration structures and Embree scenes) alive in every worker. Jobs
+# come object by object (shards are planned object-major), so a worker holds at most a few
+# objects at once and rebuilds none of them.
 _CONTEXT: RunContext | None = None
-_OBJECTS: dict[int, object] = {}
+_OBJECTS: OrderedDict[int, object] = OrderedDict()
+_KEEP_OBJECTS = 8
 
 
 def _install_context(context: RunContext) -> None:
@@ -267,6 +295,10 @@ def _object(index: int):
     if obj is None:
         obj = _CONTEXT.objects[index].build()
         _OBJECTS[index] = obj
+        while len(_OBJECTS) > _KEEP_OBJECTS:
+            _OBJECTS.popitem(last=False)
+    else:
+        _OBJECTS.move_to_end(index)
     return obj
 
 

@@ -31,6 +31,7 @@ import pyarrow as pa
 
 from .. import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
+from ..grasp.pregrasp import SAMPLE_STREAMS
 from ..hands import Hand, hand_to_dict
 from ..robust import RobustSettings, robust_settings
 from ..schema import column_numbers
@@ -49,10 +50,13 @@ from .layout import (
     DEFAULT_SHARD_SIZE,
     FORMAT,
     FORMAT_VERSION,
+    MANIFEST_NAME,
     Shard,
+    manifest_streams,
     plan_shards,
     prepare_directory,
     read_checksums,
+    read_manifest,
     remove_stale_temporaries,
     shard_metadata,
     valid_shard_info,
@@ -147,6 +151,7 @@ def build_manifest(
     materials: bool = False,
     volume: bool = False,
     robust: RobustSettings | None = None,
+    streams: str = "per-object",
 ) -> dict:
     """The plan of a run as a JSON document (``_manifest.json``).
 
@@ -176,11 +181,17 @@ def build_manifest(
     robust : RobustSettings, optional
         Robust evaluation's parameters (recorded under ``robust`` when K > 0; a resume
         must use the same).
+    streams : {"per-object", "shared"}
+        How the objects draw their samples (``sample_streams``; per object, its ``seed``:
+        :func:`~affordgrasp.grasp.pregrasp.object_stream_seed`, or the run's seed when
+        shared).
 
     Returns
     -------
     dict
     """
+    from ..grasp.pregrasp import object_stream_seed
+
     manifest = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
@@ -194,6 +205,7 @@ def build_manifest(
         "volume": bool(metrics and volume),
         "soft": soft,
         "materials": bool(materials),
+        "sample_streams": streams,
         "objects": [
             {
                 "index": i,
@@ -201,6 +213,7 @@ def build_manifest(
                 "category": o.category,
                 "mesh_hash": o.mesh_hash,
                 "source": o.source,
+                "seed": object_stream_seed(seed, o.name) if streams == "per-object" else seed,
             }
             for i, o in enumerate(objects)
         ],
@@ -287,6 +300,7 @@ def generate(
     progress: ProgressFactory | None = None,
     volume: bool = False,
     robust: RobustSettings | int | None = None,
+    streams: str | None = None,
 ) -> GenerationSummary:
     """Generate (or finish) the dataset of ``samples`` uniform samples per object in ``out``.
 
@@ -299,7 +313,8 @@ def generate(
     out : path
         The dataset directory (created; an existing one of the same plan is resumed).
     seed : int
-        The run's seed: sample ``i`` depends only on (seed, i).
+        The run's seed: sample ``i`` of an object depends only on (seed, i, the object's
+        name) (``streams="per-object"``) or on (seed, i) (``"shared"``).
     workers : int, optional
         Processes (local) or CPUs (local Ray); default every core; 1 runs in-process.
     engine : {"local", "ray"}
@@ -333,6 +348,14 @@ def generate(
     robust : RobustSettings or int, optional
         K perturbed copies per grasp and the ``robust_*`` columns (:mod:`affordgrasp.robust`);
         None or 0: plain. Needs ``metrics``.
+    streams : {"per-object", "shared"}, optional
+        ``"per-object"``: each object draws its samples from its own seed
+        (:func:`~affordgrasp.grasp.pregrasp.object_stream_seed`, in the rows' ``seed``
+        column and the manifest), so no two objects share a pregrasp; what a learning
+        dataset needs. ``"shared"``: every object draws the run's samples (sample i is the
+        same pregrasp and use direction on every object; a paired comparison of objects).
+        None: per-object for a new dataset, the dataset's own when resuming (a dataset
+        whose manifest does not record it shares its stream).
 
     Returns
     -------
@@ -361,6 +384,14 @@ def generate(
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
         raise bad_parameter("out", f"{str(directory)!r} is a file; give a directory", DatasetError)
+    if streams is not None and streams not in SAMPLE_STREAMS:
+        raise bad_parameter(
+            "streams", f"must be one of {', '.join(SAMPLE_STREAMS)}, got {streams!r}"
+        )
+    if streams is None:
+        # a resume keeps the dataset's own streams; a new dataset gets per-object streams
+        on_disk = (directory / MANIFEST_NAME).exists()
+        streams = manifest_streams(read_manifest(directory)) if on_disk else SAMPLE_STREAMS[0]
     manifest = build_manifest(
         resolved,
         samples=samples,
@@ -374,6 +405,7 @@ def generate(
         materials=materials or any(o.materials for o in resolved),
         volume=volume,
         robust=robust,
+        streams=streams,
     )
     manifest = prepare_directory(directory, manifest)
     removed = remove_stale_temporaries(directory)
@@ -397,6 +429,11 @@ def generate(
         objects=tuple(ObjectPayload.from_object(o) for o in resolved),
         hand=hand_model,
         seed=seed,
+        object_seeds=(
+            tuple(int(o["seed"]) for o in manifest["objects"])
+            if manifest_streams(manifest) == "per-object"
+            else None
+        ),
         metrics=metrics,
         soft=soft,
         depth=depth,

@@ -68,6 +68,7 @@ PLAN_KEYS = (
     "soft",
     "depth",
     "materials",
+    "sample_streams",
     "objects",
 )
 
@@ -311,6 +312,23 @@ def manifest_volume(manifest: dict) -> bool:
     return bool(manifest.get("metrics"))
 
 
+def manifest_streams(manifest: dict) -> str:
+    """How a dataset's objects drew their samples: ``"per-object"`` or ``"shared"``.
+
+    Parameters
+    ----------
+    manifest : dict
+        A dataset manifest.
+
+    Returns
+    -------
+    str
+        Its ``sample_streams`` entry; a manifest written before it was recorded has none,
+        and every object of it drew the run's samples (``"shared"``).
+    """
+    return str(manifest.get("sample_streams", "shared"))
+
+
 def manifest_differences(existing: dict, requested: dict) -> list[str]:
     """Readable differences between two manifests' plans (``PLAN_KEYS``).
 
@@ -357,6 +375,10 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                     + ("computed (--metrics +volume)" if b else "not computed")
                     + " here"
                 )
+        elif key == "sample_streams":
+            a, b = manifest_streams(existing), manifest_streams(requested)
+            if a != b:
+                diffs.append(f"samples drawn with {a} streams there vs {b} here (--streams)")
         elif key == "materials":
             # absent from manifests written before it was recorded: unit density
             a, b = bool(a), bool(b)

@@ -32,6 +32,7 @@ edge-on from the centre of mass in the handle, in a few per mille of draws.
 
 from __future__ import annotations
 
+import hashlib
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -335,13 +336,49 @@ PLAN_OFFSET_RANGE = 0.25
 
 SAMPLE_BLOCK = 1024
 
+# How a multi-object run draws its samples (``generate --streams``): "per-object", each
+# object its own stream (:func:`object_stream_seed`), or "shared", every object the run's
+# stream (sample i is the same pregrasp on every object; the only choice before streams were
+# recorded in the manifest).
+SAMPLE_STREAMS = ("per-object", "shared")
+
+
+def object_stream_seed(seed: int, name: str) -> int:
+    """The seed of an object's own sample stream in a run of seed ``seed``.
+
+    A learning dataset needs it: with one stream shared by every object, sample i is the
+    same pregrasp and use direction on every object, so a run of 390 objects × 200 samples
+    holds 200 distinct inputs. A model then learns those 200 poses' labels, and objects held
+    out of the same run (the same 200 poses) score it far above objects of another run
+    (docs/learning.md). Keyed by the object's name, not its place in the run: the same object
+    gets the same samples in any run of that seed.
+
+    Parameters
+    ----------
+    seed : int
+        The run's seed (>= 0).
+    name : str
+        The object's name (``knife:3``, ``knife:3~scan``, a mesh's name).
+
+    Returns
+    -------
+    int
+        In [0, 2**63): the seed :func:`sample_inputs` draws the object's samples from (and
+        the rows' ``seed`` column).
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InputError(f"seed must be a non-negative integer, got {seed!r}")
+    digest = hashlib.sha256(f"affordgrasp-samples:{int(seed)}:{name}".encode()).digest()
+    return int.from_bytes(digest[:8], "little") & ((1 << 63) - 1)
+
 
 def sample_inputs(seed: int, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
     """Uniform pregrasps and use directions for samples start..stop-1.
 
     Sample i depends only on (seed, i): draws come in fixed blocks of SAMPLE_BLOCK samples,
     each block from its own ``SeedSequence([seed, block])``, so any split of a run into
-    shards or workers produces the same samples. Every object of a run shares the sequence.
+    shards or workers produces the same samples. A dataset's objects each draw from their
+    own seed (:func:`object_stream_seed`) unless it was generated with shared streams.
 
     Parameters
     ----------

@@ -179,6 +179,31 @@ def _planes_lines(plane_origins, plane_normals, line_origins, line_directions):
     return on_plane, valid
 
 
+_DEVICE = None
+
+
+def embree_device():
+    """The process's one Embree device, shared by every :class:`EmbreeScene`.
+
+    ``embreex`` makes a new device for each scene it is not given one for, and does not
+    check that the device was made: with about a thousand scenes alive in one process (a
+    ``generate`` run of 500 objects keeps two per object) Embree's device creation fails
+    and the next scene segfaults inside Embree. Scenes of one device are independent, and
+    tracing them from several threads is safe; one device makes the number of scenes
+    limited by memory only (``tests/objects/test_rays.py`` builds 1500).
+
+    Returns
+    -------
+    embreex.rtcore.EmbreeDevice
+    """
+    global _DEVICE
+    if _DEVICE is None:
+        from embreex import rtcore
+
+        _DEVICE = rtcore.EmbreeDevice()
+    return _DEVICE
+
+
 class EmbreeScene:
     """Triangles in one Embree scene (``embreex``, one ray per call, robust, float32).
 
@@ -218,7 +243,7 @@ class EmbreeScene:
         self._scale = float(scale)
         self._face_normals = None if face_normals is None else np.asarray(face_normals)
         scaled = (self._vertices - self._origin) * self._scale
-        self._scene = rtcore_scene.EmbreeScene()
+        self._scene = rtcore_scene.EmbreeScene(embree_device())
         if self._faces is None:
             TriangleMesh(scene=self._scene, vertices=scaled.astype(_EMBREE_DTYPE))
         else:
