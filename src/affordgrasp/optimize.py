@@ -794,17 +794,6 @@ def _pair_search_guidance(obj, rows, task, mode, overrides, uses, thresholds=Tru
     return pair_guidance(rows, task, mode, overrides, uses, eps_column)
 
 
-def _rows_of_pairs(obj, p0, use_dir, task, mode, hand, seed, overrides) -> pa.Table:
-    """The pairs (p0, d) re-simulated as ordinary rows, with their F_T as ``value``."""
-    from .pipeline import evaluate_inputs
-
-    rows = evaluate_inputs(
-        obj, np.reshape(p0, (-1, 6)), np.reshape(use_dir, (-1, 2)), hand=hand, seed=seed
-    ).table
-    value = task.evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
-    return rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
-
-
 def targeted_pairs(
     obj,
     task: str,
@@ -870,11 +859,8 @@ def targeted_pairs(
     -------
     TargetedSearch
     """
-    from .grasp.pregrasp import sample_inputs
     from .objects import load_object
-    from .pairs import best_use_per_grasp, pair_scores
-    from .pipeline import evaluate_inputs
-    from .search.ranking import top_indices
+    from .pairs import optimize_pairs
     from .tasks import get_task
 
     obj = load_object(obj)
@@ -884,40 +870,26 @@ def targeted_pairs(
     use, sampling = _search_use_points(
         obj, t, uses, seed + 1, mode, overrides, max_draws, passing_uses
     )
-    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    counts = {"lp": 0, "finite": 0}
-
-    def objective(x: np.ndarray):
-        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed, volume=False).table
-        scores = pair_scores(obj, rows, use, task, mode, **overrides)
-        best, best_use = best_use_per_grasp(scores, len(x))
-        counts["lp"] += len(scores["value"])
-        counts["finite"] += int(np.sum(scores["value"] > -np.inf))
-        found.append((x[:, :6].copy(), best, best_use))
-        return best, _pair_search_guidance(obj, rows, t, mode, overrides, use, threshold_guide)
-
-    def first_generation(start: int, stop: int) -> np.ndarray:
-        return np.concatenate(sample_inputs(seed, start, stop), axis=1)
-
-    cem_search(
-        objective,
+    found = optimize_pairs(
+        obj,
+        task,
+        mode=mode,
         budget=budget,
         seed=seed,
+        top=top,
+        population=population,
+        hand=hand,
         restarts=restarts,
         refine=refine,
-        population=population,
-        first_generation=first_generation,
+        given_uses=use,
+        guide=lambda rows: _pair_search_guidance(
+            obj, rows, t, mode, overrides, use, threshold_guide
+        ),
+        **overrides,
     )
-    p0 = np.concatenate([f[0] for f in found])
-    value = np.concatenate([f[1] for f in found])
-    use_idx = np.concatenate([f[2] for f in found])
-    ok = np.flatnonzero(value > -np.inf)
-    key = np.concatenate([p0[ok], use_idx[ok, None].astype(float)], axis=1)
-    _, first = np.unique(key, axis=0, return_index=True)
-    ok = ok[np.sort(first)]
-    pick = ok[top_indices(value[ok], top)]
-    rows = _rows_of_pairs(obj, p0[pick], use.use_dir[use_idx[pick]], t, mode, hand, seed, overrides)
-    return TargetedSearch(rows, int(len(value)), counts["finite"], counts["lp"], use, sampling)
+    return TargetedSearch(
+        found.table, found.grasps, found.candidates, found.lp_pairs, use, sampling
+    )
 
 
 def targeted_best_pairs(
@@ -961,8 +933,7 @@ def targeted_best_pairs(
     TargetedSearch
     """
     from .objects import load_object
-    from .pairs import best_use_per_grasp, pair_scores
-    from .search.ranking import TopRows
+    from .pairs import best_pairs
     from .tasks import get_task
 
     obj = load_object(obj)
@@ -971,15 +942,18 @@ def targeted_best_pairs(
     use, sampling = _search_use_points(
         obj, t, uses, seed + 1, mode, overrides, max_draws, passing_uses
     )
-    scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
-    n = grasp_table.num_rows
-    best_value, best_use = best_use_per_grasp(scores, n)
-    ranked = TopRows(top, 2)
-    ranked.add(best_value, np.arange(n), best_use)
-    grasp_index, use_index = ranked.keys
-    p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
-    rows = _rows_of_pairs(
-        obj, p0[grasp_index], use.use_dir[use_index], t, mode, hand, seed, overrides
+    found = best_pairs(
+        obj,
+        task,
+        mode=mode,
+        seed=seed,
+        top=top,
+        hand=hand,
+        grasp_table=grasp_table,
+        per_grasp=True,
+        given_uses=use,
+        **overrides,
     )
-    candidates = int(np.count_nonzero(scores["value"] > -np.inf))
-    return TargetedSearch(rows, n, candidates, int(len(scores["value"])), use, sampling)
+    return TargetedSearch(
+        found.table, found.grasps, found.candidates, found.lp_pairs, use, sampling
+    )

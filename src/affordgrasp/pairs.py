@@ -25,6 +25,7 @@ does; a task for which that is not true can pass ``screen=False``.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -457,6 +458,7 @@ def best_pairs(
     hand: Hand | str = "barrett",
     grasp_table: pa.Table | None = None,
     per_grasp: bool = False,
+    given_uses: UsePoints | None = None,
     **overrides: float,
 ) -> PairSearch:
     """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` uniform samples × ``uses`` use
@@ -490,6 +492,10 @@ def best_pairs(
         Top ``top`` distinct grasps, each with its best use point (F_T of a grasp is its
         maximum over U), instead of the top pairs (which may repeat one grasp with
         several use points).
+    given_uses : UsePoints, optional
+        The use points to score (``uses`` is then ignored); default the sample by area
+        (:func:`affordgrasp.optimize.targeted_best_pairs` passes the use points that pass
+        the task's use-point tests).
     **overrides : float
         Threshold values that replace the mode's.
 
@@ -501,7 +507,7 @@ def best_pairs(
     if grasp_table is None:
         # ε only: the search never reads the GWS volume; the returned rows carry it
         grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand, volume=False).table
-    use = UsePoints.sample(obj, uses, seed + 1)
+    use = UsePoints.sample(obj, uses, seed + 1) if given_uses is None else given_uses
     d = use.use_dir
     scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
     # The one ranker of the package: highest F_T first, ties to the smaller grasp, then use.
@@ -586,6 +592,8 @@ def optimize_pairs(
     hand: Hand | str = "barrett",
     restarts: int = 1,
     refine: float = 0.0,
+    given_uses: UsePoints | None = None,
+    guide: Callable[[pa.Table], np.ndarray] | None = None,
     **overrides: float,
 ) -> PairSearch:
     """The cross-entropy method over p0, each grasp scored with its best of ``uses`` use points.
@@ -626,6 +634,13 @@ def optimize_pairs(
         elites then samples between them); refining finds that point's neighbours, so the
         top pairs are neighbours of the best pair rather than the best of weaker regions
         that other restarts settled in.
+    given_uses : UsePoints, optional
+        The use points to score (``uses`` is then ignored); default the sample by area.
+    guide : callable, optional
+        ``guide(rows)``: the guidance of a generation's simulated rows, (n,) floats, that
+        ranks them while none is feasible; default :func:`pair_guidance` (contacts, ε and
+        the use terms). :func:`affordgrasp.optimize.targeted_pairs` passes the guidance
+        relative to the task's thresholds.
     **overrides : float
         Threshold values that replace the mode's.
 
@@ -638,7 +653,7 @@ def optimize_pairs(
     obj = load_object(obj)
     get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
     plan_runs(budget, restarts, refine, population)  # a budget that cannot be split: too
-    use = UsePoints.sample(obj, uses, seed + 1)
+    use = UsePoints.sample(obj, uses, seed + 1) if given_uses is None else given_uses
     d = use.use_dir
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     counts = {"lp": 0, "finite": 0}
@@ -655,6 +670,8 @@ def optimize_pairs(
         counts["lp"] += len(scores["value"])
         counts["finite"] += int(np.sum(scores["value"] > -np.inf))
         found.append((x[:, :6].copy(), best, best_use))
+        if guide is not None:
+            return best, guide(rows)
         return best, pair_guidance(rows, t, mode, overrides, use, eps_column)
 
     def first_generation(start: int, stop: int) -> np.ndarray:
