@@ -83,6 +83,8 @@ def make_dataset(directory: Path, samples: int, workers: int | None, robust: int
     from affordgrasp.dataset.generate import generate
 
     started = time.perf_counter()
+    # The shipped models' dataset was drawn with one stream for every object (the only draw
+    # before streams were recorded); "shared" reproduces it (docs/dataset.md).
     summary = generate(
         OBJECTS,
         samples,
@@ -92,6 +94,7 @@ def make_dataset(directory: Path, samples: int, workers: int | None, robust: int
         depth=True,
         shard_size=samples,
         robust=robust or None,
+        streams="shared",
     )
     print(
         f"dataset {directory}: {summary.samples_written} samples written now, "
