@@ -355,8 +355,8 @@ def optimize(
         CEM population per generation.
     baseline : bool
         Also run random sampling (samples 0..budget-1 of the run ``seed``, the rows
-        ``generate --seed`` writes; the first generation of each CEM run is the next part of
-        them, reused).
+        ``generate --seed --streams shared`` writes; the first generation of each CEM run
+        is the next part of them, reused).
     progress : callable, optional
         ``progress(total)`` returns a context manager yielding ``advance(n)``.
     uses : int
@@ -457,7 +457,9 @@ def optimize(
             return np.concatenate(sample_inputs(seed, start, stop), axis=1)
 
         def objective(x: np.ndarray):
-            if first_blocks:  # a run's first generation: seeded samples, as generate draws
+            if (
+                first_blocks
+            ):  # a run's first generation: seeded samples, as generate --streams shared draws
                 start, stop = first_blocks.pop(0)
                 scored = sim.seeded(start, stop)
                 reused.append((start, scored))

@@ -464,11 +464,12 @@ def best_pairs(
     """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` uniform samples × ``uses`` use
     points drawn by surface area (:meth:`UsePoints.sample`).
 
-    The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate`` draws them; pass
-    ``grasp_table`` to reuse evaluated rows); the use directions are drawn from run
-    ``seed + 1`` so that they are independent of the rows' own d. The top pairs are
-    re-simulated with :func:`affordgrasp.pipeline.evaluate_inputs`, so the returned rows carry
-    every column of the dataset schema; a pair's value is recomputed on that row.
+    The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate --streams
+    shared`` draws them; pass ``grasp_table`` to reuse evaluated rows); the use directions
+    are drawn from run ``seed + 1`` so that they are independent of the rows' own d. The
+    top pairs are re-simulated with :func:`affordgrasp.pipeline.evaluate_inputs`, so the
+    returned rows carry every column of the dataset schema; a pair's value is recomputed on
+    that row.
 
     Parameters
     ----------
