@@ -515,18 +515,6 @@ def optimize(
 
 # ---------------------------------------------------- pair searches aimed at the task's tests
 
-# columns of a use point, each with the function that computes it (the lean cast computes
-# only those the task reads)
-_USE_POINT_COLUMNS = (
-    "use_edge",
-    "use_edge_angle",
-    "use_wedge_angle",
-    "use_wedge_angle_fine",
-    "use_edge_span",
-    "use_depth",
-    "use_relief",
-)
-
 
 @dataclass(frozen=True)
 class UseSampling:
@@ -600,53 +588,6 @@ class UseSampling:
         }
 
 
-def _cast_use_points(obj, use_dir: np.ndarray, columns):
-    """:class:`~affordgrasp.pairs.UsePoints` of ``use_dir`` with only ``columns`` of the use
-    point computed (the others NaN): the use-point tests of a task read a few of them, and
-    the dihedral angle alone costs more than the rest together."""
-    from .grasp.pregrasp import use_points
-    from .metrics.striking import use_depth, use_relief
-    from .metrics.use_geometry import use_edge, use_edge_angle, use_wedge_shape
-    from .pairs import UsePoints
-
-    P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
-    hit = T >= 0
-    out = {c: np.full(len(T), np.nan) for c in _USE_POINT_COLUMNS}
-    if hit.any():
-        Ph, Nh = P[hit], N[hit]
-        if "use_edge" in columns:
-            out["use_edge"][hit] = use_edge(obj.mesh, T[hit], Ph)
-        if "use_edge_angle" in columns:
-            out["use_edge_angle"][hit] = use_edge_angle(obj.mesh, Ph, use_normal=Nh)
-        if {"use_wedge_angle", "use_wedge_angle_fine", "use_edge_span"} & set(columns):
-            shape = use_wedge_shape(obj.mesh_data, Ph, Nh)
-            out["use_wedge_angle"][hit] = shape.angle
-            out["use_wedge_angle_fine"][hit] = shape.inner_angle
-            out["use_edge_span"][hit] = shape.span
-        if "use_depth" in columns:
-            out["use_depth"][hit] = use_depth(obj.mesh_data, Ph, Nh)
-        if "use_relief" in columns:
-            out["use_relief"][hit] = use_relief(obj.mesh_data, Ph, Nh)
-    return UsePoints(use_dir, P, N, T, **out)
-
-
-def _take(uses, index: np.ndarray):
-    """The use points ``index`` of a :class:`~affordgrasp.pairs.UsePoints`."""
-    from dataclasses import fields
-
-    return type(uses)(**{f.name: getattr(uses, f.name)[index] for f in fields(uses)})
-
-
-def _join(parts: list):
-    """One :class:`~affordgrasp.pairs.UsePoints` of several, in order."""
-    from dataclasses import fields
-
-    first = parts[0]
-    return type(first)(
-        **{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(first)}
-    )
-
-
 def passing_use_points(
     obj,
     task,
@@ -692,6 +633,7 @@ def passing_use_points(
     """
     from .grasp.pregrasp import surface_use_directions
     from .objects import load_object
+    from .pairs import UsePoints
     from .search.guidance import USE_ONLY, use_only_passes
     from .tasks import get_task
 
@@ -712,7 +654,7 @@ def passing_use_points(
         batch_seed = seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
         size = min(n, limit - drawn)
         d = surface_use_directions(obj.mesh_data, center, size, batch_seed)
-        batch = _cast_use_points(obj, d, columns if tested else set(_USE_POINT_COLUMNS))
+        batch = UsePoints.of(obj, d, columns if tested else None)
         drawn += size
         k += 1
         if first is None:
@@ -722,13 +664,13 @@ def passing_use_points(
         ok = np.flatnonzero(use_only_passes(t, mode, overrides, batch))
         passing += ok.size
         if ok.size:
-            kept.append(_take(batch, ok))
+            kept.append(batch.take(ok))
         if sum(len(p.triangle) for p in kept) >= n:
             break
     if not kept:
         return first, UseSampling(drawn, passing, len(first.triangle), True, tested)
-    uses = _join(kept)
-    uses = _take(uses, np.arange(min(n, len(uses.triangle))))
+    uses = UsePoints.concat(kept)
+    uses = uses.take(np.arange(min(n, len(uses.triangle))))
     return uses, UseSampling(drawn, passing, len(uses.triangle), False)
 
 

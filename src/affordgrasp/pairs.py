@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import pyarrow as pa
@@ -36,27 +36,22 @@ from .columns import GRASP_METRICS, USE_METRICS
 from .grasp.pregrasp import sample_inputs, surface_use_directions, use_points
 from .hands import Hand
 from .metrics.cones import wrench_matrix_kernel
-from .metrics.discharge import discharge
 from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from .metrics.epsilon_hand import epsilon_hand
 from .metrics.lp import OPTIMAL
-from .metrics.striking import use_depth, use_relief, use_swing_cosine
+from .metrics.striking import use_depth, use_relief
 from .metrics.transmission import use_force, use_force_kernel
 from .metrics.use_geometry import (
-    contact_reach,
     contact_thickness,
     contact_width,
-    long_axis,
-    use_clearance,
     use_edge,
     use_edge_angle,
-    use_lever_ratio,
     use_wedge_shape,
 )
 from .objects import GraspObject, load_object
 from .pipeline import evaluate_inputs, evaluate_samples
 from .search.cem import cem_search, plan_runs
-from .search.guidance import guidance, swing_alignment
+from .search.guidance import USE_ONLY, guidance, pair_geometry, swing_alignment
 from .search.ranking import TopRows, top_indices
 from .tasks import MetricColumns, get_task
 
@@ -163,7 +158,7 @@ class UsePoints:
     use_relief: np.ndarray
 
     @classmethod
-    def of(cls, obj: GraspObject | str, use_dir: np.ndarray) -> UsePoints:
+    def of(cls, obj: GraspObject | str, use_dir: np.ndarray, columns=None) -> UsePoints:
         """Cast the use rays of ``use_dir`` on an object.
 
         Parameters
@@ -172,6 +167,10 @@ class UsePoints:
             An object or a spec (``knife:3``, a mesh path).
         use_dir : (m, 2) array_like of float
             Use directions, in [0, 1].
+        columns : iterable of str, optional
+            Compute only these use-point columns (the others NaN): a search that tests a
+            few of them skips the rest (the dihedral angle alone costs more than the rest
+            together). Default every one.
 
         Returns
         -------
@@ -180,23 +179,55 @@ class UsePoints:
         """
         obj = load_object(obj)
         use_dir = np.asarray(use_dir, dtype=np.float64).reshape(-1, 2)
+        wanted = set(USE_ONLY if columns is None else columns)
         P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
         hit = T >= 0
-        ug = np.full(len(T), np.nan)
-        ang = np.full(len(T), np.nan)
-        wedge = np.full(len(T), np.nan)
-        fine = np.full(len(T), np.nan)
-        span = np.full(len(T), np.nan)
-        depth = np.full(len(T), np.nan)
-        relief = np.full(len(T), np.nan)
+        out = {c: np.full(len(T), np.nan) for c in sorted(USE_ONLY)}
         if hit.any():
-            ug[hit] = use_edge(obj.mesh, T[hit], P[hit])
-            ang[hit] = use_edge_angle(obj.mesh, P[hit], use_normal=N[hit])
-            shape = use_wedge_shape(obj.mesh_data, P[hit], N[hit])
-            wedge[hit], fine[hit], span[hit] = shape.angle, shape.inner_angle, shape.span
-            depth[hit] = use_depth(obj.mesh_data, P[hit], N[hit])
-            relief[hit] = use_relief(obj.mesh_data, P[hit], N[hit])
-        return cls(use_dir, P, N, T, ug, ang, wedge, fine, span, depth, relief)
+            Ph, Nh = P[hit], N[hit]
+            if "use_edge" in wanted:
+                out["use_edge"][hit] = use_edge(obj.mesh, T[hit], Ph)
+            if "use_edge_angle" in wanted:
+                out["use_edge_angle"][hit] = use_edge_angle(obj.mesh, Ph, use_normal=Nh)
+            if {"use_wedge_angle", "use_wedge_angle_fine", "use_edge_span"} & wanted:
+                shape = use_wedge_shape(obj.mesh_data, Ph, Nh)
+                out["use_wedge_angle"][hit] = shape.angle
+                out["use_wedge_angle_fine"][hit] = shape.inner_angle
+                out["use_edge_span"][hit] = shape.span
+            if "use_depth" in wanted:
+                out["use_depth"][hit] = use_depth(obj.mesh_data, Ph, Nh)
+            if "use_relief" in wanted:
+                out["use_relief"][hit] = use_relief(obj.mesh_data, Ph, Nh)
+        return cls(use_dir, P, N, T, **out)
+
+    def take(self, index: np.ndarray) -> UsePoints:
+        """The use points ``index``, in that order.
+
+        Parameters
+        ----------
+        index : (k,) int ndarray
+
+        Returns
+        -------
+        UsePoints
+        """
+        return UsePoints(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+
+    @staticmethod
+    def concat(parts: list[UsePoints]) -> UsePoints:
+        """One set of use points of several, in order.
+
+        Parameters
+        ----------
+        parts : list of UsePoints
+            At least one.
+
+        Returns
+        -------
+        UsePoints
+        """
+        names = [f.name for f in fields(parts[0])]
+        return UsePoints(**{n: np.concatenate([getattr(p, n) for p in parts]) for n in names})
 
     @classmethod
     def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
@@ -314,32 +345,10 @@ def pair_scores(
         gi, ui = np.meshgrid(with_contacts[first : first + step], use_rows, indexing="ij")
         gi, ui = gi.ravel(), ui.ravel()
         cols = {c: col[c][gi] for c in GRASP_COLUMNS}
-        cols["discharge"] = (
-            np.asarray(discharge(uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]))
-            if len(gi)
-            else np.zeros(0)
-        )
-        cols["use_edge"] = uses.use_edge[ui]
-        cols["use_edge_angle"] = uses.use_edge_angle[ui]
-        cols["use_wedge_angle"] = uses.use_wedge_angle[ui]
-        cols["use_wedge_angle_fine"] = uses.use_wedge_angle_fine[ui]
-        cols["use_edge_span"] = uses.use_edge_span[ui]
-        cols["use_depth"] = uses.use_depth[ui]
-        cols["use_relief"] = uses.use_relief[ui]
-        cols["use_swing_cosine"] = use_swing_cosine(
-            uses.point[ui], uses.normal[ui], wrist_point[gi], wrist_axis[gi]
-        )
-        cols["use_clearance"] = use_clearance(all_points, all_offsets, uses.point[ui], gi)
-        cols["contact_reach"] = contact_reach(
-            all_points,
-            all_offsets,
-            uses.point[ui],
-            obj.mass.center_of_mass,
-            long_axis(obj.mass.inertia),
-            gi,
-        )
-        cols["use_lever_ratio"] = use_lever_ratio(
-            uses.point[ui], obj.mass.center_of_mass, wrist_point[gi], wrist_axis[gi]
+        for c in USE_ONLY:
+            cols[c] = getattr(uses, c)[ui]
+        cols.update(
+            pair_geometry(obj, uses, ui, gi, wrist_point, wrist_axis, all_points, all_offsets)
         )
         if screen and len(gi):
             cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)

@@ -31,7 +31,7 @@ import pyarrow as pa
 
 from .. import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
-from ..grasp.pregrasp import SAMPLE_STREAMS
+from ..grasp.pregrasp import SAMPLE_STREAMS, object_stream_seed
 from ..hands import Hand, hand_to_dict
 from ..robust import RobustSettings, robust_settings
 from ..schema import column_numbers
@@ -190,8 +190,6 @@ def build_manifest(
     -------
     dict
     """
-    from ..grasp.pregrasp import object_stream_seed
-
     manifest = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,

@@ -319,28 +319,54 @@ def pair_columns(obj, rows: pa.Table, uses, use_index: np.ndarray, grasp_index: 
     -------
     dict of str to (p,) float64 ndarray
     """
-    from ..metrics.discharge import discharge
-    from ..metrics.striking import use_swing_cosine
-    from ..metrics.use_geometry import contact_reach, long_axis, use_clearance, use_lever_ratio
-
     n = rows.num_rows
     wp = np.asarray(rows.column("wrist_point").to_pylist(), float).reshape(n, 3)
     wa = np.asarray(rows.column("wrist_axis").to_pylist(), float).reshape(n, 3)
     points, offsets = _contact_points(rows)
-    P, N = uses.point[use_index], uses.normal[use_index]
-    W, A = wp[grasp_index], wa[grasp_index]
-    com = np.asarray(obj.mass.center_of_mass, dtype=np.float64)
+    return pair_geometry(obj, uses, use_index, grasp_index, wp, wa, points, offsets)
+
+
+PAIR_GEOMETRY_COLUMNS = (
+    "discharge",
+    "use_swing_cosine",
+    "use_clearance",
+    "contact_reach",
+    "use_lever_ratio",
+)
+
+
+def pair_geometry(obj, uses, use_index, grasp_index, wrist_point, wrist_axis, points, offsets):
+    """:func:`pair_columns` from the grasps' arrays (what :func:`affordgrasp.pairs.pair_scores`
+    holds already, block after block).
+
+    Parameters
+    ----------
+    obj : GraspObject
+        Its centre of mass and inertia are read.
+    uses : UsePoints
+    use_index, grasp_index : (p,) int ndarray
+        The pairs.
+    wrist_point, wrist_axis : (n, 3) float64 ndarray
+        Every grasp's palm centre (m) and unit approach direction.
+    points : (k, 3) float64 ndarray
+        Every grasp's contact points stacked, m.
+    offsets : (n + 1,) int ndarray
+        Grasp i's contacts are ``points[offsets[i]:offsets[i + 1]]``.
+
+    Returns
+    -------
+    dict of str to (p,) float64 ndarray
+        :data:`PAIR_GEOMETRY_COLUMNS`.
+    """
+    from ..metrics.discharge import discharge
+    from ..metrics.striking import use_swing_cosine
+    from ..metrics.use_geometry import contact_reach, long_axis, use_clearance, use_lever_ratio
+
     if not len(grasp_index):
-        return {
-            c: np.zeros(0)
-            for c in (
-                "discharge",
-                "use_swing_cosine",
-                "use_clearance",
-                "contact_reach",
-                "use_lever_ratio",
-            )
-        }
+        return {c: np.zeros(0) for c in PAIR_GEOMETRY_COLUMNS}
+    P, N = uses.point[use_index], uses.normal[use_index]
+    W, A = wrist_point[grasp_index], wrist_axis[grasp_index]
+    com = np.asarray(obj.mass.center_of_mass, dtype=np.float64)
     return {
         "discharge": np.asarray(discharge(P, N, W, A), dtype=np.float64),
         "use_swing_cosine": use_swing_cosine(P, N, W, A),
