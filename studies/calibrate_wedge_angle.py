@@ -63,7 +63,7 @@ from affordgrasp.objects import load_object  # noqa: E402
 
 END_DIST_M = 3e-3  # around an end of the cutting edge: a corner or a tip
 NEAR_DIST_M = 10e-3  # "other" blade points this close to the edge: the flats beside the bevel
-METRICS = ("wedge", "fine", "span", "dihedral")
+METRICS = ("wedge", "fine", "span", "thick", "dihedral")
 
 
 def edge_ends(A: np.ndarray, B: np.ndarray, double: bool) -> np.ndarray:
@@ -122,6 +122,7 @@ def collect(seeds: range, rays: int, rng, retreats: list, families) -> dict:
                     "wedge": np.degrees(shape.angle),
                     "fine": np.degrees(shape.inner_angle),
                     "span": shape.span,
+                    "thick": shape.edge_thickness * 1e3,
                     "dihedral": np.degrees(use_edge_angle(mesh, P, use_normal=N)),
                 }
                 if blade:
@@ -142,6 +143,7 @@ def collect(seeds: range, rays: int, rng, retreats: list, families) -> dict:
                         "edge": (dist <= retreat + EDGE_DIST_M) & ~at_end,
                         "other": other,
                         "near": other & (dist <= retreat + NEAR_DIST_M),
+                        "spine": other & (obj.parts_of_faces(T) == "spine"),
                         "end": at_end,
                     }
                 else:
@@ -153,16 +155,22 @@ def collect(seeds: range, rays: int, rng, retreats: list, families) -> dict:
     return {k: {m: np.concatenate(v[m]) for m in v} for k, v in out.items()}
 
 
-def passes(data: dict, key, tau_wedge: float, tau_fine: float, tau_span: float) -> np.ndarray:
-    """The cut task's edge test on the points of ``key``."""
+def passes(
+    data: dict, key, tau_wedge: float, tau_fine: float, tau_span: float, tau_thick=np.inf
+) -> np.ndarray:
+    """The cut task's edge test on the points of ``key`` (a NaN thickness fails)."""
     d = data[key]
-    return (d["wedge"] <= tau_wedge) & (d["fine"] <= tau_fine) & (d["span"] >= tau_span)
+    ok = (d["wedge"] <= tau_wedge) & (d["fine"] <= tau_fine) & (d["span"] >= tau_span)
+    return ok & ((d["thick"] <= tau_thick) | (tau_thick == np.inf))
 
 
-def group_rates(data: dict, variant: str, taus: tuple[float, float, float]) -> dict:
+LABELS = ("edge", "other", "near", "end", "spine")
+
+
+def group_rates(data: dict, variant: str, taus: tuple) -> dict:
     """Edge pass rate and fail rates of the negative groups under the combined test."""
     out = {}
-    for label in ("edge", "other", "near", "end"):
+    for label in LABELS:
         if (variant, label) not in data:
             continue
         ok = passes(data, (variant, label), *taus)
@@ -194,6 +202,7 @@ def main() -> None:
     parser.add_argument("--tau-wedge", type=float, default=None, help="fix it (deg)")
     parser.add_argument("--tau-fine", type=float, default=None, help="fix it (deg)")
     parser.add_argument("--tau-span", type=float, default=None, help="fix it")
+    parser.add_argument("--tau-thick", type=float, default=None, help="fix it (mm)")
     parser.add_argument("--out", default="", help="also write the report here")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
@@ -258,12 +267,37 @@ def main() -> None:
         "span": [min(sp_plateau), max(sp_plateau)],
     }
     report["calibration_score"] = score(calib, (tau, tau_fine, tau_span))
+
+    # the edge thickness on top of the three (a spine: a thin plate's end); "spine" counts
+    # as a negative group of its own here
+    def score_spine(data: dict, taus) -> float:
+        rates = [group_rates(data, v, taus) for v in ("crisp", "scan")]
+        tpr = np.mean([r["edge"]["rate"] for r in rates])
+        tnr = np.mean(
+            [r[g]["rate"] for r in rates for g in LABELS[1:] if g in r and r[g]["rate"] is not None]
+        )
+        return float(0.5 * (tpr + tnr))
+
+    thick_grid = np.arange(0.30, 1.505, 0.05).round(2)
+    thick_scores = np.array(
+        [score_spine(calib, (tau, tau_fine, tau_span, th)) for th in thick_grid]
+    )
+    plateau = thick_grid[thick_scores == thick_scores.max()]
+    tau_thick = float(np.round(np.median(plateau), 2))
+    report["thickness_sweep"] = {
+        f"{th:.2f} mm": round(float(v), 4) for th, v in zip(thick_grid, thick_scores, strict=True)
+    }
+    if args.tau_thick is not None:
+        tau_thick = args.tau_thick
+    report["tau_edge_thickness_mm"] = tau_thick
+    report["thickness_plateau_mm"] = [float(plateau.min()), float(plateau.max())]
     # each test alone on top of the wedge test, for comparison
     variants = {
         "wedge_only": (tau, 360.0, 0.0),
         "wedge_and_span": (tau, 360.0, tau_span),
         "wedge_and_fine": (tau, tau_fine, 0.0),
-        "all": (tau, tau_fine, tau_span),
+        "all_but_thickness": (tau, tau_fine, tau_span),
+        "all": (tau, tau_fine, tau_span, tau_thick),
     }
     pct = [1, 5, 50, 95, 99]
     for name, data in (("calibration", calib), ("held_out", held)):
@@ -273,14 +307,17 @@ def main() -> None:
                 test: group_rates(data, variant, taus) for test, taus in variants.items()
             }
             entry["dihedral_45"] = accuracy(data, variant, "dihedral", 45.0)
-            for label in ("edge", "other", "near", "end"):
+            for label in LABELS:
                 if (variant, label) in data and len(data[(variant, label)]["wedge"]):
                     entry[f"percentiles_{label}"] = {
-                        m: np.percentile(data[(variant, label)][m], pct).round(3).tolist()
-                        for m in ("wedge", "fine", "span")
+                        m: np.nanpercentile(data[(variant, label)][m], pct).round(3).tolist()
+                        for m in ("wedge", "fine", "span", "thick")
                     }
             report[name][variant] = entry
         report[name]["score"] = {test: score(data, taus) for test, taus in variants.items()}
+        report[name]["score_with_spine"] = {
+            test: score_spine(data, taus) for test, taus in variants.items()
+        }
     report["scan_edge_retreat_mm"] = (
         np.percentile(np.array(retreats) * 1e3, [0, 50, 100]).tolist() if retreats else []
     )

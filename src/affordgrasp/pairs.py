@@ -141,6 +141,8 @@ class UsePoints:
         rad (2 mm ball).
     use_edge_span : (m,) float64 ndarray
         Dimensionless.
+    use_edge_thickness : (m,) float64 ndarray
+        m (NaN where no chord behind U lies inside the solid).
     use_depth, use_relief : (m,) float64 ndarray
         m (:mod:`affordgrasp.metrics.striking`).
     """
@@ -154,6 +156,7 @@ class UsePoints:
     use_wedge_angle: np.ndarray
     use_wedge_angle_fine: np.ndarray
     use_edge_span: np.ndarray
+    use_edge_thickness: np.ndarray
     use_depth: np.ndarray
     use_relief: np.ndarray
 
@@ -189,11 +192,18 @@ class UsePoints:
                 out["use_edge"][hit] = use_edge(obj.mesh, T[hit], Ph)
             if "use_edge_angle" in wanted:
                 out["use_edge_angle"][hit] = use_edge_angle(obj.mesh, Ph, use_normal=Nh)
-            if {"use_wedge_angle", "use_wedge_angle_fine", "use_edge_span"} & wanted:
+            wedge_columns = {
+                "use_wedge_angle",
+                "use_wedge_angle_fine",
+                "use_edge_span",
+                "use_edge_thickness",
+            }
+            if wedge_columns & wanted:
                 shape = use_wedge_shape(obj.mesh_data, Ph, Nh)
                 out["use_wedge_angle"][hit] = shape.angle
                 out["use_wedge_angle_fine"][hit] = shape.inner_angle
                 out["use_edge_span"][hit] = shape.span
+                out["use_edge_thickness"][hit] = shape.edge_thickness
             if "use_depth" in wanted:
                 out["use_depth"][hit] = use_depth(obj.mesh_data, Ph, Nh)
             if "use_relief" in wanted:

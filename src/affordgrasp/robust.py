@@ -612,6 +612,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_wedge_angle": np.repeat(phi["use_wedge_angle"], k_count),
         "use_wedge_angle_fine": np.repeat(phi["use_wedge_angle_fine"], k_count),
         "use_edge_span": np.repeat(phi["use_edge_span"], k_count),
+        "use_edge_thickness": np.repeat(phi["use_edge_thickness"], k_count),
         "use_depth": np.repeat(phi["use_depth"], k_count),
         "use_relief": np.repeat(phi["use_relief"], k_count),
         "use_swing_cosine": np.asarray(

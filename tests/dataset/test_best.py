@@ -35,6 +35,7 @@ def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
             & (df.use_wedge_angle <= t["tau_wedge"])
             & (df.use_wedge_angle_fine <= t["tau_wedge_fine"])
             & (df.use_edge_span >= t["tau_span"])
+            & (df.use_edge_thickness <= t["tau_edge_thickness"])
             & (df.use_clearance >= t["tau_clear"])
             & (df.contact_thickness >= t["tau_thick"])
             & (df.contact_width >= t["tau_width"])

@@ -28,7 +28,8 @@ EXPECTED_COLUMNS = [
     "epsilon", "gws_volume", "epsilon_reason", "inertia", "hold_effort_px", "hold_effort_nx",
     "hold_effort_py", "hold_effort_ny", "hold_effort_pz", "hold_effort_nz", "impact_effort",
     "discharge", "use_force", "use_edge", "use_edge_angle", "use_wedge_angle",
-    "use_wedge_angle_fine", "use_edge_span", "use_clearance", "use_lever_ratio", "contact_reach",
+    "use_wedge_angle_fine", "use_edge_span", "use_edge_thickness", "use_clearance",
+    "use_lever_ratio", "contact_reach",
     "use_depth", "use_relief", "use_swing_cosine",
     "contact_thickness", "contact_width", "epsilon_hand",
 ]  # fmt: skip
@@ -95,6 +96,7 @@ def test_batch_equals_the_metric_functions(scene):
         shape = use_wedge_shape(mesh, U[i], nU[i])
         assert cols["use_wedge_angle_fine"][i] == pytest.approx(shape.inner_angle[0])
         assert cols["use_edge_span"][i] == pytest.approx(shape.span[0])
+        assert cols["use_edge_thickness"][i] == pytest.approx(shape.edge_thickness[0], nan_ok=True)
         near = np.linalg.norm(cs.points - U[i], axis=1).min() if len(cs) else np.inf
         assert cols["use_clearance"][i] == pytest.approx(near)
         assert cols["epsilon_hand"][i] == cols["epsilon"][i]  # r_max 0.07 m: within 0.25 m

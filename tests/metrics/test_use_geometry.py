@@ -334,6 +334,56 @@ def test_wedge_angle_fine_sees_a_thin_flat_but_not_an_edge():
     assert half.angle[0] == flat.angle[0] and half.span[0] == flat.span[0]
 
 
+def test_edge_thickness_tells_an_edge_from_a_plate_end():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import use_edge_thickness, use_wedge_shape
+
+    # on a wedge the chords 2 tan(α/2) d are linear in d: 0 at the apex, any opening
+    for opening in (20.0, 40.0):
+        apex = use_edge_thickness(_prism(opening), [0.0, 0.0, 0.0], [0.0, -1.0, 0.0])
+        assert isinstance(apex, float) and abs(apex) < 2e-5
+    # a 1.2 mm plate's end (a spine): its thickness; off the end's middle the inside
+    # directions tilt the chords a little (5 % longer 0.2 mm off it)
+    plate = trimesh.creation.box(extents=(0.04, 0.03, 0.0012))
+    pts = np.array([[0.02, 0.0, 0.0], [0.02, 0.005, 0.0004]])
+    nrm = np.tile([1.0, 0.0, 0.0], (2, 1))
+    got = use_edge_thickness(plate, pts, nrm)
+    assert got[0] == pytest.approx(0.0012, abs=2e-5) and got[1] == pytest.approx(0.0012, rel=0.06)
+    # the end of a plate as thin as the balls reads as an edge to them, not to this
+    shape = use_wedge_shape(plate, pts[:1], nrm[:1])
+    assert np.degrees(shape.angle[0]) < 55.0 and np.degrees(shape.inner_angle[0]) < 90.0
+    # rigid motion: the same thickness
+    rot = trimesh.transformations.rotation_matrix(0.7, [1.0, 2.0, 3.0])
+    rot[:3, 3] = [0.1, -0.2, 0.3]
+    moved = plate.copy().apply_transform(rot)
+    moved_got = use_edge_thickness(moved, trimesh.transform_points(pts, rot), nrm @ rot[:3, :3].T)
+    np.testing.assert_allclose(moved_got, got, atol=1e-5)  # the rays turn with it, not exactly
+
+
+def test_edge_thickness_survives_a_scanner():
+    import trimesh
+
+    from affordgrasp.metrics.use_geometry import use_edge_thickness
+    from affordgrasp.objects.scan import ScanSettings, scan_like
+
+    settings = ScanSettings(noise_m=0.15e-3)
+    x = np.linspace(-0.015, 0.015, 7)
+    # the rounded, noisy crest of a 20° wedge: still thin
+    scan, _ = scan_like(_prism(20.0), seed=0, settings=settings)
+    probe = np.stack([x, np.full(7, -2e-3), np.zeros(7)], axis=1)
+    loc, _, tri = scan.ray.intersects_location(probe, np.tile([0, 1.0, 0], (7, 1)), False)
+    crest = use_edge_thickness(scan, loc, scan.face_normals[tri])
+    assert np.median(crest) < 0.4e-3 and np.all(crest < 0.6e-3)
+    # a 1.2 mm plate's end, rounded by the scanner to a half round: still the plate's
+    plate = trimesh.creation.box(extents=(0.04, 0.03, 0.0012))
+    scan, _ = scan_like(plate, seed=1, settings=settings)
+    probe = np.stack([np.full(7, 0.03), x, np.zeros(7)], axis=1)
+    loc, _, tri = scan.ray.intersects_location(probe, np.tile([-1.0, 0, 0], (7, 1)), False)
+    end = use_edge_thickness(scan, loc, scan.face_normals[tri])
+    assert np.median(end) > 0.9e-3 and np.all(end > 0.7e-3)
+
+
 def test_use_clearance_is_the_nearest_contact():
     from affordgrasp.metrics.use_geometry import use_clearance
 

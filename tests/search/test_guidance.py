@@ -20,6 +20,7 @@ def _uses(points, normals, depth=0.09, relief=1e-4, wedge=np.pi):
         use_wedge_angle=np.full(n, wedge),
         use_wedge_angle_fine=np.full(n, wedge),
         use_edge_span=np.full(n, 1.0 / 3.0),
+        use_edge_thickness=np.zeros(n),
         use_depth=np.full(n, depth),
         use_relief=np.full(n, relief),
     )

@@ -27,6 +27,7 @@ def table(**overrides):
         "use_wedge_angle": np.full(n, math.radians(20)),  # beat's tests make it blunt
         "use_wedge_angle_fine": np.full(n, math.radians(20)),
         "use_edge_span": np.full(n, 1.0 / 3.0),
+        "use_edge_thickness": np.full(n, 1e-4),
         "use_clearance": np.full(n, 0.05),
         "contact_thickness": np.full(n, 0.02),
         "contact_width": np.full(n, 0.015),
@@ -190,6 +191,14 @@ def test_cut_rejects_thin_flats_tips_and_corners_and_cut_wedge_keeps_them():
     assert cut.thresholds["tau_wedge_fine"] == pytest.approx(tasks.TAU_WEDGE_FINE_DEFAULT)
     assert cut.thresholds["tau_span"] == pytest.approx(tasks.TAU_SPAN_DEFAULT)
     assert 0.18 < tasks.TAU_SPAN_DEFAULT < 1 / 3  # between a 90° corner and an edge
+    # the use point on a spine: a 1 mm plate's end, parallel flanks behind it; a NaN
+    # thickness (no chord behind U inside the part) is no edge either
+    end = table(use_edge_thickness=[0.001, np.nan, 0.0, 0.0, 0.0])
+    got = cut.evaluate(end)
+    assert got[0] == -INF and got[1] == -INF and np.isfinite(got[2:]).all()
+    assert cut.evaluate(end, tau_edge_thickness=0.002)[0] == 0.5
+    np.testing.assert_allclose(plain.evaluate(end), end["use_force"])
+    assert cut.thresholds["tau_edge_thickness"] == pytest.approx(tasks.TAU_EDGE_THICKNESS_DEFAULT)
     # a finger on a spine: thick along its normal, 3 mm across
     spine = table(contact_width=[0.003, 0.015, 0.015, 0.015, 0.015])
     assert cut.evaluate(spine)[0] == -INF and plain.evaluate(spine)[0] == 0.5

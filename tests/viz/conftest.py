@@ -298,6 +298,7 @@ def metric_row(rng: np.random.Generator, *, blunt: bool = True) -> dict:
         "use_wedge_angle": float(wedge),
         "use_wedge_angle_fine": float(wedge),
         "use_edge_span": float(rng.uniform(0.31, 0.4)),
+        "use_edge_thickness": float(rng.uniform(0.0, 0.0005)),
         "use_clearance": float(rng.uniform(0.04, 0.1)),
         "use_lever_ratio": float(rng.uniform(1.1, 1.9)),
         "contact_thickness": float(rng.uniform(0.01, 0.03)),

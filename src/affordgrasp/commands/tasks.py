@@ -11,6 +11,7 @@ THRESHOLD_COLUMNS = {
     "tau_blunt": "use_wedge_angle",
     "tau_wedge_fine": "use_wedge_angle_fine",
     "tau_span": "use_edge_span",
+    "tau_edge_thickness": "use_edge_thickness",
     "tau_clear": "use_clearance",
     "tau_thick": "contact_thickness",
     "tau_width": "contact_width",

@@ -20,6 +20,7 @@ use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.u
 use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the solid
 use_wedge_angle_fine      rad    the same in a 2 mm ball (same rays)
 use_edge_span             --     λ2 of the inside directions' second moment (same rays)
+use_edge_thickness        m      the part's thickness at U, from chords 1 and 3 mm behind it
 use_clearance             m      smallest contact-to-U distance
 use_lever_ratio           --     U's distance to the wrist axis / the centre of mass's
 contact_thickness         m      thinnest chord through the solid under a contact
@@ -286,6 +287,7 @@ def compute_phi_batch(
     out["use_wedge_angle"] = wedge.angle if wedge is not None else np.zeros(0)
     out["use_wedge_angle_fine"] = wedge.inner_angle if wedge is not None else np.zeros(0)
     out["use_edge_span"] = wedge.span if wedge is not None else np.zeros(0)
+    out["use_edge_thickness"] = wedge.edge_thickness if wedge is not None else np.zeros(0)
     out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
     out["use_depth"] = np.asarray(use_depth(mesh, use_point, use_normal), dtype=float)
     out["use_relief"] = np.asarray(use_relief(mesh, use_point, use_normal), dtype=float)

@@ -152,6 +152,7 @@ THRESHOLD_TESTS: dict[str, tuple[str, int]] = {
     "tau_wedge": ("use_wedge_angle", -1),
     "tau_wedge_fine": ("use_wedge_angle_fine", -1),
     "tau_span": ("use_edge_span", +1),
+    "tau_edge_thickness": ("use_edge_thickness", -1),
     "tau_angle": ("use_edge_angle", -1),
     "tau_ug": ("use_edge", +1),
 }
@@ -164,6 +165,7 @@ USE_ONLY = frozenset(
         "use_wedge_angle",
         "use_wedge_angle_fine",
         "use_edge_span",
+        "use_edge_thickness",
         "use_depth",
         "use_relief",
     }

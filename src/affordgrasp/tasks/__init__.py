@@ -31,10 +31,12 @@ Built-in tasks (paper §III; ``ΣE_h`` is the sum of the six hold efforts):
   of mass towards U along the long axis by more than half of U's offset (``contact_reach``
   > τ_reach, 0.5), or the use point is a thin flat, a tip or a thin part's corner rather
   than an edge (``use_wedge_angle_fine``, the same opening within 2 mm, > τ_wedge_fine, or
-  ``use_edge_span`` < τ_span), or a contact is on a part narrower than τ_width (8 mm)
+  ``use_edge_span`` < τ_span), or a thin plate's end such as a knife's spine
+  (``use_edge_thickness``, the part's thickness at U from chords 1 and 3 mm behind it,
+  > τ_edge_thickness, 0.7 mm, or NaN), or a contact is on a part narrower than τ_width (8 mm)
   across (``contact_width``: a finger on a blade's spine), else U_τ;
-* ``cut-wedge``: cut with the 3 mm wedge test alone (without ``use_wedge_angle_fine`` and
-  ``use_edge_span``) and without the width test;
+* ``cut-wedge``: cut with the 3 mm wedge test alone (without ``use_wedge_angle_fine``,
+  ``use_edge_span`` and ``use_edge_thickness``) and without the width test;
 * ``cut-dihedral``: the edge test on the sharpest mesh dihedral within 3 mm
   (``use_edge_angle`` <= τ_angle) instead, no clearance (crisp meshes only: a scanner
   rounds the mesh's edges away);
@@ -107,6 +109,7 @@ from .thresholds import (
     TAU_DELTA_DEFAULT,
     TAU_DEPTH_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
+    TAU_EDGE_THICKNESS_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_EPS_EXTRA,
     TAU_EPS_VIABLE,
@@ -142,6 +145,7 @@ __all__ = [
     "TAU_BLUNT_DEFAULT",
     "TAU_CLEARANCE_DEFAULT",
     "TAU_EDGE_ANGLE_DEFAULT",
+    "TAU_EDGE_THICKNESS_DEFAULT",
     "TAU_THICKNESS_DEFAULT",
     "TAU_EPS_DEFAULT",
     "TAU_EPS_EXTRA",

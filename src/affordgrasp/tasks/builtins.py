@@ -15,6 +15,7 @@ from .thresholds import (
     TAU_DELTA_DEFAULT,
     TAU_DEPTH_DEFAULT,
     TAU_EDGE_ANGLE_DEFAULT,
+    TAU_EDGE_THICKNESS_DEFAULT,
     TAU_EPS_DEFAULT,
     TAU_LEVER_DEFAULT,
     TAU_LEVER_MAX_DEFAULT,
@@ -66,11 +67,13 @@ def _beat_formula(
 
 
 def _cut(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
-    # an edge, not a thin flat (the 2 mm ball) nor a tip or a thin part's corner (the span);
+    # an edge, not a thin flat (the 2 mm ball) nor a tip or a thin part's corner (the span)
+    # nor a thin plate's end (a spine: its flanks parallel behind U, the edge thickness);
     # every contact on a part at least tau_width across (a handle, not a blade's spine)
     ok = (
         (m["use_wedge_angle_fine"] <= t["tau_wedge_fine"])
         & (m["use_edge_span"] >= t["tau_span"])
+        & (m["use_edge_thickness"] <= t["tau_edge_thickness"])
         & (m["contact_width"] >= t["tau_width"])
     )
     return np.where(ok, _cut_wedge(m, t), -np.inf)
@@ -185,19 +188,22 @@ def builtin_tasks() -> list[Task]:
                 "tau_wedge": TAU_WEDGE_DEFAULT,
                 "tau_wedge_fine": TAU_WEDGE_FINE_DEFAULT,
                 "tau_span": TAU_SPAN_DEFAULT,
+                "tau_edge_thickness": TAU_EDGE_THICKNESS_DEFAULT,
                 "tau_clear": TAU_CLEARANCE_DEFAULT,
                 "tau_thick": TAU_THICKNESS_DEFAULT,
                 "tau_width": TAU_WIDTH_DEFAULT,
                 "tau_reach": TAU_REACH_DEFAULT,
             },
             description="cutting: U_τ if robust, the use point on an edge (wedge angles at "
-            "3 and 2 mm, edge span: not a thin flat, a tip or a corner) and the hand off it, "
-            "on parts at least 8 mm across, behind the centre of mass",
+            "3 and 2 mm, edge span, edge thickness: not a thin flat, a tip, a corner or a "
+            "spine) and the hand off it, on parts at least 8 mm across, behind the centre of "
+            "mass",
             requires=(
                 "epsilon_hand",
                 "use_wedge_angle",
                 "use_wedge_angle_fine",
                 "use_edge_span",
+                "use_edge_thickness",
                 "use_clearance",
                 "contact_thickness",
                 "contact_width",

@@ -74,6 +74,13 @@ TAU_WEDGE_DEFAULT = math.radians(55.0)
 # studies/calibrate_wedge_angle.py (docs/validation.md §7).
 TAU_WEDGE_FINE_DEFAULT = math.radians(65.0)
 TAU_SPAN_DEFAULT = 0.30
+# Nor can the balls tell an edge from a thin plate's end once a scanner has rounded both: a
+# knife's 1 mm spine reads 43-50 degrees at 3 mm and 51-64 at 2 mm, span 0.36-0.39. Its
+# flanks stay parallel where an edge's converge on U: use_edge_thickness, the part's
+# thickness at U extrapolated from chords 1 and 3 mm behind it, is about 0 on an edge and
+# the plate's thickness on a spine (use_edge_thickness <= tau_edge_thickness; NaN, no chord
+# inside the part, fails). Calibrated with studies/calibrate_wedge_angle.py (§7).
+TAU_EDGE_THICKNESS_DEFAULT = 0.0007
 # A striking surface is blunt at the same scale: a flat face reads 180 degrees, a hammer
 # face's rounded rim 110-150, a claw's or a blade's tip less than 60.
 TAU_BLUNT_DEFAULT = math.radians(135.0)
