@@ -623,7 +623,7 @@ def _edge_thickness(
     over the directions S and the weights' second moment (:func:`use_wedge_shape`), m."""
     m = len(P)
     across = np.linalg.eigh(moment)[1][:, :, 0]  # least inside weight: across the blade
-    into = w @ S
+    into = np.einsum("mk,kq->mq", w, S)  # not BLAS: the same sums whatever the batch
     into -= np.einsum("ij,ij->i", into, across)[:, None] * across
     norm = np.linalg.norm(into, axis=1)
     ok = (total > 0) & (norm > 1e-9)
