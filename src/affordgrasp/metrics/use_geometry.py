@@ -638,16 +638,17 @@ def _edge_thickness(
     ).reshape(-1, 3)
     d = np.repeat(across, len(depths) * len(offsets), axis=0)
     n_chords = len(centre)
-    halves = []
-    for sign in (1.0, -1.0):
-        ray, locations = _crossings(caster, centre, sign * d)
-        t = np.einsum("ij,ij->i", locations - centre[ray], sign * d[ray])
-        first = np.full(n_chords, np.inf)
-        np.minimum.at(first, ray, t)
-        # inside the solid when the ray leaves it an odd number of times
-        halves.append((np.bincount(ray, minlength=n_chords) % 2 == 1, first))
-    inside = halves[0][0] & halves[1][0]
-    chord = np.where(inside, halves[0][1] + halves[1][1], np.nan)
+    # both halves of every chord in one cast: rays along +e3, then along -e3
+    origins = np.concatenate([centre, centre])
+    dirs = np.concatenate([d, -d])
+    ray, locations = _crossings(caster, origins, dirs)
+    t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
+    first = np.full(2 * n_chords, np.inf)
+    np.minimum.at(first, ray, t)
+    # inside the solid when the ray leaves it an odd number of times
+    odd = np.bincount(ray, minlength=2 * n_chords) % 2 == 1
+    inside = odd[:n_chords] & odd[n_chords:]
+    chord = np.where(inside, first[:n_chords] + first[n_chords:], np.nan)
     chord = chord.reshape(m, len(depths), len(offsets))
     with warnings.catch_warnings():
         # a depth with no chord inside the solid is NaN, quietly
