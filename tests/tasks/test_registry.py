@@ -198,6 +198,10 @@ def test_cut_rejects_thin_flats_tips_and_corners_and_cut_wedge_keeps_them():
     assert got[0] == -INF and got[1] == -INF and np.isfinite(got[2:]).all()
     assert cut.evaluate(end, tau_edge_thickness=0.002)[0] == 0.5
     np.testing.assert_allclose(plain.evaluate(end), end["use_force"])
+    # rows of an earlier version, without the column: named, and what to do
+    old_rows = {c: v for c, v in end.items() if c != "use_edge_thickness"}
+    with pytest.raises(TaskError, match="use_edge_thickness.*earlier version"):
+        cut.evaluate(old_rows)
     assert cut.thresholds["tau_edge_thickness"] == pytest.approx(tasks.TAU_EDGE_THICKNESS_DEFAULT)
     # a finger on a spine: thick along its normal, 3 mm across
     spine = table(contact_width=[0.003, 0.015, 0.015, 0.015, 0.015])

@@ -13,6 +13,7 @@ from ..columns import (
     HOLD_DIRS,
     HOLD_EFFORT_COLUMNS,
     HOLD_EFFORT_SUM,
+    METRIC_COLUMNS,
     hold_dirs_count,
     hold_effort_sum,
 )
@@ -61,8 +62,16 @@ class MetricColumns(Mapping):
             )
             value = self["epsilon"]
         else:
+            # a column this version writes: the rows come from an earlier version
+            hint = (
+                "; rows written by an earlier version of affordgrasp lack it: evaluate or "
+                "generate them again with this version"
+                if name in METRIC_COLUMNS
+                else ""
+            )
             raise TaskError(
-                f"metric column {name!r} is missing; available: {', '.join(sorted(self._names))}"
+                f"metric column {name!r} is missing; available: "
+                f"{', '.join(sorted(self._names))}{hint}"
             )
         self._cache[name] = value
         return value
