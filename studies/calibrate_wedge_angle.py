@@ -1,4 +1,4 @@
-"""Calibrate the edge tests of cut (wedge angles, edge span) on crisp and scan-like objects.
+"""Calibrate the edge tests of cut (wedge angles, span, thickness) on crisp and scan-like objects.
 
 The wedge angle (``use_wedge_angle``: 2π × the part of a 3 mm ball around U inside the
 solid) is meant to hold on real scans, whose edges are rounded and noisy. So the
@@ -25,7 +25,12 @@ families, with the labels of ``calibrate_use_edge.py``:
   2 mm wedge angle (``use_wedge_angle_fine``) and the edge span (``use_edge_span``,
   :func:`affordgrasp.metrics.use_wedge_shape`) are chosen together to maximise
   ``(edge pass + mean(other fail, near fail, end fail)) / 2``; the held-out seeds are
-  reported apart, per variant and group.
+  reported apart, per variant and group;
+* "spine": the "other" points labelled ``spine`` (a thin plate's end, which the balls
+  cannot tell from an edge once rounded). With the three thresholds fixed, the edge
+  thickness's threshold (``use_edge_thickness``, in mm; ``--tau-thick`` fixes it) is the
+  middle of the plateau of ``(edge pass + mean(other, near, end, spine fail)) / 2`` on
+  the calibration seeds (``thickness_sweep`` in the report).
 
 ``--families`` restricts the run (e.g. to the blades: every point of the other families
 is "other", and adding tests to the wedge test's AND can only make more of them fail).

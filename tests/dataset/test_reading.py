@@ -103,3 +103,22 @@ def test_object_selection_and_errors(reference_dataset, tmp_path):
         open_dataset(tmp_path)
     with pytest.raises(DatasetError, match="does not exist"):
         open_dataset(tmp_path / "nowhere")
+
+
+def test_a_dataset_of_an_earlier_version_says_which_columns_it_lacks(
+    reference_dataset, tmp_path, caplog
+):
+    import shutil
+
+    copy = tmp_path / "old"
+    shutil.copytree(reference_dataset, copy)
+    for p in shard_paths(copy):  # as an earlier version wrote them: no edge thickness
+        pq.write_table(pq.read_table(p).drop_columns(["use_edge_thickness"]), p)
+    with caplog.at_level("WARNING", logger="affordgrasp"):
+        table = open_dataset(copy, verify=False).to_table()
+    assert "use_edge_thickness" in caplog.text and "earlier version" in caplog.text
+    assert table.column("use_edge_thickness").null_count == table.num_rows
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="affordgrasp"):
+        open_dataset(reference_dataset)
+    assert "earlier version" not in caplog.text

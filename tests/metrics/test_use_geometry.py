@@ -359,6 +359,17 @@ def test_edge_thickness_tells_an_edge_from_a_plate_end():
     moved = plate.copy().apply_transform(rot)
     moved_got = use_edge_thickness(moved, trimesh.transform_points(pts, rot), nrm @ rot[:3, :3].T)
     np.testing.assert_allclose(moved_got, got, atol=1e-5)  # the rays turn with it, not exactly
+    # no ray inside (a point off the part): NaN, not a number from a meaningless frame
+    assert np.isnan(use_edge_thickness(plate, [0.5, 0.5, 0.5], [0.0, 0.0, 1.0]))
+    # a point's value does not depend on its batch (300 points: more than one chunk)
+    prism = _prism(20.0)
+    pts, tri = trimesh.sample.sample_surface(prism, 300, seed=3)
+    nrm = prism.face_normals[tri]
+    batch = use_edge_thickness(prism, pts, nrm)
+    for i in (0, 17, 299):
+        np.testing.assert_array_equal(
+            use_edge_thickness(prism, pts[i : i + 1], nrm[i : i + 1]), batch[i : i + 1]
+        )
 
 
 def test_edge_thickness_survives_a_scanner():

@@ -685,7 +685,33 @@ def open_dataset(
     schema = dataset_schema(
         manifest.get("metrics", True), bool(manifest.get("depth")), manifest_robust(manifest)
     )
+    _warn_missing_metrics(directory, paths, schema)
     return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
+
+
+def _warn_missing_metrics(directory, paths: list, schema) -> None:
+    """Say so when the shards lack metric columns this version writes (an earlier version
+    wrote them): they read as null, and a task that needs one scores every row −∞."""
+    import pyarrow.parquet as pq
+
+    from ..columns import METRIC_COLUMNS
+
+    wanted = [c for c in METRIC_COLUMNS if c in schema.names]
+    if not wanted:
+        return
+    missing: set[str] = set()
+    for path in {paths[0], paths[-1]}:  # a dataset's shards come from one version, or two
+        with read_errors(path):
+            have = set(pq.read_schema(path).names)
+        missing |= {c for c in wanted if c not in have}
+    if missing:
+        log.warning(
+            "dataset %s was written by an earlier version of affordgrasp: its rows have no "
+            "%s (read as null), so a task that needs them (cut needs use_edge_thickness) "
+            "scores those rows as unusable; generate it again to compute them",
+            directory,
+            ", ".join(c for c in METRIC_COLUMNS if c in missing),
+        )
 
 
 @contextlib.contextmanager

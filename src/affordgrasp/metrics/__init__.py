@@ -17,7 +17,7 @@ function                    metric
 :func:`use_edge`            U_g (paper's edge-ness)
 :func:`use_edge_angle`      sharpest convex dihedral angle near U
 :func:`use_wedge_angle`     opening angle of the solid in a 3 mm ball at U
-:func:`use_wedge_shape`     the same, in a 2 mm ball, edge span and thickness, one ray cast
+:func:`use_wedge_shape`     the same, in a 2 mm ball, edge span and thickness (shared rays)
 :func:`use_clearance`       smallest contact-to-U distance
 :func:`contact_thickness`   thinnest chord through the solid under a contact
 :func:`contact_width`       narrowest part under a contact, across the part

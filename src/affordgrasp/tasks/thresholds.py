@@ -80,8 +80,9 @@ TAU_SPAN_DEFAULT = 0.30
 # thickness at U extrapolated from chords 1 and 3 mm behind it, is about 0 on an edge and
 # the plate's thickness on a spine (use_edge_thickness <= tau_edge_thickness; NaN, no chord
 # inside the part, fails). Calibrated with studies/calibrate_wedge_angle.py: 0.70 mm is the
-# best score on seeds 0-1; held out, scan-like edge points passing 97.6 % -> 95.9 %, spine
-# points passing the other tests of cut 290 -> 5 (seeds 2-6, docs/validation.md §7).
+# best score on seeds 0-1; held out (seeds 2-3) scan-like edge points passing 97.6 % ->
+# 95.9 %; spine points passing the other tests of cut 290 -> 5 (held-out seeds 2-6 of the
+# five blade families; docs/validation.md §7).
 TAU_EDGE_THICKNESS_DEFAULT = 0.0007
 # A striking surface is blunt at the same scale: a flat face reads 180 degrees, a hammer
 # face's rounded rim 110-150, a claw's or a blade's tip less than 60.
