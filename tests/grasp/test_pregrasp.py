@@ -66,6 +66,23 @@ def test_start_pose_is_outside_and_offsets_span_the_extent():
     np.testing.assert_allclose(poses[1][:3, 3], [0, 0, -radius - 0.2], atol=1e-12)
 
 
+def test_start_poses_do_not_depend_on_the_batch_and_match_the_plain_projection():
+    from affordgrasp.grasp.pregrasp import dot3
+
+    rng = np.random.default_rng(5)
+    hull = rng.normal(size=(300, 3)) * [0.05, 0.02, 0.1]
+    p0 = np.concatenate([rng.uniform(0, 1, (300, 3)), rng.uniform(-1, 1, (300, 3))], axis=1)
+    poses, _ = start_poses(p0, hull, hand_reach=0.2)  # more grasps than one block of them
+    for i in (0, 127, 128, 299):
+        np.testing.assert_array_equal(start_poses(p0[i : i + 1], hull, 0.2)[0][0], poses[i])
+    # the extents are the projections of every hull vertex, bit for bit
+    rot = hand_rotations(p0)
+    px = dot3(hull[:, None, :], rot[None, :, :, 0])
+    lo, hi = px.min(axis=0), px.max(axis=0)
+    x = dot3(poses[:, :3, 3], rot[:, :, 0])
+    np.testing.assert_allclose(x, (lo + hi) / 2 + p0[:, 3] * (hi - lo) / 2, rtol=0, atol=1e-15)
+
+
 def test_use_point_is_the_farthest_hit():
     # A hollow box (outer 10 cm, walls 1 cm): the ray from the centre crosses the inner wall
     # first; U is on the outer face.
