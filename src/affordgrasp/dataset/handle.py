@@ -707,8 +707,8 @@ def _warn_missing_metrics(directory, paths: list, schema) -> None:
     if missing:
         log.warning(
             "dataset %s was written by an earlier version of affordgrasp: its rows have no "
-            "%s (read as null), so a task that needs them (cut needs use_edge_thickness) "
-            "scores those rows as unusable; generate it again to compute them",
+            "%s (read as null), so a task that needs them scores those rows as unusable; "
+            "generate it again to compute them",
             directory,
             ", ".join(c for c in METRIC_COLUMNS if c in missing),
         )

@@ -597,13 +597,7 @@ def use_wedge_shape(
         m = len(p)
         origins = np.repeat(p - _WEDGE_START_M * N[first : first + chunk], k, axis=0)
         dirs = np.tile(S, (m, 1))
-        ray, locations = _crossings(mesh.ray, origins, dirs)
-        t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
-        ray, t = _sorted_by_ray(ray, t)
-        # one crossing per surface: a ray through an edge reports both of its faces
-        dup = np.zeros(len(t), dtype=bool)
-        dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
-        ray, t = ray[~dup], t[~dup]
+        ray, t = _crossing_distances(mesh.ray, origins, dirs)
         w = _ray_inside(ray, t, radius, m * k).reshape(m, k)
         angle[first : first + m] = 2.0 * np.pi * w.mean(axis=1)
         w_in = _ray_inside(ray, t, inner_radius, m * k).reshape(m, k)
@@ -625,7 +619,9 @@ def _edge_thickness(
     """(m,) ``use_edge_thickness`` of the points P from their rays' inside weights w (m, k)
     over the directions S and the weights' second moment (:func:`use_wedge_shape`), m."""
     m = len(P)
-    across = np.linalg.eigh(moment)[1][:, :, 0]  # least inside weight: across the blade
+    # least inside weight: across the blade (eigh's eigenvalues are not eigvalsh's bits, so
+    # the span keeps its own call)
+    across = np.linalg.eigh(moment)[1][:, :, 0]
     into = np.einsum("mk,kq->mq", w, S)  # not BLAS: the same sums whatever the batch
     into -= np.einsum("ij,ij->i", into, across)[:, None] * across
     norm = np.linalg.norm(into, axis=1)
@@ -645,13 +641,7 @@ def _edge_thickness(
     # both halves of every chord in one cast: rays along +e3, then along -e3
     origins = np.concatenate([centre, centre])
     dirs = np.concatenate([d, -d])
-    ray, locations = _crossings(caster, origins, dirs)
-    t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
-    ray, t = _sorted_by_ray(ray, t)
-    # one crossing per surface, as for the wedge rays: a ray through an edge reports both faces
-    dup = np.zeros(len(t), dtype=bool)
-    dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
-    ray, t = ray[~dup], t[~dup]
+    ray, t = _crossing_distances(caster, origins, dirs)
     first = np.full(2 * n_chords, np.inf)
     np.minimum.at(first, ray, t)
     # inside the solid when the ray leaves it an odd number of times
@@ -663,7 +653,7 @@ def _edge_thickness(
     count = np.isfinite(chord).sum(axis=2)
     low = np.take_along_axis(chord, np.maximum(count - 1, 0)[..., None] // 2, axis=2)[..., 0]
     high = np.take_along_axis(chord, (count // 2)[..., None], axis=2)[..., 0]
-    t_depth = np.where(count > 0, 0.5 * (low + np.where(count > 0, high, 0.0)), np.nan)
+    t_depth = np.where(count > 0, 0.5 * (low + high), np.nan)
     d1, d3 = depths
     out = t_depth[:, 0] + (t_depth[:, 0] - t_depth[:, 1]) * d1 / (d3 - d1)
     return np.where(ok, out, np.nan)
@@ -729,6 +719,19 @@ def _crossings(caster, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarra
         return ray, locations
     locations, ray, _ = caster.intersects_location(origins, dirs, multiple_hits=True)
     return np.asarray(ray, dtype=np.int64), np.asarray(locations, dtype=np.float64)
+
+
+def _crossing_distances(
+    caster, origins: np.ndarray, dirs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Ray and distance of every crossing ((m,) int64, (m,) float64), by ray then distance,
+    one per surface: a ray through an edge reports both of its faces, kept once."""
+    ray, locations = _crossings(caster, origins, dirs)
+    t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
+    ray, t = _sorted_by_ray(ray, t)
+    dup = np.zeros(len(t), dtype=bool)
+    dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
+    return ray[~dup], t[~dup]
 
 
 def _sorted_by_ray(ray: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
