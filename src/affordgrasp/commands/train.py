@@ -49,6 +49,12 @@ def add_arguments(p) -> None:
         "--canonical", action="store_true", help="canonicalised depth inputs (relative depth)"
     )
     p.add_argument(
+        "--hand-view",
+        action="store_true",
+        help="cnn: read the hand view (the depth at a fixed metric scale around the approach "
+        "line, the fingers and palm drawn in; implies --canonical) instead of the camera image",
+    )
+    p.add_argument(
         "--max-train", type=int, default=20000, help="most training rows kept (default 20000)"
     )
     p.add_argument(
@@ -167,6 +173,7 @@ def run(args, out) -> None:
             stream=args.stream,
             calibrate=args.calibrate,
             buffer_rows=args.buffer_rows,
+            view="hand" if args.hand_view else None,
         )
     tr = config["training"]
     out.table(

@@ -23,6 +23,7 @@ from .model import Dof, Finger, Hand, Joint, Link, Shape, axis_angle, transform
 
 MM = 1e-3
 SPREAD_ARM = 50 * MM  # spread axis to proximal joint
+SPREAD_AXIS_X = 25 * MM  # F1's spread axis at +x, F2's at -x
 PROXIMAL_LENGTH = 70 * MM  # proximal joint to distal joint
 DISTAL_BEND = np.deg2rad(42.0)
 PROXIMAL_LIMIT = np.deg2rad(140.0)
@@ -85,7 +86,7 @@ def barrett_bh8_282() -> Hand:
     up = axis_angle([1.0, 0.0, 0.0], np.pi / 2)
     # F1/F2 arms point along +y of their base frame at spread 0: turned half a turn.
     flip = axis_angle([0.0, 0.0, 1.0], np.pi) @ up
-    for prefix, x, ratio in (("f1", 25 * MM, -1.0), ("f2", -25 * MM, 1.0)):
+    for prefix, x, ratio in (("f1", SPREAD_AXIS_X, -1.0), ("f2", -SPREAD_AXIS_X, 1.0)):
         base = Link(
             f"{prefix}_base",
             "palm",

@@ -212,6 +212,7 @@ def train_on_dataset(
     stream: bool = False,
     buffer_rows: int = 4096,
     calibrate: bool = False,
+    view: str | None = None,
 ):
     """Train a model on a dataset, evaluate it on the held-out objects, save it if asked.
 
@@ -258,6 +259,10 @@ def train_on_dataset(
         rate of its training objects (config ``calibration``,
         :func:`~affordgrasp.learning.training.prior_shift`); its threshold and test report
         are then those of the corrected probabilities.
+    view : str, optional
+        ``"hand"``: the CNN reads the hand view (:func:`~affordgrasp.learning.views.hand_view`:
+        the depth at a fixed metric scale around the approach line, with the fingers'
+        closing planes and the palm drawn in; implies ``canonical``); None: the camera image.
 
     Returns
     -------
@@ -301,7 +306,11 @@ def train_on_dataset(
         )
     if not isinstance(members, int) or isinstance(members, bool) or members < 1:
         raise InputError(f"members must be an integer >= 1, got {members!r}")
-    config = default_config(arch, tgt, canonical=canonical, members=members)
+    if view not in (None, "hand"):
+        raise InputError(f"view must be None (the camera image) or 'hand', got {view!r}")
+    if view == "hand" and arch != "cnn":
+        raise InputError(f"the hand view is an image input of the cnn, not of {arch!r}")
+    config = default_config(arch, tgt, canonical=canonical, members=members, view=view)
     epochs = None
     if stream:
         from .streaming import StreamedEpochs

@@ -122,6 +122,12 @@ def check_config(config, path: str | os.PathLike) -> None:
     size = camera.get("size") if isinstance(camera, dict) else None
     if not isinstance(size, int) or not 8 <= size <= 1024:
         raise InputError(f"{where} has input image size {size!r}; expected a size of 8-1024 px")
+    view = config.get("view")
+    if view not in (None, "hand") or (view == "hand" and arch != "cnn"):
+        raise InputError(
+            f"{where} has input view {view!r} for architecture {arch!r}; this affordgrasp knows "
+            "the camera image (no view) and the hand view of a cnn"
+        )
     for key in ("width", "n_points", "members"):
         value = config.get(key, 1)
         if not isinstance(value, int) or value < 1:

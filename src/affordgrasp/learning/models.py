@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .torch_support import require_torch
+from .views import VIEW_CHANNELS
 
 ARCHITECTURES = ("cnn", "pointnet", "pointnet-slim", "pose")
 DEPTH_SCALE = 2.0  # network input = depth in m × 2 (objects of 0.1–0.4 m sit at 0.1–0.6 m)
@@ -99,6 +100,8 @@ def build_model(config: dict):
     config : dict
         ``arch`` (one of ``ARCHITECTURES``), ``width`` (16), ``dropout`` (0.3) and
         ``canonical`` (two-channel depth and the nearest depth as an extra pose feature),
+        ``view`` (``"hand"``: the CNN reads the hand view's channels,
+        :func:`~affordgrasp.learning.views.hand_view`),
         ``members`` (1; more gives an ensemble: that many networks of the same
         architecture, trained with different seeds, whose outputs are averaged).
 
@@ -162,6 +165,8 @@ def build_model(config: dict):
         def __init__(self):
             super().__init__()
             c_in = 2 if config.get("canonical") else 1
+            if config.get("view") == "hand":
+                c_in = VIEW_CHANNELS
             w = width
             self.encoder = nn.Sequential(
                 nn.Conv2d(c_in, w // 2, 5, stride=2, padding=2),

@@ -28,6 +28,7 @@ from .data import Samples, balanced_indices
 from .models import build_model, count_parameters, depth_input, nearest_depth, pose_features
 from .targets import Target
 from .torch_support import require_torch
+from .views import hand_view
 
 log = logging.getLogger(__name__)
 
@@ -77,7 +78,9 @@ def default_config(arch: str, target: Target, **options) -> dict:
         What the model learns.
     **options
         Overrides of the defaults (``dropout`` 0.3, ``width`` 16, ``n_points`` 256,
-        ``canonical`` False, ``camera`` 128 px at 60°); None values are ignored.
+        ``canonical`` False, ``camera`` 128 px at 60°; ``view`` ``"hand"`` for the hand
+        view of :mod:`~affordgrasp.learning.views`, which implies ``canonical``, absent
+        for the camera image); None values are ignored.
 
     Returns
     -------
@@ -96,6 +99,8 @@ def default_config(arch: str, target: Target, **options) -> dict:
         "affordgrasp_version": __version__,
     }
     config.update({k: v for k, v in options.items() if v is not None})
+    if config.get("view") == "hand":
+        config["canonical"] = True
     return config
 
 
@@ -131,6 +136,9 @@ class Inputs:
 
         self.arch = config["arch"]
         self.canonical = bool(config.get("canonical"))
+        self.view = config.get("view")
+        self.fov_deg = float(config.get("camera", {}).get("fov_deg", 60.0))
+        self.spread = np.pi * np.asarray(samples.p0, dtype=np.float64)[:, 5]
         pose = pose_features(samples.p0, samples.use_dir)
         if self.arch != "pose" and samples.depth_mm is None:
             raise InputError("samples need their depth images (learning.data.load_depth)")
@@ -168,6 +176,9 @@ class Inputs:
         """
         torch = require_torch()
         pose = torch.from_numpy(self.pose[idx])
+        if self.arch == "cnn" and self.view == "hand":
+            image = hand_view(self.depth_mm[idx], self.spread[idx], fov_deg=self.fov_deg)
+            return torch.from_numpy(image), pose
         if self.arch == "cnn":
             return torch.from_numpy(depth_input(self.depth_mm[idx], self.canonical)), pose
         if self.points is not None:
