@@ -14,11 +14,18 @@ from affordgrasp.learning.decisions import decision_order, true_percentiles  # n
 
 
 def test_plan_chooses_by_the_rule_and_reports_the_truth(box_mesh):
-    p = ag.plan(str(box_mesh), "pick", candidates=6, seed=3)
+    from affordgrasp.learning.decisions import decision_threshold
+    from affordgrasp.learning.io import read_config
+    from affordgrasp.learning.api import resolve_models
+
+    p = ag.plan(str(box_mesh), "pick", candidates=6, seed=3, models="default")
     assert isinstance(p, ag.Plan)
     assert p.chosen == p.order[0] and sorted(p.order.tolist()) == list(range(6))
-    # the order is the rule's on the predictions (threshold 0.5: shipped files store none)
-    again = decision_order(p.probability, p.predicted, threshold=0.5)
+    # the order is the rule's on the predictions, at the shipped classifier's stored threshold
+    (clf,) = resolve_models("classifier")
+    t = decision_threshold(read_config(clf))
+    assert 0.0 < t < 0.5  # chosen on validation objects, after the calibration
+    again = decision_order(p.probability, p.predicted, threshold=t)
     assert again.tolist() == p.order.tolist()
     # the truth: -ΣE_h of the simulated candidates, the percentile among them
     from affordgrasp.columns import HOLD_EFFORT_COLUMNS
@@ -32,7 +39,7 @@ def test_plan_chooses_by_the_rule_and_reports_the_truth(box_mesh):
     assert doc["chosen"]["index"] == p.chosen and doc["candidates"] == 6
     json.dumps(doc)  # JSON-ready
     # same seed, same candidates and choice
-    q = ag.plan(str(box_mesh), "pick", candidates=6, seed=3)
+    q = ag.plan(str(box_mesh), "pick", candidates=6, seed=3, models="default")
     assert q.chosen == p.chosen and np.array_equal(q.p0, p.p0)
 
 
@@ -40,6 +47,9 @@ def test_plan_with_a_classifier_alone_takes_the_most_probable(box_mesh):
     p = ag.plan(str(box_mesh), "pick", candidates=5, models="classifier", seed=1)
     assert p.predicted is None and p.chosen == int(np.argmax(p.probability))
     assert p.rule == "highest viability probability"
+    # the default decides so too
+    q = ag.plan(str(box_mesh), "pick", candidates=5, seed=1)
+    assert q.rule == p.rule and q.chosen == p.chosen and q.predicted is None
 
 
 def test_plan_command_json_and_bad_input(box_mesh, capsys):

@@ -25,9 +25,11 @@ def add_arguments(p) -> None:
     p.add_argument("--candidates", type=int, default=64, help="candidate grasps drawn (default 64)")
     p.add_argument(
         "--model",
-        default="default",
-        help="default (shipped classifier + regressor), classifier, regressor, or model "
-        "files separated by commas (at most one classifier and one regressor)",
+        default="classifier",
+        help="classifier (the shipped classifier alone: the most probably viable candidate; "
+        "the default), default (shipped classifier + regressor: the classifier's threshold, "
+        "then least predicted effort), regressor, or model files separated by commas (at "
+        "most one classifier and one regressor)",
     )
     p.add_argument(
         "--threshold",

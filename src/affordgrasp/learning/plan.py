@@ -9,9 +9,10 @@ then says how good the decision truly was:
    (u4, u5), drawn in [-r, r]² with r = ``offset_range`` (default :data:`OFFSET_RANGE`:
    a planner aims near the object; 1 is the dataset's uniform draw);
 2. render every candidate's camera-in-hand depth image D(p0, O) in one batch;
-3. predict with the models in one batch (the shipped classifier and regressor by default);
-4. choose by :func:`~affordgrasp.learning.decisions.decision_order` (the classifier's
-   decision threshold, then least predicted effort);
+3. predict with the models in one batch (the shipped classifier by default);
+4. choose by :func:`~affordgrasp.learning.decisions.decision_order` (the classifier alone:
+   the most probably viable; with a regressor as well, the classifier's decision
+   threshold, then least predicted effort);
 5. simulate every candidate (not only the chosen one), so the chosen grasp's true task
    score, viability and percentile among the candidates' true scores are known; with
    ``physics=True`` replay the chosen grasp in MuJoCo (the physics extra).
@@ -236,7 +237,7 @@ def plan(
     task: str = "pick",
     *,
     candidates: int = 64,
-    models="default",
+    models="classifier",
     seed: int = 0,
     hand="barrett",
     mode: str = "default",
@@ -258,7 +259,10 @@ def plan(
     candidates : int
         How many candidate grasps to draw (>= 1).
     models : str, path or sequence
-        ``"default"`` (the shipped classifier and regressor), ``"classifier"``,
+        ``"classifier"`` (the default: the shipped classifier alone, the most probably
+        viable candidate first; with ``plan``'s candidates it chooses a viable grasp more
+        often than the pair's rule, docs/learning.md), ``"default"`` (the shipped
+        classifier and regressor: the classifier's threshold, then least predicted effort),
         ``"regressor"``, a model file, or a sequence of files and/or loaded
         ``(model, config)`` pairs: at most one classifier and one regressor.
     seed : int
