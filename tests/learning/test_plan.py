@@ -14,9 +14,9 @@ from affordgrasp.learning.decisions import decision_order, true_percentiles  # n
 
 
 def test_plan_chooses_by_the_rule_and_reports_the_truth(box_mesh):
+    from affordgrasp.learning.api import resolve_models
     from affordgrasp.learning.decisions import decision_threshold
     from affordgrasp.learning.io import read_config
-    from affordgrasp.learning.api import resolve_models
 
     p = ag.plan(str(box_mesh), "pick", candidates=6, seed=3, models="default")
     assert isinstance(p, ag.Plan)
