@@ -168,3 +168,26 @@ def test_prior_shift_calibration_moves_the_odds():
     assert prior_shift({}) == 0.0
     with pytest.raises(InputError, match="prior shift"):
         prior_shift({"calibration": {"kind": "prior_shift", "from_rate": 0.5, "to_rate": 1.0}})
+
+
+def test_a_model_reads_the_hand_view_and_round_trips(tmp_path):
+    from affordgrasp.errors import InputError
+    from affordgrasp.learning.io import check_config
+    from affordgrasp.learning.views import VIEW_SIZE
+
+    train, val = _samples(48, 10), _samples(16, 11)
+    config = default_config("cnn", make_target("viable"), width=8, view="hand")
+    assert config["view"] == "hand" and config["canonical"] is True
+    x = Inputs(config, val)
+    image, pose = x.batch(np.arange(4))
+    assert tuple(image.shape) == (4, 6, VIEW_SIZE, VIEW_SIZE) and pose.shape[1] == 15
+    model, summary = train_model(config, train, val, TrainSettings(epochs=2, batch_size=16))
+    assert len(summary["history"]) == 2
+    path = save_model(tmp_path / "h.safetensors", model, config)
+    loaded, cfg = load_model(path)
+    assert cfg["view"] == "hand"
+    np.testing.assert_array_equal(predict_scores(loaded, cfg, x), predict_scores(model, config, x))
+    # a view the package does not know, or on an architecture without images, is refused
+    for bad in ({"view": "side"}, {"view": "hand", "arch": "pointnet"}):
+        with pytest.raises(InputError, match="view"):
+            check_config(dict(cfg, **bad), path)

@@ -4,7 +4,6 @@ planes and the palm where the hand model puts them, and models that read it."""
 import math
 
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -114,48 +113,3 @@ def test_spread_moves_f1_and_f2_planes():
     cols2 = np.flatnonzero(v0[3, 0] > 0.99)
     assert np.all(np.abs(GRID[cols1] - 0.025) < VIEW_PIXEL_M)
     assert np.all(np.abs(GRID[cols2] + 0.025) < VIEW_PIXEL_M)
-
-
-def test_a_model_reads_the_hand_view_and_round_trips(tmp_path):
-    pytest.importorskip("torch")
-    pytest.importorskip("safetensors")
-    from affordgrasp.errors import InputError
-    from affordgrasp.learning.io import load_model, save_model
-    from affordgrasp.learning.targets import make_target
-    from affordgrasp.learning.training import (
-        Inputs,
-        TrainSettings,
-        default_config,
-        predict_scores,
-        train_model,
-    )
-
-    def samples(n, seed):  # discs at 0.3 m; "viable" when the disc is under the palm
-        from affordgrasp.learning.data import Samples
-
-        rng = np.random.default_rng(seed)
-        centre = rng.uniform(-0.1, 0.1, (n, 2))
-        depth = np.concatenate([_disc(0.3, 0.04, cx, cy) for cx, cy in centre])
-        names = np.array(["disc:0"] * n, dtype=object)
-        p0 = np.c_[rng.uniform(-1, 1, (n, 5)), rng.random(n)]
-        y = (np.hypot(*centre.T) < 0.05).astype(np.float64)
-        return Samples(names, names, np.arange(n), p0, rng.uniform(-1, 1, (n, 2)), y, depth)
-
-    train, val = samples(48, 10), samples(16, 11)
-    config = default_config("cnn", make_target("viable"), width=8, view="hand")
-    assert config["view"] == "hand" and config["canonical"] is True
-    x = Inputs(config, val)
-    image, pose = x.batch(np.arange(4))
-    assert tuple(image.shape) == (4, 6, VIEW_SIZE, VIEW_SIZE) and pose.shape[1] == 15
-    model, summary = train_model(config, train, val, TrainSettings(epochs=2, batch_size=16))
-    assert len(summary["history"]) == 2
-    path = save_model(tmp_path / "h.safetensors", model, config)
-    loaded, cfg = load_model(path)
-    assert cfg["view"] == "hand"
-    np.testing.assert_array_equal(predict_scores(loaded, cfg, x), predict_scores(model, config, x))
-    # a view the package does not know, or on an architecture without images, is refused
-    from affordgrasp.learning.io import check_config
-
-    for bad in ({"view": "side"}, {"view": "hand", "arch": "pointnet"}):
-        with pytest.raises(InputError, match="view"):
-            check_config(dict(cfg, **bad), path)
