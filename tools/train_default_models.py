@@ -67,7 +67,8 @@ CLASSIFIER = {
 # The shipped classifier learns from many objects with few samples each (the classifier
 # dataset below), calibrated: with plan's candidates it chooses a viable grasp in 0.33-0.35
 # of decisions alone against 0.22-0.28 for the same recipe on the 65 objects x 1500 samples
-# (validation variants 7-8 and test variants 5-6; docs/learning.md, "The shipped models").
+# (validation variants 7-8 and test variants 5-6; with training seed 1, 0.24-0.28: docs/
+# learning.md, "The shipped classifier, many objects, and plan's default").
 SHIPPED_CLASSIFIER = dict(CLASSIFIER, calibrate=True, data="classifier")
 REGRESSOR = {
     "arch": "cnn",
