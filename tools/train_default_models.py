@@ -93,41 +93,26 @@ ROBUST_REGRESSOR = {
 }
 
 
-def make_classifier_dataset(directory: Path, workers: int | None) -> None:
-    from affordgrasp.dataset.generate import generate
-
-    started = time.perf_counter()
-    summary = generate(
-        CLASSIFIER_OBJECTS, CLASSIFIER_SAMPLES, directory, seed=0, workers=workers, depth=True
-    )
-    print(
-        f"dataset {directory}: {summary.samples_written} samples written now, "
-        f"{summary.shards_skipped} shards already there, {time.perf_counter() - started:.0f} s"
-    )
-
-
 CLASSIFIER_DATASET = (
     "13 families x 30 instances (variants 9-38) x 200 uniform samples, seed 0, per-object streams"
 )
 
 
-def make_dataset(directory: Path, samples: int, workers: int | None, robust: int = 0) -> None:
+def make_dataset(
+    directory: Path, samples: int, workers: int | None, robust: int = 0, *, classifier=False
+) -> None:
+    """Generate (or resume) the regressor's dataset, or with ``classifier`` the shipped
+    classifier's (its own objects and samples, per-object streams, default shards)."""
     from affordgrasp.dataset.generate import generate
 
     started = time.perf_counter()
-    # The shipped models' dataset was drawn with one stream for every object (the only draw
+    # The regressor's dataset was drawn with one stream for every object (the only draw
     # before streams were recorded); "shared" reproduces it (docs/dataset.md).
-    summary = generate(
-        OBJECTS,
-        samples,
-        directory,
-        seed=0,
-        workers=workers,
-        depth=True,
-        shard_size=samples,
-        robust=robust or None,
-        streams="shared",
-    )
+    options = dict(shard_size=samples, robust=robust or None, streams="shared")
+    objects = OBJECTS
+    if classifier:
+        objects, samples, options = CLASSIFIER_OBJECTS, CLASSIFIER_SAMPLES, {}
+    summary = generate(objects, samples, directory, seed=0, workers=workers, depth=True, **options)
     print(
         f"dataset {directory}: {summary.samples_written} samples written now, "
         f"{summary.shards_skipped} shards already there, {time.perf_counter() - started:.0f} s"
@@ -199,7 +184,7 @@ def train(
         log_target=recipe.get("log", False),
         members=recipe.get("members", 1),
         prepared=prepared,
-        calibrate=calibrate,
+        calibrate=calibrate or recipe.get("calibrate", False),
     )
     ship(out, extra, dataset)
     tr = config["training"]
@@ -271,18 +256,11 @@ def main() -> None:
             if kind not in models:
                 continue
             out = args.out / f"{prefix}_{kind}.safetensors"
+            data, described = args.data, text
             if recipe.get("data") == "classifier":
-                make_classifier_dataset(args.classifier_data, args.workers)
-                train(
-                    args.classifier_data,
-                    recipe,
-                    out,
-                    args.epochs,
-                    calibrate=True,
-                    dataset=CLASSIFIER_DATASET,
-                )
-            else:
-                train(args.data, recipe, out, args.epochs, calibrate=args.calibrate, dataset=text)
+                data, described = args.classifier_data, CLASSIFIER_DATASET
+                make_dataset(data, 0, args.workers, classifier=True)
+            train(data, recipe, out, args.epochs, calibrate=args.calibrate, dataset=described)
 
 
 if __name__ == "__main__":

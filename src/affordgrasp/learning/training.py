@@ -138,7 +138,8 @@ class Inputs:
         self.canonical = bool(config.get("canonical"))
         self.view = config.get("view")
         self.fov_deg = float(config.get("camera", {}).get("fov_deg", 60.0))
-        self.spread = np.pi * np.asarray(samples.p0, dtype=np.float64)[:, 5]
+        # the hand view draws the fingers at each pregrasp's spread (π·p0[5], rad)
+        self.spread = np.pi * np.asarray(samples.p0)[:, 5] if self.view == "hand" else None
         pose = pose_features(samples.p0, samples.use_dir)
         if self.arch != "pose" and samples.depth_mm is None:
             raise InputError("samples need their depth images (learning.data.load_depth)")

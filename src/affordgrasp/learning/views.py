@@ -27,11 +27,10 @@ is its depth times its camera ray, so the finger and palm channels use the true 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..hands.barrett import SPREAD_ARM, SPREAD_AXIS_X
+from ..vision.camera import DepthCamera
 
 # The view's defaults: 64 x 64 pixels of 6 mm (0.384 m across: the open fingers' reach,
 # proximal joint 50 mm from the spread axis plus a 175 mm finger, is about 0.2 m from the
@@ -98,24 +97,25 @@ def hand_view(
     """
     z = np.asarray(depth_mm, dtype=np.float32) / 1000.0
     b, h = len(z), z.shape[-1]
-    k = math.tan(math.radians(fov_deg) / 2.0) / (h / 2.0)
+    camera = DepthCamera(h, float(fov_deg))
+    k, centre = camera.pixel_scale, camera.principal_point[0]
     hit = z > 0
     near = np.where(hit, z, np.inf).reshape(b, -1).min(axis=1) if b else np.zeros(0)
     near = np.where(np.isfinite(near), near, 1.0).astype(np.float32)
     grid = (np.arange(size) + 0.5 - size / 2.0) * pixel_m
-    src = grid[None, :] / (near[:, None] * k) + (h / 2.0 - 0.5)  # (b, size) source index
+    src = grid[None, :] / (near[:, None] * k) + centre  # (b, size) source index
     inside = (src >= -0.5) & (src <= h - 0.5)
     idx = np.clip(np.rint(src), 0, h - 1).astype(np.intp)
     zi = z[np.arange(b)[:, None, None], idx[:, :, None], idx[:, None, :]]
     zi = np.where(inside[:, :, None] & inside[:, None, :], zi, np.float32(0.0))
     hit = zi > 0
-    ray = ((idx + 0.5 - h / 2.0) * k).astype(np.float32)
+    ray = ((idx - centre) * k).astype(np.float32)
     x = zi * ray[:, None, :]
     y = zi * ray[:, :, None]
     out = np.empty((b, VIEW_CHANNELS, size, size), dtype=np.float32)
     out[:, 0] = np.where(hit, zi - near[:, None, None], 0.0) * 10.0
     out[:, 1] = hit
-    planes = finger_planes(np.asarray(spread, dtype=np.float64).astype(np.float32))
+    planes = finger_planes(np.asarray(spread, dtype=np.float32))
     for f, (bx, by, ax, ay) in enumerate(planes):
         e = (x - bx[:, None, None]) * -ay[:, None, None] + (y - by[:, None, None]) * ax[
             :, None, None
