@@ -33,12 +33,20 @@ def test_warm_up_with_vision_also_makes_the_rasteriser_ready():
     for dispatcher in compiled._vision_dispatchers():
         assert dispatcher.signatures, dispatcher.py_func.__name__
     # the signature warmed up is the one a depth render calls: rendering compiles nothing
-    (rasterise,) = compiled._vision_dispatchers()
-    misses = sum(rasterise.stats.cache_misses.values())
-    signatures = list(rasterise.signatures)
-    render_depth("knife", [[0.3, 0.1, -0.4, 0.2, -0.5, 0.7]])
-    assert sum(rasterise.stats.cache_misses.values()) == misses
-    assert list(rasterise.signatures) == signatures
+    dispatchers = compiled._vision_dispatchers()
+    misses = [sum(d.stats.cache_misses.values()) for d in dispatchers]
+    signatures = [list(d.signatures) for d in dispatchers]
+    p0 = [[0.3, 0.1, -0.4, 0.2, -0.5, 0.7], [-0.6, 0.5, 0.2, 0.1, 0.3, 0.2]]
+    depth = render_depth("knife", p0)
+    # and the fusion of views (plan --model views) calls the carving kernel warmed up
+    from affordgrasp.objects import load_object
+    from affordgrasp.vision.depth import renderer_for
+    from affordgrasp.vision.fusion import free_space_field
+
+    renderer = renderer_for(load_object("knife"))
+    free_space_field(depth, renderer.poses(p0), renderer.camera)
+    assert [sum(d.stats.cache_misses.values()) for d in dispatchers] == misses
+    assert [list(d.signatures) for d in dispatchers] == signatures
 
 
 def test_building_the_package_warms_the_vision_kernels_up(monkeypatch):

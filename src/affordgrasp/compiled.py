@@ -19,6 +19,8 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class KernelLoad:
@@ -61,9 +63,9 @@ def _dispatchers() -> list:
 
 
 def _vision_dispatchers() -> list:
-    from .vision import raster
+    from .vision import fusion, raster
 
-    return [raster.rasterise]
+    return [raster.rasterise, fusion._carve]
 
 
 def _misses(dispatchers: list) -> int:
@@ -156,8 +158,11 @@ def warm_up(*, vision: bool = False, reference: bool = False) -> KernelLoad:
             _reference_paths()
         if vision:
             from .vision.depth import DepthRenderer
+            from .vision.fusion import free_space_field
 
-            DepthRenderer(obj.mesh, engine="raster").render([[0.1, -0.2, 0.3, 0.0, 0.5, 0.5]])
+            renderer = DepthRenderer(obj.mesh, engine="raster")
+            p0 = np.array([[0.1, -0.2, 0.3, 0.0, 0.5, 0.5], [0.6, 0.4, -0.3, 0.0, 0.0, 0.5]])
+            free_space_field(renderer.render(p0), renderer.poses(p0), renderer.camera)
     misses = _misses(dispatchers) - misses_before
     return KernelLoad(time.perf_counter() - started, misses > 0 or compilations.count > 0)
 

@@ -120,6 +120,7 @@ def evaluate_inputs(
     metrics: bool = True,
     volume: bool = False,
     robust: RobustSettings | int | None = None,
+    frame: GraspObject | None = None,
 ) -> Evaluation:
     """Simulate and score given inputs on one object.
 
@@ -148,6 +149,9 @@ def evaluate_inputs(
         Robust evaluation (:mod:`affordgrasp.robust`): K perturbed copies per grasp and the
         ``robust_*`` columns after the metric columns. An int is K with the default
         perturbations; None or 0: plain evaluation, the same table as without it.
+    frame : GraspObject, optional
+        The object whose geometry places the pregrasps (default: ``obj``; see
+        :func:`~affordgrasp.grasp.policy.simulate`).
 
     Returns
     -------
@@ -157,7 +161,7 @@ def evaluate_inputs(
     hand = get_hand(hand)
     settings = robust_settings(robust)
     t0 = time.perf_counter()
-    batch = simulate(obj, p0, use_dir, hand=hand)
+    batch = simulate(obj, p0, use_dir, hand=hand, frame=frame)
     t1 = time.perf_counter()
     phi = phi_of_batch(obj, batch, soft=soft, volume=volume) if metrics else None
     t2 = time.perf_counter()

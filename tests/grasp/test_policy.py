@@ -304,3 +304,22 @@ def test_results_do_not_depend_on_where_the_object_sits(offset_m):
         np.array(base.column("use_point").to_pylist()),
         atol=1e-6,
     )
+
+
+def test_a_frame_object_places_the_pregrasps_and_the_object_itself_changes_nothing():
+    obj = load_object("mug")
+    p0 = np.random.default_rng(5).uniform(-1, 1, (24, 6))
+    p0[:, 5] = np.abs(p0[:, 5])
+    plain = simulate(obj, p0)
+    same = simulate(obj, p0, frame=obj)
+    np.testing.assert_array_equal(plain.hand_pose, same.hand_pose)
+    np.testing.assert_array_equal(plain.joints, same.joints)
+    # a slightly larger copy places the hand as on it, and the hand still stops on the mug:
+    # the same approach lines (the copy's centre and extents differ by 1 %)
+    bigger = as_object(obj.mesh.copy().apply_scale(1.01))
+    placed = simulate(obj, p0, frame=bigger)
+    touched = (plain.status != "missed") & (placed.status != "missed")
+    assert touched.sum() >= 12
+    gap = np.linalg.norm(placed.hand_pose[touched, :3, 3] - plain.hand_pose[touched, :3, 3], axis=1)
+    assert np.median(gap) < 3e-3
+    assert not np.array_equal(placed.hand_pose, plain.hand_pose)

@@ -110,3 +110,26 @@ def test_plan_offset_range_scales_the_candidates_offsets_only(box_mesh, capsys):
     assert json.loads(capsys.readouterr().out)["offset_range"] == 1.0
     assert main(["plan", str(box_mesh), "--offset-range", "2"]) == 2
     assert "offset_range" in capsys.readouterr().err
+
+
+def test_plan_with_the_views_decides_on_the_surface_they_fuse_into(box_mesh, capsys):
+    from affordgrasp.learning.decisions import oracle_order
+
+    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, models="views")
+    assert p.probability is None and p.predicted is None
+    assert p.fused_score.shape == (12,) and p.fused_viable.dtype == bool
+    # ranked as the oracle ranks the truth, on the fused surface's simulation
+    assert p.order.tolist() == oracle_order(p.fused_score, p.fused_viable).tolist()
+    assert "fused from 12 views" in p.rule
+    doc = p.summary()
+    json.dumps(doc)
+    assert doc["chosen"]["fused_viable"] == bool(p.fused_viable[p.chosen])
+    # a box seen from 12 views: the fused surface's simulation mostly agrees with the truth
+    assert (p.fused_viable == p.viable).mean() >= 0.75
+    with pytest.raises(InputError, match="threshold"):
+        ag.plan(str(box_mesh), candidates=2, models="views", threshold=0.3)
+    rc = main(["plan", str(box_mesh), "--candidates", "6", "--model", "views", "--json"])
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["chosen"]["fused_viable"] is not None and "fuse" in doc["timings"]
+    assert main(["plan", str(box_mesh), "--model", "views", "--threshold", "0.2"]) == 2

@@ -28,8 +28,9 @@ def add_arguments(p) -> None:
         default="classifier",
         help="classifier (the shipped classifier alone: the most probably viable candidate; "
         "the default), default (shipped classifier + regressor: the classifier's threshold, "
-        "then least predicted effort), regressor, or model files separated by commas (at "
-        "most one classifier and one regressor)",
+        "then least predicted effort), regressor, model files separated by commas (at "
+        "most one classifier and one regressor), or views (no learned model: the views fused "
+        "into a surface, every candidate simulated on it; needs scikit-image)",
     )
     p.add_argument(
         "--threshold",
@@ -79,11 +80,16 @@ def run(args, out) -> None:
     check_fits_in_memory("--candidates", args.candidates, CANDIDATE_BYTES)
     models = args.model.split(",") if "," in args.model else args.model
     try:
-        from ..learning.plan import plan
+        from ..learning.plan import VIEWS, plan
         from ..learning.torch_support import require_safetensors, require_torch
 
-        require_torch()
-        require_safetensors()
+        if models == VIEWS:
+            if args.threshold is not None:
+                raise InputError("--threshold is a classifier's; --model views uses no model")
+            _require_scikit_image()
+        else:
+            require_torch()
+            require_safetensors()
         if args.physics:
             from ..physics import deps
 
@@ -147,6 +153,10 @@ def run(args, out) -> None:
         out.text(f"viability probability {c['probability']:.3f}")
     if c["predicted"] is not None:
         out.text(f"predicted value {c['predicted']:.4g}")
+    if c["fused_score"] is not None:
+        out.text(
+            f"on the fused surface: task score {c['fused_score']:.4g}, viable {c['fused_viable']}"
+        )
     if doc["physics"] is not None:
         ph = doc["physics"]
         out.text(
@@ -155,6 +165,17 @@ def run(args, out) -> None:
         )
     out.text("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in doc["timings"].items()))
     out.result(doc)
+
+
+def _require_scikit_image() -> None:
+    """Refuse ``--model views`` before any work when scikit-image is missing."""
+    import importlib.util
+
+    if importlib.util.find_spec("skimage") is None:
+        raise InputError(
+            "--model views fuses the views with scikit-image's marching cubes: "
+            "pip install 'affordgrasp[learn]' (or scikit-image)"
+        )
 
 
 def _sensor(args):

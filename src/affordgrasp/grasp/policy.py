@@ -681,6 +681,7 @@ def simulate(
     *,
     hand: Hand | str = "barrett",
     object_material: str = DEFAULT_OBJECT_MATERIAL,
+    frame=None,
 ) -> SimulationBatch:
     """Simulate the policy for a batch of pregrasps on one object.
 
@@ -695,6 +696,12 @@ def simulate(
     hand : Hand or str
     object_material : str
         The object's surface material (friction).
+    frame : GraspObject, optional
+        The object whose geometry places the pregrasps (their start poses and approach
+        lengths), in the same mesh frame as ``obj``; None: ``obj`` itself. A surface fused
+        from camera views (:mod:`affordgrasp.vision.fusion`) is grasped from the poses the
+        pregrasps have on the object it was seen from, so that both simulations move the
+        hand alike.
 
     Returns
     -------
@@ -716,7 +723,12 @@ def simulate(
         upts, unrm, utri = use_points(geom.mesh, obj.mass.center_of_mass - geom.origin, use_dir)
         upts += geom.origin
     started = time.perf_counter()
-    starts, travel = pregrasp_starts(hand, geom, p0)
+    if frame is None:
+        starts, travel = pregrasp_starts(hand, geom, p0)
+    else:
+        placing = object_geometry(frame)
+        starts, travel = pregrasp_starts(hand, placing, p0)
+        starts[:, :3, 3] += placing.origin - geom.origin  # its centred frame to obj's
     status, poses, joints, contacts = _simulate_centred(
         hand, geom, starts, travel, p0[:, 5], object_material
     )

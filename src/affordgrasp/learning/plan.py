@@ -43,6 +43,8 @@ from .decisions import (
 )
 
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
+VIEWS = "views"  # the decider that fuses the candidates' views and simulates on the surface
+FUSED_VIEWS = 64  # views fused at most (the first candidates'): carving costs per view
 
 
 @dataclass(frozen=True)
@@ -85,9 +87,16 @@ class Plan:
     physics : dict or None
         The chosen grasp's replay outcome (``GraspOutcome.to_row()``), when asked for.
     timings : dict of str to float
-        Seconds per step: ``render``, ``predict``, ``simulate``, ``physics``.
+        Seconds per step: ``render``, ``predict`` (or ``fuse`` and ``predict``, the
+        simulation on the fused surface, for ``models="views"``), ``simulate``,
+        ``physics``.
     offset_range : float
         The candidates' offsets (u4, u5) were drawn in [-offset_range, offset_range]².
+    fused_score : (n,) float64 ndarray or None
+        With ``models="views"``: every candidate's F_T simulated on the surface fused from
+        the views (−inf where the task fails there); else None.
+    fused_viable : (n,) bool ndarray or None
+        With ``models="views"``: viability simulated on the fused surface; else None.
     """
 
     object: str
@@ -107,6 +116,8 @@ class Plan:
     physics: dict | None = None
     timings: dict = field(default_factory=dict)
     offset_range: float = 1.0
+    fused_score: np.ndarray | None = None
+    fused_viable: np.ndarray | None = None
 
     def summary(self) -> dict:
         """The plan as JSON-ready data (without the per-candidate arrays).
@@ -130,6 +141,8 @@ class Plan:
                 "use_dir": self.use_dir[c].tolist(),
                 "probability": None if self.probability is None else float(self.probability[c]),
                 "predicted": None if self.predicted is None else float(self.predicted[c]),
+                "fused_score": None if self.fused_score is None else float(self.fused_score[c]),
+                "fused_viable": None if self.fused_viable is None else bool(self.fused_viable[c]),
                 "true_score": float(self.true_score[c]),
                 "viable": bool(self.viable[c]),
                 "feasible": bool(np.isfinite(self.true_score[c])),
@@ -264,7 +277,12 @@ def plan(
         often than the pair's rule, docs/learning.md), ``"default"`` (the shipped
         classifier and regressor: the classifier's threshold, then least predicted effort),
         ``"regressor"``, a model file, or a sequence of files and/or loaded
-        ``(model, config)`` pairs: at most one classifier and one regressor.
+        ``(model, config)`` pairs: at most one classifier and one regressor. Or
+        ``"views"``: no learned model; the first :data:`FUSED_VIEWS` candidates' depth
+        images are fused into a surface (:func:`affordgrasp.vision.fusion.fused_object`),
+        every candidate is simulated on it from the pose it has on the object, and the
+        candidates are ranked as the oracle ranks them, by their task score there, viable
+        ones first among ties (needs scikit-image, the ``learn`` extra).
     seed : int
         Seeds the candidates (candidate i depends only on (seed, i)).
     hand : Hand or str
@@ -298,7 +316,7 @@ def plan(
     from ..objects import load_object
     from ..pipeline import evaluate_inputs
     from ..tasks import get_task, is_viable
-    from ..vision.depth import depth_to_mm, renderer_for
+    from ..vision.depth import depth_from_mm, depth_to_mm, renderer_for
     from .data import Samples
 
     if isinstance(candidates, bool) or not isinstance(candidates, int | np.integer):
@@ -317,7 +335,10 @@ def plan(
     task_obj.thresholds_for(mode)  # an unknown mode fails before any work
     step = progress or (lambda name: None)
     timings: dict[str, float] = {}
-    classifier, regressor = split_models(load_models(models))
+    views = isinstance(models, str) and models == VIEWS
+    if views and threshold is not None:
+        raise InputError("threshold is a classifier's decision threshold; models='views' has none")
+    classifier, regressor = (None, None) if views else split_models(load_models(models))
     obj = load_object(obj)
     n = int(candidates)
     p0, use_dir = sample_inputs(seed, 0, n)
@@ -325,7 +346,8 @@ def plan(
 
     step("render")
     t0 = time.perf_counter()
-    depth = renderer_for(obj).render(p0)
+    renderer = renderer_for(obj)
+    depth = renderer.render(p0)
     if sensor is not None:
         from ..vision.sensor import apply_sensor
 
@@ -333,12 +355,42 @@ def plan(
     depth_mm = depth_to_mm(depth)
     timings["render"] = time.perf_counter() - t0
 
-    step("predict")
-    t0 = time.perf_counter()
-    names = np.full(n, obj.name, dtype=object)
-    samples = Samples(names, names.copy(), np.arange(n), p0, use_dir, np.full(n, np.nan), depth_mm)
-    order, probability, predicted = model_order(classifier, regressor, samples, threshold=threshold)
-    timings["predict"] = time.perf_counter() - t0
+    probability = predicted = fused_score = fused_viable = None
+    if views:
+        from ..vision.fusion import fused_object
+
+        step("fuse")
+        t0 = time.perf_counter()
+        k = min(n, FUSED_VIEWS)
+        # the images as the models would see them: millimetres, as a dataset stores them
+        seen = depth_from_mm(depth_mm[:k])
+        fused = fused_object(seen, renderer.poses(p0[:k]), renderer.camera, name=obj.name)
+        timings["fuse"] = time.perf_counter() - t0
+        step("predict")
+        t0 = time.perf_counter()
+        on_fused = evaluate_inputs(
+            fused, p0, use_dir, hand=hand, seed=seed, volume=False, frame=obj
+        ).table
+        fused_score = task_obj.evaluate(on_fused, mode)
+        fused_viable = is_viable(on_fused)
+        order = oracle_order(fused_score, fused_viable)
+        timings["predict"] = time.perf_counter() - t0
+        rule = (
+            f"{task_obj.name}'s score on the surface fused from {k} views, viable ones "
+            "first among ties"
+        )
+    else:
+        step("predict")
+        t0 = time.perf_counter()
+        names = np.full(n, obj.name, dtype=object)
+        samples = Samples(
+            names, names.copy(), np.arange(n), p0, use_dir, np.full(n, np.nan), depth_mm
+        )
+        order, probability, predicted = model_order(
+            classifier, regressor, samples, threshold=threshold
+        )
+        timings["predict"] = time.perf_counter() - t0
+        rule = rule_of(classifier, regressor, threshold)
 
     step("simulate")
     t0 = time.perf_counter()
@@ -372,11 +424,13 @@ def plan(
         viable=viable,
         percentile=float(true_percentiles(true_score)[chosen]),
         measures=measures,
-        rule=rule_of(classifier, regressor, threshold),
+        rule=rule,
         table=table,
         physics=outcome,
         timings=timings,
         offset_range=offset_range,
+        fused_score=fused_score,
+        fused_viable=fused_viable,
     )
 
 

@@ -20,6 +20,7 @@ from affordgrasp.objects.resolve import (
     list_families,
     load_object,
     mesh_hash,
+    object_from_mesh,
 )
 
 __all__ = [
@@ -35,6 +36,7 @@ __all__ = [
     "mass_properties",
     "mass_properties_parts",
     "mesh_hash",
+    "object_from_mesh",
     "prepare_mesh",
     "read_off",
 ]

@@ -45,6 +45,10 @@ import numpy as np
 
 from ..caching import IdentityCache, cache_dir, read_arrays, write_arrays
 
+# The ``source`` of an object made in memory for one use (a surface fused from camera
+# views): its derived geometry is not written to the disk cache.
+TRANSIENT_SOURCE = "transient"
+
 if TYPE_CHECKING:
     import trimesh
 
@@ -274,6 +278,8 @@ def derived_geometry(obj: GraspObject) -> DerivedGeometry:
 
 
 def _load_or_build_derived(obj: GraspObject) -> DerivedGeometry:
+    if obj.source == TRANSIENT_SOURCE:
+        return _build_derived(obj)  # made for one use: the disk cache would only grow
     vertices, faces = obj.vertices, obj.faces
     key = {"kind": "mesh", "mesh_hash": obj.mesh_hash, "stamp": stamp()}
     path = _entry_path(f"mesh-{obj.mesh_hash[:32]}-{key['stamp'][:12]}")

@@ -41,7 +41,7 @@ from affordgrasp.objects.mass import (
     plane_regions,
     regions_on_mesh,
 )
-from affordgrasp.objects.prepared import mesh_hash
+from affordgrasp.objects.prepared import TRANSIENT_SOURCE, mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 
 if TYPE_CHECKING:
@@ -307,6 +307,46 @@ def load_object(
         _refuse_materials_for_file(text, materials)
         return _resolve_file(path, size_m=size_m, units=units, density=density)
     raise InputError(_unknown_spec_message(text))
+
+
+def object_from_mesh(
+    mesh: trimesh.Trimesh,
+    name: str,
+    *,
+    source: str = TRANSIENT_SOURCE,
+    density: float = 1.0,
+) -> GraspObject:
+    """An object from a mesh held in memory (cleaned, repaired and oriented as a file's).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The object in metres, in its mesh frame (not modified).
+    name : str
+        The object's name.
+    source : str
+        Where the mesh came from. With the default, :data:`TRANSIENT_SOURCE`, its derived
+        geometry is kept in memory only, never written to the on-disk cache (a surface
+        fused from camera views is made for one decision).
+    density : float
+        kg/m^3, uniform.
+
+    Returns
+    -------
+    GraspObject
+        Category ``"mesh"``.
+
+    Raises
+    ------
+    InputError
+        For a bad density; :class:`~affordgrasp.errors.MeshError` for an unusable mesh.
+    """
+    if not _is_trimesh(mesh):
+        raise InputError(f"mesh must be a trimesh.Trimesh, got {type(mesh).__name__}")
+    density = _check_density(density)
+    with recording_warnings() as warnings:
+        prepared_mesh = prepare_mesh(mesh, source=name)
+    return _build(name, "mesh", prepared_mesh, density, source, load_warnings=tuple(warnings))
 
 
 def is_family_spec(spec: object) -> bool:
