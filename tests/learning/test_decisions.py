@@ -119,3 +119,16 @@ def test_within_object_against_pooled():
     assert base["comparison_accuracy"] == pytest.approx((16 + 0.5 * 12) / 28)
     c = within_object(objects, np.r_[1.0, 0, 0, 0, 0, 0, 0, 0], pred, kind="classification")
     assert c["objects"] == 1 and c["average_precision"] == pytest.approx(1 / 4)
+
+
+def test_margin_order_takes_viable_then_feasible_then_the_widest_epsilon():
+    from affordgrasp.learning.decisions import margin_order
+
+    viable = [False, True, False, True, False]
+    score = [-1.0, -5.0, -np.inf, -2.0, -3.0]
+    eps = [0.9, 0.1, 0.8, 0.3, np.nan]
+    assert margin_order(viable, score, eps).tolist() == [3, 1, 0, 4, 2]
+    # ties keep the candidates' order
+    assert margin_order([True] * 3, [0.0] * 3, [0.2] * 3).tolist() == [0, 1, 2]
+    with pytest.raises(InputError):
+        margin_order([True], [0.0, 1.0], [0.1])

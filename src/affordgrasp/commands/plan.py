@@ -1,5 +1,6 @@
-"""``affordgrasp plan``: choose a grasp of an object from camera-in-hand views with learned
-models, then simulate every candidate to say how good the choice truly was."""
+"""``affordgrasp plan``: choose a grasp of an object from camera-in-hand views (fused into a
+surface, or read by learned models), then simulate every candidate to say how good the
+choice truly was."""
 
 from __future__ import annotations
 
@@ -25,12 +26,13 @@ def add_arguments(p) -> None:
     p.add_argument("--candidates", type=int, default=64, help="candidate grasps drawn (default 64)")
     p.add_argument(
         "--model",
-        default="classifier",
-        help="classifier (the shipped classifier alone: the most probably viable candidate; "
-        "the default), default (shipped classifier + regressor: the classifier's threshold, "
-        "then least predicted effort), regressor, model files separated by commas (at "
-        "most one classifier and one regressor), or views (no learned model: the views fused "
-        "into a surface, every candidate simulated on it; needs scikit-image)",
+        default="views",
+        help="views (the default; no learned model: the first 64 candidates' views fused "
+        "into a surface, every candidate simulated on it, the viable one with the widest "
+        "epsilon there chosen; needs scikit-image), classifier (the shipped classifier "
+        "alone: the most probably viable candidate), default (shipped classifier + "
+        "regressor: the classifier's threshold, then least predicted effort), regressor, "
+        "or model files separated by commas (at most one classifier and one regressor)",
     )
     p.add_argument(
         "--threshold",
@@ -84,8 +86,6 @@ def run(args, out) -> None:
         from ..learning.torch_support import require_safetensors, require_torch
 
         if models == VIEWS:
-            if args.threshold is not None:
-                raise InputError("--threshold is a classifier's; --model views uses no model")
             _require_scikit_image()
         else:
             require_torch()

@@ -167,6 +167,35 @@ def oracle_order(true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:
     return np.lexsort((~np.asarray(viable, dtype=bool).ravel(), -s))
 
 
+def margin_order(viable: np.ndarray, score: np.ndarray, epsilon: np.ndarray) -> np.ndarray:
+    """Candidates judged by a simulation of their own (on a surface fused from views): the
+    viable ones first, then the task-feasible ones (finite score), each by decreasing ε.
+
+    ε is the margin: on a surface a millimetre off the true one, a grasp that is viable with
+    a wide ε stays viable more often than one chosen for its effort (``plan --model
+    views``, docs/learning.md).
+
+    Parameters
+    ----------
+    viable : (n,) array_like of bool
+    score : (n,) array_like of float
+        F_T (−inf or NaN where the task fails).
+    epsilon : (n,) array_like of float
+        ε (NaN counts as 0).
+
+    Returns
+    -------
+    (n,) int64 ndarray
+        The best first; ties keep the candidates' order.
+    """
+    v = np.asarray(viable, dtype=bool).ravel()
+    s = np.asarray(score, dtype=np.float64).ravel()
+    e = np.nan_to_num(np.asarray(epsilon, dtype=np.float64).ravel(), nan=0.0)
+    if not len(v) == len(s) == len(e):
+        raise InputError(f"{len(v)} viable flags, {len(s)} scores and {len(e)} ε values")
+    return np.lexsort((np.arange(len(v)), -e, ~np.isfinite(s), ~v))
+
+
 def random_measures(
     true_score: np.ndarray,
     viable: np.ndarray,

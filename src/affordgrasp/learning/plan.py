@@ -37,6 +37,7 @@ from .decisions import (
     decision_measures,
     decision_order,
     decision_threshold,
+    margin_order,
     oracle_order,
     random_measures,
     true_percentiles,
@@ -97,6 +98,8 @@ class Plan:
         the views (−inf where the task fails there); else None.
     fused_viable : (n,) bool ndarray or None
         With ``models="views"``: viability simulated on the fused surface; else None.
+    fused_epsilon : (n,) float64 ndarray or None
+        With ``models="views"``: ε simulated on the fused surface; else None.
     """
 
     object: str
@@ -118,6 +121,7 @@ class Plan:
     offset_range: float = 1.0
     fused_score: np.ndarray | None = None
     fused_viable: np.ndarray | None = None
+    fused_epsilon: np.ndarray | None = None
 
     def summary(self) -> dict:
         """The plan as JSON-ready data (without the per-candidate arrays).
@@ -143,6 +147,9 @@ class Plan:
                 "predicted": None if self.predicted is None else float(self.predicted[c]),
                 "fused_score": None if self.fused_score is None else float(self.fused_score[c]),
                 "fused_viable": None if self.fused_viable is None else bool(self.fused_viable[c]),
+                "fused_epsilon": (
+                    None if self.fused_epsilon is None else float(self.fused_epsilon[c])
+                ),
                 "true_score": float(self.true_score[c]),
                 "viable": bool(self.viable[c]),
                 "feasible": bool(np.isfinite(self.true_score[c])),
@@ -250,7 +257,7 @@ def plan(
     task: str = "pick",
     *,
     candidates: int = 64,
-    models="classifier",
+    models=VIEWS,
     seed: int = 0,
     hand="barrett",
     mode: str = "default",
@@ -272,17 +279,18 @@ def plan(
     candidates : int
         How many candidate grasps to draw (>= 1).
     models : str, path or sequence
-        ``"classifier"`` (the default: the shipped classifier alone, the most probably
-        viable candidate first; with ``plan``'s candidates it chooses a viable grasp more
-        often than the pair's rule, docs/learning.md), ``"default"`` (the shipped
-        classifier and regressor: the classifier's threshold, then least predicted effort),
+        ``"views"`` (the default; no learned model): the first :data:`FUSED_VIEWS`
+        candidates' depth images are fused into a surface
+        (:func:`affordgrasp.vision.fusion.fused_object`), every candidate is simulated on
+        it from the pose it has on the object, and the candidates are ranked by
+        :func:`~affordgrasp.learning.decisions.margin_order` on that simulation: viable
+        there first, then task-feasible, by decreasing ε (needs scikit-image, the ``learn``
+        extra; it chooses a viable grasp twice as often as the shipped classifier,
+        docs/learning.md). ``"classifier"``: the shipped classifier alone, the most
+        probably viable candidate first. ``"default"``: the shipped classifier and
+        regressor, the classifier's threshold, then least predicted effort.
         ``"regressor"``, a model file, or a sequence of files and/or loaded
-        ``(model, config)`` pairs: at most one classifier and one regressor. Or
-        ``"views"``: no learned model; the first :data:`FUSED_VIEWS` candidates' depth
-        images are fused into a surface (:func:`affordgrasp.vision.fusion.fused_object`),
-        every candidate is simulated on it from the pose it has on the object, and the
-        candidates are ranked as the oracle ranks them, by their task score there, viable
-        ones first among ties (needs scikit-image, the ``learn`` extra).
+        ``(model, config)`` pairs: at most one classifier and one regressor.
     seed : int
         Seeds the candidates (candidate i depends only on (seed, i)).
     hand : Hand or str
@@ -355,8 +363,9 @@ def plan(
     depth_mm = depth_to_mm(depth)
     timings["render"] = time.perf_counter() - t0
 
-    probability = predicted = fused_score = fused_viable = None
+    probability = predicted = fused_score = fused_viable = fused_epsilon = None
     if views:
+        from ..vision.fusion import VOTES as FUSION_VOTES
         from ..vision.fusion import fused_object
 
         step("fuse")
@@ -364,7 +373,13 @@ def plan(
         k = min(n, FUSED_VIEWS)
         # the images as the models would see them: millimetres, as a dataset stores them
         seen = depth_from_mm(depth_mm[:k])
-        fused = fused_object(seen, renderer.poses(p0[:k]), renderer.camera, name=obj.name)
+        fused = fused_object(
+            seen,
+            renderer.poses(p0[:k]),
+            renderer.camera,
+            name=obj.name,
+            votes=min(FUSION_VOTES, k),  # one view: what it saw, solid behind
+        )
         timings["fuse"] = time.perf_counter() - t0
         step("predict")
         t0 = time.perf_counter()
@@ -373,11 +388,13 @@ def plan(
         ).table
         fused_score = task_obj.evaluate(on_fused, mode)
         fused_viable = is_viable(on_fused)
-        order = oracle_order(fused_score, fused_viable)
+        fused_epsilon = on_fused.column("epsilon").to_numpy(zero_copy_only=False)
+        order = margin_order(fused_viable, fused_score, fused_epsilon)
         timings["predict"] = time.perf_counter() - t0
         rule = (
-            f"{task_obj.name}'s score on the surface fused from {k} views, viable ones "
-            "first among ties"
+            f"on the surface fused from {k} view{'' if k == 1 else 's'}: viable, then "
+            f"{task_obj.name}-feasible, "
+            "then the widest epsilon"
         )
     else:
         step("predict")
@@ -431,6 +448,7 @@ def plan(
         offset_range=offset_range,
         fused_score=fused_score,
         fused_viable=fused_viable,
+        fused_epsilon=fused_epsilon,
     )
 
 
