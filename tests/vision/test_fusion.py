@@ -123,3 +123,50 @@ def test_bad_views_are_refused_with_what_to_do():
         free_space_field(depth, poses, camera, votes=0)
     with pytest.raises(InputError, match="voxel_m"):
         free_space_field(depth, poses, camera, voxel_m=-1.0)
+
+
+def test_returns_lost_next_to_the_surface_are_unknown_not_empty_with_unknown_px():
+    from scipy.ndimage import binary_erosion
+
+    box = trimesh.creation.box([0.1, 0.05, 0.04])
+    depth, poses, camera = views_of(box, n=48, seed=5)
+    # a sensor loses the returns seen at grazing angles: here a 4-pixel band inside every
+    # silhouette
+    kept = binary_erosion(depth > 0, structure=np.ones((1, 9, 9)))
+    lossy = np.where(kept, depth, 0.0)
+    as_empty = fuse_views(lossy, poses, camera)
+    as_unknown = fuse_views(lossy, poses, camera, unknown_px=5)
+    assert as_empty.volume < 0.75 * box.volume  # the band carved into the box
+    assert as_unknown.volume == pytest.approx(box.volume, rel=0.05)
+    np.testing.assert_allclose(as_unknown.bounds, box.bounds, atol=2.5e-3)
+    with pytest.raises(InputError, match="unknown_px"):
+        free_space_field(depth, poses, camera, unknown_px=-1)
+
+
+def test_a_surface_that_is_not_closed_is_fused_again_smoother_then_refused(monkeypatch):
+    import affordgrasp.objects as objects
+    from affordgrasp.errors import MeshError
+    from affordgrasp.vision import fusion
+
+    box = trimesh.creation.box([0.12, 0.04, 0.03])
+    depth, poses, camera = views_of(box, n=16)
+    made = objects.object_from_mesh
+    tried = []
+
+    def fails_first(mesh, name):
+        tried.append(len(mesh.faces))
+        if len(tried) == 1:
+            raise MeshError("not a closed volume")
+        return made(mesh, name)
+
+    monkeypatch.setattr(objects, "object_from_mesh", fails_first)
+    obj = fused_object(depth, poses, camera, name="box")
+    assert len(tried) == 2 and obj.name == "box"
+
+    def always_fails(mesh, name):
+        raise MeshError("not a closed volume")
+
+    monkeypatch.setattr(objects, "object_from_mesh", always_fails)
+    with pytest.raises(InputError, match="fused into no closed surface"):
+        fused_object(depth, poses, camera, name="box")
+    assert fusion.RETRY_SMOOTH_VOXELS  # smoother fields were tried in between

@@ -46,6 +46,9 @@ from .decisions import (
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
 VIEWS = "views"  # the decider that fuses the candidates' views and simulates on the surface
 FUSED_VIEWS = 64  # views fused at most (the first candidates'): carving costs per view
+# With a sensor model, pixels without a return this close to a return say nothing when the
+# views are fused (lost at a grazing angle, not empty space: vision/fusion.py).
+SENSOR_UNKNOWN_PX = 3
 
 
 @dataclass(frozen=True)
@@ -379,6 +382,7 @@ def plan(
             renderer.camera,
             name=obj.name,
             votes=min(FUSION_VOTES, k),  # one view: what it saw, solid behind
+            unknown_px=0 if sensor is None else SENSOR_UNKNOWN_PX,
         )
         timings["fuse"] = time.perf_counter() - t0
         step("predict")

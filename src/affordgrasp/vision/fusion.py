@@ -49,6 +49,7 @@ DILATE_PX = 1  # the minimum filter's radius, pixels
 TRUNCATION_VOXELS = 3.0  # the field is clipped to ± this many voxels
 SMOOTH_VOXELS = 0.6  # Gaussian σ of the field before marching cubes, voxels
 MARGIN_VOXELS = 3  # empty voxels around the seen points
+RETRY_SMOOTH_VOXELS = (1.0, 1.5)  # smoother fields tried when a surface is not closed
 
 
 @dataclass(frozen=True)
@@ -97,9 +98,11 @@ def _carve(origin, voxel, dims, depth, rot, trans, focal, cx, cy, trunc, votes, 
                     v = np.floor(cy + focal * qy / qz + 0.5)
                     if u < 0 or u >= w or v < 0 or v >= h:
                         continue
-                    seen += 1
                     d = depth[i, int(v), int(u)]
-                    val = trunc if d <= 0.0 else min(d - qz, trunc)
+                    if d < 0.0:
+                        continue  # unknown: a lost return near the surface
+                    seen += 1
+                    val = trunc if d == 0.0 else min(d - qz, trunc)
                     if val > top[votes - 1]:
                         j = votes - 1
                         while j > 0 and top[j - 1] < val:
@@ -168,6 +171,7 @@ def free_space_field(
     votes: int = VOTES,
     dilate_px: int = DILATE_PX,
     max_voxels: int = MAX_VOXELS,
+    unknown_px: int = 0,
 ) -> FreeSpaceField:
     """Fuse depth images into a free-space field (the module docstring defines it).
 
@@ -188,6 +192,11 @@ def free_space_field(
         Radius of the minimum filter over each image, pixels (>= 0).
     max_voxels : int
         The most voxels of the grid.
+    unknown_px : int
+        Pixels without a return within this many pixels of a return say nothing (the
+        view is skipped there) instead of "empty all along the ray": a real sensor loses
+        returns where the surface is seen at a grazing angle, next to what it saw (0, the
+        default: every pixel without a return is empty space, as in an exact image).
 
     Returns
     -------
@@ -199,14 +208,15 @@ def free_space_field(
         For images or poses of the wrong shape, non-finite values, bad options, or views
         that saw nothing.
     """
-    from scipy.ndimage import minimum_filter
+    from scipy.ndimage import maximum_filter, minimum_filter
 
     camera = camera or DepthCamera()
     depth, poses = _check_views(depth, poses, camera)
     if isinstance(votes, bool) or not isinstance(votes, int | np.integer) or votes < 1:
         raise InputError(f"votes must be an integer >= 1, got {votes!r}")
-    if isinstance(dilate_px, bool) or not isinstance(dilate_px, int | np.integer) or dilate_px < 0:
-        raise InputError(f"dilate_px must be an integer >= 0, got {dilate_px!r}")
+    for name, value in (("dilate_px", dilate_px), ("unknown_px", unknown_px)):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+            raise InputError(f"{name} must be an integer >= 0, got {value!r}")
     if not (np.isfinite(voxel_m) and voxel_m > 0):
         raise InputError(f"voxel_m must be a positive length in metres, got {voxel_m!r}")
     if isinstance(max_voxels, bool) or not isinstance(max_voxels, int) or max_voxels < 1000:
@@ -223,10 +233,15 @@ def free_space_field(
         voxel *= 1.1
     origin = low - MARGIN_VOXELS * voxel
     dims = (np.ceil(extent / voxel).astype(np.int64) + 2 * MARGIN_VOXELS + 1).astype(np.int64)
+    returned = depth > 0
     if dilate_px > 0:
-        far = np.where(depth > 0, depth, np.inf)
+        far = np.where(returned, depth, np.inf)
         far = minimum_filter(far, size=(1, 2 * dilate_px + 1, 2 * dilate_px + 1), mode="nearest")
         depth = np.where(np.isinf(far), 0.0, far)
+    if unknown_px > 0:
+        width = 2 * unknown_px + 1
+        near = maximum_filter(returned, size=(1, width, width), mode="constant")
+        depth = np.where((depth == 0) & near, -1.0, depth)  # the kernel skips -1
     out = np.empty(tuple(int(d) for d in dims), dtype=np.float64)
     cx, cy = camera.principal_point
     _carve(
@@ -302,6 +317,7 @@ def fuse_views(
     votes: int = VOTES,
     dilate_px: int = DILATE_PX,
     smooth_voxels: float = SMOOTH_VOXELS,
+    unknown_px: int = 0,
 ):
     """The surface of an object from depth images of it (:func:`free_space_field`, then
     :func:`field_surface`).
@@ -313,7 +329,7 @@ def fuse_views(
     poses : (n, 4, 4) float array_like
         Camera → object transforms of the views, m.
     camera : DepthCamera, optional
-    voxel_m, votes, dilate_px : optional
+    voxel_m, votes, dilate_px, unknown_px : optional
         See :func:`free_space_field`.
     smooth_voxels : float
         See :func:`field_surface`.
@@ -324,7 +340,13 @@ def fuse_views(
         Closed, outward-oriented, object frame, m.
     """
     field = free_space_field(
-        depth, poses, camera, voxel_m=voxel_m, votes=votes, dilate_px=dilate_px
+        depth,
+        poses,
+        camera,
+        voxel_m=voxel_m,
+        votes=votes,
+        dilate_px=dilate_px,
+        unknown_px=unknown_px,
     )
     return field_surface(field, smooth_voxels=smooth_voxels)
 
@@ -339,6 +361,7 @@ def fused_object(
     votes: int = VOTES,
     dilate_px: int = DILATE_PX,
     smooth_voxels: float = SMOOTH_VOXELS,
+    unknown_px: int = 0,
 ):
     """The object as the views saw it, ready to be grasped in simulation.
 
@@ -351,24 +374,44 @@ def fused_object(
     camera : DepthCamera, optional
     name : str
         The object's name.
-    voxel_m, votes, dilate_px, smooth_voxels : optional
+    voxel_m, votes, dilate_px, smooth_voxels, unknown_px : optional
         See :func:`fuse_views`.
 
     Returns
     -------
     GraspObject
         In the views' object frame, unit density; its derived geometry is kept in memory
-        only (``source`` is :data:`~affordgrasp.objects.prepared.TRANSIENT_SOURCE`).
+        only (``source`` is :data:`~affordgrasp.objects.prepared.TRANSIENT_SOURCE`). When
+        the surface is not a closed volume even after the loader's repairs, smoother
+        fields are tried (σ in :data:`RETRY_SMOOTH_VOXELS`).
+
+    Raises
+    ------
+    InputError
+        When no smoothing gives a closed surface, or for bad views (see
+        :func:`free_space_field`).
     """
+    from ..errors import MeshError
     from ..objects import object_from_mesh
 
-    mesh = fuse_views(
+    field = free_space_field(
         depth,
         poses,
         camera,
         voxel_m=voxel_m,
         votes=votes,
         dilate_px=dilate_px,
-        smooth_voxels=smooth_voxels,
+        unknown_px=unknown_px,
     )
-    return object_from_mesh(mesh, name)
+    problem = None
+    # Two sheets of a thin, noisy wall can meet along an edge that no repair closes; a
+    # smoother field separates them (seen with a sensor model on a mug's wall).
+    for smooth in (smooth_voxels, *RETRY_SMOOTH_VOXELS):
+        try:
+            return object_from_mesh(field_surface(field, smooth_voxels=smooth), name)
+        except MeshError as exc:
+            problem = exc
+    raise InputError(
+        f"the views of {name} fused into no closed surface ({problem}); give more views or "
+        "exact images"
+    )
