@@ -135,3 +135,14 @@ def test_plan_with_the_views_decides_on_the_surface_they_fuse_into(box_mesh, cap
     doc = json.loads(capsys.readouterr().out)
     assert doc["chosen"]["fused_viable"] is not None and "fuse" in doc["timings"]
     assert main(["plan", str(box_mesh), "--model", "views", "--threshold", "0.2"]) == 2
+
+
+def test_plan_with_the_views_fuses_what_a_sensor_returns(box_mesh):
+    from affordgrasp.vision.sensor import SensorModel
+
+    exact = ag.plan(str(box_mesh), "pick", candidates=8, seed=1)
+    sensed = ag.plan(str(box_mesh), "pick", candidates=8, seed=1, sensor=SensorModel(seed=1))
+    np.testing.assert_array_equal(exact.true_score, sensed.true_score)  # the same candidates
+    assert sensed.fused_score.shape == (8,)
+    # the fused surfaces differ, so their simulations do
+    assert not np.array_equal(exact.fused_epsilon, sensed.fused_epsilon)

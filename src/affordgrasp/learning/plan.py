@@ -46,9 +46,12 @@ from .decisions import (
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
 VIEWS = "views"  # the decider that fuses the candidates' views and simulates on the surface
 FUSED_VIEWS = 64  # views fused at most (the first candidates'): carving costs per view
-# With a sensor model, pixels without a return this close to a return say nothing when the
-# views are fused (lost at a grazing angle, not empty space: vision/fusion.py).
-SENSOR_UNKNOWN_PX = 3
+# With a sensor model the views are fused more cautiously (docs/learning.md, measured on
+# validation objects): pixels without a return this close to a return say nothing (lost at
+# a grazing angle, not empty space), and a voxel needs this many views to see past it (the
+# depth noise, 0.5-0.8 mm, carves into the surface where two views suffice).
+SENSOR_UNKNOWN_PX = 6
+SENSOR_VOTES = 3
 
 
 @dataclass(frozen=True)
@@ -381,7 +384,8 @@ def plan(
             renderer.poses(p0[:k]),
             renderer.camera,
             name=obj.name,
-            votes=min(FUSION_VOTES, k),  # one view: what it saw, solid behind
+            # one view: what it saw, solid behind
+            votes=min(FUSION_VOTES if sensor is None else SENSOR_VOTES, k),
             unknown_px=0 if sensor is None else SENSOR_UNKNOWN_PX,
         )
         timings["fuse"] = time.perf_counter() - t0

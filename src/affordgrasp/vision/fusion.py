@@ -309,45 +309,27 @@ def field_surface(field: FreeSpaceField, *, smooth_voxels: float = SMOOTH_VOXELS
 
 
 def fuse_views(
-    depth,
-    poses,
-    camera: DepthCamera | None = None,
-    *,
-    voxel_m: float = VOXEL_M,
-    votes: int = VOTES,
-    dilate_px: int = DILATE_PX,
-    smooth_voxels: float = SMOOTH_VOXELS,
-    unknown_px: int = 0,
+    depth, poses, camera: DepthCamera | None = None, *, smooth_voxels=SMOOTH_VOXELS, **carving
 ):
     """The surface of an object from depth images of it (:func:`free_space_field`, then
     :func:`field_surface`).
 
     Parameters
     ----------
-    depth : (n, size, size) float array_like
-        Depth along the optical axis, m; 0 = no return.
-    poses : (n, 4, 4) float array_like
-        Camera → object transforms of the views, m.
-    camera : DepthCamera, optional
-    voxel_m, votes, dilate_px, unknown_px : optional
-        See :func:`free_space_field`.
+    depth, poses, camera
+        The views, as for :func:`free_space_field`.
     smooth_voxels : float
         See :func:`field_surface`.
+    **carving
+        Options of :func:`free_space_field` (``voxel_m``, ``votes``, ``dilate_px``,
+        ``max_voxels``, ``unknown_px``).
 
     Returns
     -------
     trimesh.Trimesh
         Closed, outward-oriented, object frame, m.
     """
-    field = free_space_field(
-        depth,
-        poses,
-        camera,
-        voxel_m=voxel_m,
-        votes=votes,
-        dilate_px=dilate_px,
-        unknown_px=unknown_px,
-    )
+    field = free_space_field(depth, poses, camera, **carving)
     return field_surface(field, smooth_voxels=smooth_voxels)
 
 
@@ -357,25 +339,21 @@ def fused_object(
     camera: DepthCamera | None = None,
     *,
     name: str = "fused views",
-    voxel_m: float = VOXEL_M,
-    votes: int = VOTES,
-    dilate_px: int = DILATE_PX,
     smooth_voxels: float = SMOOTH_VOXELS,
-    unknown_px: int = 0,
+    **carving,
 ):
     """The object as the views saw it, ready to be grasped in simulation.
 
     Parameters
     ----------
-    depth : (n, size, size) float array_like
-        Depth along the optical axis, m; 0 = no return.
-    poses : (n, 4, 4) float array_like
-        Camera → object transforms of the views, m.
-    camera : DepthCamera, optional
+    depth, poses, camera
+        The views, as for :func:`free_space_field`.
     name : str
         The object's name.
-    voxel_m, votes, dilate_px, smooth_voxels, unknown_px : optional
-        See :func:`fuse_views`.
+    smooth_voxels : float
+        See :func:`field_surface` (the first try).
+    **carving
+        Options of :func:`free_space_field`.
 
     Returns
     -------
@@ -394,15 +372,7 @@ def fused_object(
     from ..errors import MeshError
     from ..objects import object_from_mesh
 
-    field = free_space_field(
-        depth,
-        poses,
-        camera,
-        voxel_m=voxel_m,
-        votes=votes,
-        dilate_px=dilate_px,
-        unknown_px=unknown_px,
-    )
+    field = free_space_field(depth, poses, camera, **carving)
     problem = None
     # Two sheets of a thin, noisy wall can meet along an edge that no repair closes; a
     # smoother field separates them (seen with a sensor model on a mug's wall).
