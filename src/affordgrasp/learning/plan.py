@@ -9,16 +9,20 @@ then says how good the decision truly was:
    (u4, u5), drawn in [-r, r]² with r = ``offset_range`` (default :data:`OFFSET_RANGE`:
    a planner aims near the object; 1 is the dataset's uniform draw);
 2. render every candidate's camera-in-hand depth image D(p0, O) in one batch;
-3. predict with the models in one batch (the shipped classifier by default);
-4. choose by :func:`~affordgrasp.learning.decisions.decision_order` (the classifier alone:
-   the most probably viable; with a regressor as well, the classifier's decision
-   threshold, then least predicted effort);
+3. by default (``models="views"``) fuse the first :data:`FUSED_VIEWS` images into a
+   surface (:mod:`affordgrasp.vision.fusion`) and simulate every candidate on it; or
+   predict with learned models in one batch;
+4. choose: on the fused surface's simulation by
+   :func:`~affordgrasp.learning.decisions.margin_order` (viable, then task-feasible, then
+   the widest ε); with models by :func:`~affordgrasp.learning.decisions.decision_order`
+   (a classifier alone: the most probably viable; with a regressor as well, the
+   classifier's decision threshold, then least predicted effort);
 5. simulate every candidate (not only the chosen one), so the chosen grasp's true task
    score, viability and percentile among the candidates' true scores are known; with
    ``physics=True`` replay the chosen grasp in MuJoCo (the physics extra).
 
-The simulation of step 5 is the check, not part of the decision: the models see only the
-depth images and the poses.
+The simulation of step 5 is the check, not part of the decision: the deciders see only the
+depth images and the poses (the fused surface is made from the images alone).
 """
 
 from __future__ import annotations
