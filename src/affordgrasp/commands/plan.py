@@ -86,7 +86,9 @@ def run(args, out) -> None:
         from ..learning.torch_support import require_safetensors, require_torch
 
         if models == VIEWS:
-            _require_scikit_image()
+            from ..vision.fusion import require_marching_cubes
+
+            require_marching_cubes()
         else:
             require_torch()
             require_safetensors()
@@ -165,17 +167,6 @@ def run(args, out) -> None:
         )
     out.text("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in doc["timings"].items()))
     out.result(doc)
-
-
-def _require_scikit_image() -> None:
-    """Refuse ``--model views`` before any work when scikit-image is missing."""
-    import importlib.util
-
-    if importlib.util.find_spec("skimage") is None:
-        raise InputError(
-            "--model views fuses the views with scikit-image's marching cubes: "
-            "pip install 'affordgrasp[learn]' (or scikit-image)"
-        )
 
 
 def _sensor(args):

@@ -193,7 +193,7 @@ def margin_order(viable: np.ndarray, score: np.ndarray, epsilon: np.ndarray) -> 
     e = np.nan_to_num(np.asarray(epsilon, dtype=np.float64).ravel(), nan=0.0)
     if not len(v) == len(s) == len(e):
         raise InputError(f"{len(v)} viable flags, {len(s)} scores and {len(e)} ε values")
-    return np.lexsort((np.arange(len(v)), -e, ~np.isfinite(s), ~v))
+    return np.lexsort((-e, ~np.isfinite(s), ~v))  # lexsort is stable
 
 
 def random_measures(

@@ -8,7 +8,9 @@ then says how good the decision truly was:
    (seed, i), as in a generated dataset), uniform but for the approach line's offsets
    (u4, u5), drawn in [-r, r]² with r = ``offset_range`` (default :data:`OFFSET_RANGE`:
    a planner aims near the object; 1 is the dataset's uniform draw);
-2. render every candidate's camera-in-hand depth image D(p0, O) in one batch;
+2. render the candidates' camera-in-hand depth images D(p0, O) in one batch (every
+   candidate's for learned models; the first :data:`FUSED_VIEWS`, those it fuses, for
+   ``models="views"``);
 3. by default (``models="views"``) fuse the first :data:`FUSED_VIEWS` images into a
    surface (:mod:`affordgrasp.vision.fusion`) and simulate every candidate on it; or
    predict with learned models in one batch;
@@ -365,11 +367,12 @@ def plan(
     step("render")
     t0 = time.perf_counter()
     renderer = renderer_for(obj)
-    depth = renderer.render(p0)
+    k = min(n, FUSED_VIEWS) if views else n  # the views fusion reads: the first ones only
+    depth = renderer.render(p0[:k])
     if sensor is not None:
         from ..vision.sensor import apply_sensor
 
-        depth = apply_sensor(depth, sensor, np.arange(n))
+        depth = apply_sensor(depth, sensor, np.arange(k))
     depth_mm = depth_to_mm(depth)
     timings["render"] = time.perf_counter() - t0
 
@@ -380,9 +383,8 @@ def plan(
 
         step("fuse")
         t0 = time.perf_counter()
-        k = min(n, FUSED_VIEWS)
         # the images as the models would see them: millimetres, as a dataset stores them
-        seen = depth_from_mm(depth_mm[:k])
+        seen = depth_from_mm(depth_mm)
         fused = fused_object(
             seen,
             renderer.poses(p0[:k]),

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..errors import InputError
+from ..errors import InputError, MissingDependencyError
 from ..kernel_cache import install_package_stamp
 from .camera import DepthCamera
 
@@ -113,6 +113,23 @@ def _carve(origin, voxel, dims, depth, rot, trans, focal, cx, cy, trunc, votes, 
                             break  # free whatever the other views say
                 best = top[votes - 1] if seen >= votes else trunc
                 out[a, b, c] = max(best, -trunc)
+
+
+def require_marching_cubes():
+    """scikit-image's ``marching_cubes``, or a MissingDependencyError naming the extra.
+
+    Returns
+    -------
+    callable
+    """
+    try:
+        from skimage.measure import marching_cubes
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise MissingDependencyError(
+            "fusing views into a surface needs scikit-image's marching cubes; install it "
+            "with: pip install 'affordgrasp[learn]'"
+        ) from exc
+    return marching_cubes
 
 
 def _check_views(depth, poses, camera: DepthCamera) -> tuple[np.ndarray, np.ndarray]:
@@ -227,12 +244,15 @@ def free_space_field(
             "no view saw the object (every pixel is 0): nothing to fuse; aim the views at it"
         )
     low, high = points.min(axis=0), points.max(axis=0)
-    extent = high - low
+
+    def grid_dims(edge: float) -> np.ndarray:
+        return np.ceil((high - low) / edge).astype(np.int64) + 2 * MARGIN_VOXELS + 1
+
     voxel = float(voxel_m)
-    while np.prod(np.ceil(extent / voxel) + 2 * MARGIN_VOXELS + 1) > max_voxels:
+    while np.prod(grid_dims(voxel)) > max_voxels:
         voxel *= 1.1
     origin = low - MARGIN_VOXELS * voxel
-    dims = (np.ceil(extent / voxel).astype(np.int64) + 2 * MARGIN_VOXELS + 1).astype(np.int64)
+    dims = grid_dims(voxel)
     returned = depth > 0
     if dilate_px > 0:
         far = np.where(returned, depth, np.inf)
@@ -279,17 +299,14 @@ def field_surface(field: FreeSpaceField, *, smooth_voxels: float = SMOOTH_VOXELS
     Raises
     ------
     InputError
-        When the field holds no solid, or scikit-image (the ``learn`` extra) is missing.
+        When the field holds no solid.
+    MissingDependencyError
+        When scikit-image (the ``learn`` extra) is missing.
     """
     import trimesh
     from scipy.ndimage import gaussian_filter
 
-    try:
-        from skimage.measure import marching_cubes
-    except ImportError:
-        raise InputError(
-            "fusing views into a surface needs scikit-image: pip install 'affordgrasp[learn]'"
-        ) from None
+    marching_cubes = require_marching_cubes()
     values = field.values
     if smooth_voxels > 0:
         values = gaussian_filter(values, float(smooth_voxels), mode="nearest")
