@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..errors import InputError, MissingDependencyError
+from ..errors import InputError, require
 from ..kernel_cache import install_package_stamp
 from .camera import DepthCamera
 
@@ -122,14 +122,7 @@ def require_marching_cubes():
     -------
     callable
     """
-    try:
-        from skimage.measure import marching_cubes
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise MissingDependencyError(
-            "fusing views into a surface needs scikit-image's marching cubes; install it "
-            "with: pip install 'affordgrasp[learn]'"
-        ) from exc
-    return marching_cubes
+    return require("skimage.measure", "learn").marching_cubes
 
 
 def _check_views(depth, poses, camera: DepthCamera) -> tuple[np.ndarray, np.ndarray]:
