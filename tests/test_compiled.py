@@ -91,6 +91,49 @@ def test_every_kernel_of_the_package_uses_the_content_stamp():
     assert locator.get_source_stamp() == ("affordgrasp-kernels", kernel_cache.package_stamp())
 
 
+def test_the_object_files_symbol_table_names_what_the_kernels_bitcode_defines():
+    # The light loading takes a cached kernel's defined symbols from its machine code's
+    # symbol table instead of parsing its LLVM bitcode: cross-checked against the bitcode
+    # (LLVM's own parser) on every kernel of the pipeline. Only private constants
+    # (".const.", ".bytes." names, never looked up) are in the bitcode alone.
+    import llvmlite.binding as ll
+
+    compiled.warm_up()
+    checked = 0
+    for dispatcher in compiled._dispatchers():
+        for signature, overload in dispatcher.overloads.items():
+            cache = dispatcher._cache  # the kernel as numba stored it: (name, kind, data)
+            key = cache._index_key(signature, overload.target_context.codegen())
+            stored = cache._cache_file.load(key)
+            if stored is None:
+                pytest.skip("the kernel cache could not be written: nothing loads from it")
+            _, kind, (object_code, bitcode) = stored[0]
+            assert kind == "object"
+            names = kernel_cache.elf_exported_symbols(object_code)
+            if names is None:
+                pytest.skip("this platform's object files are not ELF")
+            module = ll.parse_bitcode(bitcode)
+            defined = {
+                value.name
+                for values in (module.functions, module.global_variables)
+                for value in values
+                if not value.is_declaration
+            }
+            assert names <= defined, dispatcher.py_func.__name__
+            assert all(name.startswith(".") for name in defined - names), sorted(defined - names)
+            assert overload.fndesc.llvm_cpython_wrapper_name in names
+            checked += 1
+    assert checked >= len(compiled._dispatchers())
+
+
+@pytest.mark.parametrize(
+    "data",
+    [b"", b"not an object file", b"\x7fELF\x01\x01" + bytes(58), b"\x7fELF\x02\x01" + bytes(10)],
+)
+def test_a_non_elf_or_truncated_object_file_is_left_to_numba(data):
+    assert kernel_cache.elf_exported_symbols(data) is None
+
+
 def test_a_compilation_of_the_package_says_so_once_on_stderr(monkeypatch, capsys):
     import numba
 

@@ -94,6 +94,62 @@ def test_kernels_load_from_the_cache_without_numba_compiler_registries_and_run_r
     assert light["rows"] == numba_own["rows"]
 
 
+LINK_AGAINST_A_LIGHT_LOADED_KERNEL = """
+import json, numba, numpy as np
+from affordgrasp import compiled
+from affordgrasp.hands.kinematics import shape_poses
+from affordgrasp.metrics import kernel_cache
+load = compiled.warm_up()
+(overload,) = shape_poses.overloads.values()
+parsed_before = overload.library._shared_module is not None
+
+@numba.njit
+def user_function(links, shape_link, shape_local):  # compiled now, against the cached kernel
+    return shape_poses(links, shape_link, shape_local)
+
+rng = np.random.default_rng(0)
+links = rng.normal(size=(3, 4, 4))
+shape_link = np.array([2, 0, 0, 1])
+shape_local = rng.normal(size=(4, 4, 4))
+print(json.dumps({{
+    "compiled": load.compiled,
+    "light_loads": kernel_cache._LightLoading.loads,
+    "failure": kernel_cache._LightLoading.failure,
+    "parsed_before": parsed_before,
+    "error": float(np.abs(
+        user_function(links, shape_link, shape_local) - links[shape_link] @ shape_local
+    ).max()),
+    "overloads": len(shape_poses.overloads),
+    "parsed_after": overload.library._shared_module is not None,
+}}))
+"""
+
+
+def test_a_function_compiled_later_links_against_a_kernel_loaded_without_its_bitcode():
+    # The light loading parses a kernel's LLVM bitcode only when a new function is compiled
+    # against it: a user's njit function calling a package kernel compiles, links and agrees.
+    proc = subprocess.run(
+        [sys.executable, "-c", LINK_AGAINST_A_LIGHT_LOADED_KERNEL.format()],
+        capture_output=True,
+        text=True,
+        check=False,
+        env={
+            "PYTHONPATH": SRC,
+            "PATH": "/usr/bin:/bin",
+            "AFFORDGRASP_CACHE_DIR": os.environ["AFFORDGRASP_CACHE_DIR"],
+        },
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    if report["compiled"]:
+        pytest.skip("the kernel cache was stale: this process compiled the kernels")
+    assert report["failure"] is None and report["light_loads"] > 0
+    assert not report["parsed_before"]  # loaded without its bitcode...
+    assert report["overloads"] == 1  # ...the user's function used that same overload...
+    assert report["parsed_after"]  # ...whose bitcode was parsed to link it...
+    assert report["error"] < 1e-12  # ...and gives the right poses
+
+
 # Never on generate's path, cold or warm (pandas and scipy.stats cost a second of imports).
 NEVER_IMPORTED = ("pandas", "scipy.stats")
 # Not on a warm generate's path (the object and its derived geometry come from the cache).
