@@ -13,17 +13,25 @@ simulating them on it (``plan --model views``), with no access to the true mesh.
 **The field.** For a voxel centre x and a view i whose image x projects into (in front of
 the camera), ``f_i(x) = D̃_i(pixel) − z_i(x)``: the observed depth minus x's depth along the
 optical axis, clipped to [−τ, τ] (τ = :data:`TRUNCATION_VOXELS` voxels), +τ where the pixel
-has no return (the ray met nothing). ``D̃_i`` is the image after a minimum filter over
-(2r + 1)² pixels (r = ``dilate_px``, no return counted as infinitely far): a voxel is
-carved only when it lies in front of every nearby return, so a silhouette or a surface seen
-at a grazing angle is not eaten by the rounding of its projection to one pixel. The field is
-the ``votes``-th largest ``f_i`` over the views that see x (+τ where fewer views see it):
-a voxel is free when at least ``votes`` views see past it, so one view's error cannot cut a
-thin blade in two. Solid is ``field < 0``.
+has no return (the ray met nothing). ``D̃_i`` is the nearest of the four pixels around x's
+projection where all four returned (``subpixel``), and elsewhere (a silhouette, a lost
+return) the image after a minimum filter over (2r + 1)² pixels around the nearest pixel
+(r = ``dilate_px``, no return counted as infinitely far): a voxel is carved only when it
+lies in front of every nearby return, so a silhouette or a surface seen at a grazing angle
+is not eaten by the rounding of its projection to one pixel. The field is the
+``votes``-th largest ``f_i`` over the views that see x (+τ where fewer views see it): a
+voxel is free when at least ``votes`` views see past it, so one view's error cannot cut a
+thin blade in two. Solid is ``field < 0``; every voxel that holds a return of some view is
+kept solid (``keep_seen``; at least :data:`SEEN_SOLID_VOXELS` of a voxel deep, after the
+smoothing of :func:`field_surface`), so a blade thinner than a voxel, whose voxel centres
+may all lie outside it, is not melted away.
 
-**Measured** (64 views at ``plan``'s pregrasps of 13 families, 1 mm voxels;
-docs/learning.md): the fused surface lies within 0.5-1 mm (median) of the true one; with
-r = 0 or one vote, thin blades break into pieces.
+**Measured** (64 views at ``plan``'s pregrasps, 1 mm voxels, grown on the largest tools;
+docs/learning.md): the 3 × 3 filter everywhere put the fused surface 0.8 mm (median)
+outside the true one on knives, daggers, cleavers and spatulas, 1.5-2 mm on an axe and a
+sword (larger voxels), and thickened blades by that much on each side; the four pixels and
+the seen voxels bring it to 0.1-0.5 mm. With r = 0 or one vote, thin blades break into
+pieces.
 
 Validated against known geometry: a box and a sphere seen from many pregrasps are
 recovered within a voxel (``tests/vision/test_fusion.py``).
@@ -48,6 +56,7 @@ VOTES = 2  # views that must see past a voxel to carve it
 DILATE_PX = 1  # the minimum filter's radius, pixels
 TRUNCATION_VOXELS = 3.0  # the field is clipped to ± this many voxels
 SMOOTH_VOXELS = 0.6  # Gaussian σ of the field before marching cubes, voxels
+SEEN_SOLID_VOXELS = 0.1  # a voxel holding a return is solid at least this deep, voxels
 MARGIN_VOXELS = 3  # empty voxels around the seen points
 RETRY_SMOOTH_VOXELS = (1.0, 1.5)  # smoother fields tried when a surface is not closed
 
@@ -64,18 +73,25 @@ class FreeSpaceField:
         Centre of voxel (0, 0, 0), object frame, m.
     voxel_m : float
         Voxel edge, m.
+    seen : (nx, ny, nz) bool ndarray or None
+        Voxels that hold a return of some view: :func:`field_surface` keeps them solid
+        (None: nothing is kept).
     """
 
     values: np.ndarray
     origin: np.ndarray
     voxel_m: float
+    seen: np.ndarray | None = None
 
 
 @njit(cache=True, nogil=True)
-def _carve(origin, voxel, dims, depth, rot, trans, focal, cx, cy, trunc, votes, out):
+def _carve(origin, voxel, dims, raw, depth, rot, trans, focal, cx, cy, trunc, votes, out):
     # One pass over voxels × views: numpy would hold an (voxels × views) array (2e6 × 64
-    # doubles, 1 GB); this keeps the `votes` largest values of each voxel only.
+    # doubles, 1 GB); this keeps the `votes` largest values of each voxel only. `depth` is
+    # the minimum-filtered image (-1: unknown), `raw` the image itself, or an empty array
+    # for the filtered image everywhere (no sub-pixel rule).
     n, h, w = depth.shape
+    subpixel = raw.shape[0] == n
     top = np.empty(votes)
     for a in range(dims[0]):
         x = origin[0] + voxel * a
@@ -94,13 +110,27 @@ def _carve(origin, voxel, dims, depth, rot, trans, focal, cx, cy, trunc, votes, 
                         continue
                     qx = px * rot[i, 0, 0] + py * rot[i, 1, 0] + pz * rot[i, 2, 0]
                     qy = px * rot[i, 0, 1] + py * rot[i, 1, 1] + pz * rot[i, 2, 1]
-                    u = np.floor(cx + focal * qx / qz + 0.5)
-                    v = np.floor(cy + focal * qy / qz + 0.5)
+                    fu = cx + focal * qx / qz
+                    fv = cy + focal * qy / qz
+                    u = np.floor(fu + 0.5)
+                    v = np.floor(fv + 0.5)
                     if u < 0 or u >= w or v < 0 or v >= h:
                         continue
                     d = depth[i, int(v), int(u)]
                     if d < 0.0:
                         continue  # unknown: a lost return near the surface
+                    if subpixel:
+                        # the four pixels around the projection: where all returned, the
+                        # nearest of them (the filter's 3 x 3 reaches a pixel further)
+                        u0 = int(np.floor(fu))
+                        v0 = int(np.floor(fv))
+                        if u0 >= 0 and v0 >= 0 and u0 + 1 < w and v0 + 1 < h:
+                            near = min(
+                                min(raw[i, v0, u0], raw[i, v0, u0 + 1]),
+                                min(raw[i, v0 + 1, u0], raw[i, v0 + 1, u0 + 1]),
+                            )
+                            if near > 0.0:
+                                d = near
                     seen += 1
                     val = trunc if d == 0.0 else min(d - qz, trunc)
                     if val > top[votes - 1]:
@@ -182,6 +212,8 @@ def free_space_field(
     dilate_px: int = DILATE_PX,
     max_voxels: int = MAX_VOXELS,
     unknown_px: int = 0,
+    subpixel: bool = True,
+    keep_seen: bool = True,
 ) -> FreeSpaceField:
     """Fuse depth images into a free-space field (the module docstring defines it).
 
@@ -207,6 +239,13 @@ def free_space_field(
         view is skipped there) instead of "empty all along the ray": a real sensor loses
         returns where the surface is seen at a grazing angle, next to what it saw (0, the
         default: every pixel without a return is empty space, as in an exact image).
+    subpixel : bool
+        Where the four pixels around a voxel's projection all returned, read the nearest
+        of them instead of the minimum filter's (2r + 1)² (True, the default; False: the
+        filter everywhere).
+    keep_seen : bool
+        Mark the voxels that hold a return as seen, which :func:`field_surface` keeps
+        solid (True, the default).
 
     Returns
     -------
@@ -247,6 +286,7 @@ def free_space_field(
     origin = low - MARGIN_VOXELS * voxel
     dims = grid_dims(voxel)
     returned = depth > 0
+    raw = depth
     if dilate_px > 0:
         far = np.where(returned, depth, np.inf)
         far = minimum_filter(far, size=(1, 2 * dilate_px + 1, 2 * dilate_px + 1), mode="nearest")
@@ -261,6 +301,7 @@ def free_space_field(
         origin,
         voxel,
         dims,
+        np.ascontiguousarray(raw) if subpixel else np.zeros((0, 1, 1)),
         np.ascontiguousarray(depth),
         np.ascontiguousarray(poses[:, :3, :3]),
         np.ascontiguousarray(poses[:, :3, 3]),
@@ -271,7 +312,12 @@ def free_space_field(
         int(votes),
         out,
     )
-    return FreeSpaceField(out, origin, voxel)
+    seen = None
+    if keep_seen:
+        index = np.floor((points - origin) / voxel + 0.5).astype(np.int64)
+        seen = np.zeros(out.shape, dtype=bool)
+        seen[index[:, 0], index[:, 1], index[:, 2]] = True
+    return FreeSpaceField(out, origin, voxel, seen)
 
 
 def field_surface(field: FreeSpaceField, *, smooth_voxels: float = SMOOTH_VOXELS):
@@ -282,7 +328,8 @@ def field_surface(field: FreeSpaceField, *, smooth_voxels: float = SMOOTH_VOXELS
     field : FreeSpaceField
     smooth_voxels : float
         Gaussian σ applied to the field first, voxels (0: none). Smoothing removes the
-        single-voxel pinches where marching cubes would join two sheets at a vertex.
+        single-voxel pinches where marching cubes would join two sheets at a vertex. The
+        field's seen voxels are then made solid, at least :data:`SEEN_SOLID_VOXELS` deep.
 
     Returns
     -------
@@ -303,6 +350,10 @@ def field_surface(field: FreeSpaceField, *, smooth_voxels: float = SMOOTH_VOXELS
     values = field.values
     if smooth_voxels > 0:
         values = gaussian_filter(values, float(smooth_voxels), mode="nearest")
+    if field.seen is not None:  # after smoothing, which would melt a blade thinner than a voxel
+        values = np.where(
+            field.seen, np.minimum(values, -SEEN_SOLID_VOXELS * field.voxel_m), values
+        )
     if not (values < 0).any():
         raise InputError("the fused views hold no solid: no view saw a surface to keep")
     # A border of free space closes the surface where the solid meets the grid's edge.
