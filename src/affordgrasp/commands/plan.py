@@ -7,7 +7,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import InputError, MissingDependencyError
-from ..grasp.pregrasp import PLAN_OFFSET_RANGE
+from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE
 
 
 def add_arguments(p) -> None:
@@ -23,7 +23,12 @@ def add_arguments(p) -> None:
     p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
     p.add_argument("--task", default="pick", help="task that judges the choice (default pick)")
     p.add_argument("--mode", default="default", help="threshold mode of the task")
-    p.add_argument("--candidates", type=int, default=64, help="candidate grasps drawn (default 64)")
+    p.add_argument(
+        "--candidates",
+        type=int,
+        default=PLAN_CANDIDATES,
+        help=f"candidate grasps drawn (default {PLAN_CANDIDATES})",
+    )
     p.add_argument(
         "--model",
         default="views",

@@ -38,7 +38,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..errors import InputError
-from ..grasp.pregrasp import PLAN_OFFSET_RANGE
+from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE
 from .decisions import (
     decision_measures,
     decision_order,
@@ -52,6 +52,7 @@ from .decisions import (
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
 VIEWS = "views"  # the decider that fuses the candidates' views and simulates on the surface
 FUSED_VIEWS = 64  # views fused at most (the first candidates'): carving costs per view
+DEFAULT_CANDIDATES = PLAN_CANDIDATES  # candidates drawn by default (see grasp.pregrasp)
 # With a sensor model the views are fused more cautiously (docs/learning.md, measured on
 # validation objects): pixels without a return this close to a return say nothing (lost at
 # a grazing angle, not empty space), and a voxel needs this many views to see past it (the
@@ -268,7 +269,7 @@ def plan(
     obj,
     task: str = "pick",
     *,
-    candidates: int = 64,
+    candidates: int = DEFAULT_CANDIDATES,
     models=VIEWS,
     seed: int = 0,
     hand="barrett",
@@ -289,7 +290,7 @@ def plan(
     task : str
         The task that judges the choice (its simulated F_T in ``mode``).
     candidates : int
-        How many candidate grasps to draw (>= 1).
+        How many candidate grasps to draw (>= 1; default :data:`DEFAULT_CANDIDATES`).
     models : str, path or sequence
         ``"views"`` (the default; no learned model): the first :data:`FUSED_VIEWS`
         candidates' depth images are fused into a surface
@@ -297,8 +298,8 @@ def plan(
         it from the pose it has on the object, and the candidates are ranked by
         :func:`~affordgrasp.learning.decisions.margin_order` on that simulation: viable
         there first, then task-feasible, by decreasing ε (needs scikit-image, the ``learn``
-        extra; it chooses a viable grasp twice as often as the shipped classifier,
-        docs/learning.md). ``"classifier"``: the shipped classifier alone, the most
+        extra; with 256 candidates it chose a viable grasp on 0.92 of unseen objects, the
+        shipped classifier on 0.37, docs/learning.md). ``"classifier"``: the shipped classifier alone, the most
         probably viable candidate first. ``"default"``: the shipped classifier and
         regressor, the classifier's threshold, then least predicted effort.
         ``"regressor"``, a model file, or a sequence of files and/or loaded
