@@ -137,11 +137,26 @@ def test_plan_with_the_views_decides_on_the_surface_they_fuse_into(box_mesh, cap
     assert main(["plan", str(box_mesh), "--model", "views", "--threshold", "0.2"]) == 2
 
 
-def test_plan_with_the_views_fuses_what_a_sensor_returns(box_mesh):
+def test_plan_with_the_views_fuses_what_a_sensor_returns(box_mesh, monkeypatch):
+    from affordgrasp.learning.plan import SENSOR_UNKNOWN_PX, SENSOR_VOTES
+    from affordgrasp.vision import fusion
     from affordgrasp.vision.sensor import SensorModel
 
+    options = []
+    fused_object = fusion.fused_object
+
+    def recorded(*args, **kwargs):
+        options.append(kwargs)
+        return fused_object(*args, **kwargs)
+
+    monkeypatch.setattr(fusion, "fused_object", recorded)
     exact = ag.plan(str(box_mesh), "pick", candidates=8, seed=1)
     sensed = ag.plan(str(box_mesh), "pick", candidates=8, seed=1, sensor=SensorModel(seed=1))
+    # exact images: the four pixels and the seen voxels; a sensor's: the filter alone, with
+    # lost returns unknown and three votes (docs/learning.md)
+    assert options[0]["subpixel"] and options[0]["keep_seen"] and options[0]["unknown_px"] == 0
+    assert not options[1]["subpixel"] and not options[1]["keep_seen"]
+    assert options[1]["unknown_px"] == SENSOR_UNKNOWN_PX and options[1]["votes"] == SENSOR_VOTES
     np.testing.assert_array_equal(exact.true_score, sensed.true_score)  # the same candidates
     assert sensed.fused_score.shape == (8,)
     # the fused surfaces differ, so their simulations do

@@ -394,6 +394,10 @@ def plan(
             # one view: what it saw, solid behind
             votes=min(FUSION_VOTES if sensor is None else SENSOR_VOTES, k),
             unknown_px=0 if sensor is None else SENSOR_UNKNOWN_PX,
+            # a sensor's noise makes the nearest of four pixels and the voxels of single
+            # returns no better (and a noisy wall's seen voxels not always closed)
+            subpixel=sensor is None,
+            keep_seen=sensor is None,
         )
         timings["fuse"] = time.perf_counter() - t0
         step("predict")
