@@ -55,10 +55,10 @@ print(json.dumps({{
 """
 
 
-def load_and_run_the_kernels(light: bool) -> tuple[dict, set[str]]:
-    code = LOAD_AND_RUN_THE_KERNELS.format(light=light)
+def run_fresh(code: str) -> list[str]:
+    """Lines a fresh interpreter prints running ``code`` (the session's private cache)."""
     proc = subprocess.run(
-        [sys.executable, "-c", code + "\nimport sys; print(json.dumps(sorted(sys.modules)))"],
+        [sys.executable, "-c", code],
         capture_output=True,
         text=True,
         check=False,
@@ -69,7 +69,13 @@ def load_and_run_the_kernels(light: bool) -> tuple[dict, set[str]]:
         },
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    report, modules = proc.stdout.strip().splitlines()[-2:]
+    return proc.stdout.strip().splitlines()
+
+
+def load_and_run_the_kernels(light: bool) -> tuple[dict, set[str]]:
+    code = LOAD_AND_RUN_THE_KERNELS.format(light=light)
+    lines = run_fresh(code + "\nimport sys; print(json.dumps(sorted(sys.modules)))")
+    report, modules = lines[-2:]
     return json.loads(report), set(json.loads(modules))
 
 
@@ -128,19 +134,7 @@ print(json.dumps({{
 def test_a_function_compiled_later_links_against_a_kernel_loaded_without_its_bitcode():
     # The light loading parses a kernel's LLVM bitcode only when a new function is compiled
     # against it: a user's njit function calling a package kernel compiles, links and agrees.
-    proc = subprocess.run(
-        [sys.executable, "-c", LINK_AGAINST_A_LIGHT_LOADED_KERNEL.format()],
-        capture_output=True,
-        text=True,
-        check=False,
-        env={
-            "PYTHONPATH": SRC,
-            "PATH": "/usr/bin:/bin",
-            "AFFORDGRASP_CACHE_DIR": os.environ["AFFORDGRASP_CACHE_DIR"],
-        },
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    report = json.loads(run_fresh(LINK_AGAINST_A_LIGHT_LOADED_KERNEL.format())[-1])
     if report["compiled"]:
         pytest.skip("the kernel cache was stale: this process compiled the kernels")
     assert report["failure"] is None and report["light_loads"] > 0
