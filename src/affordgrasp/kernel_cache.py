@@ -183,12 +183,17 @@ def _install_light_loading(locator: type) -> bool:
             _preload_lapack_tables()
             rtsys.initialize(target_context)
             codegen = target_context.codegen()
+            # (numba holds its compiler lock here; a nested load restores what it found)
+            previous = codegen.__dict__.get("unserialize_library")
             codegen.unserialize_library = partial(_unserialize_library, codegen)
             try:
                 with self._guard_against_spurious_io_errors():
                     data = self._load_overload(sig, target_context)
             finally:
-                del codegen.unserialize_library  # the class's own method again
+                if previous is None:
+                    codegen.__dict__.pop("unserialize_library", None)  # the class's method
+                else:
+                    codegen.unserialize_library = previous
         except Exception as error:  # noqa: BLE001 - numba's own loading takes over
             _LightLoading.enabled = False
             _LightLoading.failure = f"{type(error).__name__}: {error}"
