@@ -135,8 +135,10 @@ def test_a_function_compiled_later_links_against_a_kernel_loaded_without_its_bit
     # The light loading parses a kernel's LLVM bitcode only when a new function is compiled
     # against it: a user's njit function calling a package kernel compiles, links and agrees.
     report = json.loads(run_fresh(LINK_AGAINST_A_LIGHT_LOADED_KERNEL.format())[-1])
+    if report["compiled"]:  # a stale kernel cache: this process compiled and saved it
+        report = json.loads(run_fresh(LINK_AGAINST_A_LIGHT_LOADED_KERNEL.format())[-1])
     if report["compiled"]:
-        pytest.skip("the kernel cache was stale: this process compiled the kernels")
+        pytest.skip("the kernel cache could not be written: nothing loads from it")
     assert report["failure"] is None and report["light_loads"] > 0
     assert not report["parsed_before"]  # loaded without its bitcode...
     assert report["overloads"] == 1  # ...the user's function used that same overload...

@@ -24,6 +24,7 @@ import hashlib
 import re
 import struct
 import sys
+import weakref
 from functools import cache, partial
 from pathlib import Path
 
@@ -156,13 +157,14 @@ def _install_light_loading(locator: type) -> bool:
         ``Cache._load_overload``, ``Cache._guard_against_spurious_io_errors``,
         ``rtsys.initialize``, and the code library's object-cache methods used by
         :func:`_unserialize_library`): when one of them is missing (another numba version)
-        numba is left alone and loads the kernels its own way (about 0.4 s slower).
+        numba is left alone and loads the kernels its own way (a few tenths of a second
+        slower).
 
     Notes
     -----
     When the light loading raises (any ``Exception``), that load is done again by numba's
     own ``load_overload`` and every later load of the process goes to numba directly: a
-    change inside numba costs the 0.2 s, never a failed start-up.
+    change inside numba costs those tenths of a second, never a failed start-up.
     """
     if not all(hasattr(owner, name) for owner, name in _light_loading_needs()):
         return False
@@ -197,7 +199,14 @@ def _install_light_loading(locator: type) -> bool:
         except Exception as error:  # noqa: BLE001 - numba's own loading takes over
             _LightLoading.enabled = False
             _LightLoading.failure = f"{type(error).__name__}: {error}"
-            return original(self, sig, target_context)
+            # numba's own, even inside another load that installed the hook
+            codegen = target_context.codegen()
+            hook = codegen.__dict__.pop("unserialize_library", None)
+            try:
+                return original(self, sig, target_context)
+            finally:
+                if hook is not None:
+                    codegen.unserialize_library = hook
         if data is not None:
             _LightLoading.loads += 1
         return data
@@ -210,6 +219,7 @@ def _install_light_loading(locator: type) -> bool:
 _ELF64_LITTLE = b"\x7fELF\x02\x01"
 _SHT_SYMTAB = 2
 _STB_GLOBAL, _STB_WEAK = 1, 2
+_WRAPPER_PREFIX = "_ZN7cpython"  # numba's CPython wrappers: the cpython:: namespace, mangled
 
 
 def elf_exported_symbols(object_code: bytes) -> set[str] | None:
@@ -227,7 +237,8 @@ def elf_exported_symbols(object_code: bytes) -> set[str] | None:
     -------
     set of str or None
         The names; None when the bytes are not a 64-bit little-endian ELF file (macOS and
-        Windows write other formats) or are malformed.
+        Windows write other formats), are malformed, or name nothing (no symbol table, as
+        in a stripped file).
     """
     if object_code[:6] != _ELF64_LITTLE:
         return None
@@ -249,7 +260,7 @@ def elf_exported_symbols(object_code: bytes) -> set[str] | None:
                 if name and index != 0 and info >> 4 in (_STB_GLOBAL, _STB_WEAK):
                     end = object_code.index(b"\0", strings + name)
                     names.add(object_code[strings + name : end].decode())
-        return names
+        return names or None
     except (struct.error, IndexError, ValueError, UnicodeDecodeError):
         return None
 
@@ -269,15 +280,20 @@ def _unserialize_library(codegen, state):
     """
     name, kind, data = state
     symbols = elf_exported_symbols(data[0]) if kind == "object" else None
-    if symbols is None:
+    # a kernel is entered through its CPython wrapper (numba's mangled "cpython" namespace):
+    # without one, numba's way
+    if symbols is None or not any(symbol.startswith(_WRAPPER_PREFIX) for symbol in symbols):
         return type(codegen).unserialize_library(codegen, state)
     object_code, shared_bitcode = data
+    defined = codegen._engine._defined_symbols  # before any state changes: a failure here
+    defined |= symbols  # falls back to numba's loading with nothing added to the engine
     library = codegen.create_library(name)
     library.enable_object_caching()
     library._set_compiled_object(object_code)
     library._finalize_final_module()
-    codegen._engine._defined_symbols |= symbols
-    library._get_module_for_linking = partial(_module_for_linking, library, shared_bitcode)
+    library._get_module_for_linking = partial(
+        _module_for_linking, weakref.proxy(library), shared_bitcode
+    )
     return library
 
 

@@ -22,7 +22,7 @@ is not eaten by the rounding of its projection to one pixel. The field is the
 ``votes``-th largest ``f_i`` over the views that see x (+τ where fewer views see it): a
 voxel is free when at least ``votes`` views see past it, so one view's error cannot cut a
 thin blade in two. Solid is ``field < 0``; every voxel that holds a return of some view is
-kept solid (``keep_seen``; at least :data:`SEEN_SOLID_VOXELS` of a voxel deep, after the
+kept solid (``keep_seen``: its value at most −:data:`SEEN_SOLID_VOXELS` voxel, after the
 smoothing of :func:`field_surface`), so a blade thinner than a voxel, whose voxel centres
 may all lie outside it, is not melted away.
 
@@ -56,7 +56,7 @@ VOTES = 2  # views that must see past a voxel to carve it
 DILATE_PX = 1  # the minimum filter's radius, pixels
 TRUNCATION_VOXELS = 3.0  # the field is clipped to ± this many voxels
 SMOOTH_VOXELS = 0.6  # Gaussian σ of the field before marching cubes, voxels
-SEEN_SOLID_VOXELS = 0.1  # a voxel holding a return is solid at least this deep, voxels
+SEEN_SOLID_VOXELS = 0.1  # a voxel holding a return has a field value <= -this, voxels
 MARGIN_VOXELS = 3  # empty voxels around the seen points
 RETRY_SMOOTH_VOXELS = (1.0, 1.5)  # smoother fields tried when a surface is not closed
 
@@ -245,7 +245,9 @@ def free_space_field(
         filter everywhere).
     keep_seen : bool
         Mark the voxels that hold a return as seen, which :func:`field_surface` keeps
-        solid (True, the default).
+        solid (True, the default). Meant for exact images: with a sensor's noise, stray
+        returns become solid specks and can join sheets that the smoother retries of
+        :func:`fused_object` cannot part (``plan`` turns it off with a sensor model).
 
     Returns
     -------
@@ -329,7 +331,8 @@ def field_surface(field: FreeSpaceField, *, smooth_voxels: float = SMOOTH_VOXELS
     smooth_voxels : float
         Gaussian σ applied to the field first, voxels (0: none). Smoothing removes the
         single-voxel pinches where marching cubes would join two sheets at a vertex. The
-        field's seen voxels are then made solid, at least :data:`SEEN_SOLID_VOXELS` deep.
+        field's seen voxels are then made solid: their value at most
+        −:data:`SEEN_SOLID_VOXELS` voxel.
 
     Returns
     -------
@@ -383,7 +386,7 @@ def fuse_views(
         See :func:`field_surface`.
     **carving
         Options of :func:`free_space_field` (``voxel_m``, ``votes``, ``dilate_px``,
-        ``max_voxels``, ``unknown_px``).
+        ``max_voxels``, ``unknown_px``, ``subpixel``, ``keep_seen``).
 
     Returns
     -------
