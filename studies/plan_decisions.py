@@ -9,6 +9,8 @@ of decisions whose chosen grasp is truly viable, the oracle's and a random choic
 median true percentile of the choice, the top-5 viable share, with ``--physics`` the share
 whose MuJoCo replay holds, and the CPU seconds of a decision. ``--sensor`` fuses (or
 shows the models) the images of the default sensor model, seeded by the decision's seed.
+``--scan`` decides on the scan-like variants (``knife:5~scan``: 1 mm triangles, rounded
+creases, noise, capped holes; docs/validation.md) of the same instances.
 docs/learning.md ("Deciding on the fused views") reports its numbers: variant 7 was used
 to choose the fusion's settings, variants 5-6 only to measure them.
 """
@@ -33,12 +35,17 @@ def main() -> None:
     ap.add_argument("--model", default="views", help="plan's --model (default views)")
     ap.add_argument("--physics", action="store_true", help="replay each choice in MuJoCo")
     ap.add_argument("--sensor", action="store_true", help="the default sensor model's images")
+    ap.add_argument(
+        "--scan", action="store_true", help="the scan-like variants (knife:5~scan) instead"
+    )
+    ap.add_argument("--families", help="only these families (comma-separated; default all)")
     ap.add_argument("--json", help="write every decision to this file")
     args = ap.parse_args()
     variants = [int(v) for v in args.variants.split(",")]
     seeds = [int(s) for s in args.seeds.split(",")]
     rows = []
-    for family in list_families():
+    families = args.families.split(",") if args.families else list_families()
+    for family in families:
         for variant in variants:
             for seed in seeds:
                 sensor = None
@@ -48,7 +55,7 @@ def main() -> None:
                     sensor = SensorModel(seed=seed)
                 started = time.process_time()
                 p = ag.plan(
-                    f"{family}:{variant}",
+                    f"{family}:{variant}" + ("~scan" if args.scan else ""),
                     "pick",
                     candidates=args.candidates,
                     seed=seed,

@@ -206,7 +206,21 @@ def test_a_surface_that_is_not_closed_is_fused_again_smoother_then_refused(monke
     def always_fails(mesh, name):
         raise MeshError("not a closed volume")
 
+    calls = []
+    surface = fusion.field_surface
+
+    def recorded(field, smooth_voxels):
+        calls.append((field.seen is not None, smooth_voxels))
+        return surface(field, smooth_voxels=smooth_voxels)
+
     monkeypatch.setattr(objects, "object_from_mesh", always_fails)
+    monkeypatch.setattr(fusion, "field_surface", recorded)
     with pytest.raises(InputError, match="fused into no closed surface"):
         fused_object(depth, poses, camera, name="box")
-    assert fusion.RETRY_SMOOTH_VOXELS  # smoother fields were tried in between
+    # without the seen voxels (which no smoothing parts), then smoother fields
+    smooths = (fusion.SMOOTH_VOXELS, *fusion.RETRY_SMOOTH_VOXELS)
+    assert calls == [(True, smooths[0])] + [(False, s) for s in smooths]
+    calls.clear()
+    with pytest.raises(InputError, match="fused into no closed surface"):
+        fused_object(depth, poses, camera, name="box", keep_seen=False)
+    assert calls == [(False, s) for s in smooths]

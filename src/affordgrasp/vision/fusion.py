@@ -39,7 +39,7 @@ recovered within a voxel (``tests/vision/test_fusion.py``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
@@ -424,25 +424,33 @@ def fused_object(
     GraspObject
         In the views' object frame, unit density; its derived geometry is kept in memory
         only (``source`` is :data:`~affordgrasp.objects.prepared.TRANSIENT_SOURCE`). When
-        the surface is not a closed volume even after the loader's repairs, smoother
-        fields are tried (σ in :data:`RETRY_SMOOTH_VOXELS`).
+        the surface is not a closed volume even after the loader's repairs, the field
+        without its seen voxels is tried (smoothing cannot part two sheets they join),
+        then smoother fields (σ in :data:`RETRY_SMOOTH_VOXELS`).
 
     Raises
     ------
     InputError
-        When no smoothing gives a closed surface, or for bad views (see
+        When no field gives a closed surface, or for bad views (see
         :func:`free_space_field`).
     """
     from ..errors import MeshError
     from ..objects import object_from_mesh
 
     field = free_space_field(depth, poses, camera, **carving)
-    problem = None
     # Two sheets of a thin, noisy wall can meet along an edge that no repair closes; a
-    # smoother field separates them (seen with a sensor model on a mug's wall).
-    for smooth in (smooth_voxels, *RETRY_SMOOTH_VOXELS):
+    # smoother field separates them (seen with a sensor model on a mug's wall). Seen voxels
+    # can join them too (once in ~450 plans, a tumbler's rim), which no smoothing undoes:
+    # after the first try, the field without them.
+    attempts = [(field, smooth_voxels)]
+    retry = field if field.seen is None else replace(field, seen=None)
+    attempts += [(retry, smooth) for smooth in (smooth_voxels, *RETRY_SMOOTH_VOXELS)]
+    if field.seen is None:
+        attempts = attempts[1:]
+    problem = None
+    for candidate, smooth in attempts:
         try:
-            return object_from_mesh(field_surface(field, smooth_voxels=smooth), name)
+            return object_from_mesh(field_surface(candidate, smooth_voxels=smooth), name)
         except MeshError as exc:
             problem = exc
     raise InputError(
