@@ -25,6 +25,7 @@ import re
 import struct
 import sys
 import weakref
+from contextlib import contextmanager
 from functools import cache, partial
 from pathlib import Path
 
@@ -185,28 +186,15 @@ def _install_light_loading(locator: type) -> bool:
             _preload_lapack_tables()
             rtsys.initialize(target_context)
             codegen = target_context.codegen()
-            # (numba holds its compiler lock here; a nested load restores what it found)
-            previous = codegen.__dict__.get("unserialize_library")
-            codegen.unserialize_library = partial(_unserialize_library, codegen)
-            try:
+            with _unserialize_hook(codegen, partial(_unserialize_library, codegen)):
                 with self._guard_against_spurious_io_errors():
                     data = self._load_overload(sig, target_context)
-            finally:
-                if previous is None:
-                    codegen.__dict__.pop("unserialize_library", None)  # the class's method
-                else:
-                    codegen.unserialize_library = previous
         except Exception as error:  # noqa: BLE001 - numba's own loading takes over
             _LightLoading.enabled = False
             _LightLoading.failure = f"{type(error).__name__}: {error}"
             # numba's own, even inside another load that installed the hook
-            codegen = target_context.codegen()
-            hook = codegen.__dict__.pop("unserialize_library", None)
-            try:
+            with _unserialize_hook(target_context.codegen(), None):
                 return original(self, sig, target_context)
-            finally:
-                if hook is not None:
-                    codegen.unserialize_library = hook
         if data is not None:
             _LightLoading.loads += 1
         return data
@@ -214,6 +202,25 @@ def _install_light_loading(locator: type) -> bool:
     load_overload.__wrapped__ = original  # type: ignore[attr-defined]
     caching.Cache.load_overload = load_overload
     return True
+
+
+@contextmanager
+def _unserialize_hook(codegen, hook):
+    """Within the block, ``codegen.unserialize_library`` is ``hook`` (None: the class's own
+    method); then whatever it was before (numba holds its compiler lock around a load, and
+    a nested load restores what it found)."""
+    previous = codegen.__dict__.get("unserialize_library")
+    if hook is None:
+        codegen.__dict__.pop("unserialize_library", None)
+    else:
+        codegen.unserialize_library = hook
+    try:
+        yield
+    finally:
+        if previous is None:
+            codegen.__dict__.pop("unserialize_library", None)
+        else:
+            codegen.unserialize_library = previous
 
 
 _ELF64_LITTLE = b"\x7fELF\x02\x01"

@@ -52,7 +52,6 @@ from .decisions import (
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
 VIEWS = "views"  # the decider that fuses the candidates' views and simulates on the surface
 FUSED_VIEWS = 64  # views fused at most (the first candidates'): carving costs per view
-DEFAULT_CANDIDATES = PLAN_CANDIDATES  # candidates drawn by default (see grasp.pregrasp)
 # With a sensor model the views are fused more cautiously (docs/learning.md, measured on
 # validation objects): pixels without a return this close to a return say nothing (lost at
 # a grazing angle, not empty space), and a voxel needs this many views to see past it (the
@@ -269,7 +268,7 @@ def plan(
     obj,
     task: str = "pick",
     *,
-    candidates: int = DEFAULT_CANDIDATES,
+    candidates: int = PLAN_CANDIDATES,
     models=VIEWS,
     seed: int = 0,
     hand="barrett",
@@ -290,7 +289,7 @@ def plan(
     task : str
         The task that judges the choice (its simulated F_T in ``mode``).
     candidates : int
-        How many candidate grasps to draw (>= 1; default :data:`DEFAULT_CANDIDATES`).
+        How many candidate grasps to draw (>= 1; default 256, ``grasp.pregrasp.PLAN_CANDIDATES``).
     models : str, path or sequence
         ``"views"`` (the default; no learned model): the first :data:`FUSED_VIEWS`
         candidates' depth images are fused into a surface

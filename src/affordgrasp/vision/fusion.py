@@ -442,11 +442,9 @@ def fused_object(
     # smoother field separates them (seen with a sensor model on a mug's wall). Seen voxels
     # can join them too (once in ~450 plans, a tumbler's rim), which no smoothing undoes:
     # after the first try, the field without them.
-    attempts = [(field, smooth_voxels)]
-    retry = field if field.seen is None else replace(field, seen=None)
-    attempts += [(retry, smooth) for smooth in (smooth_voxels, *RETRY_SMOOTH_VOXELS)]
-    if field.seen is None:
-        attempts = attempts[1:]
+    bare = replace(field, seen=None)
+    attempts = [(field, smooth_voxels)] if field.seen is not None else []
+    attempts += [(bare, smooth) for smooth in (smooth_voxels, *RETRY_SMOOTH_VOXELS)]
     problem = None
     for candidate, smooth in attempts:
         try:
