@@ -39,6 +39,7 @@ def main() -> None:
         "--scan", action="store_true", help="the scan-like variants (knife:5~scan) instead"
     )
     ap.add_argument("--families", help="only these families (comma-separated; default all)")
+    ap.add_argument("--robust-check", type=int, help="plan's robust_check (default: plan's own, 4)")
     ap.add_argument("--json", help="write every decision to this file")
     args = ap.parse_args()
     variants = [int(v) for v in args.variants.split(",")]
@@ -62,6 +63,7 @@ def main() -> None:
                     models=args.model,
                     physics=args.physics,
                     sensor=sensor,
+                    **({} if args.robust_check is None else {"robust_check": args.robust_check}),
                 )
                 seconds = time.process_time() - started - p.timings.get("physics", 0.0)
                 rows.append(

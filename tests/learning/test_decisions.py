@@ -11,6 +11,7 @@ from affordgrasp.learning.decisions import (
     oracle_hit_rate,
     oracle_order,
     random_measures,
+    robust_first,
     true_percentiles,
 )
 
@@ -132,3 +133,22 @@ def test_margin_order_takes_viable_then_feasible_then_the_widest_epsilon():
     assert margin_order([True] * 3, [0.0] * 3, [0.2] * 3).tolist() == [0, 1, 2]
     with pytest.raises(InputError):
         margin_order([True], [0.0, 1.0], [0.1])
+
+
+def test_robust_first_moves_the_most_often_viable_of_the_first_forward():
+    order = [4, 2, 0, 1, 3]
+    viable = [True, False, False, False, True]  # by candidate: 0 and 4 viable, 2 not
+    # the first three (4, 2, 0) re-simulated: 2 is the most robust but not viable itself,
+    # so the better of the viable ones (0) comes first; the rest keep their places
+    assert robust_first(order, viable, [0.5, 0.9, 0.75], 3).tolist() == [0, 4, 2, 1, 3]
+    # ties keep the order; NaN counts as 0
+    assert robust_first(order, viable, [0.5, 0.9, 0.5], 3).tolist() == order
+    assert robust_first(order, viable, [np.nan, 0.0, 0.25], 3).tolist() == [0, 4, 2, 1, 3]
+    # none of the first viable: the most robust of them
+    assert robust_first(order, [False] * 5, [0.1, 0.3, 0.2], 3).tolist() == [2, 4, 0, 1, 3]
+    # more checked than candidates: all of them
+    assert robust_first([1, 0], [True, True], [0.2, 0.4], 5).tolist() == [0, 1]
+    with pytest.raises(InputError):
+        robust_first(order, viable, [0.5, 0.9], 3)
+    with pytest.raises(InputError):
+        robust_first(order, viable, [], 0)

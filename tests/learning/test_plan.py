@@ -110,11 +110,8 @@ def test_plan_offset_range_scales_the_candidates_offsets_only(box_mesh, capsys):
 
 
 def test_plan_with_the_views_decides_on_the_surface_they_fuse_into(box_mesh, capsys):
-    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, models="views")
-    # the default decides so
-    q = ag.plan(str(box_mesh), "pick", candidates=12, seed=2)
-    assert q.rule == p.rule and q.order.tolist() == p.order.tolist()
-    assert p.probability is None and p.predicted is None
+    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, models="views", robust_check=0)
+    assert p.probability is None and p.predicted is None and p.fused_robust_viable is None
     assert p.fused_score.shape == (12,) and p.fused_viable.dtype == bool
     # viable on the fused surface first, then feasible there, then by its ε there
     key = [
@@ -161,3 +158,42 @@ def test_plan_with_the_views_fuses_what_a_sensor_returns(box_mesh, monkeypatch):
     assert sensed.fused_score.shape == (8,)
     # the fused surfaces differ, so their simulations do
     assert not np.array_equal(exact.fused_epsilon, sensed.fused_epsilon)
+
+
+def test_plan_with_the_views_checks_its_first_candidates_under_perturbation(
+    box_mesh, capsys, monkeypatch
+):
+    from affordgrasp.learning import plan as planning
+    from affordgrasp.learning.decisions import margin_order
+
+    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2)  # the default checks 4
+    margin = margin_order(p.fused_viable, p.fused_score, p.fused_epsilon)
+    checked = margin[:4]
+    r = p.fused_robust_viable
+    assert np.isfinite(r[checked]).all() and np.isnan(np.delete(r, checked)).all()
+    assert ((r[checked] >= 0) & (r[checked] <= 1)).all()
+    # the most often viable of the first four (of those viable on the fused surface), the
+    # others in the margin's order
+    pool = checked[p.fused_viable[checked]] if p.fused_viable[checked].any() else checked
+    assert p.chosen in pool and r[p.chosen] == r[pool].max()
+    assert p.order[1:].tolist() == [i for i in margin if i != p.chosen]
+    assert "the first 4" in p.rule
+    assert p.summary()["chosen"]["fused_robust_viable"] == r[p.chosen]
+    # unperturbed copies are the grasps themselves: robust viability is the fused viability,
+    # and the widest ε stays first
+    still = planning.RobustSettings(
+        copies=3, translation_m=0.0, rotation_rad=0.0, friction_sd=0.0, com_m=0.0, tasks=()
+    )
+    monkeypatch.setattr(planning, "ROBUST_CHECK_SETTINGS", still)
+    q = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, robust_check=6)
+    np.testing.assert_array_equal(
+        q.fused_robust_viable[margin[:6]], p.fused_viable[margin[:6]].astype(float)
+    )
+    assert q.order.tolist() == margin.tolist()
+    for bad in (-1, 1.5, True):
+        with pytest.raises(InputError, match="robust_check"):
+            ag.plan(str(box_mesh), candidates=2, robust_check=bad)
+    rc = main(["plan", str(box_mesh), "--candidates", "6", "--robust-check", "0", "--json"])
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["chosen"]["fused_robust_viable"] is None and "perturbations" not in doc["rule"]

@@ -7,7 +7,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import InputError, MissingDependencyError
-from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE
+from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE, PLAN_ROBUST_CHECK
 
 
 def add_arguments(p) -> None:
@@ -53,6 +53,15 @@ def add_arguments(p) -> None:
         metavar="R",
         help="the candidates' approach-line offsets (u4, u5) are drawn in [-R, R]^2 (default "
         f"{PLAN_OFFSET_RANGE}: near the object's centre; 1: uniform, as datasets are generated)",
+    )
+    p.add_argument(
+        "--robust-check",
+        type=int,
+        default=None,
+        metavar="N",
+        help="with --model views: re-simulate the first N candidates on the fused surface "
+        "under small perturbations and choose the most often viable (default "
+        f"{PLAN_ROBUST_CHECK}; 0: the widest epsilon as it is)",
     )
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     p.add_argument(
@@ -122,6 +131,7 @@ def run(args, out) -> None:
         threshold=args.threshold,
         sensor=_sensor(args),
         **({} if args.offset_range is None else {"offset_range": args.offset_range}),
+        **({} if args.robust_check is None else {"robust_check": args.robust_check}),
         progress=progress,
     )
     doc = result.summary()

@@ -196,6 +196,45 @@ def margin_order(viable: np.ndarray, score: np.ndarray, epsilon: np.ndarray) -> 
     return np.lexsort((-e, ~np.isfinite(s), ~v))  # lexsort is stable
 
 
+def robust_first(
+    order: np.ndarray, viable: np.ndarray, robust_viable: np.ndarray, checked: int
+) -> np.ndarray:
+    """An order's first candidates re-ranked by how often they stay viable under
+    perturbation.
+
+    The first ``checked`` candidates of ``order`` are compared by ``robust_viable`` (the
+    share of perturbed copies that are viable); where some of them are viable themselves,
+    only those can come first. The best of them moves to the front; every other candidate
+    keeps its place. Ties keep ``order``'s order.
+
+    Parameters
+    ----------
+    order : (n,) array_like of int
+        Candidates, best first (e.g. :func:`margin_order`).
+    viable : (n,) array_like of bool
+        Each candidate's own viability (indexed by candidate, not by rank).
+    robust_viable : (checked,) array_like of float
+        The robust viability of ``order[:checked]``, in that order (NaN counts as 0).
+    checked : int
+        How many of the first candidates were re-simulated (>= 1).
+
+    Returns
+    -------
+    (n,) int64 ndarray
+        ``order`` with the chosen one of its first ``checked`` candidates first.
+    """
+    o = np.asarray(order, dtype=np.int64).ravel()
+    v = np.asarray(viable, dtype=bool).ravel()
+    r = np.nan_to_num(np.asarray(robust_viable, dtype=np.float64).ravel(), nan=0.0)
+    m = min(int(checked), len(o))
+    if m < 1 or len(r) != m:
+        raise InputError(f"{len(r)} robust viabilities for the first {m} of {len(o)} candidates")
+    first = v[o[:m]]
+    score = np.where(first, r, -np.inf) if first.any() else r
+    best = int(np.lexsort((np.arange(m), -score))[0])  # the highest; the earliest of ties
+    return np.concatenate([o[best : best + 1], np.delete(o, best)])
+
+
 def random_measures(
     true_score: np.ndarray,
     viable: np.ndarray,

@@ -29,6 +29,7 @@ depth images and the poses (the fused surface is made from the images alone).
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -38,7 +39,8 @@ import numpy as np
 import pyarrow as pa
 
 from ..errors import InputError
-from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE
+from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE, PLAN_ROBUST_CHECK
+from ..robust import RobustSettings
 from .decisions import (
     decision_measures,
     decision_order,
@@ -46,6 +48,7 @@ from .decisions import (
     margin_order,
     oracle_order,
     random_measures,
+    robust_first,
     true_percentiles,
 )
 
@@ -58,6 +61,15 @@ FUSED_VIEWS = 64  # views fused at most (the first candidates'): carving costs p
 # depth noise, 0.5-0.8 mm, carves into the surface where two views suffice).
 SENSOR_UNKNOWN_PX = 6
 SENSOR_VOTES = 3
+# The perturbations of plan's robust check (grasp.pregrasp.PLAN_ROBUST_CHECK): half the
+# robust labels' hand-pose and centre-of-mass scales, K = 12 (docs/learning.md).
+ROBUST_CHECK_SETTINGS = RobustSettings(
+    copies=12,
+    translation_m=0.0025,
+    rotation_rad=math.radians(1.5),
+    com_m=0.00125,
+    tasks=(),
+)
 
 
 @dataclass(frozen=True)
@@ -112,6 +124,10 @@ class Plan:
         With ``models="views"``: viability simulated on the fused surface; else None.
     fused_epsilon : (n,) float64 ndarray or None
         With ``models="views"``: ε simulated on the fused surface; else None.
+    fused_robust_viable : (n,) float64 ndarray or None
+        With ``models="views"`` and ``robust_check``: the share of perturbed copies viable
+        on the fused surface, for the candidates re-simulated (NaN for the others); else
+        None.
     """
 
     object: str
@@ -134,6 +150,7 @@ class Plan:
     fused_score: np.ndarray | None = None
     fused_viable: np.ndarray | None = None
     fused_epsilon: np.ndarray | None = None
+    fused_robust_viable: np.ndarray | None = None
 
     def summary(self) -> dict:
         """The plan as JSON-ready data (without the per-candidate arrays).
@@ -161,6 +178,12 @@ class Plan:
                 "fused_viable": None if self.fused_viable is None else bool(self.fused_viable[c]),
                 "fused_epsilon": (
                     None if self.fused_epsilon is None else float(self.fused_epsilon[c])
+                ),
+                "fused_robust_viable": (
+                    None
+                    if self.fused_robust_viable is None
+                    or not np.isfinite(self.fused_robust_viable[c])
+                    else float(self.fused_robust_viable[c])
                 ),
                 "true_score": float(self.true_score[c]),
                 "viable": bool(self.viable[c]),
@@ -277,6 +300,7 @@ def plan(
     threshold: float | None = None,
     sensor=None,
     offset_range: float = OFFSET_RANGE,
+    robust_check: int = PLAN_ROBUST_CHECK,
     progress: Callable[[str], Any] | None = None,
 ) -> Plan:
     """Choose a grasp of an object from camera-in-hand views, and check the choice.
@@ -321,6 +345,13 @@ def plan(
         The candidates' approach-line offsets (u4, u5) lie in [-r, r]² (r in (0, 1]; the
         dataset's uniform draw scaled by r, so candidate i is the same draw whatever r).
         Default :data:`OFFSET_RANGE`; 1: uniform, as the datasets are generated.
+    robust_check : int
+        With ``models="views"``: how many of the first candidates on the fused surface are
+        simulated again there under :data:`ROBUST_CHECK_SETTINGS` (K perturbed copies of
+        the hand pose, friction and centre of mass, :mod:`affordgrasp.robust`); the most
+        often viable of them (among those viable there, if any) is chosen
+        (:func:`~affordgrasp.learning.decisions.robust_first`). 0: the first as it is.
+        Default 4 (``grasp.pregrasp.PLAN_ROBUST_CHECK``).
     progress : callable, optional
         Called with the name of each step as it starts.
 
@@ -352,6 +383,10 @@ def plan(
         raise InputError(f"offset_range must be a number in (0, 1], got {offset_range!r}") from None
     if not 0.0 < offset_range <= 1.0:  # NaN fails too
         raise InputError(f"offset_range must be in (0, 1] (1: uniform), got {offset_range!r}")
+    if isinstance(robust_check, bool) or not isinstance(robust_check, int | np.integer):
+        raise InputError(f"robust_check must be an integer >= 0, got {robust_check!r}")
+    if robust_check < 0:
+        raise InputError(f"robust_check must be an integer >= 0, got {robust_check}")
     task_obj = get_task(task)
     task_obj.thresholds_for(mode)  # an unknown mode fails before any work
     step = progress or (lambda name: None)
@@ -378,6 +413,7 @@ def plan(
     timings["render"] = time.perf_counter() - t0
 
     probability = predicted = fused_score = fused_viable = fused_epsilon = None
+    fused_robust_viable = None
     if views:
         from ..vision.fusion import VOTES as FUSION_VOTES
         from ..vision.fusion import fused_object
@@ -409,12 +445,31 @@ def plan(
         fused_viable = is_viable(on_fused)
         fused_epsilon = on_fused.column("epsilon").to_numpy(zero_copy_only=False)
         order = margin_order(fused_viable, fused_score, fused_epsilon)
-        timings["predict"] = time.perf_counter() - t0
         rule = (
             f"on the surface fused from {k} view{'' if k == 1 else 's'}: viable, then "
             f"{task_obj.name}-feasible, "
             "then the widest epsilon"
         )
+        m = min(int(robust_check), n)
+        if m > 0:
+            top = order[:m]
+            copies = evaluate_inputs(
+                fused,
+                p0[top],
+                use_dir[top],
+                hand=hand,
+                seed=seed,
+                robust=ROBUST_CHECK_SETTINGS,
+                frame=obj,
+            ).table
+            fused_robust_viable = np.full(n, np.nan)
+            fused_robust_viable[top] = copies.column("robust_viable").to_numpy(zero_copy_only=False)
+            order = robust_first(order, fused_viable, fused_robust_viable[top], m)
+            rule += (
+                f"; of the first {m}, the most often viable under "
+                f"{ROBUST_CHECK_SETTINGS.copies} perturbations there"
+            )
+        timings["predict"] = time.perf_counter() - t0
     else:
         step("predict")
         t0 = time.perf_counter()
@@ -468,6 +523,7 @@ def plan(
         fused_score=fused_score,
         fused_viable=fused_viable,
         fused_epsilon=fused_epsilon,
+        fused_robust_viable=fused_robust_viable,
     )
 
 
