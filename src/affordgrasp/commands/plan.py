@@ -33,8 +33,9 @@ def add_arguments(p) -> None:
         "--model",
         default="views",
         help="views (the default; no learned model: the first 64 candidates' views fused "
-        "into a surface, every candidate simulated on it, the viable one with the widest "
-        "epsilon there chosen; needs scikit-image), classifier (the shipped classifier "
+        "into a surface, every candidate simulated on it, of the viable ones with the widest "
+        "epsilon there the most robust to small perturbations chosen; needs scikit-image), "
+        "classifier (the shipped classifier "
         "alone: the most probably viable candidate), default (shipped classifier + "
         "regressor: the classifier's threshold, then least predicted effort), regressor, "
         "or model files separated by commas (at most one classifier and one regressor)",
