@@ -372,7 +372,7 @@ def plan(
     from ..objects import load_object
     from ..pipeline import evaluate_inputs
     from ..tasks import get_task, is_viable
-    from ..vision.depth import depth_from_mm, depth_to_mm, renderer_for
+    from ..vision.depth import depth_to_mm, renderer_for
     from .data import Samples
 
     if isinstance(candidates, bool) or not isinstance(candidates, int | np.integer):
@@ -419,25 +419,10 @@ def plan(
     probability = predicted = fused_score = fused_viable = fused_epsilon = None
     fused_robust_viable = None
     if views:
-        from ..vision.fusion import VOTES as FUSION_VOTES
-        from ..vision.fusion import fused_object
-
         step("fuse")
         t0 = time.perf_counter()
-        # the images as the models would see them: millimetres, as a dataset stores them
-        seen = depth_from_mm(depth_mm)
-        fused = fused_object(
-            seen,
-            renderer.poses(p0[:k]),
-            renderer.camera,
-            name=obj.name,
-            # one view: what it saw, solid behind
-            votes=min(FUSION_VOTES if sensor is None else SENSOR_VOTES, k),
-            unknown_px=0 if sensor is None else SENSOR_UNKNOWN_PX,
-            # a sensor's noise makes the nearest of four pixels and the voxels of single
-            # returns no better (and a noisy wall's seen voxels not always closed)
-            subpixel=sensor is None,
-            keep_seen=sensor is None,
+        fused = fuse_candidate_views(
+            depth_mm, renderer.poses(p0[:k]), renderer.camera, obj.name, sensed=sensor is not None
         )
         timings["fuse"] = time.perf_counter() - t0
         step("predict")
@@ -528,6 +513,50 @@ def plan(
         fused_viable=fused_viable,
         fused_epsilon=fused_epsilon,
         fused_robust_viable=fused_robust_viable,
+    )
+
+
+def fuse_candidate_views(depth_mm, poses, camera, name: str, *, sensed: bool = False):
+    """The surface ``plan`` decides on: candidates' depth images fused with its settings.
+
+    Parameters
+    ----------
+    depth_mm : (k, size, size) uint16 ndarray
+        The images in millimetres, as a dataset stores them and the models see them.
+    poses : (k, 4, 4) float ndarray
+        Their camera → object transforms, m.
+    camera : DepthCamera
+        Their camera.
+    name : str
+        The fused object's name.
+    sensed : bool
+        The images are a sensor model's: lost returns next to a return are unknown and
+        three votes carve (:data:`SENSOR_UNKNOWN_PX`, :data:`SENSOR_VOTES`), with the 3 × 3
+        filter alone; else the nearest of four pixels and the seen voxels kept
+        (docs/learning.md).
+
+    Returns
+    -------
+    GraspObject
+        :func:`affordgrasp.vision.fusion.fused_object` of the views.
+    """
+    from ..vision.depth import depth_from_mm
+    from ..vision.fusion import VOTES as FUSION_VOTES
+    from ..vision.fusion import fused_object
+
+    k = len(depth_mm)
+    return fused_object(
+        depth_from_mm(depth_mm),
+        poses,
+        camera,
+        name=name,
+        # one view: what it saw, solid behind
+        votes=min(SENSOR_VOTES if sensed else FUSION_VOTES, k),
+        unknown_px=SENSOR_UNKNOWN_PX if sensed else 0,
+        # a sensor's noise makes the nearest of four pixels and the voxels of single
+        # returns no better (and a noisy wall's seen voxels not always closed)
+        subpixel=not sensed,
+        keep_seen=not sensed,
     )
 
 

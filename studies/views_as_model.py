@@ -1,0 +1,166 @@
+"""The fused views judged as a model: how well does simulating a grasp on the surface fused
+from ``plan``'s views predict its true viability and robust hold, grasp by grasp?
+
+    python studies/views_as_model.py --variants 5,6 --calibrate 7 --json views_model.json
+
+For every object: ``plan``'s first 64 views (plan seed 0, its offsets near the centre) are
+fused into a surface as ``plan`` fuses them; the held-out rows are uniform samples (the
+dataset's draw, ``--sample-seed``, one shared stream: the same poses on every object),
+simulated on the true object with ``--robust`` perturbed copies (the truth) and on the
+fused surface with the same copies (the prediction). Reported as the learned models are
+(docs/learning.md, "Raw vs robust targets"), pooled and within each object:
+
+* classifier: the probability of ``viable`` is the share of the fused surface's copies
+  that are viable (``robust_viable`` there), ties broken by the fused ε; average precision
+  at the natural rate and the expected calibration error, raw and after a calibration map
+  fitted on the ``--calibrate`` objects (the share truly viable in each of 10 bins of the
+  fused probability);
+* ranker: the fused ``robust_hold`` as a prediction of the true ``robust_hold`` (and the
+  fused ΣE_h of the true ΣE_h on the truly viable rows): comparison accuracy and E[GMS]
+  within each object, then the mean.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+
+def object_rows(name: str, *, samples: int, sample_seed: int, copies: int) -> dict:
+    """The truth and the fused surface's prediction for one object's rows."""
+    from affordgrasp.grasp.pregrasp import PLAN_OFFSET_RANGE, sample_inputs
+    from affordgrasp.learning.plan import FUSED_VIEWS, fuse_candidate_views
+    from affordgrasp.objects import load_object
+    from affordgrasp.pipeline import evaluate_inputs
+    from affordgrasp.tasks import is_viable
+    from affordgrasp.vision.depth import depth_to_mm, renderer_for
+
+    obj = load_object(name)
+    views, _ = sample_inputs(0, 0, FUSED_VIEWS)  # plan's candidates, seed 0
+    views[:, 3:5] *= PLAN_OFFSET_RANGE
+    renderer = renderer_for(obj)
+    fused = fuse_candidate_views(
+        depth_to_mm(renderer.render(views)), renderer.poses(views), renderer.camera, name
+    )
+    p0, use_dir = sample_inputs(sample_seed, 0, samples)
+    out = {}
+    for key, target, frame in (("true", obj, None), ("fused", fused, obj)):
+        table = evaluate_inputs(target, p0, use_dir, robust=copies, frame=frame).table
+        out[f"{key}_viable"] = is_viable(table)
+        for column in ("epsilon", "robust_viable", "robust_hold"):
+            out[f"{key}_{column}"] = table.column(column).to_numpy(zero_copy_only=False)
+        effort = sum(
+            table.column(f"hold_effort_{a}").to_numpy(zero_copy_only=False)
+            for a in ("px", "nx", "py", "ny", "pz", "nz")
+        )
+        out[f"{key}_effort"] = effort
+    return out
+
+
+def probability(rows: dict) -> np.ndarray:
+    """The fused surface's share of viable copies, ties broken by its ε (within 1e-6)."""
+    eps = np.nan_to_num(rows["fused_epsilon"], nan=0.0)
+    return np.nan_to_num(rows["fused_robust_viable"], nan=0.0) + 1e-6 * np.tanh(eps)
+
+
+def fit_bins(p: np.ndarray, label: np.ndarray, bins: int = 10) -> np.ndarray:
+    """The share of positives in each of ``bins`` equal bins of p (the bin's centre where
+    empty)."""
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    idx = np.clip(np.digitize(p, edges) - 1, 0, bins - 1)
+    rate = (edges[:-1] + edges[1:]) / 2
+    for b in range(bins):
+        m = idx == b
+        if m.any():
+            rate[b] = label[m].mean()
+    return rate
+
+
+def apply_bins(p: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    edges = np.linspace(0.0, 1.0, len(rate) + 1)
+    return rate[np.clip(np.digitize(p, edges) - 1, 0, len(rate) - 1)]
+
+
+def main() -> None:
+    from affordgrasp.learning.decision_eval import within_object
+    from affordgrasp.learning.evaluation import comparison_accuracy, gms_distribution
+    from affordgrasp.objects import list_families
+    from affordgrasp.stats import average_precision, expected_calibration_error
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--variants", default="5,6", help="held-out variants (comma-separated)")
+    ap.add_argument("--calibrate", default="7", help="variants the calibration map is fit on")
+    ap.add_argument("--families", help="only these families (comma-separated; default all)")
+    ap.add_argument("--samples", type=int, default=512, help="uniform rows per object")
+    ap.add_argument("--sample-seed", type=int, default=1)
+    ap.add_argument("--robust", type=int, default=25, help="perturbed copies K")
+    ap.add_argument("--json", help="write the numbers to this file")
+    args = ap.parse_args()
+    families = args.families.split(",") if args.families else list_families()
+
+    def collect(variants: str) -> dict[str, dict]:
+        rows = {}
+        for family in families:
+            for v in variants.split(","):
+                name = f"{family}:{v}"
+                t0 = time.process_time()
+                rows[name] = object_rows(
+                    name, samples=args.samples, sample_seed=args.sample_seed, copies=args.robust
+                )
+                print(f"{name}: {time.process_time() - t0:.1f} CPU s", flush=True)
+        return rows
+
+    calib = collect(args.calibrate)
+    held = collect(args.variants)
+    cat = lambda rows, key: np.concatenate([r[key] for r in rows.values()])  # noqa: E731
+    rate = fit_bins(
+        np.concatenate([probability(r) for r in calib.values()]), cat(calib, "true_viable")
+    )
+    objects = np.concatenate([[n] * len(r["true_viable"]) for n, r in held.items()])
+    p = np.concatenate([probability(r) for r in held.values()])
+    report: dict = {"objects": len(held), "rows": len(p), "calibration_bins": rate.tolist()}
+    for label_name, label in (
+        ("viable", cat(held, "true_viable").astype(float)),
+        ("robust viable>=0.5", (cat(held, "true_robust_viable") >= 0.5).astype(float)),
+    ):
+        calibrated = apply_bins(p, rate)
+        report[label_name] = {
+            "rate": float(label.mean()),
+            "ap": average_precision(label, p),
+            "ap_within": within_object(objects, label, p, kind="classification")[
+                "average_precision"
+            ],
+            "ece_raw": expected_calibration_error(label, p),
+            "ece_calibrated": expected_calibration_error(label, calibrated),
+        }
+    truth = cat(held, "true_robust_hold")
+    pred = cat(held, "fused_robust_hold")
+    w = within_object(objects, truth, pred, kind="regression", lower_is_better=False)
+    g = gms_distribution(truth, pred, lower_is_better=False, n_subsets=1000)
+    report["robust_hold"] = {
+        "within_comparison": w["comparison_accuracy"],
+        "within_expected_gms": w["expected_gms"],
+        "within_random_gms": w["random_expected_gms"],
+        "pooled_comparison": comparison_accuracy(truth, pred),
+        "pooled_expected_gms": float(np.mean(g)),
+    }
+    ok = cat(held, "true_viable")
+    truth_e, pred_e = cat(held, "true_effort")[ok], cat(held, "fused_effort")[ok]
+    pred_e = np.where(np.isfinite(pred_e), pred_e, np.inf)
+    w = within_object(objects[ok], truth_e, np.nan_to_num(pred_e, posinf=1e9), kind="regression")
+    report["effort_on_viable_rows"] = {
+        "rows": int(ok.sum()),
+        "within_comparison": w["comparison_accuracy"],
+        "within_expected_gms": w["expected_gms"],
+    }
+    print(json.dumps(report, indent=1))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(report, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
