@@ -1,9 +1,9 @@
 """The fused views judged as a model: how well does simulating a grasp on the surface fused
 from ``plan``'s views predict its true viability and robust hold, grasp by grasp?
 
-    python studies/views_as_model.py --variants 5,6 --calibrate 7 --json views_model.json
+    python studies/views_as_model.py --variants 5,6 --calibrate 7 --views 64 --json views_model.json
 
-For every object: ``plan``'s first 64 views (plan seed 0, its offsets near the centre) are
+For every object: ``plan``'s first ``--views`` views (plan seed 0, its offsets near the centre) are
 fused into a surface as ``plan`` fuses them; the held-out rows are uniform samples (the
 dataset's draw, ``--sample-seed``, one shared stream: the same poses on every object),
 simulated on the true object with ``--robust`` perturbed copies (the truth) and on the
@@ -29,21 +29,21 @@ import time
 import numpy as np
 
 
-def object_rows(name: str, *, samples: int, sample_seed: int, copies: int) -> dict:
+def object_rows(name: str, *, samples: int, sample_seed: int, copies: int, views: int) -> dict:
     """The truth and the fused surface's prediction for one object's rows."""
     from affordgrasp.grasp.pregrasp import PLAN_OFFSET_RANGE, sample_inputs
-    from affordgrasp.learning.plan import FUSED_VIEWS, fuse_candidate_views
+    from affordgrasp.learning.plan import fuse_candidate_views
     from affordgrasp.objects import load_object
     from affordgrasp.pipeline import evaluate_inputs
     from affordgrasp.tasks import is_viable
     from affordgrasp.vision.depth import depth_to_mm, renderer_for
 
     obj = load_object(name)
-    views, _ = sample_inputs(0, 0, FUSED_VIEWS)  # plan's candidates, seed 0
-    views[:, 3:5] *= PLAN_OFFSET_RANGE
+    seen, _ = sample_inputs(0, 0, views)  # plan's first candidates, seed 0
+    seen[:, 3:5] *= PLAN_OFFSET_RANGE
     renderer = renderer_for(obj)
     fused = fuse_candidate_views(
-        depth_to_mm(renderer.render(views)), renderer.poses(views), renderer.camera, name
+        depth_to_mm(renderer.render(seen)), renderer.poses(seen), renderer.camera, name
     )
     p0, use_dir = sample_inputs(sample_seed, 0, samples)
     out = {}
@@ -87,6 +87,7 @@ def apply_bins(p: np.ndarray, rate: np.ndarray) -> np.ndarray:
 def main() -> None:
     from affordgrasp.learning.decision_eval import within_object
     from affordgrasp.learning.evaluation import comparison_accuracy, gms_distribution
+    from affordgrasp.learning.plan import FUSED_VIEWS
     from affordgrasp.objects import list_families
     from affordgrasp.stats import average_precision, expected_calibration_error
 
@@ -97,6 +98,9 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=512, help="uniform rows per object")
     ap.add_argument("--sample-seed", type=int, default=1)
     ap.add_argument("--robust", type=int, default=25, help="perturbed copies K")
+    ap.add_argument(
+        "--views", type=int, default=FUSED_VIEWS, help=f"views fused (default {FUSED_VIEWS})"
+    )
     ap.add_argument("--json", help="write the numbers to this file")
     args = ap.parse_args()
     families = args.families.split(",") if args.families else list_families()
@@ -108,7 +112,11 @@ def main() -> None:
                 name = f"{family}:{v}"
                 t0 = time.process_time()
                 rows[name] = object_rows(
-                    name, samples=args.samples, sample_seed=args.sample_seed, copies=args.robust
+                    name,
+                    samples=args.samples,
+                    sample_seed=args.sample_seed,
+                    copies=args.robust,
+                    views=args.views,
                 )
                 print(f"{name}: {time.process_time() - t0:.1f} CPU s", flush=True)
         return rows
