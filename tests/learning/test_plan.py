@@ -197,3 +197,14 @@ def test_plan_with_the_views_checks_its_first_candidates_under_perturbation(
     assert rc == 0, capsys.readouterr().err
     doc = json.loads(capsys.readouterr().out)
     assert doc["chosen"]["fused_robust_viable"] is None and "perturbations" not in doc["rule"]
+
+
+def test_plan_says_when_no_candidate_is_viable_on_the_fused_surface(box_mesh, capsys):
+    # one candidate, one view: seed 1's is not viable on the surface that view fuses into,
+    # seed 3's is
+    for seed, warned in ((1, True), (3, False)):
+        p = ag.plan(str(box_mesh), "pick", candidates=1, seed=seed)
+        assert bool(p.fused_viable[0]) is not warned
+        assert main(["plan", str(box_mesh), "--candidates", "1", "--seed", str(seed)]) == 0
+        err = capsys.readouterr().err
+        assert ("no candidate is viable on the fused surface" in err) is warned

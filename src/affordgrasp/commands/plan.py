@@ -175,6 +175,14 @@ def run(args, out) -> None:
         out.text(
             f"on the fused surface: task score {c['fused_score']:.4g}, viable {c['fused_viable']}"
         )
+    if c["fused_viable"] is False:
+        # measured on unseen objects (docs/learning.md): a choice viable on the fused surface
+        # was truly viable in 0.95 of the decisions, one that was not in 0.1
+        print(
+            "plan: no candidate is viable on the fused surface, so the choice is probably not "
+            "viable either; draw more candidates (--candidates) or another seed (--seed)",
+            file=sys.stderr,
+        )
     if doc["physics"] is not None:
         ph = doc["physics"]
         out.text(
