@@ -97,6 +97,30 @@ def test_zero_perturbation_gives_the_plain_metrics_exactly(hammer, hammer_batch)
         np.testing.assert_array_equal(r3[name], r[name])
 
 
+def test_zero_perturbation_of_grasps_placed_by_another_surface(hammer):
+    # simulate(..., frame=) places the pregrasps by another surface's hull (a fused one in
+    # plan); unperturbed copies must start from those poses too, not from the object's own
+    mesh = hammer.mesh.copy()
+    mesh.apply_transform(trimesh.transformations.scale_matrix(1.04, [0.01, 0.005, 0.0]))
+    other = as_object(mesh, "a larger hammer")
+    p0, d = sample_inputs(0, 0, 40)
+    batch = simulate(hammer, p0, d, hand="barrett", frame=other)
+    phi = phi_of_batch(hammer, batch, volume=False)
+    zero = RobustSettings(copies=1, **ZERO)
+    r = robust_columns(hammer, batch, zero, hand="barrett", phi=phi, frame=other)
+    np.testing.assert_array_equal(r["robust_epsilon"], phi["epsilon"])
+    np.testing.assert_array_equal(r["robust_viable"], is_viable(phi).astype(float))
+    # placed by the object's own hull the copies are other grasps
+    own = robust_columns(hammer, batch, zero, hand="barrett", phi=phi)
+    assert not np.array_equal(own["robust_epsilon"], phi["epsilon"])
+    # and through evaluate_inputs
+    t = evaluate_inputs(hammer, p0, d, robust=zero, frame=other).table
+    np.testing.assert_array_equal(
+        t.column("robust_epsilon").to_numpy(zero_copy_only=False),
+        t.column("epsilon").to_numpy(zero_copy_only=False),
+    )
+
+
 def test_graded_hold_orders_by_directions_then_effort(hammer, hammer_batch):
     batch, phi = hammer_batch
     k = 1

@@ -150,8 +150,8 @@ def evaluate_inputs(
         ``robust_*`` columns after the metric columns. An int is K with the default
         perturbations; None or 0: plain evaluation, the same table as without it.
     frame : GraspObject, optional
-        The object whose geometry places the pregrasps (default: ``obj``; see
-        :func:`~affordgrasp.grasp.policy.simulate`).
+        The object whose geometry places the pregrasps, and the robust copies' starts
+        (default: ``obj``; see :func:`~affordgrasp.grasp.policy.simulate`).
 
     Returns
     -------
@@ -167,7 +167,7 @@ def evaluate_inputs(
     t2 = time.perf_counter()
     extra = None
     if settings is not None and phi is not None:
-        extra = robust_columns(obj, batch, settings, hand=hand, phi=phi, soft=soft)
+        extra = robust_columns(obj, batch, settings, hand=hand, phi=phi, soft=soft, frame=frame)
     t3 = time.perf_counter()
     table = batch_to_table(
         obj, batch, hand=hand.name, seed=seed, sample_start=sample_start, metrics=phi

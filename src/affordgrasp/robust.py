@@ -429,6 +429,7 @@ def robust_columns(
     phi: dict | None = None,
     soft: bool = False,
     timings: dict | None = None,
+    frame=None,
 ) -> dict[str, np.ndarray]:
     """The ``robust_*`` columns (and ``hold_dirs``) of simulated grasps.
 
@@ -451,6 +452,9 @@ def robust_columns(
     timings : dict, optional
         Filled with the seconds spent simulating the copies (``simulate``), on their
         metrics (``metrics``) and summarising them (``summary``).
+    frame : GraspObject, optional
+        The object whose geometry placed the batch's pregrasps (``simulate(..., frame=)``):
+        the copies start from the same poses, perturbed; None: ``obj`` itself.
 
     Returns
     -------
@@ -477,7 +481,8 @@ def robust_columns(
         return out
     geom = object_geometry(obj)
     draws = perturbations(settings)
-    starts, travel = pregrasp_starts(hand, geom, batch.p0)
+    placing = None if frame is None else object_geometry(frame)
+    starts, travel = pregrasp_starts(hand, geom, batch.p0, placing)
     # pivot: where the unperturbed palm stopped, along the approach (centred frame)
     z = starts[:, :3, 2]
     start_origin = starts[:, :3, 3]

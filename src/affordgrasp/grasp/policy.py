@@ -621,7 +621,7 @@ def simulate_starts(
 
 
 def pregrasp_starts(
-    hand: Hand, geom: ObjectGeometry, p0: np.ndarray
+    hand: Hand, geom: ObjectGeometry, p0: np.ndarray, placing: ObjectGeometry | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Start poses (centred frame of ``geom``) and approach lengths of pregrasps.
 
@@ -631,17 +631,24 @@ def pregrasp_starts(
     geom : ObjectGeometry
     p0 : (n, 6) float64 ndarray
         Valid pregrasps.
+    placing : ObjectGeometry, optional
+        The geometry whose hull places the pregrasps (``simulate(..., frame=)``), in the same
+        mesh frame as ``geom``; None: ``geom`` itself.
 
     Returns
     -------
     starts : (n, 4, 4) float64 ndarray
-        Hand → centred frame, m.
+        Hand → centred frame of ``geom``, m.
     travel : (n,) float64 ndarray
         m.
     """
     # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all.
     reach = max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
-    return start_poses(p0, geom.hull_vertices, reach)
+    if placing is None:
+        return start_poses(p0, geom.hull_vertices, reach)
+    starts, travel = start_poses(p0, placing.hull_vertices, reach)
+    starts[:, :3, 3] += placing.origin - geom.origin  # its centred frame to geom's
+    return starts, travel
 
 
 def _simulate_centred(
@@ -723,12 +730,8 @@ def simulate(
         upts, unrm, utri = use_points(geom.mesh, obj.mass.center_of_mass - geom.origin, use_dir)
         upts += geom.origin
     started = time.perf_counter()
-    if frame is None:
-        starts, travel = pregrasp_starts(hand, geom, p0)
-    else:
-        placing = object_geometry(frame)
-        starts, travel = pregrasp_starts(hand, placing, p0)
-        starts[:, :3, 3] += placing.origin - geom.origin  # its centred frame to obj's
+    placing = None if frame is None else object_geometry(frame)
+    starts, travel = pregrasp_starts(hand, geom, p0, placing)
     status, poses, joints, contacts = _simulate_centred(
         hand, geom, starts, travel, p0[:, 5], object_material
     )
