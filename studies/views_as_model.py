@@ -124,18 +124,23 @@ def main() -> None:
     calib = collect(args.calibrate)
     held = collect(args.variants)
     cat = lambda rows, key: np.concatenate([r[key] for r in rows.values()])  # noqa: E731
-    rate = fit_bins(
-        np.concatenate([probability(r) for r in calib.values()]), cat(calib, "true_viable")
-    )
+    p_calib = np.concatenate([probability(r) for r in calib.values()])
     objects = np.concatenate([[n] * len(r["true_viable"]) for n, r in held.items()])
     p = np.concatenate([probability(r) for r in held.values()])
-    report: dict = {"objects": len(held), "rows": len(p), "calibration_bins": rate.tolist()}
-    for label_name, label in (
-        ("viable", cat(held, "true_viable").astype(float)),
-        ("robust viable>=0.5", (cat(held, "true_robust_viable") >= 0.5).astype(float)),
-    ):
+    report: dict = {"objects": len(held), "rows": len(p)}
+
+    def labels(rows: dict[str, dict]) -> dict[str, np.ndarray]:
+        return {
+            "viable": cat(rows, "true_viable").astype(float),
+            "robust viable>=0.5": (cat(rows, "true_robust_viable") >= 0.5).astype(float),
+        }
+
+    calib_labels = labels(calib)
+    for label_name, label in labels(held).items():
+        rate = fit_bins(p_calib, calib_labels[label_name])  # a map per label
         calibrated = apply_bins(p, rate)
         report[label_name] = {
+            "calibration_bins": rate.tolist(),
             "rate": float(label.mean()),
             "ap": average_precision(label, p),
             "ap_within": within_object(objects, label, p, kind="classification")[

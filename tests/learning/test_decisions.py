@@ -146,6 +146,8 @@ def test_robust_first_moves_the_most_often_viable_of_the_first_forward():
     assert robust_first(order, viable, [np.nan, 0.0, 0.25], 3).tolist() == [0, 4, 2, 1, 3]
     # none of the first viable: the most robust of them
     assert robust_first(order, [False] * 5, [0.1, 0.3, 0.2], 3).tolist() == [2, 4, 0, 1, 3]
+    # one checked: the order as it is
+    assert robust_first(order, viable, [0.0], 1).tolist() == order
     # more checked than candidates: all of them
     assert robust_first([1, 0], [True, True], [0.2, 0.4], 5).tolist() == [0, 1]
     with pytest.raises(InputError):

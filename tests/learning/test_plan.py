@@ -197,6 +197,9 @@ def test_plan_with_the_views_checks_its_first_candidates_under_perturbation(
     assert rc == 0, capsys.readouterr().err
     doc = json.loads(capsys.readouterr().out)
     assert doc["chosen"]["fused_robust_viable"] is None and "perturbations" not in doc["rule"]
+    # learned models have no fused surface to check on
+    assert main(["plan", str(box_mesh), "--model", "classifier", "--robust-check", "2"]) == 2
+    assert "--model views" in capsys.readouterr().err
 
 
 def test_plan_says_when_no_candidate_is_viable_on_the_fused_surface(box_mesh, capsys):

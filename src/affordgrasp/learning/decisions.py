@@ -213,10 +213,10 @@ def robust_first(
         Candidates, best first (e.g. :func:`margin_order`).
     viable : (n,) array_like of bool
         Each candidate's own viability (indexed by candidate, not by rank).
-    robust_viable : (checked,) array_like of float
+    robust_viable : (min(checked, n),) array_like of float
         The robust viability of ``order[:checked]``, in that order (NaN counts as 0).
     checked : int
-        How many of the first candidates were re-simulated (>= 1).
+        How many of the first candidates were re-simulated (>= 1; at most n count).
 
     Returns
     -------

@@ -533,10 +533,10 @@ def fuse_candidate_views(depth_mm, poses, camera, name: str, *, sensed: bool = F
     name : str
         The fused object's name.
     sensed : bool
-        The images are a sensor model's: lost returns next to a return are unknown and
-        three votes carve (:data:`SENSOR_UNKNOWN_PX`, :data:`SENSOR_VOTES`), with the 3 × 3
-        filter alone; else the nearest of four pixels and the seen voxels kept
-        (docs/learning.md).
+        False (the default): exact images, fused with the nearest of four pixels and the
+        seen voxels kept. True: a sensor model's images: lost returns next to a return are
+        unknown and three votes carve (:data:`SENSOR_UNKNOWN_PX`, :data:`SENSOR_VOTES`),
+        with the 3 × 3 filter alone (docs/learning.md).
 
     Returns
     -------
