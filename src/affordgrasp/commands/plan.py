@@ -182,7 +182,7 @@ def run(args, out) -> None:
         )
     if c["fused_viable"] is False:
         # measured on unseen objects (docs/learning.md): a choice viable on the fused surface
-        # was truly viable in 0.95 of the decisions, one that was not in 0.1
+        # was truly viable in 0.92 of the decisions, one that was not in none of 10
         print(
             "plan: no candidate is viable on the fused surface, so the choice is probably not "
             "viable either; draw more candidates (--candidates) or another seed (--seed)",

@@ -328,7 +328,7 @@ def plan(
         :func:`~affordgrasp.learning.decisions.margin_order` on that simulation: viable
         there first, then task-feasible, by decreasing ε, the first ``robust_check`` of
         them checked under perturbation (needs scikit-image, the ``learn`` extra; with 256
-        candidates it chose a viable grasp in 0.90 of the decisions on unseen objects, the
+        candidates it chose a viable grasp in 0.885 of the decisions on unseen objects, the
         shipped classifier in 0.37, docs/learning.md).
         ``"classifier"``: the shipped classifier alone, the most probably viable candidate
         first. ``"default"``: the shipped classifier and regressor, the classifier's
