@@ -31,6 +31,7 @@ import numpy as np
 
 def object_rows(name: str, *, samples: int, sample_seed: int, copies: int, views: int) -> dict:
     """The truth and the fused surface's prediction for one object's rows."""
+    from affordgrasp.columns import HOLD_EFFORT_COLUMNS, hold_effort_sum
     from affordgrasp.grasp.pregrasp import PLAN_OFFSET_RANGE, sample_inputs
     from affordgrasp.learning.plan import fuse_candidate_views
     from affordgrasp.objects import load_object
@@ -52,11 +53,9 @@ def object_rows(name: str, *, samples: int, sample_seed: int, copies: int, views
         out[f"{key}_viable"] = is_viable(table)
         for column in ("epsilon", "robust_viable", "robust_hold"):
             out[f"{key}_{column}"] = table.column(column).to_numpy(zero_copy_only=False)
-        effort = sum(
-            table.column(f"hold_effort_{a}").to_numpy(zero_copy_only=False)
-            for a in ("px", "nx", "py", "ny", "pz", "nz")
+        out[f"{key}_effort"] = hold_effort_sum(
+            {c: table.column(c).to_numpy(zero_copy_only=False) for c in HOLD_EFFORT_COLUMNS}
         )
-        out[f"{key}_effort"] = effort
     return out
 
 
@@ -69,19 +68,18 @@ def probability(rows: dict) -> np.ndarray:
 def fit_bins(p: np.ndarray, label: np.ndarray, bins: int = 10) -> np.ndarray:
     """The share of positives in each of ``bins`` equal bins of p (the bin's centre where
     empty)."""
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    idx = np.clip(np.digitize(p, edges) - 1, 0, bins - 1)
-    rate = (edges[:-1] + edges[1:]) / 2
-    for b in range(bins):
-        m = idx == b
-        if m.any():
-            rate[b] = label[m].mean()
-    return rate
+    from affordgrasp.stats import reliability_bins
+
+    r = reliability_bins(label, p, bins=bins)
+    centres = (r["edges"][:-1] + r["edges"][1:]) / 2
+    return np.where(r["count"] > 0, r["positive_rate"], centres)
 
 
 def apply_bins(p: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    """The calibrated probability: the rate of the bin p falls in (as
+    :func:`~affordgrasp.stats.reliability_bins` bins it)."""
     edges = np.linspace(0.0, 1.0, len(rate) + 1)
-    return rate[np.clip(np.digitize(p, edges) - 1, 0, len(rate) - 1)]
+    return rate[np.clip(np.searchsorted(edges, p, side="right") - 1, 0, len(rate) - 1)]
 
 
 def main() -> None:

@@ -96,15 +96,15 @@ def run(args, out) -> None:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
     check_fits_in_memory("--candidates", args.candidates, CANDIDATE_BYTES)
     models = args.model.split(",") if "," in args.model else args.model
-    if args.robust_check is not None and models != "views":
-        raise InputError(
-            "--robust-check re-simulates candidates on the fused views' surface: it needs "
-            "--model views (the default)"
-        )
     try:
         from ..learning.plan import VIEWS, plan
         from ..learning.torch_support import require_safetensors, require_torch
 
+        if args.robust_check is not None and models != VIEWS:
+            raise InputError(
+                "--robust-check re-simulates candidates on the fused views' surface: it needs "
+                "--model views (the default)"
+            )
         if models == VIEWS:
             from ..vision.fusion import require_marching_cubes
 
