@@ -39,7 +39,8 @@ def main() -> None:
         "--scan", action="store_true", help="the scan-like variants (knife:5~scan) instead"
     )
     ap.add_argument("--families", help="only these families (comma-separated; default all)")
-    ap.add_argument("--robust-check", type=int, help="plan's robust_check (default: plan's own, 4)")
+    ap.add_argument("--robust-check", type=int, help="plan's robust_check (default: plan's own)")
+    ap.add_argument("--refine", type=int, help="plan's refine (default: plan's own)")
     ap.add_argument("--json", help="write every decision to this file")
     args = ap.parse_args()
     variants = [int(v) for v in args.variants.split(",")]
@@ -64,15 +65,20 @@ def main() -> None:
                     physics=args.physics,
                     sensor=sensor,
                     **({} if args.robust_check is None else {"robust_check": args.robust_check}),
+                    **({} if args.refine is None else {"refine": args.refine}),
                 )
+                drawn = len(p.p0) if p.drawn is None else p.drawn
                 seconds = time.process_time() - started - p.timings.get("physics", 0.0)
                 rows.append(
                     {
                         "object": p.object,
                         "seed": seed,
                         "viable": bool(p.viable[p.chosen]),
+                        # the refined candidates are drawn near the best ones: the oracle
+                        # counts them, a random choice is among the drawn ones
                         "oracle": bool(p.viable.any()),
-                        "random": float(p.viable.mean()),
+                        "oracle_drawn": bool(p.viable[:drawn].any()),
+                        "random": float(p.viable[:drawn].mean()),
                         "percentile": p.percentile,
                         "top5": p.measures["model"]["topk_precision"],
                         "hold": None if p.physics is None else bool(p.physics.get("hold_ok")),
@@ -91,7 +97,7 @@ def main() -> None:
         )
 
     print(f"{len(rows)} decisions on {len(objects)} objects, {args.candidates} candidates")
-    for key in ("viable", "oracle", "random", "top5"):
+    for key in ("viable", "oracle", "oracle_drawn", "random", "top5"):
         print(f"  {key:8s} {per_object(key):.3f}")
     print(f"  median percentile {np.median([r['percentile'] for r in rows]):.1f}")
     if args.physics:

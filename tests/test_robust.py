@@ -15,6 +15,7 @@ from affordgrasp.objects import GraspObject, load_object, mass_properties, mesh_
 from affordgrasp.pipeline import evaluate_inputs, evaluate_samples, phi_of_batch
 from affordgrasp.robust import (
     RobustSettings,
+    copy_metrics,
     hold_dirs,
     perturbations,
     ranking_column,
@@ -149,6 +150,24 @@ def test_perturbed_copies_change_the_scores_and_quantile_is_an_order_statistic(
     # when two or more copies fail
     fails = np.round((1 - r["robust_p_pick"]) * 8)
     np.testing.assert_array_equal(r["robust_pick"] == -np.inf, fails >= 2)
+
+
+def test_copy_metrics_are_what_the_robust_columns_summarise(hammer, hammer_batch):
+    batch, phi = hammer_batch
+    s = RobustSettings(copies=6, seed=2)
+    phi_k = copy_metrics(hammer, batch, s, hand="barrett", phi=phi)
+    eps = np.asarray(phi_k["epsilon"]).reshape(len(batch), 6)  # grasp-major
+    r = robust_columns(hammer, batch, s, hand="barrett", phi=phi)
+    np.testing.assert_allclose(eps.mean(axis=1), r["robust_epsilon"], rtol=0, atol=1e-15)
+    viable = np.asarray(is_viable(phi_k)).reshape(len(batch), 6)
+    np.testing.assert_allclose(viable.mean(axis=1), r["robust_viable"], rtol=0, atol=1e-15)
+    # σ = 0: every copy is the grasp itself
+    still = copy_metrics(hammer, batch, RobustSettings(copies=2, **ZERO), hand="barrett")
+    np.testing.assert_array_equal(np.repeat(phi["epsilon"], 2), still["epsilon"])
+    with pytest.raises(InputError, match="empty"):
+        copy_metrics(hammer, simulate(hammer, np.zeros((0, 6))), s, hand="barrett")
+    with pytest.raises(InputError, match="K >= 1"):
+        copy_metrics(hammer, batch, RobustSettings(copies=0), hand="barrett")
 
 
 def test_robust_columns_do_not_depend_on_the_batch(hammer):

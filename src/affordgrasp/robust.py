@@ -463,6 +463,77 @@ def robust_columns(
     """
     import time
 
+    from .metrics.phi_batch import phi_of_batch
+
+    if not settings.enabled:
+        raise InputError("robust evaluation needs K >= 1 copies (K = 0 is plain evaluation)")
+    n, k_count = len(batch), settings.copies
+    if phi is None:
+        phi = phi_of_batch(obj, batch, soft=soft, volume=False)
+    out: dict[str, np.ndarray] = {"hold_dirs": hold_dirs(phi)}
+    if n == 0:
+        for name in robust_column_names(settings.tasks)[1:]:
+            out[name] = np.zeros(0)
+        return out
+    steps: dict[str, float] = {}
+    phi_k = copy_metrics(
+        obj, batch, settings, hand=hand, phi=phi, soft=soft, frame=frame, timings=steps
+    )
+    t2 = time.perf_counter()
+    _summarise(out, phi_k, n, k_count, settings)
+    if timings is not None:
+        timings.update(steps, summary=time.perf_counter() - t2)
+    return out
+
+
+def copy_metrics(
+    obj,
+    batch,
+    settings: RobustSettings,
+    *,
+    hand,
+    phi: dict | None = None,
+    soft: bool = False,
+    frame=None,
+    timings: dict | None = None,
+) -> dict[str, np.ndarray]:
+    """Φ of every perturbed copy of simulated grasps, before they are summarised.
+
+    What :func:`robust_columns` summarises, for a caller that judges the copies its own way
+    (``plan``'s robust check takes a quantile of their ε).
+
+    Parameters
+    ----------
+    obj : GraspObject
+        The object the batch was simulated on.
+    batch : SimulationBatch
+        n grasps from :func:`affordgrasp.grasp.policy.simulate`.
+    settings : RobustSettings
+        K > 0 and the perturbation scales (its tasks are not used).
+    hand : Hand or str
+        The hand simulated.
+    phi : dict of str to (n,) ndarray, optional
+        The batch's plain Φ; computed when None.
+    soft : bool
+        Soft-finger contacts.
+    frame : GraspObject, optional
+        The object whose geometry placed the batch's pregrasps; None: ``obj`` itself.
+    timings : dict, optional
+        Filled with the seconds spent simulating the copies (``simulate``) and on their
+        metrics (``metrics``).
+
+    Returns
+    -------
+    dict of str to (n K,) ndarray
+        The Φ columns of the copies, grasp-major (copy k of grasp i in row i K + k).
+
+    Raises
+    ------
+    InputError
+        For K = 0 or an empty batch.
+    """
+    import time
+
     from .grasp.policy import object_geometry, pregrasp_starts, simulate_starts
     from .grasp.pregrasp import dot3
     from .hands import get_hand
@@ -472,13 +543,10 @@ def robust_columns(
         raise InputError("robust evaluation needs K >= 1 copies (K = 0 is plain evaluation)")
     hand = get_hand(hand) if isinstance(hand, str) else hand
     n, k_count = len(batch), settings.copies
+    if n == 0:
+        raise InputError("no grasps to copy: the batch is empty")
     if phi is None:
         phi = phi_of_batch(obj, batch, soft=soft, volume=False)
-    out: dict[str, np.ndarray] = {"hold_dirs": hold_dirs(phi)}
-    if n == 0:
-        for name in robust_column_names(settings.tasks)[1:]:
-            out[name] = np.zeros(0)
-        return out
     geom = object_geometry(obj)
     draws = perturbations(settings)
     placing = None if frame is None else object_geometry(frame)
@@ -513,11 +581,9 @@ def robust_columns(
         mu = flat.mu
     t1 = time.perf_counter()
     phi_k = _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft)
-    t2 = time.perf_counter()
-    _summarise(out, phi_k, n, k_count, settings)
     if timings is not None:
-        timings.update(simulate=t1 - t0, metrics=t2 - t1, summary=time.perf_counter() - t2)
-    return out
+        timings.update(simulate=t1 - t0, metrics=time.perf_counter() - t1)
+    return phi_k
 
 
 def _open_hand_radius(hand) -> float:

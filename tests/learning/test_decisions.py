@@ -10,6 +10,7 @@ from affordgrasp.learning.decisions import (
     decision_threshold,
     oracle_hit_rate,
     oracle_order,
+    percentile_among,
     random_measures,
     robust_first,
     true_percentiles,
@@ -154,3 +155,14 @@ def test_robust_first_moves_the_most_often_viable_of_the_first_forward():
         robust_first(order, viable, [0.5, 0.9], 3)
     with pytest.raises(InputError):
         robust_first(order, viable, [], 0)
+
+
+def test_percentile_among_places_scores_among_a_reference():
+    ref = np.array([1.0, 2.0, 2.0, 4.0, -np.inf])
+    # 3 of 5 below 3 (-inf, 1, 2, 2: 4 below, none equal) -> 50 (4 + 4) / 5 = 80
+    got = percentile_among([3.0, 2.0, 10.0, -np.inf, np.nan], ref)
+    np.testing.assert_allclose(got, [80.0, 50.0 * (2 + 4) / 5, 100.0, 10.0, 10.0])
+    # a reference's own scores get their true_percentiles
+    np.testing.assert_array_equal(percentile_among(ref, ref), true_percentiles(ref))
+    with pytest.raises(InputError, match="reference"):
+        percentile_among([1.0], [])

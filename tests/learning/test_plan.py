@@ -92,12 +92,13 @@ def test_plan_offset_range_scales_the_candidates_offsets_only(box_mesh, capsys):
     uniform = ag.plan(str(box_mesh), "pick", candidates=5, seed=4, offset_range=1.0)
     near = ag.plan(str(box_mesh), "pick", candidates=5, seed=4)
     p0, d = sample_inputs(4, 0, 5)
-    np.testing.assert_array_equal(uniform.p0, p0)
-    np.testing.assert_array_equal(uniform.use_dir, d)
+    assert uniform.drawn == near.drawn == 5  # then the refined ones
+    np.testing.assert_array_equal(uniform.p0[:5], p0)
+    np.testing.assert_array_equal(uniform.use_dir[:5], d)
     # the default: the same draws, the offsets (u4, u5) scaled into [-R, R]²
-    np.testing.assert_array_equal(near.p0[:, [0, 1, 2, 5]], p0[:, [0, 1, 2, 5]])
-    np.testing.assert_array_equal(near.p0[:, 3:5], OFFSET_RANGE * p0[:, 3:5])
-    np.testing.assert_array_equal(near.use_dir, d)
+    np.testing.assert_array_equal(near.p0[:5, [0, 1, 2, 5]], p0[:, [0, 1, 2, 5]])
+    np.testing.assert_array_equal(near.p0[:5, 3:5], OFFSET_RANGE * p0[:, 3:5])
+    np.testing.assert_array_equal(near.use_dir[:5], d)
     assert near.offset_range == OFFSET_RANGE and near.summary()["offset_range"] == OFFSET_RANGE
     for bad in (0.0, -0.5, 1.5, float("nan"), "wide"):
         with pytest.raises(InputError, match="offset_range"):
@@ -110,7 +111,9 @@ def test_plan_offset_range_scales_the_candidates_offsets_only(box_mesh, capsys):
 
 
 def test_plan_with_the_views_decides_on_the_surface_they_fuse_into(box_mesh, capsys):
-    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, models="views", robust_check=0)
+    p = ag.plan(
+        str(box_mesh), "pick", candidates=12, seed=2, models="views", robust_check=0, refine=0
+    )
     assert p.probability is None and p.predicted is None and p.fused_robust_viable is None
     assert p.fused_score.shape == (12,) and p.fused_viable.dtype == bool
     # viable on the fused surface first, then feasible there, then by its ε there
@@ -147,8 +150,10 @@ def test_plan_with_the_views_fuses_what_a_sensor_returns(box_mesh, monkeypatch):
         return fused_object(*args, **kwargs)
 
     monkeypatch.setattr(fusion, "fused_object", recorded)
-    exact = ag.plan(str(box_mesh), "pick", candidates=8, seed=1)
-    sensed = ag.plan(str(box_mesh), "pick", candidates=8, seed=1, sensor=SensorModel(seed=1))
+    exact = ag.plan(str(box_mesh), "pick", candidates=8, seed=1, refine=0)
+    sensed = ag.plan(
+        str(box_mesh), "pick", candidates=8, seed=1, sensor=SensorModel(seed=1), refine=0
+    )
     # exact images: the four pixels and the seen voxels; a sensor's: the filter alone, with
     # lost returns unknown and three votes (docs/learning.md)
     assert options[0]["subpixel"] and options[0]["keep_seen"] and options[0]["unknown_px"] == 0
@@ -166,30 +171,36 @@ def test_plan_with_the_views_checks_its_first_candidates_under_perturbation(
     from affordgrasp.learning import plan as planning
     from affordgrasp.learning.decisions import margin_order
 
-    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2)  # the default checks 4
+    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, refine=0)  # the default checks 8
     margin = margin_order(p.fused_viable, p.fused_score, p.fused_epsilon)
-    checked = margin[:4]
-    r = p.fused_robust_viable
-    assert np.isfinite(r[checked]).all() and np.isnan(np.delete(r, checked)).all()
-    assert ((r[checked] >= 0) & (r[checked] <= 1)).all()
-    # the most often viable of the first four (of those viable on the fused surface), the
-    # others in the margin's order
+    checked = margin[:8]
+    r, q = p.fused_robust_viable, p.fused_robust_epsilon
+    for values in (r, q):
+        assert np.isfinite(values[checked]).all() and np.isnan(np.delete(values, checked)).all()
+    assert ((r[checked] >= 0) & (r[checked] <= 1)).all() and (q[checked] >= 0).all()
+    # the widest lower-quartile ε of the first eight (of those viable on the fused surface),
+    # the others in the margin's order
     pool = checked[p.fused_viable[checked]] if p.fused_viable[checked].any() else checked
-    assert p.chosen in pool and r[p.chosen] == r[pool].max()
+    assert p.chosen in pool and q[p.chosen] == q[pool].max()
     assert p.order[1:].tolist() == [i for i in margin if i != p.chosen]
-    assert "the first 4" in p.rule
-    assert p.summary()["chosen"]["fused_robust_viable"] == r[p.chosen]
+    assert "the first 8" in p.rule
+    doc = p.summary()
+    assert doc["chosen"]["fused_robust_viable"] == r[p.chosen]
+    assert doc["chosen"]["fused_robust_epsilon"] == q[p.chosen]
     # unperturbed copies are the grasps themselves: robust viability is the fused viability,
-    # and the widest ε stays first
+    # the quantile of ε is ε, and the widest ε stays first
     still = planning.RobustSettings(
         copies=3, translation_m=0.0, rotation_rad=0.0, friction_sd=0.0, com_m=0.0, tasks=()
     )
     monkeypatch.setattr(planning, "ROBUST_CHECK_SETTINGS", still)
-    q = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, robust_check=6)
+    same = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, robust_check=6, refine=0)
     np.testing.assert_array_equal(
-        q.fused_robust_viable[margin[:6]], p.fused_viable[margin[:6]].astype(float)
+        same.fused_robust_viable[margin[:6]], p.fused_viable[margin[:6]].astype(float)
     )
-    assert q.order.tolist() == margin.tolist()
+    np.testing.assert_array_equal(
+        same.fused_robust_epsilon[margin[:6]], p.fused_epsilon[margin[:6]]
+    )
+    assert same.order.tolist() == margin.tolist()
     for bad in (-1, 1.5, True):
         with pytest.raises(InputError, match="robust_check"):
             ag.plan(str(box_mesh), candidates=2, robust_check=bad)
@@ -197,9 +208,60 @@ def test_plan_with_the_views_checks_its_first_candidates_under_perturbation(
     assert rc == 0, capsys.readouterr().err
     doc = json.loads(capsys.readouterr().out)
     assert doc["chosen"]["fused_robust_viable"] is None and "perturbations" not in doc["rule"]
+    assert doc["chosen"]["fused_robust_epsilon"] is None
     # learned models have no fused surface to check on
     assert main(["plan", str(box_mesh), "--model", "classifier", "--robust-check", "2"]) == 2
     assert "--model views" in capsys.readouterr().err
+
+
+def test_plan_with_the_views_refines_its_first_candidates(box_mesh, capsys):
+    from affordgrasp.grasp.pregrasp import PLAN_REFINE_NEIGHBOURS as J
+    from affordgrasp.grasp.pregrasp import PLAN_REFINE_SIGMA
+    from affordgrasp.learning.decisions import margin_order, percentile_among, random_measures
+    from affordgrasp.learning.plan import REFINE_STREAM
+    from affordgrasp.search.cem import nearby_inputs
+
+    p = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, robust_check=0, refine=3)
+    n = 12 + 3 * J
+    assert p.drawn == 12 and len(p.p0) == len(p.use_dir) == len(p.table) == n
+    assert p.fused_score.shape == p.true_score.shape == p.viable.shape == (n,)
+    # the refined candidates: drawn near the first three of the drawn ones' margin order,
+    # their use directions kept
+    first = margin_order(p.fused_viable[:12], p.fused_score[:12], p.fused_epsilon[:12])[:3]
+    x = nearby_inputs(
+        np.concatenate([p.p0[first], p.use_dir[first]], axis=1),
+        np.r_[np.full(6, PLAN_REFINE_SIGMA), 0.0, 0.0],
+        J,
+        np.random.default_rng(np.random.SeedSequence([2, REFINE_STREAM])),
+    )
+    np.testing.assert_array_equal(p.p0[12:], x[:, :6])
+    np.testing.assert_array_equal(p.use_dir[12:], np.repeat(p.use_dir[first], J, axis=0))
+    # all ranked together; the truth of every one simulated; the chosen placed among the
+    # drawn ones, a random choice among the drawn ones
+    assert p.order.tolist() == margin_order(p.fused_viable, p.fused_score, p.fused_epsilon).tolist()
+    assert p.percentile == percentile_among(p.true_score[[p.chosen]], p.true_score[:12])[0]
+    assert p.measures["random"] == random_measures(p.true_score[:12], p.viable[:12])
+    assert p.measures["model"]["top1_percentile"] == p.percentile
+    assert "drawn near each of the first 3" in p.rule
+    doc = p.summary()
+    assert doc["candidates"] == 12 and doc["refined"] == 3 * J
+    # refine=0: the drawn candidates alone, the same as before refining existed
+    plain = ag.plan(str(box_mesh), "pick", candidates=12, seed=2, robust_check=0, refine=0)
+    assert plain.drawn is None and len(plain.p0) == 12 and plain.summary()["refined"] == 0
+    np.testing.assert_array_equal(plain.fused_epsilon, p.fused_epsilon[:12])
+    np.testing.assert_array_equal(plain.true_score, p.true_score[:12])
+    for bad in (-1, 2.5, True, "3"):
+        with pytest.raises(InputError, match="refine"):
+            ag.plan(str(box_mesh), candidates=2, refine=bad)
+    rc = main(["plan", str(box_mesh), "--candidates", "4", "--refine", "1", "--json"])
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["candidates"] == 4 and doc["refined"] == J
+    assert main(["plan", str(box_mesh), "--candidates", "4", "--refine", "1"]) == 0
+    assert f"of 4 and {J} refined" in capsys.readouterr().out
+    assert main(["plan", str(box_mesh), "--model", "classifier", "--refine", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--refine" in err and "--model views" in err
 
 
 def test_plan_says_when_no_candidate_is_viable_on_the_fused_surface(box_mesh, capsys):

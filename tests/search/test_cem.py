@@ -10,6 +10,7 @@ from affordgrasp.search.cem import (
     PERIODIC,
     cem_maximize,
     cem_search,
+    nearby_inputs,
     plan_runs,
     uniform_inputs,
 )
@@ -74,3 +75,32 @@ def test_restarts_and_refinement_share_the_budget():
 def test_splits_that_cannot_work_are_refused(budget, restarts, refine, name):
     with pytest.raises(InputError, match=name):
         plan_runs(budget, restarts, refine)
+
+
+def test_nearby_inputs_move_each_coordinate_by_its_std_and_stay_in_the_box():
+    centres = np.array([[0.99, 0.0, -0.99, 0.995, -1.0, 0.0, 0.5, 0.5], TARGET])
+    std = np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.0, 0.0])
+    x = nearby_inputs(centres, std, 2000, np.random.default_rng(0))
+    assert x.shape == (4000, 8)
+    assert (x >= -1).all() and (x <= 1).all() and (x[:, 5] >= 0).all()
+    for i, c in enumerate(centres):
+        rows = x[i * 2000 : (i + 1) * 2000]
+        np.testing.assert_array_equal(rows[:, 6:], np.broadcast_to(c[6:], (2000, 2)))  # std 0
+        d = rows - c
+        d[:, PERIODIC] = (d[:, PERIODIC] + 1) % 2 - 1  # the angles wrap: 0.99 + 0.05 is -0.96
+        assert np.abs(d[:, :6]).max() < 0.05 * 6
+    # around the second centre, away from the box's faces: the draws' spread is the std
+    d = x[2000:] - TARGET
+    d[:, PERIODIC] = (d[:, PERIODIC] + 1) % 2 - 1
+    d = d[:, :6]
+    np.testing.assert_allclose(d.std(axis=0), 0.05, rtol=0.1)
+    assert (x[:2000, 0] < 0).any()  # u1 = 0.99 wrapped past 1 to the other side
+    assert (x[:2000, 3] == 1.0).any() and (x[:2000, 4] == -1.0).any()  # clipped
+    # the same generator state, the same draws; none asked, none drawn
+    again = nearby_inputs(centres, std, 2000, np.random.default_rng(0))
+    np.testing.assert_array_equal(x, again)
+    assert nearby_inputs(centres, 0.1, 0, np.random.default_rng(0)).shape == (0, 8)
+    for bad in ({"centres": np.zeros((2, 6))}, {"std": -0.1}, {"std": np.nan}, {"count": -1}):
+        args = {"centres": centres, "std": 0.1, "count": 3} | bad
+        with pytest.raises(InputError):
+            nearby_inputs(args["centres"], args["std"], args["count"], np.random.default_rng(0))

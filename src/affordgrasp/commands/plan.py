@@ -7,7 +7,13 @@ from __future__ import annotations
 import sys
 
 from ..errors import InputError, MissingDependencyError
-from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE, PLAN_ROBUST_CHECK
+from ..grasp.pregrasp import (
+    PLAN_CANDIDATES,
+    PLAN_OFFSET_RANGE,
+    PLAN_REFINE,
+    PLAN_REFINE_NEIGHBOURS,
+    PLAN_ROBUST_CHECK,
+)
 
 
 def add_arguments(p) -> None:
@@ -61,8 +67,17 @@ def add_arguments(p) -> None:
         default=None,
         metavar="N",
         help="with --model views: re-simulate the first N candidates on the fused surface "
-        "under small perturbations and choose the most often viable (default "
-        f"{PLAN_ROBUST_CHECK}; 0: the widest epsilon as it is)",
+        "under small perturbations and choose the one whose copies keep the widest epsilon "
+        f"(default {PLAN_ROBUST_CHECK}; 0: the widest epsilon as it is)",
+    )
+    p.add_argument(
+        "--refine",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"with --model views: draw {PLAN_REFINE_NEIGHBOURS} more candidates near each of "
+        "the first N on the fused surface and rank them with the others (default "
+        f"{PLAN_REFINE}; 0: none)",
     )
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     p.add_argument(
@@ -100,11 +115,12 @@ def run(args, out) -> None:
         from ..learning.plan import VIEWS, plan
         from ..learning.torch_support import require_safetensors, require_torch
 
-        if args.robust_check is not None and models != VIEWS:
-            raise InputError(
-                "--robust-check re-simulates candidates on the fused views' surface: it needs "
-                "--model views (the default)"
-            )
+        for value, option in ((args.robust_check, "--robust-check"), (args.refine, "--refine")):
+            if value is not None and models != VIEWS:
+                raise InputError(
+                    f"{option} simulates candidates on the fused views' surface: it needs "
+                    "--model views (the default)"
+                )
         if models == VIEWS:
             from ..vision.fusion import require_marching_cubes
 
@@ -138,6 +154,7 @@ def run(args, out) -> None:
         sensor=_sensor(args),
         **({} if args.offset_range is None else {"offset_range": args.offset_range}),
         **({} if args.robust_check is None else {"robust_check": args.robust_check}),
+        **({} if args.refine is None else {"refine": args.refine}),
         progress=progress,
     )
     doc = result.summary()
@@ -166,8 +183,9 @@ def run(args, out) -> None:
         ],
     ]
     out.table(
-        f"{doc['object']}, task {doc['task']}: candidate {c['index']} of {doc['candidates']} "
-        f"({doc['rule']}); {doc['candidates_viable']} viable, "
+        f"{doc['object']}, task {doc['task']}: candidate {c['index']} of {doc['candidates']}"
+        + (f" and {doc['refined']} refined" if doc["refined"] else "")
+        + f" ({doc['rule']}); {doc['candidates_viable']} viable, "
         f"{doc['candidates_feasible']} task-feasible",
         ["quantity", "chosen", "random (expected)", "oracle"],
         rows,

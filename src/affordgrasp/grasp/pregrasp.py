@@ -355,13 +355,23 @@ PLAN_OFFSET_RANGE = 0.25
 # the object, about 2 ms (docs/learning.md).
 PLAN_CANDIDATES = 256
 # With the fused views, ``plan`` simulates its first PLAN_ROBUST_CHECK candidates on the fused
-# surface again under small perturbations and chooses the most often viable: the widest ε
-# there is sometimes a contact that only grazes the fused surface (a distal link touching a
-# surface a millimetre outside the true one). Chosen on validation objects (variants 7-8,
-# 117 decisions) among 4, 8, 16 and 32 checked candidates and full or half the robust
-# labels' perturbations; as shipped it left validation at 106 of 117 and raised the test
-# objects' viable choices from 0.855 to 0.885 over nine seeds (docs/learning.md).
-PLAN_ROBUST_CHECK = 4
+# surface again under small perturbations and chooses the one whose copies keep the widest ε
+# (its lower quartile): the widest ε there is sometimes a contact that only grazes the fused
+# surface (a distal link touching a surface a millimetre outside the true one), or a margin
+# too thin to survive the surface's errors. Chosen on validation objects (variants 7-10, 195
+# decisions, with the neighbours below) among 2, 4 and 8 checked candidates, 12 or 24 copies,
+# and the share of copies viable, the lower quartile or the median of their ε
+# (docs/learning.md).
+PLAN_ROBUST_CHECK = 8
+
+# With the fused views, ``plan`` then draws PLAN_REFINE_NEIGHBOURS pregrasps near each of its
+# first PLAN_REFINE candidates (``search.cem.nearby_inputs``, σ = PLAN_REFINE_SIGMA) and
+# simulates them on the fused surface too: a grasp that is viable by a thin margin has
+# neighbours with a wider one. Chosen on validation objects (variants 7-10, 195 decisions;
+# docs/learning.md).
+PLAN_REFINE = 8
+PLAN_REFINE_NEIGHBOURS = 16
+PLAN_REFINE_SIGMA = 0.04
 
 SAMPLE_BLOCK = 1024
 

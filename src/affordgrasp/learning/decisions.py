@@ -99,6 +99,33 @@ def true_percentiles(true_score: np.ndarray) -> np.ndarray:
     return 50.0 * (below + at_or_below) / n
 
 
+def percentile_among(scores: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Percentiles of scores among reference scores, as :func:`true_percentiles` counts.
+
+    Parameters
+    ----------
+    scores : (m,) array_like of float
+        The scores placed (NaN counts as −inf).
+    reference : (n,) array_like of float
+        The scores they are placed among (NaN counts as −inf; n >= 1).
+
+    Returns
+    -------
+    (m,) float64 ndarray
+        In [0, 100]: 50 · (share of the reference strictly below + share at or below).
+        A score that is one of the reference's gets its :func:`true_percentiles` value.
+    """
+    s = np.asarray(scores, dtype=np.float64).ravel()
+    s = np.where(np.isnan(s), -np.inf, s)
+    ref = np.asarray(reference, dtype=np.float64).ravel()
+    if len(ref) == 0:
+        raise InputError("no reference scores to place scores among")
+    ordered = np.sort(np.where(np.isnan(ref), -np.inf, ref))
+    below = np.searchsorted(ordered, s, side="left")
+    at_or_below = np.searchsorted(ordered, s, side="right")
+    return 50.0 * (below + at_or_below) / len(ordered)
+
+
 def decision_measures(
     order: np.ndarray,
     true_score: np.ndarray,
@@ -199,11 +226,11 @@ def margin_order(viable: np.ndarray, score: np.ndarray, epsilon: np.ndarray) -> 
 def robust_first(
     order: np.ndarray, viable: np.ndarray, robust_viable: np.ndarray, checked: int
 ) -> np.ndarray:
-    """An order's first candidates re-ranked by how often they stay viable under
-    perturbation.
+    """An order's first candidates re-ranked by how they fare under perturbation.
 
-    The first ``checked`` candidates of ``order`` are compared by ``robust_viable`` (the
-    share of perturbed copies that are viable); where some of them are viable themselves,
+    The first ``checked`` candidates of ``order`` are compared by ``robust_viable``, a
+    score of their perturbed copies, higher better (the share of them viable, or, as
+    ``plan`` uses it, a quantile of their ε); where some of them are viable themselves,
     only those can come first. The best of them moves to the front; every other candidate
     keeps its place. Ties keep ``order``'s order.
 
@@ -214,7 +241,7 @@ def robust_first(
     viable : (n,) array_like of bool
         Each candidate's own viability (indexed by candidate, not by rank).
     robust_viable : (min(checked, n),) array_like of float
-        The robust viability of ``order[:checked]``, in that order (NaN counts as 0).
+        The robust score of ``order[:checked]``, in that order (NaN counts as 0).
     checked : int
         How many of the first candidates were re-simulated (>= 1; at most n count).
 

@@ -42,7 +42,14 @@ import numpy as np
 import pyarrow as pa
 
 from ..errors import InputError
-from ..grasp.pregrasp import PLAN_CANDIDATES, PLAN_OFFSET_RANGE, PLAN_ROBUST_CHECK
+from ..grasp.pregrasp import (
+    PLAN_CANDIDATES,
+    PLAN_OFFSET_RANGE,
+    PLAN_REFINE,
+    PLAN_REFINE_NEIGHBOURS,
+    PLAN_REFINE_SIGMA,
+    PLAN_ROBUST_CHECK,
+)
 from ..robust import RobustSettings
 from .decisions import (
     decision_measures,
@@ -50,9 +57,9 @@ from .decisions import (
     decision_threshold,
     margin_order,
     oracle_order,
+    percentile_among,
     random_measures,
     robust_first,
-    true_percentiles,
 )
 
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
@@ -76,6 +83,11 @@ ROBUST_CHECK_SETTINGS = RobustSettings(
     com_m=0.00125,
     tasks=(),
 )
+# The robust check ranks the candidates it re-simulates by this quantile of their copies'
+# ε (the ε three copies in four reach): on validation objects it chose a viable grasp more
+# often than the share of copies viable or the median (docs/learning.md).
+ROBUST_CHECK_QUANTILE = 0.25
+REFINE_STREAM = 0x4EB5  # the refined candidates' draws: SeedSequence([seed, REFINE_STREAM])
 
 
 @dataclass(frozen=True)
@@ -105,8 +117,9 @@ class Plan:
     viable : (n,) bool ndarray
         Simulated viability of every candidate.
     percentile : float
-        The chosen grasp's percentile among the candidates' true scores, in [0, 100]
-        (:func:`~affordgrasp.learning.decisions.true_percentiles`).
+        The chosen grasp's percentile among the drawn candidates' true scores, in [0, 100]
+        (:func:`~affordgrasp.learning.decisions.percentile_among`; a refined candidate
+        is placed among the drawn ones).
     measures : dict
         The decision's measures, the random-choice expectation and the oracle's
         (``model``, ``random``, ``oracle``; see
@@ -134,6 +147,13 @@ class Plan:
         With ``models="views"`` and ``robust_check``: the share of perturbed copies viable
         on the fused surface, for the candidates re-simulated (NaN for the others); else
         None.
+    fused_robust_epsilon : (n,) float64 ndarray or None
+        With ``models="views"`` and ``robust_check``: the :data:`ROBUST_CHECK_QUANTILE`
+        quantile of the perturbed copies' ε on the fused surface (what the check ranks
+        by), for the candidates re-simulated (NaN for the others); else None.
+    drawn : int or None
+        How many of the candidates were drawn (the first ones); the rest were drawn near
+        the best of them (``refine``). None: all were drawn.
     """
 
     object: str
@@ -157,6 +177,8 @@ class Plan:
     fused_viable: np.ndarray | None = None
     fused_epsilon: np.ndarray | None = None
     fused_robust_viable: np.ndarray | None = None
+    fused_robust_epsilon: np.ndarray | None = None
+    drawn: int | None = None
 
     def summary(self) -> dict:
         """The plan as JSON-ready data (without the per-candidate arrays).
@@ -171,7 +193,8 @@ class Plan:
         return {
             "object": self.object,
             "task": self.task,
-            "candidates": int(len(self.p0)),
+            "candidates": int(len(self.p0) if self.drawn is None else self.drawn),
+            "refined": int(0 if self.drawn is None else len(self.p0) - self.drawn),
             "offset_range": self.offset_range,
             "rule": self.rule,
             "chosen": {
@@ -190,6 +213,12 @@ class Plan:
                     if self.fused_robust_viable is None
                     or not np.isfinite(self.fused_robust_viable[c])
                     else float(self.fused_robust_viable[c])
+                ),
+                "fused_robust_epsilon": (
+                    None
+                    if self.fused_robust_epsilon is None
+                    or not np.isfinite(self.fused_robust_epsilon[c])
+                    else float(self.fused_robust_epsilon[c])
                 ),
                 "true_score": float(self.true_score[c]),
                 "viable": bool(self.viable[c]),
@@ -307,6 +336,7 @@ def plan(
     sensor=None,
     offset_range: float = OFFSET_RANGE,
     robust_check: int = PLAN_ROBUST_CHECK,
+    refine: int = PLAN_REFINE,
     progress: Callable[[str], Any] | None = None,
 ) -> Plan:
     """Choose a grasp of an object from camera-in-hand views, and check the choice.
@@ -326,10 +356,11 @@ def plan(
         (:func:`affordgrasp.vision.fusion.fused_object`), every candidate is simulated on
         it from the pose it has on the object, and the candidates are ranked by
         :func:`~affordgrasp.learning.decisions.margin_order` on that simulation: viable
-        there first, then task-feasible, by decreasing ε, the first ``robust_check`` of
-        them checked under perturbation (needs scikit-image, the ``learn`` extra; with 256
-        candidates it chose a viable grasp in 0.885 of the decisions on unseen objects, the
-        shipped classifier in 0.37, docs/learning.md).
+        there first, then task-feasible, by decreasing ε; the first ``refine`` of them get
+        neighbours, simulated there as well, and the first ``robust_check`` of all are
+        checked under perturbation (needs scikit-image, the ``learn`` extra; the chosen
+        grasp's viability on unseen objects: docs/learning.md; the shipped classifier's:
+        0.37).
         ``"classifier"``: the shipped classifier alone, the most probably viable candidate
         first. ``"default"``: the shipped classifier and regressor, the classifier's
         threshold, then least predicted effort. ``"regressor"``, a model file, or a
@@ -355,10 +386,18 @@ def plan(
     robust_check : int
         With ``models="views"``: how many of the first candidates on the fused surface are
         simulated again there under :data:`ROBUST_CHECK_SETTINGS` (K perturbed copies of
-        the hand pose, friction and centre of mass, :mod:`affordgrasp.robust`); the most
-        often viable of them (among those viable there, if any) is chosen
+        the hand pose, friction and centre of mass, :mod:`affordgrasp.robust`); the one
+        whose copies' ε has the highest :data:`ROBUST_CHECK_QUANTILE` quantile (among
+        those viable there, if any) is chosen
         (:func:`~affordgrasp.learning.decisions.robust_first`). 0: the first as it is.
-        Default 4 (``grasp.pregrasp.PLAN_ROBUST_CHECK``).
+        Default ``grasp.pregrasp.PLAN_ROBUST_CHECK``.
+    refine : int
+        With ``models="views"``: how many of the first candidates on the fused surface get
+        ``grasp.pregrasp.PLAN_REFINE_NEIGHBOURS`` new candidates drawn near them
+        (:func:`~affordgrasp.search.cem.nearby_inputs`, σ = ``PLAN_REFINE_SIGMA`` on
+        every coordinate of p0, the use direction kept), simulated there and ranked with
+        the others before the robust check; they are appended to the candidates
+        (``Plan.drawn`` says where). 0: none. Default ``grasp.pregrasp.PLAN_REFINE``.
     progress : callable, optional
         Called with the name of each step as it starts.
 
@@ -370,11 +409,21 @@ def plan(
     ------
     InputError
         For a bad number of candidates, unknown task or model, or missing extras.
+
+    Notes
+    -----
+    The measures judge the chosen grasp among every candidate simulated, refined ones
+    included (its percentile, the oracle); the random choice's expectation is over the
+    drawn candidates alone, the uniform draw a planner without a decider would choose from.
     """
+    from ..grasp.policy import simulate
     from ..grasp.pregrasp import sample_inputs
     from ..objects import load_object
     from ..pipeline import evaluate_inputs
+    from ..robust import copy_metrics
+    from ..search.cem import nearby_inputs
     from ..tasks import get_task, is_viable
+    from ..tasks.metric_columns import MetricColumns
     from ..vision.depth import depth_to_mm, renderer_for
     from .data import Samples
 
@@ -394,6 +443,8 @@ def plan(
         raise InputError(f"robust_check must be an integer >= 0, got {robust_check!r}")
     if robust_check < 0:
         raise InputError(f"robust_check must be an integer >= 0, got {robust_check}")
+    if isinstance(refine, bool) or not isinstance(refine, int | np.integer) or refine < 0:
+        raise InputError(f"refine must be an integer >= 0, got {refine!r}")
     task_obj = get_task(task)
     task_obj.thresholds_for(mode)  # an unknown mode fails before any work
     step = progress or (lambda name: None)
@@ -420,7 +471,7 @@ def plan(
     timings["render"] = time.perf_counter() - t0
 
     probability = predicted = fused_score = fused_viable = fused_epsilon = None
-    fused_robust_viable = None
+    fused_robust_viable = fused_robust_epsilon = None
     if views:
         step("fuse")
         t0 = time.perf_counter()
@@ -442,24 +493,52 @@ def plan(
             f"{task_obj.name}-feasible, "
             "then the widest epsilon"
         )
-        m = min(int(robust_check), n)
+        r = min(int(refine), n)
+        if r > 0:
+            # the pregrasp moves, the use direction stays
+            drawn_near = nearby_inputs(
+                np.concatenate([p0[order[:r]], use_dir[order[:r]]], axis=1),
+                np.r_[np.full(6, PLAN_REFINE_SIGMA), 0.0, 0.0],
+                PLAN_REFINE_NEIGHBOURS,
+                np.random.default_rng(np.random.SeedSequence([int(seed), REFINE_STREAM])),
+            )
+            near_p0, near_dir = (
+                drawn_near[:, :6],
+                use_dir[np.repeat(order[:r], PLAN_REFINE_NEIGHBOURS)],
+            )
+            near_fused = evaluate_inputs(
+                fused, near_p0, near_dir, hand=hand, seed=seed, volume=False, frame=obj
+            ).table
+            p0 = np.concatenate([p0, near_p0])
+            use_dir = np.concatenate([use_dir, near_dir])
+            fused_score = np.concatenate([fused_score, task_obj.evaluate(near_fused, mode)])
+            fused_viable = np.concatenate([fused_viable, is_viable(near_fused)])
+            fused_epsilon = np.concatenate(
+                [fused_epsilon, near_fused.column("epsilon").to_numpy(zero_copy_only=False)]
+            )
+            order = margin_order(fused_viable, fused_score, fused_epsilon)
+            rule += (
+                f"; {PLAN_REFINE_NEIGHBOURS} candidates drawn near each of the first {r} "
+                "and ranked with them"
+            )
+        m = min(int(robust_check), len(p0))
         if m > 0:
             top = order[:m]
-            copies = evaluate_inputs(
-                fused,
-                p0[top],
-                use_dir[top],
-                hand=hand,
-                seed=seed,
-                robust=ROBUST_CHECK_SETTINGS,
-                frame=obj,
-            ).table
-            fused_robust_viable = np.full(n, np.nan)
-            fused_robust_viable[top] = copies.column("robust_viable").to_numpy(zero_copy_only=False)
-            order = robust_first(order, fused_viable, fused_robust_viable[top], m)
+            settings = ROBUST_CHECK_SETTINGS
+            batch = simulate(fused, p0[top], use_dir[top], hand=hand, frame=obj)
+            cols = MetricColumns(copy_metrics(fused, batch, settings, hand=hand, frame=obj))
+            copies_eps = np.nan_to_num(
+                np.asarray(cols["epsilon"], dtype=np.float64).reshape(m, settings.copies)
+            )
+            copies_viable = np.asarray(is_viable(cols), dtype=bool).reshape(m, settings.copies)
+            fused_robust_viable = np.full(len(p0), np.nan)
+            fused_robust_viable[top] = copies_viable.mean(axis=1)
+            fused_robust_epsilon = np.full(len(p0), np.nan)
+            fused_robust_epsilon[top] = np.quantile(copies_eps, ROBUST_CHECK_QUANTILE, axis=1)
+            order = robust_first(order, fused_viable, fused_robust_epsilon[top], m)
             rule += (
-                f"; of the first {m}, the most often viable under "
-                f"{ROBUST_CHECK_SETTINGS.copies} perturbations there"
+                f"; of the first {m}, the widest epsilon that three in four of "
+                f"{settings.copies} perturbations there reach"
             )
         timings["predict"] = time.perf_counter() - t0
     else:
@@ -484,9 +563,14 @@ def plan(
 
     measures = {
         "model": decision_measures(order, true_score, viable),
-        "random": random_measures(true_score, viable),
+        "random": random_measures(true_score[:n], viable[:n]),
         "oracle": decision_measures(oracle_order(true_score, viable), true_score, viable),
     }
+    for m_ in measures.values():  # among the drawn candidates (the same without refining)
+        if "chosen" in m_:
+            m_["top1_percentile"] = float(
+                percentile_among(true_score[[m_["chosen"]]], true_score[:n])[0]
+            )
     chosen = int(order[0])
     outcome = None
     if physics:
@@ -505,7 +589,7 @@ def plan(
         predicted=predicted,
         true_score=true_score,
         viable=viable,
-        percentile=float(true_percentiles(true_score)[chosen]),
+        percentile=float(percentile_among(true_score[[chosen]], true_score[:n])[0]),
         measures=measures,
         rule=rule,
         table=table,
@@ -516,6 +600,8 @@ def plan(
         fused_viable=fused_viable,
         fused_epsilon=fused_epsilon,
         fused_robust_viable=fused_robust_viable,
+        fused_robust_epsilon=fused_robust_epsilon,
+        drawn=n if len(p0) > n else None,
     )
 
 

@@ -179,6 +179,43 @@ def _sample(rng: np.random.Generator, mean: np.ndarray, std: np.ndarray, n: int)
     return np.clip(x, LOW, HIGH)
 
 
+def nearby_inputs(
+    centres: np.ndarray, std: np.ndarray | float, count: int, rng: np.random.Generator
+) -> np.ndarray:
+    """Inputs drawn around given ones, as a generation is drawn around its fit.
+
+    Each coordinate moves by a normal draw; the angles wrap around, the rest is clipped to
+    the box (``plan`` draws its refined candidates so).
+
+    Parameters
+    ----------
+    centres : (m, 8) array_like
+        Points x = (p0, d) of the box.
+    std : float or (8,) array_like
+        The draws' standard deviation per coordinate, in its own units (0: that coordinate
+        kept).
+    count : int
+        Draws per centre (>= 0).
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    (m count, 8) float64 ndarray
+        Centre i's draws in rows i count .. (i + 1) count - 1.
+    """
+    x = np.asarray(centres, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != DIM:
+        raise InputError(f"centres must have shape (m, {DIM}), got {x.shape}")
+    s = np.broadcast_to(np.asarray(std, dtype=np.float64), (DIM,))
+    if not (np.isfinite(s).all() and (s >= 0).all()):
+        raise InputError(f"std must be finite and >= 0, got {std!r}")
+    if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 0:
+        raise InputError(f"count must be an integer >= 0, got {count!r}")
+    if len(x) == 0 or count == 0:
+        return np.zeros((0, DIM))
+    return np.concatenate([_sample(rng, centre, s, int(count)) for centre in x])
+
+
 def uniform_inputs(rng: np.random.Generator, n: int) -> np.ndarray:
     """Uniform samples of the (p0, d) box.
 
