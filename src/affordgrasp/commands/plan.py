@@ -39,8 +39,9 @@ def add_arguments(p) -> None:
         "--model",
         default="views",
         help="views (the default; no learned model: the first 64 candidates' views fused "
-        "into a surface, every candidate simulated on it, of the viable ones with the widest "
-        "epsilon there the most robust to small perturbations chosen; needs scikit-image), "
+        "into a surface, every candidate simulated on it, more drawn near the best ones, of "
+        "the viable ones with the widest epsilon there the one that keeps it best under small "
+        "perturbations chosen; needs scikit-image), "
         "classifier (the shipped classifier "
         "alone: the most probably viable candidate), default (shipped classifier + "
         "regressor: the classifier's threshold, then least predicted effort), regressor, "

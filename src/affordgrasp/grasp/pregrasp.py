@@ -348,11 +348,11 @@ def surface_use_directions(
 # each; docs/learning.md) among 0.25, 0.35, 0.5, 0.7 and 1. Here, beside the draw it scales,
 # so that the command line's help reads it without importing the learning modules.
 PLAN_OFFSET_RANGE = 0.25
-# Candidates ``plan`` draws by default: with the fused views, the choice among 256 is viable
-# on 0.88 of unseen objects' decisions (six seeds; 0.885 of nine with the robust check
-# below), among 64 on 0.73 (three seeds); more than 256 did not help on the validation
-# objects. Each candidate past the 64th costs a simulation on the fused surface and one on
-# the object, about 2 ms (docs/learning.md).
+# Candidates ``plan`` draws by default: with the fused views, the choice among 256 was viable
+# on 0.88 of unseen objects' decisions (six seeds; 0.932 of nine with the refined candidates
+# and the robust check below), among 64 on 0.73 (three seeds, before either); more than 256
+# did not help on the validation objects. Each candidate past the 64th costs a simulation on
+# the fused surface and one on the object, about 2 ms (docs/learning.md).
 PLAN_CANDIDATES = 256
 # With the fused views, ``plan`` simulates its first PLAN_ROBUST_CHECK candidates on the fused
 # surface again under small perturbations and chooses the one whose copies keep the widest ε

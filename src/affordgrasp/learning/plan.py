@@ -16,8 +16,9 @@ then says how good the decision truly was:
    predict with learned models in one batch;
 4. choose: on the fused surface's simulation by
    :func:`~affordgrasp.learning.decisions.margin_order` (viable, then task-feasible, then
-   the widest ε), its first ``robust_check`` candidates simulated there again under small
-   perturbations and the most often viable of them first
+   the widest ε); more candidates drawn near its first ``refine`` ones, simulated there
+   and ranked with them; the first ``robust_check`` of all simulated there again under
+   small perturbations and the one whose copies keep the widest ε first
    (:func:`~affordgrasp.learning.decisions.robust_first`); with models by
    :func:`~affordgrasp.learning.decisions.decision_order` (a classifier alone: the most
    probably viable; with a regressor as well, the classifier's decision threshold, then
