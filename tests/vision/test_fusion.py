@@ -183,6 +183,32 @@ def test_returns_lost_next_to_the_surface_are_unknown_not_empty_with_unknown_px(
         free_space_field(depth, poses, camera, unknown_px=-1)
 
 
+def test_a_fused_surface_is_never_simplified(monkeypatch):
+    import affordgrasp.objects as objects
+    from affordgrasp.objects.simplify import LARGE_MESH_FACES
+
+    # a scan's 0.1 mm simplification cannot hold on 1 mm voxels, and once broke a closed
+    # fused surface (213,000 triangles) whose repair then failed after 10 s
+    made = objects.object_from_mesh
+    options = []
+
+    def recorded(mesh, name, **kwargs):
+        options.append(kwargs)
+        return made(mesh, name, **kwargs)
+
+    monkeypatch.setattr(objects, "object_from_mesh", recorded)
+    box = trimesh.creation.box([0.12, 0.04, 0.03])
+    depth, poses, camera = views_of(box, n=16)
+    fused_object(depth, poses, camera, name="box")
+    assert options == [{"simplify_above": None}]
+    # what that means: a mesh above the threshold keeps its triangles
+    sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.04)  # 5120 triangles
+    kept = made(sphere, "sphere", simplify_above=None)
+    assert len(kept.faces) == 5120 and LARGE_MESH_FACES > 5120
+    simplified = made(sphere, "sphere", simplify_above=1000)
+    assert len(simplified.faces) < 5120
+
+
 def test_a_surface_that_is_not_closed_is_fused_again_smoother_then_refused(monkeypatch):
     import affordgrasp.objects as objects
     from affordgrasp.errors import MeshError
@@ -193,17 +219,17 @@ def test_a_surface_that_is_not_closed_is_fused_again_smoother_then_refused(monke
     made = objects.object_from_mesh
     tried = []
 
-    def fails_first(mesh, name):
+    def fails_first(mesh, name, **options):
         tried.append(len(mesh.faces))
         if len(tried) == 1:
             raise MeshError("not a closed volume")
-        return made(mesh, name)
+        return made(mesh, name, **options)
 
     monkeypatch.setattr(objects, "object_from_mesh", fails_first)
     obj = fused_object(depth, poses, camera, name="box")
     assert len(tried) == 2 and obj.name == "box"
 
-    def always_fails(mesh, name):
+    def always_fails(mesh, name, **options):
         raise MeshError("not a closed volume")
 
     calls = []

@@ -43,6 +43,7 @@ from affordgrasp.objects.mass import (
 )
 from affordgrasp.objects.prepared import TRANSIENT_SOURCE, mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
+from affordgrasp.objects.simplify import LARGE_MESH_FACES
 
 if TYPE_CHECKING:
     import trimesh
@@ -315,6 +316,7 @@ def object_from_mesh(
     *,
     source: str = TRANSIENT_SOURCE,
     density: float = 1.0,
+    simplify_above: int | None = LARGE_MESH_FACES,
 ) -> GraspObject:
     """An object from a mesh held in memory (cleaned, repaired and oriented as a file's).
 
@@ -330,6 +332,10 @@ def object_from_mesh(
         fused from camera views is made for one decision).
     density : float
         kg/m^3, uniform.
+    simplify_above : int or None
+        A mesh with more triangles is simplified as a file's is
+        (:func:`~affordgrasp.objects.loading.prepare_mesh`); None: never (a surface fused
+        from views, whose voxels are coarser than the simplification's tolerance).
 
     Returns
     -------
@@ -345,7 +351,7 @@ def object_from_mesh(
         raise InputError(f"mesh must be a trimesh.Trimesh, got {type(mesh).__name__}")
     density = _check_density(density)
     with recording_warnings() as warnings:
-        prepared_mesh = prepare_mesh(mesh, source=name)
+        prepared_mesh = prepare_mesh(mesh, source=name, simplify_above=simplify_above)
     return _build(name, "mesh", prepared_mesh, density, source, load_warnings=tuple(warnings))
 
 

@@ -448,7 +448,12 @@ def fused_object(
     problem = None
     for candidate, smooth in attempts:
         try:
-            return object_from_mesh(field_surface(candidate, smooth_voxels=smooth), name)
+            # never simplified: the scans' 0.1 mm simplification cannot hold on a surface
+            # of 1 mm voxels and broke a closed one (a tumbler's, 213,000 triangles), whose
+            # repair then failed after 10 s
+            return object_from_mesh(
+                field_surface(candidate, smooth_voxels=smooth), name, simplify_above=None
+            )
         except MeshError as exc:
             problem = exc
     raise InputError(
