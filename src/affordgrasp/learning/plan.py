@@ -188,7 +188,9 @@ class Plan:
         -------
         dict
             Object, task, rule, the chosen candidate (p0, d, probability, prediction,
-            true score, viable, percentile), the measures, physics and timings.
+            true score, viable, percentile), the measures, physics and timings;
+            ``candidates`` counts the drawn candidates, ``refined`` those drawn near them,
+            ``candidates_viable`` and ``candidates_feasible`` both.
         """
         c = self.chosen
         return {
