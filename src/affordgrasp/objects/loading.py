@@ -173,7 +173,9 @@ def prepare_mesh(
     simplify_above : int or None
         A mesh with more triangles is first decimated to ``tolerance_m``
         (:func:`~affordgrasp.objects.simplify.simplify_to_tolerance`); a warning gives the
-        triangle counts and the measured distance. None: never.
+        triangle counts and the measured distance. Quadric decimation can open a closed
+        surface (edges collapsed across a thin wall): when the decimated mesh is not closed
+        and the original is, the original is kept, with a warning. None: never.
     tolerance_m : float
         The simplification's geometric tolerance, metres (one-sided distance from the
         original's vertices to the simplified surface).
@@ -211,10 +213,29 @@ def prepare_mesh(
         if scale_kind == "size_m":
             used = vertices[_used_vertices(len(vertices), faces)]
             factor = scale_value / float(np.ptp(used, axis=0).max())
+        whole = vertices, faces
         vertices, faces = _simplified(vertices, faces, tolerance_m / factor, factor, source)
+    else:
+        whole = None
 
     repairs: list[str] = []
     work = _clean(vertices, faces.astype(np.int64), source, repairs)
+    if whole is not None and len(faces) != len(whole[1]) and not work.is_watertight:
+        # The decimation opened it. Repairing a decimated scan can take tens of seconds and
+        # fail (a mug's scan of 772,000 triangles, halved, had 21,666 open edges left); the
+        # original, when closed, is the better mesh to keep.
+        kept: list[str] = []
+        original = _clean(whole[0], np.asarray(whole[1], dtype=np.int64), source, kept)
+        if _is_closed(original):
+            _warn(
+                "%s: its simplified mesh is not closed (%d open or non-manifold edges) where "
+                "the original is: the original's %d triangles are kept (slower to prepare "
+                "and simulate; simplify it in a mesh editor to save time)",
+                source,
+                _boundary_edge_count(work),
+                len(original.faces),
+            )
+            work, repairs = original, kept
     work = _closed_volume(work, source, repairs)
     if repairs:
         # One line that says what was done, so that the user can judge the result.
