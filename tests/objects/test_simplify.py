@@ -134,3 +134,30 @@ def test_a_simplification_that_opens_a_closed_mesh_is_not_kept(sphere, caplog, m
         out = prepare_mesh(holed, source="scan.ply", simplify_above=20_000)
     assert len(out.faces) < len(sphere.faces) // 2 and out.is_watertight
     assert "is not closed" not in caplog.text and "capped" in caplog.text
+
+
+def test_a_simplified_mesh_is_not_merged_by_position(sphere, caplog, monkeypatch):
+    # Decimation can leave two vertices at one position where it pinched a surface (a closed
+    # mug scan of 772,000 triangles, halved); the decimated mesh is indexed already, and
+    # merging them by position would make edges of four faces. Here the "decimated" mesh is
+    # two closed boxes touching along an edge, each with its own vertices.
+    from affordgrasp.objects import loading
+
+    a = trimesh.creation.box([0.05, 0.05, 0.05])
+    a.apply_translation([0.025, 0.025, 0.025])
+    b = a.copy()
+    b.apply_translation([0.05, 0.05, 0.0])
+    two = trimesh.util.concatenate([a, b])
+    merged = two.copy()
+    merged.merge_vertices()
+    assert two.is_watertight and not merged.is_watertight  # what a merge would do
+
+    def decimated(vertices, faces, tolerance, factor, source):
+        return np.asarray(two.vertices), np.asarray(two.faces)
+
+    monkeypatch.setattr(loading, "_simplified", decimated)
+    with caplog.at_level(logging.WARNING, logger="affordgrasp.objects.loading"):
+        out = prepare_mesh(sphere, source="scan.ply", simplify_above=20_000)
+    assert len(out.faces) == 24 and out.is_watertight  # kept, not the original sphere
+    assert out.volume == pytest.approx(2 * 0.05**3, rel=1e-9)
+    assert "is not closed" not in caplog.text

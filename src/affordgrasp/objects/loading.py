@@ -218,12 +218,16 @@ def prepare_mesh(
     else:
         whole = None
 
+    simplified = whole is not None and len(faces) != len(whole[1])
     repairs: list[str] = []
-    work = _clean(vertices, faces.astype(np.int64), source, repairs)
-    if whole is not None and len(faces) != len(whole[1]) and not work.is_watertight:
+    # A decimated mesh is indexed already (_simplified shares a soup's vertices first), and
+    # decimation can leave two vertices at one position where it pinched a surface: merging
+    # them by position would make faces that repeat a vertex and edges of more than two
+    # faces (a closed mug scan of 772,000 triangles, halved: 5,956 such faces dropped).
+    work = _clean(vertices, faces.astype(np.int64), source, repairs, merge=not simplified)
+    if simplified and not work.is_watertight:
         # The decimation opened it. Repairing a decimated scan can take tens of seconds and
-        # fail (a mug's scan of 772,000 triangles, halved, had 21,666 open edges left); the
-        # original, when closed, is the better mesh to keep.
+        # fail; the original, when closed, is the better mesh to keep.
         kept: list[str] = []
         original = _clean(whole[0], np.asarray(whole[1], dtype=np.int64), source, kept)
         if _is_closed(original):
@@ -437,13 +441,20 @@ def _simplified(
 
 
 def _clean(
-    vertices: np.ndarray, faces: np.ndarray, source: str, repairs: list[str]
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    source: str,
+    repairs: list[str],
+    *,
+    merge: bool = True,
 ) -> trimesh.Trimesh:
-    """Merge duplicate vertices, drop faces repeating a vertex and duplicate faces."""
+    """Merge duplicate vertices (unless ``merge`` is False), drop faces repeating a vertex
+    and duplicate faces."""
     import trimesh
 
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
-    mesh.merge_vertices()
+    if merge:
+        mesh.merge_vertices()
     f = mesh.faces
     repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
     mesh.update_faces(~repeated)
