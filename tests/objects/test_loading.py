@@ -343,3 +343,27 @@ def test_clean_mesh_gets_no_repair_warning(caplog):
     with caplog.at_level(logging.WARNING):
         prepare_mesh(_cube(), source="part.obj")
     assert caplog.text == ""
+
+
+def test_a_floating_speck_is_kept_and_named(caplog):
+    # A scan's floating noise: kept (the mesh is what was given), but it widens the extent
+    # that places the pregrasps, so the load says so with the sizes.
+    body = box((0.1, 0.02, 0.02))
+    speck = trimesh.creation.icosphere(subdivisions=1, radius=0.001)
+    speck.apply_translation([0.1, 0.0, 0.0])  # 49 mm beyond the body's end
+    with caplog.at_level(logging.WARNING):
+        out = prepare_mesh(trimesh.util.concatenate([body, speck]), source="scan.obj")
+    assert out.volume == pytest.approx(body.volume + speck.volume, rel=1e-9)
+    message = (
+        "scan.obj: 1 of its 2 disjoint bodies holds under 0.1 % of the largest one's volume "
+        "(floating specks of a scan?); kept, they widen the object's extent from 100 mm to "
+        "151 mm"
+    )
+    assert message in caplog.text, caplog.text
+    # two real parts: no speck
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        prepare_mesh(
+            trimesh.util.concatenate([body, box((0.02, 0.02, 0.02), (0.1, 0, 0))]), source="two"
+        )
+    assert "speck" not in caplog.text

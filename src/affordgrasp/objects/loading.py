@@ -53,6 +53,10 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
+# A disjoint body under this share of the largest body's volume is a speck: kept, with a
+# warning (a scan's floating noise widens the extent that places the pregrasps).
+SPECK_RELATIVE_VOLUME = 1e-3
+
 # The warnings of the load in progress, when someone records them (see recording_warnings).
 _RECORDED: ContextVar[list[str] | None] = ContextVar("_RECORDED", default=None)
 
@@ -660,11 +664,36 @@ def _combine_bodies(
         return _oriented(trimesh.util.concatenate([*outer, *cavities]))
     if abs(solid.volume() - expected) <= UNION_RTOL * abs(expected):
         # Disjoint bodies: keep the input's own vertices and faces.
+        _warn_specks(outer, source)
         if whole is not None and not flipped:
             return _oriented(whole)
         return _oriented(trimesh.util.concatenate([*outer, *cavities]))
     repairs.append(f"merged {len(bodies)} overlapping bodies into one solid (their union)")
     return _oriented(_from_manifold(solid), repairs)
+
+
+def _warn_specks(bodies: list[trimesh.Trimesh], source: str) -> None:
+    """Say so when disjoint bodies include specks (a scan's floating noise): they are kept,
+    and they widen the extent that places the pregrasps."""
+    volumes = np.array([abs(_signed_volume(b)) for b in bodies])
+    largest = int(np.argmax(volumes))
+    specks = int((volumes < SPECK_RELATIVE_VOLUME * volumes[largest]).sum())
+    if not specks:
+        return
+    low = np.min([b.bounds[0] for b in bodies], axis=0)
+    high = np.max([b.bounds[1] for b in bodies], axis=0)
+    _warn(
+        "%s: %d of its %d disjoint bodies hold%s under %.2g %% of the largest one's volume "
+        "(floating specks of a scan?); kept, they widen the object's extent from %s to %s, "
+        "which moves where grasps are aimed: remove them in a mesh editor if they are noise",
+        source,
+        specks,
+        len(bodies),
+        "s" if specks == 1 else "",
+        SPECK_RELATIVE_VOLUME * 100,
+        _length(float(np.ptp(bodies[largest].bounds, axis=0).max())),
+        _length(float(np.ptp(np.stack([low, high]), axis=0).max())),
+    )
 
 
 def _fill_holes(mesh: trimesh.Trimesh) -> list[np.ndarray]:
