@@ -89,14 +89,7 @@ def true_percentiles(true_score: np.ndarray) -> np.ndarray:
         In [0, 100]: 50 · (share strictly below + share at or below); ties share their rank.
     """
     s = np.asarray(true_score, dtype=np.float64).ravel()
-    s = np.where(np.isnan(s), -np.inf, s)
-    n = len(s)
-    if n == 0:
-        return np.zeros(0)
-    ordered = np.sort(s)
-    below = np.searchsorted(ordered, s, side="left")
-    at_or_below = np.searchsorted(ordered, s, side="right")
-    return 50.0 * (below + at_or_below) / n
+    return percentile_among(s, s) if len(s) else np.zeros(0)
 
 
 def percentile_among(scores: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -133,6 +126,7 @@ def decision_measures(
     *,
     k: int = 5,
     robust_viable: np.ndarray | None = None,
+    among: int | None = None,
 ) -> dict:
     """How good a ranking's choices truly are.
 
@@ -149,12 +143,15 @@ def decision_measures(
     robust_viable : (n,) array_like of float, optional
         The candidates' robust viable rate (the share of their perturbed copies that stay
         viable, docs/robust.md), when known.
+    among : int, optional
+        Place the chosen grasp among the first ``among`` candidates' true scores only
+        (``plan``'s drawn candidates, before the refined ones); None: among all.
 
     Returns
     -------
     dict
         ``chosen`` (index), ``top1_viable`` and ``top1_feasible`` (0 or 1),
-        ``top1_percentile`` (:func:`true_percentiles`), ``top1_score`` (F_T) and
+        ``top1_percentile`` (:func:`percentile_among`), ``top1_score`` (F_T) and
         ``topk_precision`` (viable share of the first min(k, n) choices); with
         ``robust_viable``, ``top1_robust_viable`` (the chosen grasp's rate).
     """
@@ -168,7 +165,7 @@ def decision_measures(
         "chosen": c,
         "top1_viable": float(ok[c]),
         "top1_feasible": float(np.isfinite(s[c])),
-        "top1_percentile": float(true_percentiles(s)[c]),
+        "top1_percentile": float(percentile_among(s[[c]], s[:among])[0]),
         "top1_score": float(s[c]),
         "topk_precision": float(ok[order[:k]].mean()),
     }

@@ -58,7 +58,6 @@ from .decisions import (
     decision_threshold,
     margin_order,
     oracle_order,
-    percentile_among,
     random_measures,
     robust_first,
 )
@@ -484,12 +483,16 @@ def plan(
         timings["fuse"] = time.perf_counter() - t0
         step("predict")
         t0 = time.perf_counter()
-        on_fused = evaluate_inputs(
-            fused, p0, use_dir, hand=hand, seed=seed, volume=False, frame=obj
-        ).table
-        fused_score = task_obj.evaluate(on_fused, mode)
-        fused_viable = is_viable(on_fused)
-        fused_epsilon = on_fused.column("epsilon").to_numpy(zero_copy_only=False)
+
+        def on_fused(q0, q_dir):
+            # the task score, viability and ε of pregrasps simulated on the fused surface
+            t = evaluate_inputs(
+                fused, q0, q_dir, hand=hand, seed=seed, volume=False, frame=obj
+            ).table
+            eps = t.column("epsilon").to_numpy(zero_copy_only=False)
+            return task_obj.evaluate(t, mode), is_viable(t), eps
+
+        fused_score, fused_viable, fused_epsilon = on_fused(p0, use_dir)
         order = margin_order(fused_viable, fused_score, fused_epsilon)
         rule = (
             f"on the surface fused from {k} view{'' if k == 1 else 's'}: viable, then "
@@ -509,16 +512,12 @@ def plan(
                 drawn_near[:, :6],
                 use_dir[np.repeat(order[:r], PLAN_REFINE_NEIGHBOURS)],
             )
-            near_fused = evaluate_inputs(
-                fused, near_p0, near_dir, hand=hand, seed=seed, volume=False, frame=obj
-            ).table
+            near_score, near_viable, near_epsilon = on_fused(near_p0, near_dir)
             p0 = np.concatenate([p0, near_p0])
             use_dir = np.concatenate([use_dir, near_dir])
-            fused_score = np.concatenate([fused_score, task_obj.evaluate(near_fused, mode)])
-            fused_viable = np.concatenate([fused_viable, is_viable(near_fused)])
-            fused_epsilon = np.concatenate(
-                [fused_epsilon, near_fused.column("epsilon").to_numpy(zero_copy_only=False)]
-            )
+            fused_score = np.concatenate([fused_score, near_score])
+            fused_viable = np.concatenate([fused_viable, near_viable])
+            fused_epsilon = np.concatenate([fused_epsilon, near_epsilon])
             order = margin_order(fused_viable, fused_score, fused_epsilon)
             rule += (
                 f"; {PLAN_REFINE_NEIGHBOURS} candidates drawn near each of the first {r} "
@@ -564,16 +563,13 @@ def plan(
     viable = is_viable(table)
     timings["simulate"] = time.perf_counter() - t0
 
+    # percentiles and the random choice among the drawn candidates (all, without refining)
+    best = oracle_order(true_score, viable)
     measures = {
-        "model": decision_measures(order, true_score, viable),
+        "model": decision_measures(order, true_score, viable, among=n),
         "random": random_measures(true_score[:n], viable[:n]),
-        "oracle": decision_measures(oracle_order(true_score, viable), true_score, viable),
+        "oracle": decision_measures(best, true_score, viable, among=n),
     }
-    for m_ in measures.values():  # among the drawn candidates (the same without refining)
-        if "chosen" in m_:
-            m_["top1_percentile"] = float(
-                percentile_among(true_score[[m_["chosen"]]], true_score[:n])[0]
-            )
     chosen = int(order[0])
     outcome = None
     if physics:
@@ -592,7 +588,7 @@ def plan(
         predicted=predicted,
         true_score=true_score,
         viable=viable,
-        percentile=float(percentile_among(true_score[[chosen]], true_score[:n])[0]),
+        percentile=measures["model"]["top1_percentile"],
         measures=measures,
         rule=rule,
         table=table,

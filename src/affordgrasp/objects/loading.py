@@ -212,17 +212,16 @@ def prepare_mesh(
         raw_extent = float(np.ptp(used, axis=0).max())
         check_plausible_size(raw_extent, scale_kind, scale_value, units, source)
 
+    original = None  # the mesh before a decimation that changed it
     if simplify_above is not None and len(faces) > simplify_above:
         factor = scale_value
         if scale_kind == "size_m":
             used = vertices[_used_vertices(len(vertices), faces)]
             factor = scale_value / float(np.ptp(used, axis=0).max())
-        whole = vertices, faces
-        vertices, faces = _simplified(vertices, faces, tolerance_m / factor, factor, source)
-    else:
-        whole = None
-
-    simplified = whole is not None and len(faces) != len(whole[1])
+        v, f = _simplified(vertices, faces, tolerance_m / factor, factor, source)
+        if len(f) != len(faces):
+            original, (vertices, faces) = (vertices, faces), (v, f)
+    simplified = original is not None
     repairs: list[str] = []
     # A decimated mesh is indexed already (_simplified shares a soup's vertices first), and
     # decimation can leave two vertices at one position where it pinched a surface: merging
@@ -233,17 +232,17 @@ def prepare_mesh(
         # The decimation opened it. Repairing a decimated scan can take tens of seconds and
         # fail; the original, when closed, is the better mesh to keep.
         kept: list[str] = []
-        original = _clean(whole[0], np.asarray(whole[1], dtype=np.int64), source, kept)
-        if _is_closed(original):
+        whole = _clean(original[0], np.asarray(original[1], dtype=np.int64), source, kept)
+        if _is_closed(whole):
             _warn(
                 "%s: its simplified mesh is not closed (%d open or non-manifold edges) where "
                 "the original is: the original's %d triangles are kept (slower to prepare "
                 "and simulate; simplify it in a mesh editor to save time)",
                 source,
                 _boundary_edge_count(work),
-                len(original.faces),
+                len(whole.faces),
             )
-            work, repairs = original, kept
+            work, repairs = whole, kept
     work = _closed_volume(work, source, repairs)
     if repairs:
         # One line that says what was done, so that the user can judge the result.
