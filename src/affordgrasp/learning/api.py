@@ -428,7 +428,7 @@ def report(model, config: dict, samples: Samples, *, seed: int = 0, scores=None)
     """
     tgt = Target.from_dict(config["target"])
     if scores is None:
-        scores = predict_scores(model, config, Inputs(config, samples))
+        scores = model_scores(model, config, samples)
     if tgt.kind == "classification":
         out = classification_report(samples.y, scores, seed=seed)
         out["baseline_average_precision"] = out["positive_rate"]
@@ -458,7 +458,29 @@ def predictions_of(model, config: dict, samples: Samples) -> np.ndarray:
         A probability for a classifier, the target's units for a regressor.
     """
     tgt = Target.from_dict(config["target"])
-    return tgt.denormalise(predict_scores(model, config, Inputs(config, samples)))
+    return tgt.denormalise(model_scores(model, config, samples))
+
+
+def model_scores(model, config: dict, samples: Samples) -> np.ndarray:
+    """A model's outputs for samples on the [0, 1] scale (a network's, or the fused views').
+
+    Parameters
+    ----------
+    model : torch.nn.Module or FusedViews
+    config : dict
+        The model's config (``arch`` ``"views"``: :mod:`affordgrasp.learning.views_model`).
+    samples : Samples
+        With depth images for a network that reads them; the rows of a dataset for the
+        views.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Probabilities (classifier) or values on the target's [0, 1] scale (regressor).
+    """
+    if config.get("arch") == "views":
+        return model.predict(config, samples)
+    return predict_scores(model, config, Inputs(config, samples))
 
 
 def prediction_column(config: dict) -> str:
@@ -517,7 +539,7 @@ def predict_dataset(
     dataset = Dataset.open(dataset)
     families = dataset.families
     stored = dataset.depth
-    needs_depth = any(c["arch"] != "pose" for _, c in models)
+    needs_depth = any(c["arch"] not in ("pose", "views") for _, c in models)
     columns = ["object", "sample", "p0", "use_dir"] + (
         ["depth_mm"] if stored and needs_depth else []
     )
@@ -532,6 +554,7 @@ def predict_dataset(
             p0=np.asarray(tab.column("p0").combine_chunks().flatten()).reshape(-1, 6),
             use_dir=np.asarray(tab.column("use_dir").combine_chunks().flatten()).reshape(-1, 2),
             y=np.full(len(obj), np.nan),
+            meta={"directory": str(dataset.directory), "dataset": dataset},
         )
         if needs_depth:
             if stored:
@@ -615,9 +638,9 @@ def evaluate_on_dataset(
     available = int(mask.sum())
     idx = _subsample(np.flatnonzero(mask), max_rows, seed)
     samples = samples.take(idx)
-    if config["arch"] != "pose":
+    if config["arch"] not in ("pose", "views"):
         load_depth(samples, dataset)
-    scores = predict_scores(model, config, Inputs(config, samples))
+    scores = model_scores(model, config, samples)
     rep = report(model, config, samples, seed=seed, scores=scores)
     rep["selection"] = {
         "objects": how,

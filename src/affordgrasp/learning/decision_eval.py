@@ -204,7 +204,7 @@ def evaluate_decisions(
     base = split_models(baseline) if baseline else None
     dataset = Dataset.open(dataset)
     families = dataset.families
-    needs_depth = any(c["arch"] != "pose" for _, c in [*models, *(baseline or [])])
+    needs_depth = any(c["arch"] not in ("pose", "views") for _, c in [*models, *(baseline or [])])
     stored = dataset.depth and needs_depth
     names = [c for c in dataset.arrow().schema.names if c != "depth_mm" or stored]
     per: dict[str, dict] = {}

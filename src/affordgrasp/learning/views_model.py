@@ -1,0 +1,491 @@
+"""The fused views as a model: what ``plan`` decides with, judged row by row as the
+learned models are (``affordgrasp model-eval views DATASET``).
+
+For each object, the first :data:`~affordgrasp.learning.plan.FUSED_VIEWS` of ``plan``'s
+candidate views (seed 0, the offsets ``plan`` draws) are rendered and fused into a surface
+(:func:`~affordgrasp.learning.plan.fuse_candidate_views`); every row is simulated on that
+surface from the pose it has on the object, with K perturbed copies (the robust labels'
+default perturbations, :mod:`affordgrasp.robust`). Two predictions come of it:
+
+* the **classifier** of ``viable``: the share of the copies viable on the fused surface
+  (ties broken by the fused ε), mapped through a non-decreasing calibration map fitted on
+  validation objects (isotonic regression of their true viability on the share); the map
+  is strictly increasing, so it changes no ranking;
+* the **ranker** of ``robust_hold``: the fused surface's own ``robust_hold``.
+
+Nothing is learned but the calibration map and the decision threshold, stored in
+``pretrained/views.json`` (:func:`fit_views_config` writes one; ``tools/fit_views_model.py``
+rebuilds the shipped one). The cost is one simulation per row and copy on the fused
+surface (about 8 s of CPU per 512 rows with K = 25 on one core) where a network predicts in
+a fraction of a millisecond: a model to judge the views by, and the reference the learned
+models are measured against (docs/learning.md).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..columns import HOLD_EFFORT_COLUMNS
+from ..errors import InputError
+from ..writing import atomic_write
+from .targets import Target
+
+FORMAT = "affordgrasp-views"
+FORMAT_VERSION = 1
+ARCH = "views"
+VIEWS_FILE = "views.json"
+DEFAULT_COPIES = 25  # K of the copies simulated on the fused surface (the robust labels' K)
+# the ε tie-break inside one share of copies: below the step between shares (1/K, K <= 100)
+TIE_BREAK = 1e-3
+# the calibrated probability's own slope: keeps the map strictly increasing (no ties made),
+# moving a probability by at most this much
+MAP_SLOPE = 1e-3
+CLASSIFIER_TARGET = Target("viable", "classification", "all")
+# robust_hold counts the load directions held (one per hold-effort column), less under 1/K
+RANKER_TARGET = Target(
+    "robust_hold", "regression", "finite", 0.0, float(len(HOLD_EFFORT_COLUMNS)), False, False
+)
+
+
+def views_config_path() -> Path:
+    """The shipped views model's file (its calibration map and decision threshold).
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    return Path(str(resources.files("affordgrasp.learning") / "pretrained" / VIEWS_FILE))
+
+
+def is_views_spec(spec: Any) -> bool:
+    """Whether a model option names the fused views (``"views"`` or a views .json file).
+
+    Parameters
+    ----------
+    spec : object
+
+    Returns
+    -------
+    bool
+    """
+    if isinstance(spec, str) and spec == ARCH:
+        return True
+    if isinstance(spec, str | os.PathLike) and str(spec).endswith(".json"):
+        return True
+    return False
+
+
+def read_views_config(path: str | os.PathLike | None = None) -> dict:
+    """A views model's file: its settings, calibration map and decision threshold.
+
+    Parameters
+    ----------
+    path : path, optional
+        A file written by :func:`fit_views_config` (default: the shipped one).
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    InputError
+        When the file is missing, not JSON or not a views model.
+    """
+    path = Path(path) if path is not None else views_config_path()
+    try:
+        config = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(
+            f"views model file {str(path)!r} does not exist"
+            + (
+                "; rebuild the shipped one with 'python tools/fit_views_model.py'"
+                if path == views_config_path()
+                else ""
+            )
+        ) from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"views model file {str(path)!r} is not readable JSON: {exc}") from None
+    if not isinstance(config, dict) or config.get("format") != FORMAT:
+        raise InputError(
+            f"{str(path)!r} is not a views model file (format {FORMAT!r}); model files are "
+            ".safetensors, views model files .json written by fit_views_config"
+        )
+    if config.get("format_version", 0) > FORMAT_VERSION:
+        raise InputError(
+            f"{str(path)!r} is a views model file of format version "
+            f"{config['format_version']}; this affordgrasp reads up to {FORMAT_VERSION}: "
+            "upgrade affordgrasp"
+        )
+    calibration = config.get("calibration") or {}
+    xs, ys = calibration.get("share", []), calibration.get("rate", [])
+    if len(xs) != len(ys) or any(b < a for a, b in zip(xs, xs[1:], strict=False)):
+        raise InputError(f"{str(path)!r}: the calibration map's knots are not increasing pairs")
+    return config
+
+
+def load_views_models(spec: str | os.PathLike = ARCH, *, regressor: bool = True, log=None):
+    """The views classifier (and ranker) as ``(predictor, config)`` pairs, as models load.
+
+    Parameters
+    ----------
+    spec : str or path
+        ``"views"`` (the shipped calibration) or a views model file.
+    regressor : bool
+        Also the ranker of ``robust_hold`` (needs a dataset with robust labels to judge).
+    log : callable, optional
+        Called with a line of progress per object predicted.
+
+    Returns
+    -------
+    list of (FusedViews, dict)
+        The classifier first; both share one predictor (each row is simulated once).
+    """
+    config = read_views_config(None if str(spec) == ARCH else spec)
+    predictor = FusedViews(config, log=log)
+    pairs = [(predictor, {**config, "arch": ARCH, "target": CLASSIFIER_TARGET.to_dict()})]
+    if regressor:
+        ranker = {k: v for k, v in config.items() if k != "decision_threshold"}
+        pairs.append((predictor, {**ranker, "arch": ARCH, "target": RANKER_TARGET.to_dict()}))
+    return pairs
+
+
+def views_candidates(views: int, seed: int = 0) -> np.ndarray:
+    """The pregrasps whose views are fused: ``plan``'s first candidates.
+
+    Parameters
+    ----------
+    views : int
+    seed : int
+        ``plan``'s seed.
+
+    Returns
+    -------
+    (views, 6) float64 ndarray
+    """
+    from ..grasp.pregrasp import sample_inputs
+    from .plan import OFFSET_RANGE
+
+    p0, _ = sample_inputs(seed, 0, views)
+    p0[:, 3:5] *= OFFSET_RANGE
+    return p0
+
+
+def fused_surface(obj, *, views: int, seed: int = 0):
+    """The surface ``plan`` (seed ``seed``) fuses from an object's first ``views`` views.
+
+    Parameters
+    ----------
+    obj : GraspObject
+    views : int
+    seed : int
+
+    Returns
+    -------
+    GraspObject
+    """
+    from ..vision.depth import depth_to_mm, renderer_for
+    from .plan import fuse_candidate_views
+
+    seen = views_candidates(views, seed)
+    renderer = renderer_for(obj)
+    return fuse_candidate_views(
+        depth_to_mm(renderer.render(seen)), renderer.poses(seen), renderer.camera, obj.name
+    )
+
+
+class FusedViews:
+    """Predictions of the fused views for a dataset's rows (see the module's docstring).
+
+    Each (dataset, object, sample) row is simulated once and kept, so the classifier, the
+    ranker and the decisions on the same rows cost one simulation.
+
+    Parameters
+    ----------
+    config : dict
+        A views model file's contents (:func:`read_views_config`).
+    log : callable, optional
+        Called with a line after each object's rows are simulated.
+    """
+
+    def __init__(self, config: dict, *, log: Callable[[str], Any] | None = None) -> None:
+        self.config = config
+        self.log = log
+        self._surfaces: dict[tuple[str, str], Any] = {}
+        self._rows: dict[tuple[str, str], dict[int, tuple[float, float, float]]] = {}
+
+    def simulate(self, dataset, name: str, sample, p0, use_dir) -> np.ndarray:
+        """(share of viable copies, fused ε, fused robust_hold) of one object's rows.
+
+        Parameters
+        ----------
+        dataset : Dataset
+            Where the object comes from.
+        name : str
+            The object.
+        sample : (n,) int ndarray
+            The rows' sample numbers (the key of what is kept).
+        p0 : (n, 6) float ndarray
+        use_dir : (n, 2) float ndarray
+
+        Returns
+        -------
+        (n, 3) float64 ndarray
+        """
+        import time
+
+        from ..pipeline import evaluate_inputs
+
+        key = (str(dataset.directory), name)
+        kept = self._rows.setdefault(key, {})
+        missing = np.array([i for i, s in enumerate(sample) if int(s) not in kept], dtype=np.intp)
+        if len(missing):
+            t0 = time.process_time()
+            obj = dataset.object(name)
+            if key not in self._surfaces:
+                self._surfaces[key] = fused_surface(
+                    obj, views=int(self.config["views"]), seed=int(self.config["seed"])
+                )
+            table = evaluate_inputs(
+                self._surfaces[key],
+                np.asarray(p0)[missing],
+                np.asarray(use_dir)[missing],
+                hand=dataset.hand,
+                robust=int(self.config["copies"]),
+                frame=obj,
+            ).table
+            cols = [
+                np.nan_to_num(table.column(c).to_numpy(zero_copy_only=False).astype(np.float64))
+                for c in ("robust_viable", "epsilon", "robust_hold")
+            ]
+            for j, i in enumerate(missing):
+                kept[int(sample[i])] = (cols[0][j], cols[1][j], cols[2][j])
+            if self.log is not None:
+                self.log(
+                    f"views: {name}: {len(missing)} rows x {self.config['copies']} copies on "
+                    f"the surface fused from {self.config['views']} views, "
+                    f"{time.process_time() - t0:.1f} s CPU"
+                )
+        return np.array([kept[int(s)] for s in sample], dtype=np.float64).reshape(-1, 3)
+
+    def raw(self, samples) -> np.ndarray:
+        """The rows' simulations on the fused surfaces, in the order of ``samples``.
+
+        Parameters
+        ----------
+        samples : Samples
+            Rows of one dataset (``samples.meta["dataset"]``).
+
+        Returns
+        -------
+        (n, 3) float64 ndarray
+            Share of viable copies, fused ε, fused ``robust_hold``.
+
+        Raises
+        ------
+        InputError
+            For rows that do not come from a dataset (the objects are read from it).
+        """
+        dataset = samples.meta.get("dataset")
+        if dataset is None:
+            raise InputError(
+                "the views model predicts for a dataset's rows (it renders and fuses each "
+                "object's views itself); read the rows with affordgrasp.learning.data.read_rows"
+            )
+        out = np.zeros((len(samples), 3))
+        for name in dict.fromkeys(samples.object):
+            rows = np.flatnonzero(samples.object == name)
+            out[rows] = self.simulate(
+                dataset, str(name), samples.sample[rows], samples.p0[rows], samples.use_dir[rows]
+            )
+        return out
+
+    def predict(self, config: dict, samples) -> np.ndarray:
+        """A pair's prediction on the [0, 1] scale of its target.
+
+        Parameters
+        ----------
+        config : dict
+            The classifier's or the ranker's config (:func:`load_views_models`).
+        samples : Samples
+
+        Returns
+        -------
+        (n,) float64 ndarray
+            The calibrated probability of ``viable``, or the fused ``robust_hold`` on the
+            target's scale (``robust_hold`` / 6, as the truth is normalised).
+        """
+        raw = self.raw(samples)
+        if config["target"]["kind"] == "classification":
+            return calibrated(share_score(raw[:, 0], raw[:, 1]), config.get("calibration"))
+        tgt = Target.from_dict(config["target"])
+        return (raw[:, 2] - tgt.low) / (tgt.high - tgt.low)
+
+
+def share_score(share: np.ndarray, epsilon: np.ndarray) -> np.ndarray:
+    """The uncalibrated probability: the share of viable copies, ties broken by ε.
+
+    Parameters
+    ----------
+    share, epsilon : (n,) float ndarray
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        In [0, 1 + :data:`TIE_BREAK`).
+    """
+    eps = np.nan_to_num(np.asarray(epsilon, dtype=np.float64), nan=0.0)
+    return np.nan_to_num(np.asarray(share, dtype=np.float64), nan=0.0) + TIE_BREAK * np.tanh(eps)
+
+
+def calibrated(score: np.ndarray, calibration: dict | None) -> np.ndarray:
+    """Map uncalibrated scores through a calibration map (identity without one).
+
+    Parameters
+    ----------
+    score : (n,) float ndarray
+        :func:`share_score`.
+    calibration : dict or None
+        ``share`` and ``rate`` knots (:func:`fit_calibration`).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Probabilities in [0, 1], a strictly increasing function of the score.
+    """
+    score = np.asarray(score, dtype=np.float64)
+    if not calibration or not calibration.get("share"):
+        return np.clip(score, 0.0, 1.0)
+    rate = np.interp(score, calibration["share"], calibration["rate"])
+    return np.clip(rate * (1.0 - MAP_SLOPE) + MAP_SLOPE * np.clip(score, 0.0, 1.0), 0.0, 1.0)
+
+
+def fit_calibration(share: np.ndarray, label: np.ndarray) -> dict:
+    """A non-decreasing map from shares of viable copies to the rate of positives
+    (isotonic regression, one knot per share: the ε tie-break is not calibrated).
+
+    Parameters
+    ----------
+    share : (n,) float ndarray
+        Shares of viable copies on validation rows.
+    label : (n,) bool or 0/1 ndarray
+        Their truth.
+
+    Returns
+    -------
+    dict
+        ``share`` (the distinct shares, increasing) and ``rate`` (the fitted rate at each),
+        for :func:`calibrated`.
+    """
+    from scipy.optimize import isotonic_regression
+
+    share = np.nan_to_num(np.asarray(share, dtype=np.float64), nan=0.0)
+    knots, inverse = np.unique(share, return_inverse=True)
+    y = np.asarray(label, dtype=np.float64)
+    count = np.bincount(inverse, minlength=len(knots)).astype(np.float64)
+    mean = np.bincount(inverse, weights=y, minlength=len(knots)) / count
+    rate = isotonic_regression(mean, weights=count).x
+    return {"share": knots.tolist(), "rate": [float(r) for r in rate]}
+
+
+def fit_views_config(
+    dataset,
+    objects,
+    *,
+    views: int | None = None,
+    copies: int = DEFAULT_COPIES,
+    seed: int = 0,
+    log=None,
+) -> dict:
+    """Fit a views model's calibration map and decision threshold on validation objects.
+
+    Parameters
+    ----------
+    dataset : path or Dataset
+        A dataset generated with metrics.
+    objects : sequence of str
+        The validation objects (never those the views model is judged on).
+    views : int, optional
+        Views fused per object (default :data:`~affordgrasp.learning.plan.FUSED_VIEWS`).
+    copies : int
+        K perturbed copies per row on the fused surface.
+    seed : int
+        ``plan``'s seed whose first candidates' views are fused.
+    log : callable, optional
+        Progress lines.
+
+    Returns
+    -------
+    dict
+        The model file's contents (:func:`write_views_config`).
+    """
+    from .data import read_rows
+    from .evaluation import best_f1_threshold, expected_calibration_error
+    from .plan import FUSED_VIEWS
+
+    views = FUSED_VIEWS if views is None else int(views)
+    if views < 1 or copies < 1:
+        raise InputError(f"views and copies must be >= 1, got {views} and {copies}")
+    samples, _ = read_rows(dataset, CLASSIFIER_TARGET, objects=list(objects))
+    if len(samples) == 0:
+        raise InputError(f"none of the objects {list(objects)} has rows in {str(dataset)!r}")
+    config = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "arch": ARCH,
+        "views": views,
+        "seed": int(seed),
+        "copies": int(copies),
+    }
+    raw = FusedViews(config, log=log).raw(samples)
+    score = share_score(raw[:, 0], raw[:, 1])
+    config["calibration"] = fit_calibration(raw[:, 0], samples.y > 0.5)
+    prob = calibrated(score, config["calibration"])
+    # the threshold is one of the shares' calibrated values (a row's ε tie-break only adds)
+    value, f1 = best_f1_threshold(samples.y, calibrated(raw[:, 0], config["calibration"]))
+    names = sorted(set(samples.object))
+    config["decision_threshold"] = {
+        "value": value,
+        "rule": "largest F1 on the validation objects",
+        "f1": f1,
+        "rows": len(samples),
+        "expected_calibration_error": expected_calibration_error(samples.y, prob),
+    }
+    config["calibration"].update(
+        {
+            "rule": "isotonic regression of the true viability on the share of viable copies",
+            "rows": len(samples),
+            "positive_rate": float(np.mean(samples.y > 0.5)),
+            "uncalibrated_expected_calibration_error": expected_calibration_error(
+                samples.y, np.clip(score, 0.0, 1.0)
+            ),
+        }
+    )
+    # the objects fitted on are the model's validation split: model-eval names them
+    config["training"] = {"split": {"train": [], "val": names, "test": []}}
+    return config
+
+
+def write_views_config(path: str | os.PathLike, config: dict) -> Path:
+    """Write a views model file (JSON, atomically).
+
+    Parameters
+    ----------
+    path : path
+    config : dict
+        :func:`fit_views_config`'s result.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    path = Path(path)
+    atomic_write(path, (json.dumps(config, indent=1) + "\n").encode())
+    return path
