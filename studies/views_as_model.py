@@ -32,20 +32,14 @@ import numpy as np
 def object_rows(name: str, *, samples: int, sample_seed: int, copies: int, views: int) -> dict:
     """The truth and the fused surface's prediction for one object's rows."""
     from affordgrasp.columns import HOLD_EFFORT_COLUMNS, hold_effort_sum
-    from affordgrasp.grasp.pregrasp import PLAN_OFFSET_RANGE, sample_inputs
-    from affordgrasp.learning.plan import fuse_candidate_views
+    from affordgrasp.grasp.pregrasp import sample_inputs
+    from affordgrasp.learning.views_model import fused_surface
     from affordgrasp.objects import load_object
     from affordgrasp.pipeline import evaluate_inputs
     from affordgrasp.tasks import is_viable
-    from affordgrasp.vision.depth import depth_to_mm, renderer_for
 
     obj = load_object(name)
-    seen, _ = sample_inputs(0, 0, views)  # plan's first candidates, seed 0
-    seen[:, 3:5] *= PLAN_OFFSET_RANGE
-    renderer = renderer_for(obj)
-    fused = fuse_candidate_views(
-        depth_to_mm(renderer.render(seen)), renderer.poses(seen), renderer.camera, name
-    )
+    fused = fused_surface(obj, views=views)  # plan's first views, seed 0
     p0, use_dir = sample_inputs(sample_seed, 0, samples)
     out = {}
     for key, target, frame in (("true", obj, None), ("fused", fused, obj)):

@@ -81,6 +81,8 @@ def test_the_shipped_views_model_was_fitted_on_validation_objects():
     (clf, c1), (reg, c2) = load_views_models("views")
     assert clf is reg and c1["target"]["name"] == "viable" and c2["target"]["name"] == "robust_hold"
     assert "decision_threshold" not in c2
+    (_, c1), (_, c2) = load_views_models("views:raw")
+    assert c2["target"]["name"] == "hold_effort_sum" and c2["target"]["lower_is_better"]
 
 
 @pytest.fixture(scope="module")
@@ -128,6 +130,15 @@ def test_predictions_are_the_simulation_on_the_fused_surface(robust_dataset, sma
     assert np.array_equal(prob[knife], calibrated(share_score(share, eps), c1["calibration"]))
     fused_hold = table.column("robust_hold").to_numpy(zero_copy_only=False)
     assert np.allclose(hold[knife] * 6, fused_hold) and fused_hold.max() > 1
+    # the raw ranker: the fused ΣE_h, the viability bound where the grasp does not hold
+    from affordgrasp.columns import HOLD_EFFORT_COLUMNS, hold_effort_sum
+
+    effort = views.predict(load_views_models("views:raw")[1][1], samples)[knife] * 250
+    fused_effort = hold_effort_sum(
+        {c: table.column(c).to_numpy(zero_copy_only=False) for c in HOLD_EFFORT_COLUMNS}
+    )
+    assert np.allclose(effort, np.where(np.isfinite(fused_effort), fused_effort, 250.0))
+    assert len(lines) == 2
     # a subset in another order: the same predictions, nothing simulated again
     idx = np.flatnonzero(knife)[::-1]
     assert np.array_equal(views.predict(c1, samples.take(idx)), prob[idx]) and len(lines) == 2

@@ -34,8 +34,8 @@ def add_arguments(p) -> None:
         metavar="MODEL",
         help="a .safetensors model, classifier, regressor, default (both shipped models), "
         "a classifier and a regressor file separated by a comma, or views (the fused views "
-        "plan decides with, judged as a classifier of viable and a ranker of robust_hold; "
-        "about 8 s of CPU per 512 rows)",
+        "plan decides with, judged as a classifier of viable and a ranker of robust_hold, "
+        "or with views:raw of the raw hold_effort_sum; about 8 s of CPU per 512 rows)",
     )
     p.add_argument("dataset", metavar="DATASET", help="a directory written by 'generate'")
     p.add_argument(
@@ -101,8 +101,8 @@ def _judged(models, dataset):
     kept = [
         (m, c)
         for m, c in models
-        if not (c.get("arch") == "views" and c["target"]["kind"] == "regression")
-        or c["target"]["name"] in Dataset.open(dataset).arrow().schema.names
+        if not (c.get("arch") == "views" and c["target"]["name"] == "robust_hold")
+        or "robust_hold" in Dataset.open(dataset).arrow().schema.names
     ]
     if len(kept) < len(models):
         print(

@@ -11,7 +11,9 @@ default perturbations, :mod:`affordgrasp.robust`). Two predictions come of it:
   (ties broken by the fused ε), mapped through a non-decreasing calibration map fitted on
   validation objects (isotonic regression of their true viability on the share); the map
   is strictly increasing, so it changes no ranking;
-* the **ranker** of ``robust_hold``: the fused surface's own ``robust_hold``.
+* the **ranker** of ``robust_hold``: the fused surface's own ``robust_hold``; or, with
+  ``views:raw``, of the raw ΣE_h on viable rows: the fused surface's ΣE_h (the viability
+  bound, 250 N, where the grasp does not hold there).
 
 Nothing is learned but the calibration map and the decision threshold, stored in
 ``pretrained/views.json`` (:func:`fit_views_config` writes one; ``tools/fit_views_model.py``
@@ -35,7 +37,7 @@ import numpy as np
 from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import InputError
 from ..writing import atomic_write
-from .targets import Target
+from .targets import Target, make_target
 
 FORMAT = "affordgrasp-views"
 FORMAT_VERSION = 1
@@ -52,6 +54,8 @@ CLASSIFIER_TARGET = Target("viable", "classification", "all")
 RANKER_TARGET = Target(
     "robust_hold", "regression", "finite", 0.0, float(len(HOLD_EFFORT_COLUMNS)), False, False
 )
+RAW_RANKER_TARGET = make_target("hold_effort_sum")  # ΣE_h on viable rows, [0, 250] N
+RANKERS = {"robust": RANKER_TARGET, "raw": RAW_RANKER_TARGET}
 
 
 def views_config_path() -> Path:
@@ -65,7 +69,8 @@ def views_config_path() -> Path:
 
 
 def is_views_spec(spec: Any) -> bool:
-    """Whether a model option names the fused views (``"views"`` or a views .json file).
+    """Whether a model option names the fused views (``"views"``, ``"views:raw"``,
+    ``"views:robust"`` or a views .json file).
 
     Parameters
     ----------
@@ -75,7 +80,7 @@ def is_views_spec(spec: Any) -> bool:
     -------
     bool
     """
-    if isinstance(spec, str) and spec == ARCH:
+    if isinstance(spec, str) and spec in (ARCH, *(f"{ARCH}:{r}" for r in RANKERS)):
         return True
     if isinstance(spec, str | os.PathLike) and str(spec).endswith(".json"):
         return True
@@ -131,15 +136,16 @@ def read_views_config(path: str | os.PathLike | None = None) -> dict:
     return config
 
 
-def load_views_models(spec: str | os.PathLike = ARCH, *, regressor: bool = True, log=None):
-    """The views classifier (and ranker) as ``(predictor, config)`` pairs, as models load.
+def load_views_models(spec: str | os.PathLike = ARCH, *, log=None):
+    """The views classifier and ranker as ``(predictor, config)`` pairs, as models load.
 
     Parameters
     ----------
     spec : str or path
-        ``"views"`` (the shipped calibration) or a views model file.
-    regressor : bool
-        Also the ranker of ``robust_hold`` (needs a dataset with robust labels to judge).
+        ``"views"`` or ``"views:robust"`` (the shipped calibration; the ranker of
+        ``robust_hold``, which needs a dataset with robust labels to judge),
+        ``"views:raw"`` (the ranker of ΣE_h on viable rows), or a views model file (the
+        ranker of ``robust_hold``).
     log : callable, optional
         Called with a line of progress per object predicted.
 
@@ -148,13 +154,16 @@ def load_views_models(spec: str | os.PathLike = ARCH, *, regressor: bool = True,
     list of (FusedViews, dict)
         The classifier first; both share one predictor (each row is simulated once).
     """
-    config = read_views_config(None if str(spec) == ARCH else spec)
+    name, _, which = str(spec).partition(":") if is_views_spec(spec) else ("", "", "")
+    shipped = name == ARCH
+    config = read_views_config(None if shipped else spec)
     predictor = FusedViews(config, log=log)
-    pairs = [(predictor, {**config, "arch": ARCH, "target": CLASSIFIER_TARGET.to_dict()})]
-    if regressor:
-        ranker = {k: v for k, v in config.items() if k != "decision_threshold"}
-        pairs.append((predictor, {**ranker, "arch": ARCH, "target": RANKER_TARGET.to_dict()}))
-    return pairs
+    ranker = {k: v for k, v in config.items() if k != "decision_threshold"}
+    target = RANKERS[which if shipped and which else "robust"]
+    return [
+        (predictor, {**config, "arch": ARCH, "target": CLASSIFIER_TARGET.to_dict()}),
+        (predictor, {**ranker, "arch": ARCH, "target": target.to_dict()}),
+    ]
 
 
 def views_candidates(views: int, seed: int = 0) -> np.ndarray:
@@ -219,10 +228,11 @@ class FusedViews:
         self.config = config
         self.log = log
         self._surfaces: dict[tuple[str, str], Any] = {}
-        self._rows: dict[tuple[str, str], dict[int, tuple[float, float, float]]] = {}
+        self._rows: dict[tuple[str, str], dict[int, tuple[float, ...]]] = {}
 
     def simulate(self, dataset, name: str, sample, p0, use_dir) -> np.ndarray:
-        """(share of viable copies, fused ε, fused robust_hold) of one object's rows.
+        """(share of viable copies, fused ε, fused robust_hold, fused ΣE_h) of one object's
+        rows.
 
         Parameters
         ----------
@@ -237,10 +247,11 @@ class FusedViews:
 
         Returns
         -------
-        (n, 3) float64 ndarray
+        (n, 4) float64 ndarray
         """
         import time
 
+        from ..columns import hold_effort_sum
         from ..pipeline import evaluate_inputs
 
         key = (str(dataset.directory), name)
@@ -265,15 +276,20 @@ class FusedViews:
                 np.nan_to_num(table.column(c).to_numpy(zero_copy_only=False).astype(np.float64))
                 for c in ("robust_viable", "epsilon", "robust_hold")
             ]
+            effort = hold_effort_sum(
+                {c: table.column(c).to_numpy(zero_copy_only=False) for c in HOLD_EFFORT_COLUMNS}
+            )
+            # no hold on the fused surface: the viability bound (beyond it, nothing is viable)
+            cols.append(np.where(np.isfinite(effort), effort, RAW_RANKER_TARGET.high))
             for j, i in enumerate(missing):
-                kept[int(sample[i])] = (cols[0][j], cols[1][j], cols[2][j])
+                kept[int(sample[i])] = tuple(float(c[j]) for c in cols)
             if self.log is not None:
                 self.log(
                     f"views: {name}: {len(missing)} rows x {self.config['copies']} copies on "
                     f"the surface fused from {self.config['views']} views, "
                     f"{time.process_time() - t0:.1f} s CPU"
                 )
-        return np.array([kept[int(s)] for s in sample], dtype=np.float64).reshape(-1, 3)
+        return np.array([kept[int(s)] for s in sample], dtype=np.float64).reshape(-1, 4)
 
     def raw(self, samples) -> np.ndarray:
         """The rows' simulations on the fused surfaces, in the order of ``samples``.
@@ -285,8 +301,9 @@ class FusedViews:
 
         Returns
         -------
-        (n, 3) float64 ndarray
-            Share of viable copies, fused ε, fused ``robust_hold``.
+        (n, 4) float64 ndarray
+            Share of viable copies, fused ε, fused ``robust_hold``, fused ΣE_h (N; 250
+            where it does not hold).
 
         Raises
         ------
@@ -299,7 +316,7 @@ class FusedViews:
                 "the views model predicts for a dataset's rows (it renders and fuses each "
                 "object's views itself); read the rows with affordgrasp.learning.data.read_rows"
             )
-        out = np.zeros((len(samples), 3))
+        out = np.zeros((len(samples), 4))
         for name in dict.fromkeys(samples.object):
             rows = np.flatnonzero(samples.object == name)
             out[rows] = self.simulate(
@@ -319,14 +336,16 @@ class FusedViews:
         Returns
         -------
         (n,) float64 ndarray
-            The calibrated probability of ``viable``, or the fused ``robust_hold`` on the
-            target's scale (``robust_hold`` / 6, as the truth is normalised).
+            The calibrated probability of ``viable``, or the fused ``robust_hold`` or ΣE_h
+            on the target's scale (as the truth is normalised: ``robust_hold`` / 6,
+            ΣE_h / 250 N).
         """
         raw = self.raw(samples)
         if config["target"]["kind"] == "classification":
             return calibrated(share_score(raw[:, 0], raw[:, 1]), config.get("calibration"))
         tgt = Target.from_dict(config["target"])
-        return (raw[:, 2] - tgt.low) / (tgt.high - tgt.low)
+        value = raw[:, 3] if tgt.name == RAW_RANKER_TARGET.name else raw[:, 2]
+        return (value - tgt.low) / (tgt.high - tgt.low)
 
 
 def share_score(share: np.ndarray, epsilon: np.ndarray) -> np.ndarray:
