@@ -205,3 +205,11 @@ def test_model_eval_views_without_robust_labels_judges_the_classifier(
     assert rc == 0, captured.err
     assert [m["target"]["name"] for m in json.loads(captured.out)["models"]] == ["viable"]
     assert "ranker of robust_hold is not judged" in captured.err + captured.out
+
+
+def test_plan_decides_with_views_not_a_views_model_file(tmp_path):
+    from affordgrasp.learning.plan import plan
+
+    for spec in ("views:raw", str(tmp_path / "v.json")):
+        with pytest.raises(InputError, match="model-eval and predict"):
+            plan("knife", models=spec)

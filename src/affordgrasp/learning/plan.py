@@ -428,6 +428,7 @@ def plan(
     from ..tasks.metric_columns import MetricColumns
     from ..vision.depth import depth_to_mm, renderer_for
     from .data import Samples
+    from .views_model import is_views_spec
 
     if isinstance(candidates, bool) or not isinstance(candidates, int | np.integer):
         raise InputError(f"candidates must be a positive integer, got {candidates!r}")
@@ -452,6 +453,12 @@ def plan(
     step = progress or (lambda name: None)
     timings: dict[str, float] = {}
     views = isinstance(models, str) and models == VIEWS
+    if not views and is_views_spec(models):
+        raise InputError(
+            f"plan decides on the fused views with models='views' (its own rule: margin "
+            f"order, refined candidates, the robust check); {str(models)!r} is for "
+            "model-eval and predict, which judge the views row by row"
+        )
     if views and threshold is not None:
         raise InputError("threshold is a classifier's decision threshold; models='views' has none")
     classifier, regressor = (None, None) if views else split_models(load_models(models))
