@@ -82,6 +82,8 @@ def test_the_shipped_views_model_was_fitted_on_validation_objects():
     assert clf is reg and c1["target"]["name"] == "viable" and c2["target"]["name"] == "robust_hold"
     assert "decision_threshold" not in c2
     (_, c1), (_, c2) = load_views_models("views:raw")
+    with pytest.raises(InputError, match="views:raw"):
+        load_views_models("views:hold")
     assert c2["target"]["name"] == "hold_effort_sum" and c2["target"]["lower_is_better"]
 
 

@@ -47,7 +47,8 @@ def load_models(spec: str):
     InputError
         When torch or safetensors is missing (the message says how to install them).
     """
-    from ..learning.views_model import is_views_spec, load_views_models
+    from ..learning.plan import is_views_spec
+    from ..learning.views_model import load_views_models
 
     if is_views_spec(spec):
         return load_views_models(spec, log=_stderr)

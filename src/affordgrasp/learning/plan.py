@@ -34,6 +34,7 @@ depth images and the poses (the fused surface is made from the images alone).
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -428,7 +429,6 @@ def plan(
     from ..tasks.metric_columns import MetricColumns
     from ..vision.depth import depth_to_mm, renderer_for
     from .data import Samples
-    from .views_model import is_views_spec
 
     if isinstance(candidates, bool) or not isinstance(candidates, int | np.integer):
         raise InputError(f"candidates must be a positive integer, got {candidates!r}")
@@ -609,6 +609,23 @@ def plan(
         fused_robust_epsilon=fused_robust_epsilon,
         drawn=n if len(p0) > n else None,
     )
+
+
+def is_views_spec(spec: Any) -> bool:
+    """Whether a model option names the fused views: ``"views"``, ``"views:RANKER"`` or a
+    views model file (``.json``, :mod:`affordgrasp.learning.views_model`).
+
+    Parameters
+    ----------
+    spec : object
+
+    Returns
+    -------
+    bool
+    """
+    if isinstance(spec, str) and (spec == VIEWS or spec.startswith(VIEWS + ":")):
+        return True
+    return isinstance(spec, str | os.PathLike) and str(spec).endswith(".json")
 
 
 def fuse_candidate_views(depth_mm, poses, camera, name: str, *, sensed: bool = False):

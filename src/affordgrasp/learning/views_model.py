@@ -37,11 +37,11 @@ import numpy as np
 from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import InputError
 from ..writing import atomic_write
+from .plan import VIEWS as ARCH
 from .targets import Target, make_target
 
 FORMAT = "affordgrasp-views"
 FORMAT_VERSION = 1
-ARCH = "views"
 VIEWS_FILE = "views.json"
 DEFAULT_COPIES = 25  # K of the copies simulated on the fused surface (the robust labels' K)
 # the ε tie-break inside one share of copies: below the step between shares (1/K, K <= 100)
@@ -66,25 +66,6 @@ def views_config_path() -> Path:
     pathlib.Path
     """
     return Path(str(resources.files("affordgrasp.learning") / "pretrained" / VIEWS_FILE))
-
-
-def is_views_spec(spec: Any) -> bool:
-    """Whether a model option names the fused views (``"views"``, ``"views:raw"``,
-    ``"views:robust"`` or a views .json file).
-
-    Parameters
-    ----------
-    spec : object
-
-    Returns
-    -------
-    bool
-    """
-    if isinstance(spec, str) and spec in (ARCH, *(f"{ARCH}:{r}" for r in RANKERS)):
-        return True
-    if isinstance(spec, str | os.PathLike) and str(spec).endswith(".json"):
-        return True
-    return False
 
 
 def read_views_config(path: str | os.PathLike | None = None) -> dict:
@@ -154,8 +135,13 @@ def load_views_models(spec: str | os.PathLike = ARCH, *, log=None):
     list of (FusedViews, dict)
         The classifier first; both share one predictor (each row is simulated once).
     """
-    name, _, which = str(spec).partition(":") if is_views_spec(spec) else ("", "", "")
+    name, _, which = str(spec).partition(":")
     shipped = name == ARCH
+    if shipped and which and which not in RANKERS:
+        raise InputError(
+            f"unknown views ranker {which!r} in {str(spec)!r}; choose views (robust_hold), "
+            "views:robust or views:raw (hold_effort_sum)"
+        )
     config = read_views_config(None if shipped else spec)
     predictor = FusedViews(config, log=log)
     ranker = {k: v for k, v in config.items() if k != "decision_threshold"}
