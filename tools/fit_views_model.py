@@ -24,22 +24,6 @@ import argparse
 import time
 from pathlib import Path
 
-FAMILIES = (
-    "hammer",
-    "knife",
-    "meat_cleaver",
-    "axe",
-    "screwdriver",
-    "spatula",
-    "sword",
-    "dagger",
-    "bottle",
-    "wine_glass",
-    "tumbler",
-    "mug",
-    "ice_cream_cone",
-)
-
 
 def main() -> None:
     from affordgrasp.dataset.generate import generate
@@ -48,6 +32,7 @@ def main() -> None:
         views_config_path,
         write_views_config,
     )
+    from affordgrasp.objects import list_families
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, required=True, help="the calibration dataset (resumed)")
@@ -58,13 +43,14 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=None, help="generation processes")
     ap.add_argument("--out", type=Path, default=None, help="default: the shipped file")
     args = ap.parse_args()
-    objects = [f"{f}:{v}" for f in FAMILIES for v in args.variants.split(",")]
+    families = list_families()  # the 13 built-in families
+    objects = [f"{f}:{v}" for f in families for v in args.variants.split(",")]
     started = time.perf_counter()
     generate(objects, args.samples, args.data, seed=args.seed, workers=args.workers)
     print(f"dataset {args.data}: {time.perf_counter() - started:.0f} s")
     config = fit_views_config(args.data, objects, copies=args.copies, log=print)
     config["calibration"]["dataset"] = (
-        f"{len(FAMILIES)} families x variants {args.variants} x {args.samples} uniform "
+        f"{len(families)} families x variants {args.variants} x {args.samples} uniform "
         f"samples, seed {args.seed}, per-object streams"
     )
     out = write_views_config(args.out or views_config_path(), config)

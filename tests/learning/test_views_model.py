@@ -64,9 +64,11 @@ def test_views_model_files_are_checked(tmp_path):
     bad.write_text(json.dumps({"format": FORMAT, "format_version": 99}))
     with pytest.raises(InputError, match="upgrade affordgrasp"):
         read_views_config(bad)
-    bad.write_text(
-        json.dumps({"format": FORMAT, "calibration": {"share": [0.5, 0.1], "rate": [0, 1]}})
-    )
+    bad.write_text(json.dumps({"format": FORMAT, "views": 64, "seed": 0}))
+    with pytest.raises(InputError, match="'copies' must be an integer >= 1, got None"):
+        read_views_config(bad)
+    good = {"format": FORMAT, "views": 8, "copies": 2, "seed": 0}
+    bad.write_text(json.dumps({**good, "calibration": {"share": [0.5, 0.1], "rate": [0, 1]}}))
     with pytest.raises(InputError, match="knots"):
         read_views_config(bad)
 

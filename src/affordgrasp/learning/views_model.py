@@ -110,6 +110,10 @@ def read_views_config(path: str | os.PathLike | None = None) -> dict:
             f"{config['format_version']}; this affordgrasp reads up to {FORMAT_VERSION}: "
             "upgrade affordgrasp"
         )
+    for key, least in (("views", 1), ("copies", 1), ("seed", 0)):
+        value = config.get(key)
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise InputError(f"{str(path)!r}: {key!r} must be an integer >= {least}, got {value!r}")
     calibration = config.get("calibration") or {}
     xs, ys = calibration.get("share", []), calibration.get("rate", [])
     if len(xs) != len(ys) or any(b < a for a, b in zip(xs, xs[1:], strict=False)):
