@@ -217,3 +217,11 @@ def test_plan_decides_with_views_not_a_views_model_file(tmp_path):
     for spec in ("views:raw", str(tmp_path / "v.json")):
         with pytest.raises(InputError, match="model-eval and predict"):
             plan("knife", models=spec)
+
+
+def test_bad_views_options_exit_2(robust_dataset, tmp_path, capsys):
+    assert main(["model-eval", "views:hold", str(robust_dataset)]) == 2
+    assert "unknown views ranker 'hold'" in capsys.readouterr().err
+    missing = tmp_path / "none.json"
+    rc = main(["predict", str(missing), str(robust_dataset), "--out", str(tmp_path / "p.parquet")])
+    assert rc == 2 and "does not exist" in capsys.readouterr().err
