@@ -367,3 +367,62 @@ def test_a_floating_speck_is_kept_and_named(caplog):
             trimesh.util.concatenate([body, box((0.02, 0.02, 0.02), (0.1, 0, 0))]), source="two"
         )
     assert "speck" not in caplog.text
+
+
+def _cut_at_the_base(name: str, height_m: float) -> trimesh.Trimesh:
+    """A built-in object with the faces of its lowest ``height_m`` removed: a scan whose
+    base was never seen (the rim is the jagged edge of the triangles kept)."""
+    from affordgrasp.objects import load_object
+
+    obj = load_object(name)
+    mesh = trimesh.Trimesh(obj.vertices, obj.faces, process=False)
+    keep = mesh.triangles_center[:, 2] > mesh.bounds[0, 2] + height_m
+    cut = trimesh.Trimesh(mesh.vertices, mesh.faces[keep], process=False)
+    cut.remove_unreferenced_vertices()
+    assert not cut.is_watertight
+    return cut
+
+
+@pytest.mark.parametrize(
+    ("name", "height_m"),
+    [
+        ("wine_glass:0", 0.002),  # a rim triangle with two rim edges: a fan from the centroid
+        ("hammer:0", 0.004),
+        ("spatula:0", 0.002),
+    ],
+)
+def test_a_base_cut_open_is_capped(name, height_m, caplog):
+    from affordgrasp.objects import load_object
+
+    whole = load_object(name)
+    with caplog.at_level(logging.WARNING):
+        repaired = prepare_mesh(_cut_at_the_base(name, height_m), source="scan.ply")
+    assert repaired.is_watertight and repaired.is_winding_consistent
+    # the cap stands at the rim: less volume than the whole object, never more
+    assert 0.8 * whole.mass.volume < repaired.volume < whole.mass.volume
+    assert "scan.ply was repaired: " in caplog.text and "capped" in caplog.text
+
+
+def test_a_hole_pinched_to_one_vertex_is_capped_as_two():
+    # A unit cube open at the top, half its top covered by two triangles meeting at the
+    # centre: the two holes left share that vertex, and the rim is traced through it twice.
+    v = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+    faces = [[0, 2, 1], [0, 3, 2]]
+    for i in range(4):
+        j = (i + 1) % 4
+        faces += [[i, j, j + 4], [i, j + 4, i + 4]]
+    faces += [[6, 7, 8], [4, 5, 8]]
+    pinched = trimesh.Trimesh([*v, [0.5, 0.5, 1]], faces, process=False)
+    assert not pinched.is_watertight
+    assert_solid(prepare_mesh(pinched), 1.0)
+
+
+def test_a_rim_through_one_vertex_twice_is_split_into_simple_loops():
+    from affordgrasp.objects.loading import _simple_loops
+
+    def split(loop):
+        return [part.tolist() for part in _simple_loops(loop)]
+
+    assert split([1, 2, 3, 4, 2, 5, 6]) == [[2, 3, 4], [1, 2, 5, 6]]
+    assert split([1, 2, 3]) == [[1, 2, 3]]
+    assert split([1, 2, 3, 2, 4, 5]) == [[1, 2, 4, 5]]  # a spur there and back: no cap

@@ -11,9 +11,11 @@ Repair order, cheapest and least invasive first:
 2. a closed mesh made of several bodies: overlapping bodies are unioned (manifold3d) so
    that no volume is counted twice, bodies turned inside out are flipped, a body inside
    another and facing inwards is kept as a cavity;
-3. an open mesh: fix the winding, cap each hole with a polygon triangulated in its plane,
-   and close each connected part separately (parts touching along an edge are a soup of
-   closed parts: step 2 then unions them);
+3. an open mesh: fix the winding, cap each hole with a polygon triangulated in its plane
+   (a rim that passes one vertex twice is capped as two holes; a jagged rim whose planar
+   triangulation would reuse an edge of the mesh, as a scan cut open at its base has, is
+   capped with a fan from its centroid), and close each connected part separately (parts
+   touching along an edge are a soup of closed parts: step 2 then unions them);
 4. still open: let manifold3d merge nearly coincident vertices along open edges.
 
 Whatever is still not a closed volume, or encloses no volume, is refused with a
@@ -722,12 +724,53 @@ def _fill_holes(mesh: trimesh.Trimesh) -> list[np.ndarray]:
                 loop.append(current)
                 current = successors[current].pop()
             if current == start and len(loop) >= 3:
-                loops.append(np.array(loop, dtype=np.int64))
+                loops += _simple_loops(loop)
     if not loops:
         return []
-    caps = [loop[triangulate_polygon(mesh.vertices[loop])] for loop in loops]
+    existing = {tuple(e) for e in undirected.tolist()}
+    caps, centres = [], []
+    for loop in loops:
+        cap = loop[triangulate_polygon(mesh.vertices[loop])]
+        if len(cap) < len(loop) - 2 or _reuses_an_edge(cap, loop, existing):
+            # A jagged rim (a scan cut open at its base) where the planar triangulation
+            # drops an ear or draws a diagonal that is already an edge of the mesh (a
+            # triangle with two rim edges): a fan from a new vertex at the rim's centroid
+            # uses no edge but the rim's.
+            centre = len(mesh.vertices) + len(centres)
+            centres.append(mesh.vertices[loop].mean(axis=0))
+            cap = np.stack([loop, np.roll(loop, -1), np.full(len(loop), centre)], axis=1)
+        caps.append(cap)
+    if centres:
+        mesh.vertices = np.vstack([mesh.vertices, np.array(centres)])
     mesh.faces = np.vstack([faces, *caps])
     return loops
+
+
+def _simple_loops(loop: list[int]) -> list[np.ndarray]:
+    """A traced boundary loop split where it passes a vertex twice (a rim pinched to one
+    vertex: a figure of eight), so that each cap is a simple polygon."""
+    out, stack, where = [], [], {}
+    for v in loop:
+        if v in where:
+            i = where[v]
+            if len(stack) - i >= 3:
+                out.append(np.array(stack[i:], dtype=np.int64))
+            for u in stack[i + 1 :]:
+                del where[u]
+            del stack[i + 1 :]
+        else:
+            where[v] = len(stack)
+            stack.append(v)
+    if len(stack) >= 3:
+        out.append(np.array(stack, dtype=np.int64))
+    return out
+
+
+def _reuses_an_edge(cap: np.ndarray, loop: np.ndarray, existing: set) -> bool:
+    """Whether a cap's triangles use an edge of the mesh that is not on its rim."""
+    rim = {tuple(sorted(e)) for e in zip(loop.tolist(), np.roll(loop, -1).tolist(), strict=True)}
+    edges = np.sort(cap[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    return any(e in existing and e not in rim for e in map(tuple, edges.tolist()))
 
 
 def _boundary_edge_count(mesh: trimesh.Trimesh) -> int:
