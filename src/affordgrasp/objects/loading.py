@@ -514,25 +514,21 @@ def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> tr
         _same_cycle(wound.get(tuple(sorted(face))), tuple(face)) is False
         for face in work.faces.tolist()
     )
-    # Split first: at an edge shared by more than two faces (closed parts touching) the
-    # face adjacency stops, so each part is closed on its own and then unioned.
-    bodies = list(work.split(only_watertight=False, repair=False)) or [work]
     scale = float(np.ptp(work.vertices, axis=0).max())
-    holes: list[np.ndarray] = []
-    fins = fin_faces = 0
-    for body in bodies:
-        if not _is_closed(body):
-            open_faces = len(body.faces)
-            loops = _fill_holes(body)
-            _fix_normals(body)
-            if abs(_signed_volume(body)) <= MIN_RELATIVE_VOLUME * scale**3:
-                # An open sheet (a fin hanging off an edge, a stray triangle): it encloses
-                # nothing and is dropped with the flat parts.
-                fins += 1
-                fin_faces += open_faces
-            else:
-                holes += [body.vertices[loop] for loop in loops]
-    if all(_is_closed(body) for body in bodies):
+    # The caps of earlier versions first, then manifold3d's merge, and only then the caps
+    # for rims those could not close (a rim through one vertex twice, a jagged rim whose
+    # planar cap would reuse an edge of the mesh): every mesh repaired before is repaired
+    # the same way.
+    for careful in (False, True):
+        if careful:
+            merged = _manifold_repair(mesh)
+            if merged is not None:
+                repairs.append("closed its open edges by merging nearly coincident vertices")
+                return _oriented(merged, repairs)
+        capped = _capped_bodies(work, scale, careful)
+        if capped is None:
+            continue
+        bodies, holes, fins, fin_faces = capped
         if turned:
             were = "was" if turned == 1 else "were"
             repairs.append(f"re-wound {_count(turned, 'face')} that {were} wound against the rest")
@@ -550,16 +546,38 @@ def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> tr
             )
         return _combine_bodies(bodies, None, source, repairs, quiet_flat=fins)
 
-    merged = _manifold_repair(mesh)
-    if merged is not None:
-        repairs.append("closed its open edges by merging nearly coincident vertices")
-        return _oriented(merged, repairs)
-
     open_edges = _boundary_edge_count(work)
     raise MeshError(
         f"{source} is not a closed volume: {open_edges} edge(s) are open or shared by more "
         "than two faces after repair; close it in a mesh editor, or pass a watertight mesh"
     )
+
+
+def _capped_bodies(work: trimesh.Trimesh, scale: float, careful: bool):
+    """Each connected part of ``work`` with its holes capped, or None when one stays open.
+
+    Returns (bodies, the holes' rims, open sheets dropped, their faces). Split first: at an
+    edge shared by more than two faces (closed parts touching) the face adjacency stops, so
+    each part is closed on its own and then unioned.
+    """
+    bodies = list(work.split(only_watertight=False, repair=False)) or [work.copy()]
+    holes: list[np.ndarray] = []
+    fins = fin_faces = 0
+    for body in bodies:
+        if not _is_closed(body):
+            open_faces = len(body.faces)
+            loops = _fill_holes(body, careful=careful)
+            _fix_normals(body)
+            if abs(_signed_volume(body)) <= MIN_RELATIVE_VOLUME * scale**3:
+                # An open sheet (a fin hanging off an edge, a stray triangle): it encloses
+                # nothing and is dropped with the flat parts.
+                fins += 1
+                fin_faces += open_faces
+            else:
+                holes += [body.vertices[loop] for loop in loops]
+    if not all(_is_closed(body) for body in bodies):
+        return None
+    return bodies, holes, fins, fin_faces
 
 
 def _fix_normals(mesh: trimesh.Trimesh) -> None:
@@ -697,12 +715,14 @@ def _warn_specks(bodies: list[trimesh.Trimesh], source: str) -> None:
     )
 
 
-def _fill_holes(mesh: trimesh.Trimesh) -> list[np.ndarray]:
+def _fill_holes(mesh: trimesh.Trimesh, *, careful: bool = False) -> list[np.ndarray]:
     """Cap every boundary loop of a consistently wound mesh in place; return the loops.
 
     Each cap is the loop triangulated in its best-fit plane, wound against the boundary
     edges so that the result stays consistently wound. Loops that cannot be traced (a
-    vertex where the boundary branches oddly) are left open.
+    vertex where the boundary branches oddly) are left open. With ``careful``, a loop
+    through one vertex twice is capped as simple loops, and a cap whose triangulation
+    drops an ear or reuses an edge of the mesh off its rim is a fan from the rim's centroid.
     """
     faces = mesh.faces
     directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
@@ -724,14 +744,14 @@ def _fill_holes(mesh: trimesh.Trimesh) -> list[np.ndarray]:
                 loop.append(current)
                 current = successors[current].pop()
             if current == start and len(loop) >= 3:
-                loops += _simple_loops(loop)
+                loops += _simple_loops(loop) if careful else [np.array(loop, dtype=np.int64)]
     if not loops:
         return []
     existing = {tuple(e) for e in undirected.tolist()}
     caps, centres = [], []
     for loop in loops:
         cap = loop[triangulate_polygon(mesh.vertices[loop])]
-        if len(cap) < len(loop) - 2 or _reuses_an_edge(cap, loop, existing):
+        if careful and (len(cap) < len(loop) - 2 or _reuses_an_edge(cap, loop, existing)):
             # A jagged rim (a scan cut open at its base) where the planar triangulation
             # drops an ear or draws a diagonal that is already an edge of the mesh (a
             # triangle with two rim edges): a fan from a new vertex at the rim's centroid
