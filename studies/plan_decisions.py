@@ -10,7 +10,9 @@ median true percentile of the choice, the top-5 viable share, with ``--physics``
 whose MuJoCo replay holds, and the CPU seconds of a decision. ``--sensor`` fuses (or
 shows the models) the images of the default sensor model, seeded by the decision's seed.
 ``--scan`` decides on the scan-like variants (``knife:5~scan``: 1 mm triangles, rounded
-creases, noise, capped holes; docs/validation.md) of the same instances.
+creases, noise, capped holes; docs/validation.md) of the same instances. ``--open-base MM``
+decides on mesh files of the objects with the faces within MM millimetres of their lowest
+point removed (a scan whose base was never seen), which the loader caps.
 docs/learning.md ("Deciding on the fused views") reports its numbers: variant 7 was used
 to choose the fusion's settings, variants 5-6 only to measure them.
 """
@@ -19,9 +21,29 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import tempfile
 import time
 
 import numpy as np
+
+
+def open_base_file(spec: str, height_m: float, folder: str) -> str:
+    """A PLY file of an object without the faces whose centre lies within ``height_m`` of
+    its lowest point (written once per spec and height)."""
+    import trimesh
+
+    from affordgrasp.objects import load_object
+
+    path = os.path.join(folder, f"{spec.replace(':', '_')}_open{height_m * 1000:g}mm.ply")
+    if not os.path.exists(path):
+        obj = load_object(spec)
+        mesh = trimesh.Trimesh(obj.vertices, obj.faces, process=False)
+        keep = mesh.triangles_center[:, 2] > mesh.bounds[0, 2] + height_m
+        cut = trimesh.Trimesh(mesh.vertices, mesh.faces[keep], process=False)
+        cut.remove_unreferenced_vertices()
+        cut.export(path)
+    return path
 
 
 def main() -> None:
@@ -38,6 +60,12 @@ def main() -> None:
     ap.add_argument(
         "--scan", action="store_true", help="the scan-like variants (knife:5~scan) instead"
     )
+    ap.add_argument(
+        "--open-base",
+        type=float,
+        metavar="MM",
+        help="decide on mesh files cut open at their base (faces within MM of the lowest z)",
+    )
     ap.add_argument("--families", help="only these families (comma-separated; default all)")
     ap.add_argument("--robust-check", type=int, help="plan's robust_check (default: plan's own)")
     ap.add_argument("--refine", type=int, help="plan's refine (default: plan's own)")
@@ -47,6 +75,7 @@ def main() -> None:
     seeds = [int(s) for s in args.seeds.split(",")]
     rows = []
     families = args.families.split(",") if args.families else list_families()
+    folder = tempfile.mkdtemp(prefix="open-base-")
     for family in families:
         for variant in variants:
             for seed in seeds:
@@ -56,8 +85,11 @@ def main() -> None:
 
                     sensor = SensorModel(seed=seed)
                 started = time.process_time()
+                spec = f"{family}:{variant}" + ("~scan" if args.scan else "")
+                if args.open_base is not None:
+                    spec = open_base_file(spec, args.open_base / 1000.0, folder)
                 p = ag.plan(
-                    f"{family}:{variant}" + ("~scan" if args.scan else ""),
+                    spec,
                     "pick",
                     candidates=args.candidates,
                     seed=seed,
