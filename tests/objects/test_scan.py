@@ -68,6 +68,15 @@ def test_spec_grammar():
         ScanSettings(noise_m=-1.0)
 
 
+def test_a_mesh_file_whose_name_holds_the_scan_suffix_is_a_file(tmp_path):
+    import trimesh
+
+    path = tmp_path / "mug~scan_v2.ply"
+    trimesh.creation.box(extents=(0.05, 0.06, 0.07)).export(path)
+    obj = load_object(str(path))
+    assert obj.name == "mug~scan_v2.ply" and obj.mass.volume == pytest.approx(2.1e-4)
+
+
 def test_family_variant_by_name_keeps_parts():
     crisp = load_object("knife:1")
     obj = load_object("knife:1~scan")

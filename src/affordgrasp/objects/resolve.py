@@ -287,8 +287,9 @@ def load_object(
         raise InputError(
             "the object spec is empty; give a family name (e.g. 'knife', 'knife:7') or a mesh path"
         )
-    scan = split_scan_spec(text)
-    if scan is not None and not Path(text).expanduser().exists():
+    # an existing file is a file, whatever its name holds ("mug~scan_v2.ply")
+    scan = None if Path(text).expanduser().exists() else split_scan_spec(text)
+    if scan is not None:
         return _resolve_scan(
             scan[0], scan[1], size_m=size_m, units=units, density=density, materials=materials
         )
