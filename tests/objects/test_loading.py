@@ -426,3 +426,41 @@ def test_a_rim_through_one_vertex_twice_is_split_into_simple_loops():
     assert split([1, 2, 3, 4, 2, 5, 6]) == [[2, 3, 4], [1, 2, 5, 6]]
     assert split([1, 2, 3]) == [[1, 2, 3]]
     assert split([1, 2, 3, 2, 4, 5]) == [[1, 2, 4, 5]]  # a spur there and back: no cap
+
+
+def test_consistent_winding_undoes_random_flips_with_the_fewest_turns():
+    from affordgrasp.objects.loading import _consistent_winding
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    rng = np.random.default_rng(0)
+    faces = sphere.faces.copy()
+    flipped = rng.random(len(faces)) < 0.2
+    faces[flipped] = faces[flipped][:, ::-1]
+    assert np.array_equal(_consistent_winding(faces), sphere.faces)  # most faces kept
+    assert _consistent_winding(sphere.faces) is None
+    # two parts: each keeps its own majority (one all inside out: fixed later by volume)
+    other = trimesh.creation.box()
+    both = np.vstack([sphere.faces[:, ::-1], other.faces + len(sphere.vertices)])
+    both[-2:] = both[-2:, ::-1]
+    wound = _consistent_winding(both)
+    assert np.array_equal(wound[: len(sphere.faces)], sphere.faces[:, ::-1])
+    assert np.array_equal(wound[len(sphere.faces) :], other.faces + len(sphere.vertices))
+
+
+def test_fixing_normals_agrees_with_trimesh():
+    # an independent implementation of the same walk: trimesh's fix_normals
+    from affordgrasp.objects.loading import _fix_normals
+
+    rng = np.random.default_rng(1)
+    parts = [trimesh.creation.icosphere(subdivisions=2), trimesh.creation.capsule()]
+    parts[1].apply_translation([3, 0, 0])
+    mesh = trimesh.util.concatenate(parts)
+    faces = mesh.faces.copy()
+    flipped = rng.random(len(faces)) < 0.3
+    faces[flipped] = faces[flipped][:, ::-1]
+    ours = trimesh.Trimesh(mesh.vertices, faces, process=False)
+    theirs = trimesh.Trimesh(mesh.vertices, faces, process=False)
+    _fix_normals(ours)
+    trimesh.repair.fix_normals(theirs, multibody=True)
+    assert ours.is_winding_consistent and ours.volume > 0
+    assert np.array_equal(ours.faces, theirs.faces)

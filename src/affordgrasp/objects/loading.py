@@ -581,12 +581,76 @@ def _capped_bodies(work: trimesh.Trimesh, scale: float, careful: bool):
 
 
 def _fix_normals(mesh: trimesh.Trimesh) -> None:
-    """Consistent, outward winding per body, in place."""
+    """Consistent, outward winding per body, in place (trimesh's ``fix_normals`` with the
+    winding made consistent by :func:`_consistent_winding`)."""
     import trimesh
 
+    wound = _consistent_winding(mesh.faces)
+    if wound is not None:
+        mesh.faces = wound
     # trimesh divides by the volume on its way; a flat part has none, and is refused later.
     with np.errstate(divide="ignore", invalid="ignore"):
-        trimesh.repair.fix_normals(mesh, multibody=True)
+        trimesh.repair.fix_inversion(mesh, multibody=True)
+
+
+def _consistent_winding(faces: np.ndarray) -> np.ndarray | None:
+    """The faces with every connected part wound consistently, or None if they are.
+
+    What ``trimesh.repair.fix_winding`` does (a breadth-first walk over faces sharing an
+    edge used by exactly two faces, each face flipped when it runs that edge the same way
+    as the face it is reached from), with the walk done by scipy's compiled graph search
+    instead of a Python loop per face (trimesh's took 5 s on a 170,000-triangle scan); each
+    part keeps the winding of most of its faces.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
+    faces = np.asarray(faces, dtype=np.int64)
+    n = len(faces)
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    _, inverse, counts = np.unique(
+        _edge_keys(directed, int(faces.max()) + 1 if n else 0),
+        return_inverse=True,
+        return_counts=True,
+    )
+    inverse = inverse.ravel()
+    shared = np.flatnonzero(counts[inverse] == 2)
+    shared = shared[np.argsort(inverse[shared], kind="stable")]
+    a, b = shared[0::2], shared[1::2]  # the two uses of each manifold edge
+    fa, fb = a // 3, b // 3
+    same = directed[a, 0] == directed[b, 0]  # the edge run the same way: one face is flipped
+    if not same.any():
+        return None
+    # one parity per pair of faces (the first edge they share, as trimesh)
+    pair = np.minimum(fa, fb) * n + np.maximum(fa, fb)
+    _, first = np.unique(pair, return_index=True)
+    fa, fb, same = fa[first], fb[first], same[first]
+    graph = coo_matrix((np.ones(len(fa)), (fa, fb)), shape=(n, n)).tocsr()
+    _, labels = connected_components(graph, directed=False)
+    # a root joined to the first face of every part: one walk covers them all
+    roots = np.unique(labels, return_index=True)[1]
+    rows = np.r_[fa, np.full(len(roots), n)]
+    cols = np.r_[fb, roots]
+    walk = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n + 1, n + 1)).tocsr()
+    order, parent = breadth_first_order(walk, n, directed=False, return_predecessors=True)
+    parity = coo_matrix(
+        (np.r_[same, same].astype(np.int8) + 1, (np.r_[fa, fb], np.r_[fb, fa])), shape=(n, n)
+    ).tocsr()
+    flip = np.zeros(n + 1, dtype=bool)
+    order = order[1:]  # the root first
+    step = np.asarray(parity[np.where(parent[order] == n, order, parent[order]), order]).ravel()
+    step = np.where(parent[order] == n, False, step == 2)
+    for face, up, turn in zip(order.tolist(), parent[order].tolist(), step.tolist(), strict=True):
+        flip[face] = flip[up] ^ turn
+    flip = flip[:n]
+    # each part keeps the winding most of its faces have: the fewest faces turned
+    turned = np.bincount(labels, weights=flip) > np.bincount(labels) / 2
+    flip ^= turned[labels]
+    if not flip.any():
+        return None
+    out = faces.copy()
+    out[flip] = out[flip][:, ::-1]
+    return out
 
 
 def _signed_volume(mesh: trimesh.Trimesh) -> float:
@@ -726,8 +790,8 @@ def _fill_holes(mesh: trimesh.Trimesh, *, careful: bool = False) -> list[np.ndar
     """
     faces = mesh.faces
     directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    undirected = np.sort(directed, axis=1)
-    _, inverse, counts = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
+    keys = _edge_keys(directed, len(mesh.vertices))
+    existing, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
     boundary = directed[counts[inverse.ravel()] == 1]
     if len(boundary) == 0:
         return []
@@ -747,16 +811,16 @@ def _fill_holes(mesh: trimesh.Trimesh, *, careful: bool = False) -> list[np.ndar
                 loops += _simple_loops(loop) if careful else [np.array(loop, dtype=np.int64)]
     if not loops:
         return []
-    existing = {tuple(e) for e in undirected.tolist()}
+    n = len(mesh.vertices)
     caps, centres = [], []
     for loop in loops:
         cap = loop[triangulate_polygon(mesh.vertices[loop])]
-        if careful and (len(cap) < len(loop) - 2 or _reuses_an_edge(cap, loop, existing)):
+        if careful and (len(cap) < len(loop) - 2 or _reuses_an_edge(cap, loop, existing, n)):
             # A jagged rim (a scan cut open at its base) where the planar triangulation
             # drops an ear or draws a diagonal that is already an edge of the mesh (a
             # triangle with two rim edges): a fan from a new vertex at the rim's centroid
             # uses no edge but the rim's.
-            centre = len(mesh.vertices) + len(centres)
+            centre = n + len(centres)
             centres.append(mesh.vertices[loop].mean(axis=0))
             cap = np.stack([loop, np.roll(loop, -1), np.full(len(loop), centre)], axis=1)
         caps.append(cap)
@@ -786,16 +850,22 @@ def _simple_loops(loop: list[int]) -> list[np.ndarray]:
     return out
 
 
-def _reuses_an_edge(cap: np.ndarray, loop: np.ndarray, existing: set) -> bool:
-    """Whether a cap's triangles use an edge of the mesh that is not on its rim."""
-    rim = {tuple(sorted(e)) for e in zip(loop.tolist(), np.roll(loop, -1).tolist(), strict=True)}
-    edges = np.sort(cap[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return any(e in existing and e not in rim for e in map(tuple, edges.tolist()))
+def _edge_keys(edges: np.ndarray, n_vertices: int) -> np.ndarray:
+    """One int64 per undirected edge (sorting pairs as rows is several times slower)."""
+    edges = np.asarray(edges, dtype=np.int64)
+    return np.minimum(edges[:, 0], edges[:, 1]) * n_vertices + np.maximum(edges[:, 0], edges[:, 1])
+
+
+def _reuses_an_edge(cap: np.ndarray, loop: np.ndarray, existing: np.ndarray, n: int) -> bool:
+    """Whether a cap's triangles use an edge of the mesh (sorted ``existing`` keys of ``n``
+    vertices) that is not on its rim."""
+    rim = _edge_keys(np.stack([loop, np.roll(loop, -1)], axis=1), n)
+    keys = _edge_keys(cap[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), n)
+    return bool(np.any(np.isin(keys, existing) & ~np.isin(keys, rim)))
 
 
 def _boundary_edge_count(mesh: trimesh.Trimesh) -> int:
-    edges = np.sort(mesh.edges, axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
+    _, counts = np.unique(_edge_keys(mesh.edges, len(mesh.vertices)), return_counts=True)
     return int((counts != 2).sum())
 
 
