@@ -26,6 +26,7 @@ from pathlib import Path
 
 
 def main() -> None:
+    from affordgrasp.dataset.engines import default_workers
     from affordgrasp.dataset.generate import generate
     from affordgrasp.learning.views_model import (
         fit_views_config,
@@ -40,7 +41,7 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=512, help="uniform samples per object")
     ap.add_argument("--seed", type=int, default=1, help="the samples' seed")
     ap.add_argument("--copies", type=int, default=25, help="K perturbed copies per row")
-    ap.add_argument("--workers", type=int, default=None, help="generation processes")
+    ap.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     ap.add_argument("--out", type=Path, default=None, help="default: the shipped file")
     args = ap.parse_args()
     families = list_families()  # the 13 built-in families
@@ -48,7 +49,8 @@ def main() -> None:
     started = time.perf_counter()
     generate(objects, args.samples, args.data, seed=args.seed, workers=args.workers)
     print(f"dataset {args.data}: {time.perf_counter() - started:.0f} s")
-    config = fit_views_config(args.data, objects, copies=args.copies, log=print)
+    workers = args.workers or default_workers()
+    config = fit_views_config(args.data, objects, copies=args.copies, log=print, workers=workers)
     config["calibration"]["dataset"] = (
         f"{len(families)} families x variants {args.variants} x {args.samples} uniform "
         f"samples, seed {args.seed}, per-object streams"

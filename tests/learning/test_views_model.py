@@ -225,3 +225,21 @@ def test_bad_views_options_exit_2(robust_dataset, tmp_path, capsys):
     missing = tmp_path / "none.json"
     rc = main(["predict", str(missing), str(robust_dataset), "--out", str(tmp_path / "p.parquet")])
     assert rc == 2 and "does not exist" in capsys.readouterr().err
+
+
+def test_objects_simulated_in_worker_processes_match_in_process(robust_dataset, small_views):
+    from affordgrasp.learning.data import read_rows
+    from affordgrasp.learning.views_model import FusedViews
+
+    samples, _ = read_rows(robust_dataset, "viable")
+    config = read_views_config(small_views)
+    lines = []
+    apart = FusedViews(config, workers=2, log=lines.append).raw(samples)
+    assert len(lines) == 2 and np.array_equal(apart, FusedViews(config).raw(samples))
+    with pytest.raises(InputError, match="workers"):
+        FusedViews(config, workers=0)
+
+
+def test_model_eval_refuses_no_workers(robust_dataset, capsys):
+    assert main(["model-eval", "views", str(robust_dataset), "--workers", "0"]) == 2
+    assert "--workers must be >= 1" in capsys.readouterr().err

@@ -79,18 +79,25 @@ def add_arguments(p) -> None:
         action="store_true",
         help="replay the chosen grasp of each object's first draw in MuJoCo",
     )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="K",
+        help="with the views: processes simulating objects side by side (default: all cores)",
+    )
 
 
 def _split_spec(spec: str):
     return spec.split(",") if "," in spec else spec
 
 
-def _load(spec):
+def _load(spec, workers: int = 1):
     from .predict import load_models
 
     if isinstance(spec, list):
-        return [m for s in spec for m in load_models(s)]
-    return load_models(spec)
+        return [m for s in spec for m in load_models(s, workers=workers)]
+    return load_models(spec, workers=workers)
 
 
 def _judged(models, dataset):
@@ -123,8 +130,11 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    from ..dataset.engines import default_workers
     from ..learning.api import evaluate_on_dataset
 
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers must be >= 1, got {args.workers}")
     if args.max_rows < 0 or args.max_rows == 1:
         raise InputError(f"--max-rows must be 0 (every row) or >= 2, got {args.max_rows}")
     if args.candidates < 1 or args.draws < 1:
@@ -143,7 +153,8 @@ def run(args, out) -> None:
         check_output_dir(args.plots, "--plots")
     max_rows = args.max_rows or None
     objects = args.objects if args.objects in ("test", "all") else args.objects.split(",")
-    models = _judged(_load(_split_spec(args.model)), args.dataset)
+    workers = args.workers or default_workers()
+    models = _judged(_load(_split_spec(args.model), workers), args.dataset)
     baseline = _load(_split_spec(args.baseline)) if args.baseline else []
     from ..learning.plan import split_models
 

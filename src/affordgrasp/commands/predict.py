@@ -27,7 +27,7 @@ def add_arguments(p) -> None:
     p.add_argument("--object", action="append", default=None, help="only this object (repeat)")
 
 
-def load_models(spec: str):
+def load_models(spec: str, *, workers: int = 1):
     """The models named by ``--model``, each with its config.
 
     Parameters
@@ -37,6 +37,8 @@ def load_models(spec: str):
         model file (see :func:`affordgrasp.learning.api.resolve_models`), or ``views`` or
         a views model file (the fused views' classifier and ranker,
         :mod:`affordgrasp.learning.views_model`).
+    workers : int
+        For the views: processes simulating objects side by side.
 
     Returns
     -------
@@ -51,7 +53,7 @@ def load_models(spec: str):
     from ..learning.views_model import load_views_models
 
     if is_views_spec(spec):
-        return load_views_models(spec, log=_stderr)
+        return load_views_models(spec, log=_stderr, workers=workers)
     try:
         from ..learning.api import resolve_models
         from ..learning.io import load_model

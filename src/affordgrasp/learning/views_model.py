@@ -121,7 +121,7 @@ def read_views_config(path: str | os.PathLike | None = None) -> dict:
     return config
 
 
-def load_views_models(spec: str | os.PathLike = ARCH, *, log=None):
+def load_views_models(spec: str | os.PathLike = ARCH, *, log=None, workers: int = 1):
     """The views classifier and ranker as ``(predictor, config)`` pairs, as models load.
 
     Parameters
@@ -133,6 +133,8 @@ def load_views_models(spec: str | os.PathLike = ARCH, *, log=None):
         ranker of ``robust_hold``).
     log : callable, optional
         Called with a line of progress per object predicted.
+    workers : int
+        Processes simulating objects side by side (:class:`FusedViews`).
 
     Returns
     -------
@@ -147,7 +149,7 @@ def load_views_models(spec: str | os.PathLike = ARCH, *, log=None):
             "views:robust or views:raw (hold_effort_sum)"
         )
     config = read_views_config(None if shipped else spec)
-    predictor = FusedViews(config, log=log)
+    predictor = FusedViews(config, log=log, workers=workers)
     ranker = {k: v for k, v in config.items() if k != "decision_threshold"}
     target = RANKERS[which if shipped and which else "robust"]
     return [
@@ -200,6 +202,67 @@ def fused_surface(obj, *, views: int, seed: int = 0):
     )
 
 
+def simulate_on_fused(surface, obj, hand, p0, use_dir, copies: int) -> np.ndarray:
+    """Rows simulated on a fused surface from the poses they have on the object.
+
+    Parameters
+    ----------
+    surface : GraspObject
+        The fused surface (:func:`fused_surface`).
+    obj : GraspObject
+        The object (it places the pregrasps and the copies' starts).
+    hand : Hand
+    p0 : (n, 6) float ndarray
+    use_dir : (n, 2) float ndarray
+    copies : int
+        K perturbed copies per row.
+
+    Returns
+    -------
+    (n, 4) float64 ndarray
+        Share of viable copies, ε, ``robust_hold``, ΣE_h (N; 250 where it does not hold).
+    """
+    from ..columns import hold_effort_sum
+    from ..pipeline import evaluate_inputs
+
+    table = evaluate_inputs(surface, p0, use_dir, hand=hand, robust=copies, frame=obj).table
+    cols = [
+        np.nan_to_num(table.column(c).to_numpy(zero_copy_only=False).astype(np.float64))
+        for c in ("robust_viable", "epsilon", "robust_hold")
+    ]
+    effort = hold_effort_sum(
+        {c: table.column(c).to_numpy(zero_copy_only=False) for c in HOLD_EFFORT_COLUMNS}
+    )
+    # no hold on the fused surface: the viability bound (beyond it, nothing is viable)
+    cols.append(np.where(np.isfinite(effort), effort, RAW_RANKER_TARGET.high))
+    return np.stack(cols, axis=1)
+
+
+def _object_rows(directory: str, name: str, config: dict, p0, use_dir) -> tuple:
+    """A worker's job: one object's rows on its fused surface, and the CPU seconds."""
+    import time
+
+    from ..dataset.handle import Dataset
+
+    t0 = time.process_time()
+    dataset = Dataset.open(directory)
+    obj = dataset.object(name)
+    surface = fused_surface(obj, views=int(config["views"]), seed=int(config["seed"]))
+    rows = simulate_on_fused(surface, obj, dataset.hand, p0, use_dir, int(config["copies"]))
+    return rows, time.process_time() - t0
+
+
+def _worker_init(parent_pid: int) -> None:
+    # Ctrl-C reaches the whole process group; only the parent decides what to do about it
+    # (it stops the workers). A parent killed outright takes its workers along.
+    import signal
+
+    from ..worker_lifetime import die_with_parent
+
+    die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 class FusedViews:
     """Predictions of the fused views for a dataset's rows (see the module's docstring).
 
@@ -212,74 +275,76 @@ class FusedViews:
         A views model file's contents (:func:`read_views_config`).
     log : callable, optional
         Called with a line after each object's rows are simulated.
+    workers : int
+        Processes simulating objects side by side (1: in this process, keeping each fused
+        surface for later rows of its object).
     """
 
-    def __init__(self, config: dict, *, log: Callable[[str], Any] | None = None) -> None:
+    def __init__(
+        self, config: dict, *, log: Callable[[str], Any] | None = None, workers: int = 1
+    ) -> None:
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise InputError(f"workers must be an integer >= 1, got {workers!r}")
         self.config = config
         self.log = log
+        self.workers = workers
         self._surfaces: dict[tuple[str, str], Any] = {}
         self._rows: dict[tuple[str, str], dict[int, tuple[float, ...]]] = {}
 
-    def simulate(self, dataset, name: str, sample, p0, use_dir) -> np.ndarray:
-        """(share of viable copies, fused ε, fused robust_hold, fused ΣE_h) of one object's
-        rows.
+    def _said(self, name: str, n: int, seconds: float) -> None:
+        if self.log is not None:
+            self.log(
+                f"views: {name}: {n} rows x {self.config['copies']} copies on the surface "
+                f"fused from {self.config['views']} views, {seconds:.1f} s CPU"
+            )
 
-        Parameters
-        ----------
-        dataset : Dataset
-            Where the object comes from.
-        name : str
-            The object.
-        sample : (n,) int ndarray
-            The rows' sample numbers (the key of what is kept).
-        p0 : (n, 6) float ndarray
-        use_dir : (n, 2) float ndarray
-
-        Returns
-        -------
-        (n, 4) float64 ndarray
-        """
+    def _inline(self, dataset, name: str, p0, use_dir) -> np.ndarray:
         import time
 
-        from ..columns import hold_effort_sum
-        from ..pipeline import evaluate_inputs
-
+        t0 = time.process_time()
         key = (str(dataset.directory), name)
-        kept = self._rows.setdefault(key, {})
-        missing = np.array([i for i, s in enumerate(sample) if int(s) not in kept], dtype=np.intp)
-        if len(missing):
-            t0 = time.process_time()
-            obj = dataset.object(name)
-            if key not in self._surfaces:
-                self._surfaces[key] = fused_surface(
-                    obj, views=int(self.config["views"]), seed=int(self.config["seed"])
-                )
-            table = evaluate_inputs(
-                self._surfaces[key],
-                np.asarray(p0)[missing],
-                np.asarray(use_dir)[missing],
-                hand=dataset.hand,
-                robust=int(self.config["copies"]),
-                frame=obj,
-            ).table
-            cols = [
-                np.nan_to_num(table.column(c).to_numpy(zero_copy_only=False).astype(np.float64))
-                for c in ("robust_viable", "epsilon", "robust_hold")
-            ]
-            effort = hold_effort_sum(
-                {c: table.column(c).to_numpy(zero_copy_only=False) for c in HOLD_EFFORT_COLUMNS}
+        obj = dataset.object(name)
+        if key not in self._surfaces:
+            self._surfaces[key] = fused_surface(
+                obj, views=int(self.config["views"]), seed=int(self.config["seed"])
             )
-            # no hold on the fused surface: the viability bound (beyond it, nothing is viable)
-            cols.append(np.where(np.isfinite(effort), effort, RAW_RANKER_TARGET.high))
-            for j, i in enumerate(missing):
-                kept[int(sample[i])] = tuple(float(c[j]) for c in cols)
-            if self.log is not None:
-                self.log(
-                    f"views: {name}: {len(missing)} rows x {self.config['copies']} copies on "
-                    f"the surface fused from {self.config['views']} views, "
-                    f"{time.process_time() - t0:.1f} s CPU"
-                )
-        return np.array([kept[int(s)] for s in sample], dtype=np.float64).reshape(-1, 4)
+        rows = simulate_on_fused(
+            self._surfaces[key], obj, dataset.hand, p0, use_dir, int(self.config["copies"])
+        )
+        self._said(name, len(rows), time.process_time() - t0)
+        return rows
+
+    def _in_workers(self, dataset, jobs: list) -> list[np.ndarray]:
+        import multiprocessing
+        import os
+        from concurrent.futures import ProcessPoolExecutor
+
+        pool = ProcessPoolExecutor(
+            max_workers=min(self.workers, len(jobs)),
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_worker_init,
+            initargs=(os.getpid(),),
+        )
+        try:
+            futures = [
+                pool.submit(_object_rows, str(dataset.directory), name, self.config, p0, d)
+                for name, p0, d in jobs
+            ]
+            out = []
+            for (name, _, _), future in zip(jobs, futures, strict=True):
+                rows, seconds = future.result()
+                self._said(name, len(rows), seconds)
+                out.append(rows)
+        except BaseException:
+            # Ctrl-C or a failed object: the other objects' work is thrown away now
+            processes = list(getattr(pool, "_processes", {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for p in processes:
+                if p.is_alive():
+                    p.terminate()
+            raise
+        pool.shutdown(wait=True)
+        return out
 
     def raw(self, samples) -> np.ndarray:
         """The rows' simulations on the fused surfaces, in the order of ``samples``.
@@ -306,12 +371,28 @@ class FusedViews:
                 "the views model predicts for a dataset's rows (it renders and fuses each "
                 "object's views itself); read the rows with affordgrasp.learning.data.read_rows"
             )
+        jobs, where = [], []
+        for name in dict.fromkeys(samples.object):
+            rows = np.flatnonzero(samples.object == name)
+            kept = self._rows.setdefault((str(dataset.directory), str(name)), {})
+            fresh = [i for i in rows if int(samples.sample[i]) not in kept]
+            # a sample listed twice is simulated once
+            fresh = list({int(samples.sample[i]): i for i in fresh}.values())
+            if fresh:
+                jobs.append((str(name), samples.p0[fresh], samples.use_dir[fresh]))
+                where.append((kept, samples.sample[fresh]))
+        if self.workers > 1 and len(jobs) > 1:
+            results = self._in_workers(dataset, jobs)
+        else:
+            results = [self._inline(dataset, name, p0, d) for name, p0, d in jobs]
+        for (kept, ids), rows in zip(where, results, strict=True):
+            for s, row in zip(ids.tolist(), rows.tolist(), strict=True):
+                kept[int(s)] = tuple(row)
         out = np.zeros((len(samples), 4))
         for name in dict.fromkeys(samples.object):
             rows = np.flatnonzero(samples.object == name)
-            out[rows] = self.simulate(
-                dataset, str(name), samples.sample[rows], samples.p0[rows], samples.use_dir[rows]
-            )
+            kept = self._rows[(str(dataset.directory), str(name))]
+            out[rows] = [kept[int(s)] for s in samples.sample[rows]]
         return out
 
     def predict(self, config: dict, samples) -> np.ndarray:
@@ -412,6 +493,7 @@ def fit_views_config(
     copies: int = DEFAULT_COPIES,
     seed: int = 0,
     log=None,
+    workers: int = 1,
 ) -> dict:
     """Fit a views model's calibration map and decision threshold on validation objects.
 
@@ -429,6 +511,8 @@ def fit_views_config(
         ``plan``'s seed whose first candidates' views are fused.
     log : callable, optional
         Progress lines.
+    workers : int
+        Processes simulating objects side by side.
 
     Returns
     -------
@@ -453,7 +537,7 @@ def fit_views_config(
         "seed": int(seed),
         "copies": int(copies),
     }
-    raw = FusedViews(config, log=log).raw(samples)
+    raw = FusedViews(config, log=log, workers=workers).raw(samples)
     score = share_score(raw[:, 0], raw[:, 1])
     config["calibration"] = fit_calibration(raw[:, 0], samples.y > 0.5)
     prob = calibrated(score, config["calibration"])
