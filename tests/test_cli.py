@@ -198,3 +198,23 @@ def test_materials_flag_refused_for_a_mesh_file(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2
     assert "mesh file" in err and "Drop the option" in err
+
+
+def test_a_scan_file_open_at_its_base_is_evaluated(tmp_path, capsys, caplog):
+    # A scan whose base was never seen: the rim left by cutting the foot off a wine glass
+    # was refused before its jagged edge was capped with a fan.
+    import trimesh
+
+    from affordgrasp.objects import load_object
+
+    glass = load_object("wine_glass:0")
+    mesh = trimesh.Trimesh(glass.vertices, glass.faces, process=False)
+    keep = mesh.triangles_center[:, 2] > mesh.bounds[0, 2] + 0.002
+    cut = trimesh.Trimesh(mesh.vertices, mesh.faces[keep], process=False)
+    cut.remove_unreferenced_vertices()
+    path = tmp_path / "glass_open.ply"
+    cut.export(path)
+    with caplog.at_level("WARNING"):
+        assert main(["evaluate", str(path), "--samples", "8", "--task", "pick"]) == 0
+    assert capsys.readouterr().out.startswith("glass_open.ply: 8 grasps")
+    assert "glass_open.ply was repaired: capped 1 hole" in caplog.text
