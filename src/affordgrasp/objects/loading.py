@@ -508,12 +508,10 @@ def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> tr
     if zero_area:
         repairs.append(f"dropped {_count(zero_area, 'zero-area face')}")
     work.remove_unreferenced_vertices()
-    wound = {tuple(sorted(face)): tuple(face) for face in work.faces.tolist()}
+    wound = work.faces.copy()
     _fix_normals(work)
-    turned = sum(
-        _same_cycle(wound.get(tuple(sorted(face))), tuple(face)) is False
-        for face in work.faces.tolist()
-    )
+    # _fix_normals reverses rows in place, nothing else: a changed row is a turned face
+    turned = int(np.any(work.faces != wound, axis=1).sum())
     scale = float(np.ptp(work.vertices, axis=0).max())
     # The caps of earlier versions first, then manifold3d's merge, and only then the caps
     # for rims those could not close (a rim through one vertex twice, a jagged rim whose
@@ -668,13 +666,6 @@ def _oriented(mesh: trimesh.Trimesh, repairs: list[str] | None = None) -> trimes
         if repairs is not None:
             repairs.append("turned it outside out (every face pointed inwards)")
     return mesh
-
-
-def _same_cycle(a: tuple | None, b: tuple) -> bool | None:
-    """Whether two triangles (same vertices) have the same winding; None if ``a`` is None."""
-    if a is None:
-        return None
-    return b in (a, a[1:] + a[:1], a[2:] + a[:2])
 
 
 def _length(metres: float) -> str:
