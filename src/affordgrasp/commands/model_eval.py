@@ -105,12 +105,14 @@ def _judged(models, dataset):
     robust labels (said when left out)."""
     from ..dataset.handle import Dataset
 
-    kept = [
-        (m, c)
-        for m, c in models
-        if not (c.get("arch") == "views" and c["target"]["name"] == "robust_hold")
-        or "robust_hold" in Dataset.open(dataset).arrow().schema.names
-    ]
+    def views_ranker(config: dict) -> bool:
+        return config.get("arch") == "views" and config["target"]["name"] == "robust_hold"
+
+    if not any(views_ranker(c) for _, c in models):
+        return models
+    if "robust_hold" in Dataset.open(dataset).arrow().schema.names:
+        return models
+    kept = [(m, c) for m, c in models if not views_ranker(c)]
     if len(kept) < len(models):
         print(
             "model-eval: views: the dataset has no robust labels (generate it with --robust "

@@ -24,6 +24,7 @@ from .data import (
     Samples,
     load_depth,
     read_rows,
+    reads_depth,
     sensed_depth_mm,
     split_by_family,
     split_by_object,
@@ -539,7 +540,7 @@ def predict_dataset(
     dataset = Dataset.open(dataset)
     families = dataset.families
     stored = dataset.depth
-    needs_depth = any(c["arch"] not in ("pose", "views") for _, c in models)
+    needs_depth = any(reads_depth(c) for _, c in models)
     columns = ["object", "sample", "p0", "use_dir"] + (
         ["depth_mm"] if stored and needs_depth else []
     )
@@ -638,7 +639,7 @@ def evaluate_on_dataset(
     available = int(mask.sum())
     idx = _subsample(np.flatnonzero(mask), max_rows, seed)
     samples = samples.take(idx)
-    if config["arch"] not in ("pose", "views"):
+    if reads_depth(config):
         load_depth(samples, dataset)
     scores = model_scores(model, config, samples)
     rep = report(model, config, samples, seed=seed, scores=scores)

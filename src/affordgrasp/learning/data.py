@@ -184,6 +184,22 @@ def _fixed(table, name: str, width: int) -> np.ndarray:
     return np.asarray(col.flatten(), dtype=np.float64).reshape(-1, width)
 
 
+def reads_depth(config: dict) -> bool:
+    """Whether a model predicts from the rows' depth images (the pose-only networks and the
+    fused views, which render their own, do not).
+
+    Parameters
+    ----------
+    config : dict
+        The model's config.
+
+    Returns
+    -------
+    bool
+    """
+    return config["arch"] not in ("pose", "views")
+
+
 def load_depth(samples: Samples, directory: DatasetLike | None = None) -> np.ndarray:
     """The depth images of the samples, read from the dataset or rendered.
 

@@ -193,7 +193,7 @@ def evaluate_decisions(
     from ..dataset.handle import Dataset
     from ..tasks import get_task, is_viable
     from ..vision.depth import decode_depth_column, depth_to_mm
-    from .data import Samples, load_depth
+    from .data import Samples, load_depth, reads_depth
     from .plan import model_order, replay, rule_of, split_models
 
     if candidates < 1 or draws < 1:
@@ -204,7 +204,7 @@ def evaluate_decisions(
     base = split_models(baseline) if baseline else None
     dataset = Dataset.open(dataset)
     families = dataset.families
-    needs_depth = any(c["arch"] not in ("pose", "views") for _, c in [*models, *(baseline or [])])
+    needs_depth = any(reads_depth(c) for _, c in [*models, *(baseline or [])])
     stored = dataset.depth and needs_depth
     names = [c for c in dataset.arrow().schema.names if c != "depth_mm" or stored]
     per: dict[str, dict] = {}

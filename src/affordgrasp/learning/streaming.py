@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .data import Samples, balanced_indices
+from .data import Samples, balanced_indices, reads_depth
 from .targets import Target
 from .training import Inputs
 
@@ -63,7 +63,7 @@ class StreamedEpochs:
         self.sensor = sensor
         self.chunk_rows = int(chunk_rows)
         self.target = Target.from_dict(config["target"])
-        self.needs_depth = config["arch"] != "pose"
+        self.needs_depth = reads_depth(config)
         self._index = {
             (str(o), int(s)): i
             for i, (o, s) in enumerate(zip(train.object, train.sample, strict=True))

@@ -37,6 +37,7 @@ import numpy as np
 from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import InputError
 from ..writing import atomic_write
+from .plan import FUSED_VIEWS, OFFSET_RANGE, fuse_candidate_views
 from .plan import VIEWS as ARCH
 from .targets import Target, make_target
 
@@ -151,7 +152,7 @@ def load_views_models(spec: str | os.PathLike = ARCH, *, log=None, workers: int 
     config = read_views_config(None if shipped else spec)
     predictor = FusedViews(config, log=log, workers=workers)
     ranker = {k: v for k, v in config.items() if k != "decision_threshold"}
-    target = RANKERS[which if shipped and which else "robust"]
+    target = RANKERS[which or "robust"] if shipped else RANKER_TARGET
     return [
         (predictor, {**config, "arch": ARCH, "target": CLASSIFIER_TARGET.to_dict()}),
         (predictor, {**ranker, "arch": ARCH, "target": target.to_dict()}),
@@ -172,7 +173,6 @@ def views_candidates(views: int, seed: int = 0) -> np.ndarray:
     (views, 6) float64 ndarray
     """
     from ..grasp.pregrasp import sample_inputs
-    from .plan import OFFSET_RANGE
 
     p0, _ = sample_inputs(seed, 0, views)
     p0[:, 3:5] *= OFFSET_RANGE
@@ -193,7 +193,6 @@ def fused_surface(obj, *, views: int, seed: int = 0):
     GraspObject
     """
     from ..vision.depth import depth_to_mm, renderer_for
-    from .plan import fuse_candidate_views
 
     seen = views_candidates(views, seed)
     renderer = renderer_for(obj)
@@ -371,15 +370,18 @@ class FusedViews:
                 "the views model predicts for a dataset's rows (it renders and fuses each "
                 "object's views itself); read the rows with affordgrasp.learning.data.read_rows"
             )
+        groups = {
+            str(name): np.flatnonzero(samples.object == name)
+            for name in dict.fromkeys(samples.object)
+        }
         jobs, where = [], []
-        for name in dict.fromkeys(samples.object):
-            rows = np.flatnonzero(samples.object == name)
-            kept = self._rows.setdefault((str(dataset.directory), str(name)), {})
+        for name, rows in groups.items():
+            kept = self._rows.setdefault((str(dataset.directory), name), {})
             fresh = [i for i in rows if int(samples.sample[i]) not in kept]
             # a sample listed twice is simulated once
             fresh = list({int(samples.sample[i]): i for i in fresh}.values())
             if fresh:
-                jobs.append((str(name), samples.p0[fresh], samples.use_dir[fresh]))
+                jobs.append((name, samples.p0[fresh], samples.use_dir[fresh]))
                 where.append((kept, samples.sample[fresh]))
         if self.workers > 1 and len(jobs) > 1:
             results = self._in_workers(dataset, jobs)
@@ -389,9 +391,8 @@ class FusedViews:
             for s, row in zip(ids.tolist(), rows.tolist(), strict=True):
                 kept[int(s)] = tuple(row)
         out = np.zeros((len(samples), 4))
-        for name in dict.fromkeys(samples.object):
-            rows = np.flatnonzero(samples.object == name)
-            kept = self._rows[(str(dataset.directory), str(name))]
+        for name, rows in groups.items():
+            kept = self._rows[(str(dataset.directory), name)]
             out[rows] = [kept[int(s)] for s in samples.sample[rows]]
         return out
 
@@ -521,7 +522,6 @@ def fit_views_config(
     """
     from .data import read_rows
     from .evaluation import best_f1_threshold, expected_calibration_error
-    from .plan import FUSED_VIEWS
 
     views = FUSED_VIEWS if views is None else int(views)
     if views < 1 or copies < 1:

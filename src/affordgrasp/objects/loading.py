@@ -619,9 +619,8 @@ def _consistent_winding(faces: np.ndarray) -> np.ndarray | None:
     same = directed[a, 0] == directed[b, 0]  # the edge run the same way: one face is flipped
     if not same.any():
         return None
-    # one parity per pair of faces (the first edge they share, as trimesh)
-    pair = np.minimum(fa, fb) * n + np.maximum(fa, fb)
-    _, first = np.unique(pair, return_index=True)
+    # one parity per pair of faces (the first edge they share, as trimesh), by sorted key
+    pairs, first = np.unique(np.minimum(fa, fb) * n + np.maximum(fa, fb), return_index=True)
     fa, fb, same = fa[first], fb[first], same[first]
     graph = coo_matrix((np.ones(len(fa)), (fa, fb)), shape=(n, n)).tocsr()
     _, labels = connected_components(graph, directed=False)
@@ -631,15 +630,15 @@ def _consistent_winding(faces: np.ndarray) -> np.ndarray | None:
     cols = np.r_[fb, roots]
     walk = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n + 1, n + 1)).tocsr()
     order, parent = breadth_first_order(walk, n, directed=False, return_predecessors=True)
-    parity = coo_matrix(
-        (np.r_[same, same].astype(np.int8) + 1, (np.r_[fa, fb], np.r_[fb, fa])), shape=(n, n)
-    ).tocsr()
-    flip = np.zeros(n + 1, dtype=bool)
     order = order[1:]  # the root first
-    step = np.asarray(parity[np.where(parent[order] == n, order, parent[order]), order]).ravel()
-    step = np.where(parent[order] == n, False, step == 2)
-    for face, up, turn in zip(order.tolist(), parent[order].tolist(), step.tolist(), strict=True):
-        flip[face] = flip[up] ^ turn
+    up = parent[order]
+    step = np.zeros(len(order), dtype=bool)  # a root's child keeps its winding
+    child = up != n
+    lo, hi = np.minimum(up[child], order[child]), np.maximum(up[child], order[child])
+    step[child] = same[np.searchsorted(pairs, lo * n + hi)]
+    flip = np.zeros(n + 1, dtype=bool)
+    for face, above, turn in zip(order.tolist(), up.tolist(), step.tolist(), strict=True):
+        flip[face] = flip[above] ^ turn
     flip = flip[:n]
     # each part keeps the winding most of its faces have: the fewest faces turned
     turned = np.bincount(labels, weights=flip) > np.bincount(labels) / 2
