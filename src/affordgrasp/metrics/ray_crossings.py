@@ -165,3 +165,92 @@ def all_crossings(rays, origins: np.ndarray, directions: np.ndarray):
         idx.append(hit_rays)
         locs.append(points)
     return np.concatenate(tris), np.concatenate(idx), np.concatenate(locs)
+
+
+@njit(cache=True)
+def _still_near(live, o32, d32, origins, start, directions, reach, slack, scene_scale):
+    """The live rays that now start within ``reach`` of where they started, and how far
+    Embree is to search along each (to ``reach`` + ``slack``, in the scene's units)."""
+    n = live.shape[0]
+    keep = np.empty(n, dtype=np.int64)
+    gone = np.empty(n)
+    k = 0
+    for a in range(n):
+        r = live[a]
+        g = 0.0
+        for c in range(3):
+            g += (origins[r, c] - start[r, c]) * directions[r, c]
+        if g < reach:
+            keep[k] = a
+            gone[k] = g
+            k += 1
+    out_live = np.empty(k, dtype=np.int64)
+    out_o = np.empty((k, 3), dtype=np.float32)
+    out_d = np.empty((k, 3), dtype=np.float32)
+    limits = np.empty(k, dtype=np.float32)
+    for b in range(k):
+        a = keep[b]
+        out_live[b] = live[a]
+        out_o[b] = o32[a]
+        out_d[b] = d32[a]
+        limits[b] = np.float32((reach - gone[b] + slack) * scene_scale)
+    return out_live, out_o, out_d, limits
+
+
+def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: float):
+    """The crossings of :func:`all_crossings` within ``reach`` of each ray's origin, and
+    each ray's first crossing wherever it is.
+
+    A ray is followed past a crossing only while that crossing lies within ``reach``, and
+    from then on Embree searches no farther than ``reach`` (plus 0.1 %): the crossings
+    within ``reach`` and the first one are the same (faces, points, order) as
+    :func:`all_crossings` finds, in fewer rounds when rays go on far past the ball they are
+    cast for (a mug's rays cross its far wall: 1.5 rounds per ray instead of 2.65).
+
+    Parameters
+    ----------
+    rays : affordgrasp.objects.rays.EmbreeRays
+    origins, directions : (n, 3) float64 ndarray
+        m; directions need not be unit.
+    reach : float
+        m, > 0.
+
+    Returns
+    -------
+    index_tri, index_ray : (m,) int64 ndarray
+        Face and ray of each crossing (every one within ``reach``, each ray's first, and
+        perhaps a few more within 0.1 % beyond).
+    locations : (m, 3) float64 ndarray
+        m.
+    """
+    start = np.asarray(origins, dtype=np.float64)
+    origins = start.copy()
+    directions = rays.unit_directions(np.array(directions, dtype=np.float64))
+    base_offset = rays.ray_offset
+    offsets = directions * base_offset
+    plane_origins, plane_normals = rays.face_planes
+    scene_origin, scene_scale = rays.scene_frame
+    last_hit = np.full(len(origins), -1, dtype=np.int64)
+    live = np.arange(len(origins), dtype=np.int64)
+    o32, d32 = rays.to_scene(origins, directions)
+    limits = None
+    slack = 1e-3 * reach
+    tris = [np.zeros(0, dtype=np.int64)]
+    idx = [np.zeros(0, dtype=np.int64)]
+    locs = [np.zeros((0, 3), dtype=np.float64)]
+    for _depth in range(_MAX_HITS):
+        query = rays.first_faces_scene(o32, d32, limits)
+        if not (query != -1).any():
+            break
+        hit_rays, hit_tris, points, live, o32, d32 = _advance(
+            query, live, last_hit, origins, directions, offsets, base_offset, plane_origins,
+            plane_normals, scene_origin, scene_scale,
+        )  # fmt: skip
+        tris.append(hit_tris)
+        idx.append(hit_rays)
+        locs.append(points)
+        live, o32, d32, limits = _still_near(live, o32, d32, origins, start, directions,
+                                             reach, slack, scene_scale)  # fmt: skip
+        if not len(live):
+            break
+    return np.concatenate(tris), np.concatenate(idx), np.concatenate(locs)

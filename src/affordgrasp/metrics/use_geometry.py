@@ -597,10 +597,10 @@ def use_wedge_shape(
         m = len(p)
         origins = np.repeat(p - _WEDGE_START_M * N[first : first + chunk], k, axis=0)
         dirs = np.tile(S, (m, 1))
-        ray, t = _crossing_distances(mesh.ray, origins, dirs)
-        w = _ray_inside(ray, t, radius, m * k).reshape(m, k)
+        ray, t, leaving = _near_crossing_distances(mesh, origins, dirs, max(radius, inner_radius))
+        w = _ray_inside(ray, t, radius, leaving).reshape(m, k)
         angle[first : first + m] = 2.0 * np.pi * w.mean(axis=1)
-        w_in = _ray_inside(ray, t, inner_radius, m * k).reshape(m, k)
+        w_in = _ray_inside(ray, t, inner_radius, leaving).reshape(m, k)
         inner[first : first + m] = 2.0 * np.pi * w_in.mean(axis=1)
         total = w.sum(axis=1)
         # einsum's own loop, not a BLAS product: each point's sum runs in the same order
@@ -727,15 +727,81 @@ def _crossing_distances(
     """Ray and distance of every crossing ((m,) int64, (m,) float64), by ray then distance,
     one per surface: a ray through an edge reports both of its faces, kept once."""
     ray, locations = _crossings(caster, origins, dirs)
+    return _distinct_distances(ray, locations, origins, dirs)
+
+
+def _distinct_distances(
+    ray: np.ndarray, locations: np.ndarray, origins: np.ndarray, dirs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The crossings (ray, point) as sorted, de-duplicated distances along their rays."""
+    _, ray, t = _distinct(ray, locations, origins, dirs)
+    return ray, t
+
+
+def _distinct(
+    ray: np.ndarray, locations: np.ndarray, origins: np.ndarray, dirs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_distinct_distances`, with the index of each kept crossing in the input."""
     t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
-    ray, t = _sorted_by_ray(ray, t)
-    dup = np.zeros(len(t), dtype=bool)
-    dup[1:] = (ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M)
-    return ray[~dup], t[~dup]
+    order = _order_by_ray(ray, t)
+    ray, t = ray[order], t[order]
+    keep = np.ones(len(t), dtype=bool)
+    keep[1:] = ~((ray[1:] == ray[:-1]) & (t[1:] - t[:-1] < _WEDGE_SAME_HIT_M))
+    return order[keep], ray[keep], t[keep]
 
 
-def _sorted_by_ray(ray: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The crossings ordered by ray, then by distance (``np.lexsort((t, ray))``).
+def _near_crossing_distances(
+    mesh, origins: np.ndarray, dirs: np.ndarray, reach: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_crossing_distances` of at least the crossings within ``reach``, and whether
+    each ray starts inside the solid ((n,) bool).
+
+    A ray starts inside when its first crossing leaves the solid (the face's outward normal
+    along the ray), as long as its crossings within ``reach`` alternate, leaving and
+    entering; where they do not (a scan's surface folded on itself next to U), when it
+    crosses the surface an odd number of times in all. Where every crossing alternates
+    the two rules agree, and a crossing missed next to the start (a ray through an edge)
+    makes the ray start outside by both; the first needs no crossing beyond the ball, so on
+    Embree the rays are followed no farther (:func:`~.ray_crossings.near_crossings`; a
+    container's rays cross its far wall). Where crossings beyond the ball do not alternate
+    (a missed crossing, or a fold, far from U), the parity can turn a ray inside out that
+    the first crossing does not.
+    """
+    from ..objects.rays import EmbreeRays
+
+    caster = mesh.ray
+    if embree := isinstance(caster, EmbreeRays):
+        from .ray_crossings import all_crossings, near_crossings
+
+        tri, ray, locations = near_crossings(caster, origins, dirs, reach)
+        normals = caster.face_planes[1]
+    else:
+        locations, ray, tri = caster.intersects_location(origins, dirs, multiple_hits=True)
+        normals = np.asarray(mesh.face_normals, dtype=np.float64)
+    ray = np.asarray(ray, dtype=np.int64)
+    locations = np.asarray(locations, dtype=np.float64)
+    kept, ray, t = _distinct(ray, locations, origins, dirs)
+    leaves = np.einsum("ij,ij->i", normals[np.asarray(tri, dtype=np.int64)[kept]], dirs[ray]) > 0
+    starts_inside = np.zeros(len(origins), dtype=bool)
+    first = np.ones(len(ray), dtype=bool)
+    first[1:] = ray[1:] != ray[:-1]
+    starts_inside[ray[first]] = leaves[first]
+    # two crossings in a row within reach both leaving, or both entering
+    folded = (~first[1:]) & (leaves[1:] == leaves[:-1]) & (t[1:] < reach)
+    odd = np.unique(ray[1:][folded])
+    if len(odd):
+        if embree:
+            _, sub, sub_locations = all_crossings(caster, origins[odd], dirs[odd])
+            sub, _ = _distinct_distances(sub, sub_locations, origins[odd], dirs[odd])
+            count = np.bincount(sub, minlength=len(odd))
+        else:
+            count = np.bincount(ray, minlength=len(origins))[odd]
+        starts_inside[odd] = count % 2 == 1
+    return ray, t, starts_inside
+
+
+def _order_by_ray(ray: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The order of the crossings by ray, then by distance (``np.lexsort((t, ray))``).
 
     The hits of one ray come in the order the ray met them, so a stable sort by ray alone
     is nearly always that order already (a few times faster than the two-key sort); if
@@ -746,22 +812,24 @@ def _sorted_by_ray(ray: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarr
     if np.isnan(t).any() or np.any(
         (ray_sorted[1:] == ray_sorted[:-1]) & (t_sorted[1:] < t_sorted[:-1])
     ):
-        order = np.lexsort((t, ray))
-        return ray[order], t[order]
-    return ray_sorted, t_sorted
+        return np.lexsort((t, ray))
+    return order
 
 
-def _ray_inside(ray: np.ndarray, t: np.ndarray, radius: float, n_rays: int) -> np.ndarray:
+def _ray_inside(
+    ray: np.ndarray, t: np.ndarray, radius: float, starts_inside: np.ndarray
+) -> np.ndarray:
     """Volume-weighted inside part of [0, radius] of each ray.
 
-    ``ray`` sorted, ``t`` sorted within each ray (crossing distances, m, to infinity). A ray
-    starts inside when it crosses the surface an odd number of times (parity, so a crossing
-    missed next to the start does not turn the ray inside out). From inside, with crossings
+    ``ray`` sorted, ``t`` sorted within each ray (crossing distances, m, at least every one
+    within the radius); ``starts_inside`` (n_rays,) bool: the ray's first crossing leaves
+    the solid (so a crossing missed next to the start does not turn the ray inside out:
+    the next one, entering, says it starts outside). From inside, with crossings
     t1 < t2 < ... within the radius (c = (t / r)³), the inside segments are [0, t1],
     [t2, t3], ...: Σ_k (-1)^k c_(k+1), + 1 after an even number of crossings; from outside,
     the complement.
     """
-    starts_inside = np.bincount(ray, minlength=n_rays) % 2 == 1
+    n_rays = len(starts_inside)
     within = t < radius
     ray, t = ray[within], t[within]
     start = np.searchsorted(ray, np.arange(n_rays))

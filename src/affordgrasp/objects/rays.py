@@ -287,20 +287,27 @@ class EmbreeScene:
         scaled = (np.array(origins, dtype=np.float64) - self._origin) * self._scale
         return scaled.astype(_EMBREE_DTYPE), np.asarray(directions).astype(_EMBREE_DTYPE)
 
-    def first_faces_scene(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    def first_faces_scene(
+        self, origins: np.ndarray, directions: np.ndarray, limits: np.ndarray | None = None
+    ) -> np.ndarray:
         """The face each ray hits first.
 
         Parameters
         ----------
         origins, directions : (n, 3) float32 ndarray
             In Embree's frame (:meth:`to_scene`).
+        limits : (n,) float32 ndarray, optional
+            Farthest ray parameter searched per ray, in the scene's units (Embree's
+            ``tfar``); a hit within it is the same as without it. None: unlimited.
 
         Returns
         -------
         (n,) int ndarray
             Face index, -1 for a miss.
         """
-        return self._scene.run(origins, directions)
+        if limits is None:
+            return self._scene.run(origins, directions)
+        return self._scene.run(origins, directions, dists=limits)
 
     def distances_scene(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
         """Ray parameter of each first hit, in the scene's units, 0 for a miss.
