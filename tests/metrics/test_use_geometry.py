@@ -443,6 +443,39 @@ def test_contact_width_measures_across_the_part():
         contact_width(plate, C, N, [0, 2], directions=0)
 
 
+def test_contact_width_in_one_cast_is_each_direction_cast_alone():
+    """The chords across the part, cast together, are the chords cast one direction (and
+    one half) at a time, bit for bit, on a mug's contacts."""
+    from affordgrasp.metrics.use_geometry import (
+        _THICKNESS_START_M,
+        _first_exit,
+        _frames,
+        contact_thickness_and_width,
+    )
+    from affordgrasp.objects import load_object
+
+    mesh = load_object("mug").mesh_data
+    rng = np.random.default_rng(4)
+    faces = rng.choice(len(mesh.faces), 300, replace=False)
+    C = mesh.vertices[mesh.faces[faces]].mean(axis=1)
+    N = mesh.face_normals[faces]
+    offsets = np.arange(0, 301, 3)
+    thickness, width = contact_thickness_and_width(mesh, C, N, offsets, directions=6)
+    origins = C - _THICKNESS_START_M * N
+    along = _first_exit(mesh, origins, -N)
+    want = np.where(np.isfinite(along), along + _THICKNESS_START_M, 0.0)
+    assert np.array_equal(thickness, want.reshape(-1, 3).min(axis=1))
+    inside = np.isfinite(along)
+    centre = origins[inside] - 0.5 * along[inside, None] * N[inside]
+    e1, e2 = _frames(N[inside])
+    for angle in np.arange(6) * np.pi / 6:
+        d = np.cos(angle) * e1 + np.sin(angle) * e2
+        chord = _first_exit(mesh, centre, d) + _first_exit(mesh, centre, -d)
+        want[inside] = np.minimum(want[inside], chord)
+    assert np.array_equal(width, want.reshape(-1, 3).min(axis=1))
+    assert np.all(width <= thickness) and np.any(width < thickness)
+
+
 def test_lever_ratio_compares_distances_to_the_wrist_axis():
     from affordgrasp.metrics.use_geometry import use_lever_ratio
 

@@ -65,8 +65,7 @@ from .transmission import use_force, use_force_kernel
 from .use_geometry import (
     EDGE_RADIUS_M,
     contact_reach,
-    contact_thickness,
-    contact_width,
+    contact_thickness_and_width,
     long_axis,
     use_clearance,
     use_edge,
@@ -300,10 +299,11 @@ def compute_phi_batch(
         if n
         else np.zeros(0)
     )
-    out["contact_thickness"] = (
-        contact_thickness(mesh, points, normals, offsets) if n else np.zeros(0)
+    out["contact_thickness"], out["contact_width"] = (
+        contact_thickness_and_width(mesh, points, normals, offsets)
+        if n
+        else (np.zeros(0), np.zeros(0))
     )
-    out["contact_width"] = contact_width(mesh, points, normals, offsets) if n else np.zeros(0)
     out["epsilon_hand"] = epsilon_hand(
         points, normals, mu, offsets, center, r_max, eps, soft=bool(soft)
     )

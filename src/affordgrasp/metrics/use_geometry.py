@@ -1006,24 +1006,9 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
         m; +inf for a grasp without contacts; a contact whose ray finds no exit (grazing an
         edge) counts as 0.
     """
-    C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
-    N = np.asarray(contact_normals, dtype=np.float64).reshape(-1, 3)
-    offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
-    g = len(offsets) - 1
-    out = np.full(g, np.inf)
-    if len(C) == 0:
-        return out
-    origins = C - _THICKNESS_START_M * N
-    locations, ray, _ = mesh.ray.intersects_location(origins, -N, multiple_hits=False)
-    chord = np.zeros(len(C))
-    ray = np.asarray(ray, dtype=np.int64)
-    if len(ray):
-        t = np.linalg.norm(np.asarray(locations, dtype=np.float64) - origins[ray], axis=1)
-        chord[ray] = t + _THICKNESS_START_M
-    counts = np.diff(offsets)
-    owner = np.repeat(np.arange(g), counts)
-    np.minimum.at(out, owner, chord)
-    return out
+    return contact_thickness_and_width(
+        mesh, contact_points, contact_normals, offsets, directions=0
+    )[0]
 
 
 WIDTH_DIRECTIONS = 6  # directions across the part, per contact, of contact_width
@@ -1072,31 +1057,68 @@ def contact_width(
         m; +inf for a grasp without contacts; a contact whose normal ray finds no exit
         (grazing an edge) counts as 0.
     """
+    if int(directions) < 1:
+        raise InputError(f"directions must be a positive integer, got {directions}")
+    return contact_thickness_and_width(
+        mesh, contact_points, contact_normals, offsets, directions=directions
+    )[1]
+
+
+def contact_thickness_and_width(
+    mesh, contact_points, contact_normals, offsets, directions: int = WIDTH_DIRECTIONS
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`contact_thickness` and :func:`contact_width` from one set of rays.
+
+    The chord along the inward normal is both the thickness and the width's first chord;
+    the chords across the part, both halves of every direction for every contact, are cast
+    in one call.
+
+    Parameters
+    ----------
+    mesh, contact_points, contact_normals, offsets
+        As for :func:`contact_width`.
+    directions : int
+        Directions across the part per contact (0: the thickness alone; the width is then
+        the chord along the normal).
+
+    Returns
+    -------
+    thickness, width : (g,) float64 ndarray
+        m.
+    """
     C = np.asarray(contact_points, dtype=np.float64).reshape(-1, 3)
     N = np.asarray(contact_normals, dtype=np.float64).reshape(-1, 3)
     offsets = np.asarray(offsets, dtype=np.int64).reshape(-1)
     k = int(directions)
-    if k < 1:
-        raise InputError(f"directions must be a positive integer, got {directions}")
+    if k < 0:
+        raise InputError(f"directions must be a non-negative integer, got {directions}")
     g = len(offsets) - 1
+    thickness = np.full(g, np.inf)
     out = np.full(g, np.inf)
     if len(C) == 0:
-        return out
+        return thickness, out
     origins = C - _THICKNESS_START_M * N
     along = _first_exit(mesh, origins, -N)
-    width = np.where(np.isfinite(along), along + _THICKNESS_START_M, 0.0)
+    chord_n = np.where(np.isfinite(along), along + _THICKNESS_START_M, 0.0)
+    width = chord_n.copy()
     inside = np.isfinite(along)
-    if inside.any():
+    m = int(inside.sum())
+    if m and k:
         centre = origins[inside] - 0.5 * along[inside, None] * N[inside]
         e1, e2 = _frames(N[inside])
-        for angle in np.arange(k) * np.pi / k:
-            d = np.cos(angle) * e1 + np.sin(angle) * e2
-            chord = _first_exit(mesh, centre, d) + _first_exit(mesh, centre, -d)
-            width[inside] = np.minimum(width[inside], chord)
+        # rows: direction a's + half, then its - half, each over the m contacts
+        d = np.stack(
+            [np.cos(angle) * e1 + np.sin(angle) * e2 for angle in np.arange(k) * np.pi / k]
+        )
+        dirs = np.stack([d, -d], axis=1).reshape(-1, 3)
+        exits = _first_exit(mesh, np.tile(centre, (2 * k, 1)), dirs).reshape(k, 2, m)
+        for a in range(k):
+            width[inside] = np.minimum(width[inside], exits[a, 0] + exits[a, 1])
     counts = np.diff(offsets)
     owner = np.repeat(np.arange(g), counts)
+    np.minimum.at(thickness, owner, chord_n)
     np.minimum.at(out, owner, width)
-    return out
+    return thickness, out
 
 
 def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
