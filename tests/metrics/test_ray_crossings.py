@@ -118,8 +118,9 @@ def test_a_ray_starts_inside_when_its_first_crossing_leaves(engine):
     directions = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])
     ray, t, inside = use_geometry._near_crossing_distances(mesh, origins, directions, 3e-3)
     assert inside.tolist() == [True, True]
-    w = use_geometry._ray_inside(ray, t, 3e-3, inside)
+    w, w_in = use_geometry._ball_weights(ray, t, 3e-3, 2e-3, inside)
     np.testing.assert_allclose(w, [(1.0 / 3.0) ** 3, 1.0], rtol=1e-9)
+    np.testing.assert_allclose(w_in, [(1.0 / 2.0) ** 3, 1.0], rtol=1e-9)
 
 
 @pytest.mark.parametrize("engine", ["embree", "trimesh"])
@@ -146,3 +147,28 @@ def test_a_fold_within_the_ball_falls_back_to_the_parity(engine):
     ray, t, inside = use_geometry._near_crossing_distances(mesh, origins, directions, 3e-3)
     assert len(t) == 3 and t[2] < 3e-3
     assert inside.tolist() == [True]
+
+
+def _ray_inside(ray, t, radius, starts_inside):
+    """The inside weights by numpy (bincount), the reference of the compiled pass."""
+    n_rays = len(starts_inside)
+    within = t < radius
+    ray, t = ray[within], t[within]
+    start = np.searchsorted(ray, np.arange(n_rays))
+    rank = np.arange(len(ray)) - start[ray]
+    cube = (t / radius) ** 3
+    inside = np.bincount(ray, weights=np.where(rank % 2 == 0, cube, -cube), minlength=n_rays)
+    count = np.bincount(ray, minlength=n_rays)
+    inside = inside + (count % 2 == 0)
+    return np.where(starts_inside, inside, 1.0 - inside)
+
+
+@pytest.mark.parametrize("family", ["mug", "knife~scan"])
+def test_ball_weights_are_numpys_bit_for_bit(family):
+    mesh = load_object(family).mesh_data
+    origins, directions = _wedge_rays(mesh, 200, 256, 2)
+    ray, t, inside = use_geometry._near_crossing_distances(mesh, origins, directions, 3e-3)
+    w, w_in = use_geometry._ball_weights(ray, t, 3e-3, 2e-3, inside)
+    assert np.array_equal(w, _ray_inside(ray, t, 3e-3, inside))
+    assert np.array_equal(w_in, _ray_inside(ray, t, 2e-3, inside))
+    assert 0.3 < w.mean() < 0.7 and np.all((w > -1e-12) & (w < 1 + 1e-12))

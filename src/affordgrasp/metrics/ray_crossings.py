@@ -254,3 +254,52 @@ def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: flo
         if not len(live):
             break
     return np.concatenate(tris), np.concatenate(idx), np.concatenate(locs)
+
+
+@njit(cache=True)
+def ball_weights(ray, t, cube_out, cube_in, radius, inner_radius, starts_inside):
+    """Volume-weighted inside part of [0, radius] and of [0, inner_radius] of each ray.
+
+    ``use_geometry._ball_weights``: for each ray, ± the cubes of its crossings within the
+    radius in turn (+ first), + 1 after an even number of them, or the complement where the
+    ray starts outside; the sums in the order ``np.bincount`` would add them (tests compare
+    the two, bit for bit).
+
+    Parameters
+    ----------
+    ray : (m,) int64 ndarray
+        Sorted; each ray's crossings in order of distance.
+    t : (m,) float64 ndarray
+        Crossing distances, m.
+    cube_out, cube_in : (m,) float64 ndarray
+        ``(t / radius) ** 3`` and ``(t / inner_radius) ** 3`` (numpy's power).
+    radius, inner_radius : float
+        m.
+    starts_inside : (n,) bool ndarray
+        Per ray.
+
+    Returns
+    -------
+    w, w_in : (n,) float64 ndarray
+    """
+    n = starts_inside.shape[0]
+    acc_out = np.zeros(n)
+    acc_in = np.zeros(n)
+    k_out = np.zeros(n, dtype=np.int64)
+    k_in = np.zeros(n, dtype=np.int64)
+    for a in range(ray.shape[0]):
+        r = ray[a]
+        if t[a] < radius:
+            acc_out[r] += cube_out[a] if k_out[r] % 2 == 0 else -cube_out[a]
+            k_out[r] += 1
+        if t[a] < inner_radius:
+            acc_in[r] += cube_in[a] if k_in[r] % 2 == 0 else -cube_in[a]
+            k_in[r] += 1
+    w = np.empty(n)
+    w_in = np.empty(n)
+    for r in range(n):
+        v = acc_out[r] + (1.0 if k_out[r] % 2 == 0 else 0.0)
+        w[r] = v if starts_inside[r] else 1.0 - v
+        v = acc_in[r] + (1.0 if k_in[r] % 2 == 0 else 0.0)
+        w_in[r] = v if starts_inside[r] else 1.0 - v
+    return w, w_in

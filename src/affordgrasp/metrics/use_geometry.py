@@ -598,9 +598,9 @@ def use_wedge_shape(
         origins = np.repeat(p - _WEDGE_START_M * N[first : first + chunk], k, axis=0)
         dirs = np.tile(S, (m, 1))
         ray, t, leaving = _near_crossing_distances(mesh, origins, dirs, max(radius, inner_radius))
-        w = _ray_inside(ray, t, radius, leaving).reshape(m, k)
+        w, w_in = _ball_weights(ray, t, radius, inner_radius, leaving)
+        w, w_in = w.reshape(m, k), w_in.reshape(m, k)
         angle[first : first + m] = 2.0 * np.pi * w.mean(axis=1)
-        w_in = _ray_inside(ray, t, inner_radius, leaving).reshape(m, k)
         inner[first : first + m] = 2.0 * np.pi * w_in.mean(axis=1)
         total = w.sum(axis=1)
         # einsum's own loop, not a BLAS product: each point's sum runs in the same order
@@ -816,10 +816,10 @@ def _order_by_ray(ray: np.ndarray, t: np.ndarray) -> np.ndarray:
     return order
 
 
-def _ray_inside(
-    ray: np.ndarray, t: np.ndarray, radius: float, starts_inside: np.ndarray
-) -> np.ndarray:
-    """Volume-weighted inside part of [0, radius] of each ray.
+def _ball_weights(
+    ray: np.ndarray, t: np.ndarray, radius: float, inner_radius: float, starts_inside: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Volume-weighted inside part of [0, radius] and of [0, inner_radius] of each ray.
 
     ``ray`` sorted, ``t`` sorted within each ray (crossing distances, m, at least every one
     within the radius); ``starts_inside`` (n_rays,) bool: the ray's first crossing leaves
@@ -827,18 +827,14 @@ def _ray_inside(
     the next one, entering, says it starts outside). From inside, with crossings
     t1 < t2 < ... within the radius (c = (t / r)³), the inside segments are [0, t1],
     [t2, t3], ...: Σ_k (-1)^k c_(k+1), + 1 after an even number of crossings; from outside,
-    the complement.
+    the complement. Summed by a compiled pass over the crossings
+    (:func:`~.ray_crossings.ball_weights`).
     """
-    n_rays = len(starts_inside)
-    within = t < radius
-    ray, t = ray[within], t[within]
-    start = np.searchsorted(ray, np.arange(n_rays))
-    rank = np.arange(len(ray)) - start[ray]
-    cube = (t / radius) ** 3
-    inside = np.bincount(ray, weights=np.where(rank % 2 == 0, cube, -cube), minlength=n_rays)
-    count = np.bincount(ray, minlength=n_rays)
-    inside = inside + (count % 2 == 0)
-    return np.where(starts_inside, inside, 1.0 - inside)
+    from .ray_crossings import ball_weights
+
+    return ball_weights(
+        ray, t, (t / radius) ** 3, (t / inner_radius) ** 3, radius, inner_radius, starts_inside
+    )
 
 
 def _use_point_groups(group, n_uses: int, n_grasps: int) -> np.ndarray:
