@@ -27,21 +27,23 @@ HIT = 1e-3  # m: coarse enough for a 2000-step reference grid to resolve the sto
 # measured. Bounding a fine cell's points by the flat cylinder of its best-fit plane instead
 # of its sphere (kernels.flat_cell_sdf_at, _chain_touch's flat) took the approach from 1585
 # pops and queries to 467 and the closing from 2544 pops and 2694 queries to 2026 and 2176
-# (refinement 104 -> 103) on this 3 cm sphere.
-APPROACH_POPS = 467
-APPROACH_QUERIES = 467
-CLOSING_POPS = 2026
-CLOSING_QUERIES = 2176
-CLOSING_REFINE = 103
+# (refinement 104 -> 103) on this 3 cm sphere; splitting each fine cell's points into 2 x 2
+# x 2 sub-cells, released one level at a time, to 276 (approach) and 1042 pops and 1192
+# queries (closing; refinement 106).
+APPROACH_POPS = 276
+APPROACH_QUERIES = 276
+CLOSING_POPS = 1042
+CLOSING_QUERIES = 1192
+CLOSING_REFINE = 106
 
 
 def sphere_cloud(center, radius, n, rng):
     """A SampleCloud of n points on a sphere (object frame = hand frame here)."""
     v = rng.normal(size=(n, 3))
     points = center + radius * v / np.linalg.norm(v, axis=1, keepdims=True)
-    order, fine, coarse = group_into_cells(points)
+    order, fine, coarse, sub = group_into_cells(points)
     p = np.ascontiguousarray(points[order])
-    return kernels.SampleCloud(p, *fine, *coarse), p
+    return kernels.SampleCloud(p, *fine, *coarse, *sub), p
 
 
 def finger_chain(hand_name, finger, dofs):
@@ -289,7 +291,7 @@ def _flat_cell(rng, n):
     height = 0.5 * bend * (u**2).sum(axis=1) + rng.normal(0.0, rng.uniform(0, 2e-4), n)
     frame = Rotation.random(random_state=rng).as_matrix()
     points = np.column_stack([u, height]) @ frame.T + rng.uniform(-0.05, 0.05, 3)
-    _, (_, center, radius, normal, slab), _ = group_into_cells(points, size=1.0)
+    _, (_, center, radius, normal, slab), _, _ = group_into_cells(points, size=1.0)
     return points, center[0], radius[0], normal[0], slab[0]
 
 

@@ -58,6 +58,15 @@ class SampleCloud(NamedTuple):
         Offsets of each coarse cell's fine cells.
     coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
         A bounding sphere per coarse cell, m.
+    cell_sub_start : (c + 1,) int ndarray
+        Offsets of each fine cell's sub-cells.
+    sub_start : (s + 1,) int ndarray
+        Offsets of each sub-cell's points in ``sub_points``.
+    sub_points : (n,) int ndarray
+        Point indices grouped by sub-cell (the contact search's third level; the points
+        themselves stay in their fine cells' order).
+    sub_center, sub_radius, sub_normal, sub_slab : (s, 3), (s,), (s, 3), (s, 2) ndarray
+        As ``cell_*``, per sub-cell.
     """
 
     points: np.ndarray
@@ -69,6 +78,13 @@ class SampleCloud(NamedTuple):
     coarse_start: np.ndarray
     coarse_center: np.ndarray
     coarse_radius: np.ndarray
+    cell_sub_start: np.ndarray
+    sub_start: np.ndarray
+    sub_points: np.ndarray
+    sub_center: np.ndarray
+    sub_radius: np.ndarray
+    sub_normal: np.ndarray
+    sub_slab: np.ndarray
 
 
 class ShapeSet(NamedTuple):
@@ -945,11 +961,12 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 + (shape_buf[q, 2, 3] - o0[2]) * a0[2]
             )
             slab = max(slab, abs(along) + rho[q])
-    # Heap entries: entry = code * slots + slot, code a point i (< n), the fine cell n + f or
-    # the coarse cell n + nf + c; slot 0 the whole chain, q + 1 the shape q of a translation.
-    # prev is the last key at which the entry was known not to touch (the low end of the
-    # bracket of a crossing).
+    # Heap entries: entry = code * slots + slot, code a point i (< n), the sub-cell n + b,
+    # the fine cell n + ns + f or the coarse cell n + ns + nf + c; slot 0 the whole chain,
+    # q + 1 the shape q of a translation. prev is the last key at which the entry was known
+    # not to touch (the low end of the bracket of a crossing).
     n = cloud.points.shape[0]
+    ns = cloud.sub_center.shape[0]
     nf = cloud.cell_center.shape[0]
     nk = cloud.coarse_center.shape[0]
     kc = np.empty((nk, 3))
@@ -967,7 +984,15 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         radius = cloud.coarse_radius[c]
         f0 = cloud.coarse_start[c]
         f1 = cloud.coarse_start[c + 1]
-        below = 1 + f1 - f0 + cloud.cell_start[f1] - cloud.cell_start[f0]
+        below = (
+            1
+            + f1
+            - f0
+            + cloud.cell_sub_start[f1]
+            - cloud.cell_sub_start[f0]
+            + cloud.cell_start[f1]
+            - cloud.cell_start[f0]
+        )
         if translation:
             for q in range(k):
                 rr = radius + rho[q]
@@ -1005,7 +1030,7 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
     size = 0
     margin = 0.5 * hit_eps
     for c in range(nk):
-        code = n + nf + c
+        code = n + ns + nf + c
         radius = cloud.coarse_radius[c]
         if translation:
             for q in range(k):
@@ -1049,33 +1074,50 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
         slot = e - code * slots
         q = slot - 1
         if code >= n:
-            coarse = code >= n + nf
-            c = code - n - nf if coarse else code - n
+            coarse = code >= n + ns + nf
+            fine = not coarse and code >= n + ns
+            flat = False
+            thick = 0.0
+            spread = 0.0
             if coarse:
+                c = code - n - ns - nf
                 radius = cloud.coarse_radius[c]
                 _to_hand(cloud.coarse_center, c, rot, trans, ph)
-            else:
+            elif fine:
+                c = code - n - ns
                 radius = cloud.cell_radius[c]
                 _to_hand(cloud.cell_center, c, rot, trans, ph)
+                thick = cloud.cell_slab[c, 0]
+                spread = cloud.cell_slab[c, 1]
+                flat = thick < FLAT_CELL * radius
+                if flat:
+                    _to_hand_direction(cloud.cell_normal, c, rot, nh_dir)
+            else:
+                c = code - n
+                radius = cloud.sub_radius[c]
+                _to_hand(cloud.sub_center, c, rot, trans, ph)
+                thick = cloud.sub_slab[c, 0]
+                spread = cloud.sub_slab[c, 1]
+                flat = thick < FLAT_CELL * radius
+                if flat:
+                    _to_hand_direction(cloud.sub_normal, c, rot, nh_dir)
             counts[QUERIES] += 1
             if translation:
-                if coarse or cloud.cell_slab[c, 0] >= FLAT_CELL * radius:
+                if not flat:
                     d = (
                         _swept_distance(ph[0], ph[1], ph[2], s, q, shapes, shape_buf, a_move)
                         - radius
                     )
                 else:
-                    # a fine cell: a flat cylinder (see flat_cell_sdf_at); a translation
-                    # moves the point, not the direction
-                    _to_hand_direction(cloud.cell_normal, c, rot, nh_dir)
+                    # a fine or sub-cell: a flat cylinder (see flat_cell_sdf_at); a
+                    # translation moves the point, not the direction
                     d = flat_cell_sdf_at(ph[0] - a_move[0] * s, ph[1] - a_move[1] * s,
                                          ph[2] - a_move[2] * s, shape_buf, q, shapes.kinds,
                                          shapes.halves, shapes.radii, nh_dir[0], nh_dir[1],
-                                         nh_dir[2], cloud.cell_slab[c, 0],
-                                         cloud.cell_slab[c, 1], radius)  # fmt: skip
+                                         nh_dir[2], thick, spread, radius)  # fmt: skip
                 touching = d <= hit_eps
                 nxt = s + d - margin
-            elif coarse or cloud.cell_slab[c, 0] >= FLAT_CELL * radius:
+            elif not flat:
                 dx = ph[0] - o0[0]
                 dy = ph[1] - o0[1]
                 dz = ph[2] - o0[2]
@@ -1086,37 +1128,43 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 touching = d - radius <= hit_eps
                 nxt = s + step
             else:
-                # a fine cell: its points lie in a flat cylinder (see _chain_touch's flat)
+                # its points lie in a flat cylinder (see _chain_touch's flat)
                 dx = ph[0] - o0[0]
                 dy = ph[1] - o0[1]
                 dz = ph[2] - o0[2]
                 r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
-                _to_hand_direction(cloud.cell_normal, c, rot, nh_dir)
                 d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin,
                                           radius, trig, True, nh_dir[0], nh_dir[1], nh_dir[2],
-                                          cloud.cell_slab[c, 0],
-                                          cloud.cell_slab[c, 1])  # fmt: skip
+                                          thick, spread)  # fmt: skip
                 touching = d <= hit_eps
                 nxt = s + step
             if touching:
                 # Everything inside is still clear at s_prev and goes on from s, one level
-                # down: fine cells of a coarse cell, points of a fine cell.
+                # down: fine cells of a coarse cell, sub-cells of a fine cell, points of a
+                # sub-cell.
+                stack_key = s
                 if coarse:
                     f0 = cloud.coarse_start[c]
                     f1 = cloud.coarse_start[c + 1]
                     counts[PUSHES] += f1 - f0
-                    stack_key = s
                     for f in range(f1 - 1, f0 - 1, -1):
-                        stack_e[n_stack] = (n + f) * slots + slot
+                        stack_e[n_stack] = (n + ns + f) * slots + slot
+                        stack_p[n_stack] = s_prev
+                        n_stack += 1
+                elif fine:
+                    b0 = cloud.cell_sub_start[c]
+                    b1 = cloud.cell_sub_start[c + 1]
+                    counts[PUSHES] += b1 - b0
+                    for b in range(b1 - 1, b0 - 1, -1):
+                        stack_e[n_stack] = (n + b) * slots + slot
                         stack_p[n_stack] = s_prev
                         n_stack += 1
                 else:
-                    i0 = cloud.cell_start[c]
-                    i1 = cloud.cell_start[c + 1]
+                    i0 = cloud.sub_start[c]
+                    i1 = cloud.sub_start[c + 1]
                     counts[PUSHES] += i1 - i0
-                    stack_key = s
-                    for i in range(i1 - 1, i0 - 1, -1):
-                        stack_e[n_stack] = i * slots + slot
+                    for j in range(i1 - 1, i0 - 1, -1):
+                        stack_e[n_stack] = cloud.sub_points[j] * slots + slot
                         stack_p[n_stack] = s_prev
                         n_stack += 1
             elif nxt < best:
@@ -1198,7 +1246,7 @@ def first_contact(cloud, rot, trans, chain, s_max, hit_eps):
     finger's closing is its chain of revolute (or prismatic) joints. Cells (as bounding
     spheres) and points sit in one priority queue keyed by a lower bound on when they can
     first touch; the smallest is advanced by one step at a time, a touching cell releases
-    its children (coarse -> fine cells -> points), and the search stops once no entry can
+    its children (coarse -> fine -> sub-cells -> points), and the search stops once no entry can
     beat the best hit. A pure translation (the approach) queues (cell or point, shape) pairs
     instead: each shape sweeps a column, a coarse cell enters the queue for the shapes whose
     column it crosses, keyed by when it enters it, and a pair is dropped once its shape has

@@ -443,6 +443,13 @@ def sample_cloud(samples: SurfaceSample) -> kernels.SampleCloud:
         samples.coarse_start,
         samples.coarse_center,
         samples.coarse_radius,
+        samples.cell_sub_start,
+        samples.sub_start,
+        samples.sub_points,
+        samples.sub_center,
+        samples.sub_radius,
+        samples.sub_normal,
+        samples.sub_slab,
     )
 
 

@@ -228,6 +228,13 @@ _SAMPLE_FIELDS = (
     "coarse_start",
     "coarse_center",
     "coarse_radius",
+    "cell_sub_start",
+    "sub_start",
+    "sub_points",
+    "sub_center",
+    "sub_radius",
+    "sub_normal",
+    "sub_slab",
 )
 
 

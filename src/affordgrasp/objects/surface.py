@@ -32,6 +32,7 @@ MAX_POINTS = 1_000_000
 
 
 CELL_SIZE = 6e-3  # fine cells; coarse cells are 3 x 3 x 3 of them
+SUB_CELLS = 2  # the contact search splits each fine cell 2 x 2 x 2 (3 mm sub-cells)
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,15 @@ class SurfaceSample:
         Offsets of each coarse cell's (3 x 3 x 3) fine cells.
     coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
         A bounding sphere of each coarse cell, m.
+    cell_sub_start : (c + 1,) int ndarray
+        Offsets of each fine cell's sub-cells (its points split 2 x 2 x 2).
+    sub_start : (s + 1,) int ndarray
+        Offsets of each sub-cell's points in ``sub_points``.
+    sub_points : (n,) int ndarray
+        Point indices, grouped by sub-cell (the points keep their order: a sub-cell's are
+        listed, not moved).
+    sub_center, sub_radius, sub_normal, sub_slab : (s, 3), (s,), (s, 3), (s, 2) ndarray
+        As ``cell_*``, per sub-cell.
     """
 
     points: np.ndarray
@@ -74,6 +84,13 @@ class SurfaceSample:
     coarse_start: np.ndarray
     coarse_center: np.ndarray
     coarse_radius: np.ndarray
+    cell_sub_start: np.ndarray
+    sub_start: np.ndarray
+    sub_points: np.ndarray
+    sub_center: np.ndarray
+    sub_radius: np.ndarray
+    sub_normal: np.ndarray
+    sub_slab: np.ndarray
 
 
 def _runs(keys: np.ndarray) -> np.ndarray:
@@ -130,6 +147,11 @@ def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
         through the cylinder, several times tighter than through the sphere.
     coarse : tuple
         (start into the fine cells, center, radius) of the coarse cells.
+    sub : tuple
+        (start into the sub-cells per fine cell, start into ``points`` per sub-cell,
+        points, center, radius, normal, slab) of the sub-cells: each fine cell's points
+        split 2 x 2 x 2 (by the halves of its edges), listed by index in the sorted order
+        (they are not reordered), with a sphere and a flat cylinder as the fine cells'.
     """
     fine = np.floor((points - points.min(axis=0)) / size).astype(np.int64)
     coarse = fine // 3
@@ -142,10 +164,32 @@ def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     coarse_of_fine = coarse[order][fine_start[:-1]]
     coarse_runs = _runs(coarse_of_fine)
     coarse_center, coarse_radius = _spheres(p, fine_start[coarse_runs])
+    # sub-cells: the half of each fine cell's edge a point lies in, per axis (a point
+    # rounded into its neighbour's half only makes that sub-cell's sphere larger)
+    half = np.floor((p - points.min(axis=0)) / (size / SUB_CELLS)).astype(np.int64) % SUB_CELLS
+    bits = (half[:, 0] * SUB_CELLS + half[:, 1]) * SUB_CELLS + half[:, 2]
+    owner = np.repeat(np.arange(len(fine_start) - 1), np.diff(fine_start))
+    listed = np.lexsort((bits, owner))  # stable: by index within a sub-cell
+    sub_start = _runs(np.stack([owner[listed], bits[listed]], axis=1))
+    q = p[listed]
+    sub_center, sub_radius = _spheres(q, sub_start)
+    sub_normal, sub_slab = _slabs(q, sub_start, sub_center)
+    cell_sub_start = np.searchsorted(
+        owner[listed][sub_start[:-1]], np.arange(len(fine_start))
+    ).astype(np.int64)
     return (
         order,
         (fine_start, fine_center, fine_radius, fine_normal, fine_slab),
         (coarse_runs, coarse_center, coarse_radius),
+        (
+            cell_sub_start,
+            sub_start,
+            listed.astype(np.int64),
+            sub_center,
+            sub_radius,
+            sub_normal,
+            sub_slab,
+        ),
     )
 
 
@@ -340,7 +384,7 @@ def sample_surface(
     normals = np.concatenate(nrm)
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = normals / np.where(length > 0, length, 1.0)
-    order, fine, coarse = group_into_cells(points)
+    order, fine, coarse, sub = group_into_cells(points)
     return SurfaceSample(
         np.ascontiguousarray(points[order]),
         np.ascontiguousarray(normals[order]),
@@ -348,4 +392,5 @@ def sample_surface(
         spacing,
         *fine,
         *coarse,
+        *sub,
     )
