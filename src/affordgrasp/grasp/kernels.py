@@ -860,6 +860,23 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
     return first, first_p, first_q
 
 
+@njit(cache=True, inline="always")
+def _cell_in_hand(center, radius, normal, slab, c, rot, trans, ph, nh_dir):
+    """Fine or sub-cell c in the hand frame: its centre into ph and, where its points lie in
+    a flat cylinder (see _chain_touch's flat), its normal into nh_dir.
+
+    returns : (radius, slab thickness, slab spread, flat)
+    """
+    _to_hand(center, c, rot, trans, ph)
+    r = radius[c]
+    thick = slab[c, 0]
+    spread = slab[c, 1]
+    flat = thick < FLAT_CELL * r
+    if flat:
+        _to_hand_direction(normal, c, rot, nh_dir)
+    return r, thick, spread, flat
+
+
 @njit(cache=True)
 def _ahead(c, poses, q, axis, u, extent):
     """For a translation: whether a shape (start pose ``pose``, bounding radius grown by the
@@ -1085,22 +1102,16 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 _to_hand(cloud.coarse_center, c, rot, trans, ph)
             elif fine:
                 c = code - n - ns
-                radius = cloud.cell_radius[c]
-                _to_hand(cloud.cell_center, c, rot, trans, ph)
-                thick = cloud.cell_slab[c, 0]
-                spread = cloud.cell_slab[c, 1]
-                flat = thick < FLAT_CELL * radius
-                if flat:
-                    _to_hand_direction(cloud.cell_normal, c, rot, nh_dir)
+                radius, thick, spread, flat = _cell_in_hand(
+                    cloud.cell_center, cloud.cell_radius, cloud.cell_normal, cloud.cell_slab,
+                    c, rot, trans, ph, nh_dir,
+                )  # fmt: skip
             else:
                 c = code - n
-                radius = cloud.sub_radius[c]
-                _to_hand(cloud.sub_center, c, rot, trans, ph)
-                thick = cloud.sub_slab[c, 0]
-                spread = cloud.sub_slab[c, 1]
-                flat = thick < FLAT_CELL * radius
-                if flat:
-                    _to_hand_direction(cloud.sub_normal, c, rot, nh_dir)
+                radius, thick, spread, flat = _cell_in_hand(
+                    cloud.sub_center, cloud.sub_radius, cloud.sub_normal, cloud.sub_slab,
+                    c, rot, trans, ph, nh_dir,
+                )  # fmt: skip
             counts[QUERIES] += 1
             if translation:
                 if not flat:

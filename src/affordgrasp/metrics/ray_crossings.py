@@ -141,30 +141,7 @@ def all_crossings(rays, origins: np.ndarray, directions: np.ndarray):
     locations : (m, 3) float64 ndarray
         m.
     """
-    origins = np.array(origins, dtype=np.float64)
-    directions = rays.unit_directions(np.array(directions, dtype=np.float64))
-    base_offset = rays.ray_offset
-    offsets = directions * base_offset
-    plane_origins, plane_normals = rays.face_planes
-    scene_origin, scene_scale = rays.scene_frame
-    last_hit = np.full(len(origins), -1, dtype=np.int64)
-    live = np.arange(len(origins), dtype=np.int64)
-    o32, d32 = rays.to_scene(origins, directions)
-    tris = [np.zeros(0, dtype=np.int64)]
-    idx = [np.zeros(0, dtype=np.int64)]
-    locs = [np.zeros((0, 3), dtype=np.float64)]
-    for _depth in range(_MAX_HITS):
-        query = rays.first_faces_scene(o32, d32)
-        if not (query != -1).any():
-            break
-        hit_rays, hit_tris, points, live, o32, d32 = _advance(
-            query, live, last_hit, origins, directions, offsets, base_offset, plane_origins,
-            plane_normals, scene_origin, scene_scale,
-        )  # fmt: skip
-        tris.append(hit_tris)
-        idx.append(hit_rays)
-        locs.append(points)
-    return np.concatenate(tris), np.concatenate(idx), np.concatenate(locs)
+    return _crossings(rays, origins, directions, None)
 
 
 @njit(cache=True)
@@ -223,6 +200,12 @@ def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: flo
     locations : (m, 3) float64 ndarray
         m.
     """
+    return _crossings(rays, origins, directions, float(reach))
+
+
+def _crossings(rays, origins, directions, reach):
+    """The multiple-hit loop of :func:`all_crossings` (``reach`` None) and of
+    :func:`near_crossings` (a ray done once it has crossed beyond ``reach``)."""
     start = np.asarray(origins, dtype=np.float64)
     origins = start.copy()
     directions = rays.unit_directions(np.array(directions, dtype=np.float64))
@@ -234,7 +217,6 @@ def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: flo
     live = np.arange(len(origins), dtype=np.int64)
     o32, d32 = rays.to_scene(origins, directions)
     limits = None
-    slack = 1e-3 * reach
     tris = [np.zeros(0, dtype=np.int64)]
     idx = [np.zeros(0, dtype=np.int64)]
     locs = [np.zeros((0, 3), dtype=np.float64)]
@@ -249,10 +231,11 @@ def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: flo
         tris.append(hit_tris)
         idx.append(hit_rays)
         locs.append(points)
-        live, o32, d32, limits = _still_near(live, o32, d32, origins, start, directions,
-                                             reach, slack, scene_scale)  # fmt: skip
-        if not len(live):
-            break
+        if reach is not None:
+            live, o32, d32, limits = _still_near(live, o32, d32, origins, start, directions,
+                                                 reach, 1e-3 * reach, scene_scale)  # fmt: skip
+            if not len(live):
+                break
     return np.concatenate(tris), np.concatenate(idx), np.concatenate(locs)
 
 
