@@ -339,3 +339,32 @@ def test_surface_cells_carry_their_flat_cylinders():
     assert np.all(samples.cell_slab[:, 1] <= samples.cell_radius + 1e-12)
     # a mug is mostly smooth: most of its cells are far thinner than they are wide
     assert np.median(samples.cell_slab[:, 0] / samples.cell_radius) < 0.2
+
+
+def test_sub_cells_partition_each_fine_cell_and_bound_their_points():
+    from affordgrasp.grasp.policy import object_geometry
+    from affordgrasp.objects import load_object
+
+    samples = object_geometry(load_object("mug")).samples
+    start, sub_start = samples.cell_start, samples.sub_start
+    n_sub = len(sub_start) - 1
+    # every point in exactly one sub-cell, and that sub-cell in the point's fine cell
+    assert np.array_equal(np.sort(samples.sub_points), np.arange(len(samples.points)))
+    sub_owner = np.repeat(np.arange(n_sub), np.diff(sub_start))
+    fine_of_sub = np.repeat(np.arange(len(start) - 1), np.diff(samples.cell_sub_start))
+    fine_of_point = np.searchsorted(start, samples.sub_points, side="right") - 1
+    assert np.array_equal(fine_of_sub[sub_owner], fine_of_point)
+    assert np.all(np.diff(samples.cell_sub_start) >= 1)
+    assert np.all(np.diff(samples.cell_sub_start) <= 8) and np.all(np.diff(sub_start) >= 1)
+    # listed by index within a sub-cell: the samples keep their order
+    same = sub_owner[1:] == sub_owner[:-1]
+    assert np.all(samples.sub_points[1:][same] > samples.sub_points[:-1][same])
+    # spheres and flat cylinders bound their points, and are smaller than the fine cells'
+    q = samples.points[samples.sub_points] - samples.sub_center[sub_owner]
+    assert np.all(np.linalg.norm(q, axis=1) <= samples.sub_radius[sub_owner])
+    along = np.sum(q * samples.sub_normal[sub_owner], axis=1)
+    across = np.linalg.norm(q - along[:, None] * samples.sub_normal[sub_owner], axis=1)
+    assert np.all(np.abs(along) <= samples.sub_slab[sub_owner, 0])
+    assert np.all(across <= samples.sub_slab[sub_owner, 1])
+    assert np.all(samples.sub_radius <= samples.cell_radius[fine_of_sub] + 1e-12)
+    assert np.median(samples.sub_radius) < 0.6 * np.median(samples.cell_radius)
