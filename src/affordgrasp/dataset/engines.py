@@ -324,7 +324,7 @@ def run_job(job, context=None):
     return _CONTEXT.run(job)
 
 
-def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
+def _detach_worker(parent_pid: int | None = None) -> None:
     # Ctrl-C and a terminal's hangup reach the whole process group; only the parent decides
     # what to do about them (it stops the workers). SIGTERM keeps its default: it is how
     # the parent stops a worker. A parent killed outright (SIGKILL) takes its workers along.
@@ -332,7 +332,64 @@ def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
         die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+
+def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
+    _detach_worker(parent_pid)
     _install_context(context)
+
+
+def process_pool(workers: int, initializer=None, initargs: tuple = ()):
+    """A pool of worker processes started with 'spawn' (safe with threads) that leave
+    Ctrl-C to this process and die with it.
+
+    Parameters
+    ----------
+    workers : int
+        Processes.
+    initializer : callable, optional
+        Run in each worker with ``initargs`` (it must call ``_detach_worker``); default:
+        ``_detach_worker`` with this process's pid.
+    initargs : tuple
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        Stop it with :func:`stop_pool` when its running jobs are to be thrown away.
+    """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    if initializer is None:
+        initializer, initargs = _detach_worker, (os.getpid(),)
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=initializer,
+        initargs=initargs,
+    )
+
+
+def stop_pool(pool) -> None:
+    """Stop a :func:`process_pool` now: cancel what waits, terminate what runs.
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+    """
+    # Running jobs' results would be thrown away: stop their processes now rather than
+    # wait for them. The executor keeps them in a private mapping.
+    processes = list(getattr(pool, "_processes", {}).values())
+    with _signals_deferred():
+        pool.shutdown(wait=False, cancel_futures=True)
+        for p in processes:
+            if p.is_alive():
+                p.terminate()
+        for p in processes:
+            p.join(timeout=5)
+            if p.is_alive():  # pragma: no cover - a worker stuck in native code
+                p.kill()
+                p.join(timeout=5)
 
 
 def default_workers() -> int:
@@ -463,16 +520,8 @@ class LocalEngine(Engine):
     name = "local"
 
     def __init__(self, context: RunContext, workers: int):
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
         self.workers = workers
-        self._pool = ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_worker_init,
-            initargs=(context, os.getpid()),
-        )
+        self._pool = process_pool(workers, _worker_init, (context, os.getpid()))
 
     def submit(self, job: Job):
         return self._pool.submit(run_job, job)
@@ -488,19 +537,7 @@ class LocalEngine(Engine):
 
     def close(self, cancel: bool = False) -> None:
         if cancel:
-            # Running jobs' results would be thrown away: stop their processes now rather
-            # than wait for them. The executor keeps them in a private mapping.
-            processes = list(getattr(self._pool, "_processes", {}).values())
-            with _signals_deferred():
-                self._pool.shutdown(wait=False, cancel_futures=True)
-                for p in processes:
-                    if p.is_alive():
-                        p.terminate()
-                for p in processes:
-                    p.join(timeout=5)
-                    if p.is_alive():  # pragma: no cover - a worker stuck in native code
-                        p.kill()
-                        p.join(timeout=5)
+            stop_pool(self._pool)
         else:
             self._pool.shutdown(wait=True)
 

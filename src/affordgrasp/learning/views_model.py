@@ -251,17 +251,6 @@ def _object_rows(directory: str, name: str, config: dict, p0, use_dir) -> tuple:
     return rows, time.process_time() - t0
 
 
-def _worker_init(parent_pid: int) -> None:
-    # Ctrl-C reaches the whole process group; only the parent decides what to do about it
-    # (it stops the workers). A parent killed outright takes its workers along.
-    import signal
-
-    from ..worker_lifetime import die_with_parent
-
-    die_with_parent(parent_pid)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 class FusedViews:
     """Predictions of the fused views for a dataset's rows (see the module's docstring).
 
@@ -314,16 +303,9 @@ class FusedViews:
         return rows
 
     def _in_workers(self, dataset, jobs: list) -> list[np.ndarray]:
-        import multiprocessing
-        import os
-        from concurrent.futures import ProcessPoolExecutor
+        from ..dataset.engines import process_pool, stop_pool
 
-        pool = ProcessPoolExecutor(
-            max_workers=min(self.workers, len(jobs)),
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_worker_init,
-            initargs=(os.getpid(),),
-        )
+        pool = process_pool(min(self.workers, len(jobs)))
         try:
             futures = [
                 pool.submit(_object_rows, str(dataset.directory), name, self.config, p0, d)
@@ -336,11 +318,7 @@ class FusedViews:
                 out.append(rows)
         except BaseException:
             # Ctrl-C or a failed object: the other objects' work is thrown away now
-            processes = list(getattr(pool, "_processes", {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for p in processes:
-                if p.is_alive():
-                    p.terminate()
+            stop_pool(pool)
             raise
         pool.shutdown(wait=True)
         return out

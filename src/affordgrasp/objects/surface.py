@@ -170,12 +170,13 @@ def group_into_cells(points: np.ndarray, size: float = CELL_SIZE):
     bits = (half[:, 0] * SUB_CELLS + half[:, 1]) * SUB_CELLS + half[:, 2]
     owner = np.repeat(np.arange(len(fine_start) - 1), np.diff(fine_start))
     listed = np.lexsort((bits, owner))  # stable: by index within a sub-cell
-    sub_start = _runs(np.stack([owner[listed], bits[listed]], axis=1))
+    listed_owner = owner[listed]
+    sub_start = _runs(np.stack([listed_owner, bits[listed]], axis=1))
     q = p[listed]
     sub_center, sub_radius = _spheres(q, sub_start)
     sub_normal, sub_slab = _slabs(q, sub_start, sub_center)
     cell_sub_start = np.searchsorted(
-        owner[listed][sub_start[:-1]], np.arange(len(fine_start))
+        listed_owner[sub_start[:-1]], np.arange(len(fine_start))
     ).astype(np.int64)
     return (
         order,
