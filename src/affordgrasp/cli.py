@@ -17,6 +17,7 @@ from . import __version__
 from .commands import add_verbose_argument  # also used by subcommands' own parsers
 from .errors import InputError, cli_message
 from .interrupts import interrupt_in, stop_on_signals
+from .process_tuning import keep_freed_memory, one_blas_thread
 
 COMMANDS = {
     "objects": "list the built-in object families, or export one as a mesh",
@@ -88,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         Exit status: 0 on success, 2 for bad input (one line naming the problem and the
         fix), 1 for any other error, 128 + signum when stopped by a signal.
     """
+    one_blas_thread()  # before numpy is imported: see process_tuning
     from .commands.output import Output
 
     parser = build_parser()
@@ -103,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     out = Output(json_mode=args.json)
+    keep_freed_memory()
     try:
         with stop_on_signals():
             args._module.run(args, out)

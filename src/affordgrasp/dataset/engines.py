@@ -35,6 +35,7 @@ import pyarrow as pa
 from ..errors import InputError, InternalError, bad_parameter, require
 from ..hands import Hand
 from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
+from ..process_tuning import keep_freed_memory
 from ..robust import RobustSettings
 from ..worker_lifetime import Reaper, die_with_parent
 
@@ -332,6 +333,7 @@ def _detach_worker(parent_pid: int | None = None) -> None:
         die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    keep_freed_memory()
 
 
 def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
@@ -670,6 +672,7 @@ def _init_with_deadline(ray, kwargs: dict) -> None:
 
 
 def _ray_run_job(context: RunContext, job: Job) -> pa.Table:
+    keep_freed_memory()  # a Ray worker runs our jobs one after another
     return run_job(job, context)
 
 
