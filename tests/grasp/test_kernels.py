@@ -29,12 +29,13 @@ HIT = 1e-3  # m: coarse enough for a 2000-step reference grid to resolve the sto
 # pops and queries to 467 and the closing from 2544 pops and 2694 queries to 2026 and 2176
 # (refinement 104 -> 103) on this 3 cm sphere; splitting each fine cell's points into 2 x 2
 # x 2 sub-cells, released one level at a time, to 276 (approach) and 1042 pops and 1192
-# queries (closing; refinement 106).
+# queries (closing; refinement 106); the closing's second safe step (the sdf's convexity
+# along the motion's velocity, _chain_touch) to 891 pops and 1041 queries (refinement 105).
 APPROACH_POPS = 276
 APPROACH_QUERIES = 276
-CLOSING_POPS = 1042
-CLOSING_QUERIES = 1192
-CLOSING_REFINE = 106
+CLOSING_POPS = 891
+CLOSING_QUERIES = 1041
+CLOSING_REFINE = 105
 
 
 def sphere_cloud(center, radius, n, rng):
@@ -204,6 +205,75 @@ def test_the_search_does_no_more_work_than_measured():
     assert closing[kernels.POPS] <= 1.05 * CLOSING_POPS
     assert closing[kernels.QUERIES] <= 1.05 * CLOSING_QUERIES
     assert closing[kernels.REFINE_QUERIES] <= 1.05 * CLOSING_REFINE
+
+
+def _query(chain, frames, s, point, radius=0.0, flat=None):
+    """_chain_touch for a point (radius 0), a cell's sphere or a flat cell, as the search
+    asks it: (distance, safe step)."""
+    o0 = (chain.base @ chain.origins[0])[:3, 3]
+    r = np.linalg.norm(point - o0) + radius
+    trig = np.empty((len(chain.q0), 2))
+    kernels._set_trig(s, chain, trig)
+    half = 0.5 * HIT
+    if flat is None:
+        d, _, step = kernels._chain_touch(*point, s, r, chain, frames, half + radius,
+                                          HIT + radius, radius, trig, False, 0.0, 0.0, 0.0,
+                                          0.0, 0.0)  # fmt: skip
+        return d - radius, step
+    normal, thick, spread = flat
+    d, _, step = kernels._chain_touch(*point, s, r, chain, frames, half, HIT + radius, radius,
+                                      trig, True, *normal, thick, spread)  # fmt: skip
+    return d, step
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_every_step_keeps_every_point_clear_of_half_the_hit_level(seed):
+    # The safe step of a distance query (_chain_touch: the larger of a speed bound and the
+    # bound d + h g.u - A h^2 / 2 from the sdf's convexity, the motion's velocity u and a
+    # bound A on its acceleration) against the reference distances on a dense grid over the
+    # step: no point of the query (a point, every point of a cell's ball or of a flat cell)
+    # comes closer than half the hit level to a moving link (so one already that close gets
+    # no step).
+    # Points start anywhere from inside a link to a few cm away, on fingers whose first
+    # joint moves or (after a breakaway) stands still.
+    rng = np.random.default_rng(seed)
+    hand = get_hand("barrett")
+    ball = rng.normal(size=(64, 3))
+    ball *= (rng.uniform(0.0, 1.0, 64) ** (1 / 3) / np.linalg.norm(ball, axis=1))[:, None]
+    long_steps = 0
+    for _ in range(60):
+        dofs = hand.open_dofs(rng.uniform())
+        chain, s_max = finger_chain("barrett", int(rng.integers(3)), dofs)
+        if rng.uniform() < 0.3:
+            chain = chain._replace(speeds=chain.speeds * np.array([0.0, 1.0]))
+        frames = kernels._chain_frames(chain, s_max)
+        s = rng.uniform(0.0, 0.8 * s_max)
+        pose = shape_poses_at(chain, s)[int(rng.integers(len(chain.shape_joint)))]
+        target = pose[:3, 3] + rng.normal(size=3) * rng.uniform(0.005, 0.04)
+        kind = rng.integers(3)
+        if kind == 0:
+            points, radius, flat = target[None], 0.0, None
+            d, step = _query(chain, frames, s, target)
+        elif kind == 1:
+            radius = rng.uniform(5e-4, 6e-3)
+            points, flat = target + radius * ball, None
+            d, step = _query(chain, frames, s, target, radius)
+        else:
+            cell, center, radius, normal, (thick, spread) = _flat_cell(rng, 40)
+            points, flat = cell - center + target, (normal, thick, spread)
+            d, step = _query(chain, frames, s, target, radius, flat)
+        # the query's distance is a lower bound on its points' now
+        assert d <= distances(points, chain, s).min() + 1e-12
+        if step == 0.0:
+            continue
+        # the links that move (a step is about them: a point inside a link that stands
+        # still stays where it is)
+        moving = [np.any(chain.speeds[: j + 1] != 0.0) for j in chain.shape_joint]
+        end = min(s + step, s_max)
+        nearest = min(distances(points, chain, g)[moving].min() for g in np.linspace(s, end, 150))
+        assert nearest >= 0.5 * HIT - 1e-12
+        long_steps += end - s > 0.05
+    assert long_steps >= 10
 
 
 def breakaway_reference(hand, cloud, rot, trans, dofs):

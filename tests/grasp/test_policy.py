@@ -14,6 +14,7 @@ from affordgrasp.grasp.policy import (
     object_geometry,
     simulate,
 )
+from affordgrasp.grasp.pregrasp import sample_inputs
 from affordgrasp.hands import get_hand
 from affordgrasp.objects import list_families, load_object
 
@@ -323,3 +324,24 @@ def test_a_frame_object_places_the_pregrasps_and_the_object_itself_changes_nothi
     gap = np.linalg.norm(placed.hand_pose[touched, :3, 3] - plain.hand_pose[touched, :3, 3], axis=1)
     assert np.median(gap) < 3e-3
     assert not np.array_equal(placed.hand_pose, plain.hand_pose)
+
+
+@pytest.mark.parametrize(
+    ("family", "sample", "stop"),
+    [
+        # the approach leaves the third finger's proximal link within the hit level of the
+        # blade; its closing presses into the blade at once
+        ("knife", 215, 0.0),
+        # the third finger's proximal link passes within the hit level of a sample of the
+        # handle at 0.1029 rad, its distance still falling
+        ("hammer", 571, 0.1029),
+    ],
+)
+def test_a_finger_stops_where_its_link_first_meets_the_surface(family, sample, stop):
+    # Two grasps (seed 5) where a longer step of the closing search went wrong once: a step
+    # given to a cell already within reach let the knife's finger close 0.17 rad into the
+    # blade (a sample 0.19 mm inside the link), and a step across the graze let the
+    # hammer's close on to 1.45 rad.
+    p0, _ = sample_inputs(5, sample, sample + 1)
+    joints = simulate(load_object(family), p0).joints[0]
+    assert joints[3] == pytest.approx(stop, abs=1e-4)

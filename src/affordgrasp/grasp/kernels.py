@@ -594,8 +594,8 @@ def _chain_frames(chain, s_max):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, ny, nz, thick,
-                 spread):  # fmt: skip
+def _chain_touch(px, py, pz, s, r, chain, frames, margin, level, grow, trig, flat, nx, ny, nz,
+                 thick, spread):  # fmt: skip
     """Distance of a hand-frame point to the moving shapes at motion parameter s.
 
     The point is carried down the chain (joint frame, then undo the joint's motion) instead
@@ -604,15 +604,32 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
     point is a cell centre (r includes it; 0 for a sample point); with a margin below the
     hit level the steps reach the hit level in finitely many steps.
 
-    The safe step h against the shapes of link j is the larger of two bounds, each valid
-    over the whole step: the distance over the speed bound sum_i<=j |w_i| (r + chain
-    length to joint i), and the root of lin h + quad h^2 / 2 = distance, where lin =
-    sum_i<=j |w_i| (|p - o_i(s)| + grow) is the point's speed bound now and quad =
-    sum_i<=j |w_i| drift_i bounds how fast it grows as the joint origins o_i move. The
-    second is several times tighter when the first moving joint is not the chain's first
+    The safe step h against the shapes of link j is the largest of three bounds, each valid
+    over the whole step. Two bound the point's speed: the distance over the speed bound
+    sum_i<=j |w_i| (r + chain length to joint i), and the root of lin h + quad h^2 / 2 =
+    distance, where lin = sum_i<=j |w_i| (|p - o_i(s)| + grow) is the point's speed bound
+    now and quad = sum_i<=j |w_i| drift_i bounds how fast it grows as the joint origins o_i
+    move. The second is several times tighter when the first moving joint is not the chain's first
     (a distal link closing alone: its origin does not move at all).
+
+    A third bound follows the point's path instead of its speed. In link j's frame the
+    point moves with velocity u, carried down the chain with the point (joint i adds
+    -w_i a_i x y, y the point from its origin; a slide -w_i a_i), and its acceleration is at
+    most A = sum_i<=j 2 |w_i| V_i-1 + w_i^2 (r + chain length to i), V_i-1 the speed bound
+    of the joints before i. The signed distance of a rounded box or cylinder is convex and
+    1-Lipschitz, so over a step h, sdf >= d + h g.u - A h^2 / 2 (g its subgradient,
+    :func:`_sdf_subgradient`): the step is where that reaches ``level``. A point passing a
+    link sideways (g.u near 0) steps by about sqrt(2 (d - level) / A) instead of
+    (d - margin) / speed, one moving away further still. That bound keeps the point
+    above the hit level (``level``), not above the margin: its steps never carry a point
+    into the hit band and out again, so a point that grazes the band is met by the speed
+    bounds' short steps, as without it. A query already within ``level`` gets no step
+    from it.
     (error_model="numpy": no zero-division branches in the search's innermost arithmetic;
     every division here is guarded.)
+    level : float
+        The distance the path bound keeps the point above: the hit level, plus the radius
+        for a cell (for a flat cell, of its sphere).
     trig : (m, 2) float64 ndarray
         cos and sin of each joint's value at s (:func:`_set_trig`): many queries in a row
         share their s (the children of a cell), so the search computes them once per s.
@@ -641,6 +658,12 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
     bound = 0.0
     lin = 0.0
     quad = 0.0
+    # the point's velocity in the current joint's frame (d/ds), and a bound on its
+    # acceleration over every s
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
+    accel = 0.0
     io = frames.inv_origin
     it = frames.inv_shape
     halves = shapes.halves
@@ -656,6 +679,11 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
                 io[j, 1, 0] * vx + io[j, 1, 1] * vy + io[j, 1, 2] * vz,
                 io[j, 2, 0] * vx + io[j, 2, 1] * vy + io[j, 2, 2] * vz,
             )
+        ux, uy, uz = (
+            io[j, 0, 0] * ux + io[j, 0, 1] * uy + io[j, 0, 2] * uz,
+            io[j, 1, 0] * ux + io[j, 1, 1] * uy + io[j, 1, 2] * uz,
+            io[j, 2, 0] * ux + io[j, 2, 1] * uy + io[j, 2, 2] * uz,
+        )
         q = chain.q0[j] + chain.speeds[j] * s
         ax = chain.axes[j, 0]
         ay = chain.axes[j, 1]
@@ -668,6 +696,14 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
             lin += w * (np.sqrt(x * x + y * y + z * z) + grow)
             quad += w * frames.drift[j]
         if chain.kinds[j] == REVOLUTE:
+            wj = chain.speeds[j]
+            if wj != 0.0:
+                # d/ds of Rot(-q) y is Rot(-q) (y' - w a x y); its second derivative adds
+                # at most 2 |w| |y'| + w^2 |y|, |y| <= r + chain length
+                ux -= wj * (ay * z - az * y)
+                uy -= wj * (az * x - ax * z)
+                uz -= wj * (ax * y - ay * x)
+                accel += 2.0 * w * bound + w * w * (r + frames.chain_len[j])
             # Rotate by -q about the axis (Rodrigues): into the moving link's frame.
             c = trig[j, 0]
             sn = trig[j, 1]
@@ -677,6 +713,12 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
             cz = ax * y - ay * x
             x, y, z = (x * c - cx * sn + ax * dot, y * c - cy * sn + ay * dot,
                        z * c - cz * sn + az * dot)  # fmt: skip
+            dot = (ax * ux + ay * uy + az * uz) * (1.0 - c)
+            cx = ay * uz - az * uy
+            cy = az * ux - ax * uz
+            cz = ax * uy - ay * ux
+            ux, uy, uz = (ux * c - cx * sn + ax * dot, uy * c - cy * sn + ay * dot,
+                          uz * c - cz * sn + az * dot)  # fmt: skip
             if flat:
                 dot = (ax * vx + ay * vy + az * vz) * (1.0 - c)
                 cx = ay * vz - az * vy
@@ -689,8 +731,12 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
             x -= ax * q
             y -= ay * q
             z -= az * q
+            ux -= ax * chain.speeds[j]
+            uy -= ay * chain.speeds[j]
+            uz -= az * chain.speeds[j]
             bound += abs(chain.speeds[j])
         d_joint = np.inf
+        h_curved = np.inf
         for sq in range(chain.shape_joint.shape[0]):
             if chain.shape_joint[sq] != j:
                 continue
@@ -699,6 +745,24 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
             lz = it[sq, 2, 0] * x + it[sq, 2, 1] * y + it[sq, 2, 2] * z + it[sq, 2, 3]
             d = sdf_local(lx, ly, lz, shapes.kinds[sq], halves[sq, 0], halves[sq, 1],
                           halves[sq, 2], shapes.radii[sq])  # fmt: skip
+            # d(s + h) >= d(s) + h g.u - accel h^2 / 2: the sdf is convex and 1-Lipschitz
+            gx, gy, gz = _sdf_subgradient(lx, ly, lz, shapes.kinds[sq], halves[sq, 0],
+                                          halves[sq, 1], halves[sq, 2])  # fmt: skip
+            rate = (
+                gx * (it[sq, 0, 0] * ux + it[sq, 0, 1] * uy + it[sq, 0, 2] * uz)
+                + gy * (it[sq, 1, 0] * ux + it[sq, 1, 1] * uy + it[sq, 1, 2] * uz)
+                + gz * (it[sq, 2, 0] * ux + it[sq, 2, 1] * uy + it[sq, 2, 2] * uz)
+            )
+            room = d - level
+            if room <= 0.0:
+                h_q = 0.0
+            elif accel > 0.0:
+                h_q = (rate + np.sqrt(rate * rate + 2.0 * accel * room)) / accel
+            elif rate < 0.0:
+                h_q = room / -rate
+            else:
+                h_q = np.inf
+            h_curved = min(h_curved, h_q)
             if flat:
                 d -= _flat_slack(
                     lx, ly, lz, shapes.kinds[sq], halves[sq, 0], halves[sq, 1], halves[sq, 2],
@@ -717,7 +781,7 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, grow, trig, flat, nx, 
             # lin h + quad h^2 / 2 <= gap at h = gap / (lin + quad (gap / lin) / 2), since
             # gap / lin bounds h from above
             h_near = gap / (lin + 0.5 * quad * gap / lin) if lin > 0.0 else h_far
-            step = min(step, max(h_far, h_near))
+            step = min(step, max(h_far, h_near, h_curved))
     return d_min, q_min, step
 
 
@@ -838,8 +902,9 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
                 dm = _swept_distance(ph[0], ph[1], ph[2], mid, slot - 1, chain.shapes, swept, axis)
             else:
                 _set_trig(mid, chain, trig)
-                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps, 0.0,
-                                        trig, False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
+                dm, _, _ = _chain_touch(ph[0], ph[1], ph[2], mid, 0.0, chain, frames, hit_eps,
+                                        hit_eps, 0.0, trig, False, 0.0, 0.0, 0.0, 0.0,
+                                        0.0)  # fmt: skip
             if dm <= hit_eps:
                 hi = mid
             else:
@@ -850,8 +915,9 @@ def _refine_first_hit(cloud, rot, trans, chain, frames, swept, axis, hits, n_hit
             else:
                 counts[REFINE_QUERIES] += 1
                 _set_trig(hi, chain, trig)
-                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps, 0.0,
-                                          trig, False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
+                _, q_hi, _ = _chain_touch(ph[0], ph[1], ph[2], hi, 0.0, chain, frames, hit_eps,
+                                          hit_eps, 0.0, trig, False, 0.0, 0.0, 0.0, 0.0,
+                                          0.0)  # fmt: skip
             first = hi
             first_p = i
             first_q = q_hi
@@ -1061,8 +1127,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             continue
         counts[QUERIES] += 1
         _, _, step = _chain_touch(kc[c, 0], kc[c, 1], kc[c, 2], 0.0, kr[c], chain, frames,
-                                  margin + radius, radius, trig, False, 0.0, 0.0, 0.0, 0.0,
-                                  0.0)  # fmt: skip
+                                  margin + radius, hit_eps + radius, radius, trig, False, 0.0,
+                                  0.0, 0.0, 0.0, 0.0)  # fmt: skip
         if step < s_max:
             counts[PUSHES] += 1
             size = _heap_push(heap_key, heap_ident, heap_prev, size, step, code * slots, 0.0)
@@ -1134,8 +1200,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 dz = ph[2] - o0[2]
                 r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
                 d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames,
-                                          margin + radius, radius, trig, False, 0.0, 0.0, 0.0,
-                                          0.0, 0.0)  # fmt: skip
+                                          margin + radius, hit_eps + radius, radius, trig, False,
+                                          0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
                 touching = d - radius <= hit_eps
                 nxt = s + step
             else:
@@ -1145,8 +1211,8 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
                 dz = ph[2] - o0[2]
                 r = np.sqrt(dx * dx + dy * dy + dz * dz) + radius
                 d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin,
-                                          radius, trig, True, nh_dir[0], nh_dir[1], nh_dir[2],
-                                          thick, spread)  # fmt: skip
+                                          hit_eps + radius, radius, trig, True, nh_dir[0],
+                                          nh_dir[1], nh_dir[2], thick, spread)  # fmt: skip
                 touching = d <= hit_eps
                 nxt = s + step
             if touching:
@@ -1206,16 +1272,16 @@ def first_contact_counted(cloud, rot, trans, chain, s_max, hit_eps, counts):
             dy = ph[1] - o0[1]
             dz = ph[2] - o0[2]
             r = np.sqrt(dx * dx + dy * dy + dz * dz)
-            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, 0.0, trig,
-                                      False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
+            d, _, step = _chain_touch(ph[0], ph[1], ph[2], s, r, chain, frames, margin, hit_eps,
+                                      0.0, trig, False, 0.0, 0.0, 0.0, 0.0, 0.0)  # fmt: skip
             pressing = False
             if d <= hit_eps:
                 counts[QUERIES] += 1
                 s_probe = s + PROBE
                 _set_trig(s_probe, chain, trig_probe)
                 d_next, _, _ = _chain_touch(ph[0], ph[1], ph[2], s_probe, r, chain, frames,
-                                            margin, 0.0, trig_probe, False, 0.0, 0.0, 0.0, 0.0,
-                                            0.0)  # fmt: skip
+                                            margin, hit_eps, 0.0, trig_probe, False, 0.0, 0.0,
+                                            0.0, 0.0, 0.0)  # fmt: skip
                 pressing = d_next < d
             # A point inside the hit level that is not pressed (receding or sliding) has no
             # safe step from its distance; it moves on by a small fixed one (a few µm of
