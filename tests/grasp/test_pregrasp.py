@@ -5,6 +5,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from affordgrasp.errors import InputError
+from affordgrasp.grasp import kernels
 from affordgrasp.grasp.pregrasp import (
     hand_rotations,
     sample_inputs,
@@ -78,7 +79,10 @@ def test_start_poses_do_not_depend_on_the_batch_and_match_the_plain_projection()
     # the extents are the projections of every hull vertex, bit for bit
     rot = hand_rotations(p0)
     px = dot3(hull[:, None, :], rot[None, :, :, 0])
+    py = dot3(hull[:, None, :], rot[None, :, :, 1])
     lo, hi = px.min(axis=0), px.max(axis=0)
+    ext = kernels.hull_extents(*np.ascontiguousarray(hull.T), rot)
+    np.testing.assert_array_equal(ext, np.stack([lo, hi, py.min(axis=0), py.max(axis=0)], 1))
     x = dot3(poses[:, :3, 3], rot[:, :, 0])
     np.testing.assert_allclose(x, (lo + hi) / 2 + p0[:, 3] * (hi - lo) / 2, rtol=0, atol=1e-15)
 

@@ -786,6 +786,55 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, level, grow, trig, fla
 
 
 @njit(cache=True)
+def hull_extents(hx, hy, hz, rot):
+    """The smallest and largest projection of a hull's vertices on each hand's x and y axes.
+
+    The projection of vertex v on axis a of hand i is hx[v] rot[i, 0, a] + hy[v] rot[i, 1, a]
+    + hz[v] rot[i, 2, a], multiplied and summed in that order: the same bits as numpy's
+    term-by-term sum of the same products (not a matrix product, which BLAS rounds
+    differently for a batch and for one row). One pass over the vertices per hand, no
+    temporaries: numpy's form built (vertices, grasps) arrays chunk by chunk.
+
+    Parameters
+    ----------
+    hx, hy, hz : (v,) float64 ndarray
+        The vertices' coordinates, m.
+    rot : (n, 3, 3) float64 ndarray
+        Hand rotations (columns: the hand's axes).
+
+    Returns
+    -------
+    (n, 4) float64 ndarray
+        Per hand: x min, x max, y min, y max, m.
+    """
+    n = rot.shape[0]
+    out = np.empty((n, 4))
+    for i in range(n):
+        x0 = rot[i, 0, 0]
+        x1 = rot[i, 1, 0]
+        x2 = rot[i, 2, 0]
+        y0 = rot[i, 0, 1]
+        y1 = rot[i, 1, 1]
+        y2 = rot[i, 2, 1]
+        xlo = np.inf
+        xhi = -np.inf
+        ylo = np.inf
+        yhi = -np.inf
+        for v in range(hx.shape[0]):
+            px = hx[v] * x0 + hy[v] * x1 + hz[v] * x2
+            py = hx[v] * y0 + hy[v] * y1 + hz[v] * y2
+            xlo = min(xlo, px)
+            xhi = max(xhi, px)
+            ylo = min(ylo, py)
+            yhi = max(yhi, py)
+        out[i, 0] = xlo
+        out[i, 1] = xhi
+        out[i, 2] = ylo
+        out[i, 3] = yhi
+    return out
+
+
+@njit(cache=True)
 def _swept_distance(px, py, pz, u, q, shapes, shape_pose, axis):
     """For a translation: distance of a hand-frame point to shape q (at ``shape_pose`` when
     the motion starts) after it has travelled u along axis. Only the point moves (by -u

@@ -156,9 +156,6 @@ def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
-_START_CHUNK = 128  # grasps per block of hull projections in start_poses
-
-
 def start_poses(
     p0: np.ndarray, hull_vertices: np.ndarray, hand_reach: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -186,26 +183,17 @@ def start_poses(
     hi = hull_vertices.max(axis=0)
     centre = (lo + hi) / 2
     radius = float(np.max(np.linalg.norm(hull_vertices - centre, axis=1)))
-    # The object's extent along each hand's x and y axes: (v, n) projections. The dot
-    # products are summed term by term, not by a matmul: BLAS rounds a matrix product and a
-    # matrix-vector product (a batch of one) differently, and a sample's start pose must
-    # not depend on the batch it is simulated in.
-    # The same three products and two sums as dot3, from contiguous columns of the hull and
-    # in chunks of grasps: dot3 on the strided (v, n, 3) views built (v, n) temporaries of
-    # tens of MB for a hull of 1600 vertices (a mug), several times slower; same bits.
-    hx, hy, hz = (np.ascontiguousarray(hull_vertices[:, k]) for k in range(3))
-    n = len(p0)
-    xlo, xhi, ylo, yhi = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    for first in range(0, n, _START_CHUNK):
-        r = rot[first : first + _START_CHUNK]
-        for axis, low, high in ((0, xlo, xhi), (1, ylo, yhi)):
-            proj = (
-                hx[:, None] * r[None, :, 0, axis]
-                + hy[:, None] * r[None, :, 1, axis]
-                + hz[:, None] * r[None, :, 2, axis]
-            )
-            low[first : first + _START_CHUNK] = proj.min(axis=0)
-            high[first : first + _START_CHUNK] = proj.max(axis=0)
+    # The object's extent along each hand's x and y axes: every hull vertex projected, in a
+    # compiled loop (kernels.hull_extents: the same bits as numpy's term-by-term sum, which
+    # a matrix product would not give: a sample's start pose must not depend on the batch
+    # it is simulated in).
+    from .kernels import hull_extents
+
+    ext = hull_extents(
+        *(np.ascontiguousarray(hull_vertices[:, k], dtype=np.float64) for k in range(3)),
+        np.ascontiguousarray(rot, dtype=np.float64),
+    )
+    xlo, xhi, ylo, yhi = ext[:, 0], ext[:, 1], ext[:, 2], ext[:, 3]
     x = (xlo + xhi) / 2 + p0[:, 3] * (xhi - xlo) / 2
     y = (ylo + yhi) / 2 + p0[:, 4] * (yhi - ylo) / 2
     z = dot3(rot[:, :, 2], centre) - radius - hand_reach
