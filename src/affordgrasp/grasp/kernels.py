@@ -593,6 +593,17 @@ def _chain_frames(chain, s_max):
     return ChainFrames(inv_base, inv_origin, inv_shape, chain_len, slide, drift)
 
 
+@njit(cache=True, inline="always")
+def _unturn(ax, ay, az, c, sn, x, y, z):
+    """(x, y, z) rotated by -q about the unit axis (ax, ay, az), c = cos q, sn = sin q
+    (Rodrigues)."""
+    dot = (ax * x + ay * y + az * z) * (1.0 - c)
+    cx = ay * z - az * y
+    cy = az * x - ax * z
+    cz = ax * y - ay * x
+    return x * c - cx * sn + ax * dot, y * c - cy * sn + ay * dot, z * c - cz * sn + az * dot
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def _chain_touch(px, py, pz, s, r, chain, frames, margin, level, grow, trig, flat, nx, ny, nz,
                  thick, spread):  # fmt: skip
@@ -704,28 +715,13 @@ def _chain_touch(px, py, pz, s, r, chain, frames, margin, level, grow, trig, fla
                 uy -= wj * (az * x - ax * z)
                 uz -= wj * (ax * y - ay * x)
                 accel += 2.0 * w * bound + w * w * (r + frames.chain_len[j])
-            # Rotate by -q about the axis (Rodrigues): into the moving link's frame.
+            # Rotate by -q about the axis: into the moving link's frame.
             c = trig[j, 0]
             sn = trig[j, 1]
-            dot = (ax * x + ay * y + az * z) * (1.0 - c)
-            cx = ay * z - az * y
-            cy = az * x - ax * z
-            cz = ax * y - ay * x
-            x, y, z = (x * c - cx * sn + ax * dot, y * c - cy * sn + ay * dot,
-                       z * c - cz * sn + az * dot)  # fmt: skip
-            dot = (ax * ux + ay * uy + az * uz) * (1.0 - c)
-            cx = ay * uz - az * uy
-            cy = az * ux - ax * uz
-            cz = ax * uy - ay * ux
-            ux, uy, uz = (ux * c - cx * sn + ax * dot, uy * c - cy * sn + ay * dot,
-                          uz * c - cz * sn + az * dot)  # fmt: skip
+            x, y, z = _unturn(ax, ay, az, c, sn, x, y, z)
+            ux, uy, uz = _unturn(ax, ay, az, c, sn, ux, uy, uz)
             if flat:
-                dot = (ax * vx + ay * vy + az * vz) * (1.0 - c)
-                cx = ay * vz - az * vy
-                cy = az * vx - ax * vz
-                cz = ax * vy - ay * vx
-                vx, vy, vz = (vx * c - cx * sn + ax * dot, vy * c - cy * sn + ay * dot,
-                              vz * c - cz * sn + az * dot)  # fmt: skip
+                vx, vy, vz = _unturn(ax, ay, az, c, sn, vx, vy, vz)
             bound += abs(chain.speeds[j]) * (r + frames.chain_len[j])
         else:
             x -= ax * q
