@@ -39,34 +39,21 @@ CYLINDER = 1
 
 
 class SampleCloud(NamedTuple):
-    """Object surface samples grouped into two levels of cells (see ``surface``).
+    """Object surface samples grouped into cells, as the compiled kernels take them.
+
+    The arrays of :class:`affordgrasp.objects.surface.SurfaceSample` that the contact search
+    reads, the same arrays with the same meaning (``policy.sample_cloud`` hands them over
+    without copying): the points ordered by cell, the fine cells (``cell_*``: offsets,
+    bounding sphere, flat cylinder), the coarse cells (``coarse_*``: offsets into the fine
+    cells, bounding sphere) and the sub-cells (``cell_sub_start``, ``sub_*``: each fine
+    cell's points split 2 x 2 x 2 and listed by index, with a sphere and a flat cylinder).
 
     Attributes
     ----------
-    points : (n, 3) float64 ndarray
-        m, ordered by cell.
-    cell_start : (c + 1,) int ndarray
-        Offsets of each fine cell's points.
-    cell_center, cell_radius : (c, 3), (c,) float64 ndarray
-        A bounding sphere per fine cell, m.
-    cell_normal : (c, 3) float64 ndarray
-        Unit normal of each fine cell's best-fit plane through its centre.
-    cell_slab : (c, 2) float64 ndarray
-        Largest distance of the cell's points from that plane and from the normal line
-        through the centre, m: the points lie in a flat cylinder around the centre.
-    coarse_start : (k + 1,) int ndarray
-        Offsets of each coarse cell's fine cells.
-    coarse_center, coarse_radius : (k, 3), (k,) float64 ndarray
-        A bounding sphere per coarse cell, m.
-    cell_sub_start : (c + 1,) int ndarray
-        Offsets of each fine cell's sub-cells.
-    sub_start : (s + 1,) int ndarray
-        Offsets of each sub-cell's points in ``sub_points``.
-    sub_points : (n,) int ndarray
-        Point indices grouped by sub-cell (the contact search's third level; the points
-        themselves stay in their fine cells' order).
-    sub_center, sub_radius, sub_normal, sub_slab : (s, 3), (s,), (s, 3), (s, 2) ndarray
-        As ``cell_*``, per sub-cell.
+    points, cell_start, cell_center, cell_radius, cell_normal, cell_slab, coarse_start,
+    coarse_center, coarse_radius, cell_sub_start, sub_start, sub_points, sub_center,
+    sub_radius, sub_normal, sub_slab : ndarray
+        As in ``SurfaceSample`` (m for lengths).
     """
 
     points: np.ndarray

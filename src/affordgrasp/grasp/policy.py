@@ -426,31 +426,15 @@ def sample_cloud(samples: SurfaceSample) -> kernels.SampleCloud:
     Parameters
     ----------
     samples : SurfaceSample
-        The object's surface samples and their two levels of cells.
+        The object's surface samples and their cells.
 
     Returns
     -------
     SampleCloud
-        The points and both cell levels (the arrays themselves, not copies).
+        The points and their coarse, fine and sub-cells (the arrays themselves, not
+        copies: every field of ``SampleCloud`` is the ``SurfaceSample`` field of its name).
     """
-    return kernels.SampleCloud(
-        samples.points,
-        samples.cell_start,
-        samples.cell_center,
-        samples.cell_radius,
-        samples.cell_normal,
-        samples.cell_slab,
-        samples.coarse_start,
-        samples.coarse_center,
-        samples.coarse_radius,
-        samples.cell_sub_start,
-        samples.sub_start,
-        samples.sub_points,
-        samples.sub_center,
-        samples.sub_radius,
-        samples.sub_normal,
-        samples.sub_slab,
-    )
+    return kernels.SampleCloud(*(getattr(samples, name) for name in kernels.SampleCloud._fields))
 
 
 def close_fingers(
