@@ -26,6 +26,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -234,6 +235,7 @@ def build_scene(
     *,
     object_material: str = DEFAULT_OBJECT_MATERIAL,
     parts: list | None = None,
+    extend: Callable[[Any], None] | None = None,
 ) -> Scene:
     """Compile the MuJoCo model of ``hand`` and ``obj`` (see the module docstring).
 
@@ -252,6 +254,9 @@ def build_scene(
     parts : list of (vertices, faces), optional
         Convex parts of the object, m; default: the cached CoACD decomposition of
         ``obj.mesh``.
+    extend : callable, optional
+        ``extend(spec)`` adds to the model's ``mujoco.MjSpec`` before it is compiled (the
+        task trials' rig, :mod:`.task_scene`); None: the model as described above.
 
     Returns
     -------
@@ -273,7 +278,12 @@ def build_scene(
             mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
     xml, info = _mjcf(hand, obj.name, parts, mass, settings, object_material)
     try:
-        model = mj.MjModel.from_xml_string(xml)
+        if extend is None:
+            model = mj.MjModel.from_xml_string(xml)
+        else:
+            spec = mj.MjSpec.from_string(xml)
+            extend(spec)
+            model = spec.compile()
     except ValueError as exc:  # pragma: no cover - a bug in the builder, not user input
         raise InternalError(f"MuJoCo rejected the generated model: {exc}") from exc
     data = mj.MjData(model)
