@@ -155,3 +155,30 @@ def test_robust_of_rows_refuses_rows_that_do_not_simulate_to_their_grasp(tiny_da
     moved = rows.set_column(i, "hand_pose", pa.array(poses.tolist(), rows.schema.field(i).type))
     with pytest.raises(DatasetError, match="stored grasp"):
         robust_of_rows(moved, "parallel_jaw", {"block.stl": dataset.object("block.stl")}, 2)
+
+
+def test_physics_trials_write_their_columns_cards_and_resume(tiny_dataset, tmp_path, capsys):
+    out = tmp_path / "trials"
+    args = [tiny_dataset, "--out", out, "--max-per-object", 2, "--shard-size", 1, "--workers", 1]
+    code, stdout, _ = _run(capsys, *args, "--trials", "beat,cut,pick")
+    assert code == 0
+    doc = json.loads(stdout)
+    assert set(doc["summary"]["trials"]) == {"beat", "cut", "pick"}
+    table = pq.read_table(out).to_pandas()
+    columns = {"strike_offset_m", "strike_nail_advance_m", "beat_ok", "stroke_offset_m"}
+    assert columns | {"stroke_edge_thickness_m", "cut_ok", "pick_ok"} <= set(table.columns)
+    assert (table["pick_ok"] == table["hold_ok"]).all()
+    # rows with a use point get an outcome, the others null
+    has_use = table["use_force"].notna()
+    assert table.loc[has_use, "beat_ok"].notna().all()
+    assert table.loc[~has_use, "beat_ok"].isna().all()
+    cards = json.loads((out / "_physics.json").read_text())["trials"]
+    assert {c["version"] for c in cards.values()} == {1}
+    assert cards["beat"]["settings"]["nail_force_n"] == 300.0
+    # resumed with the same trials: nothing to do; with others: refused, naming them
+    code, stdout, _ = _run(capsys, *args, "--trials", "beat,cut,pick")
+    assert code == 0 and json.loads(stdout)["summary"]["shards_written"] == 0
+    code, _, stderr = _run(capsys, *args, "--trials", "pick")
+    assert code == 2 and "trials" in stderr
+    code, _, stderr = _run(capsys, *args, "--trials", "chop")
+    assert code == 2 and "chop" in stderr

@@ -7,7 +7,7 @@ import shlex
 import sys
 
 from ..errors import InputError, MissingDependencyError
-from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
+from ..physics.settings import PROTOCOLS, TRIALS, PhysicsSettings, protocol_settings
 from .common import add_robust_argument, robust_option
 
 
@@ -113,6 +113,14 @@ def add_arguments(p) -> None:
         "rows from their stored pregrasps (K perturbed copies, docs/robust.md). Default 0: "
         "the dataset's robust columns are reported when it has them, none computed",
     )
+    p.add_argument(
+        "--trials",
+        default=None,
+        metavar="T[,T...]",
+        help=f"also run these task trials ({', '.join(TRIALS)}): the grasp strikes a nail, "
+        "draws an edge over a workpiece, holds its load (docs/physics.md#task-trials); "
+        "columns beat_ok, cut_ok, pick_ok and their measurements",
+    )
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the convex decomposition")
     p.add_argument(
         "--coacd-threshold",
@@ -148,6 +156,19 @@ def _settings(args) -> PhysicsSettings:
     )
 
 
+def _trials(text: str | None) -> tuple[str, ...]:
+    """The names of ``--trials`` (comma separated), checked."""
+    if not text:
+        return ()
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    unknown = [t for t in names if t not in TRIALS]
+    if unknown:
+        raise InputError(
+            f"--trials: unknown trial {', '.join(unknown)}; choose among {', '.join(TRIALS)}"
+        )
+    return tuple(names)
+
+
 def _interval(v) -> str:
     auc, lo, hi = v
     return "—" if math.isnan(auc) else f"{auc:.3f} [{lo:.3f}–{hi:.3f}]"
@@ -170,6 +191,7 @@ def run(args, out) -> None:
 
     settings = _settings(args)
     robust = robust_option(args)
+    trials = _trials(args.trials)
     check_output_dir(args.out, "--out")
     if args.report:
         check_output_dir(args.report, "--report")
@@ -192,6 +214,7 @@ def run(args, out) -> None:
             progress=lambda total: out.progress("validating", total),
             log_message=lambda m: print(m, file=sys.stderr) if not out.json_mode else None,
             robust=robust,
+            trials=trials,
         )
     except KeyboardInterrupt:
         print(
@@ -205,6 +228,15 @@ def run(args, out) -> None:
         for name, (held, n) in summary.hold_ok.items()
     ]
     out.table("Hold test", ["object", "validated", "held", "rate"], rows)
+    for trial, per_object in summary.trials.items():
+        out.table(
+            f"Task trial: {trial}",
+            ["object", "tried", "passed", "rate"],
+            [
+                [name, n, ok, f"{100.0 * ok / n:.1f}%" if n else "—"]
+                for name, (ok, n) in per_object.items()
+            ],
+        )
     rate = summary.validations_per_core_hour
     out.table(
         "This run",

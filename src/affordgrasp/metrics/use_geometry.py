@@ -707,6 +707,66 @@ def use_edge_thickness(mesh, use_point, use_normal, **kwargs) -> float | np.ndar
     return float(shape.edge_thickness[0]) if np.ndim(use_point) == 1 else shape.edge_thickness
 
 
+def use_edge_frame(
+    mesh,
+    use_point,
+    use_normal,
+    *,
+    radius: float = WEDGE_RADIUS_M,
+    directions: int = WEDGE_DIRECTIONS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The direction an edge at U presses along and the edge's direction, at a physical scale.
+
+    From the rays of :func:`use_wedge_shape`: ``outward`` is minus the inside-weighted mean
+    ray direction in the ball (the bisector of a wedge's flanks, out of the solid; the
+    face normal on a flat face, where a mesh edge's triangle gives only its flank's
+    normal), and ``along`` is square to it and to the direction of least inside weight
+    (across a blade): the edge line's direction on a wedge, any direction square to
+    ``outward`` on a flat face. Where no ray is inside, ``outward`` is ``use_normal`` and
+    ``along`` any direction square to it. Signs: ``along`` is arbitrary.
+
+    Parameters
+    ----------
+    mesh, use_point, use_normal, radius, directions
+        As for :func:`use_wedge_shape`.
+
+    Returns
+    -------
+    outward : (n, 3) float64 ndarray
+        Unit vectors.
+    along : (n, 3) float64 ndarray
+        Unit vectors square to ``outward``.
+    """
+    P = points_n3(use_point, "use_point")
+    N = use_normals_n3(use_normal, P)
+    k = int(directions)
+    S = _fibonacci_sphere(k)
+    outer = np.einsum("ki,kj->kij", S, S).reshape(k, 9)
+    outward, along = N.copy(), np.empty_like(N)
+    chunk = max(1, 65536 // k)
+    for first in range(0, len(P), chunk):
+        sl = slice(first, first + chunk)
+        m = len(P[sl])
+        origins = np.repeat(P[sl] - _WEDGE_START_M * N[sl], k, axis=0)
+        ray, t, leaving = _near_crossing_distances(mesh, origins, np.tile(S, (m, 1)), radius)
+        w = _ball_weights(ray, t, radius, radius, leaving)[0].reshape(m, k)
+        into = np.einsum("mk,kq->mq", w, S)
+        norm = np.linalg.norm(into, axis=1)
+        ok = norm > 1e-3 * np.maximum(w.sum(axis=1), np.finfo(float).tiny)
+        outward[sl][ok] = -into[ok] / norm[ok, None]
+        moment = np.einsum("mk,kq->mq", w, outer).reshape(m, 3, 3)
+        across = np.linalg.eigh(moment)[1][:, :, 0]
+        along[sl] = np.cross(across, outward[sl])
+    # across parallel to outward (a flat face's degenerate moment): any square direction
+    norm = np.linalg.norm(along, axis=1)
+    bad = norm < 1e-6
+    if bad.any():
+        helper = np.where(np.abs(outward[bad, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
+        along[bad] = np.cross(outward[bad], helper)
+        norm[bad] = np.linalg.norm(along[bad], axis=1)
+    return outward, along / norm[:, None]
+
+
 def _crossings(caster, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Ray and point of every crossing of the rays with the mesh ((m,) int64, (m, 3) float64):
     the compiled loop on Embree (the same bits, twice as fast), else the caster's own."""

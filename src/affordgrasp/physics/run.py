@@ -37,7 +37,7 @@ from ..errors import DatasetError, InputError, bad_parameter
 from ..hands.model import Hand
 from ..robust import RobustSettings, robust_column_names, robust_settings
 from ..writing import atomic_write
-from .settings import PhysicsSettings
+from .settings import TRIALS, PhysicsSettings, TrialSettings
 
 log = logging.getLogger(__name__)
 
@@ -50,7 +50,7 @@ DEFAULT_SHARD_SIZE = 128
 
 KEY_COLUMNS = ("object", "object_hash", "sample", "seed", "status")
 # The grasp state, read to replay it (and, for ``robust``, to re-evaluate it), not written.
-STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal", "p0", "use_dir")
+STATE_COLUMNS = ("hand_pose", "joints", "use_point", "use_normal", "wrist_point", "p0", "use_dir")
 # The dataset's numeric metric columns (not the text epsilon_reason) and the contact count,
 # carried into the outcome table for the report.
 REPORTED_METRICS = (*(c for c in METRIC_COLUMNS if c != "epsilon_reason"), "n_contacts")
@@ -74,6 +74,8 @@ class PhysicsSummary:
     robust : dict or None
         With ``robust``: ``{"copies": K, "source": "dataset"}`` (the dataset's columns) or
         ``"computed"`` (for the replayed rows); None without.
+    trials : dict
+        With ``trials``: per trial and object, ``[passed, rows with an outcome]``.
     """
 
     directory: str
@@ -87,6 +89,8 @@ class PhysicsSummary:
     busy_s: float = 0.0  # seconds the workers spent validating (sum over workers)
     cpu_s: float = 0.0  # CPU seconds the workers spent validating (fair on a shared machine)
     hold_ok: dict = field(default_factory=dict)  # object -> [held, validated]
+    # The task trials run: {trial: {object: [passed, with a use point]}} (pick: hold_ok).
+    trials: dict = field(default_factory=dict)
     # The robust columns reported: None, or {"copies": K, "source": "dataset" | "computed"}.
     robust: dict | None = None
 
@@ -123,6 +127,7 @@ class PhysicsSummary:
             "worker_wall_s": self.busy_s,
             "worker_cpu_s": self.cpu_s,
             "hold_ok": self.hold_ok,
+            "trials": self.trials,
             "robust": self.robust,
         }
 
@@ -192,6 +197,7 @@ _PLAN_KEYS = (
     "shard_size",
     "settings_digest",
     "robust",
+    "trials",
 )
 
 
@@ -256,6 +262,8 @@ def run_physics(
     progress: Callable | None = None,
     log_message: Callable[[str], None] | None = None,
     robust: RobustSettings | int | None = None,
+    trials: Sequence[str] = (),
+    trial_settings: TrialSettings | None = None,
 ) -> PhysicsSummary:
     """Validate the grasps of a dataset in MuJoCo; write the outcomes as Parquet shards.
 
@@ -295,6 +303,12 @@ def run_physics(
         row's stored pregrasp, K perturbed copies, the dataset's hand and contact model).
         None or 0: the dataset's ``robust_*`` columns travel when it has them, nothing is
         computed.
+    trials : sequence of str
+        Task trials to run besides the hold, impact and press tests, among ``"beat"``,
+        ``"cut"``, ``"pick"`` (:mod:`~affordgrasp.physics.task_trials`); their protocol cards
+        go into the run's manifest. Rows without a use point get null beat and cut columns.
+    trial_settings : TrialSettings, optional
+        The task trials' protocol; the defaults when None.
 
     Returns
     -------
@@ -321,6 +335,8 @@ def run_physics(
     if workers is not None and (isinstance(workers, bool) or workers <= 0):
         raise bad_parameter("workers", f"must be a positive integer, got {workers}")
     check_engine(engine, workers, address)
+    trials = check_trials(trials)
+    trial_settings = trial_settings or TrialSettings()
     out = Path(out)
     dataset = Dataset.open(dataset_dir)
     rows = _plan_rows(dataset, statuses, objects, max_per_object)
@@ -333,6 +349,11 @@ def run_physics(
     plan = _plan_manifest(dataset, settings, statuses, objects, max_per_object, n, shard_size)
     compute = _robust_plan(dataset, robust_settings(robust))
     plan["robust"] = None if compute is None else {"source": "computed", **compute.to_dict()}
+    plan["trials"] = None
+    if trials:
+        from .task_trials import protocol_cards
+
+        plan["trials"] = protocol_cards(trial_settings, trials)
     _prepare_out(out, plan)
     hand = dataset.hand  # the dataset's own hand, custom ones included
     for stale in out.glob(".part-*.tmp-*"):
@@ -362,6 +383,8 @@ def run_physics(
         settings=settings,
         robust=compute,
         soft=dataset.soft,
+        trials=trials,
+        trial_settings=trial_settings,
     )
     jobs = [ReplayJob(k, rows.slice(s, e - s)) for k, s, e in pending]
     started = time.perf_counter()
@@ -374,6 +397,7 @@ def run_physics(
             _run_jobs(context, jobs, out, summary, advance, engine, workers, address)
     summary.elapsed_s = time.perf_counter() - started
     summary.hold_ok = _hold_counts(out, len(shards))
+    summary.trials = _trial_counts(out, len(shards), trials)
     wanted = robust_settings(robust)
     if wanted is not None:
         summary.robust = {
@@ -444,6 +468,10 @@ class ReplayContext:
         without them; :func:`robust_of_rows`); None: none computed.
     soft : bool
         The dataset's contact model (for ``robust``).
+    trials : tuple of str
+        The task trials to run (:func:`run_physics`).
+    trial_settings : TrialSettings or None
+        Their protocol.
     key : str
         Identifies the run.
     """
@@ -454,6 +482,8 @@ class ReplayContext:
     settings: PhysicsSettings
     robust: RobustSettings | None = None
     soft: bool = False
+    trials: tuple = ()
+    trial_settings: TrialSettings | None = None
     key: str = field(default_factory=lambda: uuid.uuid4().hex)
 
     def run(self, job: ReplayJob) -> dict:
@@ -478,6 +508,8 @@ class ReplayContext:
             self.robust,
             self.soft,
             parts=self.parts,
+            trials=self.trials,
+            trial_settings=self.trial_settings,
         )
         seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
         steps = int(np.sum(table.column("steps").to_numpy())) if table.num_rows else 0
@@ -653,6 +685,8 @@ def validate_rows(
     soft: bool = False,
     *,
     parts: dict | None = None,
+    trials: Sequence[str] = (),
+    trial_settings: TrialSettings | None = None,
 ) -> pa.Table:
     """The outcome table of some dataset rows (their key and metric columns + outcomes).
 
@@ -673,6 +707,10 @@ def validate_rows(
         The dataset's contact model (for ``robust``).
     parts : dict of str to list, optional
         Convex parts of the objects by name; default: decomposed (or read from the cache).
+    trials : sequence of str
+        Task trials to run as well (:func:`run_physics`); their columns follow the outcomes.
+    trial_settings : TrialSettings, optional
+        Their protocol; the defaults when None.
 
     Returns
     -------
@@ -688,15 +726,19 @@ def validate_rows(
     joints = rows.column("joints").to_pylist()
     ups = rows.column("use_point").to_pylist()
     uns = rows.column("use_normal").to_pylist()
+    trials = check_trials(trials)
+    tasks = _TaskRows(rows, hand, hand_key, objects, settings, trials, trial_settings, parts)
     outcomes = []
     for i in range(rows.num_rows):
         scene = _scene(hand, hand_key, objects[names[i]], settings, (parts or {}).get(names[i]))
         up = np.array(ups[i] if ups[i] is not None else [np.nan] * 3, dtype=np.float64)
         un = np.array(uns[i] if uns[i] is not None else [np.nan] * 3, dtype=np.float64)
-        outcome = validate_grasp(
-            scene, np.array(poses[i]).reshape(4, 4), np.array(joints[i]), up, un
-        )
-        outcomes.append(outcome.to_row())
+        pose, q = np.array(poses[i]).reshape(4, 4), np.array(joints[i])
+        if trials:
+            outcome, row = tasks.row(i, scene, pose, q, up, un)
+        else:
+            outcome, row = validate_grasp(scene, pose, q, up, un), {}
+        outcomes.append(outcome.to_row() | row)
     keep = [c for c in rows.column_names if c not in STATE_COLUMNS]
     table = rows.select(keep)
     for name in outcomes[0] if outcomes else ():
@@ -711,6 +753,130 @@ def validate_rows(
     return table.append_column("protocol", pa.array([settings.protocol] * table.num_rows))
 
 
+def check_trials(trials: Sequence[str]) -> tuple[str, ...]:
+    """The task trials asked for, checked, in their columns' order.
+
+    Parameters
+    ----------
+    trials : sequence of str
+        Among ``"beat"``, ``"cut"``, ``"pick"``.
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    InputError
+        For an unknown name.
+    """
+    unknown = sorted(set(trials) - set(TRIALS))
+    if unknown:
+        raise InputError(
+            f"unknown task trial(s) {', '.join(unknown)}; choose among {', '.join(TRIALS)}"
+        )
+    return tuple(t for t in TRIALS if t in set(trials))
+
+
+# Per process: the task trials' scenes, as _SCENES (one more compiled model per object).
+_TASK_SCENES: dict[tuple, object] = {}
+
+
+class _TaskRows:
+    """The task trials of some dataset rows: their scenes and each row's edge at U."""
+
+    def __init__(self, rows, hand, hand_key, objects, settings, trials, trial_settings, parts):
+        self.names = rows.column("object").to_pylist()
+        self.trials, self.trial_settings = trials, trial_settings or TrialSettings()
+        self.hand, self.hand_key, self.objects = hand, hand_key, objects
+        self.settings, self.parts = settings, parts or {}
+        self.wrist = (
+            np.array(
+                [
+                    w if w is not None else [np.nan] * 3
+                    for w in rows.column("wrist_point").to_pylist()
+                ],
+                dtype=np.float64,
+            ).reshape(-1, 3)
+            if trials
+            else None
+        )
+        self.edges: dict[int, tuple] = {}
+        if "cut" in trials:
+            self._edge_frames(rows)
+
+    def _object(self, name: str):
+        obj = self.objects[name]
+        return obj.build() if not hasattr(obj, "mesh") else obj
+
+    def _edge_frames(self, rows) -> None:
+        """The edge's outward direction and direction at each row's U (one cast per object)."""
+        from ..metrics.use_geometry import use_edge_frame
+
+        names = np.asarray(self.names, dtype=object)
+        up = np.array(
+            [u if u is not None else [np.nan] * 3 for u in rows.column("use_point").to_pylist()],
+            dtype=np.float64,
+        ).reshape(-1, 3)
+        un = np.array(
+            [u if u is not None else [np.nan] * 3 for u in rows.column("use_normal").to_pylist()],
+            dtype=np.float64,
+        ).reshape(-1, 3)
+        ok = np.isfinite(up).all(axis=1) & np.isfinite(un).all(axis=1)
+        for name in dict.fromkeys(self.names):
+            idx = np.flatnonzero((names == name) & ok)
+            if len(idx) == 0:
+                continue
+            mesh = self._object(name).mesh
+            t = self.trial_settings
+            outward, along = use_edge_frame(
+                mesh, up[idx], un[idx], radius=t.edge_radius_m, directions=t.edge_directions
+            )
+            for k, i in enumerate(idx):
+                self.edges[int(i)] = (outward[k], along[k])
+
+    def _scene(self, name: str):
+        from .task_scene import build_task_scene
+
+        obj = self.objects[name]
+        mass = obj.mass
+        key = (
+            self.hand_key,
+            obj.name,
+            obj.mesh_hash,
+            bool(obj.materials),
+            None if mass is None else (float(mass.mass), tuple(np.round(mass.center_of_mass, 12))),
+            self.settings,
+            self.trial_settings,
+        )
+        ts = _TASK_SCENES.get(key)
+        if ts is None:
+            obj = self._object(name)
+            parts = self.parts.get(name)
+            if parts is None:
+                parts = convex_parts_of(obj, self.settings)
+            ts = build_task_scene(self.hand, obj, self.settings, self.trial_settings, parts=parts)
+            _TASK_SCENES[key] = ts
+        return ts
+
+    def row(self, i: int, scene, pose, joints, use_point, use_normal):
+        """Row ``i`` validated on ``scene`` and tried: (its GraspOutcome, the trials' columns)."""
+        from .task_trials import run_task_trials, task_row
+
+        grasp, outcome = run_task_trials(
+            scene,
+            self._scene(self.names[i]),
+            pose,
+            joints,
+            self.trials,
+            use_point,
+            use_normal,
+            self.wrist[i],
+            self.edges.get(i),
+        )
+        return grasp, task_row(outcome, self.trials, grasp.hold_ok)
+
+
 def _outcome_type(name: str) -> pa.DataType:
     if name in (
         "contacts",
@@ -721,7 +887,16 @@ def _outcome_type(name: str) -> pa.DataType:
         "settled_hold_dirs",
     ):
         return pa.int64()
-    if name in ("hold_ok", "settled", "impact_ok", "press_held", "ejected"):
+    if name in (
+        "hold_ok",
+        "settled",
+        "impact_ok",
+        "press_held",
+        "ejected",
+        "beat_ok",
+        "cut_ok",
+        "pick_ok",
+    ):
         return pa.bool_()
     if name in ("settled_points", "settled_normals", "settled_mu"):
         return pa.list_(pa.float64())
@@ -784,6 +959,25 @@ def read_outcomes(out: str | os.PathLike) -> pa.Table:
         name = settings.get("protocol", "affordgrasp")
         table = table.append_column("protocol", pa.array([name] * table.num_rows, pa.string()))
     return table
+
+
+def _trial_counts(out: Path, n_shards: int, trials: Sequence[str]) -> dict:
+    """{trial: {object: [passed, rows with an outcome]}} over the run's shards."""
+    counts: dict = {t: {} for t in trials}
+    for k in range(n_shards):
+        path = shard_path(out, k)
+        if not path.is_file() or not trials:
+            continue
+        t = pq.read_table(path, columns=["object", *(f"{n}_ok" for n in trials)])
+        names = t.column("object").to_pylist()
+        for trial in trials:
+            for name, ok in zip(names, t.column(f"{trial}_ok").to_pylist(), strict=True):
+                if ok is None:
+                    continue
+                c = counts[trial].setdefault(name, [0, 0])
+                c[0] += bool(ok)
+                c[1] += 1
+    return counts
 
 
 def _hold_counts(out: Path, n_shards: int) -> dict:

@@ -308,6 +308,142 @@ _DGB = {
 }
 
 
+TRIALS = ("beat", "cut", "pick")  # the task trials, in the order their columns come
+
+
+@dataclass(frozen=True)
+class TrialSettings:
+    """The task trials' protocol (:mod:`~affordgrasp.physics.task_trials`): every number.
+
+    Units are SI (s, m, rad, N, kg). Every value must be finite and positive. docs/physics.md
+    says where each default comes from.
+
+    Attributes
+    ----------
+    swing_speed_rad_s : float
+        Beat: the wrist's angular speed at the strike (a hand-held hammer's range).
+    strikes : int
+        Beat: strikes per trial.
+    windback_rad, ramp_rad : float
+        Beat: each swing starts at rest this far before the first touch and reaches its
+        speed over ``ramp_rad`` (raised-cosine speed profile), then coasts at it.
+    strike_timestep, fine_s : float
+        Beat: the simulation step of the strike, s, from ``fine_s`` before U would touch the
+        nail to the end of the strike (the swing before runs at the physics settings' step).
+    strike_time : float
+        Beat: how long a strike is followed after its first contact, s.
+    miss_rad : float
+        Beat: a swing that turned this far past the nail's first touch without a contact
+        missed.
+    relax_s : float
+        Beat: the wrist relaxes this long before U would touch the nail (or at any earlier
+        contact with the rig): the strike is the hand's and the tool's momentum.
+    nail_force_n, nail_mass_kg : float
+        Beat: the nail's constant resisting force (dry friction of its slide) and its mass.
+    nail_head_radius_m, nail_head_height_m, nail_shank_radius_m, nail_out_m : float
+        Beat: the nail head, its shank, and how far the head's face stands out of the board.
+    board_half_m, board_thickness_m, board_friction : float
+        Beat: the board the nail is set in (a square), and μ of the board and the nail head.
+    cut_force_n, cut_ramp_s : float
+        Cut: the press force on the edge and the time it ramps up over.
+    stroke_m, stroke_speed_m_s : float
+        Cut: the stroke's length along the edge and its speed.
+    stroke_window_s : float
+        Cut: the stroke's contacts are pooled over windows this long (the engine's contact
+        between a thin edge and a face flickers from one step to the next).
+    cut_friction : float
+        Cut: μ of the workpiece.
+    workpiece_margin_m, workpiece_across_m, workpiece_thickness_m : float
+        Cut: the workpiece the edge is pressed onto: it reaches this far beyond the stroke at
+        either end, this far on either side of the edge line, and is this thick.
+    workpiece_mass_kg : float
+        Cut: its mass (it is pushed onto the edge).
+    cut_gap_m : float
+        Cut: the workpiece starts this far from U.
+    edge_radius_m, edge_directions : float, int
+        Cut: the ball in which the edge's direction is measured, and its rays (a straight
+        edge bears along its length: 2048 rays put its direction within 0.5° median, 1.6°
+        at the 90th percentile, on the meat cleaver's edge, 256 within 1.0° / 2.5°).
+    beat_max_offset_m : float
+        Beat passes: every first contact within this distance of U, ...
+    beat_min_advance_m : float
+        ... the nail advanced at least this far per strike (the mean), ...
+    cut_max_offset_m, cut_on_edge : float
+        Cut passes: the workpiece's contacts within ``cut_max_offset_m`` of the edge line
+        through U over at least the fraction ``cut_on_edge`` of the stroke, ...
+    cut_max_thickness_m : float
+        ... the tool no thicker than this where the workpiece bore (an edge, not a spine),
+        the full press force reached, ...
+    max_turn_rad, max_slip_m : float
+        ... and (both trials) the tool turned less than ``max_turn_rad`` and U moved less
+        than ``max_slip_m`` in the hand.
+    """
+
+    swing_speed_rad_s: float = 10.0
+    strikes: int = 3
+    windback_rad: float = 1.1
+    ramp_rad: float = 1.0
+    strike_timestep: float = 0.0005
+    fine_s: float = 0.005
+    strike_time: float = 0.02
+    miss_rad: float = 0.3
+    relax_s: float = 0.002
+    nail_force_n: float = 300.0
+    nail_mass_kg: float = 0.005
+    nail_head_radius_m: float = 0.0035
+    nail_head_height_m: float = 0.002
+    nail_shank_radius_m: float = 0.0015
+    nail_out_m: float = 0.025
+    board_half_m: float = 0.025
+    board_thickness_m: float = 0.02
+    board_friction: float = 0.4
+    cut_force_n: float = 20.0
+    cut_ramp_s: float = 0.1
+    stroke_m: float = 0.04
+    stroke_speed_m_s: float = 0.1
+    stroke_window_s: float = 0.01
+    cut_friction: float = 0.4
+    workpiece_margin_m: float = 0.01
+    workpiece_across_m: float = 0.025
+    workpiece_thickness_m: float = 0.01
+    workpiece_mass_kg: float = 0.1
+    cut_gap_m: float = 2e-4
+    edge_radius_m: float = 0.003
+    edge_directions: int = 2048
+    beat_max_offset_m: float = 0.01
+    beat_min_advance_m: float = 0.0005
+    cut_max_offset_m: float = 0.002
+    cut_max_thickness_m: float = 0.001
+    cut_on_edge: float = 0.9
+    max_turn_rad: float = math.radians(10.0)
+    max_slip_m: float = 0.005
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            for v in value if isinstance(value, tuple) else (value,):
+                if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                    raise InputError(f"trial setting {f.name} must be a finite number, got {v!r}")
+                if v <= 0:
+                    raise InputError(f"trial setting {f.name} must be > 0, got {v!r}")
+        if self.ramp_rad >= self.windback_rad:
+            raise InputError(
+                f"trial setting ramp_rad ({self.ramp_rad}) must be below windback_rad "
+                f"({self.windback_rad}): the swing must reach its speed before the strike"
+            )
+        if self.cut_on_edge > 1:
+            raise InputError(f"trial setting cut_on_edge is a fraction, got {self.cut_on_edge}")
+
+    def to_dict(self) -> dict:
+        """Every setting by name (tuples as lists).
+
+        Returns
+        -------
+        dict
+        """
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+
+
 def protocol_settings(name: str = "affordgrasp", **overrides) -> PhysicsSettings:
     """The settings of a named protocol, with some values replaced.
 

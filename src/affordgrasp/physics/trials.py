@@ -8,6 +8,7 @@ deterministic: the same scene, grasp and settings give the same outcome bit for 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -596,6 +597,7 @@ def validate_grasp(
     joints: np.ndarray,
     use_point: np.ndarray | None = None,
     use_normal: np.ndarray | None = None,
+    squeezed: Callable[[Scene], None] | None = None,
 ) -> GraspOutcome:
     """Squeeze the grasp, then run the hold test and (given a use point) impact and press.
 
@@ -613,6 +615,10 @@ def validate_grasp(
     use_point, use_normal : (3,) float ndarray, optional
         U and its outward unit normal in the object frame, m; None or NaN: no use point
         (impact and press are skipped).
+    squeezed : callable, optional
+        ``squeezed(scene)`` is called once the grasp is squeezed, before any trial (the task
+        trials start from that state, :func:`~.task_scene.load_state`); it must not change
+        the scene.
 
     Returns
     -------
@@ -624,6 +630,8 @@ def validate_grasp(
     com_start = scene.data.xipos[body].copy()
     quat_start = scene.data.xquat[body].copy()
     steps = _squeeze(scene)
+    if squeezed is not None:
+        squeezed(scene)
     contacts = _hand_contacts(scene)
     squeeze_shift = float(np.linalg.norm(scene.data.xipos[body] - com_start))
     a = scene.object_dof
