@@ -7,7 +7,7 @@ meat_cleaver, dagger, sword) run on it. Prints a table per family (rows tried, p
 medians of the measured quantities) and the CPU time per trial.
 
     python studies/task_trial_semantics.py [--grasps 8] [--samples 3000] [--materials]
-        [--objects hammer axe knife ...] [--json OUT]
+        [--objects hammer axe knife ...] [--set cut_force_n=5 ...] [--json OUT]
 """
 
 from __future__ import annotations
@@ -97,7 +97,7 @@ def family(spec, trial, cases, args):
 
     obj = ag.load_object(spec, materials=args.materials)
     scene = build_scene("barrett", obj)
-    ts = build_task_scene("barrett", obj, parts=None)
+    ts = build_task_scene("barrett", obj, trials=args.trials)
     grasps = held_handle_grasps(obj, scene, args.samples, args.grasps, args.seed)
     out = {}
     for label, (part, where) in cases.items():
@@ -146,8 +146,12 @@ def main() -> None:
     p.add_argument("--samples", type=int, default=3000)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--materials", action="store_true", help="per-part materials (steel heads)")
+    p.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE", help="TrialSettings")
     p.add_argument("--json", default=None)
     args = p.parse_args()
+    from affordgrasp.physics.settings import TrialSettings
+
+    args.trials = TrialSettings(**{k: float(v) for k, v in (a.split("=") for a in args.set)})
     report = {}
     for spec in args.objects:
         base = spec.split(":")[0].split("~")[0]

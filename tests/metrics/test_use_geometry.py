@@ -372,6 +372,26 @@ def test_edge_thickness_tells_an_edge_from_a_plate_end():
         )
 
 
+def test_edge_frame_is_the_bisector_and_the_edge_line():
+    from affordgrasp.metrics.use_geometry import use_edge_frame
+
+    # a 20° wedge along x opening towards +y: the bisector out of it is -y, the edge x,
+    # also from a point on a flank 0.3 mm from the apex with the flank's normal
+    prism = _prism(20.0)
+    half = np.radians(10.0)
+    flank = [0.005, 0.0003, 0.0003 * np.tan(half)]
+    normal = [0.0, -np.sin(half), np.cos(half)]
+    outward, along = use_edge_frame(prism, [[0.0, 0.0, 0.0], flank], [[0.0, -1.0, 0.0], normal])
+    assert np.degrees(np.arccos(-outward[:, 1])).max() < 6.0
+    assert np.degrees(np.arccos(np.abs(along[:, 0]))).max() < 2.0
+    np.testing.assert_allclose(np.einsum("ij,ij->i", outward, along), 0.0, atol=1e-12)
+    # a flat face: its normal, and a direction in it
+    box = trimesh.creation.box(extents=(0.04, 0.04, 0.04))
+    outward, along = use_edge_frame(box, [0.0, 0.0, 0.02], [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(outward[0], [0.0, 0.0, 1.0], atol=1e-3)
+    assert abs(along[0, 2]) < 1e-3 and np.linalg.norm(along[0]) == pytest.approx(1.0)
+
+
 def test_edge_thickness_survives_a_scanner():
     import trimesh
 

@@ -237,3 +237,25 @@ def test_the_hold_outcomes_do_not_depend_on_the_task_trials(hammer):
     alone = validate_grasp(scene, pose, joints, u, n).to_row()
     with_trials, _ = run_task_trials(scene, ts, pose, joints, ["beat"], u, n, WRIST)
     assert with_trials.to_row() == alone
+
+
+def test_the_nail_holds_below_its_force_and_yields_above(hammer):
+    import mujoco
+
+    obj, parts = hammer
+    _scene, ts = scenes(obj, parts)
+    m, d = ts.model, ts.data
+    m.opt.timestep = ts.trials.strike_timestep
+    moved = {}
+    for push in (0.7, 1.3):  # × the nail's force, along its slide
+        mujoco.mj_resetData(m, d)
+        for _ in range(100):  # 50 ms
+            d.qfrc_applied[ts.nail_dof] = push * ts.trials.nail_force_n
+            mujoco.mj_step(m, d)
+        moved[push] = d.qpos[ts.nail_qpos]
+    # a creep of 2 mm/s, a few hundredths of a millimetre over a blow (MuJoCo's default
+    # impedance: 2 m/s)
+    assert abs(moved[0.7]) < 2e-4
+    # above it, the net 0.3 F accelerates the 5 g nail
+    expected = 0.5 * 0.3 * ts.trials.nail_force_n / ts.trials.nail_mass_kg * 0.05**2
+    assert moved[1.3] == pytest.approx(expected, rel=0.05)

@@ -353,6 +353,10 @@ class TrialSettings:
         between a thin edge and a face flickers from one step to the next).
     cut_friction : float
         Cut: μ of the workpiece.
+    crest_radius_m : float
+        Cut: the edge line passes through the workpiece's first contact nearest the line
+        through U along the edge when that is this close to it (the crest of the edge whose
+        bevel U lies on; a cleaver's bevel is 7 mm wide), else through U.
     workpiece_margin_m, workpiece_across_m, workpiece_thickness_m : float
         Cut: the workpiece the edge is pressed onto: it reaches this far beyond the stroke at
         either end, this far on either side of the edge line, and is this thick.
@@ -410,6 +414,7 @@ class TrialSettings:
     cut_gap_m: float = 2e-4
     edge_radius_m: float = 0.003
     edge_directions: int = 2048
+    crest_radius_m: float = 0.01
     beat_max_offset_m: float = 0.01
     beat_min_advance_m: float = 0.0005
     cut_max_offset_m: float = 0.002

@@ -29,10 +29,11 @@ is held, then the tool is drawn ``stroke_m`` along the edge's direction at
 ``stroke_speed_m_s`` (away from the hand, towards the tip: a push stroke) with the press on.
 The workpiece starts at first contact: backed off along its normal from wherever the tool or
 the hand would lie inside it (the convex parts' overshoot at an edge, a finger below the
-edge line). Measured: the workpiece's contacts' distance from the edge line through U over
-the stroke, the tool's thickness where it bore (an edge or a spine: a rigid contact does not
-tell their pressures apart, so the geometry at the bearing does), the press force reached
-before the tool slipped, and the tool's motion in the hand.
+edge line). Measured: the workpiece's contacts' distance from the edge line at U over the
+stroke (through the first contact near U: the crest of the edge whose bevel U lies on), the
+tool's thickness where it bore (an edge or a spine: a rigid contact does not tell their
+pressures apart, so the geometry at the bearing does), the press force reached before the
+tool slipped, and the tool's motion in the hand.
 
 The tool's turn and slip are its motion relative to the palm. MuJoCo is deterministic: the
 same scene and row give the same numbers bit for bit.
@@ -54,11 +55,16 @@ from .trials import GraspOutcome, _frame_quat, _Snapshot, validate_grasp
 __all__ = [
     "BEAT_VERSION",
     "CUT_VERSION",
+    "PICK_VERSION",
     "StrikeOutcome",
     "StrokeOutcome",
     "TaskOutcome",
     "protocol_cards",
     "run_task_trials",
+    "strike",
+    "stroke",
+    "task_row",
+    "trial_columns",
 ]
 
 BEAT_VERSION = 1
@@ -108,8 +114,11 @@ class StrokeOutcome:
     ----------
     stroke_offset_m : float
         Per window of ``stroke_window_s`` of the stroke the farthest contact of the workpiece
-        from the edge line through U (object frame; +inf in a window without one), its
-        ``cut_on_edge`` quantile over the stroke.
+        from the edge line at U (object frame; +inf in a window without one), its
+        ``cut_on_edge`` quantile over the stroke. The edge line runs along the edge's
+        direction through the workpiece's first contact nearest the line through U, when
+        that is within ``crest_radius_m`` of it (the crest of the edge whose bevel U lies
+        on), else through U.
     stroke_edge_thickness_m : float
         The tool's thickness where the workpiece bore (its median bearing point), from the
         chords 1 and 3 mm behind it (:func:`~affordgrasp.metrics.use_geometry.use_edge_thickness`):
@@ -163,7 +172,7 @@ def protocol_cards(trials: TrialSettings, names=("beat", "cut", "pick")) -> dict
     """
     t = trials.to_dict()
     both = {k: t[k] for k in ("max_turn_rad", "max_slip_m")}
-    cut_keys = ("cut", "stroke", "edge", "workpiece")
+    cut_keys = ("cut", "stroke", "edge", "workpiece", "crest")
     cards = {
         "beat": {
             "version": BEAT_VERSION,
@@ -192,7 +201,8 @@ def protocol_cards(trials: TrialSettings, names=("beat", "cut", "pick")) -> dict
                 "ball) backed off to first contact, the palm held; press ramped to "
                 "cut_force_n over cut_ramp_s, then the tool drawn stroke_m along the edge "
                 "at stroke_speed_m_s away from the hand (push stroke); workpiece μ "
-                "cut_friction; contacts pooled per stroke_window_s"
+                "cut_friction; contacts pooled per stroke_window_s; the edge line along the "
+                "edge's direction through the first contact within crest_radius_m of U, or U"
             ),
             "pass": (
                 "workpiece contacts within cut_max_offset_m of the edge line through U over "
@@ -271,7 +281,7 @@ class _InHand:
 
     def __init__(self, ts: TaskScene, use_point: np.ndarray):
         self.ts, self.use_point = ts, use_point
-        self.palm = ts.model.body("link_0").id
+        self.palm = ts.palm_body
         self.reset()
 
     def reset(self) -> None:
@@ -575,6 +585,7 @@ def stroke(
     offsets = np.full(-(-n_draw // per_window), -np.inf)
     touched = np.zeros(len(offsets), dtype=bool)
     bearing = []  # one contact per touching step, object frame
+    crest = None  # where the edge line passes: the tool's first contact near U
     force = 0.0
     for step in range(n_ramp + n_draw):
         force = t.cut_force_n * min(1.0, (step + 1) / n_ramp)
@@ -586,12 +597,14 @@ def stroke(
         turn, slip = max(turn, now_turn), max(slip, now_slip)
         if reached is None and (turn >= t.max_turn_rad or slip >= t.max_slip_m):
             reached = force
+        dist, pos, normal, _tool = _rig_contacts(ts, rig)
+        touching = dist < 0
+        if crest is None and touching.any():
+            crest = _crest(_to_object(ts, pos[touching]), use_point, along, t.crest_radius_m)
         if drawing:
-            dist, pos, normal, _tool = _rig_contacts(ts, rig)
-            touching = dist < 0
             if touching.any():
                 points = _to_object(ts, pos[touching])
-                rel = points - use_point
+                rel = points - crest
                 off = rel - np.outer(rel @ along, along)
                 w = (step - n_ramp) // per_window
                 offsets[w] = max(offsets[w], float(np.linalg.norm(off, axis=1).max()))
@@ -611,6 +624,16 @@ def stroke(
     )
     out = StrokeOutcome(offset, thickness, float(reached), turn, slip, bool(ok))
     return out, n_ramp + n_draw
+
+
+def _crest(points: np.ndarray, use_point: np.ndarray, along: np.ndarray, radius: float):
+    """The point the edge line passes through: of the workpiece's first contacts, the one
+    nearest the line through U along the edge, when within ``radius`` of it (the crest of
+    the edge whose bevel U lies on), else U."""
+    rel = points - use_point
+    across = np.linalg.norm(rel - np.outer(rel @ along, along), axis=1)
+    k = int(np.argmin(across))
+    return points[k] if across[k] <= radius else use_point
 
 
 def _bearing_thickness(ts: TaskScene, bearing: np.ndarray, outward: np.ndarray) -> float:
