@@ -13,6 +13,7 @@ medians of the measured quantities) and the CPU time per trial.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 
@@ -88,6 +89,27 @@ def use_point(obj, part, where, wrist, rng):
     return mesh.triangles_center[f], mesh.face_normals[f]
 
 
+def _reasons(results, trial, t) -> dict:
+    """How many of the failed trials failed each test (a trial can fail several)."""
+    if trial == "beat":
+        tests = {
+            "first contact off U": lambda r: not r.strike_offset_m <= t.beat_max_offset_m,
+            "nail advance": lambda r: not r.strike_nail_advance_m >= t.beat_min_advance_m,
+            "turned": lambda r: not r.strike_turn_rad < t.max_turn_rad,
+            "slipped": lambda r: not r.strike_slip_m < t.max_slip_m,
+        }
+    else:
+        tests = {
+            "off the edge": lambda r: not r.stroke_offset_m <= t.cut_max_offset_m,
+            "not an edge": lambda r: not r.stroke_edge_thickness_m <= t.cut_max_thickness_m,
+            "force": lambda r: not r.stroke_force_n >= t.cut_force_n,
+            "turned": lambda r: not r.stroke_turn_rad < t.max_turn_rad,
+            "slipped": lambda r: not r.stroke_slip_m < t.max_slip_m,
+        }
+    failed = [r for r in results if not (r.beat_ok if trial == "beat" else r.cut_ok)]
+    return {name: sum(bool(test(r)) for r in failed) for name, test in tests.items()}
+
+
 def family(spec, trial, cases, args):
     import affordgrasp as ag
     from affordgrasp.metrics.use_geometry import use_edge_frame
@@ -129,8 +151,10 @@ def family(spec, trial, cases, args):
         out[label] = {
             "tried": len(results),
             "passed": int(sum(ok)),
+            "failed": _reasons(results, trial, ts.trials),
             "median": medians,
             "cpu_ms": 1000 * float(np.mean(cpu)) if cpu else float("nan"),
+            "rows": [dataclasses.asdict(r) for r in results],
         }
     return {"grasps": len(grasps), "cases": out}
 
@@ -151,7 +175,9 @@ def main() -> None:
     args = p.parse_args()
     from affordgrasp.physics.settings import TrialSettings
 
-    args.trials = TrialSettings(**{k: float(v) for k, v in (a.split("=") for a in args.set)})
+    kinds = {f.name: type(f.default) for f in dataclasses.fields(TrialSettings)}
+    given = dict(a.split("=") for a in args.set)
+    args.trials = TrialSettings(**{k: kinds[k](v) for k, v in given.items()})
     report = {}
     for spec in args.objects:
         base = spec.split(":")[0].split("~")[0]
@@ -161,10 +187,12 @@ def main() -> None:
         print(f"\n{spec} ({trial}; {r['grasps']} held handle grasps)")
         for label, c in r["cases"].items():
             med = ", ".join(f"{k} {v:.4g}" for k, v in c["median"].items())
+            why = ", ".join(f"{k} {v}" for k, v in c["failed"].items())
             print(f"  {label:24s} {c['passed']}/{c['tried']}  cpu {c['cpu_ms']:.0f} ms  [{med}]")
+            print(f"  {'':24s} failed: {why}")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(report, fh, indent=1)
+            json.dump(report, fh, indent=1, default=float)
 
 
 if __name__ == "__main__":

@@ -35,8 +35,9 @@ tool's thickness where it bore (an edge or a spine: a rigid contact does not tel
 pressures apart, so the geometry at the bearing does), the press force reached before the
 tool slipped, and the tool's motion in the hand.
 
-The tool's turn and slip are its motion relative to the palm. MuJoCo is deterministic: the
-same scene and row give the same numbers bit for bit.
+The tool's turn and slip are its motion relative to the palm: its rotation, and the motion of
+its material point at the palm centre (the tool sliding through the grip). MuJoCo is
+deterministic: the same scene and row give the same numbers bit for bit.
 """
 
 from __future__ import annotations
@@ -90,8 +91,9 @@ class StrikeOutcome:
     strike_impulse_ns : float
         The rig's normal impulse on the tool per strike, the mean, N·s.
     strike_turn_rad, strike_slip_m : float
-        The tool's rotation and U's displacement in the hand from each strike's first contact
-        to its end, summed over the strikes (what the impacts did to the grip).
+        How far the tool turned in the hand, rad, and slid through it (its point at the palm
+        centre, relative to the palm), m, from each strike's first contact to its end, summed
+        over the strikes (what the blows did to the grip).
     strike_speed_m_s : float
         U's speed along n at the strike (ω × its lever square to n), m/s.
     beat_ok : bool
@@ -126,7 +128,8 @@ class StrokeOutcome:
     stroke_force_n : float
         The press force reached before the tool first slipped or turned past the limits, N.
     stroke_turn_rad, stroke_slip_m : float
-        The tool's largest rotation and U's largest displacement in the hand.
+        How far the tool turned in the hand, rad, and slid through it (its point at the palm
+        centre, relative to the palm), m: the largest over the press and the stroke.
     cut_ok : bool
     """
 
@@ -277,29 +280,31 @@ def _rotation(axis: np.ndarray, angle: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _InHand:
-    """The tool's pose relative to the palm, compared with a reference pose."""
+    """The tool's motion relative to the palm since a reference pose: how far it turned, and
+    how far its material point at the palm's origin (the wrist point) slid, m."""
 
-    def __init__(self, ts: TaskScene, use_point: np.ndarray):
-        self.ts, self.use_point = ts, use_point
-        self.palm = ts.palm_body
+    def __init__(self, ts: TaskScene):
+        self.ts = ts
         self.reset()
+
+    def _frames(self):
+        d, ts = self.ts.data, self.ts
+        palm_r = d.xmat[ts.palm_body].reshape(3, 3)
+        tool_r = d.xmat[ts.scene.object_body].reshape(3, 3)
+        return palm_r, d.xpos[ts.palm_body], tool_r, d.xpos[ts.scene.object_body]
 
     def reset(self) -> None:
         """Take the current pose as the reference."""
-        self.r0, self.u0 = self._pose()
-
-    def _pose(self):
-        d, body = self.ts.data, self.ts.scene.object_body
-        rp = d.xmat[self.palm].reshape(3, 3)
-        rel = rp.T @ d.xmat[body].reshape(3, 3)
-        u = rp.T @ (d.xmat[body].reshape(3, 3) @ self.use_point + d.xpos[body] - d.xpos[self.palm])
-        return rel, u
+        palm_r, palm_p, tool_r, tool_p = self._frames()
+        self.r0 = palm_r.T @ tool_r
+        self.point = tool_r.T @ (palm_p - tool_p)  # the tool's point at the palm origin
 
     def motion(self) -> tuple[float, float]:
-        """(turn, rad; slip of U, m) since the reference."""
-        rel, u = self._pose()
-        cos = (np.trace(self.r0.T @ rel) - 1.0) / 2.0
-        return math.acos(min(1.0, max(-1.0, cos))), float(np.linalg.norm(u - self.u0))
+        """(turn, rad; slip, m) since the reference."""
+        palm_r, palm_p, tool_r, tool_p = self._frames()
+        cos = (np.trace(self.r0.T @ (palm_r.T @ tool_r)) - 1.0) / 2.0
+        slip = float(np.linalg.norm(tool_r @ self.point + tool_p - palm_p))
+        return math.acos(min(1.0, max(-1.0, cos))), slip
 
 
 def _world(ts: TaskScene, point=None, vector=None):
@@ -440,7 +445,7 @@ def strike(
     omega = t.swing_speed_rad_s
     d.mocap_pos[ts.nail_mocap] = u
     d.mocap_quat[ts.nail_mocap] = _frame_quat(-n)  # the rig lies along -z of its frame
-    in_hand = _InHand(ts, use_point)
+    in_hand = _InHand(ts)
     swing = _Swing(ts, wrist_point, axis)
     rig = np.zeros(m.ngeom, dtype=bool)
     rig[list(ts.nail_geoms | ts.board_geoms)] = True
@@ -564,7 +569,7 @@ def stroke(
     m.body_pos[ts.cut_body] = u + t.cut_gap_m * z
     m.body_quat[ts.cut_body] = quat
     mj.mj_forward(m, d)
-    in_hand = _InHand(ts, use_point)
+    in_hand = _InHand(ts)
     rig = np.zeros(m.ngeom, dtype=bool)
     rig[list(ts.cut_geoms)] = True
     # The tool's convex parts stick out of its mesh (at a thin edge, tenths of a millimetre),
