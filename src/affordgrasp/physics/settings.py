@@ -333,8 +333,8 @@ class TrialSettings:
     strike_time : float
         Beat: how long a strike is followed after its first contact, s.
     miss_rad : float
-        Beat: a swing that turned this far past the nail's first touch without a contact
-        missed.
+        Beat: a blow that has touched nothing by the time the swing would have turned this far
+        past the nail's head missed.
     relax_s : float
         Beat: the wrist relaxes this long before U would touch the nail (or at any earlier
         contact with the rig): the strike is the hand's and the tool's momentum.

@@ -451,7 +451,7 @@ def strike(
     rig[list(ts.nail_geoms | ts.board_geoms)] = True
     coarse = m.opt.timestep
     ramp_time = 2.0 * t.ramp_rad / omega
-    # the swing's time to the touch, and as long again for one that stalls or misses
+    # the swing's time to the touch, and as long again for one that stalls
     give_up = 2.0 * (ramp_time + (t.windback_rad - t.ramp_rad + t.miss_rad) / omega)
     offsets, advances, impulses = [], [], []
     turn = slip = 0.0
@@ -467,6 +467,7 @@ def strike(
                 impulses.append(0.0)
                 continue
             nail0 = d.qpos[ts.nail_qpos]
+            touch = nail0 / lever  # the angle at which U meets the nail's head, where it is now
             m.opt.timestep = dt = coarse
             relaxed = False
             first = None
@@ -480,11 +481,13 @@ def strike(
                 time += dt
                 dist, pos, force, tool = _rig_contacts(ts, rig)
                 active = dist < 0
-                if dt == coarse and (swing.angle >= -omega * t.fine_s or active.any()):
+                if dt == coarse and (swing.angle >= touch - omega * t.fine_s or active.any()):
                     m.opt.timestep = dt = t.strike_timestep
-                if not relaxed and (swing.angle >= -omega * t.relax_s or active.any()):
+                if not relaxed and (swing.angle >= touch - omega * t.relax_s or active.any()):
                     relaxed = True
                     _hold_palm(ts, False)
+                    # let go, the hand and the tool fly on: as far as miss_rad more, at most
+                    give_up = min(give_up, time + t.relax_s + t.miss_rad / omega)
                 if first is None and active.any():
                     first = _farthest(ts, pos[active], use_point)
                     in_hand.reset()
@@ -494,7 +497,7 @@ def strike(
                     receding = _normal_speed(ts, use_point, n) <= 0 and not active.any()
                     if after >= t.strike_time or receding:
                         break
-                elif time > give_up or swing.angle > t.miss_rad:
+                elif time > give_up:
                     break
             offsets.append(math.inf if first is None else first)
             advances.append(float(d.qpos[ts.nail_qpos] - nail0))
