@@ -101,7 +101,12 @@ def _reasons(results, trial, t) -> dict:
     else:
         tests = {
             "off the edge": lambda r: not r.stroke_offset_m <= t.cut_max_offset_m,
-            "not an edge": lambda r: not r.stroke_edge_thickness_m <= t.cut_max_thickness_m,
+            "not an edge": lambda r: (
+                not (
+                    r.stroke_edge_thickness_m <= t.cut_max_thickness_m
+                    and r.stroke_edge_angle_rad <= t.cut_max_angle_rad
+                )
+            ),
             "force": lambda r: not r.stroke_force_n >= t.cut_force_n,
             "turned": lambda r: not r.stroke_turn_rad < t.max_turn_rad,
             "slipped": lambda r: not r.stroke_slip_m < t.max_slip_m,

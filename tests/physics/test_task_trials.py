@@ -195,6 +195,7 @@ def test_the_edge_cuts_and_the_flat_does_not(blade):
     edge = cut(blade, flank, (math.cos(half), 0.0, -math.sin(half)))
     assert edge.cut_ok, edge
     assert edge.stroke_offset_m < 0.002 and edge.stroke_edge_thickness_m < 0.0005
+    assert math.degrees(edge.stroke_edge_angle_rad) == pytest.approx(30.0, abs=6.0)
     flat = cut(blade, (0.001, 0.09, -0.01), (1.0, 0.0, 0.0))
     assert not flat.cut_ok
     assert flat.stroke_offset_m > 0.005

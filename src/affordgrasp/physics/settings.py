@@ -375,9 +375,10 @@ class TrialSettings:
     cut_max_offset_m, cut_on_edge : float
         Cut passes: the workpiece's contacts within ``cut_max_offset_m`` of the edge line
         through U over at least the fraction ``cut_on_edge`` of the stroke, ...
-    cut_max_thickness_m : float
-        ... the tool no thicker than this where the workpiece bore (an edge, not a spine),
-        the full press force reached, ...
+    cut_max_thickness_m, cut_max_angle_rad : float
+        ... where the workpiece bore, the tool no thicker than ``cut_max_thickness_m`` (its
+        flanks converge: an edge, not a spine) and its wedge no wider than
+        ``cut_max_angle_rad`` (not a spine's corner), the full press force reached, ...
     max_turn_rad, max_slip_m : float
         ... and (both trials) the tool turned less than ``max_turn_rad`` and U moved less
         than ``max_slip_m`` in the hand.
@@ -419,6 +420,7 @@ class TrialSettings:
     beat_min_advance_m: float = 0.0005
     cut_max_offset_m: float = 0.002
     cut_max_thickness_m: float = 0.001
+    cut_max_angle_rad: float = math.radians(55.0)
     cut_on_edge: float = 0.9
     max_turn_rad: float = math.radians(10.0)
     max_slip_m: float = 0.005

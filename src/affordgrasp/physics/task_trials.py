@@ -31,9 +31,9 @@ The workpiece starts at first contact: backed off along its normal from wherever
 the hand would lie inside it (the convex parts' overshoot at an edge, a finger below the
 edge line). Measured: the workpiece's contacts' distance from the edge line at U over the
 stroke (through the first contact near U: the crest of the edge whose bevel U lies on), the
-tool's thickness where it bore (an edge or a spine: a rigid contact does not tell their
-pressures apart, so the geometry at the bearing does), the press force reached before the
-tool slipped, and the tool's motion in the hand.
+tool's thickness and wedge angle where it bore (an edge, a spine or a spine's corner: a rigid
+contact does not tell their pressures apart, so the geometry at the bearing does), the
+press force reached before the tool slipped, and the tool's motion in the hand.
 
 The tool's turn and slip are its motion relative to the palm: its rotation, and the motion of
 its material point at the palm centre (the tool sliding through the grip). MuJoCo is
@@ -125,6 +125,10 @@ class StrokeOutcome:
         The tool's thickness where the workpiece bore (its median bearing point), from the
         chords 1 and 3 mm behind it (:func:`~affordgrasp.metrics.use_geometry.use_edge_thickness`):
         about 0 on an edge, the plate's thickness on a spine; NaN when nothing bore.
+    stroke_edge_angle_rad : float
+        The tool's wedge angle there, in a 3 mm ball
+        (:func:`~affordgrasp.metrics.use_geometry.use_wedge_angle`): 7-51° on the families'
+        cutting edges, 90° at a spine's corner, 180° on a flat; NaN when nothing bore.
     stroke_force_n : float
         The press force reached before the tool first slipped or turned past the limits, N.
     stroke_turn_rad, stroke_slip_m : float
@@ -135,6 +139,7 @@ class StrokeOutcome:
 
     stroke_offset_m: float
     stroke_edge_thickness_m: float
+    stroke_edge_angle_rad: float
     stroke_force_n: float
     stroke_turn_rad: float
     stroke_slip_m: float
@@ -209,9 +214,9 @@ def protocol_cards(trials: TrialSettings, names=("beat", "cut", "pick")) -> dict
             ),
             "pass": (
                 "workpiece contacts within cut_max_offset_m of the edge line through U over "
-                ">= cut_on_edge of the stroke, tool thickness where it bore <= "
-                "cut_max_thickness_m, cut_force_n reached, turn < max_turn_rad, slip < "
-                "max_slip_m"
+                ">= cut_on_edge of the stroke, where it bore the tool no thicker than "
+                "cut_max_thickness_m and its wedge no wider than cut_max_angle_rad, "
+                "cut_force_n reached, turn < max_turn_rad, slip < max_slip_m"
             ),
             "settings": {k: v for k, v in t.items() if k.startswith(cut_keys)} | both,
             "columns": list(StrokeOutcome.__dataclass_fields__),
@@ -363,7 +368,7 @@ def _unsettled_strike() -> StrikeOutcome:
 
 
 def _unsettled_stroke() -> StrokeOutcome:
-    return StrokeOutcome(math.inf, math.nan, 0.0, math.nan, math.nan, False)
+    return StrokeOutcome(math.inf, math.nan, math.nan, 0.0, math.nan, math.nan, False)
 
 
 class _Swing:
@@ -622,15 +627,16 @@ def stroke(
     offsets[~touched] = np.inf  # a window without a contact: the edge left the workpiece
     offset = float(np.quantile(offsets, t.cut_on_edge, method="higher"))
     reached = force if reached is None else reached
-    thickness = _bearing_thickness(ts, np.asarray(bearing), outward)
+    thickness, angle = _bearing_wedge(ts, np.asarray(bearing), outward)
     ok = (
         offset <= t.cut_max_offset_m
         and thickness <= t.cut_max_thickness_m
+        and angle <= t.cut_max_angle_rad
         and reached >= t.cut_force_n
         and turn < t.max_turn_rad
         and slip < t.max_slip_m
     )
-    out = StrokeOutcome(offset, thickness, float(reached), turn, slip, bool(ok))
+    out = StrokeOutcome(offset, thickness, angle, float(reached), turn, slip, bool(ok))
     return out, n_ramp + n_draw
 
 
@@ -644,18 +650,18 @@ def _crest(points: np.ndarray, use_point: np.ndarray, along: np.ndarray, radius:
     return points[k] if across[k] <= radius else use_point
 
 
-def _bearing_thickness(ts: TaskScene, bearing: np.ndarray, outward: np.ndarray) -> float:
-    """The tool's thickness where the workpiece bore (the median bearing point, on the
-    mesh), m, from :func:`~affordgrasp.metrics.use_geometry.use_edge_thickness`; NaN when
-    nothing bore."""
-    from ..metrics.use_geometry import use_edge_thickness
+def _bearing_wedge(ts: TaskScene, bearing: np.ndarray, outward: np.ndarray):
+    """The tool's thickness (m) and wedge angle (rad) where the workpiece bore (at the
+    median bearing point, on the mesh): :func:`~affordgrasp.metrics.use_geometry.use_wedge_shape`
+    with the workpiece's normal; NaN when nothing bore."""
+    from ..metrics.use_geometry import use_wedge_shape
 
     if len(bearing) == 0:
-        return math.nan
+        return math.nan, math.nan
     mesh = ts.mesh
-    point = mesh.nearest.on_surface(np.median(bearing, axis=0)[None])[0][0]
-    value = use_edge_thickness(mesh, point, np.asarray(outward, dtype=np.float64))
-    return float(value)
+    point = mesh.nearest.on_surface(np.median(bearing, axis=0)[None])[0]
+    shape = use_wedge_shape(mesh, point, np.asarray(outward, dtype=np.float64)[None])
+    return float(shape.edge_thickness[0]), float(shape.angle[0])
 
 
 def run_task_trials(
