@@ -122,9 +122,10 @@ class StrokeOutcome:
         that is within ``crest_radius_m`` of it (the crest of the edge whose bevel U lies
         on), else through U.
     stroke_edge_thickness_m : float
-        The tool's thickness where the workpiece bore (its median bearing point), from the
-        chords 1 and 3 mm behind it (:func:`~affordgrasp.metrics.use_geometry.use_edge_thickness`):
-        about 0 on an edge, the plate's thickness on a spine; NaN when nothing bore.
+        The tool's thickness where the edge at U bore (the point the edge line passes
+        through), from the chords 1 and 3 mm behind it
+        (:func:`~affordgrasp.metrics.use_geometry.use_edge_thickness`): about 0 on an edge,
+        the plate's thickness on a spine; NaN when nothing bore.
     stroke_edge_angle_rad : float
         The tool's wedge angle there, in a 3 mm ball
         (:func:`~affordgrasp.metrics.use_geometry.use_wedge_angle`): 7-51° on the families'
@@ -597,7 +598,6 @@ def stroke(
     reached = None
     offsets = np.full(-(-n_draw // per_window), -np.inf)
     touched = np.zeros(len(offsets), dtype=bool)
-    bearing = []  # one contact per touching step, object frame
     crest = None  # where the edge line passes: the tool's first contact near U
     force = 0.0
     for step in range(n_ramp + n_draw):
@@ -610,7 +610,7 @@ def stroke(
         turn, slip = max(turn, now_turn), max(slip, now_slip)
         if reached is None and (turn >= t.max_turn_rad or slip >= t.max_slip_m):
             reached = force
-        dist, pos, normal, _tool = _rig_contacts(ts, rig)
+        dist, pos, _force, _tool = _rig_contacts(ts, rig)
         touching = dist < 0
         if crest is None and touching.any():
             crest = _crest(_to_object(ts, pos[touching]), use_point, along, t.crest_radius_m)
@@ -622,12 +622,11 @@ def stroke(
                 w = (step - n_ramp) // per_window
                 offsets[w] = max(offsets[w], float(np.linalg.norm(off, axis=1).max()))
                 touched[w] = True
-                bearing.append(points[np.argmax(normal[touching])])
     d.ctrl[ts.cut_actuator] = 0.0
     offsets[~touched] = np.inf  # a window without a contact: the edge left the workpiece
     offset = float(np.quantile(offsets, t.cut_on_edge, method="higher"))
     reached = force if reached is None else reached
-    thickness, angle = _bearing_wedge(ts, np.asarray(bearing), outward)
+    thickness, angle = _bearing_wedge(ts, crest, outward)
     ok = (
         offset <= t.cut_max_offset_m
         and thickness <= t.cut_max_thickness_m
@@ -650,17 +649,16 @@ def _crest(points: np.ndarray, use_point: np.ndarray, along: np.ndarray, radius:
     return points[k] if across[k] <= radius else use_point
 
 
-def _bearing_wedge(ts: TaskScene, bearing: np.ndarray, outward: np.ndarray):
-    """The tool's thickness (m) and wedge angle (rad) where the workpiece bore (at the
-    median bearing point, on the mesh): :func:`~affordgrasp.metrics.use_geometry.use_wedge_shape`
-    with the workpiece's normal; NaN when nothing bore."""
+def _bearing_wedge(ts: TaskScene, crest, outward: np.ndarray) -> tuple[float, float]:
+    """The tool's thickness (m) and wedge angle (rad) where the edge at U bore (the crest
+    point, on the mesh): :func:`~affordgrasp.metrics.use_geometry.use_wedge_shape` with the
+    workpiece's normal; NaN when nothing bore."""
     from ..metrics.use_geometry import use_wedge_shape
 
-    if len(bearing) == 0:
+    if crest is None:
         return math.nan, math.nan
-    mesh = ts.mesh
-    point = mesh.nearest.on_surface(np.median(bearing, axis=0)[None])[0]
-    shape = use_wedge_shape(mesh, point, np.asarray(outward, dtype=np.float64)[None])
+    point = ts.mesh.nearest.on_surface(np.asarray(crest, dtype=np.float64)[None])[0]
+    shape = use_wedge_shape(ts.mesh, point, np.asarray(outward, dtype=np.float64)[None])
     return float(shape.edge_thickness[0]), float(shape.angle[0])
 
 
