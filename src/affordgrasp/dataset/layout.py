@@ -441,9 +441,10 @@ def shard_metadata(shard: Shard, object_name: str, status_counts: dict[str, int]
 
 
 def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> Path:
-    """Write one complete shard atomically, its checksum recorded before it is in place.
+    """Write one complete shard atomically, with its checksum.
 
-    So a shard in place always has one.
+    The checksum is recorded by :func:`~affordgrasp.runtime.writing.atomic_write`'s
+    ``before_replace`` hook, so a shard in place always has one.
 
     Parameters
     ----------
