@@ -100,9 +100,9 @@ def main() -> None:
     args = p.parse_args()
 
     from affordgrasp.dataset.best import task_values
-    from affordgrasp.dataset.engines import default_workers
     from affordgrasp.dataset.generate import generate
     from affordgrasp.dataset.reading import read_dataset
+    from affordgrasp.runtime.engines import default_workers
     from affordgrasp.tasks import get_task
 
     started = time.perf_counter()

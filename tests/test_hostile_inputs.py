@@ -12,7 +12,7 @@ with ``pytest -s`` (and reported in the release notes).
 ``COMMAND_CASES`` (at the end) covers the other commands: outputs that cannot be written,
 physics settings outside their physical ranges, unknown metrics in a tasks file, a sample
 count whose table cannot fit, foreign and non-finite model files. Interrupts, orphaned
-workers and large meshes have their own tests (``test_interrupts.py``,
+workers and large meshes have their own tests (``runtime/test_interrupts.py``,
 ``dataset/test_signals.py``, ``objects/test_simplify.py``, ``grasp/test_surface.py``).
 """
 

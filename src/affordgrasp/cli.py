@@ -16,8 +16,8 @@ import sys
 from . import __version__
 from .commands import add_verbose_argument  # also used by subcommands' own parsers
 from .errors import InputError, cli_message
-from .interrupts import interrupt_in, stop_on_signals
-from .process_tuning import keep_freed_memory, one_blas_thread
+from .runtime.interrupts import interrupt_in, stop_on_signals
+from .runtime.process_tuning import keep_freed_memory, one_blas_thread
 
 COMMANDS = {
     "objects": "list the built-in object families, or export one as a mesh",

@@ -271,7 +271,7 @@ class _Simulator:
 
     def inputs(self, x: np.ndarray) -> _Scored:
         """Simulate and score given inputs (rows numbered on from the last)."""
-        from .dataset.engines import Job
+        from .dataset.jobs import Job
 
         start = self.next_sample
         jobs = [
@@ -283,7 +283,7 @@ class _Simulator:
 
     def seeded(self, start: int, stop: int) -> _Scored:
         """Simulate and score samples ``start .. stop - 1`` of the run's seed."""
-        from .dataset.engines import Job
+        from .dataset.jobs import Job
 
         jobs = [Job(0, start + a, b - a) for a, b in self._split(stop - start)]
         self.next_sample = max(self.next_sample, stop)  # inputs() rows are numbered on
@@ -380,17 +380,13 @@ def optimize(
     -------
     OptimizationResult
     """
-    from .dataset.engines import (
-        ObjectPayload,
-        RunContext,
-        check_engine,
-        make_engine,
-        stop_on_signals,
-    )
+    from .dataset.jobs import ObjectPayload, RunContext
     from .grasp.pregrasp import sample_inputs
     from .hands import get_hand
     from .objects import load_object
     from .robust import robust_settings
+    from .runtime.engines import check_engine, make_engine
+    from .runtime.interrupts import stop_on_signals
     from .tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:

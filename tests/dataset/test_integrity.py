@@ -19,6 +19,7 @@ from affordgrasp.dataset.generate import generate
 from affordgrasp.dataset.layout import CHECKSUMS_NAME, read_checksums, shard_paths
 from affordgrasp.dataset.reading import iter_batches, read_dataset
 from affordgrasp.errors import DatasetError
+from affordgrasp.runtime import writing
 
 SAMPLES, SHARD = 24, 8
 
@@ -116,10 +117,10 @@ def test_disk_full_exits_2_naming_the_file_and_leaves_no_partial_file(
     tmp_path, box_mesh, pristine, monkeypatch, capsys
 ):
     out = tmp_path / "ds"
-    real_write = layout.write_file
+    real_write = writing.write_file
     shards_written = []
 
-    def full_disk(path, data):
+    def full_disk(path, data, fsync=True):
         if ".part-" in path.name and len(shards_written) == 1:
             with open(path, "wb") as f:
                 f.write(data[: len(data) // 2])  # what a full disk leaves
@@ -128,7 +129,7 @@ def test_disk_full_exits_2_naming_the_file_and_leaves_no_partial_file(
         if ".part-" in path.name:
             shards_written.append(path)
 
-    monkeypatch.setattr(layout, "write_file", full_disk)
+    monkeypatch.setattr(writing, "write_file", full_disk)
     assert _generate(box_mesh, out) == 2
     err = capsys.readouterr().err
     err = _one_line(err)
@@ -137,7 +138,7 @@ def test_disk_full_exits_2_naming_the_file_and_leaves_no_partial_file(
     assert [p.name for p in shard_paths(out)] == ["part-00000-000000000000.parquet"]
     read_dataset(out)  # what is there is whole and verified
 
-    monkeypatch.setattr(layout, "write_file", real_write)
+    monkeypatch.setattr(writing, "write_file", real_write)
     assert _generate(box_mesh, out) == 0
     assert read_dataset(out).equals(read_dataset(pristine))
 
@@ -157,7 +158,7 @@ def test_read_only_output_directory_exits_2_before_any_work(
     readonly.chmod(0o555)
     if os.access(readonly, os.W_OK):
         # root writes anywhere: answer as the kernel does for everyone else.
-        real_mkdir, real_write = Path.mkdir, layout.write_file
+        real_mkdir, real_write = Path.mkdir, writing.write_file
 
         def denied(path):
             if Path(path).is_relative_to(readonly):
@@ -167,12 +168,12 @@ def test_read_only_output_directory_exits_2_before_any_work(
             denied(self)
             return real_mkdir(self, *args, **kwargs)
 
-        def write_file(path, data):
+        def write_file(path, data, fsync=True):
             denied(path)
             return real_write(path, data)
 
         monkeypatch.setattr(Path, "mkdir", mkdir)
-        monkeypatch.setattr(layout, "write_file", write_file)
+        monkeypatch.setattr(writing, "write_file", write_file)
     for out in (readonly / "ds", readonly):
         assert _generate(box_mesh, out) == 2
         err = _one_line(capsys.readouterr().err)
@@ -194,12 +195,16 @@ def test_manifest_records_the_format_with_checksums(pristine):
 def test_full_disk_while_writing_best_or_an_export_leaves_no_file(
     pristine, tmp_path, monkeypatch, capsys
 ):
-    def full_disk(path, data):
+    real_write = writing.write_file
+
+    def full_disk(path, data, fsync=True):
+        if not Path(path).is_relative_to(tmp_path):  # the object cache: a disk with room
+            return real_write(path, data, fsync=fsync)
         with open(path, "wb") as f:
             f.write(data[: len(data) // 2])
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(layout, "write_file", full_disk)
+    monkeypatch.setattr(writing, "write_file", full_disk)
     top = tmp_path / "top.parquet"
     assert main(["best", str(pristine), "--task", "pick", "--out", str(top)]) == 2
     assert "top.parquet" in _one_line(capsys.readouterr().err)

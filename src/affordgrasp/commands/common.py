@@ -324,9 +324,9 @@ def check_output_file(path: str, option: str, suffix: str | None = None) -> None
     ------
     InputError
         When ``path`` is a directory, has another extension than ``suffix``, or its folder
-        is missing or not writable (:func:`affordgrasp.writing.check_output_path`).
+        is missing or not writable (:func:`affordgrasp.runtime.writing.check_output_path`).
     """
-    from ..writing import check_output_path
+    from ..runtime.writing import check_output_path
 
     check_output_path(path, option, kind="file")
     if suffix is not None and not str(path).endswith(suffix):
@@ -380,7 +380,7 @@ def check_output_dir(path: str, option: str) -> None:
     InputError
         When ``path`` is a file, or it (or its nearest existing folder) is not writable.
     """
-    from ..writing import check_output_path
+    from ..runtime.writing import check_output_path
 
     check_output_path(path, option, kind="dir", create_parents=True)
 
@@ -413,9 +413,9 @@ def run_batches(args, out, obj, metrics: bool):
     wall : float
         Wall time of the evaluation, s.
     """
-    from ..compiled import warm_up
     from ..grasp.policy import object_geometry
     from ..pipeline import evaluate_samples
+    from ..runtime.kernels import warm_up
 
     load = warm_up()
     t0 = time.perf_counter()
@@ -512,12 +512,9 @@ def write_table(table, path: str | None, out) -> None:
 
     import pyarrow.parquet as pq
 
-    from ..writing import atomic_write
+    from ..runtime.writing import atomic_write
 
-    try:
-        atomic_write(path, lambda fh: pq.write_table(table, fh), fsync=False)
-    except OSError as exc:
-        raise InputError(f"cannot write {path!r}: {exc.strerror or exc}") from exc
+    atomic_write(path, lambda fh: pq.write_table(table, fh), fsync=False)
     out.text(f"wrote {table.num_rows} rows to {path}")
 
 

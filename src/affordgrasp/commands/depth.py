@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..runtime.writing import atomic_write
 
 
 def add_arguments(p) -> None:
@@ -121,7 +122,7 @@ def run(args, out) -> None:
     pose = renderer.poses(p0)[0]
     if args.out is not None:
         if args.out.endswith(".npy"):
-            np.save(args.out, depth)
+            atomic_write(args.out, lambda fh: np.save(fh, depth))
         else:
             save_depth_png(args.out, depth, scale=args.scale)
     hit = depth > 0

@@ -132,8 +132,8 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
-    from ..dataset.engines import default_workers
     from ..learning.api import evaluate_on_dataset
+    from ..runtime.engines import default_workers
 
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")

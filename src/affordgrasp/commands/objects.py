@@ -59,10 +59,10 @@ def run(args, out) -> None:
         if ext not in ("obj", "stl", "ply", "glb", "off"):
             raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
         (obj,) = load_objects([spec], args)
-        from ..dataset.layout import write_bytes_atomic
+        from ..runtime.writing import atomic_write
 
         data = obj.mesh.export(file_type=ext)
-        write_bytes_atomic(path, data.encode() if isinstance(data, str) else data)
+        atomic_write(path, data.encode() if isinstance(data, str) else data)
         m = obj.mass
         ext_m = m.bounds[1] - m.bounds[0]
         out.text(

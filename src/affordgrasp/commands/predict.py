@@ -84,6 +84,7 @@ def run(args, out) -> None:
 
     from ..dataset.handle import Dataset
     from ..learning.api import predict_dataset
+    from ..runtime.writing import atomic_write
     from .common import check_output_file
 
     check_output_file(args.out, "--out", suffix=".parquet")
@@ -98,7 +99,7 @@ def run(args, out) -> None:
             )
         }
     )
-    pq.write_table(table, args.out, compression="zstd")
+    atomic_write(args.out, lambda fh: pq.write_table(table, fh, compression="zstd"))
     cols = [c for c in table.column_names if c not in ("object", "sample")]
     rows = []
     for c in cols:

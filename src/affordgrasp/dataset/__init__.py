@@ -2,7 +2,8 @@
 
 * ``schema``: the columns of a sample row (conventions: Sample columns);
 * ``generate``: sharded, deterministic, resumable Parquet datasets (``layout`` on disk,
-  ``engines`` for local processes or Ray, ``card`` for the dataset card);
+  ``jobs`` the work the engines of :mod:`affordgrasp.runtime` run, ``card`` for the dataset
+  card);
 * ``handle``: :class:`Dataset`, a dataset directory opened once (plan, hand, objects,
   rows): what every consumer of a dataset takes;
 * ``reading``: a dataset directory as one Arrow dataset;

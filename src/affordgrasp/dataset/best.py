@@ -27,10 +27,10 @@ import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
 from ..errors import DatasetError, bad_parameter
+from ..runtime.writing import atomic_write
 from ..search.ranking import TopRows  # noqa: F401  (re-exported: its former home)
 from ..tasks import Task, get_task
 from .handle import Dataset, DatasetLike
-from .layout import write_bytes_atomic
 from .reading import read_errors
 
 AFFORDANCE_COLUMN = "affordance"
@@ -302,6 +302,6 @@ def write_best(result: BestGrasps, path: str | os.PathLike) -> Path:
     ).encode()
     sink = pa.BufferOutputStream()
     pq.write_table(result.table.replace_schema_metadata(meta), sink)
-    # Whole or not at all: a full disk raises a DatasetError naming the path, no stub left.
-    write_bytes_atomic(path, sink.getvalue().to_pybytes())
+    # Whole or not at all: a full disk raises an InputError naming the path, no stub left.
+    atomic_write(path, sink.getvalue().to_pybytes())
     return path

@@ -34,18 +34,12 @@ from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..grasp.pregrasp import SAMPLE_STREAMS, object_stream_seed
 from ..hands import Hand, hand_to_dict
 from ..robust import RobustSettings, robust_settings
+from ..runtime.engines import Engine, check_engine, make_engine
+from ..runtime.interrupts import stop_on_signals
 from ..schema import column_numbers
 from . import card as card_module
-from .engines import (
-    Engine,
-    Job,
-    ObjectPayload,
-    RunContext,
-    check_engine,
-    make_engine,
-    stop_on_signals,
-)
 from .handle import Dataset
+from .jobs import Job, ObjectPayload, RunContext
 from .layout import (
     DEFAULT_SHARD_SIZE,
     FORMAT,
@@ -513,7 +507,7 @@ def _write_card_after(complete: bool, write_card, *args, **kwargs) -> None:
     so that the error the user sees is the one that stopped the run."""
     try:
         write_card(*args, **kwargs)
-    except DatasetError as exc:
+    except InputError as exc:  # a DatasetError, or a write the file system refused
         if complete:
             raise
         log.warning("could not update the dataset card: %s", exc)

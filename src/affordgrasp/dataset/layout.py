@@ -20,7 +20,6 @@ DuckDB read the directory (or ``DIR/*.parquet``) as one table.
 
 from __future__ import annotations
 
-import errno
 import hashlib
 import json
 import logging
@@ -33,6 +32,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..errors import DatasetError, InternalError
+from ..runtime import writing
 
 log = logging.getLogger(__name__)
 
@@ -148,7 +148,7 @@ def shard_paths(directory: str | os.PathLike) -> list[Path]:
 
 
 def write_json_atomic(path: Path, document: dict) -> None:
-    """Write a JSON file so that readers see the old or the new version, never a mix.
+    """Write a JSON file atomically (:func:`~affordgrasp.runtime.writing.atomic_write`).
 
     Parameters
     ----------
@@ -156,73 +156,7 @@ def write_json_atomic(path: Path, document: dict) -> None:
     document : dict
         JSON-ready; written indented, keys in their order.
     """
-    text = json.dumps(document, indent=2, sort_keys=False) + "\n"
-    write_bytes_atomic(path, text.encode("utf-8"))
-
-
-def write_bytes_atomic(path: Path, data: bytes) -> None:
-    """Write a file whole or not at all: a hidden temporary file, synced, then renamed.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-    data : bytes
-
-    Raises
-    ------
-    DatasetError
-        Naming ``path`` when it cannot be written (no space left, no permission, read-only
-        file system); nothing half-written is left behind.
-    """
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        write_file(tmp, data)
-        os.replace(tmp, path)
-    except BaseException as exc:  # Ctrl-C too: no temporary left behind
-        tmp.unlink(missing_ok=True)
-        if isinstance(exc, OSError):
-            raise write_error(path, exc) from exc
-        raise
-    _sync_directory(path.parent)
-
-
-def write_file(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` and sync it to the disk (the one place files are written).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-    data : bytes
-    """
-    with open(path, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def write_error(path: Path, exc: OSError) -> DatasetError:
-    """A one-line DatasetError for a failed write, naming the path and what to do.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        What could not be written.
-    exc : OSError
-        Why (no space, no permission, ...).
-
-    Returns
-    -------
-    DatasetError
-        Not raised.
-    """
-    reason = exc.strerror or str(exc)
-    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
-        fix = "free some space (finished shards are kept) or choose another --out"
-    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
-        fix = "make it writable or choose another --out"
-    else:
-        fix = "check the disk and the path, or choose another --out"
-    return DatasetError(f"cannot write {str(path)!r}: {reason}; {fix}")
+    writing.atomic_write(path, (json.dumps(document, indent=2) + "\n").encode("utf-8"))
 
 
 def check_writable(directory: Path) -> None:
@@ -236,18 +170,18 @@ def check_writable(directory: Path) -> None:
 
     Raises
     ------
-    DatasetError
-        From :func:`write_error`.
+    InputError
+        From :func:`~affordgrasp.runtime.writing.write_error`.
     """
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise write_error(directory, exc) from exc
+        raise writing.write_error(directory, exc) from exc
     probe = directory / f".write-test-{os.getpid()}"
     try:
-        write_file(probe, b"")
+        writing.write_file(probe, b"")
     except OSError as exc:
-        raise write_error(directory, exc) from exc
+        raise writing.write_error(directory, exc) from exc
     finally:
         try:
             probe.unlink(missing_ok=True)
@@ -507,9 +441,10 @@ def shard_metadata(shard: Shard, object_name: str, status_counts: dict[str, int]
 
 
 def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> Path:
-    """Write one complete shard: a hidden temporary file, synced, then renamed into place.
+    """Write one complete shard atomically, with its checksum.
 
-    Its checksum is recorded before the rename, so a shard in place always has one.
+    The checksum is recorded by :func:`~affordgrasp.runtime.writing.atomic_write`'s
+    ``before_replace`` hook, so a shard in place always has one.
 
     Parameters
     ----------
@@ -527,8 +462,8 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
 
     Raises
     ------
-    DatasetError
-        When it cannot be written.
+    InputError
+        When it cannot be written (:func:`~affordgrasp.runtime.writing.atomic_write`).
     InternalError
         When the table does not have the planned row count.
     """
@@ -538,21 +473,13 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
     metadata[SHARD_META_KEY] = json.dumps(info, sort_keys=True).encode()
     table = table.replace_schema_metadata(metadata)
     final = directory / shard.name
-    tmp = directory / f".{shard.name}.tmp-{os.getpid()}"
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink, compression=COMPRESSION, row_group_size=max(1, shard.rows))
     data = sink.getvalue().to_pybytes()
-    try:
-        write_file(tmp, data)
-        # The checksum is on disk before the shard: a shard in place always has one.
-        record_checksum(directory, shard.name, data)
-        os.replace(tmp, final)
-    except BaseException as exc:  # Ctrl-C too: no temporary left behind
-        tmp.unlink(missing_ok=True)
-        if isinstance(exc, OSError):
-            raise write_error(final, exc) from exc
-        raise
-    _sync_directory(directory)
+    # The checksum is on disk before the shard: a shard in place always has one.
+    writing.atomic_write(
+        final, data, before_replace=lambda: record_checksum(directory, shard.name, data)
+    )
     return final
 
 
@@ -813,17 +740,3 @@ def remove_stale_temporaries(directory: Path) -> int:
             p.unlink(missing_ok=True)
             removed += 1
     return removed
-
-
-def _sync_directory(directory: Path) -> None:
-    # Make the rename itself durable (POSIX); not possible (nor needed) on every platform.
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)

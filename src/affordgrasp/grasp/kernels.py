@@ -29,7 +29,7 @@ from ..hands.kinematics import (
     mul4_into,
     shape_poses,
 )
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HandError
+from ..runtime.writing import atomic_write
 from .model import Dof, Finger, Hand, Joint, Link, Shape
 
 FORMATS = (".json", ".toml")
@@ -266,8 +267,7 @@ def save_hand(hand: Hand, path: str | os.PathLike) -> Path:
         text = json.dumps(hand_to_dict(hand), indent=1)
     else:
         text = hand_to_toml(hand)
-    path.write_text(text, encoding="utf-8")
-    return path
+    return atomic_write(path, text.encode("utf-8"))
 
 
 def load_hand(path: str | os.PathLike) -> Hand:

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import InputError
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
 from .plan import FUSED_VIEWS, OFFSET_RANGE, fuse_candidate_views
 from .plan import VIEWS as ARCH
 from .targets import Target, make_target
@@ -303,7 +303,7 @@ class FusedViews:
         return rows
 
     def _in_workers(self, dataset, jobs: list) -> list[np.ndarray]:
-        from ..dataset.engines import process_pool, stop_pool
+        from ..runtime.engines import process_pool, stop_pool
 
         pool = process_pool(min(self.workers, len(jobs)))
         try:

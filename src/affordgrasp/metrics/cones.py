@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import InputError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from ..tolerances import CONE_AXIS_SWITCH
 
 # before the first @njit of the metrics: every kernel module imports this one first

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .cones import contact_wrenches, wrench_matrix_kernel
 from .hull import (
     HULL_DEGENERATE,

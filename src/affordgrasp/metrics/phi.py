@@ -45,7 +45,7 @@ from numba import njit
 
 from ..columns import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS
 from ..errors import InputError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .discharge import discharge
 from .effort import (

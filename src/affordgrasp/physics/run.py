@@ -8,7 +8,7 @@ fsync, rename) by the calling process when its rows come back; a run skips every
 already there with the planned row count. ``_physics.json`` records the plan and the
 settings; a run against a directory with another plan refuses and says what differs.
 
-The shards run on the engines that generate uses (:mod:`affordgrasp.dataset.engines`: this
+The shards run on the engines that generate uses (:mod:`affordgrasp.runtime.engines`: this
 process, local worker processes or Ray, every core by default), with the same stopping
 behaviour: the caller resolves each object once (:meth:`~affordgrasp.dataset.handle.Dataset.object`)
 and decomposes it, and the workers get its mesh, mass properties and convex parts in the
@@ -36,7 +36,7 @@ from ..dataset.handle import Dataset
 from ..errors import DatasetError, InputError, bad_parameter
 from ..hands.model import Hand
 from ..robust import RobustSettings, robust_column_names, robust_settings
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
 from .settings import PhysicsSettings
 
 log = logging.getLogger(__name__)
@@ -311,7 +311,7 @@ def run_physics(
     again resumes. Local workers are started with 'spawn': a script calling this with
     ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
     """
-    from ..dataset.engines import check_engine, default_workers
+    from ..runtime.engines import check_engine, default_workers
 
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
@@ -346,7 +346,7 @@ def run_physics(
     }
     # Resolve and decompose each object once, here: the workers get its mesh, mass
     # properties and convex parts (as generate's get its mesh), never its files or caches.
-    from ..dataset.engines import ObjectPayload
+    from ..dataset.jobs import ObjectPayload
 
     payloads, parts = {}, {}
     for name in [o for o in dataset.objects if o in needed]:
@@ -385,7 +385,8 @@ def run_physics(
 
 def _run_jobs(context, jobs, out: Path, summary, advance, engine, workers, address) -> None:
     """Run the shards' jobs on an engine; write each shard as its rows come back."""
-    from ..dataset.engines import make_engine, stop_on_signals
+    from ..runtime.engines import make_engine
+    from ..runtime.interrupts import stop_on_signals
 
     with (
         stop_on_signals(),

@@ -43,7 +43,7 @@ from ..errors import InputError, bad_parameter, did_you_mean
 from ..objects import load_object
 from ..pairs import PairSearch, best_pairs, optimize_pairs
 from ..pipeline import evaluate_samples
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
 from .judges import TASK_FAMILIES, scored, working_end_box
 
 logger = logging.getLogger(__name__)

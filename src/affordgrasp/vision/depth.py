@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..grasp.pregrasp import validate_pregrasps
+from ..runtime.writing import atomic_write
 from .camera import DepthCamera, ObjectFrame, camera_poses
 from .engines import EmbreeEngine, PacketEngine, RasterEngine
 
@@ -311,7 +312,7 @@ def save_depth_png(path, depth: np.ndarray, *, scale: int = 1) -> None:
     rgb = depth_to_rgb(depth)
     if scale > 1:
         rgb = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
-    mpimg.imsave(str(path), rgb)
+    atomic_write(path, lambda fh: mpimg.imsave(fh, rgb, format="png"))
 
 
 def depth_manifest(camera: DepthCamera | None = None) -> dict:

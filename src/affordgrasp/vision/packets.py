@@ -25,7 +25,7 @@ import os
 import numpy as np
 from numba import njit, types
 
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

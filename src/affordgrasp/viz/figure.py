@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..runtime.writing import atomic_write
+
 DPI = 100
 
 
@@ -55,8 +57,10 @@ def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     kwargs = {"bbox_inches": "tight", "pad_inches": 0.1} if tight else {}
-    fig.savefig(path, format="png", dpi=DPI, metadata={"Software": None}, **kwargs)
-    return path
+    return atomic_write(
+        path,
+        lambda fh: fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": None}, **kwargs),
+    )
 
 
 def figure_pixels(fig) -> np.ndarray:
@@ -100,8 +104,7 @@ def save_image(rgb: np.ndarray, path: str | os.PathLike, *, colors: int | None =
         image = image.quantize(
             colors=int(colors), method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
         )
-    image.save(path, format="PNG", optimize=True)
-    return path
+    return atomic_write(path, lambda fh: image.save(fh, format="PNG", optimize=True))
 
 
 def png_bytes(rgb: np.ndarray, *, max_px: int | None = None) -> bytes:

@@ -1,4 +1,4 @@
-"""The settings of the processes affordgrasp owns (affordgrasp.process_tuning)."""
+"""The settings of the processes affordgrasp owns (affordgrasp.runtime.process_tuning)."""
 
 import os
 import subprocess
@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 import affordgrasp
-from affordgrasp import process_tuning
+from affordgrasp.runtime import process_tuning
 
 SRC = str(Path(affordgrasp.__file__).resolve().parents[1])
 GLIBC = sys.platform.startswith("linux") and os.confstr("CS_GNU_LIBC_VERSION").startswith("glibc")
@@ -18,7 +18,7 @@ GLIBC = sys.platform.startswith("linux") and os.confstr("CS_GNU_LIBC_VERSION").s
 CHURN = """
 import resource, sys
 import numpy as np
-from affordgrasp.process_tuning import keep_freed_memory
+from affordgrasp.runtime.process_tuning import keep_freed_memory
 taken = keep_freed_memory() if sys.argv[1] == "keep" else None
 
 def batch():

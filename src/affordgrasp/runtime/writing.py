@@ -1,22 +1,26 @@
 """Writing files safely: output paths checked before the work, files replaced atomically.
 
 ``check_output_path`` is what every command that writes calls on its ``--out`` before it
-starts (so an unwritable path costs a second, not the run); ``atomic_write`` is how a file
-is written: into a temporary name in the same folder, synced, then renamed over the target,
-the temporary removed whatever happens (an error, Ctrl-C, SIGTERM).
+starts (so an unwritable path costs a second, not the run); ``atomic_write`` is how every
+file of the package is written: into a temporary name in the same folder, synced, then
+renamed over the target, the temporary removed whatever happens (an error, Ctrl-C,
+SIGTERM). A full disk, a quota, a read-only file system or any other refusal of the file
+system is an :class:`~affordgrasp.errors.InputError` naming the path (the command exits 2
+with one line), and nothing is left behind.
 """
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO
 
-from .errors import InputError
+from ..errors import InputError
 
-__all__ = ["atomic_write", "check_output_path", "temporary_name"]
+__all__ = ["atomic_write", "check_output_path", "temporary_name", "write_error", "write_file"]
 
 
 def check_output_path(
@@ -123,6 +127,57 @@ def temporary_name(path: str | os.PathLike) -> Path:
     return p.with_name(f".{p.name}.tmp-{os.getpid()}")
 
 
+def write_file(
+    path: str | os.PathLike,
+    content: bytes | Callable[[BinaryIO], object],
+    *,
+    fsync: bool = True,
+) -> None:
+    """Write a file in place (the one place the package's files are opened for writing).
+
+    Parameters
+    ----------
+    path : str or path-like
+    content : bytes or callable
+        The bytes, or ``write(fh)`` that writes them to a binary file object.
+    fsync : bool
+        Sync the data to the disk before returning.
+    """
+    with open(path, "wb") as fh:
+        if isinstance(content, (bytes, bytearray, memoryview)):
+            fh.write(content)
+        else:
+            content(fh)
+        if fsync:
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
+def write_error(path: str | os.PathLike, exc: OSError) -> InputError:
+    """A one-line InputError for a failed write, naming the path, the reason and the fix.
+
+    Parameters
+    ----------
+    path : str or path-like
+        What could not be written.
+    exc : OSError
+        Why (no space, a quota, no permission, a read-only file system...).
+
+    Returns
+    -------
+    InputError
+        Not raised.
+    """
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        fix = "free some space or write elsewhere"
+    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        fix = "make it writable or write elsewhere"
+    else:
+        fix = "check the disk and the path, or write elsewhere"
+    return InputError(f"cannot write {str(path)!r}: {reason}; {fix}")
+
+
 def atomic_write(
     path: str | os.PathLike,
     content: bytes | Callable[[BinaryIO], object],
@@ -139,7 +194,7 @@ def atomic_write(
     content : bytes or callable
         The bytes, or ``write(fh)`` that writes them to a binary file object.
     fsync : bool
-        Sync the data to the disk before the rename (survives a power cut).
+        Sync the data, and then the folder's entry, to the disk (survives a power cut).
     before_replace : callable, optional
         Called after the data is written and before the rename (e.g. to record a checksum).
 
@@ -150,25 +205,37 @@ def atomic_write(
 
     Raises
     ------
-    OSError
-        As the file system raised it; the temporary file is removed first (also on
-        KeyboardInterrupt).
+    InputError
+        When the file system refuses the write (:func:`write_error`); the temporary file is
+        removed first, as it is on any other exception (KeyboardInterrupt included).
     """
     target = Path(path)
     tmp = temporary_name(target)
     try:
-        with open(tmp, "wb") as fh:
-            if isinstance(content, (bytes, bytearray, memoryview)):
-                fh.write(content)
-            else:
-                content(fh)
-            if fsync:
-                fh.flush()
-                os.fsync(fh.fileno())
+        write_file(tmp, content, fsync=fsync)
         if before_replace is not None:
             before_replace()
         os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):  # a read-only file system refuses even this
+            tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise write_error(target, exc) from exc
         raise
+    if fsync:
+        _sync_directory(target.parent)
     return target
+
+
+def _sync_directory(directory: Path) -> None:
+    # Make the rename itself durable (POSIX); not possible (nor needed) on every platform.
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

@@ -20,7 +20,7 @@ from terminal import as_in_a_terminal
 import affordgrasp
 from affordgrasp import cli
 from affordgrasp.errors import Interrupted
-from affordgrasp.interrupts import interrupt_in
+from affordgrasp.runtime.interrupts import interrupt_in
 
 SRC = Path(affordgrasp.__file__).resolve().parents[1]
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import affordgrasp.metrics  # noqa: F401 - installs the locator
-from affordgrasp.metrics import kernel_cache
 from affordgrasp.metrics.epsilon import epsilon_kernel
+from affordgrasp.runtime import kernel_cache
 
 
 def test_stamp_follows_every_kernel_source(tmp_path):

@@ -12,7 +12,7 @@ import contextlib
 import signal
 import threading
 
-from .errors import Interrupted
+from ..errors import Interrupted
 
 __all__ = ["STOP_SIGNALS", "interrupt_in", "stop_on_signals"]
 

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import errno
+import io
 import os
+from pathlib import Path
 
 import pytest
 
+from affordgrasp.cli import main
 from affordgrasp.errors import InputError
-from affordgrasp.writing import atomic_write, check_output_path, temporary_name
+from affordgrasp.runtime import writing
+from affordgrasp.runtime.writing import atomic_write, check_output_path, temporary_name
 
 
 def test_file_paths(tmp_path):
@@ -65,3 +70,57 @@ def test_atomic_write_replaces_whole_or_not_at_all(tmp_path):
     assert path.read_bytes() == b"new"
     assert sorted(os.listdir(tmp_path)) == ["f.bin"]
     assert temporary_name(path).name == f".f.bin.tmp-{os.getpid()}"
+
+
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EDQUOT, errno.EROFS])
+def test_a_refused_write_is_an_input_error_naming_the_path_and_leaves_nothing(
+    tmp_path, monkeypatch, code
+):
+    path = tmp_path / "f.bin"
+    atomic_write(path, b"old")
+
+    def refused(fd):
+        raise OSError(code, os.strerror(code))
+
+    monkeypatch.setattr(os, "fsync", refused)  # the data reaches the disk: it is full
+    with pytest.raises(InputError) as error:
+        atomic_write(path, b"new" * 1000)
+    message = str(error.value)
+    assert repr(str(path)) in message and os.strerror(code) in message, message
+    assert "\n" not in message
+    assert path.read_bytes() == b"old"
+    assert sorted(os.listdir(tmp_path)) == ["f.bin"]
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["depth", "knife", "--sample", "0", "-o", "{out}/knife.npy"],
+        ["depth", "knife", "--sample", "0", "-o", "{out}/knife.png"],
+        ["objects", "export", "knife", "-o", "{out}/knife.stl"],
+    ],
+)
+def test_a_command_on_a_full_disk_exits_2_naming_the_file_and_leaves_nothing(
+    tmp_path, monkeypatch, capsys, command
+):
+    out = tmp_path / "out"
+    out.mkdir()
+    real_write = writing.write_file
+
+    def full_disk(path, content, fsync=True):
+        if not Path(path).is_relative_to(out):  # the object cache: a disk with room
+            return real_write(path, content, fsync=fsync)
+        buffer = io.BytesIO()
+        content(buffer) if callable(content) else buffer.write(content)
+        with open(path, "wb") as fh:
+            fh.write(buffer.getvalue()[: len(buffer.getvalue()) // 2])  # what a full disk leaves
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(writing, "write_file", full_disk)
+    argv = [a.format(out=out) for a in command]
+    assert main(argv) == 2
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(lines) == 1, lines
+    assert argv[-1] in lines[0] and "No space left on device" in lines[0], lines[0]
+    assert "shards" not in lines[0]
+    assert list(out.iterdir()) == []

@@ -1,306 +1,43 @@
-"""Where simulations run: this process, local worker processes or Ray (conventions: Datasets).
+"""Where a run's jobs run: this process, local worker processes or Ray.
 
-Every engine runs the same unit of work, a :class:`Job` (a range of seeded samples, or given
-inputs, of one object), through the same function, :func:`run_job`, and hands the resulting
-Arrow table back to the caller, which alone writes files. So the output does not depend on the
-engine or on the number of workers; only where the computing happens changes.
+Every engine runs the same unit of work, a job of the run's *context* (any picklable object
+with a ``key`` and a ``run(job)`` method), through the same function, :func:`run_job`, and
+hands what it returns back to the caller, which alone writes files. So the output does not
+depend on the engine or on the number of workers; only where the computing happens changes.
+The stages bring their contexts: grasp evaluation's
+(:class:`affordgrasp.dataset.jobs.RunContext`: generate, optimise) and the physics replay's
+get the same engines, defaults and stopping behaviour.
 
-A run's context says what its jobs do: :class:`RunContext` evaluates grasps (generate,
-optimise); another stage brings its own context (any picklable object with a ``key`` and a
-``run(job)`` method, e.g. the physics replay's) and gets the same engines, defaults and
-stopping behaviour.
-
-Workers never resolve object specs: the caller resolves each object once and ships its
-mesh (:class:`ObjectPayload`); a worker rebuilds the object and checks its mesh hash. So a
-cluster's machines need affordgrasp installed, but neither the mesh files nor the time to
-build and repair procedural objects.
+The context is sent once to each worker (a Ray task's context once to the object store).
+Workers leave Ctrl-C and a terminal's hangup to the process that started them, which stops
+them (:func:`stop_pool`), and end with it (:mod:`.worker_lifetime`), ``kill -9`` included.
+:func:`process_pool` is the same pool for a stage that submits plain functions.
 """
 
 from __future__ import annotations
 
 import contextlib
-import logging
 import os
 import signal
 import socket
 import threading
 import time
-import uuid
-from collections import OrderedDict
-from dataclasses import dataclass, field
 
-import numpy as np
-import pyarrow as pa
-
-from ..errors import InputError, InternalError, bad_parameter, require
-from ..hands import Hand
-from ..interrupts import STOP_SIGNALS, stop_on_signals  # noqa: F401 - callers import them here
-from ..process_tuning import keep_freed_memory
-from ..robust import RobustSettings
-from ..worker_lifetime import Reaper, die_with_parent
-
-log = logging.getLogger(__name__)
+from ..errors import InputError, bad_parameter, require
+from .interrupts import STOP_SIGNALS
+from .process_tuning import keep_freed_memory
+from .worker_lifetime import Reaper, die_with_parent
 
 ENGINES = ("local", "ray")
 
-
-@dataclass(frozen=True)
-class ObjectPayload:
-    """What a worker needs to rebuild a resolved object exactly.
-
-    Attributes
-    ----------
-    name, category, source : str
-        As the object's (:class:`~affordgrasp.objects.GraspObject`).
-    density : float
-        kg/m^3 (mean density).
-    mesh_hash : str
-        Checked again by the worker.
-    vertices : (v, 3) float64 ndarray
-        The prepared mesh as resolved, m.
-    faces : (f, 3) int64 ndarray
-    face_parts : (f,) int8 ndarray or None
-        Semantic part of each face (procedural families).
-    part_names : tuple of str
-        The names the part labels index.
-    mass : MassProperties or None
-        As resolved (unit density, or a family's materials); None: uniform at ``density``.
-    materials : bool
-        Whether ``mass`` follows the family's per-part materials.
-    """
-
-    name: str
-    category: str
-    source: str
-    density: float
-    mesh_hash: str
-    vertices: np.ndarray
-    faces: np.ndarray
-    face_parts: np.ndarray | None = None
-    part_names: tuple[str, ...] = ()
-    # the resolved mass properties, so that the workers use the same ones
-    mass: object | None = None
-    materials: bool = False
-
-    @classmethod
-    def from_object(cls, obj) -> ObjectPayload:
-        """The payload of a resolved object.
-
-        Parameters
-        ----------
-        obj : GraspObject
-
-        Returns
-        -------
-        ObjectPayload
-        """
-        return cls(
-            name=obj.name,
-            category=obj.category,
-            source=obj.source,
-            density=float(obj.mass.density),
-            mesh_hash=obj.mesh_hash,
-            vertices=np.ascontiguousarray(obj.vertices, dtype=np.float64),
-            faces=np.ascontiguousarray(obj.faces, dtype=np.int64),
-            face_parts=getattr(obj, "face_parts", None),
-            part_names=tuple(getattr(obj, "part_names", ())),
-            mass=obj.mass,
-            materials=bool(getattr(obj, "materials", False)),
-        )
-
-    def build(self):
-        """The GraspObject again, with the same mesh bytes (checked by hash).
-
-        Returns
-        -------
-        GraspObject
-
-        Raises
-        ------
-        InternalError
-            When the mesh arrived changed.
-        """
-        from ..objects import GraspObject, mass_properties, mesh_hash
-        from ..objects.prepared import MeshData
-
-        # arrays, not a trimesh.Trimesh: the worker builds one only if something needs it
-        mesh = MeshData(self.vertices, self.faces, self.mesh_hash)
-        digest = mesh_hash(mesh)
-        if digest != self.mesh_hash:  # pragma: no cover - a transport error
-            raise InternalError(f"object {self.name!r} arrived with a different mesh hash")
-        return GraspObject(
-            name=self.name,
-            category=self.category,
-            mesh=mesh,
-            mass=self.mass
-            if self.mass is not None
-            else mass_properties(mesh.to_trimesh(), density=self.density),
-            mesh_hash=digest,
-            source=self.source,
-            face_parts=self.face_parts,
-            part_names=self.part_names,
-            materials=self.materials,
-        )
+# Per process: the context of the current run (a worker's, installed once).
+_CONTEXT = None
 
 
-@dataclass(frozen=True)
-class RunContext:
-    """The settings every job of a run shares (sent once to each worker).
-
-    Attributes
-    ----------
-    objects : tuple of ObjectPayload
-        The run's objects, by index.
-    hand : Hand or str
-        The Hand itself, not its name: a custom hand travels to the workers as it is (a name
-        would be looked up again there, and a custom hand named "barrett" replaced).
-    seed : int
-        The run's seed.
-    object_seeds : tuple of int, optional
-        Each object's sample seed, by index (a run with per-object streams); None: every
-        object draws from ``seed``.
-    metrics, soft, depth : bool
-        Metric columns, soft-finger contacts, depth images.
-    volume : bool
-        Compute the GWS volume (``gws_volume``; null otherwise).
-    key : str
-        Identifies the run, so that a worker process rebuilds its objects once per run.
-    """
-
-    objects: tuple[ObjectPayload, ...]
-    # The Hand itself, not its name: a custom hand travels to the workers as it is (a name
-    # would be looked up again there, and a custom hand named "barrett" replaced).
-    hand: Hand | str = "barrett"
-    seed: int = 0
-    object_seeds: tuple[int, ...] | None = None
-    metrics: bool = True
-    soft: bool = False
-    depth: bool = False
-    volume: bool = False
-    robust: RobustSettings | None = None
-    key: str = field(default_factory=lambda: uuid.uuid4().hex)
-
-    def seed_of(self, object_index: int) -> int:
-        """The seed object ``object_index`` draws its samples from.
-
-        Parameters
-        ----------
-        object_index : int
-            Index into :attr:`objects`.
-
-        Returns
-        -------
-        int
-            Its entry of ``object_seeds``, or the run's seed when the run shares one stream.
-        """
-        if self.object_seeds is None:
-            return self.seed
-        return self.object_seeds[object_index]
-
-    def run(self, job: Job) -> pa.Table:
-        """Evaluate one job (in the process this context is installed in).
-
-        Parameters
-        ----------
-        job : Job
-
-        Returns
-        -------
-        pyarrow.Table
-            One row per sample (``dataset_schema``), with ``depth_mm`` when the run renders
-            depth.
-        """
-        from ..pipeline import evaluate_inputs, evaluate_samples
-
-        _install_context(self)  # its objects are rebuilt once per process
-        ctx = self
-        obj = _object(job.object_index)
-        seed = ctx.seed_of(job.object_index)
-        if job.p0 is None:
-            table = evaluate_samples(
-                obj,
-                job.n,
-                seed=seed,
-                start=job.start,
-                hand=ctx.hand,
-                soft=ctx.soft,
-                metrics=ctx.metrics,
-                volume=ctx.volume,
-                robust=ctx.robust,
-            ).table
-        else:
-            table = evaluate_inputs(
-                obj,
-                job.p0,
-                job.use_dir,
-                hand=ctx.hand,
-                seed=seed,
-                sample_start=job.start,
-                soft=ctx.soft,
-                metrics=ctx.metrics,
-                volume=ctx.volume,
-                robust=ctx.robust,
-            ).table
-        if ctx.depth:
-            from ..vision.depth import depth_column
-
-            table = table.append_column(*depth_column(obj, table))
-        return table
-
-
-@dataclass(frozen=True)
-class Job:
-    """Samples ``start .. start+n-1`` of object ``object_index``.
-
-    Attributes
-    ----------
-    object_index : int
-        Index into :attr:`RunContext.objects`.
-    start : int
-        Number of the first sample.
-    n : int
-        Samples in the job.
-    p0 : (n, 6) float ndarray or None
-        Given pregrasps (the optimiser); None: the run's seeded uniform samples (the
-        generator).
-    use_dir : (n, 2) float ndarray or None
-        Given use directions, with ``p0``.
-    """
-
-    object_index: int
-    start: int
-    n: int
-    p0: np.ndarray | None = None
-    use_dir: np.ndarray | None = None
-
-
-# Per process: the context of the current run and its most recently used rebuilt objects.
-# Bounded: a run of a thousand objects would otherwise keep every prepared object (its
-# surface samples, acceleration structures and Embree scenes) alive in every worker. Jobs
-# come object by object (shards are planned object-major), so a worker holds at most a few
-# objects at once and rebuilds none of them.
-_CONTEXT: RunContext | None = None
-_OBJECTS: OrderedDict[int, object] = OrderedDict()
-_KEEP_OBJECTS = 8
-
-
-def _install_context(context: RunContext) -> None:
+def _install_context(context) -> None:
     global _CONTEXT
     if _CONTEXT is None or _CONTEXT.key != context.key:
         _CONTEXT = context
-        _OBJECTS.clear()
-
-
-def _object(index: int):
-    obj = _OBJECTS.get(index)
-    if obj is None:
-        obj = _CONTEXT.objects[index].build()
-        _OBJECTS[index] = obj
-        while len(_OBJECTS) > _KEEP_OBJECTS:
-            _OBJECTS.popitem(last=False)
-    else:
-        _OBJECTS.move_to_end(index)
-    return obj
 
 
 def run_job(job, context=None):
@@ -308,17 +45,16 @@ def run_job(job, context=None):
 
     Parameters
     ----------
-    job : Job or object
+    job : object
         A unit of work of the installed context.
-    context : RunContext or object, optional
+    context : object, optional
         Installed first when given (a worker started without it, or the inline engine):
         anything with a ``key`` (str) and a ``run(job)`` method.
 
     Returns
     -------
     object
-        ``context.run(job)``: for a :class:`RunContext`, one row per sample
-        (``dataset_schema``), with ``depth_mm`` when the run renders depth.
+        ``context.run(job)``.
     """
     if context is not None:
         _install_context(context)
@@ -336,7 +72,7 @@ def _detach_worker(parent_pid: int | None = None) -> None:
     keep_freed_memory()
 
 
-def _worker_init(context: RunContext, parent_pid: int | None = None) -> None:
+def _worker_init(context, parent_pid: int | None = None) -> None:
     _detach_worker(parent_pid)
     _install_context(context)
 
@@ -409,17 +145,18 @@ def default_workers() -> int:
 
 
 class Engine:
-    """Submit jobs, wait for some to finish, collect their tables, stop."""
+    """Submit jobs, wait for some to finish, collect their results, stop."""
 
     workers: int = 1
     name: str = ""
 
-    def submit(self, job: Job):
+    def submit(self, job):
         """Start a job.
 
         Parameters
         ----------
-        job : Job
+        job : object
+            A unit of work of the engine's context.
 
         Returns
         -------
@@ -454,7 +191,7 @@ class Engine:
         Returns
         -------
         object
-            What the context's ``run(job)`` returned (a table, for a :class:`RunContext`).
+            What the context's ``run(job)`` returned.
         """
         raise NotImplementedError
 
@@ -480,22 +217,22 @@ class InlineEngine(Engine):
 
     Parameters
     ----------
-    context : RunContext
+    context : object
     """
 
     name = "local"
 
-    def __init__(self, context: RunContext):
+    def __init__(self, context):
         self.context = context
         self.workers = 1
 
-    def submit(self, job: Job):
+    def submit(self, job):
         return _Done(run_job(job, self.context))
 
     def wait(self, handles: list) -> list:
         return list(handles)
 
-    def result(self, handle) -> pa.Table:
+    def result(self, handle):
         return handle.table
 
 
@@ -504,7 +241,7 @@ class _Done:
 
     __slots__ = ("table",)
 
-    def __init__(self, table: pa.Table):
+    def __init__(self, table):
         self.table = table
 
 
@@ -513,7 +250,7 @@ class LocalEngine(Engine):
 
     Parameters
     ----------
-    context : RunContext
+    context : object
         Sent once to each worker.
     workers : int
         Processes.
@@ -521,11 +258,11 @@ class LocalEngine(Engine):
 
     name = "local"
 
-    def __init__(self, context: RunContext, workers: int):
+    def __init__(self, context, workers: int):
         self.workers = workers
         self._pool = process_pool(workers, _worker_init, (context, os.getpid()))
 
-    def submit(self, job: Job):
+    def submit(self, job):
         return self._pool.submit(run_job, job)
 
     def wait(self, handles: list) -> list:
@@ -534,7 +271,7 @@ class LocalEngine(Engine):
         done, _ = wait(handles, return_when=FIRST_COMPLETED)
         return list(done)
 
-    def result(self, handle) -> pa.Table:
+    def result(self, handle):
         return handle.result()
 
     def close(self, cancel: bool = False) -> None:
@@ -671,7 +408,7 @@ def _init_with_deadline(ray, kwargs: dict) -> None:
         )
 
 
-def _ray_run_job(context: RunContext, job: Job) -> pa.Table:
+def _ray_run_job(context, job):
     keep_freed_memory()  # a Ray worker runs our jobs one after another
     return run_job(job, context)
 
@@ -681,7 +418,7 @@ class RayEngine(Engine):
 
     Parameters
     ----------
-    context : RunContext
+    context : object
         Put in Ray's object store once.
     workers : int or None
         CPUs of a local Ray (default: every core); a cluster's CPUs otherwise.
@@ -691,7 +428,7 @@ class RayEngine(Engine):
 
     name = "ray"
 
-    def __init__(self, context: RunContext, workers: int | None, address: str | None):
+    def __init__(self, context, workers: int | None, address: str | None):
         ray = require("ray", "cluster")
         self._ray = ray
         self._started = False
@@ -725,7 +462,7 @@ class RayEngine(Engine):
         self._context_ref = ray.put(context)
         self._remote = ray.remote(num_cpus=1, max_retries=2)(_ray_run_job)
 
-    def submit(self, job: Job):
+    def submit(self, job):
         return self._remote.remote(self._context_ref, job)
 
     def wait(self, handles: list) -> list:
@@ -734,7 +471,7 @@ class RayEngine(Engine):
         more, _ = self._ray.wait(handles, num_returns=len(handles), timeout=0)
         return list({h: None for h in [*done, *more]})
 
-    def result(self, handle) -> pa.Table:
+    def result(self, handle):
         return self._ray.get(handle)
 
     def close(self, cancel: bool = False) -> None:
@@ -778,7 +515,7 @@ def check_engine(engine: str, workers: int | None, address: str | None) -> None:
 
 
 def make_engine(
-    context: RunContext,
+    context,
     *,
     engine: str = "local",
     workers: int | None = None,
@@ -788,7 +525,7 @@ def make_engine(
 
     Parameters
     ----------
-    context : RunContext
+    context : object
     engine : str
         ``"local"`` or ``"ray"``.
     workers : int, optional
