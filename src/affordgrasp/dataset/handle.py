@@ -522,7 +522,10 @@ def object_specs(
 
     if source == "family":
         return [name]
-    scan = split_scan_spec(name)
+    try:  # a file's own name may hold "~scan" (knife~scan.stl): a file, not a variant
+        scan = None if name == Path(str(source)).name else split_scan_spec(name)
+    except InputError:
+        scan = None
     suffix = ""
     if scan is not None:
         suffix = SCAN_SUFFIX + ("" if scan[1] is None else f":{scan[1]}")
