@@ -32,6 +32,7 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
@@ -718,21 +719,13 @@ def shard_foreign(
     seed = int(entry.get("seed", manifest["seed"]))
     try:
         stat = path.stat()
-        key = (
-            str(path),
-            stat.st_size,
-            stat.st_mtime_ns,
-            shard,
-            seed,
-            entry.get("mesh_hash"),
-            exact,
-        )
+        key = (path, stat.st_size, stat.st_mtime_ns, shard, seed, entry.get("mesh_hash"), exact)
         if key in _AS_PLANNED:
             return None
         file = pq.ParquetFile(path)
         meta = file.metadata
     except (OSError, pa.ArrowException) as exc:
-        return f"it cannot be read as Parquet ({str(exc).splitlines()[0] if str(exc) else exc})"
+        return f"it cannot be read as Parquet ({' '.join(str(exc).split())})"
     try:
         info = json.loads((meta.metadata or {}).get(SHARD_META_KEY, b"null"))
     except ValueError:
@@ -759,19 +752,20 @@ def shard_foreign(
     try:
         rows = file.read(columns=list(REQUIRED_KEYS))
     except (OSError, pa.ArrowException) as exc:
-        return f"its rows cannot be read ({str(exc).splitlines()[0] if str(exc) else exc})"
+        return f"its rows cannot be read ({' '.join(str(exc).split())})"
     for column, value, what in (
         ("object", entry["name"], "object"),
         ("object_hash", entry.get("mesh_hash"), "mesh (object_hash)"),
         ("seed", seed, "seed"),
     ):
-        found = sorted(set(rows.column(column).to_pylist()), key=str)
+        found = sorted(rows.column(column).unique().to_pylist(), key=str)
         if value is not None and found != [value]:
             return (
                 f"its rows are of {what} {', '.join(map(str, found[:3]))}, "
                 f"the dataset's {entry['name']!r} of {value} (it belongs to another dataset)"
             )
-    if rows.column("sample").to_pylist() != list(range(shard.start, shard.stop)):
+    samples = rows.column("sample").to_numpy()
+    if not np.array_equal(samples, np.arange(shard.start, shard.stop)):
         return f"its rows are not samples {shard.start} to {shard.stop - 1} in order"
     _AS_PLANNED.add(key)
     return None
