@@ -117,6 +117,10 @@ def _cases() -> list[Case]:
     inf_v[5, 2] = np.inf
 
     ok_box = {"volume": CUBE_VOLUME}
+    seam_v, seam_f = _seam_ball()
+    ball = trimesh.Trimesh(seam_v, seam_f)
+    ball.merge_vertices(digits_vertex=3)  # the seam welded: the sphere it stands for
+    three = trimesh.Scene([_box(), _box(offset=(2 * CUBE, 0, 0)), _box(offset=(4 * CUBE, 0, 0))])
     return [
         # ------------------------------------------------------------ formats and files
         Case("cube.obj", "format", "ok", _write(box, "cube.obj"), **ok_box),
@@ -240,6 +244,28 @@ def _cases() -> list[Case]:
             volume=CUBE_VOLUME * 7 / 8,
         ),
         Case(
+            "sphere seam written twice, mm",
+            "geometry",
+            "ok",
+            _raw("seam.off", _off(seam_v, seam_f)),
+            ["--units", "mm"],
+            volume=ball.volume * 1e-9,
+        ),
+        Case(
+            "three separate bodies",
+            "geometry",
+            "ok",
+            _raw("three.glb", three.export(file_type="glb")),
+            volume=3 * CUBE_VOLUME,
+        ),
+        Case(
+            "mesh file named like a scan variant",
+            "format",
+            "ok",
+            _write(box, "knife~scan.stl"),
+            **ok_box,
+        ),
+        Case(
             "sphere",
             "geometry",
             "ok",
@@ -332,6 +358,7 @@ def _cases() -> list[Case]:
             refusal="did you mean 'hammer'",
         ),
         Case("bad family seed", "arguments", "refused", lambda d: "knife:abc", refusal="seed"),
+        Case("scan variant, its own seed", "arguments", "ok", lambda d: "knife~scan:2"),
         Case("unknown task", "arguments", "refused", lambda d: "knife", ["--task", "hamering"]),
         Case("unknown mode", "arguments", "refused", lambda d: "knife", ["--mode", "strict"]),
         Case("unknown hand", "arguments", "refused", lambda d: "knife", ["--hand", "shadow"]),
@@ -339,6 +366,23 @@ def _cases() -> list[Case]:
         Case("negative seed", "arguments", "refused", lambda d: "knife", ["--seed", "-1"]),
         Case("--out is a folder", "arguments", "refused", lambda d: "knife", ["--out", "."]),
     ]
+
+
+def _seam_ball(radius=40.0, n_lat=12, n_lon=24) -> tuple[np.ndarray, np.ndarray]:
+    """A UV sphere (mm) whose seam meridian is written twice, the copy 1e-5 mm away."""
+    theta = np.pi * np.arange(1, n_lat) / n_lat
+    phi = 2 * np.pi * (np.arange(n_lon + 1) % n_lon) / n_lon
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    rings = radius * np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1)
+    rings[:, -1, 2] += 1e-5
+    index = np.arange((n_lat - 1) * (n_lon + 1)).reshape(n_lat - 1, n_lon + 1)
+    a, b, c, d = index[:-1, :-1], index[:-1, 1:], index[1:, :-1], index[1:, 1:]
+    top, bottom = index.size, index.size + 1
+    faces = [np.stack([a, c, b], -1), np.stack([b, c, d], -1)]
+    faces += [np.stack([np.full(n_lon, top), index[0, :-1], index[0, 1:]], -1)]
+    faces += [np.stack([np.full(n_lon, bottom), index[-1, 1:], index[-1, :-1]], -1)]
+    vertices = np.vstack([rings.reshape(-1, 3), [[0, 0, radius], [0, 0, -radius]]])
+    return vertices, np.vstack([f.reshape(-1, 3) for f in faces])
 
 
 def _shared_edge(box: trimesh.Trimesh) -> list[int]:

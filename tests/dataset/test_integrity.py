@@ -212,3 +212,151 @@ def test_full_disk_while_writing_best_or_an_export_leaves_no_file(
     assert main(["objects", "export", "knife", "-o", str(mesh)]) == 2
     assert "No space left on device" in _one_line(capsys.readouterr().err)
     assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------ the plan's shards: missing, extra, foreign
+
+
+@pytest.fixture(scope="module")
+def other_seed(tmp_path_factory, box_mesh):
+    """The same object and plan under another seed: its shards are not the pristine's."""
+    out = tmp_path_factory.mktemp("integrity-other") / "ds"
+    generate([str(box_mesh)], SAMPLES, out, seed=SEED + 1, workers=1, shard_size=SHARD)
+    return out
+
+
+def _forge(dataset: Path, name: str, data: bytes) -> None:
+    """Put ``data`` under the shard name ``name`` with its checksum line updated to match."""
+    (dataset / name).write_bytes(data)
+    records = [r for r in read_checksums(dataset).values() if r["name"] != name]
+    records.append(
+        {"name": name, "bytes": len(data), layout.CHECKSUM_ALGORITHM: layout.file_checksum(data)}
+    )
+    (dataset / CHECKSUMS_NAME).write_text("".join(json.dumps(r) + "\n" for r in records))
+
+
+def _damage(kind: str, dataset: Path, other: Path) -> str:
+    """Damage ``dataset`` one way; the name of the shard in question."""
+    shards = shard_paths(dataset)
+    if kind == "missing":
+        shards[1].unlink()
+        return shards[1].name
+    if kind == "extra":
+        extra = dataset / "part-00001-000000000000.parquet"
+        shutil.copy(shards[0], extra)
+        return extra.name
+    _forge(dataset, shards[1].name, (other / shards[1].name).read_bytes())
+    return shards[1].name
+
+
+COMMANDS = {
+    "best": lambda d, o: ["best", d, "--task", "pick"],
+    "plots": lambda d, o: ["plots", d, "-o", o / "plots", "--no-tasks"],
+    "show": lambda d, o: ["show", d, "--task", "pick", "-o", o / "show"],
+    "physics": lambda d, o: ["physics", d, "--out", o / "physics", "--workers", "1"],
+    "predict": lambda d, o: ["predict", "default", d, "--out", o / "p.parquet"],
+    "model-eval": lambda d, o: ["model-eval", "default", d],
+    "train": lambda d, o: ["train", d, "--epochs", "1", "-o", o / "m.safetensors"],
+}
+
+
+@pytest.mark.parametrize("kind", ["missing", "extra", "foreign"])
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_every_reader_refuses_a_shard_list_that_is_not_the_plan(
+    kind, command, dataset, other_seed, tmp_path, capsys
+):
+    if command in ("predict", "model-eval", "train"):
+        pytest.importorskip("torch")
+    name = _damage(kind, dataset, other_seed)
+    results = tmp_path / "results"
+    results.mkdir()
+    assert main([str(a) for a in COMMANDS[command](dataset, results)]) == 2
+    err = _one_line(capsys.readouterr().err)
+    assert name in err and "Traceback" not in err, err
+    fix = {
+        "missing": "resume the generation with",
+        "extra": "remove the file",
+        "foreign": "seed",
+    }[kind]
+    assert fix in err, err
+    assert list(results.iterdir()) == []
+
+
+def test_foreign_shards_of_every_kind_are_named(dataset, other_seed, tmp_path, box_mesh):
+    name = shard_paths(dataset)[1].name
+    table = pq.read_table(dataset / name)
+
+    def forged(table) -> bytes:
+        path = tmp_path / "forged.parquet"
+        pq.write_table(table, path)
+        return path.read_bytes()
+
+    no_metrics = table.select(table.schema.names[: table.schema.get_field_index("epsilon")])
+    other_mesh = tmp_path / "other-mesh"
+    generate(["knife"], SAMPLES, other_mesh, seed=SEED, workers=1, shard_size=SHARD)
+    resized = tmp_path / "resized"
+    generate([str(box_mesh)], SAMPLES, resized, seed=SEED, workers=1, shard_size=SHARD // 2)
+    for data, why in (
+        (forged(no_metrics), "missing: epsilon"),
+        (forged(table.replace_schema_metadata({})), "no shard facts"),
+        (forged(table.slice(0, 4)), "rows"),
+        ((other_mesh / name).read_bytes(), "footer says it holds 'knife:0'"),
+        ((resized / name).read_bytes(), "samples 8 to 12"),
+        ((other_seed / name).read_bytes(), "seed"),
+    ):
+        _forge(dataset, name, data)
+        with pytest.raises(DatasetError, match=rf"{name}: .*{why}"):
+            read_dataset(dataset)
+    # Resuming the generation puts the planned shard back.
+    assert _generate(box_mesh, dataset) == 0
+    read_dataset(dataset)
+
+
+def test_a_lost_shard_is_refused_and_resuming_writes_it_again(dataset, pristine, box_mesh):
+    shard_paths(dataset)[0].unlink()
+    with pytest.raises(DatasetError, match="lost the shard part-00000-000000000000"):
+        read_dataset(dataset)
+    assert _generate(box_mesh, dataset) == 0
+    assert read_dataset(dataset).equals(read_dataset(pristine))
+
+
+def test_an_unfinished_dataset_reads_with_a_warning_naming_what_is_missing(dataset, caplog, capsys):
+    # As a run stopped before its last shard leaves it: no file, no checksum, card incomplete.
+    last = shard_paths(dataset)[-1]
+    last.unlink()
+    records = [r for r in read_checksums(dataset).values() if r["name"] != last.name]
+    (dataset / CHECKSUMS_NAME).write_text("".join(json.dumps(r) + "\n" for r in records))
+    card = json.loads((dataset / "_card.json").read_text())
+    (dataset / "_card.json").write_text(json.dumps({**card, "complete": False}))
+    with caplog.at_level("WARNING", logger="affordgrasp"):
+        assert read_dataset(dataset).num_rows == SAMPLES - SHARD
+    assert "unfinished: 1 of its 3 shards (8 of 24 rows)" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="affordgrasp"):
+        assert main(["best", str(dataset), "--task", "pick"]) == 0
+    assert "scanned 16 samples" in capsys.readouterr().out
+    assert "resume the generation" in caplog.text
+
+
+def test_a_dataset_of_the_previous_release_still_opens(box_mesh, tmp_path, caplog):
+    # The previous release: format version 1 (no checksums, no object seeds: every object
+    # drew the run's samples), shards without the columns added since.
+    old = tmp_path / "old"
+    generate([str(box_mesh)], SAMPLES, old, seed=SEED, workers=1, shard_size=SHARD,
+             streams="shared")  # fmt: skip
+    manifest = json.loads((old / "_manifest.json").read_text())
+    for key in ("hand_spec", "materials", "volume", "sample_streams"):
+        manifest.pop(key)
+    for entry in manifest["objects"]:
+        entry.pop("seed")
+    (old / "_manifest.json").write_text(json.dumps({**manifest, "format_version": 1}))
+    (old / CHECKSUMS_NAME).unlink()
+    for p in shard_paths(old):
+        table = pq.read_table(p)
+        pq.write_table(table.drop_columns(sorted(layout.ADDED_COLUMNS)), p)
+    with caplog.at_level("WARNING", logger="affordgrasp"):
+        table = read_dataset(old)
+    assert table.num_rows == SAMPLES and "earlier version" in caplog.text
+    shard_paths(old)[1].unlink()  # the card says the run completed: a lost shard
+    with pytest.raises(DatasetError, match="lost the shard part-00000-000000000008"):
+        read_dataset(old)

@@ -129,6 +129,7 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    from ..dataset.handle import Dataset
     from ..learning.training import TrainSettings
     from .common import check_output_file
 
@@ -155,9 +156,11 @@ def run(args, out) -> None:
     if args.buffer_rows < 1:
         raise InputError(f"--buffer-rows must be >= 1, got {args.buffer_rows}")
     families = args.test_families.split(",") if args.test_families else None
+    dataset = Dataset.open(args.dataset)
+    dataset.arrow()  # a damaged dataset is refused before the progress bar starts
     with _bar(out, settings) as update:
         model, config = train_on_dataset(
-            args.dataset,
+            dataset,
             arch=args.model,
             target=args.target,
             out=args.out,

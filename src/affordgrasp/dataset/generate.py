@@ -411,7 +411,7 @@ def generate(
     infos: dict[Shard, dict] = {}
     checksums = read_checksums(directory)
     for shard in plan:
-        info = valid_shard_info(directory, shard, schema, checksums)
+        info = valid_shard_info(directory, shard, manifest, schema, checksums)
         if info is not None:
             infos[shard] = info
     todo = [s for s in plan if s not in infos]
@@ -460,7 +460,7 @@ def generate(
             checksums = read_checksums(directory)
             for shard in todo:
                 if shard not in infos:
-                    info = valid_shard_info(directory, shard, schema, checksums)
+                    info = valid_shard_info(directory, shard, manifest, schema, checksums)
                     if info is not None:
                         infos[shard] = info
                         written_rows += shard.rows

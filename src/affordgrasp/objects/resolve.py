@@ -29,6 +29,7 @@ import numpy as np
 from affordgrasp.errors import InputError, did_you_mean
 from affordgrasp.objects import family_names
 from affordgrasp.objects.loading import (
+    SUPPORTED_EXTENSIONS,
     _scale_request,
     load_mesh,
     prepare_mesh,
@@ -287,8 +288,11 @@ def load_object(
         raise InputError(
             "the object spec is empty; give a family name (e.g. 'knife', 'knife:7') or a mesh path"
         )
-    # an existing file is a file, whatever its name holds ("mug~scan_v2.ply")
-    scan = None if Path(text).expanduser().exists() else split_scan_spec(text)
+    # an existing file is a file, whatever its name holds ("mug~scan_v2.ply"), and a name
+    # ending in a mesh format's extension names a file ("knife~scan.stl"), missing or not
+    path = Path(text).expanduser()
+    named_file = path.exists() or path.suffix.lower() in SUPPORTED_EXTENSIONS
+    scan = None if named_file else split_scan_spec(text)
     if scan is not None:
         return _resolve_scan(
             scan[0], scan[1], size_m=size_m, units=units, density=density, materials=materials
@@ -304,7 +308,6 @@ def load_object(
             )
         seed = _parse_seed(seed_text, family, text)
         return _resolve_family(family, seed, density, materials, size_m, units)
-    path = Path(text).expanduser()
     if path.exists():
         _refuse_materials_for_file(text, materials)
         return _resolve_file(path, size_m=size_m, units=units, density=density)
