@@ -60,9 +60,3 @@ def test_nothing_ranks():
 def test_bad_counts_are_refused(k):
     with pytest.raises(InputError, match="k"):
         top_indices(np.zeros(3), k)
-
-
-def test_old_import_path_still_works():
-    from affordgrasp.dataset.best import TopRows as Old
-
-    assert Old is TopRows
