@@ -24,7 +24,7 @@ DEFAULT_TASKS = ["pick:default", "cut:default", "cut:no-robustness", "beat:no-ro
 
 def cem_run(spec: str, task: str, mode: str, budget: int, seed: int) -> dict:
     from affordgrasp.objects import load_object
-    from affordgrasp.optimize import optimize
+    from affordgrasp.search.optimize import optimize
 
     try:
         r = optimize(spec, task, mode=mode, budget=budget, seed=seed, workers=1, baseline=False)
@@ -99,11 +99,10 @@ def main() -> None:
     p.add_argument("--json", default=None)
     args = p.parse_args()
 
-    from affordgrasp.dataset.best import task_values
     from affordgrasp.dataset.generate import generate
     from affordgrasp.dataset.reading import read_dataset
+    from affordgrasp.robust import task_scores
     from affordgrasp.runtime.engines import default_workers
-    from affordgrasp.tasks import get_task
 
     started = time.perf_counter()
     summary = generate(args.objects, args.random, args.data, seed=1000, workers=args.workers)
@@ -134,7 +133,7 @@ def main() -> None:
         table = read_dataset(args.data, objects=[name])
         for tm in args.tasks:
             task, mode = tm.split(":")
-            values = task_values(get_task(task), table, mode)
+            values = task_scores(task, table, mode)
             values = np.where(np.isnan(values), -np.inf, values)
             rr = [r for r in obj_runs if r["task"] == task and r["mode"] == mode]
             cem_best = [r["best"] for r in rr if r["best"] is not None]

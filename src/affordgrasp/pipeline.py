@@ -23,7 +23,7 @@ from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
 from .metrics.phi_batch import phi_of_batch
 from .objects import GraspObject, load_object
-from .robust import RobustSettings, robust_columns, robust_settings
+from .robust import RobustSettings, robust_columns, robust_settings, task_scores
 from .schema import append_float_columns, batch_to_table, robust_fields
 
 STAGES = ("simulate", "metrics", "table")  # and "robust" with robust evaluation
@@ -87,15 +87,7 @@ class Evaluation:
         (n,) float64 ndarray
             -inf where the task's thresholds fail.
         """
-        from .tasks import get_task
-
-        if robust:
-            from .robust import ranking_values
-
-            return ranking_values(self.table, task if isinstance(task, str) else task.name)
-
-        task = get_task(task) if isinstance(task, str) else task
-        return task.evaluate(self.table, mode, **thresholds)
+        return task_scores(task, self.table, mode, thresholds, robust=robust)
 
     def to_pandas(self):
         """The table as a pandas DataFrame (needs pandas).

@@ -60,13 +60,14 @@ finite directions::
 The second term lies in [0, 1/K) and ``robust_hold_dirs`` moves in steps of 1/K, so the
 order is exactly lexicographic (counts first, efforts second), and the value reads as "load
 directions held, on average". :func:`ranking_column` names the column a task ranks by in
-robust mode (``robust_hold`` for pick, ``robust_<task>`` otherwise).
+robust mode (``robust_hold`` for pick, ``robust_<task>`` otherwise); :func:`task_scores` is
+the score every search, summary and plot ranks rows by, plain or robust.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
@@ -88,6 +89,7 @@ __all__ = [
     "robust_column_names",
     "robust_columns",
     "robust_settings",
+    "task_scores",
 ]
 
 # Tasks summarised by default (the built-in affordance functions; ``viable`` has its own
@@ -784,3 +786,40 @@ def ranking_values(columns: Any, task: str) -> np.ndarray:
     if hasattr(col, "to_numpy"):
         col = col.to_numpy()
     return np.asarray(col, dtype=np.float64).reshape(-1)
+
+
+def task_scores(
+    task: Any,
+    columns: Any,
+    mode: str = "default",
+    thresholds: Mapping[str, float] | None = None,
+    *,
+    robust: bool = False,
+) -> np.ndarray:
+    """The score rows are ranked by: F_T of ``task``, or with ``robust`` its robust score.
+
+    Parameters
+    ----------
+    task : str or Task
+        A registered name or a :class:`~affordgrasp.tasks.Task`.
+    columns : pyarrow.Table, MetricColumns or mapping of str to (n,) ndarray
+        The rows' columns (only those the task reads are converted).
+    mode : str
+        Threshold mode.
+    thresholds : mapping of str to float, optional
+        Threshold values that replace the mode's.
+    robust : bool
+        The robust ranking score (:func:`ranking_values`: rows evaluated with ``--robust K``);
+        ``mode`` and ``thresholds`` are then those the rows were evaluated with.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        −∞ where a requirement fails; NaN never ranks.
+    """
+    if robust:
+        return ranking_values(columns, task if isinstance(task, str) else task.name)
+    from .tasks import get_task
+
+    task = get_task(task) if isinstance(task, str) else task
+    return np.asarray(task.evaluate(columns, mode, **dict(thresholds or {})), dtype=np.float64)

@@ -162,7 +162,7 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
-    from ..dataset.best import best_grasps, write_best
+    from ..search.best import best_grasps, write_best
 
     if args.out:
         from .common import check_output_file

@@ -76,19 +76,15 @@ def best_rows(
         Task name -> the best sample (None when no row scores above −inf).
     """
     from ..columns import display_value
+    from ..robust import task_scores
     from ..schema import metric_arrays
     from ..search.ranking import best_index
-    from ..tasks import MetricColumns, get_task
+    from ..tasks import MetricColumns
 
     metrics = MetricColumns(metric_arrays(table))
     rows, doc = [], {}
     for name in task_names:
-        if robust:
-            from ..robust import ranking_values
-
-            values = ranking_values(table, name)
-        else:
-            values = get_task(name).evaluate(metrics, mode)
+        values = task_scores(name, table, mode, robust=robust)
         finite = np.isfinite(values)
         if not finite.any():
             rows.append([name, "-", "-inf", *["-"] * len(SHOWN_METRICS)])

@@ -89,7 +89,7 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
-    from ..optimize import optimize
+    from ..search.optimize import optimize
 
     (obj,) = load_objects([args.object], args)
     result = optimize(

@@ -1,4 +1,4 @@
-"""Data at scale (conventions: Datasets): the per-sample schema, generation, reading, argmax.
+"""Data at scale (conventions: Datasets): the per-sample schema, generation, reading.
 
 * ``schema``: the columns of a sample row (conventions: Sample columns);
 * ``generate``: sharded, deterministic, resumable Parquet datasets (``layout`` on disk,
@@ -6,8 +6,9 @@
   card);
 * ``handle``: :class:`Dataset`, a dataset directory opened once (plan, hand, objects,
   rows): what every consumer of a dataset takes;
-* ``reading``: a dataset directory as one Arrow dataset;
-* ``best``: brute-force argmax of a task over a dataset.
+* ``reading``: a dataset directory as one Arrow dataset.
+
+The argmax of a task over a dataset is :func:`affordgrasp.search.best.best_grasps`.
 
 See docs/dataset.md.
 """

@@ -338,8 +338,8 @@ PAIR_GEOMETRY_COLUMNS = (
 
 
 def pair_geometry(obj, uses, use_index, grasp_index, wrist_point, wrist_axis, points, offsets):
-    """:func:`pair_columns` from the grasps' arrays (what :func:`affordgrasp.pairs.pair_scores`
-    holds already, block after block).
+    """:func:`pair_columns` from the grasps' arrays (what
+    :func:`affordgrasp.search.pairs.pair_scores` holds already, block after block).
 
     Parameters
     ----------

@@ -266,7 +266,8 @@ def summarize(
     -------
     DatasetSummary
     """
-    from .sources import numeric_columns
+    from ..robust import task_scores
+    from ..tasks import MetricColumns
 
     thresholds = thresholds or {}
     numeric = _numeric_fields(schema)
@@ -278,16 +279,9 @@ def summarize(
         out.affordances[t.name] = {}
 
     def scores_of(table):
-        m = numeric_columns(table)
-        if robust:
-            from ..robust import ranking_values
-
-            return {t.name: ranking_values(m, t.name) for t in tasks}
+        m = MetricColumns(table)
         return {
-            t.name: np.asarray(
-                t.evaluate(m, mode=mode, **thresholds.get(t.name, {})), dtype=np.float64
-            )
-            for t in tasks
+            t.name: task_scores(t, m, mode, thresholds.get(t.name), robust=robust) for t in tasks
         }
 
     def groups(table):

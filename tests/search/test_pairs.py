@@ -1,19 +1,22 @@
-"""Brute force over grasps × use points (pairs.py): exact, and the default mode finds
+"""Brute force over grasps × use points (search/pairs.py): exact, and the default mode finds
 beat, cut and pick grasps on small seeded samples."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from affordgrasp.grasp.pregrasp import sample_inputs
 from affordgrasp.objects import load_object
-from affordgrasp.pairs import (
-    UsePoints,
+from affordgrasp.pipeline import evaluate_inputs, evaluate_samples
+from affordgrasp.search.pairs import (
+    PairSearchSettings,
     best_pairs,
     best_use_per_grasp,
     optimize_pairs,
     pair_scores,
 )
-from affordgrasp.pipeline import evaluate_inputs, evaluate_samples
+from affordgrasp.search.use_points import UsePoints
 
 CHECKED = (
     "epsilon",
@@ -63,7 +66,8 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
     # in 12 seeds), so its three striking-surface tests are off here (tests/tasks checks
     # them); every other default threshold applies.
     off = {"tau_depth": 0.0, "tau_relief": np.inf, "tau_swing": -np.inf} if task == "beat" else {}
-    result = best_pairs(obj, task, grasps=400, uses=3000, seed=seed, top=3, mode="default", **off)
+    settings = PairSearchSettings(task, thresholds=off, grasps=400, uses=3000, seed=seed, top=3)
+    result = best_pairs(obj, settings)
     values = result.table.column("value").to_numpy()
     assert result.candidates >= 1 and len(values) >= 1
     assert np.all(np.isfinite(values)) and np.all(np.diff(values) <= 1e-12)
@@ -76,18 +80,16 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
 
 
 def test_optimizer_over_grasps_with_their_best_use_point():
-    found = optimize_pairs(
-        "meat_cleaver",
+    settings = PairSearchSettings(
         "cut",
+        thresholds={"tau_thick": 0.0, "tau_width": 0.0, "tau_reach": np.inf},
         budget=200,
         uses=1500,
         seed=0,
         top=5,
         population=50,
-        tau_thick=0.0,
-        tau_width=0.0,
-        tau_reach=np.inf,
     )  # the search, not the thresholds: a 200-grasp search rarely holds the handle only
+    found = optimize_pairs("meat_cleaver", settings)
     values = found.table.column("value").to_numpy()
     assert found.grasps == 200 and found.candidates >= 1
     assert 1 <= len(values) <= 5 and np.all(np.isfinite(values))
@@ -109,17 +111,15 @@ def test_best_pairs_per_grasp_ranks_each_grasp_once_with_its_best_use():
     # cut pairs; at unit density it finds none
     cleaver = load_object("meat_cleaver", materials=True)
     table = evaluate_samples(cleaver, 120, seed=0).table
-    kw = dict(
+    settings = PairSearchSettings(
+        "cut",
+        thresholds={"tau_thick": 0.0, "tau_width": 0.0, "tau_reach": np.inf},
         grasps=120,
         uses=400,
         top=4,
-        grasp_table=table,
-        tau_thick=0.0,
-        tau_width=0.0,
-        tau_reach=np.inf,
     )
-    pairs = best_pairs(cleaver, "cut", **kw)
-    grasps = best_pairs(cleaver, "cut", per_grasp=True, **kw)
+    pairs = best_pairs(cleaver, settings, grasp_table=table)
+    grasps = best_pairs(cleaver, replace(settings, per_grasp=True), grasp_table=table)
     assert grasps.candidates == pairs.candidates >= 4
     p0 = [tuple(p) for p in grasps.table.column("p0").to_pylist()]
     assert len(set(p0)) == len(p0) >= 2
@@ -195,7 +195,7 @@ def test_searches_without_the_volume_score_the_same_grasps(hammer_grasps):
 
 
 def test_pair_scores_in_blocks_equal_one_block(hammer_grasps, monkeypatch):
-    import affordgrasp.pairs as pairs
+    import affordgrasp.search.pairs as pairs
 
     _, d = sample_inputs(5, 0, 400)
     uses = UsePoints.of("hammer", d)
@@ -208,9 +208,11 @@ def test_pair_scores_in_blocks_equal_one_block(hammer_grasps, monkeypatch):
 
 
 def test_optimizer_restarts_share_the_budget_and_repeat():
-    kwargs = dict(budget=96, uses=50, seed=0, top=5, population=16, restarts=3)
-    found = optimize_pairs("hammer", "pick", **kwargs)
-    again = optimize_pairs("hammer", "pick", **kwargs)
+    settings = PairSearchSettings(
+        "pick", budget=96, uses=50, seed=0, top=5, population=16, restarts=3
+    )
+    found = optimize_pairs("hammer", settings)
+    again = optimize_pairs("hammer", settings)
     values = found.table.column("value").to_numpy()
     assert found.grasps == 96 and found.candidates >= 1
     assert 1 <= len(values) <= 5 and np.all(np.isfinite(values))
@@ -223,7 +225,9 @@ def test_optimizer_refuses_bad_restarts(budget, restarts):
     from affordgrasp.errors import InputError
 
     with pytest.raises(InputError, match="restarts|budget"):
-        optimize_pairs("hammer", "pick", budget=budget, uses=10, restarts=restarts)
+        optimize_pairs(
+            "hammer", PairSearchSettings("pick", budget=budget, uses=10, restarts=restarts)
+        )
 
 
 def test_refine_continues_the_best_restart_within_the_budget(monkeypatch):
@@ -238,8 +242,10 @@ def test_refine_continues_the_best_restart_within_the_budget(monkeypatch):
         return trace
 
     monkeypatch.setattr(optimize_module, "cem_maximize", spy)
-    kwargs = dict(budget=96, uses=50, seed=0, top=5, population=16, restarts=3, refine=0.25)
-    found = optimize_pairs("hammer", "pick", **kwargs)
+    settings = PairSearchSettings(
+        "pick", budget=96, uses=50, seed=0, top=5, population=16, restarts=3, refine=0.25
+    )
+    found = optimize_pairs("hammer", settings)
     assert found.grasps == 96
     runs, last = calls[:3], calls[3]
     assert [c[0]["budget"] for c in calls] == [24, 24, 24, 24]
@@ -252,7 +258,7 @@ def test_refine_continues_the_best_restart_within_the_budget(monkeypatch):
     np.testing.assert_array_equal(given.elite_v, chosen.elite_v)
     np.testing.assert_array_equal(given.mean, chosen.elite_x[0])
     np.testing.assert_allclose(given.std, 0.01 * (optimize_module.HIGH - optimize_module.LOW))
-    again = optimize_pairs("hammer", "pick", **kwargs)
+    again = optimize_pairs("hammer", settings)
     assert again.table.column("p0").to_pylist() == found.table.column("p0").to_pylist()
 
 
@@ -261,14 +267,18 @@ def test_optimizer_refuses_bad_refine(refine):
     from affordgrasp.errors import InputError
 
     with pytest.raises(InputError, match="refine"):
-        optimize_pairs("hammer", "pick", budget=96, uses=10, restarts=2, refine=refine)
+        optimize_pairs(
+            "hammer", PairSearchSettings("pick", budget=96, uses=10, restarts=2, refine=refine)
+        )
 
 
 def test_optimizer_refuses_a_refine_share_that_rounds_to_nothing():
     from affordgrasp.errors import InputError
 
     with pytest.raises(InputError, match="rounds to no simulation"):
-        optimize_pairs("hammer", "pick", budget=96, uses=10, restarts=2, refine=0.001)
+        optimize_pairs(
+            "hammer", PairSearchSettings("pick", budget=96, uses=10, restarts=2, refine=0.001)
+        )
 
 
 def test_pair_searches_simulate_the_hand_they_are_given():
@@ -280,9 +290,15 @@ def test_pair_searches_simulate_the_hand_they_are_given():
     jaw = get_hand("parallel_jaw")
     try:
         searches = (
-            best_pairs("hammer", "inertia-only", grasps=40, uses=20, top=2, hand="parallel_jaw"),
+            best_pairs(
+                "hammer",
+                PairSearchSettings("inertia-only", grasps=40, uses=20, top=2, hand="parallel_jaw"),
+            ),
             optimize_pairs(
-                "hammer", "inertia-only", budget=32, uses=20, top=2, population=16, hand=jaw
+                "hammer",
+                PairSearchSettings(
+                    "inertia-only", budget=32, uses=20, top=2, population=16, hand=jaw
+                ),
             ),
         )
     finally:

@@ -10,7 +10,8 @@ import pytest
 from affordgrasp import tasks
 from affordgrasp.cli import main
 from affordgrasp.errors import InputError
-from affordgrasp.optimize import HIGH, LOW, PERIODIC, cem_maximize, optimize, uniform_inputs
+from affordgrasp.search.cem import HIGH, LOW, PERIODIC, cem_maximize, uniform_inputs
+from affordgrasp.search.optimize import optimize
 
 TARGET = np.array([0.97, 0.3, -0.98, 0.1, -0.2, 0.7, 0.5, -0.4])
 
@@ -120,7 +121,7 @@ def test_a_continued_run_keeps_its_elites_and_samples_its_distribution():
 
 
 def test_a_carried_elite_stays_until_beaten():
-    from affordgrasp.optimize import CEMState
+    from affordgrasp.search.cem import CEMState
 
     x0 = np.full((2, 8), 0.5)
     state = CEMState(
@@ -201,9 +202,8 @@ def test_optimize_simulates_the_object_with_its_materials(wrist_inertia_task):
 
 
 def test_passing_use_points_pass_the_use_only_tests_and_repeat_per_seed():
-    from affordgrasp.optimize import passing_use_points
-    from affordgrasp.pairs import UsePoints
     from affordgrasp.search.guidance import use_only_passes
+    from affordgrasp.search.use_points import UsePoints, passing_use_points
 
     cut = tasks.get_task("cut")
     uses, sampling = passing_use_points("knife", cut, 12, seed=5, max_draws=600)
@@ -224,8 +224,7 @@ def test_passing_use_points_pass_the_use_only_tests_and_repeat_per_seed():
 
 
 def test_passing_use_points_fall_back_to_the_plain_sample_and_say_so():
-    from affordgrasp.optimize import passing_use_points
-    from affordgrasp.pairs import UsePoints
+    from affordgrasp.search.use_points import UsePoints, passing_use_points
 
     cut = tasks.get_task("cut")
     # no point of a knife is a 0.01 rad wedge: nothing passes

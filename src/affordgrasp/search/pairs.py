@@ -1,4 +1,4 @@
-"""Brute-force argmax of a task over grasps × use points (paper §IV-C, conventions: Datasets).
+"""The argmax of a task over grasps × use points (paper §IV-C, conventions: Datasets).
 
 The paper maximises F_T over (G, U): the grasp and the use point are independent inputs
 (G = GP(p0, O) depends only on p0, U = DM(d, O) only on d). A dataset row pairs one p0
@@ -20,40 +20,40 @@ on the cheap metrics alone are skipped before the LPs: the screen evaluates the 
 the most favourable U_τ (+∞... a large value) and E_i (0), so it is exact for tasks that
 improve with U_τ and with 1 / E_i and fail only through thresholds, as every built-in task
 does; a task for which that is not true can pass ``screen=False``.
+
+Two searches share one parameter list (:class:`PairSearchSettings`) and one result
+(:class:`PairSearch`) and differ by strategy only: :func:`best_pairs` scores every grasp of
+a sample (or of evaluated rows), :func:`optimize_pairs` moves the grasps with the
+cross-entropy method. Either scores the plain sample of use points by area or those that
+pass the task's tests of the use point alone (:mod:`affordgrasp.search.use_points`).
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
-from dataclasses import dataclass, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 import pyarrow as pa
 from numba import njit
 
-from .columns import GRASP_METRICS, USE_METRICS
-from .grasp.pregrasp import sample_inputs, surface_use_directions, use_points
-from .hands import Hand
-from .metrics.cones import wrench_matrix_kernel
-from .metrics.effort import impact_effort, impact_effort_kernel, use_wrench
-from .metrics.epsilon_hand import epsilon_hand
-from .metrics.lp import OPTIMAL
-from .metrics.striking import use_depth, use_relief
-from .metrics.transmission import use_force, use_force_kernel
-from .metrics.use_geometry import (
-    contact_thickness,
-    contact_width,
-    use_edge,
-    use_edge_angle,
-    use_wedge_shape,
-)
-from .objects import GraspObject, load_object
-from .pipeline import evaluate_inputs, evaluate_samples
-from .search.cem import cem_search, plan_runs
-from .search.guidance import USE_ONLY, guidance, pair_geometry, swing_alignment
-from .search.ranking import TopRows, top_indices
-from .tasks import MetricColumns, get_task
+from ..columns import GRASP_METRICS, USE_METRICS
+from ..grasp.pregrasp import sample_inputs
+from ..hands import Hand
+from ..metrics.cones import wrench_matrix_kernel
+from ..metrics.effort import impact_effort, impact_effort_kernel, use_wrench
+from ..metrics.epsilon_hand import epsilon_hand
+from ..metrics.lp import OPTIMAL
+from ..metrics.transmission import use_force, use_force_kernel
+from ..metrics.use_geometry import contact_thickness, contact_width
+from ..objects import GraspObject, load_object
+from ..pipeline import evaluate_inputs, evaluate_samples
+from ..tasks import MetricColumns, get_task
+from .cem import cem_search, plan_runs
+from .guidance import USE_ONLY, guidance, pair_geometry, swing_alignment, threshold_guidance
+from .ranking import TopRows, top_indices
+from .use_points import UsePoints, UseSampling, draw_use_points
 
 log = logging.getLogger(__name__)
 
@@ -118,145 +118,6 @@ def pair_lp_metrics(points, normals, mu, offsets, center, grasp, use_point, use_
         status, force[i] = use_force_kernel(W, w_use, e - s)
         redo[i] = (not ok) or status != OPTIMAL
     return impact, force, redo
-
-
-@dataclass(frozen=True)
-class UsePoints:
-    """Use points of m use directions on one object.
-
-    Attributes
-    ----------
-    use_dir : (m, 2) float64 ndarray
-    point, normal : (m, 3) float64 ndarray
-        m; outward unit normals.
-    triangle : (m,) int ndarray
-        Face index, -1 for no hit.
-    use_edge : (m,) float64 ndarray
-        U_g, m⁻².
-    use_edge_angle : (m,) float64 ndarray
-        rad.
-    use_wedge_angle : (m,) float64 ndarray
-        rad.
-    use_wedge_angle_fine : (m,) float64 ndarray
-        rad (2 mm ball).
-    use_edge_span : (m,) float64 ndarray
-        Dimensionless.
-    use_edge_thickness : (m,) float64 ndarray
-        m (NaN where no chord behind U lies inside the solid).
-    use_depth, use_relief : (m,) float64 ndarray
-        m (:mod:`affordgrasp.metrics.striking`).
-    """
-
-    use_dir: np.ndarray
-    point: np.ndarray
-    normal: np.ndarray
-    triangle: np.ndarray
-    use_edge: np.ndarray
-    use_edge_angle: np.ndarray
-    use_wedge_angle: np.ndarray
-    use_wedge_angle_fine: np.ndarray
-    use_edge_span: np.ndarray
-    use_edge_thickness: np.ndarray
-    use_depth: np.ndarray
-    use_relief: np.ndarray
-
-    @classmethod
-    def of(cls, obj: GraspObject | str, use_dir: np.ndarray, columns=None) -> UsePoints:
-        """Cast the use rays of ``use_dir`` on an object.
-
-        Parameters
-        ----------
-        obj : GraspObject or str
-            An object or a spec (``knife:3``, a mesh path).
-        use_dir : (m, 2) array_like of float
-            Use directions, in [0, 1].
-        columns : iterable of str, optional
-            Compute only these use-point columns (the others NaN): a search that tests a
-            few of them skips the rest (the dihedral angle alone costs more than the rest
-            together). Default every one.
-
-        Returns
-        -------
-        UsePoints
-            NaN edge metrics where a ray misses the object.
-        """
-        obj = load_object(obj)
-        use_dir = np.asarray(use_dir, dtype=np.float64).reshape(-1, 2)
-        wanted = set(USE_ONLY if columns is None else columns)
-        P, N, T = use_points(obj.mesh, obj.mass.center_of_mass, use_dir)
-        hit = T >= 0
-        out = {c: np.full(len(T), np.nan) for c in sorted(USE_ONLY)}
-        if hit.any():
-            Ph, Nh = P[hit], N[hit]
-            if "use_edge" in wanted:
-                out["use_edge"][hit] = use_edge(obj.mesh, T[hit], Ph)
-            if "use_edge_angle" in wanted:
-                out["use_edge_angle"][hit] = use_edge_angle(obj.mesh, Ph, use_normal=Nh)
-            wedge_columns = {
-                "use_wedge_angle",
-                "use_wedge_angle_fine",
-                "use_edge_span",
-                "use_edge_thickness",
-            }
-            if wedge_columns & wanted:
-                shape = use_wedge_shape(obj.mesh_data, Ph, Nh)
-                out["use_wedge_angle"][hit] = shape.angle
-                out["use_wedge_angle_fine"][hit] = shape.inner_angle
-                out["use_edge_span"][hit] = shape.span
-                out["use_edge_thickness"][hit] = shape.edge_thickness
-            if "use_depth" in wanted:
-                out["use_depth"][hit] = use_depth(obj.mesh_data, Ph, Nh)
-            if "use_relief" in wanted:
-                out["use_relief"][hit] = use_relief(obj.mesh_data, Ph, Nh)
-        return cls(use_dir, P, N, T, **out)
-
-    def take(self, index: np.ndarray) -> UsePoints:
-        """The use points ``index``, in that order.
-
-        Parameters
-        ----------
-        index : (k,) int ndarray
-
-        Returns
-        -------
-        UsePoints
-        """
-        return UsePoints(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
-
-    @staticmethod
-    def concat(parts: list[UsePoints]) -> UsePoints:
-        """One set of use points of several, in order.
-
-        Parameters
-        ----------
-        parts : list of UsePoints
-            At least one.
-
-        Returns
-        -------
-        UsePoints
-        """
-        names = [f.name for f in fields(parts[0])]
-        return UsePoints(**{n: np.concatenate([getattr(p, n) for p in parts]) for n in names})
-
-    @classmethod
-    def sample(cls, obj: GraspObject | str, n: int, seed: int) -> UsePoints:
-        """``n`` use points that cover the surface by area (their d towards surface points
-        drawn uniformly by area, :func:`~affordgrasp.grasp.pregrasp.surface_use_directions`).
-
-        Parameters
-        ----------
-        obj : GraspObject or str
-        n : int
-        seed : int
-
-        Returns
-        -------
-        UsePoints
-        """
-        obj = load_object(obj)
-        d = surface_use_directions(obj.mesh_data, obj.mass.center_of_mass, n, seed)
-        return cls.of(obj, d)
 
 
 def _contacts(table: pa.Table, rows: np.ndarray):
@@ -392,7 +253,7 @@ def pair_scores(
         np.ascontiguousarray(wrist_axis[gi]),
     )
     for i in np.flatnonzero(redo):
-        from .metrics.contacts import ContactSet
+        from ..metrics.contacts import ContactSet
 
         g = local[i]
         s, e = offsets[g], offsets[g + 1]
@@ -441,99 +302,206 @@ def pair_guidance(rows: pa.Table, task, mode, overrides, uses: UsePoints, eps_co
     return g
 
 
+def pair_search_guidance(obj, rows, task, mode, overrides, uses, thresholds=True):
+    """The guidance of a pair search's grasps while none is feasible.
+
+    Relative to the task's thresholds (:func:`~affordgrasp.search.guidance.threshold_guidance`:
+    each test of the task a hinge at its threshold); for a task without known threshold tests,
+    or with ``thresholds`` False, :func:`pair_guidance` (contacts, ε and the use terms).
+
+    Parameters
+    ----------
+    obj : GraspObject
+    rows : pyarrow.Table
+        The simulated grasps (their own use points are not read).
+    task : Task
+    mode : str
+    overrides : mapping of str to float
+    uses : UsePoints
+        The search's use points.
+    thresholds : bool
+
+    Returns
+    -------
+    (n,) float64 ndarray
+    """
+    g = threshold_guidance(obj, rows, task, mode, overrides, uses) if thresholds else None
+    if g is not None:
+        return g
+    eps_column = tuple(c for c in ("epsilon_hand",) if c in task.requires)
+    return pair_guidance(rows, task, mode, overrides, uses, eps_column)
+
+
+@dataclass(frozen=True)
+class PairSearchSettings:
+    """What a pair search looks for, and with what budget: the one parameter list of
+    :func:`best_pairs` (brute force) and :func:`optimize_pairs` (the cross-entropy method).
+
+    Attributes
+    ----------
+    task : str
+        A registered task.
+    mode : str
+        Threshold mode.
+    thresholds : mapping of str to float
+        Threshold values that replace the mode's.
+    uses : int
+        Use points scored, drawn from run ``seed + 1`` (independent of the rows' own d).
+    seed : int
+        Run seed of the grasps (the brute force's samples, the optimiser's first generation
+        and stream); the top pairs are re-simulated with it.
+    top : int
+        Distinct pairs returned (with ``per_grasp``, distinct grasps).
+    hand : str or Hand
+        The hand of every simulation.
+    passing_uses : bool
+        Score :func:`~affordgrasp.search.use_points.passing_use_points` (drawn until
+        ``uses`` pass the task's tests of the use point alone) instead of the plain sample
+        by area. The best of many candidates then also finds the few use points that pass
+        those tests off the working part (a thin knife spine, a hammer's claw), where F_T
+        can be larger (docs/validation.md §7, "Searches aimed at the task's tests").
+    max_draws : int, optional
+        With ``passing_uses``: use points drawn at most (default ``16 uses``).
+    grasps : int
+        Brute force: uniform samples 0..grasps-1 of run ``seed`` simulated when no
+        evaluated rows are given.
+    per_grasp : bool
+        Brute force: the top ``top`` distinct grasps, each with its best use point (F_T of
+        a grasp is its maximum over U), instead of the top pairs (which may repeat one
+        grasp with several use points).
+    budget : int
+        Optimiser: simulations.
+    population : int, optional
+        Optimiser: CEM population; chosen from each run's budget when None.
+    restarts : int
+        Optimiser: independent CEM runs that share the budget (each ``budget // restarts``
+        simulations, its own first generation and random stream); the pairs met by all of
+        them are ranked together. One run settles on the first good region it meets (on a
+        hammer, a hold of the head with 5× the hold effort of the best hold on the handle);
+        several runs make that less likely.
+    refine : float
+        Optimiser: share of ``budget`` (in [0, 1)) spent after the restarts on continuing
+        the best of them (the run with the largest F_T; without one, the best guidance)
+        around its best point: its elites carry on and its distribution restarts centred
+        there with CEM's narrowest std
+        (:meth:`affordgrasp.search.cem.CEMState.around_best`). The restarts share the rest.
+        A run can meet its best point alone (its fit to two scattered elites then samples
+        between them); refining finds that point's neighbours, so the top pairs are
+        neighbours of the best pair rather than the best of weaker regions that other
+        restarts settled in.
+    threshold_guide : bool
+        Optimiser: while no grasp is feasible, rank the grasps by the guidance relative to
+        the task's thresholds (:func:`pair_search_guidance`), so that CEM climbs towards
+        passing every test at once (ε-robust, the hand off the working part, a swing that
+        meets the face) rather than towards more contacts; False: :func:`pair_guidance`.
+    """
+
+    task: str
+    mode: str = "default"
+    thresholds: Mapping[str, float] = field(default_factory=dict)
+    uses: int = 2000
+    seed: int = 0
+    top: int = 10
+    hand: Hand | str = "barrett"
+    passing_uses: bool = False
+    max_draws: int | None = None
+    grasps: int = 4000
+    per_grasp: bool = False
+    budget: int = 2000
+    population: int | None = None
+    restarts: int = 1
+    refine: float = 0.0
+    threshold_guide: bool = False
+
+
 @dataclass(frozen=True)
 class PairSearch:
-    """Result of :func:`best_pairs`.
+    """Result of a pair search (:func:`best_pairs`, :func:`optimize_pairs`).
 
     Attributes
     ----------
     table : pyarrow.Table
         The top pairs as ordinary evaluated rows (p0 of the grasp, d of the use point), best
         first, with a ``value`` column.
-    grasps, uses : int
-        How many grasps were simulated and use points cast.
+    grasps : int
+        Grasps simulated (or given, for the brute force).
     candidates : int
         Pairs with a finite F_T.
     lp_pairs : int
         Pairs that needed the LPs.
+    use_points : UsePoints
+        The use points scored.
+    sampling : UseSampling
+        How they were drawn.
     """
 
     table: pa.Table
     grasps: int
-    uses: int
     candidates: int
     lp_pairs: int
+    use_points: UsePoints
+    sampling: UseSampling
+
+    @property
+    def uses(self) -> int:
+        """Use points scored."""
+        return len(self.use_points.triangle)
+
+
+def _start(obj, settings: PairSearchSettings, optimiser: bool):
+    """The object, the task and the use points of a search; bad settings fail here."""
+    obj = load_object(obj)
+    task = get_task(settings.task)
+    task.thresholds_for(settings.mode, **settings.thresholds)  # bad mode or threshold
+    if optimiser:  # a budget that cannot be split: too
+        plan_runs(settings.budget, settings.restarts, settings.refine, settings.population)
+    use, sampling = draw_use_points(
+        obj,
+        task,
+        settings.uses,
+        settings.seed + 1,
+        settings.mode,
+        dict(settings.thresholds),
+        settings.max_draws,
+        settings.passing_uses,
+    )
+    return obj, task, use, sampling
 
 
 def best_pairs(
-    obj,
-    task: str,
-    *,
-    mode: str = "default",
-    grasps: int = 4000,
-    uses: int = 4000,
-    seed: int = 0,
-    top: int = 10,
-    hand: Hand | str = "barrett",
-    grasp_table: pa.Table | None = None,
-    per_grasp: bool = False,
-    given_uses: UsePoints | None = None,
-    **overrides: float,
+    obj, settings: PairSearchSettings, grasp_table: pa.Table | None = None
 ) -> PairSearch:
-    """Top ``top`` (p0, d) pairs of ``task`` over ``grasps`` uniform samples × ``uses`` use
-    points drawn by surface area (:meth:`UsePoints.sample`).
+    """Brute force: the top pairs of a task over grasps × use points.
 
-    The grasps are the samples 0..grasps-1 of run ``seed`` (as ``generate --streams
-    shared`` draws them; pass ``grasp_table`` to reuse evaluated rows); the use directions
-    are drawn from run ``seed + 1`` so that they are independent of the rows' own d. The
-    top pairs are re-simulated with :func:`affordgrasp.pipeline.evaluate_inputs`, so the
-    returned rows carry every column of the dataset schema; a pair's value is recomputed on
-    that row.
+    The grasps are the samples 0..``grasps``-1 of run ``seed`` (as ``generate --streams
+    shared`` draws them), or the evaluated rows of ``grasp_table``; every one is scored with
+    every use point (:func:`pair_scores`). The top pairs are re-simulated with
+    :func:`affordgrasp.pipeline.evaluate_inputs`, so the returned rows carry every column of
+    the dataset schema; a pair's value is recomputed on that row.
 
     Parameters
     ----------
     obj : GraspObject or str
         The object or its spec.
-    task : str
-        A registered task.
-    mode : str
-        Threshold mode.
-    grasps, uses : int
-        Sample counts.
-    seed : int
-        Run seed.
-    top : int
-        Pairs returned.
-    hand : str or Hand
-        The hand.
+    settings : PairSearchSettings
+        The task, thresholds, use points, ``top``, ``grasps`` and ``per_grasp``.
     grasp_table : pyarrow.Table, optional
         Evaluated rows to reuse instead of simulating.
-    per_grasp : bool
-        Top ``top`` distinct grasps, each with its best use point (F_T of a grasp is its
-        maximum over U), instead of the top pairs (which may repeat one grasp with
-        several use points).
-    given_uses : UsePoints, optional
-        The use points to score (``uses`` is then ignored); default the sample by area
-        (:func:`affordgrasp.optimize.targeted_best_pairs` passes the use points that pass
-        the task's use-point tests).
-    **overrides : float
-        Threshold values that replace the mode's.
 
     Returns
     -------
     PairSearch
     """
-    obj = load_object(obj)
+    s = settings
+    obj, _, use, sampling = _start(obj, s, optimiser=False)
     if grasp_table is None:
         # ε only: the search never reads the GWS volume; the returned rows carry it
-        grasp_table = evaluate_samples(obj, grasps, seed=seed, hand=hand, volume=False).table
-    use = UsePoints.sample(obj, uses, seed + 1) if given_uses is None else given_uses
-    d = use.use_dir
-    scores = pair_scores(obj, grasp_table, use, task, mode, **overrides)
+        grasp_table = evaluate_samples(obj, s.grasps, seed=s.seed, hand=s.hand, volume=False).table
+    scores = pair_scores(obj, grasp_table, use, s.task, s.mode, **s.thresholds)
     # The one ranker of the package: highest F_T first, ties to the smaller grasp, then use.
     values = scores["value"]
-    best = TopRows(top, 2)
-    if per_grasp:  # each grasp once, with its best use point (ties: the lowest use index)
+    best = TopRows(s.top, 2)
+    if s.per_grasp:  # each grasp once, with its best use point (ties: the lowest use index)
         best_value, best_use = best_use_per_grasp(scores, grasp_table.num_rows)
         best.add(best_value, np.arange(grasp_table.num_rows), best_use)
         candidates = int(np.count_nonzero(values > -np.inf))
@@ -541,31 +509,85 @@ def best_pairs(
         candidates = best.add(values, scores["grasp"], scores["use"])
     grasp_index, use_index = best.keys
     p0 = np.asarray(grasp_table.column("p0").to_pylist(), float).reshape(-1, 6)
-    rows = _top_rows(
-        obj,
-        p0[grasp_index],
-        use.use_dir[use_index],
-        task,
-        mode,
-        hand,
-        seed,
-        overrides,
-    )
-    return PairSearch(
-        table=rows,
-        grasps=grasp_table.num_rows,
-        uses=len(d),
-        candidates=candidates,
-        lp_pairs=int(len(values)),
-    )
+    rows = _top_rows(obj, p0[grasp_index], use.use_dir[use_index], s)
+    return PairSearch(rows, grasp_table.num_rows, candidates, int(len(values)), use, sampling)
 
 
-def _top_rows(obj, p0, use_dir, task, mode, hand, seed, overrides) -> pa.Table:
+def optimize_pairs(obj, settings: PairSearchSettings) -> PairSearch:
+    """The cross-entropy method over p0, each grasp scored with its best use point.
+
+    The search space splits as the metrics do: CEM (:func:`affordgrasp.search.cem.cem_search`,
+    the optimiser of :func:`affordgrasp.search.optimize.optimize`) moves the pregrasp, and
+    each simulated grasp takes the best of the search's use points, found as in
+    :func:`pair_scores` (ray casts and the pair LPs). ``budget`` counts simulations, as for
+    ``optimize``.
+
+    Parameters
+    ----------
+    obj : GraspObject or str
+    settings : PairSearchSettings
+        The task, thresholds, use points, ``top``, and the optimiser's ``budget``,
+        ``population``, ``restarts``, ``refine`` and ``threshold_guide``.
+
+    Returns
+    -------
+    PairSearch
+        The ``top`` best distinct (grasp, use point) pairs met during the search,
+        re-simulated.
+    """
+    s = settings
+    obj, task, use, sampling = _start(obj, s, optimiser=True)
+    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    counts = {"lp": 0, "finite": 0}
+
+    def objective(x: np.ndarray):
+        # ε only (volume=False): the search never reads the GWS volume, whose 6-D hull is
+        # most of the metric cost on enveloping grasps; the returned rows are re-simulated
+        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=s.hand, seed=s.seed, volume=False)
+        rows = rows.table
+        scores = pair_scores(obj, rows, use, s.task, s.mode, **s.thresholds)
+        best, best_use = best_use_per_grasp(scores, len(x))
+        counts["lp"] += len(scores["value"])
+        counts["finite"] += int(np.sum(scores["value"] > -np.inf))
+        found.append((x[:, :6].copy(), best, best_use))
+        # the rows' own use points are not the pairs'
+        guide = pair_search_guidance(obj, rows, task, s.mode, s.thresholds, use, s.threshold_guide)
+        return best, guide
+
+    def first_generation(start: int, stop: int) -> np.ndarray:
+        # run r's first generation: the next uniform samples of run ``seed``; run 0 is the
+        # search of a single run
+        return np.concatenate(sample_inputs(s.seed, start, stop), axis=1)
+
+    cem_search(
+        objective,
+        budget=s.budget,
+        seed=s.seed,
+        restarts=s.restarts,
+        refine=s.refine,
+        population=s.population,
+        first_generation=first_generation,
+    )
+    p0 = np.concatenate([f[0] for f in found])
+    value = np.concatenate([f[1] for f in found])
+    use_idx = np.concatenate([f[2] for f in found])
+    ok = np.flatnonzero(value > -np.inf)
+    # distinct pairs only: CEM keeps its elites, which may be simulated again
+    key = np.concatenate([p0[ok], use_idx[ok, None].astype(float)], axis=1)
+    _, first = np.unique(key, axis=0, return_index=True)
+    ok = ok[np.sort(first)]
+    pick = ok[top_indices(value[ok], s.top)]
+    rows = _top_rows(obj, p0[pick], use.use_dir[use_idx[pick]], s)
+    return PairSearch(rows, int(len(value)), counts["finite"], counts["lp"], use, sampling)
+
+
+def _top_rows(obj, p0, use_dir, settings: PairSearchSettings) -> pa.Table:
     """The pairs (p0, d) re-simulated as ordinary rows, with their F_T as ``value``."""
-    rows = evaluate_inputs(
-        obj, np.reshape(p0, (-1, 6)), np.reshape(use_dir, (-1, 2)), hand=hand, seed=seed
-    ).table
-    value = get_task(task).evaluate(rows, mode, **overrides) if rows.num_rows else np.zeros(0)
+    s = settings
+    p0, use_dir = np.reshape(p0, (-1, 6)), np.reshape(use_dir, (-1, 2))
+    rows = evaluate_inputs(obj, p0, use_dir, hand=s.hand, seed=s.seed).table
+    task = get_task(s.task)
+    value = task.evaluate(rows, s.mode, **s.thresholds) if rows.num_rows else np.zeros(0)
     return rows.append_column("value", pa.array(np.asarray(value, dtype=np.float64)))
 
 
@@ -597,131 +619,3 @@ def best_use_per_grasp(scores: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
         best[g[first]] = v[order[first]]
         use[g[first]] = scores["use"][order[first]]
     return best, use
-
-
-def optimize_pairs(
-    obj,
-    task: str,
-    *,
-    mode: str = "default",
-    budget: int = 2000,
-    uses: int = 2000,
-    seed: int = 0,
-    top: int = 10,
-    population: int | None = None,
-    hand: Hand | str = "barrett",
-    restarts: int = 1,
-    refine: float = 0.0,
-    given_uses: UsePoints | None = None,
-    guide: Callable[[pa.Table], np.ndarray] | None = None,
-    **overrides: float,
-) -> PairSearch:
-    """The cross-entropy method over p0, each grasp scored with its best of ``uses`` use points.
-
-    The search space splits as the metrics do: CEM (:func:`affordgrasp.search.cem.cem_search`,
-    the optimiser of :func:`affordgrasp.optimize.optimize`) moves the pregrasp, and each
-    simulated grasp takes the best use point of a fixed sample of ``uses`` use
-    points drawn by surface area (run ``seed + 1``), found as in :func:`pair_scores`.
-    ``budget`` counts simulations, as for ``optimize``.
-
-    Parameters
-    ----------
-    obj : GraspObject or str
-    task : str
-    mode : str
-    budget : int
-        Simulations.
-    uses : int
-        Use directions sampled once.
-    seed : int
-    top : int
-        Distinct pairs returned.
-    population : int, optional
-        CEM population; chosen from each run's budget when None.
-    hand : str or Hand
-    restarts : int
-        Independent CEM runs that share the budget (each ``budget // restarts``
-        simulations, its own first generation and random stream); the pairs met by all of
-        them are ranked together. One run settles on the first good region it meets (on a
-        hammer, a hold of the head with 5× the hold effort of the best hold on the handle);
-        several runs make that less likely.
-    refine : float
-        Share of ``budget`` (in [0, 1)) spent after the restarts on continuing the best of
-        them (the run with the largest F_T; without one, the best guidance) around its best
-        point: its elites carry on and its distribution restarts centred there with CEM's
-        narrowest std (:meth:`affordgrasp.search.cem.CEMState.around_best`). The restarts
-        share the rest. A run can meet its best point alone (its fit to two scattered
-        elites then samples between them); refining finds that point's neighbours, so the
-        top pairs are neighbours of the best pair rather than the best of weaker regions
-        that other restarts settled in.
-    given_uses : UsePoints, optional
-        The use points to score (``uses`` is then ignored); default the sample by area.
-    guide : callable, optional
-        ``guide(rows)``: the guidance of a generation's simulated rows, (n,) floats, that
-        ranks them while none is feasible; default :func:`pair_guidance` (contacts, ε and
-        the use terms). :func:`affordgrasp.optimize.targeted_pairs` passes the guidance
-        relative to the task's thresholds.
-    **overrides : float
-        Threshold values that replace the mode's.
-
-    Returns
-    -------
-    PairSearch
-        The ``top`` best distinct (grasp, use point) pairs met during the search,
-        re-simulated.
-    """
-    obj = load_object(obj)
-    get_task(task).thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
-    plan_runs(budget, restarts, refine, population)  # a budget that cannot be split: too
-    use = UsePoints.sample(obj, uses, seed + 1) if given_uses is None else given_uses
-    d = use.use_dir
-    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    counts = {"lp": 0, "finite": 0}
-    t = get_task(task)
-    # the rows' own use points are not the pairs': the guidance reads their ε column only
-    eps_column = tuple(c for c in ("epsilon_hand",) if c in t.requires)
-
-    def objective(x: np.ndarray):
-        # ε only (volume=False): the search never reads the GWS volume, whose 6-D hull is
-        # most of the metric cost on enveloping grasps; the returned rows are re-simulated
-        rows = evaluate_inputs(obj, x[:, :6], x[:, 6:], hand=hand, seed=seed, volume=False).table
-        scores = pair_scores(obj, rows, use, task, mode, **overrides)
-        best, best_use = best_use_per_grasp(scores, len(x))
-        counts["lp"] += len(scores["value"])
-        counts["finite"] += int(np.sum(scores["value"] > -np.inf))
-        found.append((x[:, :6].copy(), best, best_use))
-        if guide is not None:
-            return best, guide(rows)
-        return best, pair_guidance(rows, t, mode, overrides, use, eps_column)
-
-    def first_generation(start: int, stop: int) -> np.ndarray:
-        # run r's first generation: the next uniform samples of run ``seed``; run 0 is the
-        # search of a single run
-        return np.concatenate(sample_inputs(seed, start, stop), axis=1)
-
-    cem_search(
-        objective,
-        budget=budget,
-        seed=seed,
-        restarts=restarts,
-        refine=refine,
-        population=population,
-        first_generation=first_generation,
-    )
-    p0 = np.concatenate([f[0] for f in found])
-    value = np.concatenate([f[1] for f in found])
-    use_idx = np.concatenate([f[2] for f in found])
-    ok = np.flatnonzero(value > -np.inf)
-    # distinct pairs only: CEM keeps its elites, which may be simulated again
-    key = np.concatenate([p0[ok], use_idx[ok, None].astype(float)], axis=1)
-    _, first = np.unique(key, axis=0, return_index=True)
-    ok = ok[np.sort(first)]
-    pick = ok[top_indices(value[ok], top)]
-    rows = _top_rows(obj, p0[pick], use.use_dir[use_idx[pick]], task, mode, hand, seed, overrides)
-    return PairSearch(
-        table=rows,
-        grasps=int(len(value)),
-        uses=len(d),
-        candidates=counts["finite"],
-        lp_pairs=counts["lp"],
-    )

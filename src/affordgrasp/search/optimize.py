@@ -9,17 +9,15 @@ and, with the same simulation budget, runs uniform random sampling:
 * the first generation of CEM is the run's uniform samples 0..m-1 (the samples ``generate``
   and the random baseline use), so CEM starts where random sampling starts, and the
   baseline reuses those rows;
-* with ``uses`` > 0 each grasp is scored with its best use point (:mod:`affordgrasp.pairs`),
-  and CEM's guidance is relative to the task's thresholds
+* with ``uses`` > 0 each grasp is scored with its best use point
+  (:mod:`affordgrasp.search.pairs`), and CEM's guidance is relative to the task's thresholds
   (:func:`~affordgrasp.search.guidance.threshold_guidance`); with ``passing_uses`` the use
   points are those that pass the task's tests of the use point alone
-  (:func:`passing_use_points`).
+  (:func:`~affordgrasp.search.use_points.passing_use_points`).
 
-:func:`targeted_pairs` and :func:`targeted_best_pairs` are the pair searches (optimiser and
-brute force, top rows) with the same use points and guidance.
-
-The method itself (``cem_maximize``, ``CEMState``, ``CEMTrace``, ``uniform_inputs``...) lives
-in :mod:`affordgrasp.search.cem` and is re-exported here.
+The method itself (``cem_search``, ``CEMState``, ``CEMTrace``...) is
+:mod:`affordgrasp.search.cem`; the pair searches, brute force and optimiser, are
+:mod:`affordgrasp.search.pairs`.
 """
 
 from __future__ import annotations
@@ -33,46 +31,14 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
-from .errors import bad_parameter
-from .hands import Hand
-from .search.cem import (
-    DIM,
-    HIGH,
-    LOW,
-    MIN_STD,
-    PERIODIC,
-    WIDTH,
-    CEMState,
-    CEMTrace,
-    Objective,
-    cem_maximize,
-    cem_search,
-    default_population,
-    plan_runs,
-    uniform_inputs,
-)
-from .search.guidance import guidance
-from .search.ranking import best_index
-
-__all__ = [
-    "DIM",
-    "HIGH",
-    "LOW",
-    "MIN_STD",
-    "PERIODIC",
-    "WIDTH",
-    "CEMState",
-    "CEMTrace",
-    "Found",
-    "Objective",
-    "OptimizationResult",
-    "cem_maximize",
-    "cem_search",
-    "default_population",
-    "guidance",
-    "optimize",
-    "uniform_inputs",
-]
+from ..errors import bad_parameter
+from ..hands import Hand
+from ..robust import task_scores
+from .cem import CEMTrace, cem_search, plan_runs
+from .guidance import guidance
+from .pairs import best_use_per_grasp, pair_scores, pair_search_guidance
+from .ranking import best_index
+from .use_points import UseSampling, draw_use_points
 
 log = logging.getLogger(__name__)
 
@@ -220,7 +186,7 @@ class _Simulator:
         self.next_sample = 0
         self.obj = obj
         self.hand = hand
-        self.use_points = use_points  # pairs.UsePoints: score a grasp with its best use
+        self.use_points = use_points  # UsePoints: score a grasp with its best use
 
     def _run(self, jobs) -> pa.Table:
         handles = [self.engine.submit(j) for j in jobs]
@@ -239,17 +205,13 @@ class _Simulator:
 
     def score(self, table: pa.Table) -> _Scored:
         """F_T of every row (with use points: with its best use point)."""
-        from .dataset.best import task_values
-
         if self.use_points is not None:
-            from .pairs import best_use_per_grasp, pair_scores
-
             scores = pair_scores(
                 self.obj, table, self.use_points, self.task.name, self.mode, **self.thresholds
             )
             values, use = best_use_per_grasp(scores, table.num_rows)
             return _Scored(values, table, use)
-        values = task_values(self.task, table, self.mode, self.thresholds, robust=self.robust)
+        values = task_scores(self.task, table, self.mode, self.thresholds, robust=self.robust)
         return _Scored(np.where(np.isnan(values), -np.inf, values), table)
 
     def found(self, scored: _Scored, offset: int) -> Found | None:
@@ -262,7 +224,7 @@ class _Simulator:
         p0 = np.asarray(row["p0"], dtype=np.float64)
         d = np.asarray(row["use_dir"], dtype=np.float64)
         if self.use_points is not None:
-            from .pipeline import evaluate_inputs
+            from ..pipeline import evaluate_inputs
 
             d = np.asarray(self.use_points.use_dir[scored.use[i]], dtype=np.float64)
             again = evaluate_inputs(self.obj, p0[None], d[None], hand=self.hand, seed=self.seed)
@@ -271,7 +233,7 @@ class _Simulator:
 
     def inputs(self, x: np.ndarray) -> _Scored:
         """Simulate and score given inputs (rows numbered on from the last)."""
-        from .dataset.jobs import Job
+        from ..dataset.jobs import Job
 
         start = self.next_sample
         jobs = [
@@ -283,7 +245,7 @@ class _Simulator:
 
     def seeded(self, start: int, stop: int) -> _Scored:
         """Simulate and score samples ``start .. stop - 1`` of the run's seed."""
-        from .dataset.jobs import Job
+        from ..dataset.jobs import Job
 
         jobs = [Job(0, start + a, b - a) for a, b in self._split(stop - start)]
         self.next_sample = max(self.next_sample, stop)  # inputs() rows are numbered on
@@ -362,8 +324,8 @@ def optimize(
     uses : int
         If > 0, each simulated grasp (of CEM and of the baseline) is scored with its best
         use point among ``uses`` use points drawn by surface area (run ``seed + 1``), as in
-        :mod:`affordgrasp.pairs`: the search then moves the grasp only, and the use point
-        is found by ray casts, which cost no simulation. CEM's guidance is then relative
+        :mod:`affordgrasp.search.pairs`: the search then moves the grasp only, and the use
+        point is found by ray casts, which cost no simulation. CEM's guidance is then relative
         to the task's thresholds (:func:`~affordgrasp.search.guidance.threshold_guidance`).
     restarts, refine
         Independent CEM runs sharing the budget, and the share of it that continues the
@@ -373,21 +335,22 @@ def optimize(
         copies each, so a grasp costs K + 1 simulations; ``budget`` counts grasps). Each
         grasp then keeps its own use direction (``uses`` is not applied).
     passing_uses : bool
-        With ``uses``: the use points are :func:`passing_use_points` (drawn until
-        ``uses`` pass the task's tests of the use point alone) instead of the plain sample.
+        With ``uses``: the use points are
+        :func:`~affordgrasp.search.use_points.passing_use_points` (drawn until ``uses`` pass
+        the task's tests of the use point alone) instead of the plain sample.
 
     Returns
     -------
     OptimizationResult
     """
-    from .dataset.jobs import ObjectPayload, RunContext
-    from .grasp.pregrasp import sample_inputs
-    from .hands import get_hand
-    from .objects import load_object
-    from .robust import robust_settings
-    from .runtime.engines import check_engine, make_engine
-    from .runtime.interrupts import stop_on_signals
-    from .tasks import get_task
+    from ..dataset.jobs import ObjectPayload, RunContext
+    from ..grasp.pregrasp import sample_inputs
+    from ..hands import get_hand
+    from ..objects import load_object
+    from ..robust import robust_settings
+    from ..runtime.engines import check_engine, make_engine
+    from ..runtime.interrupts import stop_on_signals
+    from ..tasks import get_task
 
     if not isinstance(budget, int) or budget < 1:
         raise bad_parameter("budget", f"must be a positive integer, got {budget!r}")
@@ -422,7 +385,7 @@ def optimize(
     ):
         use_points = sampling = None
         if uses and settings is None:
-            use_points, sampling = _search_use_points(
+            use_points, sampling = draw_use_points(
                 resolved,
                 task_obj,
                 uses,
@@ -465,7 +428,7 @@ def optimize(
             best["cem"] = _better(best["cem"], sim.found(scored, done["n"]))
             done["n"] += len(x)
             if use_points is not None:  # pairs: the rows' own use points are not scored
-                return scored.values, _pair_search_guidance(
+                return scored.values, pair_search_guidance(
                     resolved, scored.table, task_obj, mode, dict(thresholds or {}), use_points
                 )
             return scored.values, guidance(scored.table, task_obj.requires)
@@ -506,394 +469,4 @@ def optimize(
         random_values=random_values,
         elapsed_s=time.perf_counter() - started,
         use_sampling=sampling,
-    )
-
-
-# ---------------------------------------------------- pair searches aimed at the task's tests
-
-
-@dataclass(frozen=True)
-class UseSampling:
-    """How a pair search's use points were drawn (:func:`passing_use_points`).
-
-    Attributes
-    ----------
-    drawn : int
-        Use points drawn by area, in all.
-    passing : int
-        Of them, how many pass the task's tests of the use point alone.
-    kept : int
-        Use points the search scores (``passing`` capped at the number asked for, or the
-        plain sample on a fallback).
-    fallback : bool
-        No drawn use point passed (or the task has no test of the use point alone): the
-        search scores the plain sample by area.
-    tested : bool
-        The task has tests of the use point alone.
-    only_passing : bool
-        The use points were drawn until enough pass (:func:`passing_use_points`); False:
-        the plain sample by area (``passing`` then counts those of it that pass).
-    """
-
-    drawn: int
-    passing: int
-    kept: int
-    fallback: bool
-    tested: bool = True
-    only_passing: bool = True
-
-    def describe(self) -> str:
-        """One line for the command's output.
-
-        Returns
-        -------
-        str
-        """
-        if not self.tested:
-            return f"use points: {self.kept:,} drawn by area"
-        if not self.only_passing:
-            return (
-                f"use points: {self.kept:,} drawn by area, {self.passing:,} of them pass the "
-                "task's tests of the use point alone"
-            )
-        if self.fallback:
-            return (
-                f"use points: none of {self.drawn:,} drawn by area passes the task's tests of "
-                f"the use point alone; scoring {self.kept:,} plain area samples"
-            )
-        return (
-            f"use points: {self.kept:,} that pass the task's tests of the use point alone "
-            f"({self.passing:,} of {self.drawn:,} drawn by area)"
-        )
-
-    def to_dict(self) -> dict:
-        """JSON-ready fields.
-
-        Returns
-        -------
-        dict
-            ``drawn``, ``passing``, ``kept``, ``fallback``, ``tested``, ``only_passing``.
-        """
-        return {
-            "drawn": self.drawn,
-            "passing": self.passing,
-            "kept": self.kept,
-            "fallback": self.fallback,
-            "tested": self.tested,
-            "only_passing": self.only_passing,
-        }
-
-
-def passing_use_points(
-    obj,
-    task,
-    n: int,
-    seed: int,
-    *,
-    mode: str = "default",
-    thresholds: Mapping[str, float] | None = None,
-    max_draws: int | None = None,
-):
-    """``n`` use points, drawn by area, that pass the task's tests of the use point alone.
-
-    Use points are drawn by surface area in batches of ``n`` (batch 0 is
-    :meth:`~affordgrasp.pairs.UsePoints.sample` with ``seed``; batch k ≥ 1 uses a seed
-    derived from (``seed``, k)) until ``n`` of them pass the tests of ``task`` that the use
-    point alone decides (:func:`~affordgrasp.search.guidance.use_only_passes`: a cutting
-    edge for ``cut``, a deep, flat, blunt face for ``beat``), or ``max_draws`` have been
-    drawn. A cutting edge is about 1 % of a blade's surface: the plain sample of 2000 holds
-    some 20 edge points, this one up to ``n``. When none passes, or the task has no such
-    test, the plain sample (batch 0) is returned and ``fallback`` says so.
-
-    Parameters
-    ----------
-    obj : GraspObject or str
-    task : str or Task
-    n : int
-        Use points wanted.
-    seed : int
-        Same seed, same use points.
-    mode : str
-        Threshold mode.
-    thresholds : mapping of str to float, optional
-        Threshold values that replace the mode's.
-    max_draws : int, optional
-        At most this many use points are drawn (default ``16 n``).
-
-    Returns
-    -------
-    uses : UsePoints
-        The use points, in the order drawn; only the columns the task reads are computed
-        (the others are NaN).
-    sampling : UseSampling
-    """
-    from .grasp.pregrasp import surface_use_directions
-    from .objects import load_object
-    from .pairs import UsePoints
-    from .search.guidance import USE_ONLY, use_only_passes
-    from .tasks import get_task
-
-    obj = load_object(obj)
-    t = get_task(task) if isinstance(task, str) else task
-    overrides = dict(thresholds or {})
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise bad_parameter("uses", f"must be a positive integer, got {n!r}")
-    limit = 16 * n if max_draws is None else int(max_draws)
-    if limit < n:
-        raise bad_parameter("max_draws", f"must be at least uses ({n}), got {max_draws!r}")
-    columns = set(t.requires) & USE_ONLY
-    center = obj.mass.center_of_mass
-    tested = bool(columns)
-    kept, first, drawn, passing = [], None, 0, 0
-    k = 0
-    while drawn < limit:
-        batch_seed = seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
-        size = min(n, limit - drawn)
-        d = surface_use_directions(obj.mesh_data, center, size, batch_seed)
-        batch = UsePoints.of(obj, d, columns if tested else None)
-        drawn += size
-        k += 1
-        if first is None:
-            first = batch
-        if not tested:
-            break
-        ok = np.flatnonzero(use_only_passes(t, mode, overrides, batch))
-        passing += ok.size
-        if ok.size:
-            kept.append(batch.take(ok))
-        if sum(len(p.triangle) for p in kept) >= n:
-            break
-    if not kept:
-        return first, UseSampling(drawn, passing, len(first.triangle), True, tested)
-    uses = UsePoints.concat(kept)
-    uses = uses.take(np.arange(min(n, len(uses.triangle))))
-    return uses, UseSampling(drawn, passing, len(uses.triangle), False)
-
-
-@dataclass(frozen=True)
-class TargetedSearch:
-    """Result of :func:`targeted_pairs` and :func:`targeted_best_pairs`.
-
-    Attributes
-    ----------
-    table : pyarrow.Table
-        The top pairs as evaluated rows (p0 of the grasp, d of the use point), best first,
-        with a ``value`` column.
-    grasps : int
-        Grasps simulated (or scored, for the brute force).
-    candidates : int
-        Pairs with a finite F_T.
-    lp_pairs : int
-        Pairs that needed the LPs.
-    use_points : UsePoints
-        The use points scored.
-    sampling : UseSampling
-        How they were drawn.
-    """
-
-    table: pa.Table
-    grasps: int
-    candidates: int
-    lp_pairs: int
-    use_points: object
-    sampling: UseSampling
-
-    @property
-    def uses(self) -> int:
-        """Use points scored."""
-        return len(self.use_points.triangle)
-
-
-def _search_use_points(obj, task, n, seed, mode, overrides, max_draws, passing):
-    """:func:`passing_use_points`, or (``passing`` False) the plain sample by area."""
-    if passing:
-        return passing_use_points(
-            obj, task, n, seed, mode=mode, thresholds=overrides, max_draws=max_draws
-        )
-    from .pairs import UsePoints
-    from .search.guidance import USE_ONLY, use_only_passes
-
-    use = UsePoints.sample(obj, n, seed)
-    passing_count = int(use_only_passes(task, mode, overrides, use).sum())
-    tested = bool(set(task.requires) & USE_ONLY)
-    return use, UseSampling(n, passing_count, n, False, tested=tested, only_passing=False)
-
-
-def _pair_search_guidance(obj, rows, task, mode, overrides, uses, thresholds=True):
-    """Threshold-relative guidance (:func:`~affordgrasp.search.guidance.threshold_guidance`);
-    for a task without known threshold tests (or ``thresholds`` False), the contacts-and-ε
-    guidance of :func:`affordgrasp.pairs.pair_guidance`."""
-    from .search.guidance import threshold_guidance
-
-    g = threshold_guidance(obj, rows, task, mode, overrides, uses) if thresholds else None
-    if g is not None:
-        return g
-    from .pairs import pair_guidance
-
-    eps_column = tuple(c for c in ("epsilon_hand",) if c in task.requires)
-    return pair_guidance(rows, task, mode, overrides, uses, eps_column)
-
-
-def targeted_pairs(
-    obj,
-    task: str,
-    *,
-    mode: str = "default",
-    budget: int = 2000,
-    uses: int = 2000,
-    seed: int = 0,
-    top: int = 10,
-    population: int | None = None,
-    hand: Hand | str = "barrett",
-    restarts: int = 1,
-    refine: float = 0.0,
-    max_draws: int | None = None,
-    passing_uses: bool = False,
-    threshold_guide: bool = True,
-    **overrides: float,
-) -> TargetedSearch:
-    """The cross-entropy method over p0, aimed at the task's tests.
-
-    As :func:`affordgrasp.pairs.optimize_pairs` (CEM moves the pregrasp; each simulated
-    grasp takes its best of ``uses`` use points drawn by area, run ``seed + 1``, found by
-    ray casts and the pair LPs), but while no grasp is feasible CEM ranks the grasps by
-    :func:`~affordgrasp.search.guidance.threshold_guidance` (each test of the task as a
-    hinge at its threshold, the best over the use points that pass the tests of the use
-    point alone), so it climbs towards passing every test at once (ε-robust, the hand off
-    the working part, a swing that meets the face) rather than towards more contacts. A
-    task without known threshold tests keeps :func:`affordgrasp.pairs.pair_guidance`.
-    With ``passing_uses`` the use points are :func:`passing_use_points` instead.
-
-    Parameters
-    ----------
-    obj : GraspObject or str
-    task : str
-    mode : str
-    budget : int
-        Simulations.
-    uses : int
-        Use points wanted.
-    seed : int
-    top : int
-        Distinct pairs returned.
-    population : int, optional
-    hand : str or Hand
-    restarts : int
-    refine : float
-        As for :func:`affordgrasp.pairs.optimize_pairs`.
-    max_draws : int, optional
-        Use points drawn at most (:func:`passing_use_points`).
-    passing_uses : bool
-        Score :func:`passing_use_points` instead of the plain sample by area (run
-        ``seed + 1``). Off by default: it finds more pairs, but the best of many candidates
-        also finds the few use points that pass the task's tests off the working part
-        (a thin knife spine, a hammer's claw), where F_T can be larger (docs/validation.md
-        §7, "Searches aimed at the task's tests").
-    threshold_guide : bool
-        False: the guidance of :func:`affordgrasp.pairs.pair_guidance`; both False is
-        ``optimize_pairs``.
-    **overrides : float
-        Threshold values that replace the mode's.
-
-    Returns
-    -------
-    TargetedSearch
-    """
-    from .objects import load_object
-    from .pairs import optimize_pairs
-    from .tasks import get_task
-
-    obj = load_object(obj)
-    t = get_task(task)
-    t.thresholds_for(mode, **overrides)  # bad mode or threshold: fail now
-    plan_runs(budget, restarts, refine, population)
-    use, sampling = _search_use_points(
-        obj, t, uses, seed + 1, mode, overrides, max_draws, passing_uses
-    )
-    found = optimize_pairs(
-        obj,
-        task,
-        mode=mode,
-        budget=budget,
-        seed=seed,
-        top=top,
-        population=population,
-        hand=hand,
-        restarts=restarts,
-        refine=refine,
-        given_uses=use,
-        guide=lambda rows: _pair_search_guidance(
-            obj, rows, t, mode, overrides, use, threshold_guide
-        ),
-        **overrides,
-    )
-    return TargetedSearch(
-        found.table, found.grasps, found.candidates, found.lp_pairs, use, sampling
-    )
-
-
-def targeted_best_pairs(
-    obj,
-    task: str,
-    grasp_table: pa.Table,
-    *,
-    mode: str = "default",
-    uses: int = 2000,
-    seed: int = 0,
-    top: int = 10,
-    hand: Hand | str = "barrett",
-    max_draws: int | None = None,
-    passing_uses: bool = True,
-    **overrides: float,
-) -> TargetedSearch:
-    """The brute force of :func:`affordgrasp.pairs.best_pairs` (``per_grasp=True``: the top
-    ``top`` distinct grasps, each with its best use point) over use points that pass the
-    task's tests of the use point alone (:func:`passing_use_points`, run ``seed + 1``).
-
-    Parameters
-    ----------
-    obj : GraspObject or str
-    task : str
-    grasp_table : pyarrow.Table
-        Evaluated rows (the grasps).
-    mode : str
-    uses : int
-        Use points wanted.
-    seed : int
-        The run seed of the rows (the re-simulated top rows use it too).
-    top : int
-    hand : str or Hand
-    max_draws : int, optional
-    passing_uses : bool
-        False: the plain sample by area (then this is ``best_pairs``).
-    **overrides : float
-
-    Returns
-    -------
-    TargetedSearch
-    """
-    from .objects import load_object
-    from .pairs import best_pairs
-    from .tasks import get_task
-
-    obj = load_object(obj)
-    t = get_task(task)
-    t.thresholds_for(mode, **overrides)
-    use, sampling = _search_use_points(
-        obj, t, uses, seed + 1, mode, overrides, max_draws, passing_uses
-    )
-    found = best_pairs(
-        obj,
-        task,
-        mode=mode,
-        seed=seed,
-        top=top,
-        hand=hand,
-        grasp_table=grasp_table,
-        per_grasp=True,
-        given_uses=use,
-        **overrides,
-    )
-    return TargetedSearch(
-        found.table, found.grasps, found.candidates, found.lp_pairs, use, sampling
     )
