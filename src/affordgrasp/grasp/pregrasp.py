@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import InputError
+from ..rays import mesh_caster
 
 if TYPE_CHECKING:
     import trimesh
@@ -213,8 +214,8 @@ def use_points(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh
-        The object, m.
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (its rays: :func:`affordgrasp.rays.mesh_caster`).
     center : (3,) float64 ndarray
         Centre of mass, m.
     use_dir : (n, 2) float64 ndarray
@@ -238,7 +239,8 @@ def use_points(
     if n == 0:
         return points, normals, tris
     origins = np.repeat(np.asarray(center, dtype=np.float64)[None], n, axis=0)
-    _, ray_idx, tri_idx = mesh.ray.intersects_location(origins, d, multiple_hits=True)
+    rays = mesh_caster(mesh)
+    _, ray_idx, tri_idx = rays.intersects_location(origins, d, multiple_hits=True)
     # Exact float64 intersection with the triangles the (float32) ray engine reported.
     tri = np.asarray(mesh.triangles, dtype=np.float64)[tri_idx]
     e1 = tri[:, 1] - tri[:, 0]
@@ -266,7 +268,7 @@ def use_points(
         V = np.asarray(mesh.vertices, dtype=np.float64)
         reach = float(np.linalg.norm(V - origins[0], axis=1).max()) * 1.5 + 1e-3
         o2 = origins[missed] + reach * d[missed]
-        loc, ray2, tri2 = mesh.ray.intersects_location(o2, -d[missed], multiple_hits=True)
+        loc, ray2, tri2 = rays.intersects_location(o2, -d[missed], multiple_hits=True)
         if len(tri2):
             tri = np.asarray(mesh.triangles, dtype=np.float64)[tri2]
             nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])

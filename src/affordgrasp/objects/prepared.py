@@ -119,7 +119,8 @@ class MeshData:
     """A triangle mesh as arrays, with what trimesh derives from it, without trimesh.
 
     Duck-types the part of ``trimesh.Trimesh`` the pipeline uses (``vertices``, ``faces``,
-    ``face_normals``, ``triangles``, ``face_adjacency*``, ``ray``, ``hash()``).
+    ``face_normals``, ``triangles``, ``face_adjacency*``, ``hash()``); its rays are cast by
+    :func:`affordgrasp.rays.mesh_caster` (Embree, without trimesh).
 
     Attributes
     ----------
@@ -156,18 +157,6 @@ class MeshData:
     def triangles(self) -> np.ndarray:
         """(f, 3, 3) float64 ndarray: the vertices of each face, m."""
         return self.vertices[self.faces]
-
-    @property
-    def ray(self):
-        """Ray queries (:class:`~affordgrasp.objects.rays.EmbreeRays`, else trimesh's)."""
-        return _RAYS.get(self, self._make_rays)
-
-    def _make_rays(self):
-        from .rays import EmbreeRays, embree_available
-
-        if embree_available() and self.face_normals is not None and self.scale is not None:
-            return EmbreeRays(self.vertices, self.faces, self.face_normals, self.scale)
-        return self.to_trimesh().ray
 
     def to_trimesh(self) -> trimesh.Trimesh:
         """The mesh as a ``trimesh.Trimesh`` (same vertices and faces, not processed).
@@ -206,8 +195,6 @@ class MeshData:
             face_adjacency_convex=np.asarray(mesh.face_adjacency_convex, dtype=bool),
         )
 
-
-_RAYS: IdentityCache[Any] = IdentityCache()
 
 _MESH_FIELDS = (
     "face_normals",

@@ -1,7 +1,7 @@
 """Ray casting a grasp scene: shaded colours, depth, parts.
 
 The object and the posed hand are cast in one scene (the package's ray-casting
-interface, :class:`affordgrasp.objects.rays.RayCaster`, with its Embree backend); each
+interface, :class:`affordgrasp.rays.RayCaster`, with its Embree backend); each
 pixel is shaded by its normal (Lambert, two lights fixed to the camera, a flat colour per
 part: the object grey, the palm and fingers blue) and silhouettes are outlined so the
 picture reads at thumbnail size. The result depends only on the inputs (no randomness, no
@@ -19,7 +19,8 @@ import numpy as np
 import trimesh
 
 from ..caching import IdentityCache
-from ..objects.rays import EmbreeScene, RayHits
+from ..rays import RayHits
+from ..rays.embree import EmbreeScene
 from .camera import Camera, _fibonacci_sphere, _image_up, framed_camera, unit
 from .scene import GraspScene, scene_bounds
 
@@ -90,7 +91,7 @@ class SceneCaster:
         return self.rays.scene_frame[0]
 
     def cast(self, origins: np.ndarray, dirs: np.ndarray) -> RayHits:
-        """First hits of rays (the :class:`~affordgrasp.objects.rays.RayCaster` interface).
+        """First hits of rays (the :class:`~affordgrasp.rays.RayCaster` interface).
 
         Parameters
         ----------
@@ -395,7 +396,3 @@ def auto_camera(
     score = score + 1e-3 * (dirs @ _image_up(scene))
     best = dirs[int(np.argmax(score))]
     return framed_camera(scene, best, fov_deg=fov_deg, width=width, height=height)
-
-
-# The name this class had before the ray-casting interface took ``RayCaster``.
-RayCaster = SceneCaster
