@@ -8,8 +8,8 @@ from metrics_support import fine_cylinder, folded_sheet, wedge_prism
 from affordgrasp.errors import InputError
 from affordgrasp.metrics import use_edge, use_edge_angle, use_geometry
 from affordgrasp.objects import load_object
-from affordgrasp.rays import embree_available, mesh_caster
-from affordgrasp.rays.embree import EmbreeRays
+from affordgrasp.rays import embree_available
+from affordgrasp.rays.mesh import EmbreeRays, mesh_caster
 
 
 def _plane():

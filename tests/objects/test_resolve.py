@@ -20,7 +20,7 @@ import affordgrasp.objects as objects
 from affordgrasp.errors import InputError, MeshError
 from affordgrasp.objects import GraspObject, load_object, mesh_hash
 from affordgrasp.objects import resolve as resolve_module
-from affordgrasp.rays import mesh_caster
+from affordgrasp.rays.mesh import mesh_caster
 
 
 @dataclass(frozen=True)

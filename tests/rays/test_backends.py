@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from affordgrasp.rays import RayCaster, RayHits, TrimeshRays, embree_available, packets
-from affordgrasp.rays.embree import EmbreeRays, EmbreeScene
+from affordgrasp.rays import RayCaster, RayHits, embree_available, packets
+from affordgrasp.rays.embree import EmbreeScene
+from affordgrasp.rays.mesh import EmbreeRays, TrimeshRays
 from affordgrasp.vision.engines import EmbreeEngine, PacketEngine, RasterEngine
 
 pytestmark = pytest.mark.skipif(not embree_available(), reason="embreex not installed")

@@ -5,8 +5,9 @@ import pytest
 
 from affordgrasp.metrics import use_geometry
 from affordgrasp.objects import load_object
-from affordgrasp.rays import embree_available, mesh_caster
-from affordgrasp.rays.crossings import all_crossings, near_crossings
+from affordgrasp.rays import embree_available
+from affordgrasp.rays.crossings import crossings
+from affordgrasp.rays.mesh import mesh_caster
 
 pytestmark = pytest.mark.skipif(not embree_available(), reason="embreex not installed")
 
@@ -26,7 +27,7 @@ def _rays(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 def test_every_crossing_is_the_loops_bit_for_bit(family):
     obj = load_object(family)
     origins, directions = _rays(600, 7)
-    got = all_crossings(mesh_caster(obj.mesh_data), origins, directions)
+    got = crossings(mesh_caster(obj.mesh_data), origins, directions)
     # trimesh's own loop (Embree through embreex), which the compiled one follows step by step
     ref = obj.mesh.ray.intersects_id(origins, directions, multiple_hits=True, return_locations=True)
     assert len(got[1]) > 2 * 600 // 3  # several hits per ray on most rays
@@ -36,10 +37,10 @@ def test_every_crossing_is_the_loops_bit_for_bit(family):
 
 def test_no_ray_no_hit():
     rays = mesh_caster(load_object("mug").mesh_data)
-    tri, ray, loc = all_crossings(rays, np.zeros((0, 3)), np.zeros((0, 3)))
+    tri, ray, loc = crossings(rays, np.zeros((0, 3)), np.zeros((0, 3)))
     assert tri.shape == ray.shape == (0,) and loc.shape == (0, 3)
     # pointing away from the mug from far outside: no crossing at all
-    tri, ray, loc = all_crossings(rays, np.array([[1.0, 0, 0]]), np.array([[1.0, 0, 0]]))
+    tri, ray, loc = crossings(rays, np.array([[1.0, 0, 0]]), np.array([[1.0, 0, 0]]))
     assert len(tri) == 0
 
 
@@ -57,8 +58,8 @@ def test_near_crossings_are_every_crossing_within_reach(family):
     mesh = load_object(family).mesh_data
     origins, directions = _wedge_rays(mesh, 60, 64, 1)
     reach = 3e-3
-    ref_tri, ref_ray, ref_loc = all_crossings(mesh_caster(mesh), origins, directions)
-    tri, ray, loc = near_crossings(mesh_caster(mesh), origins, directions, reach)
+    ref_tri, ref_ray, ref_loc = crossings(mesh_caster(mesh), origins, directions)
+    tri, ray, loc = crossings(mesh_caster(mesh), origins, directions, reach)
     assert len(ray) < len(ref_ray)  # the rays went on past the ball before
 
     def per_ray(t_ray, t_tri, t_loc, keep):

@@ -12,7 +12,8 @@ import pytest
 
 from affordgrasp.objects import load_object, prepared
 from affordgrasp.rays import embree_available
-from affordgrasp.rays.embree import EmbreeRays, EmbreeScene, embree_device
+from affordgrasp.rays.embree import EmbreeScene, embree_device
+from affordgrasp.rays.mesh import EmbreeRays
 
 pytestmark = pytest.mark.skipif(not embree_available(), reason="embreex is not installed")
 

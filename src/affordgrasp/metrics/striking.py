@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..rays import mesh_caster
+from ..rays.mesh import mesh_caster
 from .validation import points_n3, use_normals_n3
 
 RELIEF_RADIUS_M = 0.005  # ring radius of use_relief
@@ -53,7 +53,7 @@ def use_depth(mesh, use_point, use_normal) -> float | np.ndarray:
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m, closed (its rays: :func:`affordgrasp.rays.mesh_caster`).
+        The object, m, closed (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -86,7 +86,7 @@ def use_relief(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh_caster`).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float

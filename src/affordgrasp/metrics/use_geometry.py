@@ -51,7 +51,7 @@ from ..caching import IdentityCache
 from ..errors import InputError
 from ..grasp.pregrasp import dot3
 from ..kernel_cache import install_package_stamp
-from ..rays import MeshCaster, mesh_caster
+from ..rays.mesh import MeshCaster, mesh_caster
 from ..tolerances import FLAT_DIHEDRAL
 from .validation import points_n3, use_normals_n3
 
@@ -475,7 +475,7 @@ def use_wedge_angle(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh_caster`).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -562,7 +562,7 @@ def use_wedge_shape(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh_caster`).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -652,7 +652,8 @@ def _edge_thickness(
     # both halves of every chord in one cast: rays along +e3, then along -e3
     origins = np.concatenate([centre, centre])
     dirs = np.concatenate([d, -d])
-    ray, t = _crossing_distances(rays, origins, dirs)
+    _, ray, locations = rays.crossings(origins, dirs)
+    _, ray, t = _distinct(ray, locations, origins, dirs)
     first = np.full(2 * n_chords, np.inf)
     np.minimum.at(first, ray, t)
     # inside the solid when the ray leaves it an odd number of times
@@ -718,27 +719,12 @@ def use_edge_thickness(mesh, use_point, use_normal, **kwargs) -> float | np.ndar
     return float(shape.edge_thickness[0]) if np.ndim(use_point) == 1 else shape.edge_thickness
 
 
-def _crossing_distances(
-    rays: MeshCaster, origins: np.ndarray, dirs: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Ray and distance of every crossing ((m,) int64, (m,) float64), by ray then distance,
-    one per surface: a ray through an edge reports both of its faces, kept once."""
-    _, ray, locations = rays.crossings(origins, dirs)
-    return _distinct_distances(ray, locations, origins, dirs)
-
-
-def _distinct_distances(
-    ray: np.ndarray, locations: np.ndarray, origins: np.ndarray, dirs: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The crossings (ray, point) as sorted, de-duplicated distances along their rays."""
-    _, ray, t = _distinct(ray, locations, origins, dirs)
-    return ray, t
-
-
 def _distinct(
     ray: np.ndarray, locations: np.ndarray, origins: np.ndarray, dirs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_distinct_distances`, with the index of each kept crossing in the input."""
+    """The crossings (ray, point) as distances along their rays ((m,) int64 index of each
+    kept crossing in the input, (m,) int64 ray, (m,) float64 distance), by ray then
+    distance, one per surface: a ray through an edge reports both of its faces, kept once."""
     t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
     order = _order_by_ray(ray, t)
     ray, t = ray[order], t[order]
@@ -750,8 +736,8 @@ def _distinct(
 def _near_crossing_distances(
     rays: MeshCaster, origins: np.ndarray, dirs: np.ndarray, reach: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_crossing_distances` of at least the crossings within ``reach``, and whether
-    each ray starts inside the solid ((n,) bool).
+    """Ray and distance (:func:`_distinct`) of at least the crossings within ``reach``, and
+    whether each ray starts inside the solid ((n,) bool).
 
     A ray starts inside when its first crossing leaves the solid (the face's outward normal
     along the ray), as long as its crossings within ``reach`` alternate, leaving and
@@ -760,9 +746,9 @@ def _near_crossing_distances(
     the two rules agree, and a crossing missed next to the start (a ray through an edge)
     makes the ray start outside by both; the first needs no crossing beyond the ball, so the
     rays may be followed no farther (``rays.crossings`` with a reach; a container's rays
-    cross its far wall). Where crossings beyond the ball do not alternate
-    (a missed crossing, or a fold, far from U), the parity can turn a ray inside out that
-    the first crossing does not.
+    cross its far wall). Where crossings beyond the ball do not alternate (a missed
+    crossing, or a fold, far from U), the parity can turn a ray inside out that the first
+    crossing does not.
     """
     tri, ray, locations = rays.crossings(origins, dirs, reach)
     kept, ray, t = _distinct(ray, locations, origins, dirs)
@@ -776,7 +762,7 @@ def _near_crossing_distances(
     odd = np.unique(ray[1:][folded])
     if len(odd):
         _, sub, sub_locations = rays.crossings(origins[odd], dirs[odd])
-        sub, _ = _distinct_distances(sub, sub_locations, origins[odd], dirs[odd])
+        _, sub, _ = _distinct(sub, sub_locations, origins[odd], dirs[odd])
         starts_inside[odd] = np.bincount(sub, minlength=len(odd)) % 2 == 1
     return ray, t, starts_inside
 
@@ -996,7 +982,7 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh_caster`).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     contact_points, contact_normals : (k, 3) float
         Contacts of all grasps, stacked, m; the object's outward unit normals.
     offsets : (g + 1,) int
@@ -1045,7 +1031,7 @@ def contact_width(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh_caster`); closed.
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`); closed.
     contact_points, contact_normals : (k, 3) float
         Contacts of all grasps, stacked, m; the object's outward unit normals.
     offsets : (g + 1,) int

@@ -120,7 +120,7 @@ class MeshData:
 
     Duck-types the part of ``trimesh.Trimesh`` the pipeline uses (``vertices``, ``faces``,
     ``face_normals``, ``triangles``, ``face_adjacency*``, ``hash()``); its rays are cast by
-    :func:`affordgrasp.rays.mesh_caster` (Embree, without trimesh).
+    :func:`affordgrasp.rays.mesh.mesh_caster` (Embree, without trimesh).
 
     Attributes
     ----------

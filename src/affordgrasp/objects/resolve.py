@@ -44,7 +44,7 @@ from affordgrasp.objects.mass import (
 from affordgrasp.objects.prepared import TRANSIENT_SOURCE, mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 from affordgrasp.objects.simplify import LARGE_MESH_FACES
-from affordgrasp.rays import mesh_caster
+from affordgrasp.rays.mesh import mesh_caster
 
 if TYPE_CHECKING:
     import trimesh

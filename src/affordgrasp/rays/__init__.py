@@ -2,20 +2,17 @@
 
 Every ray cast in the package goes through :class:`RayCaster`: ``cast(origins, directions)``
 returns the first hit of each ray as :class:`RayHits` (distance along the ray, triangle,
-unit normal, barycentric coordinates). A mesh's caster (:func:`mesh_caster`, the one place a
-backend is chosen) is a :class:`MeshCaster`: it also answers the queries of trimesh's
-``mesh.ray`` (first face, any hit, hit points) and every crossing of many rays. Backends:
+unit normal, barycentric coordinates). A mesh's caster (:func:`~.mesh.mesh_caster`, the one
+place its backend is chosen) is a :class:`~.mesh.MeshCaster`: it also answers trimesh's
+``mesh.ray`` queries (first face, any hit, hit points) and every crossing of many rays.
 
-* :class:`~.embree.EmbreeScene`: Embree through ``embreex``, one ray per call, robust
-  (watertight) scene in float32; the viewer (:mod:`affordgrasp.viz.raycast`) and the
-  reference depth engine use it;
-* :class:`~.embree.EmbreeRays`: an :class:`~.embree.EmbreeScene` in trimesh's frame that
-  answers trimesh's queries with the same bits as trimesh's own Embree engine, without
-  importing trimesh; every crossing by a compiled loop (:mod:`.crossings`);
-* :class:`~.packets.PacketScene`: the Embree library that ``embreex`` ships, called with 16
-  rays at a time (the packet depth engine);
-* :class:`TrimeshRays`: trimesh's own engine (``mesh.ray``), for a ``trimesh.Trimesh`` and
-  wherever ``embreex`` is missing (trimesh's ray-triangle test).
+* :mod:`.embree`: Embree through ``embreex``, one ray per call, robust (watertight) scenes
+  in float32 (:class:`~.embree.EmbreeScene`; the viewer and the reference depth engine);
+* :mod:`.mesh`: a mesh's caster, Embree in trimesh's frame with trimesh's bits
+  (:class:`~.mesh.EmbreeRays`), or trimesh's own engine (:class:`~.mesh.TrimeshRays`);
+* :mod:`.crossings`: every crossing of many rays, Embree's hits followed by a compiled loop;
+* :mod:`.packets`: the Embree library that ``embreex`` ships, 16 rays per call
+  (:class:`~.packets.PacketScene`; the packet depth engine).
 
 ``tests/rays/test_backends.py`` checks that every backend, and the depth engines of
 :mod:`affordgrasp.vision.engines`, give the same hits on the same rays against a box and a
@@ -24,13 +21,12 @@ sphere (analytic distances).
 
 from __future__ import annotations
 
-from abc import abstractmethod
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..caching import IdentityCache
+_TOL_ZERO = float(np.finfo(np.float64).resolution * 100)  # trimesh.util.TOL_ZERO
 
 
 @dataclass(frozen=True)
@@ -85,90 +81,6 @@ class RayCaster(Protocol):
         ...
 
 
-class MeshCaster(RayCaster):
-    """The ray queries of one mesh, by trimesh's names (``mesh.ray``); get a mesh's with
-    :func:`mesh_caster`.
-
-    Hit points are computed in float64 on the plane of the face hit.
-
-    Attributes
-    ----------
-    normals : (f, 3) float64 ndarray
-        Unit normal of every face (trimesh's).
-    """
-
-    normals: np.ndarray
-
-    @abstractmethod
-    def intersects_first(self, ray_origins, ray_directions) -> np.ndarray:
-        """The face each ray hits first.
-
-        Parameters
-        ----------
-        ray_origins, ray_directions : (n, 3) float array_like
-            m; directions need not be unit.
-
-        Returns
-        -------
-        (n,) int ndarray
-            -1 for a miss.
-        """
-
-    @abstractmethod
-    def intersects_location(self, ray_origins, ray_directions, multiple_hits: bool = True):
-        """Hit points, their rays and faces.
-
-        Parameters
-        ----------
-        ray_origins, ray_directions : (n, 3) float array_like
-            m; directions need not be unit.
-        multiple_hits : bool
-            Every hit along each ray, else the first.
-
-        Returns
-        -------
-        locations : (m, 3) float64 ndarray
-        index_ray, index_tri : (m,) int ndarray
-        """
-
-    def intersects_any(self, ray_origins, ray_directions) -> np.ndarray:
-        """Whether each ray hits the mesh.
-
-        Parameters
-        ----------
-        ray_origins, ray_directions : (n, 3) float array_like
-            m.
-
-        Returns
-        -------
-        (n,) bool ndarray
-        """
-        return self.intersects_first(ray_origins, ray_directions) != -1
-
-    def crossings(self, origins, directions, reach: float | None = None):
-        """Every crossing of each ray with the surface, in the order the ray meets them.
-
-        Parameters
-        ----------
-        origins, directions : (n, 3) float array_like
-            m; directions need not be unit.
-        reach : float, optional
-            m: at least every crossing within it of the ray's origin, and each ray's first
-            (None: every crossing).
-
-        Returns
-        -------
-        index_tri, index_ray : (m,) int64 ndarray
-        locations : (m, 3) float64 ndarray
-        """
-        locations, ray, tri = self.intersects_location(origins, directions, multiple_hits=True)
-        return (
-            np.asarray(tri, dtype=np.int64),
-            np.asarray(ray, dtype=np.int64),
-            np.asarray(locations, dtype=np.float64),
-        )
-
-
 def unit_face_normals(triangles: np.ndarray) -> np.ndarray:
     """Unit normals of triangles as wound, ``(b − a) × (c − a)``; 0 for a degenerate one.
 
@@ -185,6 +97,83 @@ def unit_face_normals(triangles: np.ndarray) -> np.ndarray:
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     norm = np.linalg.norm(normal, axis=1, keepdims=True)
     return np.divide(normal, norm, out=np.zeros_like(normal), where=norm > 0)
+
+
+class SceneFrame:
+    """A backend's triangles, held in its scene frame ``(x − origin)·scale``.
+
+    Embree is float32 (and the rasteriser projects from the camera): the triangles and the
+    rays are moved to the scene's frame before rounding, so an origin near the triangles
+    keeps the precision. The base of the backends' scenes (:class:`~.embree.EmbreeScene`,
+    :class:`~.packets.PacketScene`, :class:`~affordgrasp.vision.engines.RasterEngine`).
+
+    Parameters
+    ----------
+    vertices : (v, 3) or (t, 3, 3) float ndarray
+        The vertices (with ``faces``) or the triangles (without), m.
+    faces : (t, 3) int ndarray, optional
+        Vertex indices of each triangle.
+    origin : (3,) float ndarray, optional
+        The scene frame's origin, m (default 0).
+    scale : float
+        Scene units per metre.
+    face_normals : (t, 3) float ndarray, optional
+        Unit normal of each triangle (default: from the winding, :func:`unit_face_normals`).
+    """
+
+    def __init__(
+        self,
+        vertices: np.ndarray,
+        faces: np.ndarray | None = None,
+        *,
+        origin: np.ndarray | None = None,
+        scale: float = 1.0,
+        face_normals: np.ndarray | None = None,
+    ) -> None:
+        self._vertices = np.asarray(vertices, dtype=np.float64)
+        self._faces = None if faces is None else np.asarray(faces)
+        self._origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
+        self._scale = float(scale)
+        self._face_normals = None if face_normals is None else np.asarray(face_normals)
+
+    @property
+    def scene_vertices(self) -> np.ndarray:
+        """(v, 3) or (t, 3, 3) float32 ndarray: the vertices in the scene's frame."""
+        return ((self._vertices - self._origin) * self._scale).astype(np.float32)
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(t, 3, 3) float64 ndarray: the triangles, m."""
+        if self._faces is None:
+            return self._vertices
+        return self._vertices[self._faces]
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(t, 3) float64 ndarray: unit normal of every triangle."""
+        if self._face_normals is None:
+            self._face_normals = unit_face_normals(self.triangles)
+        return self._face_normals
+
+    @property
+    def scene_frame(self) -> tuple[np.ndarray, float]:
+        """The scene's frame: a point x is ``(x - origin) * scale`` there."""
+        return self._origin, self._scale
+
+    def to_scene(self, origins: np.ndarray, directions: np.ndarray):
+        """Rays in the scene's frame, in float32 (Embree's).
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float array_like
+            m; directions as given (not made unit).
+
+        Returns
+        -------
+        origins, directions : (n, 3) float32 ndarray
+        """
+        scaled = (np.array(origins, dtype=np.float64) - self._origin) * self._scale
+        return scaled.astype(np.float32), np.asarray(directions).astype(np.float32)
 
 
 def ray_hits(
@@ -216,6 +205,14 @@ def ray_hits(
     return RayHits(distance, triangle, normal, barycentric)
 
 
+def _unitize(vectors: np.ndarray) -> np.ndarray:
+    # trimesh.util.unitize for (n, d) arrays, same operations
+    norm = np.sqrt(np.dot(vectors * vectors, [1.0] * vectors.shape[1]))
+    valid = norm > _TOL_ZERO
+    norm[valid] **= -1
+    return vectors * norm.reshape((-1, 1))
+
+
 def embree_available() -> bool:
     """Whether ``embreex`` can be imported (then the Embree backends work).
 
@@ -228,80 +225,3 @@ def embree_available() -> bool:
     except ImportError:
         return False
     return True
-
-
-class TrimeshRays(MeshCaster):
-    """trimesh's own engine on a ``trimesh.Trimesh`` (``mesh.ray``: Embree through ``embreex``
-    when installed, else trimesh's ray-triangle test in numpy).
-
-    Parameters
-    ----------
-    mesh : trimesh.Trimesh
-        m.
-    """
-
-    def __init__(self, mesh) -> None:
-        self.mesh = mesh
-        self.normals = np.asarray(mesh.face_normals, dtype=np.float64)
-
-    def intersects_first(self, ray_origins, ray_directions) -> np.ndarray:
-        return self.mesh.ray.intersects_first(ray_origins, ray_directions)
-
-    def intersects_any(self, ray_origins, ray_directions) -> np.ndarray:
-        return self.mesh.ray.intersects_any(ray_origins, ray_directions)
-
-    def intersects_location(self, ray_origins, ray_directions, multiple_hits: bool = True):
-        return self.mesh.ray.intersects_location(
-            ray_origins, ray_directions, multiple_hits=multiple_hits
-        )
-
-    def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
-        from trimesh.triangles import points_to_barycentric
-
-        origins = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
-        directions = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
-        locations, ray, tri = self.intersects_location(origins, directions, multiple_hits=False)
-        ray, n = np.asarray(ray, dtype=np.int64), len(origins)
-        distance, triangle, uv = np.zeros(n), np.full(n, -1), np.zeros((n, 2))
-        # |hit − origin| in units of the direction's length
-        distance[ray] = np.linalg.norm(locations - origins[ray], axis=1) / np.linalg.norm(
-            directions[ray], axis=1
-        )
-        triangle[ray] = tri
-        if len(ray):
-            uv[ray] = points_to_barycentric(self.mesh.triangles[tri], locations)[:, 1:]
-        return ray_hits(distance, triangle, self.normals, uv)
-
-
-_MESH_CASTERS: IdentityCache[MeshCaster] = IdentityCache()
-
-
-def mesh_caster(mesh) -> MeshCaster:
-    """The ray caster of a mesh: where the backend is chosen.
-
-    A ``trimesh.Trimesh`` keeps its own engine (``mesh.ray``, :class:`TrimeshRays`). A
-    prepared mesh (arrays with trimesh's face normals and scale, such as
-    :class:`~affordgrasp.objects.prepared.MeshData`) is cast by :class:`~.embree.EmbreeRays`
-    (the same bits, without importing trimesh), or where ``embreex`` is missing by trimesh's
-    engine on ``mesh.to_trimesh()``; built once per mesh.
-
-    Parameters
-    ----------
-    mesh : trimesh.Trimesh or MeshData
-        m.
-
-    Returns
-    -------
-    MeshCaster
-    """
-    if hasattr(mesh, "ray"):
-        return TrimeshRays(mesh)
-
-    def build() -> MeshCaster:
-        if embree_available() and mesh.face_normals is not None and mesh.scale is not None:
-            from .embree import EmbreeRays
-
-            return EmbreeRays(mesh.vertices, mesh.faces, mesh.face_normals, mesh.scale)
-        return TrimeshRays(mesh.to_trimesh())
-
-    return _MESH_CASTERS.get(mesh, build)

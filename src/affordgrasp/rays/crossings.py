@@ -2,11 +2,11 @@
 
 trimesh's multiple-hit loop (``RayMeshIntersector.intersects_id``) spends two thirds of its
 time outside Embree, in numpy: gathering the live rays, intersecting each hit face's plane,
-advancing the rays past their hits. :func:`all_crossings` makes the same Embree calls on the
+advancing the rays past their hits. :func:`crossings` makes the same Embree calls on the
 same float32 rays and does the rest in one compiled pass per round, with the same
 floating-point operations in the same order, so the hits, their points and their order are
 the same bits (``tests/rays/test_crossings.py`` compares the two); about twice as fast on
-the wedge angle's rays. :class:`~.embree.EmbreeRays` answers trimesh's hit-point queries
+the wedge angle's rays. :class:`~.mesh.EmbreeRays` answers trimesh's hit-point queries
 with it.
 """
 
@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from ..kernel_cache import install_package_stamp
+from . import _unitize
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 
@@ -125,45 +126,6 @@ def _advance(query, live, last_hit, origins, directions, offsets, base_offset, p
     return rays[:h], faces[:h], points[:h], next_live, next_origins, next_directions
 
 
-def all_crossings(rays, origins: np.ndarray, directions: np.ndarray):
-    """Every hit of every ray, as trimesh's ``intersects_id(..., multiple_hits=True,
-    return_locations=True)`` returns them (same faces, points and order).
-
-    Parameters
-    ----------
-    rays : affordgrasp.rays.embree.EmbreeRays
-        The mesh's ray caster.
-    origins, directions : (n, 3) float64 ndarray
-        m; directions need not be unit.
-
-    Returns
-    -------
-    index_tri, index_ray : (m,) int64 ndarray
-        Face and ray of each hit.
-    locations : (m, 3) float64 ndarray
-        m.
-    """
-    return _crossings(rays, origins, directions, None)
-
-
-def first_crossings(rays, origins: np.ndarray, directions: np.ndarray):
-    """The first hit of each ray, as trimesh's ``intersects_id(..., multiple_hits=False,
-    return_locations=True)`` returns them (one round of :func:`all_crossings`).
-
-    Parameters
-    ----------
-    rays : affordgrasp.rays.embree.EmbreeRays
-    origins, directions : (n, 3) float64 ndarray
-        m; directions need not be unit.
-
-    Returns
-    -------
-    index_tri, index_ray : (m,) int64 ndarray
-    locations : (m, 3) float64 ndarray
-    """
-    return _crossings(rays, origins, directions, None, rounds=1)
-
-
 @njit(cache=True)
 def _still_near(live, o32, d32, origins, start, directions, reach, slack, scene_scale):
     """The live rays that now start within ``reach`` of where they started, and how far
@@ -194,41 +156,41 @@ def _still_near(live, o32, d32, origins, start, directions, reach, slack, scene_
     return out_live, out_o, out_d, limits
 
 
-def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: float):
-    """The crossings of :func:`all_crossings` within ``reach`` of each ray's origin, and
-    each ray's first crossing wherever it is.
+def crossings(rays, origins, directions, reach: float | None = None, max_hits: int = _MAX_HITS):
+    """Every hit of every ray, as trimesh's ``intersects_id(..., multiple_hits=True,
+    return_locations=True)`` returns them (same faces, points and order); with ``reach``,
+    those within ``reach`` of each ray's origin and each ray's first wherever it is.
 
-    A ray is followed past a crossing only while that crossing lies within ``reach``, and
-    from then on Embree searches no farther than ``reach`` (plus 0.1 %): the crossings
-    within ``reach`` and the first one are the same (faces, points, order) as
-    :func:`all_crossings` finds, in fewer rounds when rays go on far past the ball they are
-    cast for (a mug's rays cross its far wall: 1.5 rounds per ray instead of 2.65).
+    With ``reach``, a ray is followed past a crossing only while that crossing lies within
+    ``reach``, and from then on Embree searches no farther than ``reach`` (plus 0.1 %): the
+    crossings within ``reach`` and the first one are the same (faces, points, order) as
+    without, in fewer rounds when rays go on far past the ball they are cast for (a mug's
+    rays cross its far wall: 1.5 rounds per ray instead of 2.65).
 
     Parameters
     ----------
-    rays : affordgrasp.rays.embree.EmbreeRays
-    origins, directions : (n, 3) float64 ndarray
+    rays : affordgrasp.rays.mesh.EmbreeRays
+        The mesh's ray caster.
+    origins, directions : (n, 3) float64 array_like
         m; directions need not be unit.
-    reach : float
+    reach : float, optional
         m, > 0.
+    max_hits : int
+        Most hits per ray (trimesh's default); 1 gives trimesh's first hits
+        (``multiple_hits=False``).
 
     Returns
     -------
     index_tri, index_ray : (m,) int64 ndarray
-        Face and ray of each crossing (every one within ``reach``, each ray's first, and
+        Face and ray of each hit (with ``reach``: every one within it, each ray's first, and
         perhaps a few more within 0.1 % beyond).
     locations : (m, 3) float64 ndarray
         m.
     """
-    return _crossings(rays, origins, directions, float(reach))
-
-
-def _crossings(rays, origins, directions, reach, rounds=_MAX_HITS):
-    """The multiple-hit loop of :func:`all_crossings` (``reach`` None) and of
-    :func:`near_crossings` (a ray done once it has crossed beyond ``reach``)."""
+    reach = None if reach is None else float(reach)
     start = np.asarray(origins, dtype=np.float64)
     origins = start.copy()
-    directions = rays.unit_directions(np.array(directions, dtype=np.float64))
+    directions = _unitize(np.array(directions, dtype=np.float64))  # as trimesh's loop
     if origins.shape != directions.shape:
         raise ValueError("Ray origin and direction don't match!")
     base_offset = rays.ray_offset
@@ -242,7 +204,7 @@ def _crossings(rays, origins, directions, reach, rounds=_MAX_HITS):
     tris = [np.zeros(0, dtype=np.int64)]
     idx = [np.zeros(0, dtype=np.int64)]
     locs = [np.zeros((0, 3), dtype=np.float64)]
-    for _depth in range(rounds):
+    for _depth in range(max_hits):
         query = rays.first_faces_scene(o32, d32, limits)
         if not (query != -1).any():
             break

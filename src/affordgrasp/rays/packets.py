@@ -28,8 +28,7 @@ from numba import njit, types
 
 from ..errors import InputError
 from ..kernel_cache import install_package_stamp
-from . import RayHits, ray_hits
-from .embree import SceneFrame
+from . import RayHits, SceneFrame, ray_hits
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 
@@ -285,7 +284,7 @@ class PacketScene(SceneFrame):
     triangles : (t, 3, 3) float ndarray
         m.
     **frame
-        ``origin``, ``scale`` and ``face_normals``, as :class:`~.embree.SceneFrame`'s.
+        ``origin``, ``scale`` and ``face_normals``, as :class:`~affordgrasp.rays.SceneFrame`'s.
 
     Attributes
     ----------

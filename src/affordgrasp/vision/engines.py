@@ -33,7 +33,7 @@ import functools
 import numpy as np
 
 from ..errors import InputError
-from ..rays import RayHits, ray_hits, unit_face_normals
+from ..rays import RayHits, SceneFrame, ray_hits
 from ..rays.embree import EmbreeScene
 from .camera import DepthCamera
 
@@ -58,8 +58,9 @@ def camera_rays(camera: DepthCamera) -> np.ndarray:
     return rays
 
 
-class EmbreeEngine:
-    """Embree through ``embreex``, one ray per call (the reference engine).
+class EmbreeEngine(EmbreeScene):
+    """Embree through ``embreex``, one ray per call (the reference engine): the object's
+    :class:`~affordgrasp.rays.embree.EmbreeScene`, which also makes depth images.
 
     Parameters
     ----------
@@ -73,21 +74,7 @@ class EmbreeEngine:
 
     def __init__(self, triangles: np.ndarray, centre: np.ndarray) -> None:
         self.centre = np.asarray(centre, dtype=np.float64)
-        self.scene = EmbreeScene(triangles, origin=self.centre)
-
-    def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
-        """First hits of rays (see :class:`~affordgrasp.rays.RayCaster`).
-
-        Parameters
-        ----------
-        origins, directions : (n, 3) float array_like
-            Mesh frame, m; directions need not be unit.
-
-        Returns
-        -------
-        RayHits
-        """
-        return self.scene.cast(origins, directions)
+        super().__init__(triangles, origin=self.centre)
 
     def render(
         self, poses: np.ndarray, camera: DepthCamera, *, images_per_call: int = 64
@@ -119,7 +106,7 @@ class EmbreeEngine:
             # einsum is 20x slower here).
             dirs = np.matmul(rays_cam[None], rot.transpose(0, 2, 1).astype(_F32))
             origins = np.repeat(origin.astype(_F32), per_image, axis=0)
-            t = self.scene.distances_scene(origins, dirs.reshape(-1, 3))
+            t = self.distances_scene(origins, dirs.reshape(-1, 3))
             out[lo:hi] = t.reshape(hi - lo, size, size)
         return out
 
@@ -203,7 +190,7 @@ class PacketEngine:
         return self.scene.cast(origins, directions)
 
 
-class RasterEngine:
+class RasterEngine(SceneFrame):
     """Z-buffered triangles (:func:`affordgrasp.vision.raster.rasterise`).
 
     Parameters
@@ -234,23 +221,12 @@ class RasterEngine:
         fallback=None,
     ) -> None:
         self.centre = np.asarray(centre, dtype=np.float64)
-        self._mesh_vertices = np.asarray(vertices, dtype=np.float64)
-        self._vertices = np.ascontiguousarray(self._mesh_vertices - self.centre)
-        self._faces = np.ascontiguousarray(faces, dtype=np.int64)
+        super().__init__(vertices, np.ascontiguousarray(faces, dtype=np.int64), origin=centre)
+        self._centred = np.ascontiguousarray(self._vertices - self.centre)
         self.cull = bool(cull)
         self.near = float(near)
         self._fallback_factory = fallback
         self._fallback = None
-
-    @functools.cached_property
-    def triangles(self) -> np.ndarray:
-        """(t, 3, 3) float64 ndarray: the triangles, mesh frame, m (built when first cast)."""
-        return self._mesh_vertices[self._faces]
-
-    @functools.cached_property
-    def normals(self) -> np.ndarray:
-        """(t, 3) float64 ndarray: unit normal of every triangle, as wound."""
-        return unit_face_normals(self.triangles)
 
     def fallback(self):
         """The ray engine for the views the rasteriser leaves (built once).
@@ -294,7 +270,7 @@ class RasterEngine:
         out = np.zeros((n, size, size), dtype=_F32)
         done = np.ones(n, dtype=np.bool_)
         rasterise(
-            self._vertices,
+            self._centred,
             self._faces,
             np.ascontiguousarray(rot, dtype=np.float64),
             np.ascontiguousarray(np.asarray(origin, dtype=np.float64) - self.centre),

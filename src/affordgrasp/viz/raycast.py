@@ -85,11 +85,6 @@ class SceneCaster:
     face_color: np.ndarray  # (f, 3)
     face_part: np.ndarray  # (f,) int8
 
-    @property
-    def origin(self) -> np.ndarray:
-        """(3,) float64 ndarray: the centre the rays are cast relative to, m."""
-        return self.rays.scene_frame[0]
-
     def cast(self, origins: np.ndarray, dirs: np.ndarray) -> RayHits:
         """First hits of rays (the :class:`~affordgrasp.rays.RayCaster` interface).
 

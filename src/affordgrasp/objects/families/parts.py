@@ -25,7 +25,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from ...errors import InternalError
-from ...rays import mesh_caster
+from ...rays.mesh import mesh_caster
 
 __all__ = ["PART_NAMES", "part_index", "tag", "recording", "face_parts_of", "refine_parts"]
 
