@@ -18,7 +18,7 @@ Three kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.ca
   with the same vertices and faces shares it.
 
 Every key also holds a **stamp**: a format number, a hash of the sources that compute the
-entries (``affordgrasp/objects``, ``grasp/policy.py``) and a
+entries (``affordgrasp/objects``, ``rays``, ``grasp/policy.py``) and a
 fingerprint of the installed numpy, trimesh, scipy and manifold3d. An entry written under
 another key, that fails its checksum or that cannot be read is rebuilt and overwritten,
 never trusted (:func:`affordgrasp.caching.read_arrays`); a loaded family's vertices and
@@ -59,7 +59,7 @@ if TYPE_CHECKING:
 FORMAT = 1
 _T = TypeVar("_T")
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
-_STAMPED_SOURCES = ("objects", "grasp/policy.py")
+_STAMPED_SOURCES = ("objects", "rays", "grasp/policy.py")
 _STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d", "fast_simplification")
 
 

@@ -190,9 +190,10 @@ def crossings(rays, origins, directions, reach: float | None = None, max_hits: i
     reach = None if reach is None else float(reach)
     start = np.asarray(origins, dtype=np.float64)
     origins = start.copy()
-    directions = _unitize(np.array(directions, dtype=np.float64))  # as trimesh's loop
+    directions = np.array(directions, dtype=np.float64)
     if origins.shape != directions.shape:
         raise ValueError("Ray origin and direction don't match!")
+    directions = _unitize(directions)  # as trimesh's loop
     base_offset = rays.ray_offset
     offsets = directions * base_offset
     plane_origins, plane_normals = rays.face_planes
