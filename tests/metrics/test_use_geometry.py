@@ -1,4 +1,4 @@
-"""U_g and the sharpest-edge angle (use_geometry.py, conventions: Metrics)."""
+"""U_g, the sharpest-edge angle and the wedge's rays (use_geometry.py, conventions: Metrics)."""
 
 import numpy as np
 import pytest
@@ -6,7 +6,10 @@ import trimesh
 from metrics_support import fine_cylinder, folded_sheet, wedge_prism
 
 from affordgrasp.errors import InputError
-from affordgrasp.metrics import use_edge, use_edge_angle
+from affordgrasp.metrics import use_edge, use_edge_angle, use_geometry
+from affordgrasp.objects import load_object
+from affordgrasp.rays import embree_available
+from affordgrasp.rays.mesh import EmbreeRays, mesh_caster
 
 
 def _plane():
@@ -514,3 +517,110 @@ def test_contact_reach_is_the_farthest_contact_towards_the_use_end():
         contact_reach(contacts, offsets, U, c, [0, 0, 0])
     with pytest.raises(InputError, match="offsets"):
         contact_reach(contacts, [0, 2, 3], U[:2], c, axis)
+
+
+def test_order_by_ray_is_the_two_key_sort():
+    rng = np.random.default_rng(3)
+    ray = rng.integers(0, 50, 2000)
+    t = rng.uniform(0, 1, 2000)
+    # in order within each ray (the usual case) and shuffled (the fallback), with ties
+    for distances in (np.sort(t)[np.argsort(np.argsort(ray, kind="stable"))], t, np.round(t, 1)):
+        got = use_geometry._order_by_ray(ray, distances)
+        order = np.lexsort((distances, ray))
+        assert np.array_equal(ray[got], ray[order]) and np.array_equal(
+            distances[got], distances[order]
+        )
+
+
+ENGINES = [
+    pytest.param("embree", marks=pytest.mark.skipif(not embree_available(), reason="no embreex")),
+    "trimesh",
+]
+
+
+def _engine_rays(mesh: trimesh.Trimesh, engine: str):
+    """The mesh's rays cast by Embree (as a prepared mesh's), or by trimesh's own engine."""
+    if engine == "embree":
+        return EmbreeRays(mesh.vertices, mesh.faces, mesh.face_normals, mesh.scale)
+    return mesh_caster(mesh)
+
+
+def _box_with_debris():
+    """A closed 20 mm cube and, 50 mm above it, one stray triangle (a scan's debris)."""
+    box = trimesh.creation.box(extents=(0.02, 0.02, 0.02))
+    stray = np.array([[-0.05, -0.05, 0.06], [0.05, -0.05, 0.06], [0.0, 0.05, 0.06]])
+    vertices = np.concatenate([box.vertices, stray])
+    faces = np.concatenate([box.faces, [[8, 9, 10]]])
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_ray_starts_inside_when_its_first_crossing_leaves(engine):
+    """Up from 1 mm under the cube's top: leaving the cube, then crossing the debris. The
+    parity of the two crossings says the ray starts outside; its first crossing, leaving
+    the solid, says inside, and the 3 mm ball is inside up to the top face."""
+    mesh = _box_with_debris()
+    origins = np.array([[0.0, 0.0, 0.009], [0.0, 0.0, 0.009]])
+    directions = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])
+    rays = _engine_rays(mesh, engine)
+    ray, t, inside = use_geometry._near_crossing_distances(rays, origins, directions, 3e-3)
+    assert inside.tolist() == [True, True]
+    w, w_in = use_geometry._ball_weights(ray, t, 3e-3, 2e-3, inside)
+    np.testing.assert_allclose(w, [(1.0 / 3.0) ** 3, 1.0], rtol=1e-9)
+    np.testing.assert_allclose(w_in, [(1.0 / 2.0) ** 3, 1.0], rtol=1e-9)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_fold_within_the_ball_falls_back_to_the_parity(engine):
+    """A cube and a 2 mm plate overlapping its top, as one self-intersecting surface: from
+    0.8 mm under the top, a ray enters the plate before it leaves the cube (enter, leave,
+    leave within 3 mm): the crossings do not alternate, and the parity of all of them
+    (three: odd) decides, not the first (entering)."""
+    a = trimesh.creation.box(extents=(0.02, 0.02, 0.02))
+    b = trimesh.creation.box(extents=(0.02, 0.02, 0.002)).apply_translation([0, 0, 0.0105])
+    mesh = trimesh.Trimesh(
+        np.concatenate([a.vertices, b.vertices]),
+        np.concatenate([a.faces, b.faces + len(a.vertices)]),
+        process=False,
+    )
+    origins = np.array([[0.001, 0.002, 0.0092]])
+    directions = np.array([[0.0, 0.0, 1.0]])
+    rays = _engine_rays(mesh, engine)
+    ray, t, inside = use_geometry._near_crossing_distances(rays, origins, directions, 3e-3)
+    assert len(t) == 3 and t[2] < 3e-3
+    assert inside.tolist() == [True]
+
+
+def _ray_inside(ray, t, radius, starts_inside):
+    """The inside weights by numpy (bincount), the reference of the compiled pass."""
+    n_rays = len(starts_inside)
+    within = t < radius
+    ray, t = ray[within], t[within]
+    start = np.searchsorted(ray, np.arange(n_rays))
+    rank = np.arange(len(ray)) - start[ray]
+    cube = (t / radius) ** 3
+    inside = np.bincount(ray, weights=np.where(rank % 2 == 0, cube, -cube), minlength=n_rays)
+    count = np.bincount(ray, minlength=n_rays)
+    inside = inside + (count % 2 == 0)
+    return np.where(starts_inside, inside, 1.0 - inside)
+
+
+def _wedge_rays(mesh, n_faces: int, k: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The wedge shape's rays at face centres: from 20 µm under the surface, k directions."""
+    rng = np.random.default_rng(seed)
+    faces = rng.choice(len(mesh.faces), n_faces, replace=False)
+    centre = mesh.vertices[mesh.faces[faces]].mean(axis=1) - 2e-5 * mesh.face_normals[faces]
+    sphere = use_geometry._fibonacci_sphere(k)
+    return np.repeat(centre, k, axis=0), np.tile(sphere, (n_faces, 1))
+
+
+@pytest.mark.parametrize("family", ["mug", "knife~scan"])
+def test_ball_weights_are_numpys_bit_for_bit(family):
+    mesh = load_object(family).mesh_data
+    origins, directions = _wedge_rays(mesh, 200, 256, 2)
+    rays = mesh_caster(mesh)
+    ray, t, inside = use_geometry._near_crossing_distances(rays, origins, directions, 3e-3)
+    w, w_in = use_geometry._ball_weights(ray, t, 3e-3, 2e-3, inside)
+    assert np.array_equal(w, _ray_inside(ray, t, 3e-3, inside))
+    assert np.array_equal(w_in, _ray_inside(ray, t, 2e-3, inside))
+    assert 0.3 < w.mean() < 0.7 and np.all((w > -1e-12) & (w < 1 + 1e-12))

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from .use_geometry import _first_exit
+from ..rays.mesh import mesh_caster
 from .validation import points_n3, use_normals_n3
 
 RELIEF_RADIUS_M = 0.005  # ring radius of use_relief
@@ -39,10 +39,7 @@ _DEPTH_START_M = 2e-5  # the depth ray starts this far inside U, along -n
 
 def _first_hits(mesh, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """Distance to the first hit of each ray ((n,) float64, +inf for a miss), m."""
-    caster = mesh.ray
-    if hasattr(caster, "cast"):  # objects.rays backends
-        return np.asarray(caster.cast(origins, directions).distance, dtype=np.float64)
-    return _first_exit(mesh, origins, directions)
+    return mesh_caster(mesh).cast(origins, directions).distance
 
 
 def _checked(use_point, use_normal) -> tuple[np.ndarray, np.ndarray]:
@@ -56,7 +53,7 @@ def use_depth(mesh, use_point, use_normal) -> float | np.ndarray:
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m, closed (anything with a ``ray`` caster).
+        The object, m, closed (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -89,7 +86,7 @@ def use_relief(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (anything with a ``ray`` caster).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float

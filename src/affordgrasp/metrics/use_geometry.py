@@ -45,12 +45,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..caching import IdentityCache
 from ..errors import InputError
 from ..grasp.pregrasp import dot3
+from ..runtime.kernel_cache import install_package_stamp
+from ..rays.mesh import MeshCaster, mesh_caster
 from ..tolerances import FLAT_DIHEDRAL
 from .validation import points_n3, use_normals_n3
+
+install_package_stamp()  # before the first @njit (see kernel_cache)
 
 EDGE_RADIUS_M = 0.003  # default search radius of the sharpest-edge angle
 EDGE_FACING_TOL_RAD = float(np.radians(5.0))  # use normal off an edge's normal fan, at most
@@ -470,7 +475,7 @@ def use_wedge_angle(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (anything with ``ray.intersects_location``).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -557,7 +562,7 @@ def use_wedge_shape(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (anything with ``ray.intersects_location``).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -588,6 +593,7 @@ def use_wedge_shape(
     if k < 8:
         raise InputError(f"directions must be an integer >= 8, got {directions}")
     n = P.shape[0]
+    rays = mesh_caster(mesh)
     S = _fibonacci_sphere(k)
     angle, inner, span, thickness = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     outer = np.einsum("ki,kj->kij", S, S).reshape(k, 9)
@@ -597,7 +603,7 @@ def use_wedge_shape(
         m = len(p)
         origins = np.repeat(p - _WEDGE_START_M * N[first : first + chunk], k, axis=0)
         dirs = np.tile(S, (m, 1))
-        ray, t, leaving = _near_crossing_distances(mesh, origins, dirs, max(radius, inner_radius))
+        ray, t, leaving = _near_crossing_distances(rays, origins, dirs, max(radius, inner_radius))
         w, w_in = _ball_weights(ray, t, radius, inner_radius, leaving)
         w, w_in = w.reshape(m, k), w_in.reshape(m, k)
         angle[first : first + m] = 2.0 * np.pi * w.mean(axis=1)
@@ -609,12 +615,17 @@ def use_wedge_shape(
         moment /= np.where(total > 0, total, 1.0)[:, None, None]
         moment[total <= 0] = np.eye(3) / 3.0
         span[first : first + m] = np.linalg.eigvalsh(moment)[:, 1]
-        thickness[first : first + m] = _edge_thickness(mesh.ray, p, w, S, moment, total)
+        thickness[first : first + m] = _edge_thickness(rays, p, w, S, moment, total)
     return WedgeShape(angle, inner, span, thickness)
 
 
 def _edge_thickness(
-    caster, P: np.ndarray, w: np.ndarray, S: np.ndarray, moment: np.ndarray, total: np.ndarray
+    rays: MeshCaster,
+    P: np.ndarray,
+    w: np.ndarray,
+    S: np.ndarray,
+    moment: np.ndarray,
+    total: np.ndarray,
 ) -> np.ndarray:
     """(m,) ``use_edge_thickness`` of the points P from their rays' inside weights w (m, k)
     over the directions S and the weights' second moment (:func:`use_wedge_shape`), m."""
@@ -641,7 +652,8 @@ def _edge_thickness(
     # both halves of every chord in one cast: rays along +e3, then along -e3
     origins = np.concatenate([centre, centre])
     dirs = np.concatenate([d, -d])
-    ray, t = _crossing_distances(caster, origins, dirs)
+    _, ray, locations = rays.crossings(origins, dirs)
+    _, ray, t = _distinct(ray, locations, origins, dirs)
     first = np.full(2 * n_chords, np.inf)
     np.minimum.at(first, ray, t)
     # inside the solid when the ray leaves it an odd number of times
@@ -707,41 +719,12 @@ def use_edge_thickness(mesh, use_point, use_normal, **kwargs) -> float | np.ndar
     return float(shape.edge_thickness[0]) if np.ndim(use_point) == 1 else shape.edge_thickness
 
 
-def _crossings(caster, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Ray and point of every crossing of the rays with the mesh ((m,) int64, (m, 3) float64):
-    the compiled loop on Embree (the same bits, twice as fast), else the caster's own."""
-    from ..objects.rays import EmbreeRays
-
-    if isinstance(caster, EmbreeRays):
-        from .ray_crossings import all_crossings
-
-        _, ray, locations = all_crossings(caster, origins, dirs)
-        return ray, locations
-    locations, ray, _ = caster.intersects_location(origins, dirs, multiple_hits=True)
-    return np.asarray(ray, dtype=np.int64), np.asarray(locations, dtype=np.float64)
-
-
-def _crossing_distances(
-    caster, origins: np.ndarray, dirs: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Ray and distance of every crossing ((m,) int64, (m,) float64), by ray then distance,
-    one per surface: a ray through an edge reports both of its faces, kept once."""
-    ray, locations = _crossings(caster, origins, dirs)
-    return _distinct_distances(ray, locations, origins, dirs)
-
-
-def _distinct_distances(
-    ray: np.ndarray, locations: np.ndarray, origins: np.ndarray, dirs: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The crossings (ray, point) as sorted, de-duplicated distances along their rays."""
-    _, ray, t = _distinct(ray, locations, origins, dirs)
-    return ray, t
-
-
 def _distinct(
     ray: np.ndarray, locations: np.ndarray, origins: np.ndarray, dirs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_distinct_distances`, with the index of each kept crossing in the input."""
+    """The crossings (ray, point) as distances along their rays ((m,) int64 index of each
+    kept crossing in the input, (m,) int64 ray, (m,) float64 distance), by ray then
+    distance, one per surface: a ray through an edge reports both of its faces, kept once."""
     t = np.einsum("ij,ij->i", locations - origins[ray], dirs[ray])
     order = _order_by_ray(ray, t)
     ray, t = ray[order], t[order]
@@ -751,37 +734,25 @@ def _distinct(
 
 
 def _near_crossing_distances(
-    mesh, origins: np.ndarray, dirs: np.ndarray, reach: float
+    rays: MeshCaster, origins: np.ndarray, dirs: np.ndarray, reach: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_crossing_distances` of at least the crossings within ``reach``, and whether
-    each ray starts inside the solid ((n,) bool).
+    """Ray and distance (:func:`_distinct`) of at least the crossings within ``reach``, and
+    whether each ray starts inside the solid ((n,) bool).
 
     A ray starts inside when its first crossing leaves the solid (the face's outward normal
     along the ray), as long as its crossings within ``reach`` alternate, leaving and
     entering; where they do not (a scan's surface folded on itself next to U), when it
     crosses the surface an odd number of times in all. Where every crossing alternates
     the two rules agree, and a crossing missed next to the start (a ray through an edge)
-    makes the ray start outside by both; the first needs no crossing beyond the ball, so on
-    Embree the rays are followed no farther (:func:`~.ray_crossings.near_crossings`; a
-    container's rays cross its far wall). Where crossings beyond the ball do not alternate
-    (a missed crossing, or a fold, far from U), the parity can turn a ray inside out that
-    the first crossing does not.
+    makes the ray start outside by both; the first needs no crossing beyond the ball, so the
+    rays may be followed no farther (``rays.crossings`` with a reach; a container's rays
+    cross its far wall). Where crossings beyond the ball do not alternate (a missed
+    crossing, or a fold, far from U), the parity can turn a ray inside out that the first
+    crossing does not.
     """
-    from ..objects.rays import EmbreeRays
-
-    caster = mesh.ray
-    if embree := isinstance(caster, EmbreeRays):
-        from .ray_crossings import all_crossings, near_crossings
-
-        tri, ray, locations = near_crossings(caster, origins, dirs, reach)
-        normals = caster.face_planes[1]
-    else:
-        locations, ray, tri = caster.intersects_location(origins, dirs, multiple_hits=True)
-        normals = np.asarray(mesh.face_normals, dtype=np.float64)
-    ray = np.asarray(ray, dtype=np.int64)
-    locations = np.asarray(locations, dtype=np.float64)
+    tri, ray, locations = rays.crossings(origins, dirs, reach)
     kept, ray, t = _distinct(ray, locations, origins, dirs)
-    leaves = np.einsum("ij,ij->i", normals[np.asarray(tri, dtype=np.int64)[kept]], dirs[ray]) > 0
+    leaves = np.einsum("ij,ij->i", rays.normals[tri[kept]], dirs[ray]) > 0
     starts_inside = np.zeros(len(origins), dtype=bool)
     first = np.ones(len(ray), dtype=bool)
     first[1:] = ray[1:] != ray[:-1]
@@ -790,13 +761,9 @@ def _near_crossing_distances(
     folded = (~first[1:]) & (leaves[1:] == leaves[:-1]) & (t[1:] < reach)
     odd = np.unique(ray[1:][folded])
     if len(odd):
-        if embree:
-            _, sub, sub_locations = all_crossings(caster, origins[odd], dirs[odd])
-            sub, _ = _distinct_distances(sub, sub_locations, origins[odd], dirs[odd])
-            count = np.bincount(sub, minlength=len(odd))
-        else:
-            count = np.bincount(ray, minlength=len(origins))[odd]
-        starts_inside[odd] = count % 2 == 1
+        _, sub, sub_locations = rays.crossings(origins[odd], dirs[odd])
+        _, sub, _ = _distinct(sub, sub_locations, origins[odd], dirs[odd])
+        starts_inside[odd] = np.bincount(sub, minlength=len(odd)) % 2 == 1
     return ray, t, starts_inside
 
 
@@ -827,14 +794,39 @@ def _ball_weights(
     the next one, entering, says it starts outside). From inside, with crossings
     t1 < t2 < ... within the radius (c = (t / r)³), the inside segments are [0, t1],
     [t2, t3], ...: Σ_k (-1)^k c_(k+1), + 1 after an even number of crossings; from outside,
-    the complement. Summed by a compiled pass over the crossings
-    (:func:`~.ray_crossings.ball_weights`).
+    the complement. Summed by a compiled pass over the crossings.
     """
-    from .ray_crossings import ball_weights
-
-    return ball_weights(
+    return _ball_weights_kernel(
         ray, t, (t / radius) ** 3, (t / inner_radius) ** 3, radius, inner_radius, starts_inside
     )
+
+
+@njit(cache=True)
+def _ball_weights_kernel(ray, t, cube_out, cube_in, radius, inner_radius, starts_inside):
+    """:func:`_ball_weights`' sums, in the order ``np.bincount`` would add them (tests compare
+    the two, bit for bit); ``cube_out``, ``cube_in``: ``(t / radius) ** 3`` and
+    ``(t / inner_radius) ** 3`` (numpy's power)."""
+    n = starts_inside.shape[0]
+    acc_out = np.zeros(n)
+    acc_in = np.zeros(n)
+    k_out = np.zeros(n, dtype=np.int64)
+    k_in = np.zeros(n, dtype=np.int64)
+    for a in range(ray.shape[0]):
+        r = ray[a]
+        if t[a] < radius:
+            acc_out[r] += cube_out[a] if k_out[r] % 2 == 0 else -cube_out[a]
+            k_out[r] += 1
+        if t[a] < inner_radius:
+            acc_in[r] += cube_in[a] if k_in[r] % 2 == 0 else -cube_in[a]
+            k_in[r] += 1
+    w = np.empty(n)
+    w_in = np.empty(n)
+    for r in range(n):
+        v = acc_out[r] + (1.0 if k_out[r] % 2 == 0 else 0.0)
+        w[r] = v if starts_inside[r] else 1.0 - v
+        v = acc_in[r] + (1.0 if k_in[r] % 2 == 0 else 0.0)
+        w_in[r] = v if starts_inside[r] else 1.0 - v
+    return w, w_in
 
 
 def _use_point_groups(group, n_uses: int, n_grasps: int) -> np.ndarray:
@@ -990,7 +982,7 @@ def contact_thickness(mesh, contact_points, contact_normals, offsets) -> np.ndar
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (anything with ``ray.intersects_location``).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     contact_points, contact_normals : (k, 3) float
         Contacts of all grasps, stacked, m; the object's outward unit normals.
     offsets : (g + 1,) int
@@ -1015,7 +1007,7 @@ def _first_exit(mesh, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     out = np.full(len(origins), np.inf)
     if len(origins) == 0:
         return out
-    locations, ray, _ = mesh.ray.intersects_location(origins, dirs, multiple_hits=False)
+    locations, ray, _ = mesh_caster(mesh).intersects_location(origins, dirs, multiple_hits=False)
     ray = np.asarray(ray, dtype=np.int64)
     if len(ray):
         out[ray] = np.linalg.norm(np.asarray(locations, dtype=np.float64) - origins[ray], axis=1)
@@ -1039,7 +1031,7 @@ def contact_width(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (anything with ``ray.intersects_location``); closed.
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`); closed.
     contact_points, contact_normals : (k, 3) float
         Contacts of all grasps, stacked, m; the object's outward unit normals.
     offsets : (g + 1,) int

@@ -18,7 +18,7 @@ Three kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.ca
   with the same vertices and faces shares it.
 
 Every key also holds a **stamp**: a format number, a hash of the sources that compute the
-entries (``affordgrasp/objects``, ``grasp/policy.py``) and a
+entries (``affordgrasp/objects``, ``rays``, ``grasp/policy.py``) and a
 fingerprint of the installed numpy, trimesh, scipy and manifold3d. An entry written under
 another key, that fails its checksum or that cannot be read is rebuilt and overwritten,
 never trusted (:func:`affordgrasp.caching.read_arrays`); a loaded family's vertices and
@@ -59,7 +59,7 @@ if TYPE_CHECKING:
 FORMAT = 1
 _T = TypeVar("_T")
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
-_STAMPED_SOURCES = ("objects", "grasp/policy.py")
+_STAMPED_SOURCES = ("objects", "rays", "grasp/policy.py")
 _STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d", "fast_simplification")
 
 
@@ -119,7 +119,8 @@ class MeshData:
     """A triangle mesh as arrays, with what trimesh derives from it, without trimesh.
 
     Duck-types the part of ``trimesh.Trimesh`` the pipeline uses (``vertices``, ``faces``,
-    ``face_normals``, ``triangles``, ``face_adjacency*``, ``ray``, ``hash()``).
+    ``face_normals``, ``triangles``, ``face_adjacency*``, ``hash()``); its rays are cast by
+    :func:`affordgrasp.rays.mesh.mesh_caster` (Embree, without trimesh).
 
     Attributes
     ----------
@@ -156,18 +157,6 @@ class MeshData:
     def triangles(self) -> np.ndarray:
         """(f, 3, 3) float64 ndarray: the vertices of each face, m."""
         return self.vertices[self.faces]
-
-    @property
-    def ray(self):
-        """Ray queries (:class:`~affordgrasp.objects.rays.EmbreeRays`, else trimesh's)."""
-        return _RAYS.get(self, self._make_rays)
-
-    def _make_rays(self):
-        from .rays import EmbreeRays, embree_available
-
-        if embree_available() and self.face_normals is not None and self.scale is not None:
-            return EmbreeRays(self.vertices, self.faces, self.face_normals, self.scale)
-        return self.to_trimesh().ray
 
     def to_trimesh(self) -> trimesh.Trimesh:
         """The mesh as a ``trimesh.Trimesh`` (same vertices and faces, not processed).
@@ -206,8 +195,6 @@ class MeshData:
             face_adjacency_convex=np.asarray(mesh.face_adjacency_convex, dtype=bool),
         )
 
-
-_RAYS: IdentityCache[Any] = IdentityCache()
 
 _MESH_FIELDS = (
     "face_normals",

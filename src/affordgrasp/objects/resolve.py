@@ -45,6 +45,7 @@ from affordgrasp.objects.mass import (
 from affordgrasp.objects.prepared import TRANSIENT_SOURCE, mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 from affordgrasp.objects.simplify import LARGE_MESH_FACES
+from affordgrasp.rays.mesh import mesh_caster
 
 if TYPE_CHECKING:
     import trimesh
@@ -209,7 +210,8 @@ class GraspObject:
             return np.zeros(0, dtype=np.int64)
         mesh = self.mesh_data
         faces = np.asarray(
-            mesh.ray.intersects_first(points + offset_m * normals, -normals), dtype=np.int64
+            mesh_caster(mesh).intersects_first(points + offset_m * normals, -normals),
+            dtype=np.int64,
         )
         missed = faces < 0
         if missed.any():

@@ -52,7 +52,7 @@ class DepthRenderer:
         How the image is made (:mod:`affordgrasp.vision.engines`): ``"raster"`` (z-buffered
         triangles, see :mod:`affordgrasp.vision.raster`; images it cannot make, from a
         camera almost touching the object, are ray cast), ``"packets"`` (Embree rays in
-        16-ray packets from a compiled loop, see :mod:`affordgrasp.vision.packets`),
+        16-ray packets from a compiled loop, see :mod:`affordgrasp.rays.packets`),
         ``"embreex"`` (one Embree ray per call, robust scene: the reference) or ``"auto"``
         (``"raster"``, the fastest on every built-in object).
     """
@@ -68,7 +68,7 @@ class DepthRenderer:
 
         def ray_engine():
             # Packets where the library loads (1-2 s, once), else one ray per call.
-            from . import packets
+            from ..rays import packets
 
             if packets.available():
                 return PacketEngine(triangles, centre, self.frame.vertices)

@@ -1,7 +1,7 @@
 """Seeing results: grasp renders, grids, dataset plots and an offline 3D viewer.
 
 Everything runs headless: images are ray cast (the package's ray-casting interface,
-:mod:`affordgrasp.objects.rays`, Embree through ``embreex``), drawn with
+:mod:`affordgrasp.rays`, Embree through ``embreex``), drawn with
 matplotlib's Agg canvas and written as PNG; the viewer is one self-contained HTML file.
 
 * :func:`grasp_scene` turns a sample row (conventions: Sample columns) into a :class:`GraspScene`;
@@ -23,7 +23,7 @@ from .grid import grid_image, save_grid
 from .html import ViewerEntry, write_viewer
 from .overlays import OverlayStyle, draw_grasp, grasp_image, save_grasp_png
 from .plots import save_plots, summarize
-from .raycast import RayCaster, Render, SceneCaster, auto_camera, render_image
+from .raycast import Render, SceneCaster, auto_camera, render_image
 from .scene import GraspScene, grasp_scene
 from .showcase import draw_best
 from .sources import DatasetSource, TableSource
@@ -33,7 +33,6 @@ __all__ = [
     "DatasetSource",
     "GraspScene",
     "OverlayStyle",
-    "RayCaster",
     "SceneCaster",
     "Render",
     "TableSource",

@@ -1,7 +1,7 @@
 """Ray casting a grasp scene: shaded colours, depth, parts.
 
 The object and the posed hand are cast in one scene (the package's ray-casting
-interface, :class:`affordgrasp.objects.rays.RayCaster`, with its Embree backend); each
+interface, :class:`affordgrasp.rays.RayCaster`, with its Embree backend); each
 pixel is shaded by its normal (Lambert, two lights fixed to the camera, a flat colour per
 part: the object grey, the palm and fingers blue) and silhouettes are outlined so the
 picture reads at thumbnail size. The result depends only on the inputs (no randomness, no
@@ -19,7 +19,8 @@ import numpy as np
 import trimesh
 
 from ..caching import IdentityCache
-from ..objects.rays import EmbreeScene, RayHits
+from ..rays import RayHits
+from ..rays.embree import EmbreeScene
 from .camera import Camera, _fibonacci_sphere, _image_up, framed_camera, unit
 from .scene import GraspScene, scene_bounds
 
@@ -84,13 +85,8 @@ class SceneCaster:
     face_color: np.ndarray  # (f, 3)
     face_part: np.ndarray  # (f,) int8
 
-    @property
-    def origin(self) -> np.ndarray:
-        """(3,) float64 ndarray: the centre the rays are cast relative to, m."""
-        return self.rays.scene_frame[0]
-
     def cast(self, origins: np.ndarray, dirs: np.ndarray) -> RayHits:
-        """First hits of rays (the :class:`~affordgrasp.objects.rays.RayCaster` interface).
+        """First hits of rays (the :class:`~affordgrasp.rays.RayCaster` interface).
 
         Parameters
         ----------
@@ -395,7 +391,3 @@ def auto_camera(
     score = score + 1e-3 * (dirs @ _image_up(scene))
     best = dirs[int(np.argmax(score))]
     return framed_camera(scene, best, fov_deg=fov_deg, width=width, height=height)
-
-
-# The name this class had before the ray-casting interface took ``RayCaster``.
-RayCaster = SceneCaster

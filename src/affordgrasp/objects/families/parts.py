@@ -25,6 +25,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from ...errors import InternalError
+from ...rays.mesh import mesh_caster
 
 __all__ = ["PART_NAMES", "part_index", "tag", "recording", "face_parts_of", "refine_parts"]
 
@@ -318,7 +319,7 @@ def _container(mesh, labels, params, zones: Callable | None = None):
     # Inner wall faces look towards the axis; the cavity floor looks up from inside it:
     # both see the object again along their outward normal.
     origins = centers + 1e-5 * normals
-    hits = mesh.ray.intersects_any(origins, normals)
+    hits = mesh_caster(mesh).intersects_any(origins, normals)
     inward = (n_radial < -0.2) | (normals[:, 2] > 0.6)
     _set(labels, body & hits & inward, "inside")
     if zones is not None:

@@ -1,11 +1,13 @@
 """Every crossing of many rays with a mesh: Embree finds the faces, a compiled loop the rest.
 
-``EmbreeRays.intersects_id`` (trimesh's multiple-hit loop, step for step) spends two thirds
-of its time outside Embree, in numpy: gathering the live rays, intersecting each hit face's
-plane, advancing the rays past their hits. :func:`all_crossings` makes the same Embree calls
-on the same float32 rays and does the rest in one compiled pass per round, with the same
+trimesh's multiple-hit loop (``RayMeshIntersector.intersects_id``) spends two thirds of its
+time outside Embree, in numpy: gathering the live rays, intersecting each hit face's plane,
+advancing the rays past their hits. :func:`crossings` makes the same Embree calls on the
+same float32 rays and does the rest in one compiled pass per round, with the same
 floating-point operations in the same order, so the hits, their points and their order are
-the same bits (tests compare the two); about twice as fast on the wedge angle's rays.
+the same bits (``tests/rays/test_crossings.py`` compares the two); about twice as fast on
+the wedge angle's rays. :class:`~.mesh.EmbreeRays` answers trimesh's hit-point queries
+with it.
 """
 
 from __future__ import annotations
@@ -14,10 +16,11 @@ import numpy as np
 from numba import njit
 
 from ..runtime.kernel_cache import install_package_stamp
+from . import _unitize
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 
-_MAX_HITS = 100  # rounds, as intersects_id's max_hits
+_MAX_HITS = 100  # rounds, as trimesh's intersects_id's max_hits
 
 
 @njit(cache=True)
@@ -25,7 +28,7 @@ def _advance(query, live, last_hit, origins, directions, offsets, base_offset, p
              plane_normals, scene_origin, scene_scale):  # fmt: skip
     """One round of the multiple-hit loop, after Embree answered for the live rays.
 
-    Mirrors ``EmbreeRays.intersects_id``: a ray that hits the face it hit last time is a
+    Mirrors trimesh's ``intersects_id``: a ray that hits the face it hit last time is a
     duplicate (its offset doubles and it moves on by it); another hit is intersected with the
     face's plane (``_planes_lines``, the same operations: a row's dot product summed left to
     right as ``np.dot`` with ones does) and the ray restarts just past it; a hit whose
@@ -52,7 +55,7 @@ def _advance(query, live, last_hit, origins, directions, offsets, base_offset, p
     Returns
     -------
     rays, faces : (h,) int64 ndarray
-        The hits of this round, in the order ``intersects_id`` appends them.
+        The hits of this round, in the order trimesh's ``intersects_id`` appends them.
     points : (h, 3) float64 ndarray
     next_live : (L',) int64 ndarray
     next_origins, next_directions : (L', 3) float32 ndarray
@@ -123,27 +126,6 @@ def _advance(query, live, last_hit, origins, directions, offsets, base_offset, p
     return rays[:h], faces[:h], points[:h], next_live, next_origins, next_directions
 
 
-def all_crossings(rays, origins: np.ndarray, directions: np.ndarray):
-    """Every hit of every ray, as ``rays.intersects_id(..., multiple_hits=True,
-    return_locations=True)`` returns them (same faces, points and order).
-
-    Parameters
-    ----------
-    rays : affordgrasp.objects.rays.EmbreeRays
-        The mesh's ray caster.
-    origins, directions : (n, 3) float64 ndarray
-        m; directions need not be unit.
-
-    Returns
-    -------
-    index_tri, index_ray : (m,) int64 ndarray
-        Face and ray of each hit.
-    locations : (m, 3) float64 ndarray
-        m.
-    """
-    return _crossings(rays, origins, directions, None)
-
-
 @njit(cache=True)
 def _still_near(live, o32, d32, origins, start, directions, reach, slack, scene_scale):
     """The live rays that now start within ``reach`` of where they started, and how far
@@ -174,41 +156,44 @@ def _still_near(live, o32, d32, origins, start, directions, reach, slack, scene_
     return out_live, out_o, out_d, limits
 
 
-def near_crossings(rays, origins: np.ndarray, directions: np.ndarray, reach: float):
-    """The crossings of :func:`all_crossings` within ``reach`` of each ray's origin, and
-    each ray's first crossing wherever it is.
+def crossings(rays, origins, directions, reach: float | None = None, max_hits: int = _MAX_HITS):
+    """Every hit of every ray, as trimesh's ``intersects_id(..., multiple_hits=True,
+    return_locations=True)`` returns them (same faces, points and order); with ``reach``,
+    those within ``reach`` of each ray's origin and each ray's first wherever it is.
 
-    A ray is followed past a crossing only while that crossing lies within ``reach``, and
-    from then on Embree searches no farther than ``reach`` (plus 0.1 %): the crossings
-    within ``reach`` and the first one are the same (faces, points, order) as
-    :func:`all_crossings` finds, in fewer rounds when rays go on far past the ball they are
-    cast for (a mug's rays cross its far wall: 1.5 rounds per ray instead of 2.65).
+    With ``reach``, a ray is followed past a crossing only while that crossing lies within
+    ``reach``, and from then on Embree searches no farther than ``reach`` (plus 0.1 %): the
+    crossings within ``reach`` and the first one are the same (faces, points, order) as
+    without, in fewer rounds when rays go on far past the ball they are cast for (a mug's
+    rays cross its far wall: 1.5 rounds per ray instead of 2.65).
 
     Parameters
     ----------
-    rays : affordgrasp.objects.rays.EmbreeRays
-    origins, directions : (n, 3) float64 ndarray
+    rays : affordgrasp.rays.mesh.EmbreeRays
+        The mesh's ray caster.
+    origins, directions : (n, 3) float64 array_like
         m; directions need not be unit.
-    reach : float
+    reach : float, optional
         m, > 0.
+    max_hits : int
+        Most hits per ray (trimesh's default); 1 gives trimesh's first hits
+        (``multiple_hits=False``).
 
     Returns
     -------
     index_tri, index_ray : (m,) int64 ndarray
-        Face and ray of each crossing (every one within ``reach``, each ray's first, and
+        Face and ray of each hit (with ``reach``: every one within it, each ray's first, and
         perhaps a few more within 0.1 % beyond).
     locations : (m, 3) float64 ndarray
         m.
     """
-    return _crossings(rays, origins, directions, float(reach))
-
-
-def _crossings(rays, origins, directions, reach):
-    """The multiple-hit loop of :func:`all_crossings` (``reach`` None) and of
-    :func:`near_crossings` (a ray done once it has crossed beyond ``reach``)."""
+    reach = None if reach is None else float(reach)
     start = np.asarray(origins, dtype=np.float64)
     origins = start.copy()
-    directions = rays.unit_directions(np.array(directions, dtype=np.float64))
+    directions = np.array(directions, dtype=np.float64)
+    if origins.shape != directions.shape:
+        raise ValueError("Ray origin and direction don't match!")
+    directions = _unitize(directions)  # as trimesh's loop
     base_offset = rays.ray_offset
     offsets = directions * base_offset
     plane_origins, plane_normals = rays.face_planes
@@ -220,7 +205,7 @@ def _crossings(rays, origins, directions, reach):
     tris = [np.zeros(0, dtype=np.int64)]
     idx = [np.zeros(0, dtype=np.int64)]
     locs = [np.zeros((0, 3), dtype=np.float64)]
-    for _depth in range(_MAX_HITS):
+    for _depth in range(max_hits):
         query = rays.first_faces_scene(o32, d32, limits)
         if not (query != -1).any():
             break
@@ -237,52 +222,3 @@ def _crossings(rays, origins, directions, reach):
             if not len(live):
                 break
     return np.concatenate(tris), np.concatenate(idx), np.concatenate(locs)
-
-
-@njit(cache=True)
-def ball_weights(ray, t, cube_out, cube_in, radius, inner_radius, starts_inside):
-    """Volume-weighted inside part of [0, radius] and of [0, inner_radius] of each ray.
-
-    ``use_geometry._ball_weights``: for each ray, ± the cubes of its crossings within the
-    radius in turn (+ first), + 1 after an even number of them, or the complement where the
-    ray starts outside; the sums in the order ``np.bincount`` would add them (tests compare
-    the two, bit for bit).
-
-    Parameters
-    ----------
-    ray : (m,) int64 ndarray
-        Sorted; each ray's crossings in order of distance.
-    t : (m,) float64 ndarray
-        Crossing distances, m.
-    cube_out, cube_in : (m,) float64 ndarray
-        ``(t / radius) ** 3`` and ``(t / inner_radius) ** 3`` (numpy's power).
-    radius, inner_radius : float
-        m.
-    starts_inside : (n,) bool ndarray
-        Per ray.
-
-    Returns
-    -------
-    w, w_in : (n,) float64 ndarray
-    """
-    n = starts_inside.shape[0]
-    acc_out = np.zeros(n)
-    acc_in = np.zeros(n)
-    k_out = np.zeros(n, dtype=np.int64)
-    k_in = np.zeros(n, dtype=np.int64)
-    for a in range(ray.shape[0]):
-        r = ray[a]
-        if t[a] < radius:
-            acc_out[r] += cube_out[a] if k_out[r] % 2 == 0 else -cube_out[a]
-            k_out[r] += 1
-        if t[a] < inner_radius:
-            acc_in[r] += cube_in[a] if k_in[r] % 2 == 0 else -cube_in[a]
-            k_in[r] += 1
-    w = np.empty(n)
-    w_in = np.empty(n)
-    for r in range(n):
-        v = acc_out[r] + (1.0 if k_out[r] % 2 == 0 else 0.0)
-        w[r] = v if starts_inside[r] else 1.0 - v
-        v = acc_in[r] + (1.0 if k_in[r] % 2 == 0 else 0.0)
-        w_in[r] = v if starts_inside[r] else 1.0 - v
-    return w, w_in

@@ -1,4 +1,5 @@
-"""Depth rays cast by Embree in packets of 16 (4 × 4 pixel tiles) from a compiled loop.
+"""Rays cast by Embree in packets of 16: depth images in 4 × 4 pixel tiles from a compiled
+loop (:func:`render_tiles`), any rays from packets filled with numpy (:class:`PacketScene`).
 
 ``embreex`` exposes one ray per call (``rtcIntersect1``) behind a Python wrapper; on a
 compact object such as the mug (about 40 % of the pixels hit) that path renders ~600
@@ -12,7 +13,7 @@ The scene is robust (watertight), as ``embreex``'s; the packet kernel rounds dif
 so depths can differ from the one-ray path by float32 rounding (~1e-7 relative) and, where
 a ray grazes an edge, by which surface is hit (a few pixels in ten million;
 ``tests/vision/test_depth.py`` bounds both). When the library cannot be loaded,
-:func:`available` is False and the renderer uses ``embreex``.
+:func:`available` is False and the depth renderer uses ``embreex``.
 """
 
 from __future__ import annotations
@@ -25,7 +26,9 @@ import os
 import numpy as np
 from numba import njit, types
 
+from ..errors import InputError
 from ..runtime.kernel_cache import install_package_stamp
+from . import RayHits, SceneFrame, ray_hits
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 
@@ -77,7 +80,7 @@ def _find_library():
 
 
 class _Embree:
-    """The library, one single-threaded device, and the compiled tile loop."""
+    """The library and one single-threaded device."""
 
     def __init__(self, lib):
         p = ctypes.c_void_p
@@ -113,7 +116,6 @@ class _Embree:
             raise OSError("Embree device could not be created")
         if lib.rtcGetDeviceProperty(self.device, _PROPERTY_VERSION_MAJOR) != 4:
             raise OSError("Embree 4 expected")
-        self.kernel = render_tiles
 
     def scene(self, triangles: np.ndarray) -> int:
         """A committed scene of float32 triangles (t, 3, 3); returns its handle."""
@@ -164,7 +166,7 @@ def render_tiles(
     Parameters
     ----------
     scene : int
-        Embree scene handle (:meth:`_Embree.scene`).
+        Embree scene handle (:attr:`PacketScene.handle`).
     rays_cam : (size*size, 3) float32 ndarray
         Camera-frame ray per pixel, row-major, z = 1.
     rot : (n, 3, 3) float32 ndarray
@@ -270,3 +272,102 @@ def available() -> bool:
         True when the Embree 4 library was found and a device created.
     """
     return engine() is not None
+
+
+class PacketScene(SceneFrame):
+    """Triangles in a scene of the Embree library of ``embreex``, cast 16 rays at a time.
+
+    The :class:`~affordgrasp.rays.RayCaster` backend of the packet depth engine.
+
+    Parameters
+    ----------
+    triangles : (t, 3, 3) float ndarray
+        m.
+    **frame
+        ``origin``, ``scale`` and ``face_normals``, as :class:`~affordgrasp.rays.SceneFrame`'s.
+
+    Attributes
+    ----------
+    handle : int
+        The Embree scene (for :func:`render_tiles`).
+
+    Raises
+    ------
+    InputError
+        When the Embree 4 library cannot be loaded (:func:`available` is False).
+    """
+
+    def __init__(self, triangles: np.ndarray, **frame) -> None:
+        self._embree = engine()
+        if self._embree is None:
+            raise InputError(
+                "the packet depth engine needs the Embree 4 library of embreex; "
+                "use engine='embreex' or 'raster'"
+            )
+        super().__init__(triangles, **frame)
+        self.handle: int | None = self._embree.scene(self.scene_vertices)
+
+    def __del__(self) -> None:
+        handle = getattr(self, "handle", None)
+        if handle is not None:
+            self._embree.release(handle)
+            self.handle = None
+
+    def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
+        """First hits of rays, 16 per Embree call (:class:`~affordgrasp.rays.RayCaster`).
+
+        Parameters
+        ----------
+        origins, directions : (n, 3) float array_like
+            m; directions need not be unit.
+
+        Returns
+        -------
+        RayHits
+        """
+        o, d = self.to_scene(origins, directions)
+        o, d = o.reshape(-1, 3), d.reshape(-1, 3)
+        n = len(o)
+        packets = -(-n // K)
+        # One 64-byte aligned RTCRayHit16 per packet (2 KiB each) and one valid mask.
+        buf = _aligned((packets, _FLOATS), np.float32)
+        valid = _aligned((packets, K), np.int32)
+        ints = buf.view(np.uint32)
+        lanes = np.zeros((packets * K, 3), np.float32)
+        for field, values in ((0, o), (4, d)):
+            lanes[:n] = values
+            for axis in range(3):
+                buf[:, (field + axis) * K : (field + axis + 1) * K] = lanes[:, axis].reshape(-1, K)
+        buf[:, _TFAR : _TFAR + K] = np.inf
+        ints[:, 9 * K : 10 * K] = _INVALID  # mask: every geometry
+        ints[:, _GEOM_ID : _GEOM_ID + K] = _INVALID
+        valid.reshape(-1)[:n] = -1
+        intersect = self._intersect16()
+        buf_at, valid_at = buf.ctypes.data, valid.ctypes.data
+        stride, valid_stride = buf.strides[0], valid.strides[0]
+        # One call per 16 rays (Embree 4 has no stream call); the rays were laid out by numpy.
+        for i in range(packets):
+            intersect(valid_at + i * valid_stride, self.handle, buf_at + i * stride, None)
+        hit = ints[:, _GEOM_ID : _GEOM_ID + K].reshape(-1)[:n] != _INVALID
+        prim = ints[:, _GEOM_ID - K : _GEOM_ID].reshape(-1)[:n].astype(np.int64)
+        tfar = buf[:, _TFAR : _TFAR + K].reshape(-1)[:n] / np.float32(self._scale)
+        u = buf[:, 15 * K : 16 * K].reshape(-1)[:n]
+        v = buf[:, 16 * K : 17 * K].reshape(-1)[:n]
+        return ray_hits(tfar, np.where(hit, prim, -1), self.normals, np.column_stack([u, v]))
+
+    def _intersect16(self):
+        fn = self._embree.lib.rtcIntersect16
+        if fn.restype is not None or not fn.argtypes:
+            p = ctypes.c_void_p
+            fn.argtypes = [p, p, p, p]
+            fn.restype = None
+        return fn
+
+
+def _aligned(shape: tuple[int, int], dtype) -> np.ndarray:
+    """A zeroed C-contiguous array starting on a 64-byte boundary (Embree's packets)."""
+    count = int(np.prod(shape))
+    itemsize = np.dtype(dtype).itemsize
+    raw = np.zeros(count + 64 // itemsize, dtype)
+    start = ((64 - raw.ctypes.data % 64) % 64) // itemsize
+    return raw[start : start + count].reshape(shape)
