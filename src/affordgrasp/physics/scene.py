@@ -162,7 +162,17 @@ def _written(values, digits: int = 9):
 
 
 def rotation_quat(rotation: np.ndarray) -> np.ndarray:
-    """The unit quaternion (w, x, y, z) of a (3, 3) rotation matrix."""
+    """The unit quaternion of a rotation matrix.
+
+    Parameters
+    ----------
+    rotation : (3, 3) float ndarray
+
+    Returns
+    -------
+    (4,) float64 ndarray
+        (w, x, y, z), MuJoCo's order.
+    """
     mj = deps.mujoco()
     q = np.zeros(4)
     mj.mju_mat2Quat(q, np.ascontiguousarray(rotation, dtype=np.float64).ravel())
