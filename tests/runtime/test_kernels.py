@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from affordgrasp import kernels as compiled
 from affordgrasp.grasp import kernels
 from affordgrasp.runtime import kernel_cache
-from affordgrasp import kernels as compiled
 from affordgrasp.vision import render_depth
 
 
