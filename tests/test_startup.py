@@ -35,7 +35,7 @@ def fresh_process_modules(code: str, **env: str) -> set[str]:
 
 LOAD_AND_RUN_THE_KERNELS = """
 import hashlib, json
-from affordgrasp.runtime import kernels as compiled
+from affordgrasp import kernels as compiled
 from affordgrasp.runtime import kernel_cache
 from affordgrasp.objects import load_object
 from affordgrasp.pipeline import evaluate_samples
@@ -102,7 +102,7 @@ def test_kernels_load_from_the_cache_without_numba_compiler_registries_and_run_r
 
 LINK_AGAINST_A_LIGHT_LOADED_KERNEL = """
 import json, numba, numpy as np
-from affordgrasp.runtime import kernels as compiled
+from affordgrasp import kernels as compiled
 from affordgrasp.hands.kinematics import shape_poses
 from affordgrasp.runtime import kernel_cache
 load = compiled.warm_up()

@@ -13,7 +13,7 @@ import importlib
 import logging
 import sys
 
-from . import __version__
+from ._version import __version__
 from .commands import add_verbose_argument  # also used by subcommands' own parsers
 from .errors import InputError, cli_message
 from .runtime.interrupts import interrupt_in, stop_on_signals

@@ -1,4 +1,4 @@
-"""Kernels ready up front, caches valid after an install (runtime/kernels.py, kernel_cache.py)."""
+"""Kernels ready up front, caches valid after an install (kernels.py, runtime/kernel_cache.py)."""
 
 import json
 import os
@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from affordgrasp import kernels as compiled
 from affordgrasp.grasp import kernels
 from affordgrasp.runtime import kernel_cache
-from affordgrasp.runtime import kernels as compiled
 from affordgrasp.vision import render_depth
 
 
@@ -199,7 +199,7 @@ def test_an_installed_package_loads_its_kernels_without_compiling(tmp_path):
     assert list(copy.rglob("*.nbi")), "the installed package holds no kernel caches"
     code = (
         "import json, affordgrasp\n"
-        "from affordgrasp.runtime.kernels import warm_up\n"
+        "from affordgrasp.kernels import warm_up\n"
         "load = warm_up(vision=True, reference=True)\n"
         "print(json.dumps({'compiled': load.compiled, 'file': affordgrasp.__file__}))"
     )

@@ -414,8 +414,8 @@ def run_batches(args, out, obj, metrics: bool):
         Wall time of the evaluation, s.
     """
     from ..grasp.policy import object_geometry
+    from ..kernels import warm_up
     from ..pipeline import evaluate_samples
-    from ..runtime.kernels import warm_up
 
     load = warm_up()
     t0 = time.perf_counter()

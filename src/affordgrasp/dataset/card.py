@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..runtime.writing import atomic_write
 from .layout import (
     CARD_JSON_NAME,

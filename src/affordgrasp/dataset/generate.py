@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pyarrow as pa
 
-from .. import __version__
+from .._version import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..grasp.pregrasp import SAMPLE_STREAMS, object_stream_seed
 from ..hands import Hand, hand_to_dict

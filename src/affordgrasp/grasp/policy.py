@@ -23,7 +23,6 @@ import functools
 import logging
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,15 +31,12 @@ from ..errors import InputError
 from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
-from ..objects.prepared import centred_frame_origin  # noqa: F401  (re-exported: its former home)
+from ..objects.prepared import MeshData
 from ..objects.surface import SurfaceSample
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .contacts import ContactSet
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
-
-if TYPE_CHECKING:
-    from ..objects.prepared import MeshData
 
 log = logging.getLogger(__name__)
 

@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..errors import InputError
 from .data import Samples, balanced_indices
 from .models import build_model, count_parameters, depth_input, nearest_depth, pose_features

@@ -42,15 +42,13 @@ from affordgrasp.objects.mass import (
     plane_regions,
     regions_on_mesh,
 )
-from affordgrasp.objects.prepared import TRANSIENT_SOURCE, mesh_hash
+from affordgrasp.objects.prepared import TRANSIENT_SOURCE, MeshData, mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 from affordgrasp.objects.simplify import LARGE_MESH_FACES
 from affordgrasp.rays.mesh import mesh_caster
 
 if TYPE_CHECKING:
     import trimesh
-
-    from affordgrasp.objects.prepared import MeshData
 
 __all__ = [
     "GraspObject",

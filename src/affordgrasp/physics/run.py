@@ -30,7 +30,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from .. import __version__
+from .._version import __version__
 from ..columns import METRIC_COLUMNS
 from ..dataset.handle import Dataset
 from ..errors import DatasetError, InputError, bad_parameter

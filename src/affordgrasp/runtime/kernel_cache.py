@@ -7,7 +7,7 @@ one file that defines it. Two problems follow:
   Φ calls all of them) and inline them: after an edit of ``hull.py`` a cached
   ``epsilon_kernel`` would silently keep running the old hull;
 * an install copies the sources with new modification times, so caches compiled when the
-  package is built (see ``setup.py`` and :mod:`affordgrasp.runtime.kernels`) would all be stale.
+  package is built (see ``setup.py`` and :mod:`affordgrasp.kernels`) would all be stale.
 
 The fix is a cache *locator* (numba's hook that says where a function's cache lives and
 which stamp validates it): for functions defined anywhere in this package it keeps numba's

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .. import __version__
+from .._version import __version__
 from ..hands import Hand
 from ..hands.meshes import link_meshes
 from ..runtime.writing import atomic_write

@@ -1,7 +1,7 @@
 """The paper's Table II protocol on held-out objects, classifier AP, and K-candidate ranking.
 
     python tools/train_default_models.py --data DATA        # dataset + shipped models
-    python benchmarks/bench_learning.py --data DATA --models DIR --plots DIR --json out.json
+    python studies/learning_quality.py --data DATA --models DIR --plots DIR --json out.json
 
 On the dataset of ``train_default_models.py`` (13 families x 5 instances x 1500 samples,
 split by object instance, seed 0), it trains (or loads from ``--models``) the regressors of

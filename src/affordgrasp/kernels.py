@@ -3,7 +3,7 @@
 The simulation and the metrics run in numba kernels. numba compiles a kernel at its first
 call and caches the machine code on disk (see :mod:`affordgrasp.runtime.kernel_cache`), so
 only the very first run on a machine pays the compilation (about a minute on one core).
-Building the package runs ``python -m affordgrasp.runtime.kernels`` (see ``setup.py``), so an
+Building the package runs ``python -m affordgrasp.kernels`` (see ``setup.py``), so an
 installed package ships with the caches of the machine it was built on and its first run
 only loads them (about a second). A cache built elsewhere (another CPU, another numba) is
 ignored and the kernels compile on first use, as before.
@@ -50,9 +50,9 @@ class KernelLoad:
 
 
 def _dispatchers() -> list:
-    from ..grasp import kernels
-    from ..hands import kinematics
-    from ..metrics import phi
+    from .grasp import kernels
+    from .hands import kinematics
+    from .metrics import phi
 
     return [
         kernels.simulate_batch,
@@ -63,7 +63,7 @@ def _dispatchers() -> list:
 
 
 def _vision_dispatchers() -> list:
-    from ..vision import fusion, raster
+    from .vision import fusion, raster
 
     return [raster.rasterise, fusion._carve]
 
@@ -109,10 +109,8 @@ def _reference_paths() -> None:
     """Run the per-metric functions the batch falls back to when a compiled solver cannot
     certify its answer (rare: see ``metrics.phi``), so that their kernels are ready (and
     ship with the package) before the first grasp that needs them."""
-    import numpy as np
-
-    from ..metrics import epsilon, hold_effort, impact_effort, use_force
-    from ..metrics.contacts import ContactSet
+    from .metrics import epsilon, hold_effort, impact_effort, use_force
+    from .metrics.contacts import ContactSet
 
     axes = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]])
     contacts = ContactSet.from_arrays(0.03 * axes, axes, 0.5)
@@ -145,8 +143,8 @@ def warm_up(*, vision: bool = False, reference: bool = False) -> KernelLoad:
     -------
     KernelLoad
     """
-    from ..objects import load_object
-    from ..pipeline import evaluate_samples
+    from .objects import load_object
+    from .pipeline import evaluate_samples
 
     started = time.perf_counter()
     dispatchers = _dispatchers() + (_vision_dispatchers() if vision else [])
@@ -157,8 +155,8 @@ def warm_up(*, vision: bool = False, reference: bool = False) -> KernelLoad:
         if reference:
             _reference_paths()
         if vision:
-            from ..vision.depth import DepthRenderer
-            from ..vision.fusion import free_space_field
+            from .vision.depth import DepthRenderer
+            from .vision.fusion import free_space_field
 
             renderer = DepthRenderer(obj.mesh, engine="raster")
             p0 = np.array([[0.1, -0.2, 0.3, 0.0, 0.5, 0.5], [0.6, 0.4, -0.3, 0.0, 0.0, 0.5]])
@@ -168,7 +166,7 @@ def warm_up(*, vision: bool = False, reference: bool = False) -> KernelLoad:
 
 
 def main() -> None:
-    """Warm the kernels up and print what it cost (``python -m affordgrasp.runtime.kernels``)."""
+    """Warm the kernels up and print what it cost (``python -m affordgrasp.kernels``)."""
     load = warm_up(vision=True, reference=True)
     print(f"affordgrasp: {load.describe()}")
 

@@ -6,7 +6,7 @@ serves every task: ``random@B`` is the best F_T of a window of B consecutive sam
 a value v is estimated as ``N / #{samples with F_T >= v}`` (the mean of a geometric law;
 "> N" when no sample of the long run reaches v). CEM runs with budget B for a few seeds.
 
-    python benchmarks/bench_optimize.py --budget 1000 --random 20000 --seeds 3
+    python studies/optimizer_vs_random.py --budget 1000 --random 20000 --seeds 3
 """
 
 from __future__ import annotations
