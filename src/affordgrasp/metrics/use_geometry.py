@@ -50,8 +50,8 @@ from numba import njit
 from ..caching import IdentityCache
 from ..errors import InputError
 from ..grasp.pregrasp import dot3
-from ..runtime.kernel_cache import install_package_stamp
 from ..rays.mesh import MeshCaster, mesh_caster
+from ..runtime.kernel_cache import install_package_stamp
 from ..tolerances import FLAT_DIHEDRAL
 from .validation import points_n3, use_normals_n3
 
