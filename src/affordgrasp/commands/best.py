@@ -152,6 +152,12 @@ def check_dataset_robust(directory, k: int) -> bool:
     return True
 
 
+def loosen_hint(mode: str) -> str:
+    """What to try when no grasp passes a task's thresholds in ``mode``."""
+    lower = "a lower --threshold"
+    return lower if mode == "no-robustness" else f"--mode no-robustness or {lower}"
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp best``.
 
@@ -195,8 +201,8 @@ def run(args, out) -> None:
     )
     if result.finite == 0:
         out.text(
-            "no sample passes the task's thresholds; try --mode no-robustness or a lower "
-            "--threshold, or generate more samples"
+            f"no sample passes the task's thresholds; try {loosen_hint(args.mode)}, or "
+            "generate more samples"
         )
     document = result.to_dict()
     if args.out:

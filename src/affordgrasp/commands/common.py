@@ -52,7 +52,7 @@ def add_metrics_argument(p) -> None:
     """
     p.add_argument(
         "--metrics",
-        default="",
+        default=None,
         metavar="+NAME",
         help="also compute an optional metric: +volume (the GWS volume, column gws_volume; "
         "not in the paper's metric vector, it costs the full 6-D hull of every "
@@ -75,10 +75,12 @@ def optional_metrics(args) -> set[str]:
     Raises
     ------
     InputError
-        For a word that is not ``+NAME`` of a known optional metric.
+        For a word that is not ``+NAME`` of a known optional metric, or a value that names
+        none.
     """
     wanted = set()
-    for word in (getattr(args, "metrics", "") or "").replace(",", " ").split():
+    given = getattr(args, "metrics", None)
+    for word in [] if given is None else names_of("--metrics", given.replace(" ", ","), "+volume"):
         name = word[1:] if word.startswith("+") else None
         if name not in OPTIONAL_METRICS:
             raise InputError(
@@ -334,15 +336,17 @@ def check_output_file(path: str, option: str, suffix: str | None = None) -> None
 
 
 def check_mesh_files(args) -> None:
-    """Refuse ``--mesh`` paths that are not mesh files, before any work.
+    """Refuse ``--mesh`` paths that are not mesh files, and SOURCE files that are neither
+    mesh files nor datasets, before any work.
 
-    They are read only when a dataset object is not a built-in family, so without this
-    check a mistyped path would be ignored in silence.
+    ``--mesh`` files are read only when a dataset object is not a built-in family, so
+    without this check a mistyped path would be ignored in silence.
 
     Parameters
     ----------
     args : argparse.Namespace
-        With a ``mesh`` list (``show``, ``plots``); other commands pass through.
+        With a ``mesh`` list and ``source`` (``show``, ``plots``); other commands pass
+        through.
 
     Raises
     ------
@@ -353,6 +357,14 @@ def check_mesh_files(args) -> None:
 
     from ..objects.loading import SUPPORTED_EXTENSIONS
 
+    for path in getattr(args, "source", None) or []:
+        ext = os.path.splitext(path)[1].lower()
+        if os.path.isfile(path) and ext not in SUPPORTED_EXTENSIONS:
+            raise InputError(
+                f"SOURCE {path!r} is a file but not a mesh file ({ext or 'no extension'}); give "
+                "a dataset directory (the folder of a _manifest.json or of Parquet files), a "
+                f"family (e.g. knife) or a mesh file ({', '.join(SUPPORTED_EXTENSIONS)})"
+            )
     for path in getattr(args, "mesh", None) or []:
         if not os.path.isfile(path):
             what = "is a directory" if os.path.isdir(path) else "does not exist"
@@ -605,6 +617,35 @@ def add_task_arguments(
         )
 
 
+def names_of(option: str, text: str, example: str) -> list[str]:
+    """The names of a comma-separated option value, refused when it names none.
+
+    Parameters
+    ----------
+    option : str
+        The option (``--task``), for the message.
+    text : str
+        Its value (``"beat,cut"``).
+    example : str
+        A value to suggest (``"cut"``).
+
+    Returns
+    -------
+    list of str
+        The names, stripped, in order.
+
+    Raises
+    ------
+    InputError
+        For a value with no name in it (``''``, ``','``): an empty option would otherwise
+        run as if it had not been given.
+    """
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise InputError(f"{option} {text!r} names nothing; give a name, e.g. {option} {example}")
+    return names
+
+
 def task_names(values: list[str] | str | None) -> list[str]:
     """Task names from ``--task`` values (repeated and/or comma-separated).
 
@@ -617,12 +658,17 @@ def task_names(values: list[str] | str | None) -> list[str]:
     -------
     list of str
         In order, the first of duplicates kept.
+
+    Raises
+    ------
+    InputError
+        For a value that names no task (``--task ''``).
     """
     if isinstance(values, str):
         values = [values]
     names: list[str] = []
     for value in values or []:
-        names.extend(n.strip() for n in value.split(",") if n.strip())
+        names.extend(names_of("--task", value, "cut (see 'affordgrasp tasks')"))
     return list(dict.fromkeys(names))
 
 

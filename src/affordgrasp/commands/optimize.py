@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .best import metric_cells, metric_headings, shown_metrics
+from .best import loosen_hint, metric_cells, metric_headings, shown_metrics
 from .common import (
     HAND_HELP,
     add_robust_argument,
@@ -155,8 +155,8 @@ def run(args, out) -> None:
         out.text(f"{100 * share:.3g}% of the random samples are as good as the cross-entropy best")
     elif result.cem is None:
         out.text(
-            "no simulation passed the task's thresholds (every F_T = -inf); try --mode "
-            "no-robustness, a lower --threshold or a larger --budget"
+            "no simulation passed the task's thresholds (every F_T = -inf); try "
+            f"{loosen_hint(args.mode)} or a larger --budget"
         )
     out.text(f"{result.elapsed_s:.1f} s")
     out.result(result.to_dict())

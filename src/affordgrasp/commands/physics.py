@@ -6,7 +6,7 @@ import math
 import shlex
 import sys
 
-from ..errors import InputError, MissingDependencyError
+from ..errors import DatasetError, InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
 from .common import add_robust_argument, robust_option
 
@@ -153,6 +153,29 @@ def _interval(v) -> str:
     return "—" if math.isnan(auc) else f"{auc:.3f} [{lo:.3f}–{hi:.3f}]"
 
 
+def _dataset_with_objects(directory, names):
+    """The dataset, its objects resolved (kept by the handle), before any output is written.
+
+    A missing mesh is refused here, with a fix that ``physics`` offers: the message shared
+    with ``show`` and ``plots`` names their ``--mesh``.
+    """
+    from ..dataset.handle import Dataset
+
+    dataset = Dataset.open(directory)
+    for name in names or dataset.objects:
+        try:
+            dataset.object(name)
+        except DatasetError as exc:
+            text, fix = str(exc), "; restore the mesh file"
+            if fix not in text:
+                raise
+            raise DatasetError(
+                text[: text.index(fix)] + "; restore the mesh file at the path the dataset's "
+                "_manifest.json records, or copy it into the dataset directory"
+            ) from None
+    return dataset
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp physics``.
 
@@ -178,9 +201,10 @@ def run(args, out) -> None:
         deps.coacd()
     except MissingDependencyError as exc:
         raise InputError(str(exc)) from None
+    dataset = _dataset_with_objects(args.dataset, args.object)
     try:
         summary = run_physics(
-            args.dataset,
+            dataset,
             args.out,
             settings=settings,
             workers=args.workers,

@@ -480,13 +480,16 @@ def run(args, out) -> None:
     )
     empty = [r for r in rankings if not r.best]
     for r in empty:
+        more = "more --samples"
+        if getattr(sources_by_object[r.object], "directory", None) is not None:
+            more = "a dataset with more samples ('affordgrasp generate --samples N')"
         out.text(
             f"{r.object}: no grasp scores above −∞ for {r.task} in mode {args.mode} "
-            f"({r.accepted} of {r.scored} samples accepted); "
+            f"({r.accepted} of {r.scored} samples accepted); try "
             + (
-                "try more --samples"
+                more
                 if args.mode == "no-robustness" or args.robust
-                else "try --mode no-robustness or more --samples"
+                else f"--mode no-robustness or {more}"
             )
         )
     out.text(f"wrote {result.grid}")

@@ -130,7 +130,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..learning.training import TrainSettings
-    from .common import check_output_file
+    from .common import check_output_file, names_of
 
     check_output_file(args.out, "--out", suffix=".safetensors")
     for name in ("epochs", "batch_size", "patience", "max_train", "members"):
@@ -154,7 +154,9 @@ def run(args, out) -> None:
     )
     if args.buffer_rows < 1:
         raise InputError(f"--buffer-rows must be >= 1, got {args.buffer_rows}")
-    families = args.test_families.split(",") if args.test_families else None
+    families = None
+    if args.test_families is not None:
+        families = names_of("--test-families", args.test_families, "axe,mug")
     with _bar(out, settings) as update:
         model, config = train_on_dataset(
             args.dataset,

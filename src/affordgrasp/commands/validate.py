@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
+from .common import names_of
 
 QUICK = {"seeds": 1, "grasps": 100, "uses": 200, "budget": 100, "families": "hammer,knife"}
 FULL = {"seeds": 5, "grasps": 1000, "uses": 4000, "budget": 1000, "families": "all"}
@@ -140,8 +141,8 @@ def settings_of(args):
         refine=args.refine,
         also_grasps=args.also_grasps,
         top=args.top,
-        tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()),
-        families=() if families == "all" else tuple(f for f in families.split(",") if f),
+        tasks=tuple(names_of("--tasks", args.tasks, "cut,beat")),
+        families=() if families == "all" else tuple(names_of("--families", families, "knife")),
         optimizer=not args.no_optimizer,
         brute_force=not args.no_brute_force,
         figures=figures,

@@ -391,8 +391,25 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                     + " here"
                 )
         elif a != b:
-            diffs.append(f"{key} {a!r} there vs {b!r} here")
+            diffs.append(f"{_plan_text(key, a)} there vs {_plan_text(key, b)} here")
     return diffs
+
+
+def _plan_text(key: str, value) -> str:
+    """One value of a manifest's plan in words (a table of settings as the option that set it)."""
+    if key == "depth":
+        return (
+            f"depth images of {value.get('size')} px at {value.get('fov_deg')}° (--depth)"
+            if value
+            else "no depth images (--depth)"
+        )
+    if key == "robust":
+        return (
+            f"robust columns of {value.get('copies')} copies (--robust {value.get('copies')})"
+            if value
+            else "no robust columns (--robust)"
+        )
+    return f"{key} {value!r}"
 
 
 def hand_spec_differences(there: dict | None, here: dict | None) -> list[str]:
