@@ -254,6 +254,8 @@ def run(args, out) -> None:
                 value, kind = g["auc"][outcome].get(pred, math.nan), "ROC-AUC"
             else:
                 value, kind = g["spearman"][outcome].get(pred, math.nan), "Spearman"
+            if math.isnan(value):  # say why rather than nan
+                value = "undefined: " + g["undefined"].get(outcome, {}).get(pred, "not computed")
             headline.append([pred, outcome, kind, value])
         out.table(
             f"Metrics vs outcomes (n={report['all']['n']})",
