@@ -325,7 +325,7 @@ CASES = [
     ),
     (
         ["train", "{ds}", "-o", "{d}/m8.safetensors", "--max-minutes", "-1"],
-        "a split by object needs at least 2 instances of some family ",
+        "--max-minutes must be a finite number in [0.01, 10080], got -1.0",
     ),
     (
         ["predict", "{d}/nonexist.safetensors", "{ds}", "--out", "{d}/pr1.parquet"],
@@ -425,7 +425,7 @@ CASES = [
     ),
     (
         ["train", "{ds}", "-o", "{d}/m10.safetensors", "--rank-weight", "-1"],
-        "a split by object needs at least 2 instances of some family ",
+        "--rank-weight must be a finite number in [0, 100], got -1.0",
     ),
     (
         ["train", "{ds}", "-o", "{d}/m11.safetensors", "--buffer-rows", "0", "--stream"],

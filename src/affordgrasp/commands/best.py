@@ -5,7 +5,11 @@ from __future__ import annotations
 import math
 
 from ..columns import column_heading
-from .common import add_robust_argument, add_task_arguments, parse_thresholds
+from .common import ROBUST, add_robust_argument, add_task_arguments, parse_thresholds
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {"top": (None, 100_000, "the top rows are held and printed"), "robust": ROBUST}
+
 
 METRICS_SHOWN = (
     ("ε", "epsilon"),

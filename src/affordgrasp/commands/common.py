@@ -198,6 +198,72 @@ def load_objects(specs, args) -> list:
 
 MAX_SEED = 2**63 - 1
 
+# The limits of a command's numeric options, ``LIMITS`` in its module: option (as its dest)
+# -> (lowest, highest, why the highest). ``cli.main`` checks them before the command runs;
+# None leaves that side to the command's own check, which names it its own way; a callable
+# highest is computed then (from the memory this machine has). Every numeric option of
+# every command has an entry (tests/test_hostile_options.py).
+SEED = (0, MAX_SEED, "seeds are 64-bit")
+ROBUST = (None, 1000, "K copies of each grasp are simulated and held together")
+USES = (0, 50_000, "each use point is ray cast and held with its metrics, ~10 kB each")
+WORKER_BYTES = 256 * 1024**2  # one worker process, measured at ~170 MB
+
+
+def memory_cap(bytes_each: int, default: int = 1024):
+    """The largest count of items of ``bytes_each`` bytes that fits in half the memory
+    available, as a callable for ``LIMITS`` (``default`` where the system does not say)."""
+
+    def cap() -> int:
+        available = available_memory()
+        return default if available is None else max(1, available // 2 // bytes_each)
+
+    return cap
+
+
+WORKERS = (None, memory_cap(WORKER_BYTES), "each worker process holds about 200 MB")
+SIZE_M = (None, None, "the mesh loader: a plausible object size")
+SAMPLING = {  # add_sampling_arguments
+    "samples": (None, None, "check_counts: positive, and the rows must fit in memory"),
+    "seed": (None, None, "check_counts: a 64-bit seed"),
+    "size_m": SIZE_M,
+    "batch": (None, 100_000, "a batch is simulated and held at once"),
+}
+
+
+def check_limits(args, limits: dict) -> None:
+    """Refuse a numeric option outside its ``LIMITS``, before the command does any work.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    limits : dict
+        Option dest -> (lowest, highest, why), as described above.
+
+    Raises
+    ------
+    InputError
+        Naming the option, its range and the reason for its maximum.
+    """
+    for dest, (low, high, why) in limits.items():
+        value = getattr(args, dest, None)
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            continue  # not given
+        high = high() if callable(high) else high
+        finite = math.isfinite(value) or (low is None and high is None)
+        if finite and (low is None or value >= low) and (high is None or value <= high):
+            continue
+
+        def text(x) -> str:
+            return "2**63 - 1" if x == MAX_SEED else f"{x:,}" if isinstance(x, int) else f"{x:g}"
+
+        kind = "an integer" if isinstance(value, int) else "a finite number"
+        if low is not None and high is not None:
+            bounds = f"in [{text(low)}, {text(high)}]"
+        else:
+            bounds = f"at most {text(high)}" if low is None else f"at least {text(low)}"
+        raise InputError(f"--{dest.replace('_', '-')} must be {kind} {bounds}, got {value} ({why})")
+
 
 def check_counts(args) -> None:
     """Sample count, seed and batch size, before any work is done.

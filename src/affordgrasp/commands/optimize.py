@@ -5,6 +5,11 @@ from __future__ import annotations
 from .best import loosen_hint, metric_cells, metric_headings, shown_metrics
 from .common import (
     HAND_HELP,
+    ROBUST,
+    SEED,
+    SIZE_M,
+    USES,
+    WORKERS,
     add_robust_argument,
     add_scale_arguments,
     add_task_arguments,
@@ -12,6 +17,19 @@ from .common import (
     parse_thresholds,
     robust_option,
 )
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {
+    "budget": (None, 10**8, "the value of every simulation is kept"),
+    "seed": SEED,
+    "size_m": SIZE_M,
+    "population": (None, 10**6, "a generation is simulated and held at once"),
+    "workers": WORKERS,
+    "uses": (None, *USES[1:]),
+    "robust": ROBUST,
+    "restarts": (None, 10_000, "each restart draws populations of its own from the budget"),
+    "refine": (None, None, "optimize: a share in [0, 1)"),
+}
 
 
 def add_arguments(p) -> None:

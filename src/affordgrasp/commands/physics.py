@@ -8,7 +8,24 @@ import sys
 
 from ..errors import DatasetError, InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
-from .common import add_robust_argument, robust_option
+from .common import MAX_SEED, ROBUST, WORKERS, add_robust_argument, robust_option
+
+# Of the numeric options: see common.check_limits; the settings check their physical ranges.
+LIMITS = {
+    "workers": WORKERS,
+    "shard_size": (None, 100_000, "a shard's outcomes are held before they are written"),
+    "max_per_object": (None, MAX_SEED, "row counts are 64-bit"),
+    **{
+        name: (None, None, "PhysicsSettings: its physical range")
+        for name in ("load_factor", "density", "grip_torque", "grip_force")
+    },
+    "friction_margin": (None, None, "PhysicsSettings: its physical range"),
+    "timestep": (None, None, "PhysicsSettings: its physical range"),
+    "robust": ROBUST,
+    "seed": (None, MAX_SEED, "seeds are 64-bit"),
+    "coacd_threshold": (None, 1.0, "CoACD's concavity threshold is a fraction of the size"),
+    "coacd_max_hulls": (None, 256, "each convex part is a body of the MuJoCo scene"),
+}
 
 
 def add_arguments(p) -> None:

@@ -5,6 +5,20 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 from ..errors import InputError, MissingDependencyError
+from .common import SEED, memory_cap
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {
+    "epochs": (None, 10_000, "an epoch reads every training row"),
+    "batch_size": (None, 8192, "a batch of images and activations is held at once"),
+    "patience": (None, 10_000, "epochs"),
+    "seed": SEED,
+    "rank_weight": (0.0, 100.0, "a weight beside the mean squared error; 0: none"),
+    "max_train": (None, 10**6, "the training images are held in memory unless --stream"),
+    "members": (None, 100, "the networks are trained one after another"),
+    "max_minutes": (0.01, 10_080.0, "a week"),
+    "buffer_rows": (None, memory_cap(35_000), "rows of images held together, ~35 kB each"),
+}
 
 
 def add_arguments(p) -> None:
