@@ -147,9 +147,12 @@ def run(args, out) -> None:
     from .common import check_output_file, names_of
 
     check_output_file(args.out, "--out", suffix=".safetensors")
-    for name in ("epochs", "batch_size", "patience", "max_train", "members"):
+    for name in ("epochs", "batch_size", "patience", "max_train", "members", "buffer_rows"):
         if getattr(args, name) < 1:
             raise InputError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    families = None
+    if args.test_families is not None:
+        families = names_of("--test-families", args.test_families, "axe,mug")
     try:
         from ..learning.api import train_on_dataset
         from ..learning.torch_support import require_safetensors, require_torch
@@ -166,11 +169,6 @@ def run(args, out) -> None:
         rank_weight=args.rank_weight,
         max_seconds=None if args.max_minutes is None else 60 * args.max_minutes,
     )
-    if args.buffer_rows < 1:
-        raise InputError(f"--buffer-rows must be >= 1, got {args.buffer_rows}")
-    families = None
-    if args.test_families is not None:
-        families = names_of("--test-families", args.test_families, "axe,mug")
     with _bar(out, settings) as update:
         model, config = train_on_dataset(
             args.dataset,
