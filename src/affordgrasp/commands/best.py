@@ -157,7 +157,18 @@ def check_dataset_robust(directory, k: int) -> bool:
 
 
 def loosen_hint(mode: str) -> str:
-    """What to try when no grasp passes a task's thresholds in ``mode``."""
+    """What to try when no grasp passes a task's thresholds in ``mode``.
+
+    Parameters
+    ----------
+    mode : str
+        The ``--mode`` of the run.
+
+    Returns
+    -------
+    str
+        ``--mode no-robustness`` unless that is the mode, and a lower ``--threshold``.
+    """
     lower = "a lower --threshold"
     return lower if mode == "no-robustness" else f"--mode no-robustness or {lower}"
 

@@ -210,8 +210,20 @@ WORKER_BYTES = 256 * 1024**2  # one worker process, measured at ~170 MB
 
 
 def memory_cap(bytes_each: int, default: int = 1024):
-    """The largest count of items of ``bytes_each`` bytes that fits in half the memory
-    available, as a callable for ``LIMITS`` (``default`` where the system does not say)."""
+    """The largest count of items that fits in half the memory available, for ``LIMITS``.
+
+    Parameters
+    ----------
+    bytes_each : int
+        Bytes one item takes.
+    default : int
+        The count where the system does not say how much memory is available.
+
+    Returns
+    -------
+    callable
+        ``cap() -> int``, computed when called.
+    """
 
     def cap() -> int:
         available = available_memory()
