@@ -130,7 +130,8 @@ def test_outcomes_without_a_protocol_column_take_the_runs(tmp_path):
 
 
 def test_an_undefined_statistic_says_why():
-    from affordgrasp.physics.report import _stats, why_undefined
+    from affordgrasp.physics.report import _stats
+    from affordgrasp.physics.report import _why_undefined as why_undefined
 
     force = np.array([1.0, 2.0, 3.0, 4.0])
     assert "every task_cut is -inf" in why_undefined("task_cut", np.full(4, -np.inf), "f", force)

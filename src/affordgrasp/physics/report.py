@@ -141,21 +141,8 @@ def _family(name: str) -> str:
     return name.split(":", 1)[0]
 
 
-def why_undefined(predictor: str, x: np.ndarray, outcome: str, y: np.ndarray) -> str:
-    """Why the AUC or Spearman's ρ of a predictor against an outcome is undefined, in words.
-
-    Parameters
-    ----------
-    predictor, outcome : str
-        Their names, for the message.
-    x, y : (n,) float ndarray
-        Their values (NaN: missing).
-
-    Returns
-    -------
-    str
-        E.g. ``"every task_cut is -inf (no grasp passes the task)"``.
-    """
+def _why_undefined(predictor: str, x: np.ndarray, outcome: str, y: np.ndarray) -> str:
+    """Why the AUC or ρ of predictor values ``x`` against outcomes ``y`` is NaN, in words."""
     keep = ~(np.isnan(x) | np.isnan(y))
     x, y = x[keep], y[keep]
     if len(x) < 3:
@@ -183,7 +170,7 @@ def _stats(preds, outs, mask) -> dict:
     for o, values in (*aucs.items(), *rhos.items()):
         for p, value in values.items():
             if math.isnan(value):
-                undefined.setdefault(o, {})[p] = why_undefined(p, preds[p][mask], o, outs[o][mask])
+                undefined.setdefault(o, {})[p] = _why_undefined(p, preds[p][mask], o, outs[o][mask])
     result["undefined"] = undefined
     return result
 

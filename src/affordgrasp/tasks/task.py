@@ -78,7 +78,7 @@ class Task:
                     f"task {self.name!r} has no threshold {key!r}; thresholds: "
                     f"{', '.join(values) or 'none'}"
                 )
-            values[key] = threshold_value(key, value)
+            values[key] = _threshold(key, value)
         return values
 
     def thresholds_by_mode(self) -> dict[str, dict[str, float]]:
@@ -126,30 +126,13 @@ class Task:
     __call__ = evaluate
 
 
-def threshold_value(name: str, value: Any) -> float:
-    """A threshold as a float: a number, ±inf (a test switched off), never NaN.
-
-    Parameters
-    ----------
-    name : str
-        The threshold's name, for the message.
-    value : object
-        The value given.
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    TaskError
-        For a value that is not a number, or NaN (every comparison with it is false).
-    """
+def _threshold(name: str, value: Any) -> float:
+    """A threshold as a float: a number or ±inf (a test switched off), never NaN."""
     try:
         number = float(value)
     except (TypeError, ValueError):
         number = math.nan
-    if math.isnan(number):
+    if math.isnan(number):  # every comparison with NaN is false: a test that passes nothing
         raise TaskError(
             f"threshold {name!r} must be a number (inf and -inf switch a test off), got {value!r}"
         )
@@ -193,12 +176,12 @@ def make_task(
         raise TaskError(f"a task name must be a non-empty string, got {name!r}")
     if not callable(func):
         raise TaskError(f"task {name!r}: func must be callable, got {type(func).__name__}")
-    thresholds = {str(k): threshold_value(k, v) for k, v in (thresholds or {}).items()}
+    thresholds = {str(k): _threshold(k, v) for k, v in (thresholds or {}).items()}
     merged = standard_modes(thresholds)
     for mode, over in (modes or {}).items():
         merged[str(mode)] = {
             **merged.get(str(mode), {}),
-            **{str(k): threshold_value(k, v) for k, v in over.items()},
+            **{str(k): _threshold(k, v) for k, v in over.items()},
         }
     for mode, over in merged.items():
         unknown = set(over) - set(thresholds)
