@@ -676,3 +676,42 @@ def test_hostile_command(build, fragment, tmp_path, capsys, monkeypatch):
         "foreign.safetensors",
         "nan.safetensors",
     }
+
+
+# ---------------------------------------------------------------------------- messages
+# A run that finds nothing, or a refusal, says what to do with options the command has.
+
+
+@pytest.fixture(scope="module")
+def small_dataset(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("messages") / "ds"
+    assert (
+        main(["generate", "knife:1", "--samples", "12", "--out", str(out), "--workers", "1"]) == 0
+    )
+    return out
+
+
+def test_nothing_found_suggests_only_what_would_change(small_dataset, capsys):
+    never = ["--task", "cut", "--threshold", "tau_eps=1e9"]  # no grasp passes
+    for mode, suggested in (("default", True), ("no-robustness", False)):
+        assert main(["best", str(small_dataset), *never, "--mode", mode]) == 0
+        out = capsys.readouterr().out
+        assert "no sample passes" in out and ("try --mode no-robustness" in out) == suggested
+    show = ["show", str(small_dataset), *never, "--no-html", "-o", str(small_dataset.parent / "s")]
+    assert main(show) == 0
+    out = capsys.readouterr().out
+    assert "a dataset with more samples" in out and "more --samples" not in out
+
+
+def test_physics_says_how_to_restore_a_moved_mesh(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("mujoco")
+    pytest.importorskip("coacd")
+    monkeypatch.chdir(tmp_path)
+    _box().export(tmp_path / "block.stl")
+    assert main(["generate", "block.stl", "--samples", "4", "--out", "ds", "--workers", "1"]) == 0
+    (tmp_path / "block.stl").rename(tmp_path / "moved.stl")
+    capsys.readouterr()
+    code, _, err = _run(["physics", "ds", "--out", "ph", "--workers", "1"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "copy it into the dataset directory" in err and "--mesh" not in err
+    assert not (tmp_path / "ph").exists()

@@ -90,6 +90,7 @@ def main(argv: list[str] | None = None) -> int:
         fix), 1 for any other error, 128 + signum when stopped by a signal.
     """
     one_blas_thread()  # before numpy is imported: see process_tuning
+    from .commands.common import check_limits
     from .commands.output import Output
 
     parser = build_parser()
@@ -108,6 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     keep_freed_memory()
     try:
         with stop_on_signals():
+            check_limits(args, getattr(args._module, "LIMITS", {}))
             args._module.run(args, out)
     except InputError as exc:
         print(f"affordgrasp {args.command}: error: {cli_message(exc)}", file=sys.stderr)

@@ -5,7 +5,11 @@ from __future__ import annotations
 import math
 
 from ..columns import column_heading
-from .common import add_robust_argument, add_task_arguments, parse_thresholds
+from .common import ROBUST, add_robust_argument, add_task_arguments, parse_thresholds
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {"top": (None, 100_000, "the top rows are held and printed"), "robust": ROBUST}
+
 
 METRICS_SHOWN = (
     ("ε", "epsilon"),
@@ -152,6 +156,23 @@ def check_dataset_robust(directory, k: int) -> bool:
     return True
 
 
+def loosen_hint(mode: str) -> str:
+    """What to try when no grasp passes a task's thresholds in ``mode``.
+
+    Parameters
+    ----------
+    mode : str
+        The ``--mode`` of the run.
+
+    Returns
+    -------
+    str
+        ``--mode no-robustness`` unless that is the mode, and a lower ``--threshold``.
+    """
+    lower = "a lower --threshold"
+    return lower if mode == "no-robustness" else f"--mode no-robustness or {lower}"
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp best``.
 
@@ -195,8 +216,8 @@ def run(args, out) -> None:
     )
     if result.finite == 0:
         out.text(
-            "no sample passes the task's thresholds; try --mode no-robustness or a lower "
-            "--threshold, or generate more samples"
+            f"no sample passes the task's thresholds; try {loosen_hint(args.mode)}, or "
+            "generate more samples"
         )
     document = result.to_dict()
     if args.out:

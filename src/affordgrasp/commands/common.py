@@ -52,7 +52,7 @@ def add_metrics_argument(p) -> None:
     """
     p.add_argument(
         "--metrics",
-        default="",
+        default=None,
         metavar="+NAME",
         help="also compute an optional metric: +volume (the GWS volume, column gws_volume; "
         "not in the paper's metric vector, it costs the full 6-D hull of every "
@@ -75,10 +75,12 @@ def optional_metrics(args) -> set[str]:
     Raises
     ------
     InputError
-        For a word that is not ``+NAME`` of a known optional metric.
+        For a word that is not ``+NAME`` of a known optional metric, or a value that names
+        none.
     """
     wanted = set()
-    for word in (getattr(args, "metrics", "") or "").replace(",", " ").split():
+    given = getattr(args, "metrics", None)
+    for word in [] if given is None else names_of("--metrics", given.replace(" ", ","), "+volume"):
         name = word[1:] if word.startswith("+") else None
         if name not in OPTIONAL_METRICS:
             raise InputError(
@@ -195,6 +197,84 @@ def load_objects(specs, args) -> list:
 
 
 MAX_SEED = 2**63 - 1
+
+# The limits of a command's numeric options, ``LIMITS`` in its module: option (as its dest)
+# -> (lowest, highest, why the highest). ``cli.main`` checks them before the command runs;
+# None leaves that side to the command's own check, which names it its own way; a callable
+# highest is computed then (from the memory this machine has). Every numeric option of
+# every command has an entry (tests/test_hostile_options.py).
+SEED = (0, MAX_SEED, "seeds are 64-bit")
+ROBUST = (None, 1000, "K copies of each grasp are simulated and held together")
+USES = (0, 50_000, "each use point is ray cast and held with its metrics, ~10 kB each")
+WORKER_BYTES = 256 * 1024**2  # one worker process, measured at ~170 MB
+
+
+def memory_cap(bytes_each: int, default: int = 1024):
+    """The largest count of items that fits in half the memory available, for ``LIMITS``.
+
+    Parameters
+    ----------
+    bytes_each : int
+        Bytes one item takes.
+    default : int
+        The count where the system does not say how much memory is available.
+
+    Returns
+    -------
+    callable
+        ``cap() -> int``, computed when called.
+    """
+
+    def cap() -> int:
+        available = available_memory()
+        return default if available is None else max(1, available // 2 // bytes_each)
+
+    return cap
+
+
+WORKERS = (None, memory_cap(WORKER_BYTES), "each worker process holds about 200 MB")
+SIZE_M = (None, None, "the mesh loader: a plausible object size")
+SAMPLING = {  # add_sampling_arguments
+    "samples": (None, None, "check_counts: positive, and the rows must fit in memory"),
+    "seed": (None, None, "check_counts: a 64-bit seed"),
+    "size_m": SIZE_M,
+    "batch": (None, 100_000, "a batch is simulated and held at once"),
+}
+
+
+def check_limits(args, limits: dict) -> None:
+    """Refuse a numeric option outside its ``LIMITS``, before the command does any work.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    limits : dict
+        Option dest -> (lowest, highest, why), as described above.
+
+    Raises
+    ------
+    InputError
+        Naming the option, its range and the reason for its maximum.
+    """
+    for dest, (low, high, why) in limits.items():
+        value = getattr(args, dest, None)
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            continue  # not given
+        high = high() if callable(high) else high
+        finite = math.isfinite(value) or (low is None and high is None)
+        if finite and (low is None or value >= low) and (high is None or value <= high):
+            continue
+
+        def text(x) -> str:
+            return "2**63 - 1" if x == MAX_SEED else f"{x:,}" if isinstance(x, int) else f"{x:g}"
+
+        kind = "an integer" if isinstance(value, int) else "a finite number"
+        if low is not None and high is not None:
+            bounds = f"in [{text(low)}, {text(high)}]"
+        else:
+            bounds = f"at most {text(high)}" if low is None else f"at least {text(low)}"
+        raise InputError(f"--{dest.replace('_', '-')} must be {kind} {bounds}, got {value} ({why})")
 
 
 def check_counts(args) -> None:
@@ -334,15 +414,17 @@ def check_output_file(path: str, option: str, suffix: str | None = None) -> None
 
 
 def check_mesh_files(args) -> None:
-    """Refuse ``--mesh`` paths that are not mesh files, before any work.
+    """Refuse ``--mesh`` paths that are not mesh files, and SOURCE files that are neither
+    mesh files nor datasets, before any work.
 
-    They are read only when a dataset object is not a built-in family, so without this
-    check a mistyped path would be ignored in silence.
+    ``--mesh`` files are read only when a dataset object is not a built-in family, so
+    without this check a mistyped path would be ignored in silence.
 
     Parameters
     ----------
     args : argparse.Namespace
-        With a ``mesh`` list (``show``, ``plots``); other commands pass through.
+        With a ``mesh`` list and ``source`` (``show``, ``plots``); other commands pass
+        through.
 
     Raises
     ------
@@ -353,6 +435,14 @@ def check_mesh_files(args) -> None:
 
     from ..objects.loading import SUPPORTED_EXTENSIONS
 
+    for path in getattr(args, "source", None) or []:
+        ext = os.path.splitext(path)[1].lower()
+        if os.path.isfile(path) and ext not in SUPPORTED_EXTENSIONS:
+            raise InputError(
+                f"SOURCE {path!r} is a file but not a mesh file ({ext or 'no extension'}); give "
+                "a dataset directory (the folder of a _manifest.json or of Parquet files), a "
+                f"family (e.g. knife) or a mesh file ({', '.join(SUPPORTED_EXTENSIONS)})"
+            )
     for path in getattr(args, "mesh", None) or []:
         if not os.path.isfile(path):
             what = "is a directory" if os.path.isdir(path) else "does not exist"
@@ -602,6 +692,35 @@ def add_task_arguments(
         )
 
 
+def names_of(option: str, text: str, example: str) -> list[str]:
+    """The names of a comma-separated option value, refused when it names none.
+
+    Parameters
+    ----------
+    option : str
+        The option (``--task``), for the message.
+    text : str
+        Its value (``"beat,cut"``).
+    example : str
+        A value to suggest (``"cut"``).
+
+    Returns
+    -------
+    list of str
+        The names, stripped, in order.
+
+    Raises
+    ------
+    InputError
+        For a value with no name in it (``''``, ``','``): an empty option would otherwise
+        run as if it had not been given.
+    """
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise InputError(f"{option} {text!r} names nothing; give a name, e.g. {option} {example}")
+    return names
+
+
 def task_names(values: list[str] | str | None) -> list[str]:
     """Task names from ``--task`` values (repeated and/or comma-separated).
 
@@ -614,12 +733,17 @@ def task_names(values: list[str] | str | None) -> list[str]:
     -------
     list of str
         In order, the first of duplicates kept.
+
+    Raises
+    ------
+    InputError
+        For a value that names no task (``--task ''``).
     """
     if isinstance(values, str):
         values = [values]
     names: list[str] = []
     for value in values or []:
-        names.extend(n.strip() for n in value.split(",") if n.strip())
+        names.extend(names_of("--task", value, "cut (see 'affordgrasp tasks')"))
     return list(dict.fromkeys(names))
 
 

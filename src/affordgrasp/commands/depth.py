@@ -6,6 +6,17 @@ import numpy as np
 
 from ..errors import InputError
 from ..runtime.writing import atomic_write
+from .common import MAX_SEED
+
+MAX_PNG_SIDE = 4096  # pixels: the process peaks near 450 MB drawing it
+# Of the numeric options: see common.check_limits.
+LIMITS = {
+    "sample": (None, MAX_SEED, "sample numbers are 64-bit"),
+    "seed": (None, MAX_SEED, "seeds are 64-bit"),
+    "size": (None, None, "DepthCamera: at most 4096 pixels"),
+    "fov": (None, None, "DepthCamera: in (0, 180) degrees"),
+    "scale": (None, None, "run: the PNG's side, --size × --scale, at most MAX_PNG_SIDE"),
+}
 
 
 def add_arguments(p) -> None:
@@ -111,6 +122,12 @@ def run(args, out) -> None:
             raise InputError(f"--sample must be >= 0, got {i}")
         p0, _ = sample_inputs(args.seed, i, i + 1)
     camera = DepthCamera(size=args.size, fov_deg=args.fov)
+    if args.size * args.scale > MAX_PNG_SIDE:  # the upscaled PNG is made in memory, 3 B/px
+        raise InputError(
+            f"--scale {args.scale} makes a PNG {args.size * args.scale:,} pixels wide; at most "
+            f"{MAX_PNG_SIDE:,}: with --size {args.size}, use --scale at most "
+            f"{max(1, MAX_PNG_SIDE // args.size)}"
+        )
     obj = load_object(args.object)
     renderer = renderer_for(obj, camera)
     depth = renderer.render(p0)

@@ -8,6 +8,8 @@ from ..columns import column_heading
 from ..errors import InputError
 from ..schema import column_numbers
 from .common import (
+    ROBUST,
+    SAMPLING,
     add_robust_argument,
     add_sampling_arguments,
     add_task_arguments,
@@ -31,6 +33,9 @@ SHOWN_METRICS = (
     "use_edge",
     "use_edge_angle",
 )
+
+
+LIMITS = {**SAMPLING, "robust": ROBUST}  # of the numeric options: see common.check_limits
 
 
 def add_arguments(p) -> None:

@@ -9,6 +9,10 @@ from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
 from .common import (
     HAND_HELP,
+    MAX_SEED,
+    ROBUST,
+    SIZE_M,
+    WORKERS,
     add_metrics_argument,
     add_robust_argument,
     add_scale_arguments,
@@ -17,6 +21,17 @@ from .common import (
     robust_option,
     scale_options,
 )
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {
+    "samples": (None, None, "dataset.generate: at most 100,000 shard files"),
+    "seed": (None, MAX_SEED, "seeds are 64-bit"),
+    "workers": WORKERS,
+    "size_m": SIZE_M,
+    "shard_size": (None, 100_000, "a shard is held whole before it is written, ~10 kB a row"),
+    "chunk_size": (None, 100_000, "a chunk is one job's rows, held whole"),
+    "robust": ROBUST,
+}
 
 
 def add_arguments(p) -> None:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .common import SEED, WORKERS
 
 DECISION_ROWS = (
     ("chosen grasp viable (rate)", "top1_viable"),
@@ -19,6 +20,17 @@ DECISION_ROWS = (
     ("chosen grasp percentile (mean)", "top1_percentile"),
     ("top-5 precision (viable)", "topk_precision"),
 )
+
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {
+    "max_rows": (None, 2**63 - 1, "row counts are 64-bit"),
+    "seed": SEED,
+    "candidates": (None, 10_000, "a decision's candidates are rendered and scored together"),
+    "draws": (None, 10_000, "each candidate set is rendered"),
+    "threshold": (None, None, "run: a probability"),
+    "workers": WORKERS,
+}
 
 
 def add_arguments(p) -> None:

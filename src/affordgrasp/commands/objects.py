@@ -7,7 +7,9 @@ from pathlib import Path
 
 from ..errors import InputError
 from . import add_verbose_argument
-from .common import add_scale_arguments, load_objects
+from .common import SEED, SIZE_M, add_scale_arguments, load_objects
+
+LIMITS = {"seed": SEED, "size_m": SIZE_M}  # of the numeric options: see common.check_limits
 
 
 def add_arguments(p) -> None:

@@ -14,9 +14,13 @@ from .common import (
     check_output_dir,
     parse_tasks,
 )
-from .show import add_source_arguments, open_sources
+from .show import SOURCE, add_source_arguments, open_sources
 
 DEFAULT_TASKS = "beat,cut,pick"
+
+
+# Of the numeric options: see common.check_limits.
+LIMITS = {**SOURCE, "bins": (None, None, "plots: 5 to 500 bins")}
 
 
 def add_arguments(p) -> None:

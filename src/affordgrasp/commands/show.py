@@ -13,6 +13,9 @@ from pathlib import Path
 from ..errors import InputError
 from .common import (
     HAND_HELP,
+    ROBUST,
+    SIZE_M,
+    USES,
     add_robust_argument,
     add_scale_arguments,
     add_task_arguments,
@@ -27,6 +30,22 @@ from .common import (
 
 DEFAULT_SAMPLES = 1000
 EVALUATION_BATCH = 250
+
+
+# Of the numeric options (see common.check_limits): those of add_source_arguments, then show's.
+SOURCE = {
+    "samples": (None, None, "check_counts: positive, and the rows must fit in memory"),
+    "seed": (None, None, "check_counts: a 64-bit seed"),
+    "uses": USES,
+    "size_m": SIZE_M,
+    "robust": ROBUST,
+}
+LIMITS = {
+    **SOURCE,
+    "top": (None, 100, "each grasp is rendered"),
+    "cell": (None, None, "show: 64 to 2048 pixels"),
+    "grasp_size": (None, None, "show: 64 to 2048 pixels"),
+}
 
 
 def add_source_arguments(p) -> None:
@@ -483,13 +502,16 @@ def run(args, out) -> None:
     )
     empty = [r for r in rankings if not r.best]
     for r in empty:
+        more = "more --samples"
+        if getattr(sources_by_object[r.object], "directory", None) is not None:
+            more = "a dataset with more samples ('affordgrasp generate --samples N')"
         out.text(
             f"{r.object}: no grasp scores above −∞ for {r.task} in mode {args.mode} "
-            f"({r.accepted} of {r.scored} samples accepted); "
+            f"({r.accepted} of {r.scored} samples accepted); try "
             + (
-                "try more --samples"
+                more
                 if args.mode == "no-robustness" or args.robust
-                else "try --mode no-robustness or more --samples"
+                else f"--mode no-robustness or {more}"
             )
         )
     out.text(f"wrote {result.grid}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .common import (
+    SAMPLING,
     add_sampling_arguments,
     check_counts,
     check_output_file,
@@ -12,6 +13,8 @@ from .common import (
     status_summary,
     write_table,
 )
+
+LIMITS = SAMPLING  # of the numeric options: see common.check_limits
 
 
 def add_arguments(p) -> None:

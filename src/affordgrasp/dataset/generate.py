@@ -60,6 +60,7 @@ from .layout import (
 log = logging.getLogger(__name__)
 
 DEFAULT_CHUNK_SIZE = 256
+MAX_SHARDS = 100_000  # files in one folder, and the plan of a run held in memory
 MIN_CHUNK_SIZE = 8
 
 ProgressFactory = Callable[[int], AbstractContextManager[Callable[[int], None]]]
@@ -261,7 +262,9 @@ def load_objects(specs: Sequence, materials: bool = False) -> list:
     return objects
 
 
-def _check_counts(samples: int, seed: int, shard_size: int, chunk_size: int) -> None:
+def _check_counts(
+    samples: int, seed: int, shard_size: int, chunk_size: int, n_objects: int = 1
+) -> None:
     for name, value, low in (
         ("samples", samples, 1),
         ("seed", seed, 0),
@@ -270,6 +273,15 @@ def _check_counts(samples: int, seed: int, shard_size: int, chunk_size: int) -> 
     ):
         if not isinstance(value, int) or isinstance(value, bool) or value < low:
             raise bad_parameter(name, f"must be an integer >= {low}, got {value!r}")
+    shards = n_objects * -(-samples // shard_size)
+    if shards > MAX_SHARDS:  # the plan holds every shard, before any is written
+        most = MAX_SHARDS // max(n_objects, 1) * shard_size
+        raise bad_parameter(
+            "samples",
+            f"{samples:,} per object in shards of {shard_size:,} rows would make {shards:,} "
+            f"shard files; at most {MAX_SHARDS:,}: use at most {most:,} samples per object, or "
+            "a larger shard size",
+        )
 
 
 def generate(
@@ -366,7 +378,7 @@ def generate(
     """
     from ..hands import get_hand
 
-    _check_counts(samples, seed, shard_size, chunk_size)
+    _check_counts(samples, seed, shard_size, chunk_size, len(objects))
     check_engine(engine, workers, address)
     hand_model = get_hand(hand)
     robust = robust_settings(robust)

@@ -329,9 +329,20 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                     + ("per-part materials (--materials)" if b else "unit density")
                     + " here"
                 )
+        elif key in ("depth", "robust") and a != b:  # tables of settings: in words
+            diffs.append(f"{_plan_text(key, a)} there vs {_plan_text(key, b)} here")
         elif a != b:
             diffs.append(f"{key} {a!r} there vs {b!r} here")
     return diffs
+
+
+def _plan_text(key: str, value: dict | None) -> str:
+    """The ``depth`` or ``robust`` settings of a manifest in words, with their option."""
+    if not value:
+        return f"no {'depth images' if key == 'depth' else 'robust columns'} (--{key})"
+    if key == "depth":
+        return f"depth images of {value.get('size')} px at {value.get('fov_deg')}° (--depth)"
+    return f"robust columns of {value.get('copies')} copies (--robust {value.get('copies')})"
 
 
 def hand_spec_differences(there: dict | None, here: dict | None) -> list[str]:

@@ -179,7 +179,7 @@ def hand_from_dict(doc: dict) -> Hand:
             )
             for f in doc.get("fingers", [])
         )
-    except (TypeError, AttributeError) as exc:
+    except (TypeError, AttributeError, ValueError) as exc:
         raise HandError(f"{where}: malformed hand document ({exc})") from None
     return Hand(
         name=name,
@@ -303,4 +303,7 @@ def load_hand(path: str | os.PathLike) -> Hand:
             f"({doc.get('hand')!r}, written before hands were recorded whole); "
             "pass that name or the hand's own file"
         )
-    return hand_from_dict(doc)
+    try:
+        return hand_from_dict(doc)
+    except HandError as exc:
+        raise HandError(f"hand file {str(path)!r}: {exc}") from None

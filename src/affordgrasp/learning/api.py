@@ -608,7 +608,7 @@ def evaluate_on_dataset(
     Raises
     ------
     InputError
-        When none of the named objects is in the dataset.
+        When none of the named objects is in the dataset, or they hold no row to evaluate.
     """
     tgt = Target.from_dict(config["target"])
     dataset = Dataset.open(dataset)
@@ -637,6 +637,11 @@ def evaluate_on_dataset(
         if not mask.any():
             raise InputError(f"none of the objects {list(objects)} is in {str(dataset)!r}")
     available = int(mask.sum())
+    if available == 0:
+        raise InputError(
+            f"{str(dataset.directory)!r} holds no row to evaluate a {tgt.name} model on "
+            f"({tgt.rows} rows of {how}); generate more samples"
+        )
     idx = _subsample(np.flatnonzero(mask), max_rows, seed)
     samples = samples.take(idx)
     if reads_depth(config):

@@ -142,10 +142,24 @@ def _family(name: str) -> str:
     return name.split(":", 1)[0]
 
 
+def _why_undefined(predictor: str, x: np.ndarray, outcome: str, y: np.ndarray) -> str:
+    """Why the AUC or ρ of predictor values ``x`` against outcomes ``y`` is NaN, in words."""
+    keep = ~(np.isnan(x) | np.isnan(y))
+    x, y = x[keep], y[keep]
+    if len(x) < 3:
+        return f"{len(x)} rows with both {predictor} and {outcome}"
+    if np.all(x == -np.inf):
+        return f"every {predictor} is -inf (no grasp passes the task)"
+    if np.all(x == x[0]):
+        return f"{predictor} is the same on every row"
+    return f"{outcome} is the same on every row"
+
+
 def _stats(preds, outs, mask) -> dict:
     rates: dict[str, float] = {}
     aucs: dict[str, dict[str, float]] = {}
     rhos: dict[str, dict[str, float]] = {}
+    undefined: dict[str, dict[str, str]] = {}  # outcome -> predictor -> why it is NaN
     result = {"n": int(mask.sum()), "auc": aucs, "spearman": rhos, "rates": rates}
     for o in BINARY_OUTCOMES:
         y = outs[o][mask]
@@ -154,6 +168,11 @@ def _stats(preds, outs, mask) -> dict:
         aucs[o] = {p: roc_auc(v[mask][valid], y[valid].astype(bool)) for p, v in preds.items()}
     for o in GRADED_OUTCOMES:
         rhos[o] = {p: spearman(v[mask], outs[o][mask]) for p, v in preds.items()}
+    for o, values in (*aucs.items(), *rhos.items()):
+        for p, value in values.items():
+            if math.isnan(value):
+                undefined.setdefault(o, {})[p] = _why_undefined(p, preds[p][mask], o, outs[o][mask])
+    result["undefined"] = undefined
     return result
 
 
