@@ -3,7 +3,7 @@
 pandas, polars and DuckDB read a dataset directory directly as well (see docs/dataset.md);
 these functions add the checks: that the directory is an affordgrasp dataset, which objects it
 holds, and that the shards are the plan's, each the file written for it (see
-:func:`affordgrasp.dataset.layout.check_shards`). A file that cannot be read is reported as
+:func:`affordgrasp.dataset.shards.check_shards`). A file that cannot be read is reported as
 a :class:`~affordgrasp.errors.DatasetError` naming it, never as a raw Arrow error.
 
 They take a directory and open it each call; :class:`~affordgrasp.dataset.handle.Dataset`
@@ -28,7 +28,7 @@ from .handle import (
     open_dataset,
     read_errors,
 )
-from .layout import read_manifest
+from .manifest import read_manifest
 
 __all__ = [
     "REQUIRED_COLUMNS",
