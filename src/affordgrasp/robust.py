@@ -614,18 +614,17 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.effort import hold_effort, impact_effort
     from .metrics.epsilon import epsilon
     from .metrics.epsilon_hand import epsilon_hand
-    from .metrics.inertia import rotational_inertia
-    from .metrics.phi import contact_metrics_batch
-    from .metrics.striking import use_swing_cosine
-    from .metrics.transmission import use_force
-    from .metrics.use_geometry import (
+    from .metrics.hand_placement import (
         contact_reach,
         contact_thickness,
         contact_width,
         long_axis,
         use_clearance,
-        use_lever_ratio,
     )
+    from .metrics.inertia import rotational_inertia
+    from .metrics.phi import contact_metrics_batch
+    from .metrics.striking import use_lever_ratio, use_swing_cosine
+    from .metrics.transmission import use_force
     from .metrics.validation import units_n3
 
     mass = obj.mass
