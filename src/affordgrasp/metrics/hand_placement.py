@@ -106,18 +106,12 @@ def contact_reach(
 
     Parameters
     ----------
-    contact_points : (k, 3) float
-        Contacts of all grasps, stacked, m.
-    offsets : (g + 1,) int
-        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
-    use_point : (n, 3) float
-        Use points, m.
+    contact_points, offsets, use_point, group
+        As for :func:`use_clearance`.
     center_of_mass : (3,) float
         m.
     axis : (3,) float
         The long axis (any sign).
-    group : (n,) int, optional
-        The grasp of each use point (default: use point i belongs to grasp i, n = g).
 
     Returns
     -------
@@ -218,12 +212,8 @@ def contact_width(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`); closed.
-    contact_points, contact_normals : (k, 3) float
-        Contacts of all grasps, stacked, m; the object's outward unit normals.
-    offsets : (g + 1,) int
-        Grasp j owns rows ``offsets[j]:offsets[j + 1]``.
+    mesh, contact_points, contact_normals, offsets
+        As for :func:`contact_thickness` (the mesh closed).
     directions : int
         Directions across the part per contact (default :data:`WIDTH_DIRECTIONS`).
 
@@ -252,7 +242,7 @@ def contact_thickness_and_width(
     Parameters
     ----------
     mesh, contact_points, contact_normals, offsets
-        As for :func:`contact_width`.
+        As for :func:`contact_thickness`.
     directions : int
         Directions across the part per contact (0: the thickness alone; the width is then
         the chord along the normal).

@@ -204,14 +204,10 @@ def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.nd
 
     Parameters
     ----------
-    use_point : (n, 3) float
-        m.
+    use_point, wrist_point, wrist_axis
+        As for :func:`use_swing_cosine`.
     center_of_mass : (3,) float
         m.
-    wrist_point : (n, 3) float
-        Palm centres, m.
-    wrist_axis : (n, 3) float
-        Unit approach directions.
 
     Returns
     -------
@@ -223,7 +219,6 @@ def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.nd
     W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
     A = np.asarray(wrist_axis, dtype=np.float64).reshape(-1, 3)
     c = np.asarray(center_of_mass, dtype=np.float64).reshape(1, 3)
-
     r_u = _off_axis(U, W, A)
     r_c = _off_axis(np.broadcast_to(c, U.shape), W, A)
     along = np.einsum("ij,ij->i", r_c, r_u)

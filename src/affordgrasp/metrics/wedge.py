@@ -68,16 +68,8 @@ def use_wedge_angle(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh or MeshData
-        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
-    use_point : (3,) or (n, 3) float
-        Use points on the surface, m.
-    use_normal : (3,) or (n, 3) float
-        Outward unit normals there (the rays start 20 µm inside, along -n).
-    radius : float
-        Radius of the ball, m (default :data:`WEDGE_RADIUS_M`, 3 mm).
-    directions : int
-        Rays per use point (default :data:`WEDGE_DIRECTIONS`).
+    mesh, use_point, use_normal, radius, directions
+        As for :func:`use_wedge_shape`.
 
     Returns
     -------
