@@ -353,18 +353,16 @@ def hold_dirs(metrics: Any) -> np.ndarray:
 
 
 def robust_column_names(tasks: Sequence[str] = DEFAULT_TASKS) -> tuple[str, ...]:
-    """Names of the robust columns, in table order.
+    """:func:`affordgrasp.columns.robust_column_names` (their one owner, so that the sample
+    schema names them without importing this module), of the default tasks unless told.
 
     Parameters
     ----------
     tasks : sequence of str
-        Tasks summarised.
 
     Returns
     -------
     tuple of str
-        :func:`affordgrasp.columns.robust_column_names` of ``tasks`` (their one owner, so
-        that the sample schema names them without importing this module).
     """
     return columns.robust_column_names(tasks)
 

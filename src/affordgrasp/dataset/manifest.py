@@ -1,4 +1,4 @@
-"""The manifest of a dataset directory: the plan a run writes first and a resume must match.
+"""A dataset's manifest: the plan a run writes first and a resume must match (SPEC §2.6).
 
 ``DIR/_manifest.json`` records what the command asked for (conventions: Datasets): the objects
 with their mesh hashes, the seed, the samples and shard size, the hand, the metrics. It is
@@ -154,7 +154,6 @@ def manifest_streams(manifest: dict) -> str:
     Parameters
     ----------
     manifest : dict
-        A dataset manifest.
 
     Returns
     -------

@@ -53,7 +53,6 @@ def dataset_hand(dataset: DatasetLike) -> Hand:
     Parameters
     ----------
     dataset : path or Dataset
-        A directory written by ``affordgrasp generate``.
 
     Returns
     -------

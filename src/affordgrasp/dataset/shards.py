@@ -1,4 +1,4 @@
-"""The shards of a dataset: planned, written atomically, checked against the plan.
+"""A dataset's shards: planned, written atomically, checked against the plan (SPEC §2.6).
 
 A dataset directory holds::
 

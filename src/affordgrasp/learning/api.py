@@ -440,11 +440,8 @@ def predictions_of(model, config: dict, samples: Samples) -> np.ndarray:
 
     Parameters
     ----------
-    model : torch.nn.Module
-    config : dict
-        The model's config.
-    samples : Samples
-        With depth images unless the model is ``"pose"``.
+    model, config, samples
+        As for :func:`report`.
 
     Returns
     -------

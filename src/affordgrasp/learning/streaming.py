@@ -94,10 +94,8 @@ class StreamedEpochs:
 
         Parameters
         ----------
-        epoch : int
-            1-based.
-        seed : int
-            The training seed.
+        epoch, seed : int
+            As for :meth:`rows_of_epoch`.
 
         Returns
         -------

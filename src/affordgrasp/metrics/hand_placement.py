@@ -1,4 +1,4 @@
-"""Where the hand holds the object relative to its working part (conventions: Metrics).
+"""Where the hand holds relative to the working part: off it, on a handle (SPEC §2.10).
 
 The tasks keep the hand off the part that does the work (a blade, a hammer's head): every
 contact far from the use point U (:func:`use_clearance`), none reaching past the centre of
