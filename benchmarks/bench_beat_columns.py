@@ -36,7 +36,7 @@ def main() -> None:
     from affordgrasp.metrics.epsilon import epsilon
     from affordgrasp.metrics.epsilon_hand import epsilon_hand
     from affordgrasp.metrics.striking import use_depth, use_relief
-    from affordgrasp.metrics.use_geometry import use_wedge_angle
+    from affordgrasp.metrics.wedge import use_wedge_angle
     from affordgrasp.objects import load_object
     from affordgrasp.pipeline import evaluate_samples
     from affordgrasp.search.use_points import UsePoints

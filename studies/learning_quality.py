@@ -97,11 +97,13 @@ def _check_split(config: dict, split, name: str) -> None:
 
 def k_candidates(data, split, classifier, regressor, *, k=32, trials=40, rows=600, seed=0):
     """Per task: mean GMS-like rank, success rate and oracle-match of model vs random choice."""
+    from affordgrasp.dataset.handle import Dataset
     from affordgrasp.dataset.reading import read_dataset
     from affordgrasp.learning.api import predictions_of
     from affordgrasp.learning.data import load_depth, read_rows
     from affordgrasp.tasks import evaluate_task, list_tasks
 
+    data = Dataset.open(data)
     samples, _ = read_rows(data, "viable", objects=list(split.test))
     keep = np.concatenate(
         [np.flatnonzero(samples.object == o)[:rows] for o in sorted(set(samples.object))]

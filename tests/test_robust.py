@@ -247,7 +247,7 @@ def test_ranking_values_read_the_robust_score(hammer):
 
 def test_robust_dataset_records_its_settings_and_resumes(tmp_path):
     from affordgrasp.dataset.generate import generate
-    from affordgrasp.dataset.layout import read_manifest
+    from affordgrasp.dataset.manifest import read_manifest
     from affordgrasp.errors import DatasetError
 
     out = tmp_path / "ds"

@@ -17,8 +17,8 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 from terminal import as_in_a_terminal
 
 from affordgrasp.dataset.generate import generate
-from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
+from affordgrasp.dataset.shards import plan_shards, shard_paths
 from affordgrasp.errors import DatasetError, HandError, InputError
 from affordgrasp.grasp.pregrasp import object_stream_seed
 

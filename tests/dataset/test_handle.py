@@ -115,8 +115,8 @@ def test_resolve_object_of_loose_rows_and_bad_options(box_mesh):
 
 def test_the_dataset_splits_its_objects_as_training_does(tmp_path):
     from affordgrasp.dataset.generate import generate
+    from affordgrasp.dataset.splits import split_by_object as learning_split
     from affordgrasp.errors import InputError
-    from affordgrasp.learning.data import split_by_object as learning_split
 
     out = tmp_path / "k"
     generate(["knife:0", "knife:1", "knife:2", "mug:0"], 1, out, seed=0, workers=1)

@@ -14,10 +14,17 @@ import pytest
 from dataset_support import SEED
 
 from affordgrasp.cli import main
-from affordgrasp.dataset import layout
+from affordgrasp.dataset.checksums import (
+    CHECKSUM_ALGORITHM,
+    CHECKSUMS_NAME,
+    file_checksum,
+    read_checksums,
+    shard_damage,
+)
 from affordgrasp.dataset.generate import generate
-from affordgrasp.dataset.layout import CHECKSUMS_NAME, read_checksums, shard_paths
+from affordgrasp.dataset.manifest import FORMAT_VERSION
 from affordgrasp.dataset.reading import iter_batches, read_dataset
+from affordgrasp.dataset.shards import ADDED_COLUMNS, shard_paths
 from affordgrasp.errors import DatasetError
 from affordgrasp.runtime import writing
 
@@ -58,7 +65,7 @@ def test_every_shard_has_a_recorded_checksum(pristine):
     assert sorted(records) == [p.name for p in shards]
     for p in shards:
         assert records[p.name]["bytes"] == p.stat().st_size
-        assert layout.shard_damage(p, records[p.name]) is None
+        assert shard_damage(p, records[p.name]) is None
 
 
 def test_shard_overwritten_mid_file_is_refused_by_readers(dataset, capsys):
@@ -189,7 +196,7 @@ def _one_line(err: str) -> str:
 
 def test_manifest_records_the_format_with_checksums(pristine):
     manifest = json.loads((pristine / "_manifest.json").read_text())
-    assert manifest["format_version"] == layout.FORMAT_VERSION >= 2
+    assert manifest["format_version"] == FORMAT_VERSION >= 2
 
 
 def test_full_disk_while_writing_best_or_an_export_leaves_no_file(
@@ -229,9 +236,7 @@ def _forge(dataset: Path, name: str, data: bytes) -> None:
     """Put ``data`` under the shard name ``name`` with its checksum line updated to match."""
     (dataset / name).write_bytes(data)
     records = [r for r in read_checksums(dataset).values() if r["name"] != name]
-    records.append(
-        {"name": name, "bytes": len(data), layout.CHECKSUM_ALGORITHM: layout.file_checksum(data)}
-    )
+    records.append({"name": name, "bytes": len(data), CHECKSUM_ALGORITHM: file_checksum(data)})
     (dataset / CHECKSUMS_NAME).write_text("".join(json.dumps(r) + "\n" for r in records))
 
 
@@ -353,7 +358,7 @@ def test_a_dataset_of_the_previous_release_still_opens(box_mesh, tmp_path, caplo
     (old / CHECKSUMS_NAME).unlink()
     for p in shard_paths(old):
         table = pq.read_table(p)
-        pq.write_table(table.drop_columns(sorted(layout.ADDED_COLUMNS)), p)
+        pq.write_table(table.drop_columns(sorted(ADDED_COLUMNS)), p)
     with caplog.at_level("WARNING", logger="affordgrasp"):
         table = read_dataset(old)
     assert table.num_rows == SAMPLES and "earlier version" in caplog.text

@@ -18,8 +18,8 @@ import pytest
 from dataset_support import SEED
 
 import affordgrasp
-from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
+from affordgrasp.dataset.shards import plan_shards, shard_paths
 from affordgrasp.errors import InputError
 from affordgrasp.runtime.engines import check_ray_address
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from affordgrasp.metrics import use_geometry
+from affordgrasp.metrics import wedge
 from affordgrasp.objects import load_object
 from affordgrasp.rays import embree_available
 from affordgrasp.rays.crossings import crossings
@@ -49,7 +49,7 @@ def _wedge_rays(mesh, n_faces: int, k: int, seed: int) -> tuple[np.ndarray, np.n
     rng = np.random.default_rng(seed)
     faces = rng.choice(len(mesh.faces), n_faces, replace=False)
     centre = mesh.vertices[mesh.faces[faces]].mean(axis=1) - 2e-5 * mesh.face_normals[faces]
-    sphere = use_geometry._fibonacci_sphere(k)
+    sphere = wedge._fibonacci_sphere(k)
     return np.repeat(centre, k, axis=0), np.tile(sphere, (n_faces, 1))
 
 

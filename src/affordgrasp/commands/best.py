@@ -132,7 +132,7 @@ def check_dataset_robust(directory, k: int) -> bool:
     from pathlib import Path
 
     from ..dataset.handle import Dataset
-    from ..dataset.layout import MANIFEST_NAME
+    from ..dataset.manifest import MANIFEST_NAME
     from ..errors import InputError
 
     if k < 0:

@@ -6,7 +6,7 @@ import shlex
 import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
-from ..dataset.layout import DEFAULT_SHARD_SIZE
+from ..dataset.shards import DEFAULT_SHARD_SIZE
 from .common import (
     HAND_HELP,
     MAX_SEED,

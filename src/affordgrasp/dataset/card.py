@@ -19,7 +19,7 @@ import numpy as np
 
 from .._version import __version__
 from ..runtime.writing import atomic_write
-from .layout import (
+from .manifest import (
     CARD_JSON_NAME,
     CARD_MD_NAME,
     FORMAT,

@@ -2,7 +2,7 @@
 
 :func:`generate` samples (p0, d) uniformly for every object, simulates the grasp policy,
 computes Φ, and writes every sample, stable or not, as Parquet shards (see
-``affordgrasp.dataset.layout`` for the directory layout and ``docs/dataset.md`` for the
+``affordgrasp.dataset.shards`` for the directory layout and ``docs/dataset.md`` for the
 schema). Guarantees:
 
 * deterministic: sample ``i`` of an object depends only on (seed, i, object, hand), never on
@@ -38,19 +38,21 @@ from ..runtime.engines import Engine, check_engine, make_engine
 from ..runtime.interrupts import stop_on_signals
 from ..schema import column_numbers
 from . import card as card_module
+from .checksums import read_checksums
 from .handle import Dataset
 from .jobs import Job, ObjectPayload, RunContext
-from .layout import (
-    DEFAULT_SHARD_SIZE,
+from .manifest import (
     FORMAT,
     FORMAT_VERSION,
     MANIFEST_NAME,
-    Shard,
     manifest_streams,
-    plan_shards,
     prepare_directory,
-    read_checksums,
     read_manifest,
+)
+from .shards import (
+    DEFAULT_SHARD_SIZE,
+    Shard,
+    plan_shards,
     remove_stale_temporaries,
     shard_metadata,
     valid_shard_info,
@@ -172,7 +174,7 @@ def build_manifest(
     volume : bool
         Whether the GWS volume is computed (``gws_volume``; null otherwise). Recorded
         always (a resume must match); a manifest written before it was recorded computed
-        it whenever it computed metrics (:func:`~affordgrasp.dataset.layout.manifest_volume`).
+        it whenever it computed metrics (:func:`~affordgrasp.dataset.manifest.manifest_volume`).
     robust : RobustSettings, optional
         Robust evaluation's parameters (recorded under ``robust`` when K > 0; a resume
         must use the same).

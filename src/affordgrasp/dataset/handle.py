@@ -10,7 +10,7 @@ the object that made each row is resolved by one rule (:meth:`Dataset.object`)::
     knife = ds.object("knife")  # the GraspObject of its rows, mass properties included
     table = ds.read(columns=["object", "epsilon"])
 
-The on-disk format is that of :mod:`affordgrasp.dataset.layout`; every dataset that format
+The on-disk format is that of :mod:`affordgrasp.dataset.shards`; every dataset that format
 ever wrote opens (keys added later have their documented defaults when absent).
 """
 
@@ -103,7 +103,7 @@ class Dataset:
         """
         if isinstance(source, Dataset):
             return source
-        from .layout import read_manifest
+        from .manifest import read_manifest
 
         return cls(source, read_manifest(source))
 
@@ -159,8 +159,8 @@ class Dataset:
 
     @property
     def volume(self) -> bool:
-        """Whether ``gws_volume`` holds computed volumes (see ``layout.manifest_volume``)."""
-        from .layout import manifest_volume
+        """Whether ``gws_volume`` holds computed volumes (see ``manifest.manifest_volume``)."""
+        from .manifest import manifest_volume
 
         return manifest_volume(self.manifest)
 
@@ -391,7 +391,7 @@ class Dataset:
         -------
         list of pathlib.Path
         """
-        from .layout import shard_paths
+        from .shards import shard_paths
 
         return shard_paths(self.directory)
 
@@ -400,7 +400,7 @@ class Dataset:
 
         Every reader of the rows comes through here: the shards on disk must be the plan's
         (none missing, none extra) and each the file written for it
-        (:func:`~affordgrasp.dataset.layout.check_shards`).
+        (:func:`~affordgrasp.dataset.shards.check_shards`).
 
         Returns
         -------
@@ -655,7 +655,7 @@ def open_dataset(
         Check every shard against the checksum recorded when it was written and against
         the plan's object, seed, samples and columns (reads each file once per process; see
         docs/dataset.md for the cost). Missing and extra shards are refused either way
-        (:func:`~affordgrasp.dataset.layout.check_shards`).
+        (:func:`~affordgrasp.dataset.shards.check_shards`).
     manifest : dict, optional
         The directory's manifest when already read (:class:`~affordgrasp.dataset.handle.Dataset`
         passes its own); read here otherwise.
@@ -673,7 +673,8 @@ def open_dataset(
     import pyarrow.dataset as pads
 
     from ..schema import dataset_schema
-    from .layout import check_shards, read_manifest, shard_paths
+    from .manifest import read_manifest
+    from .shards import check_shards, shard_paths
 
     try:
         manifest = read_manifest(directory) if manifest is None else manifest
@@ -793,7 +794,7 @@ def manifest_hand(manifest: dict) -> Hand:
     Parameters
     ----------
     manifest : dict
-        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.layout.read_manifest`).
+        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.manifest.read_manifest`).
 
     Returns
     -------

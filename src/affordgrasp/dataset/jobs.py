@@ -130,7 +130,8 @@ class RunContext:
         The run's objects, by index.
     hand : Hand or str
         The Hand itself, not its name: a custom hand travels to the workers as it is (a name
-        would be looked up again there, and a custom hand named "barrett" replaced).
+        would be looked up again there, and a custom hand named "barrett" replaced). A job
+        resolves a name once and passes the Hand down.
     seed : int
         The run's seed.
     object_seeds : tuple of int, optional
@@ -187,37 +188,25 @@ class RunContext:
             One row per sample (``dataset_schema``), with ``depth_mm`` when the run renders
             depth.
         """
+        from ..hands import get_hand
         from ..pipeline import evaluate_inputs, evaluate_samples
 
-        ctx = self
         obj = _object(self, job.object_index)  # rebuilt once per process
-        seed = ctx.seed_of(job.object_index)
+        seed = self.seed_of(job.object_index)
+        common = {
+            "hand": get_hand(self.hand),
+            "soft": self.soft,
+            "metrics": self.metrics,
+            "volume": self.volume,
+            "robust": self.robust,
+        }
         if job.p0 is None:
-            table = evaluate_samples(
-                obj,
-                job.n,
-                seed=seed,
-                start=job.start,
-                hand=ctx.hand,
-                soft=ctx.soft,
-                metrics=ctx.metrics,
-                volume=ctx.volume,
-                robust=ctx.robust,
-            ).table
+            table = evaluate_samples(obj, job.n, seed=seed, start=job.start, **common).table
         else:
             table = evaluate_inputs(
-                obj,
-                job.p0,
-                job.use_dir,
-                hand=ctx.hand,
-                seed=seed,
-                sample_start=job.start,
-                soft=ctx.soft,
-                metrics=ctx.metrics,
-                volume=ctx.volume,
-                robust=ctx.robust,
+                obj, job.p0, job.use_dir, seed=seed, sample_start=job.start, **common
             ).table
-        if ctx.depth:
+        if self.depth:
             from ..vision.depth import depth_column
 
             table = table.append_column(*depth_column(obj, table))

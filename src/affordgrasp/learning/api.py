@@ -19,16 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from ..dataset.handle import Dataset, DatasetLike
+from ..dataset.splits import split_by_family, split_by_object
 from ..errors import InputError
-from .data import (
-    Samples,
-    load_depth,
-    read_rows,
-    reads_depth,
-    sensed_depth_mm,
-    split_by_family,
-    split_by_object,
-)
+from .data import Samples, load_depth, read_rows, reads_depth, sensed_depth_mm
 from .evaluation import classification_report, expected_calibration_error, regression_report
 from .targets import Target
 from .training import Inputs, TrainSettings, default_config, predict_scores, train_model
@@ -121,7 +114,7 @@ def prepare_split(
     Parameters
     ----------
     dataset : path or Dataset
-        A dataset generated with metrics.
+        A dataset generated with metrics (opened once: :class:`~affordgrasp.dataset.Dataset`).
     target : str or Target
         What to learn (:func:`~affordgrasp.learning.data.read_rows`).
     split : str
@@ -447,11 +440,8 @@ def predictions_of(model, config: dict, samples: Samples) -> np.ndarray:
 
     Parameters
     ----------
-    model : torch.nn.Module
-    config : dict
-        The model's config.
-    samples : Samples
-        With depth images unless the model is ``"pose"``.
+    model, config, samples
+        As for :func:`report`.
 
     Returns
     -------
@@ -555,7 +545,7 @@ def predict_dataset(
             p0=np.asarray(tab.column("p0").combine_chunks().flatten()).reshape(-1, 6),
             use_dir=np.asarray(tab.column("use_dir").combine_chunks().flatten()).reshape(-1, 2),
             y=np.full(len(obj), np.nan),
-            meta={"directory": str(dataset.directory), "dataset": dataset},
+            meta={"dataset": dataset},
         )
         if needs_depth:
             if stored:

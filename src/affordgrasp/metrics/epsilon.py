@@ -286,26 +286,6 @@ def epsilon_volume_store(W, volume, store):
 
 
 @njit(cache=True)
-def nearest_facet(offsets):
-    """Index of the facet with the smallest offset (the one that gives ε).
-
-    Parameters
-    ----------
-    offsets : (F,) float64 ndarray
-        Distances of the facets' hyperplanes from the origin.
-
-    Returns
-    -------
-    int
-    """
-    best = 0
-    for f in range(1, offsets.shape[0]):
-        if offsets[f] < offsets[best]:
-            best = f
-    return best
-
-
-@njit(cache=True)
 def facet_supports(P, normal, offset, vertices):
     """Whether the hyperplane ``normal . x = offset`` supports the wrench set ``P``.
 

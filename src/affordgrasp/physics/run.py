@@ -242,7 +242,7 @@ def _shard_done(path: Path, rows: int) -> bool:
 
 
 def run_physics(
-    dataset_dir: str | os.PathLike | Dataset,
+    dataset: str | os.PathLike | Dataset,
     out: str | os.PathLike,
     *,
     settings: PhysicsSettings | None = None,
@@ -261,7 +261,7 @@ def run_physics(
 
     Parameters
     ----------
-    dataset_dir : path or Dataset
+    dataset : path or Dataset
         A dataset written by ``affordgrasp generate``: its rows are replayed with its hand
         on its objects (:meth:`~affordgrasp.dataset.handle.Dataset.object`, mass properties
         included: a dataset made with ``--materials`` is replayed with them).
@@ -322,7 +322,7 @@ def run_physics(
         raise bad_parameter("workers", f"must be a positive integer, got {workers}")
     check_engine(engine, workers, address)
     out = Path(out)
-    dataset = Dataset.open(dataset_dir)
+    dataset = Dataset.open(dataset)
     rows = _plan_rows(dataset, statuses, objects, max_per_object)
     n = rows.num_rows
     if n == 0:

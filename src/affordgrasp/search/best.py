@@ -30,8 +30,7 @@ import pyarrow.dataset as pads
 import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
-from ..dataset.handle import Dataset, DatasetLike
-from ..dataset.reading import read_errors
+from ..dataset.handle import Dataset, DatasetLike, read_errors
 from ..errors import DatasetError, bad_parameter
 from ..robust import task_scores
 from ..runtime.writing import atomic_write
@@ -210,7 +209,7 @@ def scan_top(
 
 
 def best_grasps(
-    directory: DatasetLike,
+    dataset: DatasetLike,
     task: str | Task,
     *,
     mode: str = "default",
@@ -224,8 +223,8 @@ def best_grasps(
 
     Parameters
     ----------
-    directory : path or Dataset
-        A dataset written by :func:`affordgrasp.generate`.
+    dataset : path or Dataset
+        A dataset written by :func:`affordgrasp.generate` (opened once).
     task : str or Task
         A registered task name or a :class:`~affordgrasp.tasks.Task`.
     mode : str
@@ -254,7 +253,7 @@ def best_grasps(
     """
     if not isinstance(top, int) or top < 1:
         raise bad_parameter("top", f"must be a positive integer, got {top!r}")
-    ds = Dataset.open(directory)
+    ds = Dataset.open(dataset)
     directory = ds.directory
     if not ds.metrics:
         raise DatasetError(
@@ -265,9 +264,9 @@ def best_grasps(
     task_obj.thresholds_for(mode, **dict(thresholds or {}))  # bad mode/threshold: fail now
     names = ds.objects
     chosen = ds.select(objects)
-    dataset = ds.arrow()
+    arrow = ds.arrow()
     flt = pads.field("object").isin(chosen) if chosen else None
-    metric_cols = [c for c in METRIC_COLUMNS if c in dataset.schema.names]
+    metric_cols = [c for c in METRIC_COLUMNS if c in arrow.schema.names]
     if robust:
         from ..robust import ranking_column
 
@@ -277,7 +276,7 @@ def best_grasps(
                 "--robust K to rank by a robust score, or drop --robust"
             )
         metric_cols.append(ranking_column(task_obj.name))
-    scanner = dataset.scanner(
+    scanner = arrow.scanner(
         columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
     )
     with read_errors(directory):
@@ -293,7 +292,7 @@ def best_grasps(
     found = kept.get((None, task_obj.name), TopScan(TopRows(top, 3)))
     best_v, (best_o, best_s, _) = found.best.values, found.best.keys
     with read_errors(directory):
-        rows = _fetch_rows(dataset, names, best_o, best_s)
+        rows = _fetch_rows(arrow, names, best_o, best_s)
     rows = rows.append_column(RANK_COLUMN, pa.array(np.arange(1, len(best_v) + 1), pa.int64()))
     rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
     return BestGrasps(

@@ -44,9 +44,9 @@ from ..hands import Hand
 from ..metrics.cones import wrench_matrix_kernel
 from ..metrics.effort import impact_effort, impact_effort_kernel, use_wrench
 from ..metrics.epsilon_hand import epsilon_hand
+from ..metrics.hand_placement import contact_thickness, contact_width
 from ..metrics.lp import OPTIMAL
 from ..metrics.transmission import use_force, use_force_kernel
-from ..metrics.use_geometry import contact_thickness, contact_width
 from ..objects import GraspObject, load_object
 from ..pipeline import evaluate_inputs, evaluate_samples
 from ..tasks import MetricColumns, get_task

@@ -17,8 +17,9 @@ import numpy as np
 
 from ..errors import bad_parameter
 from ..grasp.pregrasp import surface_use_directions, use_points
+from ..metrics.edges import use_edge, use_edge_angle
 from ..metrics.striking import use_depth, use_relief
-from ..metrics.use_geometry import use_edge, use_edge_angle, use_wedge_shape
+from ..metrics.wedge import use_wedge_shape
 from ..objects import GraspObject, load_object
 from ..tasks import get_task
 from .guidance import USE_ONLY, use_only_passes

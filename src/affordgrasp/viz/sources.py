@@ -1,6 +1,6 @@
 """Where the grasps to show come from: a dataset directory or an in-memory table.
 
-A dataset directory is read by :func:`affordgrasp.dataset.reading.open_dataset` (its shards,
+A dataset directory is read by :func:`affordgrasp.dataset.handle.open_dataset` (its shards,
 or every ``*.parquet`` file under a directory without a manifest), streamed in batches so
 that datasets larger than memory can be ranked and plotted:
 :func:`affordgrasp.search.best.top_grasps` keeps the best ``k`` rows per object and task
@@ -18,8 +18,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
-from ..dataset.handle import Dataset
-from ..dataset.reading import open_dataset, read_errors
+from ..dataset.handle import Dataset, open_dataset, read_errors
 from ..errors import DatasetError
 from ..hands.model import Hand
 

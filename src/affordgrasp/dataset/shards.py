@@ -1,4 +1,4 @@
-"""The on-disk layout of a dataset: the plan, the manifest and the shards (conventions: Datasets).
+"""A dataset's shards: planned, written atomically, checked against the plan (SPEC §2.6).
 
 A dataset directory holds::
 
@@ -7,14 +7,14 @@ A dataset directory holds::
     DIR/_checksums.jsonl                  a BLAKE2b checksum of each shard file as written
     DIR/part-OOOOO-SSSSSSSSSSSS.parquet   one shard: object O, samples S .. S+shard_size-1
 
-The plan is a pure function of the command: object ``o`` gets samples ``0 .. samples-1`` and
-shard ``k`` of it holds samples ``k*shard_size .. min((k+1)*shard_size, samples)-1`` in order.
-A shard is written to a hidden temporary name and renamed into place only when complete and
-synced, so a shard file that exists is whole; resuming skips every valid shard. A shard
-changed afterwards (overwritten in place, truncated, replaced) no longer matches the checksum
-recorded when it was written or the plan: resuming writes it again, and readers refuse it,
-naming the file, as they refuse a planned shard that was written and is gone and a shard
-file outside the plan (:func:`check_shards`).
+The plan is a pure function of the command (:mod:`.manifest`): object ``o`` gets samples
+``0 .. samples-1`` and shard ``k`` of it holds samples ``k*shard_size ..
+min((k+1)*shard_size, samples)-1`` in order. A shard is written to a hidden temporary name
+and renamed into place only when complete and synced, so a shard file that exists is whole;
+resuming skips every valid shard. A shard changed afterwards no longer matches the checksum
+recorded when it was written (:mod:`.checksums`) or the plan: resuming writes it again, and
+readers refuse it, naming the file, as they refuse a planned shard that was written and is
+gone and a shard file outside the plan (:func:`check_shards`).
 
 Names starting with ``_`` or ``.`` are ignored by Arrow datasets, so pandas, polars and
 DuckDB read the directory (or ``DIR/*.parquet``) as one table.
@@ -22,7 +22,6 @@ DuckDB read the directory (or ``DIR/*.parquet``) as one table.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 import os
@@ -38,17 +37,11 @@ import pyarrow.parquet as pq
 from ..columns import METRIC_COLUMNS
 from ..errors import DatasetError, InternalError
 from ..runtime import writing
+from .checksums import read_checksums, record_checksum, shard_damage
+from .manifest import CARD_JSON_NAME, MANIFEST_NAME
 
 log = logging.getLogger(__name__)
 
-FORMAT = "affordgrasp-dataset"
-# 2: shard checksums in _checksums.jsonl.
-FORMAT_VERSION = 2
-MANIFEST_NAME = "_manifest.json"
-CARD_JSON_NAME = "_card.json"
-CARD_MD_NAME = "_card.md"
-CHECKSUMS_NAME = "_checksums.jsonl"
-CHECKSUM_ALGORITHM = "blake2b-128"
 SHARD_META_KEY = b"affordgrasp_shard"
 DEFAULT_SHARD_SIZE = 4096
 COMPRESSION = "zstd"
@@ -56,25 +49,6 @@ COMPRESSION = "zstd"
 _SHARD_RE = re.compile(r"^part-(\d{5})-(\d{12})\.parquet$")
 _TMP_RE = re.compile(
     r"^\.(part-\d{5}-\d{12}\.parquet|_manifest\.json|_card\.json|_card\.md)\.tmp(-\d+)?$"
-)
-
-# Manifest keys that define the content of the dataset; a resume must match all of them.
-PLAN_KEYS = (
-    "robust",
-    "format_version",
-    "affordgrasp_version",
-    "seed",
-    "samples",
-    "shard_size",
-    "hand",
-    "hand_spec",
-    "metrics",
-    "volume",
-    "soft",
-    "depth",
-    "materials",
-    "sample_streams",
-    "objects",
 )
 
 
@@ -149,289 +123,6 @@ def shard_paths(directory: str | os.PathLike) -> list[Path]:
     return sorted(p for p in directory.iterdir() if _SHARD_RE.match(p.name))
 
 
-# ---------------------------------------------------------------------------------- manifest
-
-
-def write_json_atomic(path: Path, document: dict) -> None:
-    """Write a JSON file atomically (:func:`~affordgrasp.runtime.writing.atomic_write`).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-    document : dict
-        JSON-ready; written indented, keys in their order.
-    """
-    writing.atomic_write(path, (json.dumps(document, indent=2) + "\n").encode("utf-8"))
-
-
-def check_writable(directory: Path) -> None:
-    """Refuse an output directory that cannot be written, before any work is done.
-
-    The directory is created (with its parents) and a probe file written and removed.
-
-    Parameters
-    ----------
-    directory : pathlib.Path
-
-    Raises
-    ------
-    InputError
-        From :func:`~affordgrasp.runtime.writing.write_error`.
-    """
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise writing.write_error(directory, exc) from exc
-    probe = directory / f".write-test-{os.getpid()}"
-    try:
-        writing.write_file(probe, b"")
-    except OSError as exc:
-        raise writing.write_error(directory, exc) from exc
-    finally:
-        try:
-            probe.unlink(missing_ok=True)
-        except OSError:
-            pass
-
-
-def read_manifest(directory: str | os.PathLike) -> dict:
-    """The manifest of a dataset directory.
-
-    Parameters
-    ----------
-    directory : path
-
-    Returns
-    -------
-    dict
-        The parsed ``_manifest.json``.
-
-    Raises
-    ------
-    DatasetError
-        Saying why there is none: no directory, no manifest, unreadable or foreign JSON.
-    """
-    directory = Path(directory)
-    path = directory / MANIFEST_NAME
-    if not directory.is_dir():
-        raise DatasetError(
-            f"dataset directory {str(directory)!r} does not exist; create one with "
-            "'affordgrasp generate OBJECT... --samples N --out DIR'"
-        )
-    if not path.is_file():
-        raise DatasetError(
-            f"{str(directory)!r} is not an affordgrasp dataset (no {MANIFEST_NAME}); give the "
-            "directory that 'affordgrasp generate --out' wrote"
-        )
-    try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise DatasetError(f"cannot read {str(path)!r}: {exc}") from exc
-    if manifest.get("format") != FORMAT:
-        raise DatasetError(f"{str(path)!r} is not an affordgrasp dataset manifest")
-    return manifest
-
-
-def manifest_volume(manifest: dict) -> bool:
-    """Whether a dataset's ``gws_volume`` column holds computed volumes.
-
-    Parameters
-    ----------
-    manifest : dict
-        A dataset manifest.
-
-    Returns
-    -------
-    bool
-        Its ``volume`` entry; a manifest written before the volume became optional has
-        none, and computed the volume whenever it computed metrics.
-    """
-    if "volume" in manifest:
-        return bool(manifest["volume"])
-    return bool(manifest.get("metrics"))
-
-
-def manifest_streams(manifest: dict) -> str:
-    """How a dataset's objects drew their samples: ``"per-object"`` or ``"shared"``.
-
-    Parameters
-    ----------
-    manifest : dict
-        A dataset manifest.
-
-    Returns
-    -------
-    str
-        Its ``sample_streams`` entry; a manifest written before it was recorded has none,
-        and every object of it drew the run's samples (``"shared"``).
-    """
-    return str(manifest.get("sample_streams", "shared"))
-
-
-def manifest_differences(existing: dict, requested: dict) -> list[str]:
-    """Readable differences between two manifests' plans (``PLAN_KEYS``).
-
-    Parameters
-    ----------
-    existing : dict
-        The manifest on disk.
-    requested : dict
-        The manifest of the run asked for.
-
-    Returns
-    -------
-    list of str
-        One phrase per difference, e.g. ``"seed 0 there vs 1 here"``; empty when they agree.
-    """
-    diffs = []
-    for key in PLAN_KEYS:
-        a, b = existing.get(key), requested.get(key)
-        if key == "hand_spec":
-            changed = hand_spec_differences(a, b)
-            if changed and existing.get("hand") == requested.get("hand"):
-                diffs.append(
-                    f"hand {existing.get('hand')!r}: same name, different {', '.join(changed)}"
-                )
-        elif key == "objects":
-            a = [(o.get("name"), o.get("mesh_hash")) for o in a or []]
-            b = [(o.get("name"), o.get("mesh_hash")) for o in b or []]
-            if a != b:
-                diffs.append(
-                    f"objects {[n for n, _ in a]} there vs {[n for n, _ in b]} here"
-                    + (
-                        " (same names, different meshes)"
-                        if [n for n, _ in a] == [n for n, _ in b]
-                        else ""
-                    )
-                )
-        elif key == "volume":
-            a, b = manifest_volume(existing), manifest_volume(requested)
-            if a != b:
-                diffs.append(
-                    "GWS volume "
-                    + ("computed (--metrics +volume)" if a else "not computed")
-                    + " there vs "
-                    + ("computed (--metrics +volume)" if b else "not computed")
-                    + " here"
-                )
-        elif key == "sample_streams":
-            a, b = manifest_streams(existing), manifest_streams(requested)
-            if a != b:
-                diffs.append(f"samples drawn with {a} streams there vs {b} here (--streams)")
-        elif key == "materials":
-            # absent from manifests written before it was recorded: unit density
-            a, b = bool(a), bool(b)
-            if a != b:
-                diffs.append(
-                    "mass properties from "
-                    + ("per-part materials (--materials)" if a else "unit density")
-                    + " there vs "
-                    + ("per-part materials (--materials)" if b else "unit density")
-                    + " here"
-                )
-        elif key in ("depth", "robust") and a != b:  # tables of settings: in words
-            diffs.append(f"{_plan_text(key, a)} there vs {_plan_text(key, b)} here")
-        elif a != b:
-            diffs.append(f"{key} {a!r} there vs {b!r} here")
-    return diffs
-
-
-def _plan_text(key: str, value: dict | None) -> str:
-    """The ``depth`` or ``robust`` settings of a manifest in words, with their option."""
-    if not value:
-        return f"no {'depth images' if key == 'depth' else 'robust columns'} (--{key})"
-    if key == "depth":
-        return f"depth images of {value.get('size')} px at {value.get('fov_deg')}° (--depth)"
-    return f"robust columns of {value.get('copies')} copies (--robust {value.get('copies')})"
-
-
-def hand_spec_differences(there: dict | None, here: dict | None) -> list[str]:
-    """The parts of two recorded hands that differ (``links``, ``dofs``, ...).
-
-    A manifest written before hands were recorded whole (no ``hand_spec``) is compared by
-    the hand's name alone, so it yields no difference here; the description is not compared
-    (it does not change a single row).
-
-    Parameters
-    ----------
-    there, here : dict or None
-        ``hand_spec`` of two manifests (:func:`~affordgrasp.hands.hand_to_dict`).
-
-    Returns
-    -------
-    list of str
-        Sorted top-level keys whose values differ.
-    """
-    if there is None or here is None:
-        return []
-    there, here = json.loads(json.dumps(there)), json.loads(json.dumps(here))
-    keys = sorted((set(there) | set(here)) - {"description"})
-    return [k for k in keys if there.get(k) != here.get(k)]
-
-
-def prepare_directory(directory: Path, manifest: dict) -> dict:
-    """Create the dataset directory with its manifest, or check it matches for a resume.
-
-    Parameters
-    ----------
-    directory : pathlib.Path
-    manifest : dict
-        The manifest of the run asked for.
-
-    Returns
-    -------
-    dict
-        The manifest in force (the existing one when resuming).
-
-    Raises
-    ------
-    DatasetError
-        When the directory holds a dataset of another plan (what differs is named; a
-        different hand of the same name with ``parameter="hand"``), or is not empty and not
-        a dataset.
-    """
-    check_writable(directory)
-    path = directory / MANIFEST_NAME
-    if path.exists():
-        existing = read_manifest(directory)
-        diffs = manifest_differences(existing, manifest)
-        if existing.get("hand") == manifest.get("hand") and hand_spec_differences(
-            existing.get("hand_spec"), manifest.get("hand_spec")
-        ):
-            raise DatasetError(
-                f"hand {manifest.get('hand')!r} is not the hand the dataset in "
-                f"{str(directory)!r} was generated with (same name, different "
-                + ", ".join(hand_spec_differences(existing["hand_spec"], manifest["hand_spec"]))
-                + f"); resume it with that hand, {str(directory / MANIFEST_NAME)!r} "
-                "records it and reads as a hand file, or write to a new output directory",
-                parameter="hand",
-            )
-        if diffs:
-            raise DatasetError(
-                f"{str(directory)!r} holds a dataset made by a different command ("
-                + "; ".join(diffs)
-                + "). Resume it with its original options (see its _manifest.json) or "
-                "write to a new --out directory"
-            )
-        return existing
-    foreign = [
-        p.name
-        for p in directory.iterdir()
-        if not p.name.startswith(".") and p.name not in (CARD_JSON_NAME, CARD_MD_NAME)
-    ]
-    if foreign:
-        raise DatasetError(
-            f"{str(directory)!r} is not empty and is not an affordgrasp dataset (it holds "
-            f"{', '.join(sorted(foreign)[:3])}{', ...' if len(foreign) > 3 else ''}); give a "
-            "new or empty --out directory"
-        )
-    write_json_atomic(path, manifest)
-    return manifest
-
-
-# ------------------------------------------------------------------------------------ shards
-
-
 def shard_metadata(shard: Shard, object_name: str, status_counts: dict[str, int]) -> dict:
     """The facts a shard records in its Parquet footer.
 
@@ -499,83 +190,7 @@ def write_shard(directory: Path, shard: Shard, table: pa.Table, info: dict) -> P
     return final
 
 
-# ---------------------------------------------------------------------------------- checksums
-
-
-def file_checksum(data: bytes | memoryview) -> str:
-    """BLAKE2b (128-bit) hex digest of a file's bytes (``CHECKSUM_ALGORITHM``).
-
-    Parameters
-    ----------
-    data : bytes or memoryview
-
-    Returns
-    -------
-    str
-        32 hex digits.
-    """
-    return hashlib.blake2b(data, digest_size=16).hexdigest()
-
-
-def record_checksum(directory: Path, name: str, data: bytes) -> None:
-    """Append a shard's size and checksum to ``_checksums.jsonl`` (synced).
-
-    Parameters
-    ----------
-    directory : pathlib.Path
-    name : str
-        The shard's file name.
-    data : bytes
-        The shard's bytes.
-    """
-    line = json.dumps(
-        {"name": name, "bytes": len(data), CHECKSUM_ALGORITHM: file_checksum(data)},
-        sort_keys=True,
-    )
-    with open(directory / CHECKSUMS_NAME, "ab") as f:
-        f.write(line.encode() + b"\n")
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def read_checksums(directory: Path) -> dict[str, dict]:
-    """The checksums recorded in a dataset directory (a torn last line is skipped).
-
-    Parameters
-    ----------
-    directory : pathlib.Path
-
-    Returns
-    -------
-    dict of str to dict
-        Shard name -> ``{"name", "bytes", CHECKSUM_ALGORITHM}`` as last recorded; empty
-        without a checksum file.
-
-    Raises
-    ------
-    DatasetError
-        When the checksum file exists but cannot be read.
-    """
-    path = Path(directory) / CHECKSUMS_NAME
-    try:
-        text = path.read_bytes().decode("utf-8", errors="replace")
-    except FileNotFoundError:
-        return {}
-    except OSError as exc:
-        raise DatasetError(f"cannot read {str(path)!r}: {exc.strerror or exc}") from exc
-    records = {}
-    for line in text.splitlines():
-        try:
-            entry = json.loads(line)
-            records[entry["name"]] = entry
-        except (ValueError, KeyError, TypeError):
-            continue  # a line cut short by a crash: its shard was never renamed into place
-    return records
-
-
-# Shards this process has verified: (path, size, mtime_ns, checksum); found as planned:
-# (path, size, mtime_ns, shard, seed, mesh hash, exact).
-_VERIFIED: set[tuple[str, int, int, str]] = set()
+# Shards this process has found as planned: (path, size, mtime_ns, shard, seed, mesh hash, exact).
 _AS_PLANNED: set[tuple] = set()
 # The columns a shard's rows are checked on (whose object, which seed, which samples).
 REQUIRED_KEYS = ("object", "object_hash", "seed", "sample")
@@ -584,45 +199,6 @@ REQUIRED_KEYS = ("object", "object_hash", "seed", "sample")
 ADDED_COLUMNS = frozenset(
     ("contact_parts", "use_part", *METRIC_COLUMNS[METRIC_COLUMNS.index("use_edge_angle") + 1 :])
 )
-
-
-def shard_damage(path: Path, record: dict | None) -> str | None:
-    """Why the shard file at ``path`` is not the one written.
-
-    A file verified once in this process (same size, modification time and checksum) is not
-    read again.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-    record : dict or None
-        Its entry of :func:`read_checksums`; None: no checksum was recorded.
-
-    Returns
-    -------
-    str or None
-        The reason, as a phrase; None when the file is as written.
-    """
-    if record is None:
-        return "no checksum was recorded for it (it was not written by this dataset's runs)"
-    try:
-        stat = path.stat()
-    except OSError as exc:
-        return f"it cannot be read ({exc.strerror or exc})"
-    expected = record.get(CHECKSUM_ALGORITHM)
-    key = (str(path), stat.st_size, stat.st_mtime_ns, str(expected))
-    if key in _VERIFIED:
-        return None
-    if stat.st_size != record.get("bytes"):
-        return f"it is {stat.st_size} bytes long, {record.get('bytes')} were written"
-    try:
-        actual = file_checksum(path.read_bytes())
-    except OSError as exc:
-        return f"it cannot be read ({exc.strerror or exc})"
-    if actual != expected:
-        return "its content differs from what was written (checksum mismatch)"
-    _VERIFIED.add(key)
-    return None
 
 
 def shard_foreign(
@@ -664,12 +240,9 @@ def shard_foreign(
         meta = file.metadata
     except (OSError, pa.ArrowException) as exc:
         return f"it cannot be read as Parquet ({' '.join(str(exc).split())})"
-    try:
-        info = json.loads((meta.metadata or {}).get(SHARD_META_KEY, b"null"))
-    except ValueError:
-        info = None
+    info = _footer_facts(meta)
     planned = (entry["name"], shard.object_index, shard.start, shard.stop)
-    if not isinstance(info, dict):
+    if info is None:
         return "it was not written by 'affordgrasp generate' (its footer has no shard facts)"
     if tuple(info.get(k) for k in ("object", "object_index", "start", "stop")) != planned:
         return (
@@ -811,6 +384,15 @@ def check_shards(
         )
 
 
+def _footer_facts(meta: pq.FileMetaData) -> dict | None:
+    """The shard facts (:func:`shard_metadata`) in a Parquet footer; None when it has none."""
+    try:
+        info = json.loads((meta.metadata or {}).get(SHARD_META_KEY, b"null"))
+    except ValueError:
+        return None
+    return info if isinstance(info, dict) else None
+
+
 def read_shard_info(path: Path) -> dict | None:
     """The shard's footer facts.
 
@@ -828,16 +410,9 @@ def read_shard_info(path: Path) -> dict | None:
         meta = pq.read_metadata(path)
     except (OSError, pa.ArrowException):
         return None
-    kv = meta.metadata or {}
-    raw = kv.get(SHARD_META_KEY)
-    if raw is None:
-        return None
-    try:
-        info = json.loads(raw)
-    except ValueError:
-        return None
-    info["num_rows"] = meta.num_rows
-    info["schema"] = meta.schema.to_arrow_schema()
+    info = _footer_facts(meta)
+    if info is not None:
+        info.update(num_rows=meta.num_rows, schema=meta.schema.to_arrow_schema())
     return info
 
 
