@@ -90,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
         fix), 1 for any other error, 128 + signum when stopped by a signal.
     """
     one_blas_thread()  # before numpy is imported: see process_tuning
-    from .commands.common import check_limits
+    from .commands.limits import check_limits
     from .commands.output import Output
 
     parser = build_parser()

@@ -7,22 +7,11 @@ import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
 from ..dataset.layout import DEFAULT_SHARD_SIZE
-from .common import (
-    HAND_HELP,
-    MAX_SEED,
-    ROBUST,
-    SIZE_M,
-    WORKERS,
-    add_metrics_argument,
-    add_robust_argument,
-    add_scale_arguments,
-    load_objects,
-    optional_metrics,
-    robust_option,
-    scale_options,
-)
+from .limits import MAX_SEED, ROBUST, SIZE_M, WORKERS
+from .object_options import HAND_HELP, add_scale_arguments, load_objects, scale_options
+from .task_options import add_metrics_argument, add_robust_argument, optional_metrics, robust_option
 
-# Of the numeric options: see common.check_limits.
+# Of the numeric options: see limits.check_limits.
 LIMITS = {
     "samples": (None, None, "dataset.generate: at most 100,000 shard files"),
     "seed": (None, MAX_SEED, "seeds are 64-bit"),
@@ -144,7 +133,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..errors import InputError
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     volume = "volume" in optional_metrics(args)
     if volume and args.no_metrics:

@@ -8,9 +8,10 @@ import sys
 
 from ..errors import DatasetError, InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
-from .common import MAX_SEED, ROBUST, WORKERS, add_robust_argument, robust_option
+from .limits import MAX_SEED, ROBUST, WORKERS
+from .task_options import add_robust_argument, robust_option
 
-# Of the numeric options: see common.check_limits; the settings check their physical ranges.
+# Of the numeric options: see limits.check_limits; the settings check their physical ranges.
 LIMITS = {
     "workers": WORKERS,
     "shard_size": (None, 100_000, "a shard's outcomes are held before they are written"),
@@ -206,7 +207,7 @@ def run(args, out) -> None:
     from ..physics import deps
     from ..physics.report import DESIGNED_FOR, physics_report
     from ..physics.run import read_outcomes, run_physics
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     settings = _settings(args)
     robust = robust_option(args)

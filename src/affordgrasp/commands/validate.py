@@ -12,13 +12,14 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
-from .common import ROW_BYTES, USES, memory_cap, names_of
+from .limits import ROW_BYTES, USES, memory_cap
+from .task_options import names_of
 
 QUICK = {"seeds": 1, "grasps": 100, "uses": 200, "budget": 100, "families": "hammer,knife"}
 FULL = {"seeds": 5, "grasps": 1000, "uses": 4000, "budget": 1000, "families": "all"}
 
 
-# Of the numeric options: see common.check_limits; ValidationSettings.check the rest.
+# Of the numeric options: see limits.check_limits; ValidationSettings.check the rest.
 LIMITS = {
     "seeds": (None, 1000, "each object instance is evaluated whole"),
     "grasps": (None, memory_cap(ROW_BYTES), "rows of about 2 kB are held per object"),
@@ -176,7 +177,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..validation import validate_tasks
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     settings = settings_of(args)
     check_output_dir(args.out, "--out")
