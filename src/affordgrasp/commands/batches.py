@@ -1,7 +1,8 @@
 """Grasps of one object sampled and evaluated in batches (``simulate``, ``evaluate``).
 
 Their options, the counts checked before any work, the run with its progress bar, and the
-summaries of what ran (statuses, one-time costs).
+summaries of what ran (statuses, one-time costs); and the worker and engine options of the
+commands that run their batches as jobs (``generate``, ``physics``).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from .limits import MAX_SEED, SIZE_M, check_table_fits
+from .limits import MAX_SEED, OWN_CHECK, check_table_fits
 from .object_options import HAND_HELP, add_scale_arguments
 from .task_options import add_metrics_argument, optional_metrics, robust_option
 
@@ -38,10 +39,8 @@ def add_sampling_arguments(p) -> None:
     p.add_argument("--batch", type=int, default=250, help=argparse.SUPPRESS)
 
 
-SAMPLING = {  # add_sampling_arguments
-    "samples": (None, None, "check_counts: positive, and the rows must fit in memory"),
-    "seed": (None, None, "check_counts: a 64-bit seed"),
-    "size_m": SIZE_M,
+SAMPLING = {  # add_sampling_arguments; check_counts checks the samples and the seed
+    **dict.fromkeys(("samples", "seed", "size_m"), OWN_CHECK),
     "batch": (None, 100_000, "a batch is simulated and held at once"),
 }
 
@@ -68,6 +67,28 @@ def check_counts(args) -> None:
         raise InputError(f"--batch must be a positive integer, got {args.batch}")
     optional_metrics(args)
     check_table_fits(args.samples)
+
+
+def add_engine_arguments(p) -> None:
+    """``--workers K``, ``--engine local|ray`` and ``--address`` of the commands that run jobs.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        Extended in place.
+    """
+    p.add_argument(
+        "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
+    )
+    p.add_argument(
+        "--engine",
+        choices=("local", "ray"),
+        default="local",
+        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
+    )
+    p.add_argument(
+        "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
+    )
 
 
 def run_batches(args, out, obj, metrics: bool):

@@ -45,7 +45,11 @@ def memory_cap(bytes_each: int, default: int = 1024):
 
 
 WORKERS = (None, memory_cap(WORKER_BYTES), "each worker process holds about 200 MB")
-SIZE_M = (None, None, "the mesh loader: a plausible object size")
+# Open on both sides: the command, or what it builds (the mesh loader, DepthCamera, the
+# settings), checks the range itself, in words of its own (a share, a probability, pixels).
+OWN_CHECK = (None, None, "the command's own check")
+SIZE_M = OWN_CHECK
+SEED_BITS = (None, MAX_SEED, "seeds are 64-bit")
 
 
 def check_limits(args, limits: dict) -> None:

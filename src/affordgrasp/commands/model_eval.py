@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .limits import SEED, WORKERS
+from .limits import OWN_CHECK, SEED, WORKERS
 
 DECISION_ROWS = (
     ("chosen grasp viable (rate)", "top1_viable"),
@@ -28,7 +28,7 @@ LIMITS = {
     "seed": SEED,
     "candidates": (None, 10_000, "a decision's candidates are rendered and scored together"),
     "draws": (None, 10_000, "each candidate set is rendered"),
-    "threshold": (None, None, "run: a probability"),
+    "threshold": OWN_CHECK,
     "workers": WORKERS,
 }
 

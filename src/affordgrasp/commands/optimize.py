@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .best import loosen_hint, metric_cells, metric_headings, shown_metrics
-from .limits import ROBUST, SEED, SIZE_M, USES, WORKERS
+from .limits import OWN_CHECK, ROBUST, SEED, SIZE_M, USES, WORKERS
 from .object_options import HAND_HELP, add_scale_arguments, load_objects
 from .task_options import add_robust_argument, add_task_arguments, parse_thresholds, robust_option
 
@@ -17,7 +17,7 @@ LIMITS = {
     "uses": (None, *USES[1:]),
     "robust": ROBUST,
     "restarts": (None, 10_000, "each restart draws populations of its own from the budget"),
-    "refine": (None, None, "optimize: a share in [0, 1)"),
+    "refine": OWN_CHECK,
 }
 
 

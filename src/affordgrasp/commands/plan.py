@@ -14,14 +14,12 @@ from ..grasp.pregrasp import (
     PLAN_REFINE_NEIGHBOURS,
     PLAN_ROBUST_CHECK,
 )
-from .limits import MAX_SEED, SIZE_M
+from .limits import OWN_CHECK, SEED_BITS, SIZE_M
 
 # Of the numeric options: see limits.check_limits.
 LIMITS = {
-    "candidates": (None, None, "run: they must fit in memory"),
-    "threshold": (None, None, "plan_grasp: a probability"),
-    "seed": (None, MAX_SEED, "seeds are 64-bit"),
-    "offset_range": (None, None, "plan_grasp: in (0, 1]"),
+    **dict.fromkeys(("candidates", "threshold", "offset_range"), OWN_CHECK),
+    "seed": SEED_BITS,
     "robust_check": (None, 1000, "each is re-simulated under perturbations"),
     "refine": (None, 1000, f"{PLAN_REFINE_NEIGHBOURS} more candidates are drawn near each"),
     "size_m": SIZE_M,

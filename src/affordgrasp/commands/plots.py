@@ -8,6 +8,7 @@ for the tasks asked (default beat, cut, pick), ``affordances.png`` into OUTDIR.
 from __future__ import annotations
 
 from .batches import check_counts
+from .limits import OWN_CHECK
 from .object_options import check_mesh_files
 from .output_files import check_output_dir
 from .show import SOURCE, add_source_arguments, open_sources
@@ -17,7 +18,7 @@ DEFAULT_TASKS = "beat,cut,pick"
 
 
 # Of the numeric options: see limits.check_limits.
-LIMITS = {**SOURCE, "bins": (None, None, "plots: 5 to 500 bins")}
+LIMITS = {**SOURCE, "bins": OWN_CHECK}
 
 
 def add_arguments(p) -> None:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from .batches import check_counts
-from .limits import ROBUST, SIZE_M, USES
+from .limits import OWN_CHECK, ROBUST, USES
 from .object_options import (
     HAND_HELP,
     add_scale_arguments,
@@ -28,19 +28,9 @@ EVALUATION_BATCH = 250
 
 
 # Of the numeric options (see limits.check_limits): those of add_source_arguments, then show's.
-SOURCE = {
-    "samples": (None, None, "check_counts: positive, and the rows must fit in memory"),
-    "seed": (None, None, "check_counts: a 64-bit seed"),
-    "uses": USES,
-    "size_m": SIZE_M,
-    "robust": ROBUST,
-}
-LIMITS = {
-    **SOURCE,
-    "top": (None, 100, "each grasp is rendered"),
-    "cell": (None, None, "show: 64 to 2048 pixels"),
-    "grasp_size": (None, None, "show: 64 to 2048 pixels"),
-}
+SOURCE = {**dict.fromkeys(("samples", "seed", "size_m"), OWN_CHECK), "uses": USES, "robust": ROBUST}
+LIMITS = {**SOURCE, "top": (None, 100, "each grasp is rendered")}
+LIMITS |= dict.fromkeys(("cell", "grasp_size"), OWN_CHECK)  # 64 to 2048 pixels
 
 
 def add_source_arguments(p) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
-from .limits import ROW_BYTES, USES, memory_cap
+from .limits import OWN_CHECK, ROW_BYTES, USES, memory_cap
 from .task_options import names_of
 
 QUICK = {"seeds": 1, "grasps": 100, "uses": 200, "budget": 100, "families": "hammer,knife"}
@@ -26,8 +26,7 @@ LIMITS = {
     "uses": (None, *USES[1:]),
     "budget": (None, 10**8, "the value of every simulation is kept"),
     "restarts": (None, 10_000, "each restart draws populations of its own from the budget"),
-    "refine": (None, None, "ValidationSettings: a share in [0, 1)"),
-    "also_grasps": (None, None, "ValidationSettings: at most --grasps"),
+    **dict.fromkeys(("refine", "also_grasps"), OWN_CHECK),  # ValidationSettings
     "top": (None, 1000, "the top grasps are judged and drawn per object"),
     "cell_px": (None, 2048, "pixels of a figure cell"),
 }
