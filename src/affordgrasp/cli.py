@@ -61,12 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, help_text in COMMANDS.items():
-        try:
-            module = importlib.import_module(f"affordgrasp.commands.{name.replace('-', '_')}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"affordgrasp.commands.{name.replace('-', '_')}":
-                continue
-            raise
+        module = importlib.import_module(f"affordgrasp.commands.{name.replace('-', '_')}")
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
         add_verbose_argument(p)
@@ -90,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
         fix), 1 for any other error, 128 + signum when stopped by a signal.
     """
     one_blas_thread()  # before numpy is imported: see process_tuning
-    from .commands.common import check_limits
+    from .commands.limits import check_limits
     from .commands.output import Output
 
     parser = build_parser()

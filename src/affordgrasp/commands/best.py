@@ -5,9 +5,10 @@ from __future__ import annotations
 import math
 
 from ..columns import column_heading
-from .common import ROBUST, add_robust_argument, add_task_arguments, parse_thresholds
+from .limits import ROBUST
+from .task_options import add_robust_argument, add_task_arguments, parse_thresholds
 
-# Of the numeric options: see common.check_limits.
+# Of the numeric options: see limits.check_limits.
 LIMITS = {"top": (None, 100_000, "the top rows are held and printed"), "robust": ROBUST}
 
 
@@ -186,7 +187,7 @@ def run(args, out) -> None:
     from ..search.best import best_grasps, write_best
 
     if args.out:
-        from .common import check_output_file
+        from .output_files import check_output_file
 
         check_output_file(args.out, "--out", suffix=".parquet")
 

@@ -6,16 +6,14 @@ import numpy as np
 
 from ..errors import InputError
 from ..runtime.writing import atomic_write
-from .common import MAX_SEED
+from .limits import MAX_SEED, OWN_CHECK, SEED_BITS
 
 MAX_PNG_SIDE = 4096  # pixels: the process peaks near 450 MB drawing it
-# Of the numeric options: see common.check_limits.
+# Of the numeric options: see limits.check_limits.
 LIMITS = {
     "sample": (None, MAX_SEED, "sample numbers are 64-bit"),
-    "seed": (None, MAX_SEED, "seeds are 64-bit"),
-    "size": (None, None, "DepthCamera: at most 4096 pixels"),
-    "fov": (None, None, "DepthCamera: in (0, 180) degrees"),
-    "scale": (None, None, "run: the PNG's side, --size × --scale, at most MAX_PNG_SIDE"),
+    "seed": SEED_BITS,
+    **dict.fromkeys(("size", "fov", "scale"), OWN_CHECK),  # DepthCamera; the PNG's side
 }
 
 
@@ -109,7 +107,7 @@ def run(args, out) -> None:
     if args.out is not None and not args.out.endswith((".png", ".npy")):
         raise InputError(f"--out {args.out!r} must end in .png or .npy")
     if args.out is not None:
-        from .common import check_output_file
+        from .output_files import check_output_file
 
         check_output_file(args.out, "--out")
     if args.scale < 1:

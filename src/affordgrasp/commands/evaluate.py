@@ -7,21 +7,17 @@ import numpy as np
 from ..columns import column_heading
 from ..errors import InputError
 from ..schema import column_numbers
-from .common import (
-    ROBUST,
+from .batches import (
     SAMPLING,
-    add_robust_argument,
     add_sampling_arguments,
-    add_task_arguments,
     check_counts,
-    check_output_file,
     one_time_text,
-    robust_option,
     run_batches,
     status_summary,
-    task_names,
-    write_table,
 )
+from .limits import ROBUST
+from .output_files import check_output_file, write_table
+from .task_options import add_robust_argument, add_task_arguments, robust_option, task_names
 
 SHOWN_METRICS = (
     "epsilon",
@@ -35,7 +31,7 @@ SHOWN_METRICS = (
 )
 
 
-LIMITS = {**SAMPLING, "robust": ROBUST}  # of the numeric options: see common.check_limits
+LIMITS = {**SAMPLING, "robust": ROBUST}  # of the numeric options: see limits.check_limits
 
 
 def add_arguments(p) -> None:

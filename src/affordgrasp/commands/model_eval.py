@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .common import SEED, WORKERS
+from .limits import OWN_CHECK, SEED, WORKERS
 
 DECISION_ROWS = (
     ("chosen grasp viable (rate)", "top1_viable"),
@@ -22,13 +22,13 @@ DECISION_ROWS = (
 )
 
 
-# Of the numeric options: see common.check_limits.
+# Of the numeric options: see limits.check_limits.
 LIMITS = {
     "max_rows": (None, 2**63 - 1, "row counts are 64-bit"),
     "seed": SEED,
     "candidates": (None, 10_000, "a decision's candidates are rendered and scored together"),
     "draws": (None, 10_000, "each candidate set is rendered"),
-    "threshold": (None, None, "run: a probability"),
+    "threshold": OWN_CHECK,
     "workers": WORKERS,
 }
 
@@ -162,7 +162,7 @@ def run(args, out) -> None:
 
         get_task(args.task).thresholds_for(args.mode)  # an unknown task or mode: refused now
     if args.plots:
-        from .common import check_output_dir
+        from .output_files import check_output_dir
 
         check_output_dir(args.plots, "--plots")
     max_rows = args.max_rows or None

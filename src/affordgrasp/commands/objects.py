@@ -7,9 +7,10 @@ from pathlib import Path
 
 from ..errors import InputError
 from . import add_verbose_argument
-from .common import SEED, SIZE_M, add_scale_arguments, load_objects
+from .limits import SEED, SIZE_M
+from .object_options import add_scale_arguments, load_objects
 
-LIMITS = {"seed": SEED, "size_m": SIZE_M}  # of the numeric options: see common.check_limits
+LIMITS = {"seed": SEED, "size_m": SIZE_M}  # of the numeric options: see limits.check_limits
 
 
 def add_arguments(p) -> None:
@@ -53,7 +54,7 @@ def run(args, out) -> None:
             if ":" in spec:
                 raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
             spec = f"{spec}:{args.seed}"
-        from .common import check_output_file
+        from .output_files import check_output_file
 
         check_output_file(args.out, "-o")
         path = Path(args.out)

@@ -3,22 +3,11 @@
 from __future__ import annotations
 
 from .best import loosen_hint, metric_cells, metric_headings, shown_metrics
-from .common import (
-    HAND_HELP,
-    ROBUST,
-    SEED,
-    SIZE_M,
-    USES,
-    WORKERS,
-    add_robust_argument,
-    add_scale_arguments,
-    add_task_arguments,
-    load_objects,
-    parse_thresholds,
-    robust_option,
-)
+from .limits import OWN_CHECK, ROBUST, SEED, SIZE_M, USES, WORKERS
+from .object_options import HAND_HELP, add_scale_arguments, load_objects
+from .task_options import add_robust_argument, add_task_arguments, parse_thresholds, robust_option
 
-# Of the numeric options: see common.check_limits.
+# Of the numeric options: see limits.check_limits.
 LIMITS = {
     "budget": (None, 10**8, "the value of every simulation is kept"),
     "seed": SEED,
@@ -28,7 +17,7 @@ LIMITS = {
     "uses": (None, *USES[1:]),
     "robust": ROBUST,
     "restarts": (None, 10_000, "each restart draws populations of its own from the budget"),
-    "refine": (None, None, "optimize: a share in [0, 1)"),
+    "refine": OWN_CHECK,
 }
 
 

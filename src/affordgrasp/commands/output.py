@@ -10,7 +10,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from ..jsonable import to_jsonable  # re-exported: its former home
+from ..jsonable import to_jsonable
 
 UNBOUNDED_WIDTH = 10_000  # columns of a table printed to a pipe or a file
 

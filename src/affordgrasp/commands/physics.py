@@ -8,21 +8,21 @@ import sys
 
 from ..errors import DatasetError, InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, PhysicsSettings, protocol_settings
-from .common import MAX_SEED, ROBUST, WORKERS, add_robust_argument, robust_option
+from .batches import add_engine_arguments
+from .limits import MAX_SEED, OWN_CHECK, ROBUST, SEED_BITS, WORKERS
+from .task_options import add_robust_argument, robust_option
 
-# Of the numeric options: see common.check_limits; the settings check their physical ranges.
+# Of the numeric options: see limits.check_limits; the settings check their physical ranges.
 LIMITS = {
     "workers": WORKERS,
     "shard_size": (None, 100_000, "a shard's outcomes are held before they are written"),
     "max_per_object": (None, MAX_SEED, "row counts are 64-bit"),
-    **{
-        name: (None, None, "PhysicsSettings: its physical range")
-        for name in ("load_factor", "density", "grip_torque", "grip_force")
-    },
-    "friction_margin": (None, None, "PhysicsSettings: its physical range"),
-    "timestep": (None, None, "PhysicsSettings: its physical range"),
+    **dict.fromkeys(
+        ("load_factor", "density", "grip_torque", "grip_force", "friction_margin", "timestep"),
+        OWN_CHECK,
+    ),
     "robust": ROBUST,
-    "seed": (None, MAX_SEED, "seeds are 64-bit"),
+    "seed": SEED_BITS,
     "coacd_threshold": (None, 1.0, "CoACD's concavity threshold is a fraction of the size"),
     "coacd_max_hulls": (None, 256, "each convex part is a body of the MuJoCo scene"),
 }
@@ -64,18 +64,7 @@ def add_arguments(p) -> None:
         action="store_true",
         help="start where the dataset row puts the hand, even inside the object's convex parts",
     )
-    p.add_argument(
-        "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
-    )
-    p.add_argument(
-        "--engine",
-        choices=("local", "ray"),
-        default="local",
-        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
-    )
-    p.add_argument(
-        "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
-    )
+    add_engine_arguments(p)
     p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
     p.add_argument(
@@ -206,7 +195,7 @@ def run(args, out) -> None:
     from ..physics import deps
     from ..physics.report import DESIGNED_FOR, physics_report
     from ..physics.run import read_outcomes, run_physics
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     settings = _settings(args)
     robust = robust_option(args)

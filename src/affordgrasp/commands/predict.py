@@ -85,7 +85,7 @@ def run(args, out) -> None:
     from ..dataset.handle import Dataset
     from ..learning.api import predict_dataset
     from ..runtime.writing import atomic_write
-    from .common import check_output_file
+    from .output_files import check_output_file
 
     check_output_file(args.out, "--out", suffix=".parquet")
     models = load_models(args.model)  # a foreign or broken model file: refused first

@@ -11,41 +11,26 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from .common import (
+from .batches import check_counts
+from .limits import OWN_CHECK, ROBUST, USES
+from .object_options import (
     HAND_HELP,
-    ROBUST,
-    SIZE_M,
-    USES,
-    add_robust_argument,
     add_scale_arguments,
-    add_task_arguments,
-    check_counts,
     check_mesh_files,
-    check_output_dir,
     load_objects,
-    parse_tasks,
-    robust_option,
     scale_options,
 )
+from .output_files import check_output_dir
+from .task_options import add_robust_argument, add_task_arguments, parse_tasks, robust_option
 
 DEFAULT_SAMPLES = 1000
 EVALUATION_BATCH = 250
 
 
-# Of the numeric options (see common.check_limits): those of add_source_arguments, then show's.
-SOURCE = {
-    "samples": (None, None, "check_counts: positive, and the rows must fit in memory"),
-    "seed": (None, None, "check_counts: a 64-bit seed"),
-    "uses": USES,
-    "size_m": SIZE_M,
-    "robust": ROBUST,
-}
-LIMITS = {
-    **SOURCE,
-    "top": (None, 100, "each grasp is rendered"),
-    "cell": (None, None, "show: 64 to 2048 pixels"),
-    "grasp_size": (None, None, "show: 64 to 2048 pixels"),
-}
+# Of the numeric options (see limits.check_limits): those of add_source_arguments, then show's.
+SOURCE = {**dict.fromkeys(("samples", "seed", "size_m"), OWN_CHECK), "uses": USES, "robust": ROBUST}
+LIMITS = {**SOURCE, "top": (None, 100, "each grasp is rendered")}
+LIMITS |= dict.fromkeys(("cell", "grasp_size"), OWN_CHECK)  # 64 to 2048 pixels
 
 
 def add_source_arguments(p) -> None:

@@ -5,9 +5,9 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 from ..errors import InputError, MissingDependencyError
-from .common import SEED, memory_cap
+from .limits import SEED, memory_cap
 
-# Of the numeric options: see common.check_limits.
+# Of the numeric options: see limits.check_limits.
 LIMITS = {
     "epochs": (None, 10_000, "an epoch reads every training row"),
     "batch_size": (None, 8192, "a batch of images and activations is held at once"),
@@ -145,7 +145,8 @@ def run(args, out) -> None:
     """
     from ..dataset.handle import Dataset
     from ..learning.training import TrainSettings
-    from .common import check_output_file, names_of
+    from .output_files import check_output_file
+    from .task_options import names_of
 
     check_output_file(args.out, "--out", suffix=".safetensors")
     for name in ("epochs", "batch_size", "patience", "max_train", "members", "buffer_rows"):

@@ -238,10 +238,9 @@ class Expression:
 class _ExpressionTask:
     """A task function built from ``value`` and ``requires`` expressions."""
 
-    def __init__(self, value: Expression, requires: Expression | None, thresholds: set[str]):
+    def __init__(self, value: Expression, requires: Expression | None):
         self.value = value
         self.requires = requires
-        self.threshold_names = thresholds
 
     def __call__(self, metrics: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         env = _Env(metrics, t)
@@ -307,7 +306,7 @@ def expression_task(
     req_expr = Expression(requires, where=f"task {name!r} requires") if requires else None
     names = set(value_expr.names) | (req_expr.names if req_expr else set())
     metric_names = sorted(names - set(thresholds))
-    func = _ExpressionTask(value_expr, req_expr, set(thresholds))
+    func = _ExpressionTask(value_expr, req_expr)
     return make_task(
         name,
         func,

@@ -101,20 +101,6 @@ class SceneCaster:
         """
         return self.rays.cast(origins, dirs)
 
-    @classmethod
-    def of_scene(cls, scene: GraspScene) -> SceneCaster:
-        """A new caster of a grasp scene (use :func:`caster_of`: it is built once per scene).
-
-        Parameters
-        ----------
-        scene : GraspScene
-
-        Returns
-        -------
-        SceneCaster
-        """
-        return _build_caster(scene)
-
     def render(self, camera: Camera, *, supersample: int = 2) -> Render:
         """Shaded colours, depth and part per pixel, seen by ``camera``.
 
@@ -178,7 +164,7 @@ def caster_of(scene: GraspScene) -> SceneCaster:
     SceneCaster
         The same one for every call with this scene (held as long as the scene).
     """
-    return _CASTERS.get(scene, lambda: SceneCaster.of_scene(scene))
+    return _CASTERS.get(scene, lambda: _build_caster(scene))
 
 
 def _object_corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
