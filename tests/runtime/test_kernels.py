@@ -85,7 +85,7 @@ def test_cache_stamp_depends_on_contents_not_modification_times(tmp_path):
 
 def test_every_kernel_of_the_package_uses_the_content_stamp():
     (locator_class,) = kernel_cache._installed
-    func = kernels.approach_until_contact.py_func
+    func = kernels.first_contact.py_func
     locator = locator_class.from_function(func, func.__code__.co_filename)
     assert locator is not None
     assert locator.get_source_stamp() == ("affordgrasp-kernels", kernel_cache.package_stamp())
