@@ -181,10 +181,10 @@ class GraspObject:
         out[ok] = names[self.face_parts[faces[ok]]]
         return out
 
-    def faces_at(self, points, normals, offset_m: float = 5e-4) -> np.ndarray:
+    def faces_at(self, points, normals) -> np.ndarray:
         """Face under each surface point.
 
-        The first face hit by a ray that starts ``offset_m`` outside the point along its outward
+        The first face hit by a ray that starts 0.5 mm outside the point along its outward
         normal and looks back at it. A ray that misses (a contact on a sharp edge, whose normal
         is the edge's) takes the closest face instead.
 
@@ -194,8 +194,6 @@ class GraspObject:
             Surface points, m, in the object frame.
         normals : (n, 3) array_like of float
             Outward unit normals there.
-        offset_m : float
-            Start of the rays outside the surface, m.
 
         Returns
         -------
@@ -208,7 +206,7 @@ class GraspObject:
             return np.zeros(0, dtype=np.int64)
         mesh = self.mesh_data
         faces = np.asarray(
-            mesh_caster(mesh).intersects_first(points + offset_m * normals, -normals),
+            mesh_caster(mesh).intersects_first(points + 5e-4 * normals, -normals),
             dtype=np.int64,
         )
         missed = faces < 0

@@ -37,15 +37,13 @@ def new_figure(width_px: int, height_px: int, *, axes: bool = True):
     return fig, ax
 
 
-def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
+def save_figure(fig, path: str | os.PathLike) -> Path:
     """Write a figure as PNG with no time stamp in it (the same inputs give the same bytes).
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
     path : path
-    tight : bool
-        Trim the white margins.
 
     Returns
     -------
@@ -56,10 +54,8 @@ def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
     FigureCanvasAgg(fig)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    kwargs = {"bbox_inches": "tight", "pad_inches": 0.1} if tight else {}
     return atomic_write(
-        path,
-        lambda fh: fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": None}, **kwargs),
+        path, lambda fh: fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": None})
     )
 
 

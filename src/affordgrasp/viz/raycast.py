@@ -117,17 +117,15 @@ class SceneCaster:
         return _render(self, camera, supersample=supersample)
 
 
-def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -> np.ndarray:
+def corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
     """Shading normals at each face corner.
 
     The area-weighted mean of the normals of the faces around the corner's vertex that are
-    within ``angle_deg`` of the face.
+    within ``SMOOTH_ANGLE_DEG`` of the face.
 
     Parameters
     ----------
     mesh : trimesh.Trimesh
-    angle_deg : float
-        Smoothing angle, degrees.
 
     Returns
     -------
@@ -140,7 +138,7 @@ def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -
     around = vf[faces]  # (f, 3, d)
     valid = around >= 0
     idx = np.where(valid, around, 0)
-    near = np.einsum("fk,fcdk->fcd", fn, fn[idx]) >= np.cos(np.deg2rad(angle_deg))
+    near = np.einsum("fk,fcdk->fcd", fn, fn[idx]) >= np.cos(np.deg2rad(SMOOTH_ANGLE_DEG))
     w = np.where((valid & near)[..., None], weighted[idx], 0.0)
     n = w.sum(axis=2)
     norm = np.linalg.norm(n, axis=2, keepdims=True)
