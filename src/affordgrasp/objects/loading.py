@@ -166,7 +166,6 @@ def prepare_mesh(
     source: str = "mesh",
     check_size: bool = False,
     simplify_above: int | None = LARGE_MESH_FACES,
-    tolerance_m: float = SIMPLIFY_TOLERANCE_M,
 ) -> trimesh.Trimesh:
     """Clean, repair, orient and scale a mesh into a closed solid in metres.
 
@@ -189,14 +188,11 @@ def prepare_mesh(
         a hand can grasp), with a message naming the likely unit. Without it such a mesh
         only logs a warning. :func:`load_mesh` checks.
     simplify_above : int or None
-        A mesh with more triangles is first decimated to ``tolerance_m``
+        A mesh with more triangles is first decimated to ``SIMPLIFY_TOLERANCE_M``
         (:func:`~affordgrasp.objects.simplify.simplify_to_tolerance`); a warning gives the
         triangle counts and the measured distance. Quadric decimation can open a closed
         surface (edges collapsed across a thin wall): when the decimated mesh is not closed
         and the original is, the original is kept, with a warning. None: never.
-    tolerance_m : float
-        The simplification's geometric tolerance, metres (one-sided distance from the
-        original's vertices to the simplified surface).
 
     Returns
     -------
@@ -232,7 +228,7 @@ def prepare_mesh(
         if scale_kind == "size_m":
             used = vertices[_used_vertices(len(vertices), faces)]
             factor = scale_value / float(np.ptp(used, axis=0).max())
-        v, f = _simplified(vertices, faces, tolerance_m / factor, factor, source)
+        v, f = _simplified(vertices, faces, SIMPLIFY_TOLERANCE_M / factor, factor, source)
         if len(f) != len(faces):
             original, (vertices, faces) = (vertices, faces), (v, f)
     simplified = original is not None
