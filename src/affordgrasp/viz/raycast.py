@@ -272,10 +272,8 @@ def _outline(depth: np.ndarray, part: np.ndarray, tol: float) -> np.ndarray:
     return edge
 
 
-def visible(
-    caster: SceneCaster, camera: Camera, points: np.ndarray, tol: float = 2e-3
-) -> np.ndarray:
-    """Whether each point is seen by the camera (nothing nearer along its ray).
+def visible(caster: SceneCaster, camera: Camera, points: np.ndarray) -> np.ndarray:
+    """Whether each point is seen by the camera (nothing nearer along its ray, 2 mm slack).
 
     Parameters
     ----------
@@ -283,15 +281,13 @@ def visible(
     camera : Camera
     points : (n, 3) float ndarray
         m.
-    tol : float
-        m.
 
     Returns
     -------
     (n,) bool ndarray
     """
     points = np.asarray(points, dtype=np.float64)
-    return visible_from(caster, np.broadcast_to(camera.eye, points.shape), points, tol)
+    return visible_from(caster, np.broadcast_to(camera.eye, points.shape), points, 2e-3)
 
 
 def visible_from(
