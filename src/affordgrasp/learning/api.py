@@ -100,14 +100,13 @@ def prepare_split(
     seed: int = 0,
     max_train: int | None = 20000,
     max_eval: int | None = 4000,
-    negatives_ratio: float = 3.0,
     sensor=None,
     train_depth: bool = True,
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
     Classification keeps every training/validation positive (at most ``max_train // 2`` or
-    ``max_eval // 2``) and at most ``negatives_ratio`` × as many negatives (each epoch then
+    ``max_eval // 2``) and at most three times as many negatives (each epoch then
     draws a balanced subset); the test rows keep the natural class balance (a uniform
     subsample of at most ``max_eval`` rows). Regression rows are subsampled uniformly.
 
@@ -125,8 +124,6 @@ def prepare_split(
         Seeds the split and the subsamples.
     max_train, max_eval : int or None
         Caps on the training rows and on each of validation and test (None: no cap).
-    negatives_ratio : float
-        Negatives kept per positive for training and validation.
     sensor : SensorModel, optional
         A depth sensor's noise and lost returns applied to every image
         (:func:`~affordgrasp.vision.sensor.apply_sensor`; keyed by object and sample, so a
@@ -166,7 +163,7 @@ def prepare_split(
             y = samples.y[idx]
             pos, neg = idx[y > 0.5], idx[y <= 0.5]
             kept_pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
-            n_neg = int(round(negatives_ratio * max(len(kept_pos), 1)))
+            n_neg = int(round(3.0 * max(len(kept_pos), 1)))
             kept_neg = _subsample(neg, n_neg, seed + 10 + k)
             idx = np.sort(np.r_[kept_pos, kept_neg])
             # what each kept row stands for: restores the natural balance of the part
@@ -491,9 +488,7 @@ def prediction_column(config: dict) -> str:
     return "viable_prob" if tgt["kind"] == "classification" else f"pred_{tgt['name']}"
 
 
-def predict_dataset(
-    models, dataset: DatasetLike, *, objects=None, batch_size: int = 2048, progress=None
-):
+def predict_dataset(models, dataset: DatasetLike, *, objects=None, progress=None):
     """One row per sample of a dataset: object, sample and each model's prediction.
 
     The dataset is streamed in batches (memory-bounded); depth images are read when stored,
@@ -507,10 +502,8 @@ def predict_dataset(
         A generated dataset.
     objects : sequence of str, optional
         Predict only these objects.
-    batch_size : int
-        Rows per batch.
     progress : callable, optional
-        Called with the number of rows after each batch.
+        Called with the number of rows after each batch (of 2048 rows).
 
     Returns
     -------
@@ -535,7 +528,7 @@ def predict_dataset(
         ["depth_mm"] if stored and needs_depth else []
     )
     parts = []
-    for batch in dataset.batches(columns=columns, objects=objects, batch_size=batch_size):
+    for batch in dataset.batches(columns=columns, objects=objects, batch_size=2048):
         tab = pa.Table.from_batches([batch])
         obj = np.asarray(tab.column("object").to_pylist(), dtype=object)
         s = Samples(

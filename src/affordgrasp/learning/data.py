@@ -318,8 +318,9 @@ def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
     return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
 
 
-def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np.ndarray:
-    """All positives and ``ratio`` × as many negatives drawn without replacement.
+def balanced_indices(labels: np.ndarray, *, seed: int) -> np.ndarray:
+    """All positives and as many negatives (fewer when there are not enough), drawn without
+    replacement.
 
     Parameters
     ----------
@@ -327,8 +328,6 @@ def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np
         Classes; positive when > 0.5.
     seed : int
         Seeds the draw of the negatives.
-    ratio : float
-        Negatives per positive (fewer when there are not enough).
 
     Returns
     -------
@@ -339,6 +338,6 @@ def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np
     pos = np.flatnonzero(labels)
     neg = np.flatnonzero(~labels)
     rng = np.random.default_rng(seed)
-    k = min(len(neg), int(round(ratio * len(pos))))
+    k = min(len(neg), len(pos))
     chosen = rng.choice(neg, k, replace=False) if k else np.zeros(0, dtype=np.int64)
     return np.sort(np.concatenate([pos, chosen]))

@@ -527,7 +527,7 @@ def plot_affordances(
 
 
 def save_plots(
-    summary: DatasetSummary, out_dir: str | os.PathLike, *, mode: str = "default", prefix: str = ""
+    summary: DatasetSummary, out_dir: str | os.PathLike, *, mode: str = "default"
 ) -> dict[str, Path]:
     """Write metrics.png, status.png and (with tasks) affordances.png.
 
@@ -537,8 +537,6 @@ def save_plots(
     out_dir : path
     mode : str
         Threshold mode (shown in the titles).
-    prefix : str
-        Prepended to the file names.
 
     Returns
     -------
@@ -547,11 +545,9 @@ def save_plots(
     """
     out_dir = Path(out_dir)
     files = {
-        "metrics": plot_metric_distributions(summary, out_dir / f"{prefix}metrics.png"),
-        "status": plot_status_counts(summary, out_dir / f"{prefix}status.png"),
+        "metrics": plot_metric_distributions(summary, out_dir / "metrics.png"),
+        "status": plot_status_counts(summary, out_dir / "status.png"),
     }
     if summary.affordances:
-        files["affordances"] = plot_affordances(
-            summary, out_dir / f"{prefix}affordances.png", mode=mode
-        )
+        files["affordances"] = plot_affordances(summary, out_dir / "affordances.png", mode=mode)
     return files

@@ -165,7 +165,6 @@ def draw_best(
     cones: bool = False,
     name: str = "best_grasps",
     title: str = "",
-    palette: int | None = 256,
     progress: Callable[[int], None] | None = None,
     hands: Mapping[str, Hand] | None = None,
 ) -> ShowResult:
@@ -199,8 +198,6 @@ def draw_best(
         Base name of the files.
     title : str
         Heading (default: from the tasks and mode).
-    palette : int or None
-        Reduce the grid PNG to this many colours (None keeps full colour).
     progress : callable, optional
         Called with 1 after each grasp drawn.
     hands : mapping of str to Hand, optional
@@ -292,7 +289,7 @@ def draw_best(
         row_labels=rows,
         col_labels=cols,
         title=title,
-        colors=palette,
+        colors=256,
     )
     if html and entries:
         result.html = write_viewer(
