@@ -1,9 +1,9 @@
-"""Build step that compiles the numba kernels into the package (see affordgrasp/compiled.py).
+"""Build step that compiles the numba kernels into the package (affordgrasp/kernels.py).
 
 Everything else about the package is declared in pyproject.toml. After the sources are
-copied to the build directory, ``python -m affordgrasp.compiled`` runs on them, so numba's
-caches land next to the kernels and ship with the wheel: a fresh install's first run loads
-them instead of compiling for minutes. The build directory is put in front of the
+copied to the build directory, ``python -m affordgrasp.kernels`` runs on them, so
+numba's caches land next to the kernels and ship with the wheel: a fresh install's first run
+loads them instead of compiling for minutes. The build directory is put in front of the
 interpreter's path, not in place of it: under pip's build isolation the build requirements
 (numpy, numba...) are only reachable through the ``PYTHONPATH`` pip sets.
 
@@ -33,7 +33,7 @@ class BuildPyWithKernels(build_py):
         env.pop("NUMBA_CACHE_DIR", None)  # caches next to the sources, inside the wheel
         env.pop("NUMBA_DISABLE_JIT", None)
         print("compiling the affordgrasp kernels into the package (a few minutes, once per build)")
-        result = subprocess.run([sys.executable, "-m", "affordgrasp.compiled"], env=env)
+        result = subprocess.run([sys.executable, "-m", "affordgrasp.kernels"], env=env)
         if result.returncode != 0:
             raise SystemExit(
                 f"error: precompiling the affordgrasp kernels failed (exit {result.returncode}, "

@@ -36,10 +36,10 @@ def main() -> None:
     from affordgrasp.metrics.epsilon import epsilon
     from affordgrasp.metrics.epsilon_hand import epsilon_hand
     from affordgrasp.metrics.striking import use_depth, use_relief
-    from affordgrasp.metrics.use_geometry import use_wedge_angle
+    from affordgrasp.metrics.wedge import use_wedge_angle
     from affordgrasp.objects import load_object
-    from affordgrasp.pairs import UsePoints
     from affordgrasp.pipeline import evaluate_samples
+    from affordgrasp.search.use_points import UsePoints
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--object", default="sword:4~scan")

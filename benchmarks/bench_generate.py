@@ -32,10 +32,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from affordgrasp.dataset.engines import default_workers
 from affordgrasp.dataset.generate import generate
 from affordgrasp.objects import load_object
 from affordgrasp.pipeline import evaluate_samples
+from affordgrasp.runtime.engines import default_workers
 
 
 def stage_split(objects: list[str], n: int, seed: int) -> dict:

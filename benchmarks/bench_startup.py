@@ -105,7 +105,7 @@ TIMED = textwrap.dedent(
             (None, "write_shard", "dataset"),
         ],
         "affordgrasp.dataset.card": [(None, "write_card", "dataset")],
-        "affordgrasp.dataset.engines": [("ObjectPayload", "build", "object")],
+        "affordgrasp.dataset.jobs": [("ObjectPayload", "build", "object")],
         "affordgrasp.grasp.policy": [
             (None, "object_geometry", "object"),
             (None, "hand_arrays", "hand"),

@@ -3,7 +3,8 @@
 The third Python example of the README; run it with ``python examples/best_pairs.py``.
 """
 
-from affordgrasp.pairs import best_pairs
+from affordgrasp.search.pairs import PairSearchSettings, best_pairs
 
-found = best_pairs("dagger", "cut", grasps=400, uses=3000, seed=0, top=3)
+settings = PairSearchSettings("cut", grasps=400, uses=3000, seed=0, top=3)
+found = best_pairs("dagger", settings)
 print(found.candidates, found.table["value"].to_pylist())  # pairs with F_T > -inf; top 3

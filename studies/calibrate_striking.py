@@ -1,12 +1,13 @@
 """Calibrate beat's striking-surface tests (``use_depth``, ``use_relief``) on hammers and axes.
 
-Use points drawn by area (:meth:`affordgrasp.pairs.UsePoints.sample`) on crisp and scan-like
-(``~scan``) hammers and axes; only the blunt ones (``use_wedge_angle`` >= beat's τ_blunt: the
-others fail beat already). Each is labelled by the part the family gives its face: "strike"
-(a hammer's ``striking_face``, an axe's ``poll``), "head" (the rest of the head: its side
-faces, a claw, a ball peen, an axe's cheeks) and "handle". Prints, per group, percentiles of
-the two columns and the fraction of each group that passes candidate thresholds, so that the
-thresholds are chosen on the calibration seeds (0-1) and checked on the held-out ones (2-6).
+Use points drawn by area (:meth:`affordgrasp.search.use_points.UsePoints.sample`) on crisp
+and scan-like (``~scan``) hammers and axes; only the blunt ones (``use_wedge_angle`` >=
+beat's τ_blunt: the others fail beat already). Each is labelled by the part the family gives
+its face: "strike" (a hammer's ``striking_face``, an axe's ``poll``), "head" (the rest of
+the head: its side faces, a claw, a ball peen, an axe's cheeks) and "handle". Prints, per
+group, percentiles of the two columns and the fraction of each group that passes candidate
+thresholds, so that the thresholds are chosen on the calibration seeds (0-1) and checked on
+the held-out ones (2-6).
 
 Run: ``python studies/calibrate_striking.py --seeds 0-1 --uses 3000``.
 """
@@ -21,7 +22,7 @@ import numpy as np
 
 from affordgrasp.metrics.striking import use_depth, use_relief
 from affordgrasp.objects import load_object
-from affordgrasp.pairs import UsePoints
+from affordgrasp.search.use_points import UsePoints
 from affordgrasp.tasks.thresholds import TAU_BLUNT_DEFAULT
 
 STRIKE = {"striking_face", "poll"}

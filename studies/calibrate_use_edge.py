@@ -31,7 +31,7 @@ import time
 import numpy as np
 import trimesh
 
-from affordgrasp.metrics.use_geometry import use_edge, use_edge_angle
+from affordgrasp.metrics.edges import use_edge, use_edge_angle
 from affordgrasp.objects.families import make_family
 
 SINGLE_EDGED = ("knife", "meat_cleaver", "axe")

@@ -63,7 +63,8 @@ from calibrate_use_edge import (  # noqa: E402
     edge_samples,
 )
 
-from affordgrasp.metrics.use_geometry import use_edge_angle, use_wedge_shape  # noqa: E402
+from affordgrasp.metrics.edges import use_edge_angle  # noqa: E402
+from affordgrasp.metrics.wedge import use_wedge_shape  # noqa: E402
 from affordgrasp.objects import load_object  # noqa: E402
 
 END_DIST_M = 3e-3  # around an end of the cutting edge: a corner or a tip

@@ -122,9 +122,12 @@ def copies_of(train, out: Path, copies: int, sigma: float, chunk: int):
 
 def classifier_split(data: Path, keep, seed: int = 0):
     """prepare_split for ``viable`` with only the kept training rows (same caps and draws)."""
+    from affordgrasp.dataset.handle import Dataset
+    from affordgrasp.dataset.splits import split_by_object
     from affordgrasp.learning.api import _subsample
-    from affordgrasp.learning.data import load_depth, read_rows, split_by_object
+    from affordgrasp.learning.data import load_depth, read_rows
 
+    data = Dataset.open(data)
     samples, target = read_rows(data, "viable")
     sp = split_by_object(samples.object, samples.family, seed=seed)
     parts = []

@@ -8,7 +8,7 @@ rows where they are cheap to find: each viable training grasp is perturbed ``--c
 times by Gaussian noise of standard deviation σ in p0 (p0's own units, clipped; the use
 direction kept) and simulated again; the copies that stay viable join the training rows,
 with their depth images rendered (:mod:`affordgrasp.learning.augment`). The test objects
-are the split's held-out objects, as in ``benchmarks/bench_learning.py``; nothing of them
+are the split's held-out objects, as in ``studies/learning_quality.py``; nothing of them
 is simulated again. The same recipe (CNN, ranking loss, canonical depth, seed 0) is
 trained on the original rows and on the augmented rows and both are scored on the same
 test rows.

@@ -1,7 +1,7 @@
 """Why a pair search comes back empty: which test its best near misses fail, and by how much.
 
-Runs :func:`affordgrasp.pairs.optimize_pairs` (or, with ``--targeted``,
-:func:`affordgrasp.optimize.targeted_pairs`) on scan-like objects and keeps every grasp it
+Runs :func:`affordgrasp.search.pairs.optimize_pairs` (with ``--targeted``, guided by the
+task's thresholds) on scan-like objects and keeps every grasp it
 simulated. For those grasps and the search's use points it reports, per test of the task
 (:func:`affordgrasp.search.guidance.task_tests`):
 
@@ -25,10 +25,9 @@ import time
 import numpy as np
 import pyarrow as pa
 
-import affordgrasp.pairs as pairs
 import affordgrasp.pipeline as pipeline
+import affordgrasp.search.pairs as pairs
 from affordgrasp.objects import load_object
-from affordgrasp.optimize import targeted_pairs
 from affordgrasp.search.guidance import (
     GRASP_ONLY,
     USE_ONLY,
@@ -60,16 +59,16 @@ def study(spec, task_name, budget, restarts, uses_n, seed, materials, targeted):
     pipeline.evaluate_inputs = recording
     t0 = time.perf_counter()
     try:
-        if targeted:
-            found = targeted_pairs(
-                obj, task_name, budget=budget, uses=uses_n, seed=seed, restarts=restarts
-            )
-            uses = found.use_points
-        else:
-            found = pairs.optimize_pairs(
-                obj, task_name, budget=budget, uses=uses_n, seed=seed, restarts=restarts
-            )
-            uses = pairs.UsePoints.sample(obj, uses_n, seed + 1)
+        settings = pairs.PairSearchSettings(
+            task_name,
+            uses=uses_n,
+            seed=seed,
+            budget=budget,
+            restarts=restarts,
+            threshold_guide=targeted,
+        )
+        found = pairs.optimize_pairs(obj, settings)
+        uses = found.use_points
     finally:
         pairs.evaluate_inputs = original
         pipeline.evaluate_inputs = original
@@ -115,7 +114,7 @@ def study(spec, task_name, budget, restarts, uses_n, seed, materials, targeted):
                     f"{int(sel.sum())} (value median {np.median(v):.3g}, tau {t.tau:.3g})"
                 )
     # the old guidance's top grasps: which grasp-only tests they fail
-    from affordgrasp.pairs import pair_guidance
+    from affordgrasp.search.pairs import pair_guidance
 
     eps_column = tuple(c for c in ("epsilon_hand",) if c in task.requires)
     g = pair_guidance(rows, task, "default", {}, uses, eps_column)

@@ -117,7 +117,7 @@ def _reasons(results, trial, t) -> dict:
 
 def family(spec, trial, cases, args):
     import affordgrasp as ag
-    from affordgrasp.metrics.use_geometry import use_edge_frame
+    from affordgrasp.metrics.wedge import use_edge_frame
     from affordgrasp.physics.scene import build_scene
     from affordgrasp.physics.task_scene import build_task_scene
     from affordgrasp.physics.task_trials import run_task_trials

@@ -31,15 +31,15 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
 
 from affordgrasp.objects import load_object
-from affordgrasp.optimize import targeted_best_pairs, targeted_pairs
-from affordgrasp.pairs import best_pairs, optimize_pairs
 from affordgrasp.pipeline import evaluate_samples
+from affordgrasp.search.pairs import PairSearchSettings, best_pairs, optimize_pairs
 from affordgrasp.validation import surrounds_com
 
 FAMILIES = {
@@ -171,10 +171,10 @@ def main() -> None:
         "--search",
         choices=("plain", "guidance", "uses", "targeted"),
         default="targeted",
-        help="plain: use points by area and contacts-and-ε guidance (best_pairs, "
-        "optimize_pairs); targeted: use points that pass the task's use-point tests and "
-        "guidance relative to the thresholds (targeted_best_pairs, targeted_pairs); "
-        "guidance / uses: one of the two changes alone",
+        help="plain: use points by area and contacts-and-ε guidance; targeted: use points "
+        "that pass the task's use-point tests (passing_uses) and guidance relative to the "
+        "thresholds (threshold_guide); guidance / uses: one of the two changes alone in the "
+        "optimiser (the brute force scores the passing use points whenever not plain)",
     )
     args = parser.parse_args()
     if args.figure:
@@ -209,38 +209,29 @@ def main() -> None:
                 targeted = args.search != "plain"
                 passing = args.search in ("uses", "targeted")
                 guide = args.search in ("guidance", "targeted")
+                common = PairSearchSettings(task, uses=args.uses, seed=0, top=args.top)
                 started = time.perf_counter()
                 found = (
                     None
                     if args.no_brute_force
-                    else targeted_best_pairs(obj, task, table, uses=args.uses, seed=0, top=args.top)
-                    if targeted
                     else best_pairs(
-                        obj,
-                        task,
-                        grasps=table.num_rows,
-                        uses=args.uses,
-                        seed=0,
-                        top=args.top,
-                        grasp_table=table,
-                        per_grasp=True,
+                        obj, replace(common, per_grasp=True, passing_uses=targeted), table
                     )
                 )
                 seconds = {"brute_force": time.perf_counter() - started}
                 searches = [] if args.no_brute_force else [("brute_force", found)]
                 if not args.no_optimizer:
                     started = time.perf_counter()
-                    opt = (targeted_pairs if targeted else optimize_pairs)(
-                        obj,
-                        task,
-                        budget=args.budget,
-                        uses=args.uses,
+                    aimed = replace(
+                        common,
                         seed=seed,
-                        top=args.top,
+                        budget=args.budget,
                         restarts=args.restarts,
                         refine=args.refine,
-                        **({"passing_uses": passing, "threshold_guide": guide} if targeted else {}),
+                        passing_uses=passing,
+                        threshold_guide=guide,
                     )
+                    opt = optimize_pairs(obj, aimed)
                     seconds["optimizer"] = time.perf_counter() - started
                     searches.append(("optimizer", opt))
                 if args.show:

@@ -218,3 +218,13 @@ def test_a_scan_file_open_at_its_base_is_evaluated(tmp_path, capsys, caplog):
         assert main(["evaluate", str(path), "--samples", "8", "--task", "pick"]) == 0
     assert capsys.readouterr().out.startswith("glass_open.ply: 8 grasps")
     assert "glass_open.ply was repaired: capped 1 hole" in caplog.text
+
+
+def test_tables_to_a_pipe_keep_whole_cells(capsys, monkeypatch):
+    from affordgrasp.commands.output import Output
+
+    monkeypatch.delenv("COLUMNS", raising=False)
+    out = Output()  # stdout is captured: not a terminal
+    out.table("wide", ["name", "value", "seed"], [["beat-paper" * 12, 8.702e-05, 2**62]])
+    text = capsys.readouterr().out
+    assert "beat-paper" * 12 in text and "8.702e-05" in text and str(2**62) in text

@@ -12,7 +12,7 @@ with ``pytest -s`` (and reported in the release notes).
 ``COMMAND_CASES`` (at the end) covers the other commands: outputs that cannot be written,
 physics settings outside their physical ranges, unknown metrics in a tasks file, a sample
 count whose table cannot fit, foreign and non-finite model files. Interrupts, orphaned
-workers and large meshes have their own tests (``test_interrupts.py``,
+workers and large meshes have their own tests (``runtime/test_interrupts.py``,
 ``dataset/test_signals.py``, ``objects/test_simplify.py``, ``grasp/test_surface.py``).
 """
 
@@ -117,6 +117,10 @@ def _cases() -> list[Case]:
     inf_v[5, 2] = np.inf
 
     ok_box = {"volume": CUBE_VOLUME}
+    seam_v, seam_f = _seam_ball()
+    ball = trimesh.Trimesh(seam_v, seam_f)
+    ball.merge_vertices(digits_vertex=3)  # the seam welded: the sphere it stands for
+    three = trimesh.Scene([_box(), _box(offset=(2 * CUBE, 0, 0)), _box(offset=(4 * CUBE, 0, 0))])
     return [
         # ------------------------------------------------------------ formats and files
         Case("cube.obj", "format", "ok", _write(box, "cube.obj"), **ok_box),
@@ -240,6 +244,28 @@ def _cases() -> list[Case]:
             volume=CUBE_VOLUME * 7 / 8,
         ),
         Case(
+            "sphere seam written twice, mm",
+            "geometry",
+            "ok",
+            _raw("seam.off", _off(seam_v, seam_f)),
+            ["--units", "mm"],
+            volume=ball.volume * 1e-9,
+        ),
+        Case(
+            "three separate bodies",
+            "geometry",
+            "ok",
+            _raw("three.glb", three.export(file_type="glb")),
+            volume=3 * CUBE_VOLUME,
+        ),
+        Case(
+            "mesh file named like a scan variant",
+            "format",
+            "ok",
+            _write(box, "knife~scan.stl"),
+            **ok_box,
+        ),
+        Case(
             "sphere",
             "geometry",
             "ok",
@@ -332,6 +358,7 @@ def _cases() -> list[Case]:
             refusal="did you mean 'hammer'",
         ),
         Case("bad family seed", "arguments", "refused", lambda d: "knife:abc", refusal="seed"),
+        Case("scan variant, its own seed", "arguments", "ok", lambda d: "knife~scan:2"),
         Case("unknown task", "arguments", "refused", lambda d: "knife", ["--task", "hamering"]),
         Case("unknown mode", "arguments", "refused", lambda d: "knife", ["--mode", "strict"]),
         Case("unknown hand", "arguments", "refused", lambda d: "knife", ["--hand", "shadow"]),
@@ -339,6 +366,23 @@ def _cases() -> list[Case]:
         Case("negative seed", "arguments", "refused", lambda d: "knife", ["--seed", "-1"]),
         Case("--out is a folder", "arguments", "refused", lambda d: "knife", ["--out", "."]),
     ]
+
+
+def _seam_ball(radius=40.0, n_lat=12, n_lon=24) -> tuple[np.ndarray, np.ndarray]:
+    """A UV sphere (mm) whose seam meridian is written twice, the copy 1e-5 mm away."""
+    theta = np.pi * np.arange(1, n_lat) / n_lat
+    phi = 2 * np.pi * (np.arange(n_lon + 1) % n_lon) / n_lon
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    rings = radius * np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1)
+    rings[:, -1, 2] += 1e-5
+    index = np.arange((n_lat - 1) * (n_lon + 1)).reshape(n_lat - 1, n_lon + 1)
+    a, b, c, d = index[:-1, :-1], index[:-1, 1:], index[1:, :-1], index[1:, 1:]
+    top, bottom = index.size, index.size + 1
+    faces = [np.stack([a, c, b], -1), np.stack([b, c, d], -1)]
+    faces += [np.stack([np.full(n_lon, top), index[0, :-1], index[0, 1:]], -1)]
+    faces += [np.stack([np.full(n_lon, bottom), index[-1, 1:], index[-1, :-1]], -1)]
+    vertices = np.vstack([rings.reshape(-1, 3), [[0, 0, radius], [0, 0, -radius]]])
+    return vertices, np.vstack([f.reshape(-1, 3) for f in faces])
 
 
 def _shared_edge(box: trimesh.Trimesh) -> list[int]:
@@ -632,3 +676,42 @@ def test_hostile_command(build, fragment, tmp_path, capsys, monkeypatch):
         "foreign.safetensors",
         "nan.safetensors",
     }
+
+
+# ---------------------------------------------------------------------------- messages
+# A run that finds nothing, or a refusal, says what to do with options the command has.
+
+
+@pytest.fixture(scope="module")
+def small_dataset(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("messages") / "ds"
+    assert (
+        main(["generate", "knife:1", "--samples", "12", "--out", str(out), "--workers", "1"]) == 0
+    )
+    return out
+
+
+def test_nothing_found_suggests_only_what_would_change(small_dataset, capsys):
+    never = ["--task", "cut", "--threshold", "tau_eps=1e9"]  # no grasp passes
+    for mode, suggested in (("default", True), ("no-robustness", False)):
+        assert main(["best", str(small_dataset), *never, "--mode", mode]) == 0
+        out = capsys.readouterr().out
+        assert "no sample passes" in out and ("try --mode no-robustness" in out) == suggested
+    show = ["show", str(small_dataset), *never, "--no-html", "-o", str(small_dataset.parent / "s")]
+    assert main(show) == 0
+    out = capsys.readouterr().out
+    assert "a dataset with more samples" in out and "more --samples" not in out
+
+
+def test_physics_says_how_to_restore_a_moved_mesh(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("mujoco")
+    pytest.importorskip("coacd")
+    monkeypatch.chdir(tmp_path)
+    _box().export(tmp_path / "block.stl")
+    assert main(["generate", "block.stl", "--samples", "4", "--out", "ds", "--workers", "1"]) == 0
+    (tmp_path / "block.stl").rename(tmp_path / "moved.stl")
+    capsys.readouterr()
+    code, _, err = _run(["physics", "ds", "--out", "ph", "--workers", "1"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "copy it into the dataset directory" in err and "--mesh" not in err
+    assert not (tmp_path / "ph").exists()

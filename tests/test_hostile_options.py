@@ -10,13 +10,18 @@ names created. The mesh-file corpus and the costlier cases live in
 
 from __future__ import annotations
 
+import argparse
+import copy
+import json
+import math
 import os
 import re
 from pathlib import Path
 
 import pytest
 
-from affordgrasp.cli import main
+from affordgrasp.cli import build_parser, main
+from affordgrasp.hands import get_hand, save_hand
 
 # (argv, fragment of the message); {ds} a small dataset, {d} a scratch folder, {txt} a text
 # file, {empty} an empty folder, {bad} random bytes named .safetensors.
@@ -325,7 +330,7 @@ CASES = [
     ),
     (
         ["train", "{ds}", "-o", "{d}/m8.safetensors", "--max-minutes", "-1"],
-        "a split by object needs at least 2 instances of some family ",
+        "--max-minutes must be a finite number in [0.01, 10080], got -1.0",
     ),
     (
         ["predict", "{d}/nonexist.safetensors", "{ds}", "--out", "{d}/pr1.parquet"],
@@ -425,7 +430,7 @@ CASES = [
     ),
     (
         ["train", "{ds}", "-o", "{d}/m10.safetensors", "--rank-weight", "-1"],
-        "a split by object needs at least 2 instances of some family ",
+        "--rank-weight must be a finite number in [0, 100], got -1.0",
     ),
     (
         ["train", "{ds}", "-o", "{d}/m11.safetensors", "--buffer-rows", "0", "--stream"],
@@ -506,6 +511,84 @@ CASES = [
     ),
     (["validate", "-o", "{txt}"], "is a file, not a directory; give a directory"),
     (["validate", "-o", "{d}/v9", "--seeds", "two"], "argument --seeds: invalid int value"),
+    # Hand files: every number finite and in its range (an infinite joint limit hung).
+    (
+        ["evaluate", "knife", "--samples", "3", "--hand", "{d}/inf_limit.json"],
+        "the joint's travel (ratio 1 × the limits of 'f1_prox') must be a finite number in",
+    ),
+    (
+        ["evaluate", "knife", "--samples", "3", "--hand", "{d}/nan_palm.json"],
+        "a shape's rounding radius must be a finite number in [0, 1] m, got nan",
+    ),
+    (
+        ["evaluate", "knife", "--samples", "3", "--hand", "{d}/wide_palm.json"],
+        "a shape's half extents must be a finite number in [0, 1] m, got 2e+06",
+    ),
+    (
+        ["generate", "knife", "--samples", "5", "--out", "{d}/g10", "--hand", "{d}/slow.json"],
+        "a closing speed must be a finite number in [0.001, 1000], got 1e-12",
+    ),
+    # Task files: thresholds are numbers or ±inf; expressions bounded in size and depth.
+    (
+        ["evaluate", "knife", "--samples", "3", "--tasks-file", "{d}/nan_threshold.toml"],
+        "threshold 't' must be a number (inf and -inf switch a test off), got nan",
+    ),
+    (
+        ["evaluate", "knife", "--samples", "3", "--tasks-file", "{d}/minus.toml"],
+        "is 100,007 characters long; a task expression may have at most 2,000",
+    ),
+    (["tasks", "--tasks-file", "{d}/sum.toml"], "a task expression may have at most 2,000"),
+    (["tasks", "--tasks-file", "{d}/deep.toml"], "levels deep; a task expression may nest at most"),
+    # Numeric options: finite, their sign, a largest value with the reason.
+    (
+        ["train", "{ds}", "-o", "{d}/m13.safetensors", "--target", "hold_effort_sum"]
+        + ["--rank-weight", "nan"],
+        "--rank-weight must be a finite number in [0, 100], got nan",
+    ),
+    (
+        ["train", "{ds}", "-o", "{d}/m14.safetensors", "--rank-weight", "inf"],
+        "--rank-weight must be a finite number in [0, 100], got inf",
+    ),
+    (
+        ["train", "{ds}", "-o", "{d}/m15.safetensors", "--max-minutes", "0"],
+        "--max-minutes must be a finite number in [0.01, 10080], got 0.0 (a week)",
+    ),
+    (
+        ["train", "{ds}", "-o", "{d}/m16.safetensors", "--max-minutes", "nan"],
+        "--max-minutes must be a finite number in [0.01, 10080], got nan",
+    ),
+    (
+        ["depth", "knife", "--sample", "1", "--scale", "100000", "-o", "{d}/d15.png"],
+        "makes a PNG 12,800,000 pixels wide; at most 4,096: with --size 128, use --scale at most",
+    ),
+    (
+        ["show", "{ds}", "--task", "pick", "--uses", "1000000000", "-o", "{d}/s9"],
+        "--uses must be an integer in [0, 50,000], got 1000000000 (each use point is ray cast",
+    ),
+    (
+        ["optimize", "knife", "--task", "pick", "--budget", "20", "--uses", "1000000000"],
+        "--uses must be an integer at most 50,000, got 1000000000",
+    ),
+    (
+        ["generate", "knife", "--samples", "5", "--out", "{d}/g8", "--workers", "1000000"],
+        "--workers must be an integer at most",
+    ),
+    (
+        ["generate", "knife", "--samples", "1000000000000", "--out", "{d}/g9"],
+        "shard files; at most 100,000: use at most 409,600,000 samples per object",
+    ),
+    # An option that names nothing is refused, not read as absent.
+    (["evaluate", "knife", "--samples", "3", "--task", ""], "--task '' names nothing; give a"),
+    (["evaluate", "knife", "--samples", "3", "--task", ","], "--task ',' names nothing; give a"),
+    (["evaluate", "knife", "--samples", "3", "--metrics", ""], "--metrics '' names nothing"),
+    (["show", "{ds}", "--task", " ", "-o", "{d}/s10"], "--task ' ' names nothing"),
+    (["validate", "-o", "{d}/v10", "--families", ""], "--families '' names nothing"),
+    # Messages that say what to do with what the command has.
+    (
+        ["generate", "knife:1", "--samples", "48", "--out", "{ds}", "--depth"],
+        "(no depth images (--depth) there vs depth images of 128 px at 60.0° (--depth) here)",
+    ),
+    (["plots", "{txt}", "-o", "{d}/p5"], "is a file but not a mesh file (.txt); give a dataset"),
 ]
 
 
@@ -520,6 +603,7 @@ def place(tmp_path_factory) -> dict[str, str]:
     (d / "weird.toml").write_text('[tasks.t]\nexpr = "epsilon >"\n')
     (d / "model.safetensors").write_bytes(os.urandom(200))
     (d / "emptydir").mkdir()
+    _hostile_files(d)
     return {
         "ds": str(ds),
         "d": str(d),
@@ -527,6 +611,27 @@ def place(tmp_path_factory) -> dict[str, str]:
         "empty": str(d / "emptydir"),
         "bad": str(d / "model.safetensors"),
     }
+
+
+def _hostile_files(d: Path) -> None:
+    """Hand files with a bad number each, and task files past the bounds."""
+    save_hand(get_hand("barrett"), d / "barrett.json")
+    doc = json.loads((d / "barrett.json").read_text())
+    edits = {
+        "inf_limit": lambda h: h["dofs"][1].update(upper=math.inf),  # written as Infinity
+        "nan_palm": lambda h: h["links"][0]["shapes"][0].update(radius=math.nan),
+        "wide_palm": lambda h: h["links"][0]["shapes"][0].update(half_extents=[2e6, 2e6, 0.03]),
+        "slow": lambda h: [f.update(speeds=[1.0, 1e-12]) for f in h["fingers"]],
+    }
+    for name, edit in edits.items():
+        hand = copy.deepcopy(doc)
+        edit(hand)
+        (d / f"{name}.json").write_text(json.dumps(hand))
+    task = '[tasks.x]\nvalue = "{}"\n'
+    (d / "nan_threshold.toml").write_text(task.format("epsilon") + "thresholds = { t = nan }\n")
+    (d / "minus.toml").write_text(task.format("-" * 100_000 + "epsilon"))
+    (d / "sum.toml").write_text(task.format("+".join(["epsilon"] * 200_000)))
+    (d / "deep.toml").write_text(task.format("+".join(["epsilon"] * 150)))
 
 
 @pytest.mark.parametrize("argv, fragment", CASES, ids=[" ".join(a)[:70] for a, _ in CASES])
@@ -548,3 +653,83 @@ def test_hostile_option_is_refused_in_one_line(argv, fragment, place, capsys):
     assert re.match(rf"affordgrasp( {re.escape(args[0])}( [a-z]+)?)?: error: ", lines[0]), lines[0]
     assert fragment in lines[0], lines[0]
     assert {p.name for p in scratch.iterdir()} == before  # refused before any work
+
+
+# ----------------------------------------------------------------- every numeric option
+# Each command declares the limits of its numeric options (LIMITS in its module, checked by
+# cli.main before the command runs): no numeric option without them, and a value past a
+# limit is refused before any work, whatever the rest of the command line says.
+
+BASE = {  # the least each command parses; the refusal comes before anything is read
+    "objects": ["objects", "export", "knife", "-o", "o.obj"],
+    "simulate": ["simulate", "knife"],
+    "evaluate": ["evaluate", "knife"],
+    "generate": ["generate", "knife", "--samples", "5", "--out", "g"],
+    "best": ["best", "ds", "--task", "pick"],
+    "optimize": ["optimize", "knife", "--task", "pick"],
+    "show": ["show", "ds", "--task", "pick", "-o", "s"],
+    "plots": ["plots", "ds", "-o", "p"],
+    "physics": ["physics", "ds", "--out", "ph"],
+    "depth": ["depth", "knife", "-o", "d.png"],
+    "train": ["train", "ds", "-o", "m.safetensors"],
+    "model-eval": ["model-eval", "default", "ds"],
+    "plan": ["plan", "knife"],
+    "validate": ["validate", "-o", "v"],
+}
+
+
+def _numeric_options():
+    """(command, option string, dest, type, module) of every int or float option."""
+    parser = build_parser()
+    (commands,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    for name, sub in commands.choices.items():
+        module = sub.get_default("_module")
+        parsers = [sub]
+        while parsers:
+            for action in parsers.pop()._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    parsers.extend(action.choices.values())
+                elif action.type in (int, float):
+                    yield name, action.option_strings[-1], action.dest, action.type, module
+
+
+def test_every_numeric_option_has_limits():
+    missing = [
+        f"{name} {option}"
+        for name, option, dest, _, module in _numeric_options()
+        if dest not in getattr(module, "LIMITS", {})
+    ]
+    assert not missing, missing
+
+
+def _past_the_limits():
+    cases = []
+    for name, option, dest, kind, module in _numeric_options():
+        low, high, _ = module.LIMITS[dest]
+        if callable(high):  # sized by the memory available, which moves: far past it
+            high = 2**62
+        values = []
+        if low is not None:
+            values.append(str(kind(low) - 1))
+        if high is not None:
+            values.append(str(high + 1) if kind is int else repr(2.0 * high + 1.0))
+        if kind is float and (low, high) != (None, None):
+            values += ["nan", "inf", "-inf"]
+        cases += [(name, option, value) for value in values]
+    return cases
+
+
+PAST = _past_the_limits()
+
+
+@pytest.mark.parametrize("name, option, value", PAST, ids=[" ".join(c) for c in PAST])
+def test_a_value_past_the_limits_is_refused_before_any_work(
+    name, option, value, tmp_path, monkeypatch, capsys
+):
+    monkeypatch.chdir(tmp_path)
+    code = main([*BASE[name], f"{option}={value}"])
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert code == 2 and len(lines) == 1, err
+    assert lines[0].startswith(f"affordgrasp {name}: error: {option} must be "), lines[0]
+    assert not list(tmp_path.iterdir())

@@ -247,7 +247,7 @@ def test_ranking_values_read_the_robust_score(hammer):
 
 def test_robust_dataset_records_its_settings_and_resumes(tmp_path):
     from affordgrasp.dataset.generate import generate
-    from affordgrasp.dataset.layout import read_manifest
+    from affordgrasp.dataset.manifest import read_manifest
     from affordgrasp.errors import DatasetError
 
     out = tmp_path / "ds"
@@ -266,7 +266,7 @@ def test_robust_dataset_records_its_settings_and_resumes(tmp_path):
     with pytest.raises(DatasetError, match="robust"):
         generate(["hammer"], 12, out, shard_size=6, workers=1, robust=RobustSettings(copies=4))
     # the dataset ranks by its robust score
-    from affordgrasp.dataset.best import best_grasps
+    from affordgrasp.search.best import best_grasps
 
     best = best_grasps(out, "pick", top=3, robust=True)
     every = np.concatenate([t.column("robust_hold").to_numpy() for t in first.values()])

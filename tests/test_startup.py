@@ -35,8 +35,8 @@ def fresh_process_modules(code: str, **env: str) -> set[str]:
 
 LOAD_AND_RUN_THE_KERNELS = """
 import hashlib, json
-from affordgrasp import compiled
-from affordgrasp.metrics import kernel_cache
+from affordgrasp import kernels as compiled
+from affordgrasp.runtime import kernel_cache
 from affordgrasp.objects import load_object
 from affordgrasp.pipeline import evaluate_samples
 kernel_cache._LightLoading.enabled = {light}
@@ -102,9 +102,9 @@ def test_kernels_load_from_the_cache_without_numba_compiler_registries_and_run_r
 
 LINK_AGAINST_A_LIGHT_LOADED_KERNEL = """
 import json, numba, numpy as np
-from affordgrasp import compiled
+from affordgrasp import kernels as compiled
 from affordgrasp.hands.kinematics import shape_poses
-from affordgrasp.metrics import kernel_cache
+from affordgrasp.runtime import kernel_cache
 load = compiled.warm_up()
 (overload,) = shape_poses.overloads.values()
 parsed_before = overload.library._shared_module is not None

@@ -26,7 +26,6 @@ from pathlib import Path
 
 
 def main() -> None:
-    from affordgrasp.dataset.engines import default_workers
     from affordgrasp.dataset.generate import generate
     from affordgrasp.learning.views_model import (
         fit_views_config,
@@ -34,6 +33,7 @@ def main() -> None:
         write_views_config,
     )
     from affordgrasp.objects import list_families
+    from affordgrasp.runtime.engines import default_workers
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, required=True, help="the calibration dataset (resumed)")

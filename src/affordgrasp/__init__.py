@@ -38,7 +38,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from ._version import __version__ as __version__
 
 # public name -> module that defines it (imported on first access)
 _EXPORTS = {
@@ -62,14 +62,13 @@ _EXPORTS = {
     "generate": "affordgrasp.dataset.generate",
     "Dataset": "affordgrasp.dataset.handle",
     "read_dataset": "affordgrasp.dataset.reading",
-    "best_grasps": "affordgrasp.dataset.best",
+    "best_grasps": "affordgrasp.search.best",
     "plan": "affordgrasp.learning.plan",
     "Plan": "affordgrasp.learning.plan",
     "RobustSettings": "affordgrasp.robust",
 }
 
 if TYPE_CHECKING:
-    from .dataset.best import best_grasps
     from .dataset.generate import generate
     from .dataset.handle import Dataset
     from .dataset.reading import read_dataset
@@ -79,6 +78,7 @@ if TYPE_CHECKING:
     from .objects.resolve import GraspObject, list_families, load_object
     from .pipeline import Evaluation, evaluate
     from .robust import RobustSettings
+    from .search.best import best_grasps
     from .tasks import Task, get_task, list_tasks, load_task_file, register_task
 
 

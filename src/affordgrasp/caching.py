@@ -176,12 +176,13 @@ def write_arrays(path: Path, key: Mapping[str, Any], arrays: Mapping[str, np.nda
     data = {name: np.asarray(a) for name, a in arrays.items()}
     data[_CHECKSUM] = np.array(_checksum(data))
     data[_KEY] = np.array(json.dumps(key, sort_keys=True))
-    from .writing import atomic_write
+    from .errors import InputError
+    from .runtime.writing import atomic_write
 
     save: Any = np.savez  # names are the arrays' keywords
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         # A cache entry need not survive a power cut (its checksum catches a torn one).
         atomic_write(path, lambda f: save(f, **data), fsync=False)
-    except OSError as exc:  # a read-only or full cache only costs the rebuild next time
+    except (OSError, InputError) as exc:  # a read-only or full cache costs a rebuild later
         log.warning("could not write cache entry %s (%s)", path, exc)

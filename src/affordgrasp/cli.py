@@ -13,11 +13,11 @@ import importlib
 import logging
 import sys
 
-from . import __version__
+from ._version import __version__
 from .commands import add_verbose_argument  # also used by subcommands' own parsers
 from .errors import InputError, cli_message
-from .interrupts import interrupt_in, stop_on_signals
-from .process_tuning import keep_freed_memory, one_blas_thread
+from .runtime.interrupts import interrupt_in, stop_on_signals
+from .runtime.process_tuning import keep_freed_memory, one_blas_thread
 
 COMMANDS = {
     "objects": "list the built-in object families, or export one as a mesh",
@@ -61,12 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, help_text in COMMANDS.items():
-        try:
-            module = importlib.import_module(f"affordgrasp.commands.{name.replace('-', '_')}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"affordgrasp.commands.{name.replace('-', '_')}":
-                continue
-            raise
+        module = importlib.import_module(f"affordgrasp.commands.{name.replace('-', '_')}")
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
         add_verbose_argument(p)
@@ -90,6 +85,7 @@ def main(argv: list[str] | None = None) -> int:
         fix), 1 for any other error, 128 + signum when stopped by a signal.
     """
     one_blas_thread()  # before numpy is imported: see process_tuning
+    from .commands.limits import check_limits
     from .commands.output import Output
 
     parser = build_parser()
@@ -108,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     keep_freed_memory()
     try:
         with stop_on_signals():
+            check_limits(args, getattr(args._module, "LIMITS", {}))
             args._module.run(args, out)
     except InputError as exc:
         print(f"affordgrasp {args.command}: error: {cli_message(exc)}", file=sys.stderr)

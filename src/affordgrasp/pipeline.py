@@ -23,7 +23,7 @@ from .grasp.pregrasp import sample_inputs
 from .hands import Hand, get_hand
 from .metrics.phi_batch import phi_of_batch
 from .objects import GraspObject, load_object
-from .robust import RobustSettings, robust_columns, robust_settings
+from .robust import RobustSettings, robust_columns, robust_settings, task_scores
 from .schema import append_float_columns, batch_to_table, robust_fields
 
 STAGES = ("simulate", "metrics", "table")  # and "robust" with robust evaluation
@@ -87,15 +87,7 @@ class Evaluation:
         (n,) float64 ndarray
             -inf where the task's thresholds fail.
         """
-        from .tasks import get_task
-
-        if robust:
-            from .robust import ranking_values
-
-            return ranking_values(self.table, task if isinstance(task, str) else task.name)
-
-        task = get_task(task) if isinstance(task, str) else task
-        return task.evaluate(self.table, mode, **thresholds)
+        return task_scores(task, self.table, mode, thresholds, robust=robust)
 
     def to_pandas(self):
         """The table as a pandas DataFrame (needs pandas).
@@ -157,9 +149,36 @@ def evaluate_inputs(
     -------
     Evaluation
     """
-    obj = load_object(obj)
-    hand = get_hand(hand)
-    settings = robust_settings(robust)
+    return _evaluate_batch(
+        load_object(obj),
+        get_hand(hand),
+        p0,
+        use_dir,
+        seed=seed,
+        sample_start=sample_start,
+        soft=soft,
+        metrics=metrics,
+        volume=volume,
+        settings=robust_settings(robust),
+        frame=frame,
+    )
+
+
+def _evaluate_batch(
+    obj: GraspObject,
+    hand: Hand,
+    p0,
+    use_dir,
+    *,
+    seed: int,
+    sample_start: int,
+    soft: bool,
+    metrics: bool,
+    volume: bool,
+    settings: RobustSettings | None,
+    frame: GraspObject | None = None,
+) -> Evaluation:
+    """:func:`evaluate_inputs` of an object, a hand and robust settings already resolved."""
     t0 = time.perf_counter()
     batch = simulate(obj, p0, use_dir, hand=hand, frame=frame)
     t1 = time.perf_counter()
@@ -220,8 +239,7 @@ def evaluate_samples(
         raise InputError(f"samples must be a positive integer, got {samples!r}")
     if batch_size is not None and (not isinstance(batch_size, int | np.integer) or batch_size <= 0):
         raise InputError(f"batch_size must be a positive integer, got {batch_size!r}")
-    obj = load_object(obj)
-    hand = get_hand(hand)
+    obj, hand, settings = load_object(obj), get_hand(hand), robust_settings(robust)
     n = int(samples)
     step = int(batch_size or n)
     tables = []
@@ -229,17 +247,17 @@ def evaluate_samples(
     for first in range(start, start + n, step):
         k = min(step, start + n - first)
         p0, d = sample_inputs(seed, first, first + k)
-        part = evaluate_inputs(
+        part = _evaluate_batch(
             obj,
+            hand,
             p0,
             d,
-            hand=hand,
             seed=seed,
             sample_start=first,
             soft=soft,
             metrics=metrics,
             volume=volume,
-            robust=robust,
+            settings=settings,
         )
         for stage, seconds in part.timings.items():
             spent[stage] = spent.get(stage, 0.0) + seconds

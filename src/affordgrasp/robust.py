@@ -60,13 +60,14 @@ finite directions::
 The second term lies in [0, 1/K) and ``robust_hold_dirs`` moves in steps of 1/K, so the
 order is exactly lexicographic (counts first, efforts second), and the value reads as "load
 directions held, on average". :func:`ranking_column` names the column a task ranks by in
-robust mode (``robust_hold`` for pick, ``robust_<task>`` otherwise).
+robust mode (``robust_hold`` for pick, ``robust_<task>`` otherwise); :func:`task_scores` is
+the score every search, summary and plot ranks rows by, plain or robust.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
@@ -88,6 +89,7 @@ __all__ = [
     "robust_column_names",
     "robust_columns",
     "robust_settings",
+    "task_scores",
 ]
 
 # Tasks summarised by default (the built-in affordance functions; ``viable`` has its own
@@ -351,18 +353,16 @@ def hold_dirs(metrics: Any) -> np.ndarray:
 
 
 def robust_column_names(tasks: Sequence[str] = DEFAULT_TASKS) -> tuple[str, ...]:
-    """Names of the robust columns, in table order.
+    """:func:`affordgrasp.columns.robust_column_names` (their one owner, so that the sample
+    schema names them without importing this module), of the default tasks unless told.
 
     Parameters
     ----------
     tasks : sequence of str
-        Tasks summarised.
 
     Returns
     -------
     tuple of str
-        :func:`affordgrasp.columns.robust_column_names` of ``tasks`` (their one owner, so
-        that the sample schema names them without importing this module).
     """
     return columns.robust_column_names(tasks)
 
@@ -511,7 +511,7 @@ def copy_metrics(
     settings : RobustSettings
         K > 0 and the perturbation scales (its tasks are not used).
     hand : Hand or str
-        The hand simulated.
+        The hand simulated (a name is resolved here, with the hand's arrays, once).
     phi : dict of str to (n,) ndarray, optional
         The batch's plain Φ; computed when None.
     soft : bool
@@ -534,14 +534,14 @@ def copy_metrics(
     """
     import time
 
-    from .grasp.policy import object_geometry, pregrasp_starts, simulate_starts
+    from .grasp.policy import hand_arrays, object_geometry, pregrasp_starts, simulate_starts
     from .grasp.pregrasp import dot3
     from .hands import get_hand
     from .metrics.phi_batch import phi_of_batch
 
     if not settings.enabled:
         raise InputError("robust evaluation needs K >= 1 copies (K = 0 is plain evaluation)")
-    hand = get_hand(hand) if isinstance(hand, str) else hand
+    arrays = hand_arrays(get_hand(hand))
     n, k_count = len(batch), settings.copies
     if n == 0:
         raise InputError("no grasps to copy: the batch is empty")
@@ -550,7 +550,7 @@ def copy_metrics(
     geom = object_geometry(obj)
     draws = perturbations(settings)
     placing = None if frame is None else object_geometry(frame)
-    starts, travel = pregrasp_starts(hand, geom, batch.p0, placing)
+    starts, travel = pregrasp_starts(arrays, geom, batch.p0, placing)
     # pivot: where the unperturbed palm stopped, along the approach (centred frame)
     z = starts[:, :3, 2]
     start_origin = starts[:, :3, 3]
@@ -562,11 +562,11 @@ def copy_metrics(
     if settings.translation_m == 0.0 and settings.rotation_rad == 0.0:
         backoff = np.zeros((n, k_count))  # every copy is the unperturbed grasp
     else:
-        backoff = _backoff(depth, draws, _open_hand_radius(hand), settings.clearance_m)
+        backoff = _backoff(depth, draws, arrays.open_radius, settings.clearance_m)
     t0 = time.perf_counter()
     copies = _perturbed_starts(starts, depth, draws, backoff)
     flat = simulate_starts(
-        hand,
+        arrays,
         geom,
         copies,
         (travel[:, None] + backoff).reshape(n * k_count),
@@ -586,24 +586,6 @@ def copy_metrics(
     return phi_k
 
 
-def _open_hand_radius(hand) -> float:
-    """The largest distance from the palm origin of any point of the open hand, m (every
-    pregrasp DOF value)."""
-    from .grasp.policy import hand_arrays
-
-    arrays = hand_arrays(hand)
-    radius = 0.0
-    for s in (0.0, 0.25, 0.5, 0.75, 1.0):
-        poses = arrays.shape_poses(hand.open_dofs(s))
-        reach = (
-            np.linalg.norm(poses[:, :3, 3], axis=1)
-            + np.linalg.norm(arrays.shapes.halves, axis=1)
-            + arrays.shapes.radii
-        )
-        radius = max(radius, float(reach.max()))
-    return radius
-
-
 def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, np.ndarray]:
     """Φ of every copy (n K rows): the contact metrics in one compiled call, geometry moved
     by minus the centre-of-mass shift (the same as moving the centre of mass by it)."""
@@ -612,18 +594,17 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
     from .metrics.effort import hold_effort, impact_effort
     from .metrics.epsilon import epsilon
     from .metrics.epsilon_hand import epsilon_hand
-    from .metrics.inertia import rotational_inertia
-    from .metrics.phi import contact_metrics_batch
-    from .metrics.striking import use_swing_cosine
-    from .metrics.transmission import use_force
-    from .metrics.use_geometry import (
+    from .metrics.hand_placement import (
         contact_reach,
         contact_thickness,
         contact_width,
         long_axis,
         use_clearance,
-        use_lever_ratio,
     )
+    from .metrics.inertia import rotational_inertia
+    from .metrics.phi import contact_metrics_batch
+    from .metrics.striking import use_lever_ratio, use_swing_cosine
+    from .metrics.transmission import use_force
     from .metrics.validation import units_n3
 
     mass = obj.mass
@@ -784,3 +765,40 @@ def ranking_values(columns: Any, task: str) -> np.ndarray:
     if hasattr(col, "to_numpy"):
         col = col.to_numpy()
     return np.asarray(col, dtype=np.float64).reshape(-1)
+
+
+def task_scores(
+    task: Any,
+    columns: Any,
+    mode: str = "default",
+    thresholds: Mapping[str, float] | None = None,
+    *,
+    robust: bool = False,
+) -> np.ndarray:
+    """The score rows are ranked by: F_T of ``task``, or with ``robust`` its robust score.
+
+    Parameters
+    ----------
+    task : str or Task
+        A registered name or a :class:`~affordgrasp.tasks.Task`.
+    columns : pyarrow.Table, MetricColumns or mapping of str to (n,) ndarray
+        The rows' columns (only those the task reads are converted).
+    mode : str
+        Threshold mode.
+    thresholds : mapping of str to float, optional
+        Threshold values that replace the mode's.
+    robust : bool
+        The robust ranking score (:func:`ranking_values`: rows evaluated with ``--robust K``);
+        ``mode`` and ``thresholds`` are then those the rows were evaluated with.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        −∞ where a requirement fails; NaN never ranks.
+    """
+    if robust:
+        return ranking_values(columns, task if isinstance(task, str) else task.name)
+    from .tasks import get_task
+
+    task = get_task(task) if isinstance(task, str) else task
+    return np.asarray(task.evaluate(columns, mode, **dict(thresholds or {})), dtype=np.float64)

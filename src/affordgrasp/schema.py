@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from . import __version__
+from ._version import __version__
 from .columns import METRIC_COLUMNS
 
 _f64 = pa.float64()

@@ -11,9 +11,9 @@ import pytest
 
 from affordgrasp import tasks
 from affordgrasp.cli import main
-from affordgrasp.dataset.best import best_grasps
 from affordgrasp.dataset.generate import generate
 from affordgrasp.errors import DatasetError
+from affordgrasp.search.best import best_grasps
 
 HOLD = [f"hold_effort_{s}" for s in ("px", "nx", "py", "ny", "pz", "nz")]
 

@@ -17,8 +17,8 @@ from dataset_support import SAMPLES, SEED, SHARD_SIZE
 from terminal import as_in_a_terminal
 
 from affordgrasp.dataset.generate import generate
-from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
+from affordgrasp.dataset.shards import plan_shards, shard_paths
 from affordgrasp.errors import DatasetError, HandError, InputError
 from affordgrasp.grasp.pregrasp import object_stream_seed
 
@@ -399,22 +399,23 @@ def test_the_gws_volume_is_computed_on_request_recorded_and_resumed(tmp_path):
 
 def test_a_worker_keeps_a_few_objects_and_rebuilds_one_that_left(monkeypatch):
     # a run of many objects must not keep every prepared object alive in a worker
-    from affordgrasp.dataset import engines
+    from affordgrasp.dataset import jobs
     from affordgrasp.objects import load_object
     from affordgrasp.pipeline import evaluate_samples
+    from affordgrasp.runtime.engines import run_job
 
-    monkeypatch.setattr(engines, "_KEEP_OBJECTS", 2)
+    monkeypatch.setattr(jobs, "_KEEP_OBJECTS", 2)
     objects = [load_object(f"knife:{v}") for v in range(4)]
-    context = engines.RunContext(
-        objects=tuple(engines.ObjectPayload.from_object(o) for o in objects),
+    context = jobs.RunContext(
+        objects=tuple(jobs.ObjectPayload.from_object(o) for o in objects),
         hand="barrett",
         seed=SEED,
     )
-    first = engines.run_job(engines.Job(0, 0, 3), context)
+    first = run_job(jobs.Job(0, 0, 3), context)
     for index in (1, 2, 3):
-        engines.run_job(engines.Job(index, 0, 3), context)
-        assert len(engines._OBJECTS) <= 2
-    assert list(engines._OBJECTS) == [2, 3]
-    again = engines.run_job(engines.Job(0, 0, 3), context)  # rebuilt: the same rows
+        run_job(jobs.Job(index, 0, 3), context)
+        assert len(jobs._OBJECTS) <= 2
+    assert list(jobs._OBJECTS) == [2, 3]
+    again = run_job(jobs.Job(0, 0, 3), context)  # rebuilt: the same rows
     same_rows(again, first)
     same_rows(first, evaluate_samples("knife:0", 3, seed=SEED).table)

@@ -115,8 +115,8 @@ def test_resolve_object_of_loose_rows_and_bad_options(box_mesh):
 
 def test_the_dataset_splits_its_objects_as_training_does(tmp_path):
     from affordgrasp.dataset.generate import generate
+    from affordgrasp.dataset.splits import split_by_object as learning_split
     from affordgrasp.errors import InputError
-    from affordgrasp.learning.data import split_by_object as learning_split
 
     out = tmp_path / "k"
     generate(["knife:0", "knife:1", "knife:2", "mug:0"], 1, out, seed=0, workers=1)
@@ -128,3 +128,21 @@ def test_the_dataset_splits_its_objects_as_training_does(tmp_path):
     assert ds.split("family", test_families=[ds.families["mug:0"]]).test == ("mug:0",)
     with pytest.raises(InputError, match="test_families"):
         ds.split("family")
+
+
+def test_a_mesh_file_named_like_a_scan_variant_is_that_file_to_every_reader(tmp_path, capsys):
+    import trimesh
+
+    from affordgrasp.cli import main
+    from affordgrasp.dataset.generate import generate
+
+    mesh = tmp_path / "knife~scan.stl"
+    trimesh.creation.box((0.12, 0.04, 0.03)).export(mesh)
+    out = tmp_path / "ds"
+    generate([str(mesh)], 16, out, seed=0, workers=1)
+    assert object_specs("knife~scan.stl", str(mesh)) == [str(mesh)]
+    assert object_specs("knife~scan.stl", None) == ["knife~scan.stl"]
+    ds = Dataset.open(out)
+    assert ds.object("knife~scan.stl").mesh_hash == ds.mesh_hash("knife~scan.stl")
+    rc = main(["show", str(out), "--task", "pick", "--top", "1", "-o", str(tmp_path / "s")])
+    assert rc == 0, capsys.readouterr().err

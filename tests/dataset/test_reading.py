@@ -11,8 +11,9 @@ import pytest
 from dataset_support import SAMPLES, SEED, SHARD_SIZE
 
 from affordgrasp import __version__, tasks
-from affordgrasp.dataset.layout import shard_paths
-from affordgrasp.dataset.reading import open_dataset, read_dataset, select_objects
+from affordgrasp.dataset.handle import open_dataset
+from affordgrasp.dataset.reading import read_dataset, select_objects
+from affordgrasp.dataset.shards import shard_paths
 from affordgrasp.errors import DatasetError
 from affordgrasp.schema import SCHEMA
 

@@ -18,10 +18,10 @@ import pytest
 from dataset_support import SEED
 
 import affordgrasp
-from affordgrasp.dataset.engines import check_ray_address
-from affordgrasp.dataset.layout import plan_shards, shard_paths
 from affordgrasp.dataset.reading import read_dataset
+from affordgrasp.dataset.shards import plan_shards, shard_paths
 from affordgrasp.errors import InputError
+from affordgrasp.runtime.engines import check_ray_address
 
 # The folder the tests import affordgrasp from (the installed package in CI, src/ in a
 # checkout): a subprocess must run the same build, with the same compiled kernels.
@@ -148,7 +148,7 @@ def test_die_with_parent_arms_the_parent_death_signal():
     """In a child process: the kernel's parent-death signal is set to SIGKILL."""
     code = (
         "import ctypes, os, signal\n"
-        "from affordgrasp.worker_lifetime import die_with_parent\n"
+        "from affordgrasp.runtime.worker_lifetime import die_with_parent\n"
         "assert die_with_parent(os.getppid())\n"
         "libc = ctypes.CDLL(None)\n"
         "sig = ctypes.c_int()\n"
@@ -236,7 +236,7 @@ def test_generate_on_a_silent_ray_address_exits_2_then_obeys_sigterm(
 
 _REAPED_PARENT = (
     "import subprocess, sys, time\n"
-    "from affordgrasp.worker_lifetime import Reaper\n"
+    "from affordgrasp.runtime.worker_lifetime import Reaper\n"
     "reaper = Reaper(interval=0.1)\n"
     "assert reaper.running\n"
     # Its own session: a child that would survive its parent (and any group kill).

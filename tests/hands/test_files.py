@@ -52,3 +52,24 @@ def test_registry_lookup_and_replacement():
         HANDS.unregister("wide_jaw")
     with pytest.raises(HandError, match="unknown hand 'wide_jaw'"):
         get_hand("wide_jaw")
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda d: d["dofs"][1].update(upper=np.inf), r"joint's travel .* got inf"),
+        (lambda d: d["dofs"][1].update(upper=100.0), r"in \[-6\.28319, 6\.28319\] rad, got 100"),
+        (lambda d: d["links"][0]["shapes"][0].update(radius=np.nan), "rounding radius .* nan"),
+        (lambda d: d["links"][0]["shapes"][0].update(half_extents=[1e6, 1, 1]), "got 1e\\+06"),
+        (lambda d: d["links"][1]["joint"].update(ratio=np.nan), "ratio nan"),
+        (lambda d: d["links"][1]["joint"].update(axis=[np.nan, 0, 0]), "must be a unit vector"),
+        (lambda d: d["links"][1]["joint"]["origin"][0].__setitem__(3, 5.0), "translation .* 5"),
+        (lambda d: d["fingers"][0].update(speeds=[1.0, 0.0]), r"speed .* \[0\.001, 1000\]"),
+        (lambda d: d["fingers"][0].update(speeds=[1.0, "fast"]), "malformed hand document"),
+    ],
+)
+def test_every_number_of_a_hand_is_checked(edit, message):
+    doc = hand_to_dict(get_hand("barrett"))
+    edit(doc)
+    with pytest.raises(HandError, match=message):
+        hand_from_dict(doc)

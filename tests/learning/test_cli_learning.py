@@ -199,6 +199,7 @@ def test_model_eval_without_test_objects_and_subsample_say_so(tiny_dataset, caps
 
 
 def test_streamed_training_reads_each_epochs_rows_once_within_its_buffer(tiny_dataset):
+    from affordgrasp.dataset.handle import Dataset
     from affordgrasp.learning.api import prepare_split, train_on_dataset
     from affordgrasp.learning.streaming import StreamedEpochs
     from affordgrasp.learning.training import TrainSettings, default_config
@@ -208,7 +209,7 @@ def test_streamed_training_reads_each_epochs_rows_once_within_its_buffer(tiny_da
     )
     assert train.depth_mm is None and val.depth_mm is not None
     config = default_config("cnn", target, width=4)
-    epochs = StreamedEpochs(tiny_dataset, config, train, batch_size=4, buffer_rows=10)
+    epochs = StreamedEpochs(Dataset.open(tiny_dataset), config, train, batch_size=4, buffer_rows=10)
     batches, n = epochs(1, 0)
     seen = []
     for inputs, idx, y in batches:

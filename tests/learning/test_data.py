@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
+from affordgrasp.dataset.splits import split_by_family, split_by_object
 from affordgrasp.errors import InputError
-from affordgrasp.learning.data import balanced_indices, split_by_family, split_by_object
+from affordgrasp.learning.data import balanced_indices
 from affordgrasp.learning.targets import (
     make_target,
     target_column,

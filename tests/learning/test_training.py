@@ -191,3 +191,20 @@ def test_a_model_reads_the_hand_view_and_round_trips(tmp_path):
     for bad in ({"view": "side"}, {"view": "hand", "arch": "pointnet"}):
         with pytest.raises(InputError, match="view"):
             check_config(dict(cfg, **bad), path)
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"rank_weight": float("nan")}, "rank_weight must be a finite number >= 0, got nan"),
+        ({"rank_weight": float("inf")}, "rank_weight must be a finite number >= 0, got inf"),
+        ({"rank_weight": -1.0}, "rank_weight must be a finite number >= 0, got -1.0"),
+        ({"max_seconds": 0.0}, "max_seconds must be a finite number > 0, got 0.0"),
+        ({"max_seconds": float("nan")}, "max_seconds must be a finite number > 0, got nan"),
+    ],
+)
+def test_settings_that_would_train_nonsense_are_refused(options, message):
+    from affordgrasp.errors import InputError
+
+    with pytest.raises(InputError, match=message):
+        TrainSettings(**options)

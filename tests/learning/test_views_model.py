@@ -114,7 +114,7 @@ def test_predictions_are_the_simulation_on_the_fused_surface(robust_dataset, sma
 
     lines = []
     (views, c1), (_, c2) = load_views_models(small_views, log=lines.append)
-    samples, _ = read_rows(robust_dataset, "viable")
+    samples, _ = read_rows(Dataset.open(robust_dataset), "viable")
     prob = views.predict(c1, samples)
     hold = views.predict(c2, samples)
     assert len(lines) == 2  # one simulation per object, kept for the ranker
@@ -228,10 +228,11 @@ def test_bad_views_options_exit_2(robust_dataset, tmp_path, capsys):
 
 
 def test_objects_simulated_in_worker_processes_match_in_process(robust_dataset, small_views):
+    from affordgrasp.dataset.handle import Dataset
     from affordgrasp.learning.data import read_rows
     from affordgrasp.learning.views_model import FusedViews
 
-    samples, _ = read_rows(robust_dataset, "viable")
+    samples, _ = read_rows(Dataset.open(robust_dataset), "viable")
     config = read_views_config(small_views)
     lines = []
     apart = FusedViews(config, workers=2, log=lines.append).raw(samples)

@@ -58,3 +58,19 @@ def test_rigid_motions_and_bad_input(head):
     with pytest.raises(InputError, match="rays"):
         use_relief(head, P, N, rays=2)
     assert use_depth(head, np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
+
+
+def test_lever_ratio_compares_distances_to_the_wrist_axis():
+    from affordgrasp.metrics.striking import use_lever_ratio
+
+    U = np.array([[0.3, 0, 0.5], [0.05, 0, 0]])
+    W = np.zeros((2, 3))
+    A = np.tile([0, 0, 1.0], (2, 1))
+    np.testing.assert_allclose(use_lever_ratio(U, [0.2, 0, 0], W, A), [1.5, 0.25])
+    # signed: the mass on the other side of the axis from U, or on it, is -inf; NaN stays NaN
+    other = np.array([[-0.1, 0, 0], [0.1, 0, 0], [np.nan, 0, 0]])
+    got = use_lever_ratio(other, [0.2, 0, 0], np.zeros((3, 3)), np.tile([0, 0, 1.0], (3, 1)))
+    assert got[0] == -np.inf and got[1] == pytest.approx(0.5) and np.isnan(got[2])
+    # only the lever's projection counts: the mass off to the side of U's lever
+    side = use_lever_ratio([[0.2, 0, 0]], [0.1, 0.3, 0], np.zeros((1, 3)), [[0, 0, 1.0]])
+    np.testing.assert_allclose(side, [2.0])

@@ -464,3 +464,83 @@ def test_fixing_normals_agrees_with_trimesh():
     trimesh.repair.fix_normals(theirs, multibody=True)
     assert ours.is_winding_consistent and ours.volume > 0
     assert np.array_equal(ours.faces, theirs.faces)
+
+
+def _seam_sphere(radius=40.0, n_lat=16, n_lon=32, jitter=1e-5) -> tuple[np.ndarray, np.ndarray]:
+    """A UV sphere whose seam meridian is written twice, the copy ``jitter`` away."""
+    rng = np.random.default_rng(0)
+    theta = np.pi * np.arange(1, n_lat) / n_lat
+    phi = 2 * np.pi * (np.arange(n_lon + 1) % n_lon) / n_lon  # column n_lon: column 0 again
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    rings = radius * np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1)
+    rings[:, -1] += rng.uniform(-jitter, jitter, (n_lat - 1, 3))
+    vertices = np.vstack([rings.reshape(-1, 3), [[0, 0, radius], [0, 0, -radius]]])
+    index = np.arange((n_lat - 1) * (n_lon + 1)).reshape(n_lat - 1, n_lon + 1)
+    a, b = index[:-1, :-1].ravel(), index[:-1, 1:].ravel()
+    c, d = index[1:, :-1].ravel(), index[1:, 1:].ravel()
+    top, bottom = len(vertices) - 2, len(vertices) - 1
+    faces = np.vstack(
+        [
+            np.stack([a, c, b], 1),
+            np.stack([b, c, d], 1),
+            np.stack([np.full(n_lon, top), index[0, :-1], index[0, 1:]], 1),
+            np.stack([np.full(n_lon, bottom), index[-1, 1:], index[-1, :-1]], 1),
+        ]
+    )
+    return vertices, faces
+
+
+def test_a_seam_written_twice_is_welded_not_capped(tmp_path, caplog):
+    vertices, faces = _seam_sphere()
+    path = tmp_path / "ball.off"
+    lines = ["OFF", f"{len(vertices)} {len(faces)} 0"]
+    lines += [" ".join(repr(float(x)) for x in v) for v in vertices]
+    lines += ["3 " + " ".join(map(str, f)) for f in faces]
+    path.write_text("\n".join(lines) + "\n")
+    welded = trimesh.Trimesh(vertices, faces)
+    welded.merge_vertices(digits_vertex=3)  # the seam's copy 1e-5 mm away: one vertex
+    assert welded.is_watertight
+    with caplog.at_level(logging.WARNING):
+        mesh = load_mesh(path, units="mm")
+    assert_solid(mesh, welded.volume * 1e-9)
+    assert len(mesh.faces) == len(faces)  # no cap
+    said = caplog.text
+    assert "welded 15 vertices" in said and " mm away" in said and "capped" not in said, said
+
+
+def test_repair_sizes_are_in_the_files_unit(tmp_path, caplog):
+    # A cube 50 mm wide without one side: a hole 50 mm across, said in millimetres.
+    cube = box((50.0, 50.0, 50.0))
+    side = np.flatnonzero(np.isclose(cube.face_normals[:, 0], 1.0))
+    path = tmp_path / "open.stl"
+    trimesh.Trimesh(cube.vertices, np.delete(cube.faces, side, axis=0)).export(path)
+    with caplog.at_level(logging.WARNING):
+        load_mesh(path, units="mm")
+    assert "the widest 50 mm across" in caplog.text, caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        load_mesh(path, size_m=0.1)
+    assert "the widest 100 mm across" in caplog.text, caplog.text
+
+
+def test_separate_bodies_are_named_and_specks_and_touching_parts_are_not(tmp_path, caplog):
+    scene = trimesh.Scene()
+    for i, size in enumerate([(0.06, 0.03, 0.03), (0.05, 0.03, 0.03), (0.055, 0.03, 0.02)]):
+        scene.add_geometry(box(size, (0.1 * i, 0.0, 0.0)), geom_name=f"part{i}")
+    path = tmp_path / "three.glb"
+    scene.export(path)
+    with caplog.at_level(logging.WARNING):
+        mesh = load_mesh(path)
+    assert mesh.volume == pytest.approx(0.06 * 0.03 * 0.03 + 0.05 * 0.03 * 0.03 + 0.055 * 6e-4)
+    assert (
+        "three.glb holds 3 separate bodies (60 mm, 55 mm, 50 mm long), the closest 45 mm "
+        "apart: they are graded as ONE rigid object"
+    ) in caplog.text, caplog.text
+    caplog.clear()
+    touching = trimesh.util.concatenate([box((1, 1, 1)), box((1, 1, 1), (1, 1, 0))])
+    speck = trimesh.creation.icosphere(subdivisions=1, radius=0.001)
+    speck.apply_translation([0.1, 0.0, 0.0])
+    with caplog.at_level(logging.WARNING):
+        prepare_mesh(touching, source="touching")
+        prepare_mesh(trimesh.util.concatenate([box((0.1, 0.02, 0.02)), speck]), source="s")
+    assert "separate" not in caplog.text and "speck" in caplog.text, caplog.text

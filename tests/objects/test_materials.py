@@ -107,7 +107,7 @@ def test_materials_refused_with_a_density_or_a_mesh_file(tmp_path):
 
 
 def test_workers_rebuild_the_material_mass_properties():
-    from affordgrasp.dataset.engines import ObjectPayload
+    from affordgrasp.dataset.jobs import ObjectPayload
 
     obj = load_object("axe:1", materials=True)
     rebuilt = ObjectPayload.from_object(obj).build()

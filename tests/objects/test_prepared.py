@@ -8,7 +8,6 @@ import trimesh
 
 from affordgrasp.errors import InputError
 from affordgrasp.objects import families, family_names, load_mesh, load_object, prepared, resolve
-from affordgrasp.objects.rays import EmbreeRays, embree_available
 from affordgrasp.objects.resolve import GraspObject
 
 
@@ -264,34 +263,6 @@ def test_bad_options_for_a_mesh_file_fail_before_the_cache(cache, box_mesh):
     with pytest.raises(InputError, match="unit"):
         load_object(box_mesh, units="furlong")
     assert not list(cache.glob("file-*.npz"))
-
-
-@pytest.mark.skipif(not embree_available(), reason="embreex not installed")
-def test_rays_are_trimeshs_rays_bit_for_bit():
-    obj = load_object("mug")
-    mesh = obj.mesh
-    data = prepared.MeshData.from_trimesh(mesh, obj.mesh_hash)
-    rays = EmbreeRays(data.vertices, data.faces, data.face_normals, data.scale)
-    rng = np.random.default_rng(5)
-    # from a sphere around the mug towards points near its centre: most rays cross its
-    # walls several times; a few start inside it
-    outward = rng.normal(size=(400, 3))
-    origins = 0.2 * outward / np.linalg.norm(outward, axis=1, keepdims=True)
-    origins[:40] *= 0.1
-    directions = rng.uniform(-0.03, 0.03, (400, 3)) - origins
-    for a, b in zip(
-        rays.intersects_location(origins, directions, multiple_hits=True),
-        mesh.ray.intersects_location(origins, directions, multiple_hits=True),
-        strict=True,
-    ):
-        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
-    assert len(rays.intersects_location(origins, directions)[0]) > 400  # several hits per ray
-    first = rays.intersects_first(origins, directions)
-    assert first.tobytes() == mesh.ray.intersects_first(origins, directions).tobytes()
-    assert np.array_equal(rays.intersects_any(origins, directions), first != -1)
-    loc = rays.intersects_location(origins, directions, multiple_hits=False)
-    ref = mesh.ray.intersects_location(origins, directions, multiple_hits=False)
-    assert all(a.tobytes() == b.tobytes() for a, b in zip(loc, ref, strict=True))
 
 
 def test_family_names_are_the_builders_names():

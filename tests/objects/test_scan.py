@@ -86,3 +86,17 @@ def test_family_variant_by_name_keeps_parts():
     assert set(np.unique(obj.face_parts)) == set(np.unique(crisp.face_parts))
     assert abs(obj.mass.volume / crisp.mass.volume - 1) < 0.02
     assert load_object("knife:1~scan") is obj
+
+
+def test_a_family_variant_with_its_own_degradation_seed_loads():
+    # knife:0 degraded with seed 2: a hole whose rim, projected on its plane, crosses itself
+    obj = load_object("knife~scan:2")
+    crisp = load_object("knife:0")
+    assert obj.name == "knife:0~scan:2" and obj.mesh.is_watertight
+    assert obj.mesh.is_winding_consistent
+    assert abs(obj.mass.volume / crisp.mass.volume - 1) < 0.02
+
+
+def test_a_mesh_file_named_like_a_variant_is_a_file_even_when_missing(tmp_path):
+    with pytest.raises(InputError, match="no file exists at that path"):
+        load_object(str(tmp_path / "knife~scan.stl"))

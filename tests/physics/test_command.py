@@ -109,7 +109,7 @@ def test_physics_robust_computes_the_columns_a_robust_dataset_holds(tiny_dataset
     import numpy as np
 
     from affordgrasp.dataset.generate import generate
-    from affordgrasp.dataset.layout import read_manifest
+    from affordgrasp.dataset.manifest import read_manifest
 
     mesh = read_manifest(tiny_dataset)["objects"][0]["source"]
     robust_ds = tmp_path / "robust-ds"

@@ -127,3 +127,22 @@ def test_outcomes_without_a_protocol_column_take_the_runs(tmp_path):
     (tmp_path / MANIFEST).write_text(json.dumps({"settings": {"protocol": "dgb"}}))
     pq.write_table(pa.table({"object": ["mug:0", "mug:0"]}), shard_path(tmp_path, 0))
     assert read_outcomes(tmp_path).column("protocol").to_pylist() == ["dgb", "dgb"]
+
+
+def test_an_undefined_statistic_says_why():
+    from affordgrasp.physics.report import _stats
+    from affordgrasp.physics.report import _why_undefined as why_undefined
+
+    force = np.array([1.0, 2.0, 3.0, 4.0])
+    assert "every task_cut is -inf" in why_undefined("task_cut", np.full(4, -np.inf), "f", force)
+    assert "epsilon is the same" in why_undefined("epsilon", np.ones(4), "f", force)
+    assert "f is the same" in why_undefined("epsilon", force, "f", np.ones(4))
+    assert "2 rows with both" in why_undefined("e", np.array([1.0, 2, np.nan, np.nan]), "f", force)
+    outs = {o: np.array([1.0, 0.0, 1.0, 0.0]) for o in ("hold_ok", "settled", "impact_ok")}
+    outs |= {o: force for o in ("press_held", "hold_directions_ok", "impact_steadiness")}
+    outs["press_force_n"] = force
+    preds = {"task_cut": np.full(4, -np.inf), "use_force": force}
+    stats = _stats(preds, outs, np.ones(4, dtype=bool))
+    assert math.isnan(stats["spearman"]["press_force_n"]["task_cut"])
+    assert "-inf" in stats["undefined"]["press_force_n"]["task_cut"]
+    assert "use_force" not in stats["undefined"].get("press_force_n", {})

@@ -67,7 +67,7 @@ def test_a_finger_with_its_distal_at_the_limit_still_closes(box_object):
     assert start.distal_at_limit >= 1
     from affordgrasp.physics.trials import _squeeze
 
-    jid = scene.fingers[0][1]
+    jid = scene.fingers[0].joint
     adr = scene.model.jnt_qposadr[jid]
     before = float(scene.data.qpos[adr])
     _squeeze(scene)

@@ -173,7 +173,7 @@ def test_a_use_point_on_the_line_through_the_wrist_cannot_be_struck(hammer):
 
 
 def cut(blade_parts, use_point, use_normal):
-    from affordgrasp.metrics.use_geometry import use_edge_frame
+    from affordgrasp.metrics.wedge import use_edge_frame
 
     obj, parts = blade_parts
     # a press the jaws' 20 N grip can carry 90 mm out along the blade

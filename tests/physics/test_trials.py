@@ -160,7 +160,7 @@ def test_tools_touch_the_use_point_from_outside(jaw_scene):
     m, d = jaw_scene.model, jaw_scene.data
     for place, body in (
         (place_anvil, m.body("anvil").id),
-        (place_plate, jaw_scene.plate_body),
+        (place_plate, m.body("plate").id),
     ):
         set_grasp(jaw_scene, *jaw_grasp(TOUCH, TOUCH))
         _squeeze(jaw_scene)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from affordgrasp import tasks
-from affordgrasp.pairs import UsePoints
 from affordgrasp.search.guidance import swing_alignment
+from affordgrasp.search.use_points import UsePoints
 
 
 def _uses(points, normals, depth=0.09, relief=1e-4, wedge=np.pi):

@@ -62,7 +62,27 @@ def test_bad_counts_are_refused(k):
         top_indices(np.zeros(3), k)
 
 
-def test_old_import_path_still_works():
-    from affordgrasp.dataset.best import TopRows as Old
+def test_the_top_k_scan_breaks_ties_by_object_then_sample_then_seed():
+    import pyarrow as pa
 
-    assert Old is TopRows
+    from affordgrasp.search.best import scan_top
+    from affordgrasp.tasks import make_task
+
+    score = make_task("score", lambda m, t: m["score"], requires=("score",))
+    rows = {
+        "object": ["b", "a", "a", "b", "a", "a"],
+        "sample": [0, 2, 1, 0, 1, 0],
+        "seed": [0, 0, 9, 0, 3, 0],
+        "score": [1.0, 1.0, 1.0, 2.0, 1.0, -np.inf],
+    }
+    table = pa.table(rows)
+    batches = [table.slice(0, 3), table.slice(3)]  # the order rows arrive does not matter
+    for tables in (batches, batches[::-1]):
+        names, kept = scan_top(tables, [score], 4, objects=["a", "b"])
+        found = kept[None, "score"]
+        assert names == ["a", "b"] and (found.scanned, found.finite) == (6, 5)
+        ranked = [(names[o], s, d) for o, s, d in zip(*found.best.keys, strict=True)]
+        assert ranked == [("b", 0, 0), ("a", 1, 3), ("a", 1, 9), ("a", 2, 0)]
+        _, per_object = scan_top(tables, [score], 2, per_object=True)
+        _, samples, seeds = per_object["a", "score"].best.keys
+        assert samples.tolist() == [1, 1] and seeds.tolist() == [3, 9]

@@ -361,3 +361,31 @@ def test_bad_task_files(tmp_path):
     bad.write_text('[tasks.x]\nvalue = "1"\n[tasks.x.modes.default]\ntau = 1\n')
     with pytest.raises(TaskError, match="unknown thresholds"):
         tasks.load_task_file(bad)
+
+
+def test_thresholds_are_numbers_or_infinite_never_nan(registry):
+    task = tasks.task_from_expressions("bounded", "epsilon", "epsilon > t", {"t": -math.inf})
+    assert task.thresholds_for("default", t=math.inf)["t"] == math.inf
+    for bad in (math.nan, "abc", None):
+        with pytest.raises(TaskError, match="threshold 't' must be a number"):
+            task.thresholds_for("default", t=bad)
+    with pytest.raises(TaskError, match="threshold 't' must be a number"):
+        tasks.task_from_expressions("nan_t", "epsilon", "epsilon > t", {"t": math.nan})
+    with pytest.raises(TaskError, match="must be a number"):
+        tasks.task_from_expressions("nan_mode", "epsilon", None, {"t": 0}, {"m": {"t": math.nan}})
+
+
+@pytest.mark.parametrize(
+    "expr, message",
+    [
+        ("-" * 100_000 + "epsilon", "100,007 characters long; .* at most 2,000"),
+        ("+".join(["epsilon"] * 200_000), "characters long"),
+        ("-" * 1500 + "epsilon", "nests 1503 levels deep; .* at most 100"),
+        ("+".join(["epsilon"] * 120), "levels deep"),
+        ("(" * 300 + "epsilon" + ")" * 300, "not a valid expression"),
+    ],
+)
+def test_expressions_are_bounded_in_size_and_depth(expr, message, registry):
+    with pytest.raises(TaskError, match=message):
+        tasks.task_from_expressions("big", expr)
+    assert tasks.task_from_expressions("sum", "+".join(["epsilon"] * 90)).name == "sum"

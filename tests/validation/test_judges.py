@@ -86,14 +86,15 @@ def test_surround_judge_needs_three_contacts_off_a_line():
 def test_brute_force_on_the_first_grasps_is_the_smaller_brute_force(hammer):
     # sample i of a run depends only on (seed, i): the first k rows of an n-grasp table are
     # the grasps a k-grasp brute force draws, so --also-grasps k reports that search
-    from affordgrasp.pairs import best_pairs
     from affordgrasp.pipeline import evaluate_samples
+    from affordgrasp.search.pairs import PairSearchSettings, best_pairs
 
     table = evaluate_samples(hammer, 120, seed=0, volume=False).table
     found = vt.brute_force(hammer, "pick", table.slice(0, 60), uses=80, top=5)
     com = hammer.mass.center_of_mass
     first = {"found": found, **vt.scored("pick", "hammer", found.table, com, None)}
-    alone = best_pairs(hammer, "pick", grasps=60, uses=80, seed=0, top=5, per_grasp=True)
+    settings = PairSearchSettings("pick", grasps=60, uses=80, seed=0, top=5, per_grasp=True)
+    alone = best_pairs(hammer, settings)
     assert first["found"].grasps == 60 and first["found"].candidates == alone.candidates
     assert first["found"].table.column("p0").to_pylist() == alone.table.column("p0").to_pylist()
     np.testing.assert_allclose(

@@ -21,7 +21,7 @@ ENGINES = ["raster", "packets", "embreex"]
 
 
 def _renderer(mesh, camera=None, engine="auto"):
-    from affordgrasp.vision import packets
+    from affordgrasp.rays import packets
 
     if engine == "packets" and not packets.available():
         pytest.skip("Embree 4 library of embreex not loadable")
@@ -133,7 +133,7 @@ def test_packet_engine_matches_the_one_ray_reference(size):
     """16-ray packets vs embreex's one ray per call: the same pixels up to rounding."""
     from affordgrasp.grasp.pregrasp import sample_inputs
     from affordgrasp.objects import load_object
-    from affordgrasp.vision import packets
+    from affordgrasp.rays import packets
 
     if not packets.available():
         pytest.skip("Embree 4 library of embreex not loadable")

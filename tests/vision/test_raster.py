@@ -34,7 +34,7 @@ def test_raster_matches_the_one_ray_reference_on_built_in_objects(name):
 
 
 def test_raster_is_the_default_and_matches_packets_on_a_small_camera():
-    from affordgrasp.vision import packets
+    from affordgrasp.rays import packets
 
     if not packets.available():
         pytest.skip("Embree 4 library of embreex not loadable")

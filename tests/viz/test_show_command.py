@@ -181,8 +181,7 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
 
     import pyarrow as pa
 
-    import affordgrasp.optimize
-    import affordgrasp.pairs
+    import affordgrasp.search.pairs
     from affordgrasp.commands.show import with_best_pairs
     from affordgrasp.pipeline import evaluate_samples
     from affordgrasp.tasks import get_task
@@ -193,8 +192,8 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     calls = []
 
     def fake(name, rows):
-        def search(obj, task, *args, **kwargs):
-            calls.append((name, task, kwargs.get("budget"), kwargs.get("restarts")))
+        def search(obj, settings, **kwargs):
+            calls.append((name, settings.task, settings.budget, settings.restarts))
             return types.SimpleNamespace(table=rows)
 
         return search
@@ -206,14 +205,14 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     )
     cut = get_task("cut")
     # the brute force finds pairs: nothing else runs, nothing is said
-    monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", found))
-    monkeypatch.setattr(affordgrasp.optimize, "targeted_pairs", fake("search", found))
+    monkeypatch.setattr(affordgrasp.search.pairs, "best_pairs", fake("brute force", found))
+    monkeypatch.setattr(affordgrasp.search.pairs, "optimize_pairs", fake("search", found))
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
     assert [c[0] for c in calls] == ["brute force"] and not said
     assert grown.num_rows == table.num_rows + 2
     # nothing by area: the search, 4 x --samples simulations in 2 restarts
     calls.clear()
-    monkeypatch.setattr(affordgrasp.pairs, "best_pairs", fake("brute force", none))
+    monkeypatch.setattr(affordgrasp.search.pairs, "best_pairs", fake("brute force", none))
     grown = with_best_pairs("hammer", table, [cut], {}, args, out)
     assert [c[0] for c in calls] == ["brute force", "search"]
     assert calls[-1][2:] == (1200, 2)
@@ -221,7 +220,7 @@ def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
     assert "1,200 more simulations in 2 restarts: 2 grasps found" in said[-1]
     assert grown.column("sample").to_pylist()[-2:] == [6, 7]
     # nothing found at all: the samples alone, and it says so
-    monkeypatch.setattr(affordgrasp.optimize, "targeted_pairs", fake("search", none))
+    monkeypatch.setattr(affordgrasp.search.pairs, "optimize_pairs", fake("search", none))
     assert with_best_pairs("hammer", table, [cut], {}, args, out) is table
     assert said[-1].endswith("0 grasps found")
     # pick reads no use point: no pair search at all

@@ -5,7 +5,12 @@ from __future__ import annotations
 import math
 
 from ..columns import column_heading
-from .common import add_robust_argument, add_task_arguments, parse_thresholds
+from .limits import ROBUST
+from .task_options import add_robust_argument, add_task_arguments, parse_thresholds
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {"top": (None, 100_000, "the top rows are held and printed"), "robust": ROBUST}
+
 
 METRICS_SHOWN = (
     ("ε", "epsilon"),
@@ -128,7 +133,7 @@ def check_dataset_robust(directory, k: int) -> bool:
     from pathlib import Path
 
     from ..dataset.handle import Dataset
-    from ..dataset.layout import MANIFEST_NAME
+    from ..dataset.manifest import MANIFEST_NAME
     from ..errors import InputError
 
     if k < 0:
@@ -152,6 +157,23 @@ def check_dataset_robust(directory, k: int) -> bool:
     return True
 
 
+def loosen_hint(mode: str) -> str:
+    """What to try when no grasp passes a task's thresholds in ``mode``.
+
+    Parameters
+    ----------
+    mode : str
+        The ``--mode`` of the run.
+
+    Returns
+    -------
+    str
+        ``--mode no-robustness`` unless that is the mode, and a lower ``--threshold``.
+    """
+    lower = "a lower --threshold"
+    return lower if mode == "no-robustness" else f"--mode no-robustness or {lower}"
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp best``.
 
@@ -162,10 +184,10 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
-    from ..dataset.best import best_grasps, write_best
+    from ..search.best import best_grasps, write_best
 
     if args.out:
-        from .common import check_output_file
+        from .output_files import check_output_file
 
         check_output_file(args.out, "--out", suffix=".parquet")
 
@@ -195,8 +217,8 @@ def run(args, out) -> None:
     )
     if result.finite == 0:
         out.text(
-            "no sample passes the task's thresholds; try --mode no-robustness or a lower "
-            "--threshold, or generate more samples"
+            f"no sample passes the task's thresholds; try {loosen_hint(args.mode)}, or "
+            "generate more samples"
         )
     document = result.to_dict()
     if args.out:

@@ -5,6 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..runtime.writing import atomic_write
+from .limits import MAX_SEED, OWN_CHECK, SEED_BITS
+
+MAX_PNG_SIDE = 4096  # pixels: the process peaks near 450 MB drawing it
+# Of the numeric options: see limits.check_limits.
+LIMITS = {
+    "sample": (None, MAX_SEED, "sample numbers are 64-bit"),
+    "seed": SEED_BITS,
+    **dict.fromkeys(("size", "fov", "scale"), OWN_CHECK),  # DepthCamera; the PNG's side
+}
 
 
 def add_arguments(p) -> None:
@@ -97,7 +107,7 @@ def run(args, out) -> None:
     if args.out is not None and not args.out.endswith((".png", ".npy")):
         raise InputError(f"--out {args.out!r} must end in .png or .npy")
     if args.out is not None:
-        from .common import check_output_file
+        from .output_files import check_output_file
 
         check_output_file(args.out, "--out")
     if args.scale < 1:
@@ -110,6 +120,12 @@ def run(args, out) -> None:
             raise InputError(f"--sample must be >= 0, got {i}")
         p0, _ = sample_inputs(args.seed, i, i + 1)
     camera = DepthCamera(size=args.size, fov_deg=args.fov)
+    if args.size * args.scale > MAX_PNG_SIDE:  # the upscaled PNG is made in memory, 3 B/px
+        raise InputError(
+            f"--scale {args.scale} makes a PNG {args.size * args.scale:,} pixels wide; at most "
+            f"{MAX_PNG_SIDE:,}: with --size {args.size}, use --scale at most "
+            f"{max(1, MAX_PNG_SIDE // args.size)}"
+        )
     obj = load_object(args.object)
     renderer = renderer_for(obj, camera)
     depth = renderer.render(p0)
@@ -121,7 +137,7 @@ def run(args, out) -> None:
     pose = renderer.poses(p0)[0]
     if args.out is not None:
         if args.out.endswith(".npy"):
-            np.save(args.out, depth)
+            atomic_write(args.out, lambda fh: np.save(fh, depth))
         else:
             save_depth_png(args.out, depth, scale=args.scale)
     hit = depth > 0

@@ -7,19 +7,17 @@ import numpy as np
 from ..columns import column_heading
 from ..errors import InputError
 from ..schema import column_numbers
-from .common import (
-    add_robust_argument,
+from .batches import (
+    SAMPLING,
     add_sampling_arguments,
-    add_task_arguments,
     check_counts,
-    check_output_file,
     one_time_text,
-    robust_option,
     run_batches,
     status_summary,
-    task_names,
-    write_table,
 )
+from .limits import ROBUST
+from .output_files import check_output_file, write_table
+from .task_options import add_robust_argument, add_task_arguments, robust_option, task_names
 
 SHOWN_METRICS = (
     "epsilon",
@@ -31,6 +29,9 @@ SHOWN_METRICS = (
     "use_edge",
     "use_edge_angle",
 )
+
+
+LIMITS = {**SAMPLING, "robust": ROBUST}  # of the numeric options: see limits.check_limits
 
 
 def add_arguments(p) -> None:
@@ -76,19 +77,15 @@ def best_rows(
         Task name -> the best sample (None when no row scores above −inf).
     """
     from ..columns import display_value
+    from ..robust import task_scores
     from ..schema import metric_arrays
     from ..search.ranking import best_index
-    from ..tasks import MetricColumns, get_task
+    from ..tasks import MetricColumns
 
     metrics = MetricColumns(metric_arrays(table))
     rows, doc = [], {}
     for name in task_names:
-        if robust:
-            from ..robust import ranking_values
-
-            values = ranking_values(table, name)
-        else:
-            values = get_task(name).evaluate(metrics, mode)
+        values = task_scores(name, table, mode, robust=robust)
         finite = np.isfinite(values)
         if not finite.any():
             rows.append([name, "-", "-inf", *["-"] * len(SHOWN_METRICS)])

@@ -6,17 +6,22 @@ import shlex
 import sys
 
 from ..dataset.generate import DEFAULT_CHUNK_SIZE, generate
-from ..dataset.layout import DEFAULT_SHARD_SIZE
-from .common import (
-    HAND_HELP,
-    add_metrics_argument,
-    add_robust_argument,
-    add_scale_arguments,
-    load_objects,
-    optional_metrics,
-    robust_option,
-    scale_options,
-)
+from ..dataset.shards import DEFAULT_SHARD_SIZE
+from .batches import add_engine_arguments
+from .limits import OWN_CHECK, ROBUST, SEED_BITS, SIZE_M, WORKERS
+from .object_options import HAND_HELP, add_scale_arguments, load_objects, scale_options
+from .task_options import add_metrics_argument, add_robust_argument, optional_metrics, robust_option
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {
+    "samples": OWN_CHECK,  # dataset.generate: at most 100,000 shard files
+    "seed": SEED_BITS,
+    "workers": WORKERS,
+    "size_m": SIZE_M,
+    "shard_size": (None, 100_000, "a shard is held whole before it is written, ~10 kB a row"),
+    "chunk_size": (None, 100_000, "a chunk is one job's rows, held whole"),
+    "robust": ROBUST,
+}
 
 
 def add_arguments(p) -> None:
@@ -39,18 +44,7 @@ def add_arguments(p) -> None:
         "what a learning dataset needs); shared: sample i is the same pregrasp on every "
         "object. A resume keeps the dataset's own",
     )
-    p.add_argument(
-        "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
-    )
-    p.add_argument(
-        "--engine",
-        choices=("local", "ray"),
-        default="local",
-        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
-    )
-    p.add_argument(
-        "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
-    )
+    add_engine_arguments(p)
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     add_scale_arguments(p)
     p.add_argument(
@@ -129,7 +123,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..errors import InputError
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     volume = "volume" in optional_metrics(args)
     if volume and args.no_metrics:

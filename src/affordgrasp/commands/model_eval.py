@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .limits import OWN_CHECK, SEED, WORKERS
 
 DECISION_ROWS = (
     ("chosen grasp viable (rate)", "top1_viable"),
@@ -19,6 +20,17 @@ DECISION_ROWS = (
     ("chosen grasp percentile (mean)", "top1_percentile"),
     ("top-5 precision (viable)", "topk_precision"),
 )
+
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {
+    "max_rows": (None, 2**63 - 1, "row counts are 64-bit"),
+    "seed": SEED,
+    "candidates": (None, 10_000, "a decision's candidates are rendered and scored together"),
+    "draws": (None, 10_000, "each candidate set is rendered"),
+    "threshold": OWN_CHECK,
+    "workers": WORKERS,
+}
 
 
 def add_arguments(p) -> None:
@@ -132,8 +144,8 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
-    from ..dataset.engines import default_workers
     from ..learning.api import evaluate_on_dataset
+    from ..runtime.engines import default_workers
 
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
@@ -150,7 +162,7 @@ def run(args, out) -> None:
 
         get_task(args.task).thresholds_for(args.mode)  # an unknown task or mode: refused now
     if args.plots:
-        from .common import check_output_dir
+        from .output_files import check_output_dir
 
         check_output_dir(args.plots, "--plots")
     max_rows = args.max_rows or None

@@ -7,7 +7,10 @@ from pathlib import Path
 
 from ..errors import InputError
 from . import add_verbose_argument
-from .common import add_scale_arguments, load_objects
+from .limits import SEED, SIZE_M
+from .object_options import add_scale_arguments, load_objects
+
+LIMITS = {"seed": SEED, "size_m": SIZE_M}  # of the numeric options: see limits.check_limits
 
 
 def add_arguments(p) -> None:
@@ -51,7 +54,7 @@ def run(args, out) -> None:
             if ":" in spec:
                 raise InputError(f"give the seed once: either {spec!r} or --seed, not both")
             spec = f"{spec}:{args.seed}"
-        from .common import check_output_file
+        from .output_files import check_output_file
 
         check_output_file(args.out, "-o")
         path = Path(args.out)
@@ -59,10 +62,10 @@ def run(args, out) -> None:
         if ext not in ("obj", "stl", "ply", "glb", "off"):
             raise InputError(f"cannot write {path.name!r}: use .obj, .stl, .ply, .glb or .off")
         (obj,) = load_objects([spec], args)
-        from ..dataset.layout import write_bytes_atomic
+        from ..runtime.writing import atomic_write
 
         data = obj.mesh.export(file_type=ext)
-        write_bytes_atomic(path, data.encode() if isinstance(data, str) else data)
+        atomic_write(path, data.encode() if isinstance(data, str) else data)
         m = obj.mass
         ext_m = m.bounds[1] - m.bounds[0]
         out.text(

@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
-from .best import metric_cells, metric_headings, shown_metrics
-from .common import (
-    HAND_HELP,
-    add_robust_argument,
-    add_scale_arguments,
-    add_task_arguments,
-    load_objects,
-    parse_thresholds,
-    robust_option,
-)
+from .best import loosen_hint, metric_cells, metric_headings, shown_metrics
+from .limits import OWN_CHECK, ROBUST, SEED, SIZE_M, USES, WORKERS
+from .object_options import HAND_HELP, add_scale_arguments, load_objects
+from .task_options import add_robust_argument, add_task_arguments, parse_thresholds, robust_option
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {
+    "budget": (None, 10**8, "the value of every simulation is kept"),
+    "seed": SEED,
+    "size_m": SIZE_M,
+    "population": (None, 10**6, "a generation is simulated and held at once"),
+    "workers": WORKERS,
+    "uses": (None, *USES[1:]),
+    "robust": ROBUST,
+    "restarts": (None, 10_000, "each restart draws populations of its own from the budget"),
+    "refine": OWN_CHECK,
+}
 
 
 def add_arguments(p) -> None:
@@ -89,7 +96,7 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
-    from ..optimize import optimize
+    from ..search.optimize import optimize
 
     (obj,) = load_objects([args.object], args)
     result = optimize(
@@ -155,8 +162,8 @@ def run(args, out) -> None:
         out.text(f"{100 * share:.3g}% of the random samples are as good as the cross-entropy best")
     elif result.cem is None:
         out.text(
-            "no simulation passed the task's thresholds (every F_T = -inf); try --mode "
-            "no-robustness, a lower --threshold or a larger --budget"
+            "no simulation passed the task's thresholds (every F_T = -inf); try "
+            f"{loosen_hint(args.mode)} or a larger --budget"
         )
     out.text(f"{result.elapsed_s:.1f} s")
     out.result(result.to_dict())

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from contextlib import contextmanager
 
 import numpy as np
 
-from ..jsonable import to_jsonable  # re-exported: its former home
+from ..jsonable import to_jsonable
+
+UNBOUNDED_WIDTH = 10_000  # columns of a table printed to a pipe or a file
 
 
 def fmt(value) -> str:
@@ -46,8 +49,11 @@ class Output:
         self.json_mode = json_mode
         from rich.console import Console
 
-        # Tables go to stdout; progress bars to stderr so stdout stays parseable.
-        self.console = Console(file=sys.stdout)
+        # Tables go to stdout; progress bars to stderr so stdout stays parseable. A pipe or a
+        # file gets whole numbers and names: rich folds cells at 80 columns where it cannot
+        # ask a terminal for its width (COLUMNS still sets it).
+        piped = not sys.stdout.isatty() and "COLUMNS" not in os.environ
+        self.console = Console(file=sys.stdout, width=UNBOUNDED_WIDTH if piped else None)
         self.err = Console(file=sys.stderr)
 
     def table(self, title: str, columns: list[str], rows: list[list]) -> None:

@@ -6,9 +6,26 @@ import math
 import shlex
 import sys
 
-from ..errors import InputError, MissingDependencyError
+from ..errors import DatasetError, InputError, MissingDependencyError
 from ..physics.settings import PROTOCOLS, TRIALS, PhysicsSettings, protocol_settings
-from .common import add_robust_argument, robust_option
+from .batches import add_engine_arguments
+from .limits import MAX_SEED, OWN_CHECK, ROBUST, SEED_BITS, WORKERS
+from .task_options import add_robust_argument, robust_option
+
+# Of the numeric options: see limits.check_limits; the settings check their physical ranges.
+LIMITS = {
+    "workers": WORKERS,
+    "shard_size": (None, 100_000, "a shard's outcomes are held before they are written"),
+    "max_per_object": (None, MAX_SEED, "row counts are 64-bit"),
+    **dict.fromkeys(
+        ("load_factor", "density", "grip_torque", "grip_force", "friction_margin", "timestep"),
+        OWN_CHECK,
+    ),
+    "robust": ROBUST,
+    "seed": SEED_BITS,
+    "coacd_threshold": (None, 1.0, "CoACD's concavity threshold is a fraction of the size"),
+    "coacd_max_hulls": (None, 256, "each convex part is a body of the MuJoCo scene"),
+}
 
 
 def add_arguments(p) -> None:
@@ -47,18 +64,7 @@ def add_arguments(p) -> None:
         action="store_true",
         help="start where the dataset row puts the hand, even inside the object's convex parts",
     )
-    p.add_argument(
-        "--workers", type=int, default=None, metavar="K", help="processes/CPUs (default: all)"
-    )
-    p.add_argument(
-        "--engine",
-        choices=("local", "ray"),
-        default="local",
-        help="local worker processes (default) or Ray (pip install 'affordgrasp[cluster]')",
-    )
-    p.add_argument(
-        "--address", default=None, help="an existing Ray cluster (with --engine ray), e.g. auto"
-    )
+    add_engine_arguments(p)
     p.add_argument("--shard-size", type=int, default=128, metavar="ROWS", help="rows per shard")
     p.add_argument("--object", action="append", default=None, help="only this object (repeatable)")
     p.add_argument(
@@ -174,6 +180,29 @@ def _interval(v) -> str:
     return "—" if math.isnan(auc) else f"{auc:.3f} [{lo:.3f}–{hi:.3f}]"
 
 
+def _dataset_with_objects(directory, names):
+    """The dataset, its objects resolved (kept by the handle), before any output is written.
+
+    A missing mesh is refused here, with a fix that ``physics`` offers: the message shared
+    with ``show`` and ``plots`` names their ``--mesh``.
+    """
+    from ..dataset.handle import Dataset
+
+    dataset = Dataset.open(directory)
+    for name in names or dataset.objects:
+        try:
+            dataset.object(name)
+        except DatasetError as exc:
+            text, fix = str(exc), "; restore the mesh file"
+            if fix not in text:
+                raise
+            raise DatasetError(
+                text[: text.index(fix)] + "; restore the mesh file at the path the dataset's "
+                "_manifest.json records, or copy it into the dataset directory"
+            ) from None
+    return dataset
+
+
 def run(args, out) -> None:
     """Run ``affordgrasp physics``.
 
@@ -187,7 +216,7 @@ def run(args, out) -> None:
     from ..physics import deps
     from ..physics.report import DESIGNED_FOR, physics_report
     from ..physics.run import read_outcomes, run_physics
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     settings = _settings(args)
     robust = robust_option(args)
@@ -200,9 +229,10 @@ def run(args, out) -> None:
         deps.coacd()
     except MissingDependencyError as exc:
         raise InputError(str(exc)) from None
+    dataset = _dataset_with_objects(args.dataset, args.object)
     try:
         summary = run_physics(
-            args.dataset,
+            dataset,
             args.out,
             settings=settings,
             workers=args.workers,
@@ -262,6 +292,8 @@ def run(args, out) -> None:
                 value, kind = g["auc"][outcome].get(pred, math.nan), "ROC-AUC"
             else:
                 value, kind = g["spearman"][outcome].get(pred, math.nan), "Spearman"
+            if math.isnan(value):  # say why rather than nan
+                value = "undefined: " + g["undefined"].get(outcome, {}).get(pred, "not computed")
             headline.append([pred, outcome, kind, value])
         out.table(
             f"Metrics vs outcomes (n={report['all']['n']})",

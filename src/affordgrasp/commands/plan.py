@@ -14,6 +14,16 @@ from ..grasp.pregrasp import (
     PLAN_REFINE_NEIGHBOURS,
     PLAN_ROBUST_CHECK,
 )
+from .limits import OWN_CHECK, SEED_BITS, SIZE_M
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {
+    **dict.fromkeys(("candidates", "threshold", "offset_range"), OWN_CHECK),
+    "seed": SEED_BITS,
+    "robust_check": (None, 1000, "each is re-simulated under perturbations"),
+    "refine": (None, 1000, f"{PLAN_REFINE_NEIGHBOURS} more candidates are drawn near each"),
+    "size_m": SIZE_M,
+}
 
 
 def add_arguments(p) -> None:
@@ -24,7 +34,7 @@ def add_arguments(p) -> None:
     p : argparse.ArgumentParser
         The subcommand's parser, changed in place.
     """
-    from .common import HAND_HELP, add_scale_arguments
+    from .object_options import HAND_HELP, add_scale_arguments
 
     p.add_argument("object", help="family (knife), family:seed (knife:7) or a mesh path")
     p.add_argument("--task", default="pick", help="task that judges the choice (default pick)")
@@ -106,7 +116,8 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..objects import load_object
-    from .common import check_fits_in_memory, materials_option, scale_options
+    from .limits import check_fits_in_memory
+    from .object_options import materials_option, scale_options
 
     if args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")

@@ -7,16 +7,18 @@ for the tasks asked (default beat, cut, pick), ``affordances.png`` into OUTDIR.
 
 from __future__ import annotations
 
-from .common import (
-    add_task_arguments,
-    check_counts,
-    check_mesh_files,
-    check_output_dir,
-    parse_tasks,
-)
-from .show import add_source_arguments, open_sources
+from .batches import check_counts
+from .limits import OWN_CHECK
+from .object_options import check_mesh_files
+from .output_files import check_output_dir
+from .show import SOURCE, add_source_arguments, open_sources
+from .task_options import add_task_arguments, parse_tasks
 
 DEFAULT_TASKS = "beat,cut,pick"
+
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {**SOURCE, "bins": OWN_CHECK}
 
 
 def add_arguments(p) -> None:

@@ -84,7 +84,8 @@ def run(args, out) -> None:
 
     from ..dataset.handle import Dataset
     from ..learning.api import predict_dataset
-    from .common import check_output_file
+    from ..runtime.writing import atomic_write
+    from .output_files import check_output_file
 
     check_output_file(args.out, "--out", suffix=".parquet")
     models = load_models(args.model)  # a foreign or broken model file: refused first
@@ -98,7 +99,7 @@ def run(args, out) -> None:
             )
         }
     )
-    pq.write_table(table, args.out, compression="zstd")
+    atomic_write(args.out, lambda fh: pq.write_table(table, fh, compression="zstd"))
     cols = [c for c in table.column_names if c not in ("object", "sample")]
     rows = []
     for c in cols:

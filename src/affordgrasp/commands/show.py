@@ -11,22 +11,26 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from .common import (
+from .batches import check_counts
+from .limits import OWN_CHECK, ROBUST, USES
+from .object_options import (
     HAND_HELP,
-    add_robust_argument,
     add_scale_arguments,
-    add_task_arguments,
-    check_counts,
     check_mesh_files,
-    check_output_dir,
     load_objects,
-    parse_tasks,
-    robust_option,
     scale_options,
 )
+from .output_files import check_output_dir
+from .task_options import add_robust_argument, add_task_arguments, parse_tasks, robust_option
 
 DEFAULT_SAMPLES = 1000
 EVALUATION_BATCH = 250
+
+
+# Of the numeric options (see limits.check_limits): those of add_source_arguments, then show's.
+SOURCE = {**dict.fromkeys(("samples", "seed", "size_m"), OWN_CHECK), "uses": USES, "robust": ROBUST}
+LIMITS = {**SOURCE, "top": (None, 100, "each grasp is rendered")}
+LIMITS |= dict.fromkeys(("cell", "grasp_size"), OWN_CHECK)  # 64 to 2048 pixels
 
 
 def add_source_arguments(p) -> None:
@@ -62,7 +66,7 @@ def add_source_arguments(p) -> None:
         default=2000,
         metavar="M",
         help="for an object SOURCE, also score every grasp with each of M use points drawn by area "
-        "(affordgrasp.pairs; default 2000, 0: only the samples' own use points)",
+        "(affordgrasp.search.pairs; default 2000, 0: only the samples' own use points)",
     )
     p.add_argument(
         "--hand",
@@ -205,12 +209,12 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
     """A table plus, per task, its best (grasp, use point) pairs.
 
     The pairs are searched over the table's grasps and ``args.uses`` use points drawn by area
-    (:func:`affordgrasp.pairs.best_pairs`) and appended as ordinary rows, numbered after the
-    samples. Tasks that do not read the use point add nothing. Where that finds no pair (on
-    a scan-like blade 1000 grasps hold a handful of ε-robust ones), a search aimed at the
-    task's tests (:func:`affordgrasp.optimize.targeted_pairs`, the guidance of
-    ``optimize --uses``) simulates 4 × ``args.samples`` more grasps in two restarts, and
-    ``out`` says so.
+    (:func:`affordgrasp.search.pairs.best_pairs`) and appended as ordinary rows, numbered
+    after the samples. Tasks that do not read the use point add nothing. Where that finds no
+    pair (on a scan-like blade 1000 grasps hold a handful of ε-robust ones), a search aimed
+    at the task's tests (:func:`affordgrasp.search.pairs.optimize_pairs` with
+    ``threshold_guide``, the guidance of ``optimize --uses``) simulates 4 × ``args.samples``
+    more grasps in two restarts, and ``out`` says so.
 
     Parameters
     ----------
@@ -235,10 +239,11 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
     InputError
         When ``--uses`` is negative.
     """
+    from dataclasses import replace
+
     import pyarrow as pa
 
-    from ..optimize import targeted_pairs
-    from ..pairs import USE_COLUMNS, best_pairs
+    from ..search.pairs import USE_COLUMNS, PairSearchSettings, best_pairs, optimize_pairs
 
     if args.uses < 0:
         raise InputError(f"--uses must be a non-negative integer, got {args.uses}")
@@ -247,21 +252,23 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
     for task in tasks:
         if not USE_COLUMNS & set(task.requires):
             continue  # the task ignores the use point: the samples already say it all
-        common = dict(
+        settings = PairSearchSettings(
+            task.name,
             mode=args.mode,
+            thresholds=thresholds.get(task.name) or {},
             uses=args.uses,
             seed=args.seed,
             top=args.top,
             hand=args.hand,
-            **(thresholds.get(task.name) or {}),
         )
-        found = best_pairs(obj, task.name, grasp_table=table, **common).table
+        found = best_pairs(obj, settings, grasp_table=table).table
         if not found.num_rows and args.samples > 0:
             # two runs of 2 x --samples each: on the scan-like blades, hammers and axes, runs
             # of 1000 met no feasible grasp where longer ones did; scoring the same grasps
             # with use points that pass the use-point tests found none (docs/validation.md §7)
             budget = 4 * max(int(args.samples), 40)
-            found = targeted_pairs(obj, task.name, budget=budget, restarts=2, **common).table
+            aimed = replace(settings, budget=budget, restarts=2, threshold_guide=True)
+            found = optimize_pairs(obj, aimed).table
             say(
                 f"{task.name}: no pair of the {table.num_rows:,} grasps with {args.uses:,} use "
                 f"points by area passes; a search aimed at the task's tests, {budget:,} more "
@@ -406,8 +413,8 @@ def run(args, out) -> None:
     InputError
         For bad options or sources without rows.
     """
+    from ..search.best import top_grasps
     from ..viz.showcase import draw_best
-    from ..viz.sources import top_grasps
 
     check_counts(args)
     check_mesh_files(args)
@@ -480,13 +487,16 @@ def run(args, out) -> None:
     )
     empty = [r for r in rankings if not r.best]
     for r in empty:
+        more = "more --samples"
+        if getattr(sources_by_object[r.object], "directory", None) is not None:
+            more = "a dataset with more samples ('affordgrasp generate --samples N')"
         out.text(
             f"{r.object}: no grasp scores above −∞ for {r.task} in mode {args.mode} "
-            f"({r.accepted} of {r.scored} samples accepted); "
+            f"({r.accepted} of {r.scored} samples accepted); try "
             + (
-                "try more --samples"
+                more
                 if args.mode == "no-robustness" or args.robust
-                else "try --mode no-robustness or more --samples"
+                else f"--mode no-robustness or {more}"
             )
         )
     out.text(f"wrote {result.grid}")

@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
-from .common import (
+from .batches import (
+    SAMPLING,
     add_sampling_arguments,
     check_counts,
-    check_output_file,
     one_time_text,
-    optional_metrics,
     run_batches,
     status_summary,
-    write_table,
 )
+from .output_files import check_output_file, write_table
+from .task_options import optional_metrics
+
+LIMITS = SAMPLING  # of the numeric options: see limits.check_limits
 
 
 def add_arguments(p) -> None:

@@ -5,6 +5,20 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 from ..errors import InputError, MissingDependencyError
+from .limits import SEED, memory_cap
+
+# Of the numeric options: see limits.check_limits.
+LIMITS = {
+    "epochs": (None, 10_000, "an epoch reads every training row"),
+    "batch_size": (None, 8192, "a batch of images and activations is held at once"),
+    "patience": (None, 10_000, "epochs"),
+    "seed": SEED,
+    "rank_weight": (0.0, 100.0, "a weight beside the mean squared error; 0: none"),
+    "max_train": (None, 10**6, "the training images are held in memory unless --stream"),
+    "members": (None, 100, "the networks are trained one after another"),
+    "max_minutes": (0.01, 10_080.0, "a week"),
+    "buffer_rows": (None, memory_cap(35_000), "rows of images held together, ~35 kB each"),
+}
 
 
 def add_arguments(p) -> None:
@@ -129,13 +143,18 @@ def run(args, out) -> None:
     out : Output
         Where results go (text or ``--json``).
     """
+    from ..dataset.handle import Dataset
     from ..learning.training import TrainSettings
-    from .common import check_output_file
+    from .output_files import check_output_file
+    from .task_options import names_of
 
     check_output_file(args.out, "--out", suffix=".safetensors")
-    for name in ("epochs", "batch_size", "patience", "max_train", "members"):
+    for name in ("epochs", "batch_size", "patience", "max_train", "members", "buffer_rows"):
         if getattr(args, name) < 1:
             raise InputError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    families = None
+    if args.test_families is not None:
+        families = names_of("--test-families", args.test_families, "axe,mug")
     try:
         from ..learning.api import train_on_dataset
         from ..learning.torch_support import require_safetensors, require_torch
@@ -152,12 +171,11 @@ def run(args, out) -> None:
         rank_weight=args.rank_weight,
         max_seconds=None if args.max_minutes is None else 60 * args.max_minutes,
     )
-    if args.buffer_rows < 1:
-        raise InputError(f"--buffer-rows must be >= 1, got {args.buffer_rows}")
-    families = args.test_families.split(",") if args.test_families else None
+    dataset = Dataset.open(args.dataset)
+    dataset.arrow()  # a damaged dataset is refused before the progress bar starts
     with _bar(out, settings) as update:
         model, config = train_on_dataset(
-            args.dataset,
+            dataset,
             arch=args.model,
             target=args.target,
             out=args.out,

@@ -12,9 +12,24 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
+from .limits import OWN_CHECK, ROW_BYTES, USES, memory_cap
+from .task_options import names_of
 
 QUICK = {"seeds": 1, "grasps": 100, "uses": 200, "budget": 100, "families": "hammer,knife"}
 FULL = {"seeds": 5, "grasps": 1000, "uses": 4000, "budget": 1000, "families": "all"}
+
+
+# Of the numeric options: see limits.check_limits; ValidationSettings.check the rest.
+LIMITS = {
+    "seeds": (None, 1000, "each object instance is evaluated whole"),
+    "grasps": (None, memory_cap(ROW_BYTES), "rows of about 2 kB are held per object"),
+    "uses": (None, *USES[1:]),
+    "budget": (None, 10**8, "the value of every simulation is kept"),
+    "restarts": (None, 10_000, "each restart draws populations of its own from the budget"),
+    **dict.fromkeys(("refine", "also_grasps"), OWN_CHECK),  # ValidationSettings
+    "top": (None, 1000, "the top grasps are judged and drawn per object"),
+    "cell_px": (None, 2048, "pixels of a figure cell"),
+}
 
 
 def add_arguments(p) -> None:
@@ -140,8 +155,8 @@ def settings_of(args):
         refine=args.refine,
         also_grasps=args.also_grasps,
         top=args.top,
-        tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()),
-        families=() if families == "all" else tuple(f for f in families.split(",") if f),
+        tasks=tuple(names_of("--tasks", args.tasks, "cut,beat")),
+        families=() if families == "all" else tuple(names_of("--families", families, "knife")),
         optimizer=not args.no_optimizer,
         brute_force=not args.no_brute_force,
         figures=figures,
@@ -161,7 +176,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..validation import validate_tasks
-    from .common import check_output_dir
+    from .output_files import check_output_dir
 
     settings = settings_of(args)
     check_output_dir(args.out, "--out")

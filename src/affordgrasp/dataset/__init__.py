@@ -1,12 +1,14 @@
-"""Data at scale (conventions: Datasets): the per-sample schema, generation, reading, argmax.
+"""Data at scale (conventions: Datasets): the per-sample schema, generation, reading.
 
 * ``schema``: the columns of a sample row (conventions: Sample columns);
-* ``generate``: sharded, deterministic, resumable Parquet datasets (``layout`` on disk,
-  ``engines`` for local processes or Ray, ``card`` for the dataset card);
+* ``generate``: sharded, deterministic, resumable Parquet datasets (on disk: ``manifest``,
+  ``shards`` and ``checksums``; ``jobs`` the work the engines of :mod:`affordgrasp.runtime`
+  run, ``card`` for the dataset card);
 * ``handle``: :class:`Dataset`, a dataset directory opened once (plan, hand, objects,
   rows): what every consumer of a dataset takes;
-* ``reading``: a dataset directory as one Arrow dataset;
-* ``best``: brute-force argmax of a task over a dataset.
+* ``reading``: a dataset directory as one Arrow dataset.
+
+The argmax of a task over a dataset is :func:`affordgrasp.search.best.best_grasps`.
 
 See docs/dataset.md.
 """

@@ -17,14 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
-from .layout import (
+from .._version import __version__
+from ..runtime.writing import atomic_write
+from .manifest import (
     CARD_JSON_NAME,
     CARD_MD_NAME,
     FORMAT,
     FORMAT_VERSION,
     manifest_volume,
-    write_bytes_atomic,
     write_json_atomic,
 )
 
@@ -447,5 +447,5 @@ def write_card(directory: Path, **kwargs) -> dict:
     """
     card = build_card(previous=read_card(directory), **kwargs)
     write_json_atomic(directory / CARD_JSON_NAME, card)
-    write_bytes_atomic(directory / CARD_MD_NAME, card_markdown(card).encode("utf-8"))
+    atomic_write(directory / CARD_MD_NAME, card_markdown(card).encode("utf-8"))
     return card

@@ -2,7 +2,7 @@
 
 :func:`generate` samples (p0, d) uniformly for every object, simulates the grasp policy,
 computes Φ, and writes every sample, stable or not, as Parquet shards (see
-``affordgrasp.dataset.layout`` for the directory layout and ``docs/dataset.md`` for the
+``affordgrasp.dataset.shards`` for the directory layout and ``docs/dataset.md`` for the
 schema). Guarantees:
 
 * deterministic: sample ``i`` of an object depends only on (seed, i, object, hand), never on
@@ -29,34 +29,30 @@ from pathlib import Path
 
 import pyarrow as pa
 
-from .. import __version__
+from .._version import __version__
 from ..errors import DatasetError, InputError, InternalError, bad_parameter
 from ..grasp.pregrasp import SAMPLE_STREAMS, object_stream_seed
 from ..hands import Hand, hand_to_dict
 from ..robust import RobustSettings, robust_settings
+from ..runtime.engines import Engine, check_engine, make_engine
+from ..runtime.interrupts import stop_on_signals
 from ..schema import column_numbers
 from . import card as card_module
-from .engines import (
-    Engine,
-    Job,
-    ObjectPayload,
-    RunContext,
-    check_engine,
-    make_engine,
-    stop_on_signals,
-)
+from .checksums import read_checksums
 from .handle import Dataset
-from .layout import (
-    DEFAULT_SHARD_SIZE,
+from .jobs import Job, ObjectPayload, RunContext
+from .manifest import (
     FORMAT,
     FORMAT_VERSION,
     MANIFEST_NAME,
-    Shard,
     manifest_streams,
-    plan_shards,
     prepare_directory,
-    read_checksums,
     read_manifest,
+)
+from .shards import (
+    DEFAULT_SHARD_SIZE,
+    Shard,
+    plan_shards,
     remove_stale_temporaries,
     shard_metadata,
     valid_shard_info,
@@ -66,6 +62,7 @@ from .layout import (
 log = logging.getLogger(__name__)
 
 DEFAULT_CHUNK_SIZE = 256
+MAX_SHARDS = 100_000  # files in one folder, and the plan of a run held in memory
 MIN_CHUNK_SIZE = 8
 
 ProgressFactory = Callable[[int], AbstractContextManager[Callable[[int], None]]]
@@ -177,7 +174,7 @@ def build_manifest(
     volume : bool
         Whether the GWS volume is computed (``gws_volume``; null otherwise). Recorded
         always (a resume must match); a manifest written before it was recorded computed
-        it whenever it computed metrics (:func:`~affordgrasp.dataset.layout.manifest_volume`).
+        it whenever it computed metrics (:func:`~affordgrasp.dataset.manifest.manifest_volume`).
     robust : RobustSettings, optional
         Robust evaluation's parameters (recorded under ``robust`` when K > 0; a resume
         must use the same).
@@ -267,7 +264,9 @@ def load_objects(specs: Sequence, materials: bool = False) -> list:
     return objects
 
 
-def _check_counts(samples: int, seed: int, shard_size: int, chunk_size: int) -> None:
+def _check_counts(
+    samples: int, seed: int, shard_size: int, chunk_size: int, n_objects: int = 1
+) -> None:
     for name, value, low in (
         ("samples", samples, 1),
         ("seed", seed, 0),
@@ -276,6 +275,15 @@ def _check_counts(samples: int, seed: int, shard_size: int, chunk_size: int) -> 
     ):
         if not isinstance(value, int) or isinstance(value, bool) or value < low:
             raise bad_parameter(name, f"must be an integer >= {low}, got {value!r}")
+    shards = n_objects * -(-samples // shard_size)
+    if shards > MAX_SHARDS:  # the plan holds every shard, before any is written
+        most = MAX_SHARDS // max(n_objects, 1) * shard_size
+        raise bad_parameter(
+            "samples",
+            f"{samples:,} per object in shards of {shard_size:,} rows would make {shards:,} "
+            f"shard files; at most {MAX_SHARDS:,}: use at most {most:,} samples per object, or "
+            "a larger shard size",
+        )
 
 
 def generate(
@@ -372,7 +380,7 @@ def generate(
     """
     from ..hands import get_hand
 
-    _check_counts(samples, seed, shard_size, chunk_size)
+    _check_counts(samples, seed, shard_size, chunk_size, len(objects))
     check_engine(engine, workers, address)
     hand_model = get_hand(hand)
     robust = robust_settings(robust)
@@ -417,7 +425,7 @@ def generate(
     infos: dict[Shard, dict] = {}
     checksums = read_checksums(directory)
     for shard in plan:
-        info = valid_shard_info(directory, shard, schema, checksums)
+        info = valid_shard_info(directory, shard, manifest, schema, checksums)
         if info is not None:
             infos[shard] = info
     todo = [s for s in plan if s not in infos]
@@ -466,7 +474,7 @@ def generate(
             checksums = read_checksums(directory)
             for shard in todo:
                 if shard not in infos:
-                    info = valid_shard_info(directory, shard, schema, checksums)
+                    info = valid_shard_info(directory, shard, manifest, schema, checksums)
                     if info is not None:
                         infos[shard] = info
                         written_rows += shard.rows
@@ -513,7 +521,7 @@ def _write_card_after(complete: bool, write_card, *args, **kwargs) -> None:
     so that the error the user sees is the one that stopped the run."""
     try:
         write_card(*args, **kwargs)
-    except DatasetError as exc:
+    except InputError as exc:  # a DatasetError, or a write the file system refused
         if complete:
             raise
         log.warning("could not update the dataset card: %s", exc)

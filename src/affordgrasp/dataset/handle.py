@@ -10,7 +10,7 @@ the object that made each row is resolved by one rule (:meth:`Dataset.object`)::
     knife = ds.object("knife")  # the GraspObject of its rows, mass properties included
     table = ds.read(columns=["object", "epsilon"])
 
-The on-disk format is that of :mod:`affordgrasp.dataset.layout`; every dataset that format
+The on-disk format is that of :mod:`affordgrasp.dataset.shards`; every dataset that format
 ever wrote opens (keys added later have their documented defaults when absent).
 """
 
@@ -103,7 +103,7 @@ class Dataset:
         """
         if isinstance(source, Dataset):
             return source
-        from .layout import read_manifest
+        from .manifest import read_manifest
 
         return cls(source, read_manifest(source))
 
@@ -159,8 +159,8 @@ class Dataset:
 
     @property
     def volume(self) -> bool:
-        """Whether ``gws_volume`` holds computed volumes (see ``layout.manifest_volume``)."""
-        from .layout import manifest_volume
+        """Whether ``gws_volume`` holds computed volumes (see ``manifest.manifest_volume``)."""
+        from .manifest import manifest_volume
 
         return manifest_volume(self.manifest)
 
@@ -391,12 +391,16 @@ class Dataset:
         -------
         list of pathlib.Path
         """
-        from .layout import shard_paths
+        from .shards import shard_paths
 
         return shard_paths(self.directory)
 
     def arrow(self) -> pads.Dataset:
-        """The shards as one ``pyarrow.dataset.Dataset`` (checked against their checksums once).
+        """The shards as one ``pyarrow.dataset.Dataset``, checked once against the plan.
+
+        Every reader of the rows comes through here: the shards on disk must be the plan's
+        (none missing, none extra) and each the file written for it
+        (:func:`~affordgrasp.dataset.shards.check_shards`).
 
         Returns
         -------
@@ -405,8 +409,8 @@ class Dataset:
         Raises
         ------
         DatasetError
-            When there are no shards yet, or one is damaged (the message names it and the
-            command that rewrites it).
+            When there are no shards yet, or one is missing, extra, damaged or another
+            dataset's (the message names it and what to do).
         """
         if self._arrow is None:
             self._arrow = open_dataset(self.directory, manifest=self.manifest)
@@ -518,7 +522,10 @@ def object_specs(
 
     if source == "family":
         return [name]
-    scan = split_scan_spec(name)
+    try:  # a file's own name may hold "~scan" (knife~scan.stl): a file, not a variant
+        scan = None if name == Path(str(source)).name else split_scan_spec(name)
+    except InputError:
+        scan = None
     suffix = ""
     if scan is not None:
         suffix = SCAN_SUFFIX + ("" if scan[1] is None else f":{scan[1]}")
@@ -645,8 +652,10 @@ def open_dataset(
         (not in hidden folders) whose columns are those of sample rows, e.g. files written
         by ``affordgrasp evaluate --out``. Their footers are checked, not checksums.
     verify : bool
-        Check every shard against the checksum recorded when it was written (reads each
-        file once per process; see docs/dataset.md for the cost).
+        Check every shard against the checksum recorded when it was written and against
+        the plan's object, seed, samples and columns (reads each file once per process; see
+        docs/dataset.md for the cost). Missing and extra shards are refused either way
+        (:func:`~affordgrasp.dataset.shards.check_shards`).
     manifest : dict, optional
         The directory's manifest when already read (:class:`~affordgrasp.dataset.handle.Dataset`
         passes its own); read here otherwise.
@@ -659,12 +668,13 @@ def open_dataset(
     ------
     DatasetError
         When the directory is missing, not a dataset, empty or unreadable, or a shard is
-        damaged (the message names it and the command that rewrites it).
+        missing, extra, damaged or another dataset's (the message names it and what to do).
     """
     import pyarrow.dataset as pads
 
     from ..schema import dataset_schema
-    from .layout import read_manifest, shard_paths, verify_shards
+    from .manifest import read_manifest
+    from .shards import check_shards, shard_paths
 
     try:
         manifest = read_manifest(directory) if manifest is None else manifest
@@ -678,13 +688,12 @@ def open_dataset(
             f"dataset {str(directory)!r} has no shards yet; run the command in its "
             "_manifest.json to generate them"
         )
-    if verify:
-        verify_shards(Path(directory), paths, manifest)
     from ..robust import manifest_robust
 
     schema = dataset_schema(
         manifest.get("metrics", True), bool(manifest.get("depth")), manifest_robust(manifest)
     )
+    check_shards(Path(directory), paths, manifest, schema, content=verify)
     _warn_missing_metrics(directory, paths, schema)
     return pads.dataset([str(p) for p in paths], format="parquet", schema=schema)
 
@@ -785,7 +794,7 @@ def manifest_hand(manifest: dict) -> Hand:
     Parameters
     ----------
     manifest : dict
-        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.layout.read_manifest`).
+        A dataset's ``_manifest.json`` (:func:`~affordgrasp.dataset.manifest.read_manifest`).
 
     Returns
     -------

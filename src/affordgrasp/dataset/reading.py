@@ -2,54 +2,33 @@
 
 pandas, polars and DuckDB read a dataset directory directly as well (see docs/dataset.md);
 these functions add the checks: that the directory is an affordgrasp dataset, which objects it
-holds, and that every shard is the file that was written (its checksum, see
-:func:`affordgrasp.dataset.layout.verify_shards`). A file that cannot be read is reported as
+holds, and that the shards are the plan's, each the file written for it (see
+:func:`affordgrasp.dataset.shards.check_shards`). A file that cannot be read is reported as
 a :class:`~affordgrasp.errors.DatasetError` naming it, never as a raw Arrow error.
 
-They take a directory and open it each call; :class:`~affordgrasp.dataset.handle.Dataset`
-(which they use) opens it once for many reads.
+Each takes a dataset (a directory, opened here, or a :class:`~affordgrasp.dataset.handle.Dataset`
+already open, which many reads share).
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator, Sequence
-from pathlib import Path
 
 import pyarrow as pa
 
 from ..hands.model import Hand
-from .handle import (
-    REQUIRED_COLUMNS,
-    Dataset,
-    manifest_hand,
-    match_objects,
-    object_filter,
-    open_dataset,
-    read_errors,
-)
-from .layout import read_manifest
+from .handle import Dataset, DatasetLike
 
 __all__ = [
-    "REQUIRED_COLUMNS",
-    "Dataset",
-    "dataset_dir",
     "dataset_hand",
-    "dataset_objects",
     "dataset_volume",
     "iter_batches",
-    "manifest_hand",
-    "match_objects",
-    "object_filter",
-    "open_dataset",
     "read_dataset",
-    "read_errors",
-    "read_manifest",
     "select_objects",
 ]
 
 
-def dataset_volume(directory: str | os.PathLike) -> bool:
+def dataset_volume(dataset: DatasetLike) -> bool:
     """Whether a dataset's ``gws_volume`` column holds computed GWS volumes.
 
     Generated with ``--metrics +volume`` (``volume=True``); otherwise the column is there,
@@ -58,72 +37,50 @@ def dataset_volume(directory: str | os.PathLike) -> bool:
 
     Parameters
     ----------
-    directory : path
+    dataset : path or Dataset
         A dataset directory.
 
     Returns
     -------
     bool
     """
-    return Dataset.open(directory).volume
+    return Dataset.open(dataset).volume
 
 
-def dataset_hand(directory: str | os.PathLike) -> Hand:
-    """The hand a dataset directory was generated with (custom hands included).
+def dataset_hand(dataset: DatasetLike) -> Hand:
+    """The hand a dataset was generated with (custom hands included).
 
     Parameters
     ----------
-    directory : path
-        A directory written by ``affordgrasp generate``.
+    dataset : path or Dataset
 
     Returns
     -------
     Hand
-        See :func:`manifest_hand`.
+        See :func:`~affordgrasp.dataset.handle.manifest_hand`.
     """
-    return Dataset.open(directory).hand
+    return Dataset.open(dataset).hand
 
 
-def dataset_objects(directory: str | os.PathLike) -> list[str]:
-    """Names of the objects of a dataset, in the order they were given.
-
-    Parameters
-    ----------
-    directory : path
-        A dataset directory.
-
-    Returns
-    -------
-    list of str
-    """
-    return Dataset.open(directory).objects
-
-
-def select_objects(directory: str | os.PathLike, wanted: Sequence[str] | None) -> list[str] | None:
+def select_objects(dataset: DatasetLike, wanted: Sequence[str] | None) -> list[str] | None:
     """Object names in the dataset matching ``wanted`` (``knife`` matches ``knife:0``).
 
     Parameters
     ----------
-    directory : path
+    dataset : path or Dataset
         A dataset directory.
     wanted : sequence of str or None
-        Names or families; None or empty selects every object.
+        As for :meth:`~affordgrasp.dataset.handle.Dataset.select` (its result and errors).
 
     Returns
     -------
     list of str or None
-        None when every object is selected.
-
-    Raises
-    ------
-    DatasetError
-        For a name that matches nothing (the message names the objects available).
     """
-    return Dataset.open(directory).select(wanted)
+    return Dataset.open(dataset).select(wanted)
 
 
 def iter_batches(
-    directory: str | os.PathLike,
+    dataset: DatasetLike,
     *,
     columns: Sequence[str] | None = None,
     objects: Sequence[str] | None = None,
@@ -133,7 +90,7 @@ def iter_batches(
 
     Parameters
     ----------
-    directory : path
+    dataset : path or Dataset
         A dataset directory (checksums verified first).
     columns : sequence of str, optional
         Columns to read; all when None.
@@ -146,13 +103,13 @@ def iter_batches(
     ------
     pyarrow.RecordBatch
     """
-    yield from Dataset.open(directory).batches(
+    yield from Dataset.open(dataset).batches(
         columns=columns, objects=objects, batch_size=batch_size
     )
 
 
 def read_dataset(
-    directory: str | os.PathLike,
+    dataset: DatasetLike,
     *,
     columns: Sequence[str] | None = None,
     objects: Sequence[str] | None = None,
@@ -161,7 +118,7 @@ def read_dataset(
 
     Parameters
     ----------
-    directory : path
+    dataset : path or Dataset
         A directory written by :func:`affordgrasp.generate` / ``affordgrasp generate``.
     columns : sequence of str, optional
         Read only these columns (docs/conventions.md lists them).
@@ -173,26 +130,4 @@ def read_dataset(
     pyarrow.Table
         One row per sample, in plan order. Use :func:`iter_batches` for larger datasets.
     """
-    return Dataset.open(directory).read(columns=columns, objects=objects)
-
-
-def dataset_dir(path: str | os.PathLike) -> Path:
-    """``path`` as a Path, after checking that it holds a dataset manifest.
-
-    Parameters
-    ----------
-    path : path
-        A dataset directory.
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    DatasetError
-        When it is not a dataset.
-    """
-    path = Path(path)
-    read_manifest(path)
-    return path
+    return Dataset.open(dataset).read(columns=columns, objects=objects)

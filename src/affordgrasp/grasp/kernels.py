@@ -29,7 +29,7 @@ from ..hands.kinematics import (
     mul4_into,
     shape_poses,
 )
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 
@@ -1651,49 +1651,6 @@ def simulate_batch(cloud, normals, sharp, starts, travel, dofs, hk, hit_eps, at_
             nc += m
         offsets[i + 1] = nc
     return poses, touched, offsets, c_point[:nc], c_shape[:nc], c_normal[:nc]
-
-
-@njit(cache=True)
-def approach_until_contact(cloud, rot, trans, shapes, t_max, hit_eps):
-    """Distance the hand can travel along its +z before a link touches a sample point.
-
-    The hand stops with a gap in [hit_eps / 2, hit_eps] to the closest sample.
-
-    Parameters
-    ----------
-    cloud : SampleCloud
-        Surface samples, object frame.
-    rot : (3, 3) float64 ndarray
-    trans : (3,) float64 ndarray
-        The hand pose: object frame = rot @ hand + trans (m).
-    shapes : ShapeSet
-        Hand-frame poses.
-    t_max : float
-        Longest travel searched, m.
-    hit_eps : float
-        Contact distance, m.
-
-    Returns
-    -------
-    t : float
-        m; inf if nothing is touched by t_max.
-    point : int
-        Sample index (-1: none).
-    shape : int
-        Shape index (-1: none).
-    """
-    k = shapes.kinds.shape[0]
-    chain = Chain(
-        np.eye(4),
-        np.eye(4).reshape(1, 4, 4),
-        np.array([PRISMATIC]),
-        np.array([[0.0, 0.0, 1.0]]),
-        np.zeros(1),
-        np.ones(1),
-        np.zeros(k, dtype=np.int64),
-        shapes,
-    )
-    return first_contact(cloud, rot, trans, chain, t_max, hit_eps)
 
 
 @njit(cache=True)

@@ -23,7 +23,6 @@ import functools
 import logging
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,15 +31,12 @@ from ..errors import InputError
 from ..hands import Hand, get_hand, kinematics
 from ..hands.kinematics import KinematicTree
 from ..materials import DEFAULT_OBJECT_MATERIAL, friction_coefficient
-from ..objects.prepared import centred_frame_origin  # noqa: F401  (re-exported: its former home)
+from ..objects.prepared import MeshData
 from ..objects.surface import SurfaceSample
 from ..tolerances import CONTACT_DISTANCE_M, JOINT_AT_LIMIT, STOP_DISTANCE_M
 from . import kernels
 from .contacts import ContactSet
 from .pregrasp import start_poses, use_points, validate_pregrasps, validate_use_directions
-
-if TYPE_CHECKING:
-    from ..objects.prepared import MeshData
 
 log = logging.getLogger(__name__)
 
@@ -79,16 +75,14 @@ class FingerArrays:
         chain index of each (k,) and a ShapeSet posed in their links.
     """
 
-    dofs: np.ndarray  # (m,) DOF index of each chain joint, proximal first
-    speeds: np.ndarray  # (m,) closing speed of each DOF
-    upper: np.ndarray  # (m,) upper limit of each DOF
-    parent: int  # link index of the chain's parent (does not move while the finger closes)
-    origins: np.ndarray  # (m, 4, 4)
-    kinds: np.ndarray  # (m,)
-    axes: np.ndarray  # (m, 3)
-    ratios: np.ndarray  # (m,)
-    # Per first active joint j0, the shapes of the links it moves (chain links >= j0): the
-    # chain index of each (k,) and a ShapeSet posed in their links.
+    dofs: np.ndarray
+    speeds: np.ndarray
+    upper: np.ndarray
+    parent: int
+    origins: np.ndarray
+    kinds: np.ndarray
+    axes: np.ndarray
+    ratios: np.ndarray
     shapes: tuple
 
 
@@ -113,9 +107,9 @@ class HandArrays:
 
     hand: Hand
     tree: KinematicTree
-    shape_link: np.ndarray  # (s,) link index of each shape
-    shapes: kernels.ShapeSet  # every shape, posed in its link
-    materials: tuple[str, ...]  # per link
+    shape_link: np.ndarray
+    shapes: kernels.ShapeSet
+    materials: tuple[str, ...]
     fingers: tuple[FingerArrays, ...]
     kernel: kernels.HandKernel
 
@@ -125,7 +119,7 @@ class HandArrays:
         Parameters
         ----------
         dofs : (n_dofs,) float ndarray
-            DOF values, rad or m.
+            DOF values, rad or m (as for every method below).
 
         Returns
         -------
@@ -140,7 +134,6 @@ class HandArrays:
         Parameters
         ----------
         dofs : (n_dofs,) float ndarray
-            DOF values, rad or m.
 
         Returns
         -------
@@ -155,7 +148,6 @@ class HandArrays:
         Parameters
         ----------
         dofs : (n_dofs,) float ndarray
-            DOF values, rad or m.
 
         Returns
         -------
@@ -164,6 +156,35 @@ class HandArrays:
         """
         s = self.shapes
         return kernels.ShapeSet(self.shape_poses(dofs), s.kinds, s.halves, s.radii)
+
+    @functools.cached_property
+    def link_names(self) -> np.ndarray:
+        """(l,) object ndarray: the links' names, indexed by a contact's link."""
+        return np.array(self.hand.link_names, dtype=object)
+
+    @functools.cached_property
+    def stretched_reach(self) -> float:
+        """How far in front of the palm the open hand reaches at its most stretched, m.
+
+        The pregrasps' start poses keep this clear of the object; three poses of the
+        pregrasp DOF bound it (they cost 7 ms, about 2 % of a 250-grasp batch, once per hand).
+        """
+        return max(hand_reach(self.hand, self.hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
+
+    @functools.cached_property
+    def open_radius(self) -> float:
+        """The largest distance from the palm origin of any point of the open hand, m (every
+        pregrasp DOF value; the robust copies' back-off)."""
+        radius = 0.0
+        for s in (0.0, 0.25, 0.5, 0.75, 1.0):
+            poses = self.shape_poses(self.hand.open_dofs(s))
+            reach = (
+                np.linalg.norm(poses[:, :3, 3], axis=1)
+                + np.linalg.norm(self.shapes.halves, axis=1)
+                + self.shapes.radii
+            )
+            radius = max(radius, float(reach.max()))
+        return radius
 
 
 _HAND_ARRAYS: IdentityCache[HandArrays] = IdentityCache()
@@ -470,10 +491,6 @@ def close_fingers(
     return dofs
 
 
-_LINK_NAMES: IdentityCache[np.ndarray] = IdentityCache()
-_STRETCHED_REACH: IdentityCache[float] = IdentityCache()
-
-
 @functools.lru_cache(maxsize=64)
 def _link_mu(materials: tuple[str, ...], object_material: str) -> np.ndarray:
     """Friction coefficient of each link against the object (read-only: indexed per grasp)."""
@@ -511,7 +528,12 @@ def grasp_once(
     centred = np.array(start_pose, dtype=np.float64).reshape(1, 4, 4)
     centred[0, :3, 3] -= geom.origin
     status, poses, joints, contacts = _simulate_centred(
-        hand, geom, centred, np.array([travel], dtype=np.float64), np.array([s]), object_material
+        hand_arrays(hand),
+        geom,
+        centred,
+        np.array([travel], dtype=np.float64),
+        np.array([s]),
+        object_material,
     )
     return GraspResult(str(status[0]), poses[0], joints[0], contacts[0])
 
@@ -559,7 +581,7 @@ class FlatGrasps:
 
 
 def simulate_starts(
-    hand: Hand,
+    arrays: HandArrays,
     geom: ObjectGeometry,
     starts: np.ndarray,
     travel: np.ndarray,
@@ -570,7 +592,8 @@ def simulate_starts(
 
     Parameters
     ----------
-    hand : Hand
+    arrays : HandArrays
+        The hand, resolved once by the caller (:func:`hand_arrays`).
     geom : ObjectGeometry
         The object's simulation geometry (:func:`object_geometry`).
     starts : (n, 4, 4) float64 ndarray
@@ -588,9 +611,8 @@ def simulate_starts(
     FlatGrasps
         Poses and contacts in the object's mesh frame.
     """
-    arrays = hand_arrays(hand)
     samples = geom.samples
-    joints = _open_dofs(hand, s)
+    joints = _open_dofs(arrays.hand, s)
     poses, touched, offsets, point, shape, normal = kernels.simulate_batch(
         sample_cloud(samples),
         samples.normals,
@@ -613,13 +635,14 @@ def simulate_starts(
 
 
 def pregrasp_starts(
-    hand: Hand, geom: ObjectGeometry, p0: np.ndarray, placing: ObjectGeometry | None = None
+    arrays: HandArrays, geom: ObjectGeometry, p0: np.ndarray, placing: ObjectGeometry | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Start poses (centred frame of ``geom``) and approach lengths of pregrasps.
 
     Parameters
     ----------
-    hand : Hand
+    arrays : HandArrays
+        The hand (:func:`hand_arrays`); the starts keep its stretched reach clear.
     geom : ObjectGeometry
     p0 : (n, 6) float64 ndarray
         Valid pregrasps.
@@ -634,11 +657,8 @@ def pregrasp_starts(
     travel : (n,) float64 ndarray
         m.
     """
-    # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all
-    # (once per hand: three poses of the hand cost 7 ms, about 2 % of a 250-grasp batch).
-    reach = _STRETCHED_REACH.get(
-        hand, lambda: max(hand_reach(hand, hand.open_dofs(s)) for s in (0.0, 0.5, 1.0))
-    )
+    # The hand's reach depends on the pregrasp DOF; the fully-stretched bound is used for all.
+    reach = arrays.stretched_reach
     if placing is None:
         return start_poses(p0, geom.hull_vertices, reach)
     starts, travel = start_poses(p0, placing.hull_vertices, reach)
@@ -647,7 +667,7 @@ def pregrasp_starts(
 
 
 def _simulate_centred(
-    hand: Hand,
+    arrays: HandArrays,
     geom: ObjectGeometry,
     starts: np.ndarray,
     travel: np.ndarray,
@@ -656,9 +676,9 @@ def _simulate_centred(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
     """The policy for start poses in the centred frame of ``geom``, in one compiled call;
     poses and contacts returned in the object frame."""
-    flat = simulate_starts(hand, geom, starts, travel, s, object_material)
+    flat = simulate_starts(arrays, geom, starts, travel, s, object_material)
     link, points, normal, mu = flat.link, flat.points, flat.normals, flat.mu
-    names = _LINK_NAMES.get(hand, lambda: np.array(hand.link_names, dtype=object))[link]
+    names = arrays.link_names[link]
     touched = flat.touched
     n = len(starts)
     status = np.empty(n, dtype=object)
@@ -696,6 +716,8 @@ def simulate(
     use_dir : (n, 2) array_like of float, optional
         Use directions in [-1, 1]^2; None: no use point (NaN).
     hand : Hand or str
+        A :class:`~affordgrasp.hands.Hand` or a name (:func:`~affordgrasp.hands.get_hand`),
+        resolved here, with its arrays, once for the batch.
     object_material : str
         The object's surface material (friction).
     frame : GraspObject, optional
@@ -709,7 +731,7 @@ def simulate(
     -------
     SimulationBatch
     """
-    hand = get_hand(hand) if isinstance(hand, str) else hand
+    arrays = hand_arrays(get_hand(hand))
     p0 = validate_pregrasps(p0)
     n = len(p0)
     geom = object_geometry(obj)
@@ -726,9 +748,9 @@ def simulate(
         upts += geom.origin
     started = time.perf_counter()
     placing = None if frame is None else object_geometry(frame)
-    starts, travel = pregrasp_starts(hand, geom, p0, placing)
+    starts, travel = pregrasp_starts(arrays, geom, p0, placing)
     status, poses, joints, contacts = _simulate_centred(
-        hand, geom, starts, travel, p0[:, 5], object_material
+        arrays, geom, starts, travel, p0[:, 5], object_material
     )
     seconds = time.perf_counter() - started
     return SimulationBatch(

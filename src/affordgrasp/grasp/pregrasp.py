@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import InputError
+from ..rays.mesh import mesh_caster
 
 if TYPE_CHECKING:
     import trimesh
@@ -213,8 +214,8 @@ def use_points(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh
-        The object, m.
+    mesh : trimesh.Trimesh or MeshData
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     center : (3,) float64 ndarray
         Centre of mass, m.
     use_dir : (n, 2) float64 ndarray
@@ -238,22 +239,11 @@ def use_points(
     if n == 0:
         return points, normals, tris
     origins = np.repeat(np.asarray(center, dtype=np.float64)[None], n, axis=0)
-    _, ray_idx, tri_idx = mesh.ray.intersects_location(origins, d, multiple_hits=True)
-    # Exact float64 intersection with the triangles the (float32) ray engine reported.
-    tri = np.asarray(mesh.triangles, dtype=np.float64)[tri_idx]
-    e1 = tri[:, 1] - tri[:, 0]
-    e2 = tri[:, 2] - tri[:, 0]
-    nrm = np.cross(e1, e2)
-    o = origins[ray_idx]
-    dirs = d[ray_idx]
-    denom = np.einsum("ij,ij->i", nrm, dirs)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.einsum("ij,ij->i", nrm, tri[:, 0] - o) / denom
-    t = np.where(np.isfinite(t), t, -np.inf)
-    order = np.lexsort((-t, ray_idx))  # per ray, farthest first
-    first = np.ones(len(order), dtype=bool)
-    first[1:] = ray_idx[order][1:] != ray_idx[order][:-1]
-    keep = order[first]
+    rays = mesh_caster(mesh)
+    _, ray_idx, tri_idx = rays.intersects_location(origins, d, multiple_hits=True)
+    o, dirs = origins[ray_idx], d[ray_idx]
+    t = _plane_hits(mesh, tri_idx, o, dirs, -np.inf)
+    keep = _first_per_ray(ray_idx, -t)  # per ray, the farthest
     r = ray_idx[keep]
     ahead = t[keep] > 0
     r, keep = r[ahead], keep[ahead]
@@ -266,24 +256,35 @@ def use_points(
         V = np.asarray(mesh.vertices, dtype=np.float64)
         reach = float(np.linalg.norm(V - origins[0], axis=1).max()) * 1.5 + 1e-3
         o2 = origins[missed] + reach * d[missed]
-        loc, ray2, tri2 = mesh.ray.intersects_location(o2, -d[missed], multiple_hits=True)
+        _, ray2, tri2 = rays.intersects_location(o2, -d[missed], multiple_hits=True)
         if len(tri2):
-            tri = np.asarray(mesh.triangles, dtype=np.float64)[tri2]
-            nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
             back = -d[missed][ray2]
-            denom = np.einsum("ij,ij->i", nrm, back)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t2 = np.einsum("ij,ij->i", nrm, tri[:, 0] - o2[ray2]) / denom
-            t2 = np.where(np.isfinite(t2), t2, np.inf)
-            order = np.lexsort((t2, ray2))  # per ray, nearest first
-            first = np.ones(len(order), dtype=bool)
-            first[1:] = ray2[order][1:] != ray2[order][:-1]
-            pick = order[first]
+            t2 = _plane_hits(mesh, tri2, o2[ray2], back, np.inf)
+            pick = _first_per_ray(ray2, t2)  # per ray, the nearest
             rows = missed[ray2[pick]]
             points[rows] = o2[ray2[pick]] + t2[pick, None] * back[pick]
             normals[rows] = np.asarray(mesh.face_normals)[tri2[pick]]
             tris[rows] = tri2[pick]
     return points, normals, tris
+
+
+def _plane_hits(mesh, tri_idx: np.ndarray, o: np.ndarray, d: np.ndarray, miss: float) -> np.ndarray:
+    """Ray parameter of each hit, in float64 on the plane of the triangle the (float32) ray
+    engine reported; ``miss`` for a ray parallel to it."""
+    tri = np.asarray(mesh.triangles, dtype=np.float64)[tri_idx]
+    nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    denom = np.einsum("ij,ij->i", nrm, d)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.einsum("ij,ij->i", nrm, tri[:, 0] - o) / denom
+    return np.where(np.isfinite(t), t, miss)
+
+
+def _first_per_ray(ray: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """Index of the hit of least ``key`` on each ray that has one."""
+    order = np.lexsort((key, ray))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = ray[order][1:] != ray[order][:-1]
+    return order[first]
 
 
 def surface_use_directions(

@@ -9,123 +9,31 @@ frame, joints and fingers: :mod:`.model`.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import HandError
+from ..registry import Registry
 from .barrett import barrett_bh8_282
 from .files import hand_from_dict, hand_to_dict, hand_to_toml, load_hand, save_hand
 from .gripper import parallel_jaw
 from .model import Dof, Finger, Hand, Joint, Link, Shape
 
 
-class HandRegistry:
+class HandRegistry(Registry[Hand]):
     """Hands by name; built-in hands are built on first lookup, then kept.
 
-    The registry takes no parameters; :data:`HANDS` is the one the package uses.
-
-    Attributes
-    ----------
-    register : method
-        ``register(hand, *, replace=False)``: add a hand under its name.
-    unregister : method
-        ``unregister(name)``: remove one.
-    get : method
-        ``get(name)``: the hand of that name (:class:`HandError` if unknown).
+    The registry takes no parameters; :data:`HANDS` is the one the package uses. Its
+    ``register(hand, *, replace=False)``, ``unregister(name)``, ``get(name)`` and
+    ``names()`` (built-in first) are those of :class:`affordgrasp.registry.Registry`.
     """
 
     def __init__(self) -> None:
-        self._factories: dict[str, Callable[[], Hand]] = {
-            "barrett": barrett_bh8_282,
-            "parallel_jaw": parallel_jaw,
-        }
-        self._hands: dict[str, Hand] = {}
+        factories = {"barrett": barrett_bh8_282, "parallel_jaw": parallel_jaw}
+        super().__init__("hand", Hand, HandError, factories)
 
-    def register(self, hand: Hand, *, replace: bool = False) -> Hand:
-        """Add ``hand`` under ``hand.name``.
-
-        Parameters
-        ----------
-        hand : Hand
-        replace : bool
-            Allow replacing a hand registered under that name.
-
-        Returns
-        -------
-        Hand
-            ``hand`` itself.
-
-        Raises
-        ------
-        HandError
-            For something other than a Hand, or a taken name without ``replace``.
-        """
-        if not isinstance(hand, Hand):
-            raise HandError(f"expected a Hand, got {type(hand).__name__}")
-        if hand.name in self._factories and not replace:
-            raise HandError(
-                f"hand {hand.name!r} is already registered (pass replace=True to replace it)"
-            )
-        self._factories[hand.name] = lambda: hand
-        self._hands[hand.name] = hand
-        return hand
-
-    def unregister(self, name: str) -> None:
-        """Remove a hand (built-in ones included).
-
-        Parameters
-        ----------
-        name : str
-
-        Raises
-        ------
-        HandError
-            When no hand has that name.
-        """
-        if name not in self._factories:
-            raise HandError(f"unknown hand {name!r}; hands: {', '.join(self._factories)}")
-        del self._factories[name]
-        self._hands.pop(name, None)
-
-    def get(self, name: str) -> Hand:
-        """The hand registered as ``name`` (a built-in one is built on first use).
-
-        Parameters
-        ----------
-        name : str
-
-        Returns
-        -------
-        Hand
-
-        Raises
-        ------
-        HandError
-            For an unknown name; the message lists the registered hands.
-        """
-        hand = self._hands.get(name) if isinstance(name, str) else None
-        if hand is None:
-            try:
-                factory = self._factories[name]
-            except (KeyError, TypeError):
-                raise HandError(
-                    f"unknown hand {name!r}; hands: {', '.join(self._factories)} "
-                    "(or a .json/.toml hand file)"
-                ) from None
-            hand = self._hands[name] = factory()
-        return hand
-
-    def names(self) -> list[str]:
-        """Names of the registered hands, built-in first.
-
-        Returns
-        -------
-        list of str
-        """
-        return list(self._factories)
-
-    def __contains__(self, name: object) -> bool:
-        return name in self._factories
+    def _unknown_message(self, name: object, *, lookup: bool) -> str:
+        hint = " (or a .json/.toml hand file)" if lookup else ""
+        return f"unknown hand {name!r}; hands: {', '.join(self.names())}{hint}"
 
 
 HANDS = HandRegistry()

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HandError
+from ..runtime.writing import atomic_write
 from .model import Dof, Finger, Hand, Joint, Link, Shape
 
 FORMATS = (".json", ".toml")
@@ -178,7 +179,7 @@ def hand_from_dict(doc: dict) -> Hand:
             )
             for f in doc.get("fingers", [])
         )
-    except (TypeError, AttributeError) as exc:
+    except (TypeError, AttributeError, ValueError) as exc:
         raise HandError(f"{where}: malformed hand document ({exc})") from None
     return Hand(
         name=name,
@@ -266,8 +267,7 @@ def save_hand(hand: Hand, path: str | os.PathLike) -> Path:
         text = json.dumps(hand_to_dict(hand), indent=1)
     else:
         text = hand_to_toml(hand)
-    path.write_text(text, encoding="utf-8")
-    return path
+    return atomic_write(path, text.encode("utf-8"))
 
 
 def load_hand(path: str | os.PathLike) -> Hand:
@@ -303,4 +303,7 @@ def load_hand(path: str | os.PathLike) -> Hand:
             f"({doc.get('hand')!r}, written before hands were recorded whole); "
             "pass that name or the hand's own file"
         )
-    return hand_from_dict(doc)
+    try:
+        return hand_from_dict(doc)
+    except HandError as exc:
+        raise HandError(f"hand file {str(path)!r}: {exc}") from None

@@ -16,7 +16,7 @@ from numba import njit
 
 from ..caching import IdentityCache
 from ..errors import HandError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

@@ -311,8 +311,40 @@ def transform(rotation: np.ndarray | None = None, translation=(0.0, 0.0, 0.0)) -
     return m
 
 
+# Hands are centimetres to decimetres long: a length beyond this is a unit mistake (mm read
+# as m), and it bounds the closing search, which sweeps every link through its travel.
+MAX_HAND_LENGTH_M = 1.0
+# A joint turns at most one full turn either way; beyond it the sweep only repeats itself.
+MAX_JOINT_TURN_RAD = 2 * np.pi
+# Closing speeds are relative (the Barrett's distal joints turn at 1/3): outside
+# [1 / MAX_SPEED, MAX_SPEED] a joint barely moves, and the search would crawl after it.
+MAX_SPEED = 1e3
+
+
+_WHY = {
+    "m": "a hand is centimetres to decimetres long: check the units",
+    "rad": "a joint turns at most once either way",
+    "": "closing speeds are relative: the Barrett's distal joints turn at 1/3",
+}
+
+
+def _check_numbers(where: str, values, low: float, high: float, unit: str = "m") -> None:
+    """Refuse a number of a hand that is not finite or lies outside [low, high] ``unit``."""
+    for x in np.ravel(np.asarray(values, dtype=np.float64)):
+        if not (np.isfinite(x) and low <= x <= high):
+            raise HandError(
+                f"{where} must be a finite number in [{low:g}, {high:g}]{' ' * bool(unit)}"
+                f"{unit}, got {x:g} ({_WHY[unit]})"
+            )
+
+
 def validate_hand(hand: Hand) -> None:
     """Check a hand description once, with messages that name the problem.
+
+    Every number must be finite and within its range: lengths (half extents, rounding
+    radii, translations) within :data:`MAX_HAND_LENGTH_M`, a joint's travel (ratio × the
+    limits of its DOF) within one turn or that length, closing speeds within
+    [1 / :data:`MAX_SPEED`, :data:`MAX_SPEED`].
 
     Parameters
     ----------
@@ -323,6 +355,24 @@ def validate_hand(hand: Hand) -> None:
     if len(set(names)) != len(names):
         raise HandError(f"hand {hand.name!r}: link names must be unique, got {names}")
     dof_names = [d.name for d in hand.dofs]
+    limits = {d.name: (d.lower, d.upper) for d in hand.dofs}
+    length = MAX_HAND_LENGTH_M
+    for link in hand.links:
+        for s in link.shapes:
+            where = f"link {link.name!r}: a shape's"
+            _check_numbers(f"{where} half extents", s.half_extents, 0.0, length)
+            _check_numbers(f"{where} rounding radius", s.radius, 0.0, length)
+        if link.joint is not None:
+            j = link.joint
+            travel, unit = (MAX_JOINT_TURN_RAD, "rad") if j.kind == "revolute" else (length, "m")
+            _check_numbers(
+                f"link {link.name!r}: the joint's travel (ratio {j.ratio:g} × the limits of "
+                f"{j.dof!r})",
+                np.multiply(j.ratio, limits.get(j.dof, 0.0)),
+                -travel,
+                travel,
+                unit,
+            )
     seen: set[str] = set()
     for i, link in enumerate(hand.links):
         if link.material not in MATERIALS:
@@ -353,7 +403,7 @@ def validate_hand(hand: Hand) -> None:
         frames = [("shape pose", sh.pose) for sh in link.shapes]
         if link.joint is not None:
             frames.append(("joint origin", link.joint.origin))
-            if abs(np.linalg.norm(link.joint.axis) - 1.0) > ORTHONORMAL:
+            if not abs(np.linalg.norm(link.joint.axis) - 1.0) <= ORTHONORMAL:  # NaN too
                 raise HandError(
                     f"link {link.name!r}: the joint axis must be a unit vector, got "
                     f"{np.asarray(link.joint.axis).tolist()}"
@@ -367,6 +417,8 @@ def validate_hand(hand: Hand) -> None:
                 and np.allclose(m[3], [0, 0, 0, 1])
             ):
                 raise HandError(f"link {link.name!r}: the {what} must be a rigid 4x4 transform")
+            where = f"link {link.name!r}: the {what}'s translation"
+            _check_numbers(where, m[:3, 3], -MAX_HAND_LENGTH_M, MAX_HAND_LENGTH_M)
     for d in hand.dofs:
         if not d.lower <= d.upper:
             raise HandError(f"DOF {d.name!r}: lower limit {d.lower} > upper limit {d.upper}")
@@ -409,7 +461,7 @@ def validate_hand(hand: Hand) -> None:
         for name in f.dofs:
             if name not in dof_names:
                 raise HandError(f"finger {f.name!r}: unknown DOF {name!r}")
-        if any(v <= 0 for v in f.speeds):
-            raise HandError(f"finger {f.name!r}: closing speeds must be > 0")
+        for v in f.speeds:  # a joint a million times slower never reaches its limit: a hang
+            _check_numbers(f"finger {f.name!r}: a closing speed", v, 1 / MAX_SPEED, MAX_SPEED, "")
     if hand.pregrasp_dof is not None and hand.pregrasp_dof not in dof_names:
         raise HandError(f"pregrasp DOF {hand.pregrasp_dof!r} is not a DOF of the hand")

@@ -19,16 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from ..dataset.handle import Dataset, DatasetLike
+from ..dataset.splits import split_by_family, split_by_object
 from ..errors import InputError
-from .data import (
-    Samples,
-    load_depth,
-    read_rows,
-    reads_depth,
-    sensed_depth_mm,
-    split_by_family,
-    split_by_object,
-)
+from .data import Samples, load_depth, read_rows, reads_depth, sensed_depth_mm
 from .evaluation import classification_report, expected_calibration_error, regression_report
 from .targets import Target
 from .training import Inputs, TrainSettings, default_config, predict_scores, train_model
@@ -107,21 +100,20 @@ def prepare_split(
     seed: int = 0,
     max_train: int | None = 20000,
     max_eval: int | None = 4000,
-    negatives_ratio: float = 3.0,
     sensor=None,
     train_depth: bool = True,
 ):
     """Rows of each part of the split, with depth images loaded (memory-capped).
 
     Classification keeps every training/validation positive (at most ``max_train // 2`` or
-    ``max_eval // 2``) and at most ``negatives_ratio`` × as many negatives (each epoch then
+    ``max_eval // 2``) and at most three times as many negatives (each epoch then
     draws a balanced subset); the test rows keep the natural class balance (a uniform
     subsample of at most ``max_eval`` rows). Regression rows are subsampled uniformly.
 
     Parameters
     ----------
     dataset : path or Dataset
-        A dataset generated with metrics.
+        A dataset generated with metrics (opened once: :class:`~affordgrasp.dataset.Dataset`).
     target : str or Target
         What to learn (:func:`~affordgrasp.learning.data.read_rows`).
     split : str
@@ -132,8 +124,6 @@ def prepare_split(
         Seeds the split and the subsamples.
     max_train, max_eval : int or None
         Caps on the training rows and on each of validation and test (None: no cap).
-    negatives_ratio : float
-        Negatives kept per positive for training and validation.
     sensor : SensorModel, optional
         A depth sensor's noise and lost returns applied to every image
         (:func:`~affordgrasp.vision.sensor.apply_sensor`; keyed by object and sample, so a
@@ -173,7 +163,7 @@ def prepare_split(
             y = samples.y[idx]
             pos, neg = idx[y > 0.5], idx[y <= 0.5]
             kept_pos = _subsample(pos, None if cap is None else cap // 2, seed + k)
-            n_neg = int(round(negatives_ratio * max(len(kept_pos), 1)))
+            n_neg = int(round(3.0 * max(len(kept_pos), 1)))
             kept_neg = _subsample(neg, n_neg, seed + 10 + k)
             idx = np.sort(np.r_[kept_pos, kept_neg])
             # what each kept row stands for: restores the natural balance of the part
@@ -447,11 +437,8 @@ def predictions_of(model, config: dict, samples: Samples) -> np.ndarray:
 
     Parameters
     ----------
-    model : torch.nn.Module
-    config : dict
-        The model's config.
-    samples : Samples
-        With depth images unless the model is ``"pose"``.
+    model, config, samples
+        As for :func:`report`.
 
     Returns
     -------
@@ -501,9 +488,7 @@ def prediction_column(config: dict) -> str:
     return "viable_prob" if tgt["kind"] == "classification" else f"pred_{tgt['name']}"
 
 
-def predict_dataset(
-    models, dataset: DatasetLike, *, objects=None, batch_size: int = 2048, progress=None
-):
+def predict_dataset(models, dataset: DatasetLike, *, objects=None, progress=None):
     """One row per sample of a dataset: object, sample and each model's prediction.
 
     The dataset is streamed in batches (memory-bounded); depth images are read when stored,
@@ -517,10 +502,8 @@ def predict_dataset(
         A generated dataset.
     objects : sequence of str, optional
         Predict only these objects.
-    batch_size : int
-        Rows per batch.
     progress : callable, optional
-        Called with the number of rows after each batch.
+        Called with the number of rows after each batch (of 2048 rows).
 
     Returns
     -------
@@ -545,7 +528,7 @@ def predict_dataset(
         ["depth_mm"] if stored and needs_depth else []
     )
     parts = []
-    for batch in dataset.batches(columns=columns, objects=objects, batch_size=batch_size):
+    for batch in dataset.batches(columns=columns, objects=objects, batch_size=2048):
         tab = pa.Table.from_batches([batch])
         obj = np.asarray(tab.column("object").to_pylist(), dtype=object)
         s = Samples(
@@ -555,7 +538,7 @@ def predict_dataset(
             p0=np.asarray(tab.column("p0").combine_chunks().flatten()).reshape(-1, 6),
             use_dir=np.asarray(tab.column("use_dir").combine_chunks().flatten()).reshape(-1, 2),
             y=np.full(len(obj), np.nan),
-            meta={"directory": str(dataset.directory), "dataset": dataset},
+            meta={"dataset": dataset},
         )
         if needs_depth:
             if stored:
@@ -608,7 +591,7 @@ def evaluate_on_dataset(
     Raises
     ------
     InputError
-        When none of the named objects is in the dataset.
+        When none of the named objects is in the dataset, or they hold no row to evaluate.
     """
     tgt = Target.from_dict(config["target"])
     dataset = Dataset.open(dataset)
@@ -637,6 +620,11 @@ def evaluate_on_dataset(
         if not mask.any():
             raise InputError(f"none of the objects {list(objects)} is in {str(dataset)!r}")
     available = int(mask.sum())
+    if available == 0:
+        raise InputError(
+            f"{str(dataset.directory)!r} holds no row to evaluate a {tgt.name} model on "
+            f"({tgt.rows} rows of {how}); generate more samples"
+        )
     idx = _subsample(np.flatnonzero(mask), max_rows, seed)
     samples = samples.take(idx)
     if reads_depth(config):

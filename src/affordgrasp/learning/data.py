@@ -20,8 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
-from ..dataset.handle import Dataset, DatasetLike
-from ..dataset.splits import Split, split_by_family, split_by_object  # noqa: F401 - their former home
+from ..dataset.handle import Dataset
 from ..errors import DatasetError, InputError
 from .targets import (
     Target,
@@ -59,7 +58,7 @@ class Samples:
     depth_mm : (n, size, size) uint16 ndarray or None
         Depth images, mm; None until loaded (:func:`load_depth`).
     meta : dict
-        Where the rows come from (``directory``, and the opened ``dataset``).
+        Where the rows come from: the opened ``dataset``.
     """
 
     object: np.ndarray
@@ -99,15 +98,13 @@ class Samples:
         )
 
 
-def read_rows(
-    directory: DatasetLike, target: str | Target, *, objects: Sequence[str] | None = None
-):
+def read_rows(dataset: Dataset, target: str | Target, *, objects: Sequence[str] | None = None):
     """The rows of a dataset a target is defined on, with their inputs and target values.
 
     Parameters
     ----------
-    directory : path or Dataset
-        A dataset generated with metrics.
+    dataset : Dataset
+        A dataset generated with metrics (opened by the caller: :meth:`Dataset.open`).
     target : str or Target
         ``"viable"``, ``"hold_effort_sum"``, a metric column, ``"COLUMN>=LEVEL"`` or
         ``"task:NAME"``; a Target
@@ -129,7 +126,6 @@ def read_rows(
     InputError
         When the target is not a column of the dataset.
     """
-    dataset = Dataset.open(directory)
     directory = dataset.directory
     if not dataset.metrics:
         raise DatasetError(
@@ -174,7 +170,7 @@ def read_rows(
         p0=_fixed(table, "p0", 6)[mask],
         use_dir=_fixed(table, "use_dir", 2)[mask],
         y=values[mask],
-        meta={"directory": str(directory), "dataset": dataset},
+        meta={"dataset": dataset},
     )
     return samples, target
 
@@ -200,7 +196,7 @@ def reads_depth(config: dict) -> bool:
     return config["arch"] not in ("pose", "views")
 
 
-def load_depth(samples: Samples, directory: DatasetLike | None = None) -> np.ndarray:
+def load_depth(samples: Samples, dataset: Dataset | None = None) -> np.ndarray:
     """The depth images of the samples, read from the dataset or rendered.
 
     Stored images are read in streamed batches keeping only the chosen rows, so memory is
@@ -209,7 +205,7 @@ def load_depth(samples: Samples, directory: DatasetLike | None = None) -> np.nda
     Parameters
     ----------
     samples : Samples
-    directory : path or Dataset, optional
+    dataset : Dataset, optional
         The dataset; default: the one the samples were read from (``samples.meta``).
 
     Returns
@@ -217,10 +213,9 @@ def load_depth(samples: Samples, directory: DatasetLike | None = None) -> np.nda
     (n, 128, 128) uint16 ndarray
         Depth, mm, 0 for no return.
     """
-    source = directory or samples.meta.get("dataset") or samples.meta.get("directory")
-    if source is None:
-        raise InputError("samples without a dataset directory: pass directory=")
-    dataset = Dataset.open(source)
+    dataset = samples.meta.get("dataset") if dataset is None else dataset
+    if dataset is None:
+        raise InputError("samples without a dataset: pass dataset=")
     if dataset.depth:
         images = _read_stored_depth(dataset, samples)
     else:
@@ -259,13 +254,13 @@ def _read_stored_depth(dataset: Dataset, samples: Samples) -> np.ndarray:
     return out if out is not None else np.zeros((0, 128, 128), dtype=np.uint16)
 
 
-def render_samples_depth(samples: Samples, dataset: DatasetLike) -> np.ndarray:
+def render_samples_depth(samples: Samples, dataset: Dataset) -> np.ndarray:
     """Render D(p0, O) of every sample from its object (as the dataset resolves it).
 
     Parameters
     ----------
     samples : Samples
-    dataset : path or Dataset
+    dataset : Dataset
         The dataset the samples come from (:meth:`Dataset.object` finds each object).
 
     Returns
@@ -280,7 +275,6 @@ def render_samples_depth(samples: Samples, dataset: DatasetLike) -> np.ndarray:
     """
     from ..vision.depth import depth_to_mm, renderer_for
 
-    dataset = Dataset.open(dataset)
     out = np.zeros((len(samples), 128, 128), dtype=np.uint16)
     by_object: dict[str, list[int]] = defaultdict(list)
     for i, o in enumerate(samples.object):
@@ -324,8 +318,9 @@ def sensed_depth_mm(samples: Samples, sensor) -> np.ndarray:
     return depth_to_mm(apply_sensor(depth_from_mm(samples.depth_mm), sensor, keys))
 
 
-def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np.ndarray:
-    """All positives and ``ratio`` × as many negatives drawn without replacement.
+def balanced_indices(labels: np.ndarray, *, seed: int) -> np.ndarray:
+    """All positives and as many negatives (fewer when there are not enough), drawn without
+    replacement.
 
     Parameters
     ----------
@@ -333,8 +328,6 @@ def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np
         Classes; positive when > 0.5.
     seed : int
         Seeds the draw of the negatives.
-    ratio : float
-        Negatives per positive (fewer when there are not enough).
 
     Returns
     -------
@@ -345,6 +338,6 @@ def balanced_indices(labels: np.ndarray, *, seed: int, ratio: float = 1.0) -> np
     pos = np.flatnonzero(labels)
     neg = np.flatnonzero(~labels)
     rng = np.random.default_rng(seed)
-    k = min(len(neg), int(round(ratio * len(pos))))
+    k = min(len(neg), len(pos))
     chosen = rng.choice(neg, k, replace=False) if k else np.zeros(0, dtype=np.int64)
     return np.sort(np.concatenate([pos, chosen]))

@@ -157,8 +157,8 @@ def evaluate_decisions(
     ----------
     models : sequence of (torch.nn.Module, dict)
         At most one classifier and one regressor.
-    dataset : path
-        A dataset generated with metrics.
+    dataset : path or Dataset
+        A dataset generated with metrics (opened once).
     objects : sequence of str
         The objects to decide on (held out from the models' training).
     task : str
@@ -235,7 +235,7 @@ def evaluate_decisions(
             p0,
             d,
             np.full(len(used), np.nan),
-            meta={"directory": str(dataset.directory), "dataset": dataset},
+            meta={"dataset": dataset},
         )
         if stored:  # read with the rows: one pass over the object's shards
             samples.depth_mm = depth_to_mm(decode_depth_column(sub.column("depth_mm")))

@@ -263,7 +263,6 @@ def random_measures(
     true_score: np.ndarray,
     viable: np.ndarray,
     *,
-    k: int = 5,
     robust_viable: np.ndarray | None = None,
 ) -> dict:
     """The expected measures of a uniformly random choice (exact, no draws).
@@ -272,8 +271,6 @@ def random_measures(
     ----------
     true_score : (n,) array_like of float
     viable : (n,) array_like of bool
-    k : int
-        As for :func:`decision_measures`.
     robust_viable : (n,) array_like of float, optional
         As for :func:`decision_measures`.
 

@@ -165,9 +165,7 @@ def gms_distribution(
     return out
 
 
-def regression_report(
-    y_true, y_pred, *, lower_is_better: bool = True, seed: int = 0, n_subsets: int = 1000
-) -> dict:
+def regression_report(y_true, y_pred, *, lower_is_better: bool = True, seed: int = 0) -> dict:
     """MSE, comparison accuracy and E[GMS] (with its quartiles) of predictions vs truth.
 
     Parameters
@@ -177,9 +175,8 @@ def regression_report(
     lower_is_better : bool
         As for :func:`global_min_score`.
     seed : int
-        Seed of the random pairs and subsets.
-    n_subsets : int
-        Subsets of the GMS distribution (10 % of the samples each).
+        Seed of the random pairs and the GMS distribution's 1000 subsets (10 % of the
+        samples each).
 
     Returns
     -------
@@ -187,9 +184,7 @@ def regression_report(
         ``n``, ``mse``, ``comparison_accuracy``, ``expected_gms`` and ``gms_quartiles``
         (25th, 50th, 75th percentiles; empty when n < 2).
     """
-    g = gms_distribution(
-        y_true, y_pred, seed=seed, n_subsets=n_subsets, lower_is_better=lower_is_better
-    )
+    g = gms_distribution(y_true, y_pred, seed=seed, lower_is_better=lower_is_better)
     return {
         "n": int(len(np.ravel(y_true))),
         "mse": mse(y_true, y_pred),

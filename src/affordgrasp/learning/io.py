@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
 from .torch_support import require_safetensors, require_torch
 
 METADATA_KEY = "affordgrasp_model"

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..runtime.writing import atomic_write
 from .evaluation import gms_distribution, precision_recall
 
 
@@ -21,6 +22,11 @@ def _subplots(*grid: int, figsize: tuple[float, float], dpi: int = 120, **kwargs
 
     fig = Figure(figsize=figsize, dpi=dpi)
     return fig, fig.subplots(*grid, **kwargs)
+
+
+def _save(fig, path) -> Path:
+    """Write a figure atomically, in the format its file's suffix names (PNG by default)."""
+    return atomic_write(path, lambda fh: fig.savefig(fh, format=Path(path).suffix[1:] or None))
 
 
 def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], positive_rate: float):
@@ -48,8 +54,7 @@ def plot_pr_curves(path, curves: dict[str, tuple[np.ndarray, np.ndarray]], posit
     ax.set_title("Precision-recall, held-out objects")
     ax.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return _save(fig, path)
 
 
 def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_is_better=True):
@@ -77,8 +82,7 @@ def plot_gms_cdf(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, lower_
     ax.set_title("Global Min Score, held-out objects")
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return _save(fig, path)
 
 
 def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
@@ -103,8 +107,7 @@ def plot_scatter(path, truth: np.ndarray, pred: np.ndarray, label: str):
     ax.plot([lo, hi], [lo, hi], c="grey", ls="--")
     ax.set(xlabel="true (normalised)", ylabel="predicted (normalised)", title=label)
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return _save(fig, path)
 
 
 def plot_reliability(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, bins: int = 10):
@@ -147,5 +150,4 @@ def plot_reliability(path, runs: dict[str, tuple[np.ndarray, np.ndarray]], *, bi
     hist.set(xlabel="predicted probability", ylabel="rows")
     hist.set_yscale("log")
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return _save(fig, path)

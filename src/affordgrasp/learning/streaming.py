@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dataset.handle import Dataset
 from .data import Samples, balanced_indices, reads_depth
 from .targets import Target
 from .training import Inputs
@@ -25,8 +26,8 @@ class StreamedEpochs:
 
     Parameters
     ----------
-    dataset : path
-        The dataset the rows come from.
+    dataset : Dataset
+        The dataset the rows come from (opened by the caller).
     config : dict
         The model config (what inputs to build).
     train : Samples
@@ -44,7 +45,7 @@ class StreamedEpochs:
 
     def __init__(
         self,
-        dataset,
+        dataset: Dataset,
         config: dict,
         train: Samples,
         *,
@@ -53,9 +54,7 @@ class StreamedEpochs:
         sensor=None,
         chunk_rows: int = 4096,
     ):
-        from ..dataset.handle import Dataset
-
-        self.dataset = Dataset.open(dataset)
+        self.dataset = dataset
         self.config = config
         self.train = train
         self.batch_size = int(batch_size)
@@ -95,10 +94,8 @@ class StreamedEpochs:
 
         Parameters
         ----------
-        epoch : int
-            1-based.
-        seed : int
-            The training seed.
+        epoch, seed : int
+            As for :meth:`rows_of_epoch`.
 
         Returns
         -------

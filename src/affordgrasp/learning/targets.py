@@ -14,6 +14,10 @@
 
 ``log`` (an option, not the paper's): the target is log1p(value − low) before the linear
 normalisation, which tames the heavy tail of efforts.
+
+A regressor's output is not bounded: predictions of an effort (``LOWER_IS_BETTER``), which
+cannot be negative, are clamped at 0 where they are made (:meth:`Target.denormalise`; the
+shipped ΣE_h regressor reaches -1.8 N unclamped).
 """
 
 from __future__ import annotations
@@ -115,14 +119,17 @@ class Target:
         Returns
         -------
         (n,) float64 ndarray
-            The inverse of :meth:`normalise`; probabilities unchanged.
+            The inverse of :meth:`normalise`, an effort clamped at 0; probabilities
+            unchanged.
         """
         s = np.asarray(scores, dtype=np.float64)
         if self.kind == "classification":
             return s
         if self.log:
-            return self.low + np.expm1(s * np.log1p(self.high - self.low))
-        return self.low + s * (self.high - self.low)
+            values = self.low + np.expm1(s * np.log1p(self.high - self.low))
+        else:
+            values = self.low + s * (self.high - self.low)
+        return np.maximum(values, 0.0) if self.name in LOWER_IS_BETTER else values
 
 
 def threshold_target(name: str) -> tuple[str, float] | None:

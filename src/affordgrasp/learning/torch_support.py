@@ -2,9 +2,18 @@
 
 from __future__ import annotations
 
+import importlib
+
 from ..errors import MissingDependencyError
 
 INSTALL_HINT = 'pip install "affordgrasp[learn]"'
+
+
+def _require(module: str, need: str):
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise MissingDependencyError(f"{need}; install it with: {INSTALL_HINT}") from exc
 
 
 def require_torch():
@@ -14,13 +23,7 @@ def require_torch():
     -------
     module
     """
-    try:
-        import torch
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise MissingDependencyError(
-            f"learning needs PyTorch (CPU is enough); install it with: {INSTALL_HINT}"
-        ) from exc
-    return torch
+    return _require("torch", "learning needs PyTorch (CPU is enough)")
 
 
 def require_safetensors():
@@ -30,10 +33,4 @@ def require_safetensors():
     -------
     module
     """
-    try:
-        import safetensors.torch as st
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise MissingDependencyError(
-            f"model files need the safetensors package; install it with: {INSTALL_HINT}"
-        ) from exc
-    return st
+    return _require("safetensors.torch", "model files need the safetensors package")

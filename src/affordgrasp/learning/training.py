@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..errors import InputError
 from .data import Samples, balanced_indices
 from .models import build_model, count_parameters, depth_input, nearest_depth, pose_features
@@ -65,6 +65,13 @@ class TrainSettings:
     rank_weight: float = 0.0
     max_seconds: float | None = None
     threads: int = 1
+
+    def __post_init__(self) -> None:
+        # a NaN or infinite weight trains non-finite weights; a time limit <= 0 stops at once
+        if not 0 <= self.rank_weight < math.inf:
+            raise InputError(f"rank_weight must be a finite number >= 0, got {self.rank_weight}")
+        if self.max_seconds is not None and not 0 < self.max_seconds < math.inf:
+            raise InputError(f"max_seconds must be a finite number > 0, got {self.max_seconds}")
 
 
 def default_config(arch: str, target: Target, **options) -> dict:

@@ -72,8 +72,6 @@ def hand_view(
     spread: np.ndarray,
     *,
     fov_deg: float = 60.0,
-    size: int = VIEW_SIZE,
-    pixel_m: float = VIEW_PIXEL_M,
 ) -> np.ndarray:
     """The hand views of camera-in-hand depth images.
 
@@ -85,15 +83,12 @@ def hand_view(
         Each pregrasp's spread, rad (π·p0[5]).
     fov_deg : float
         The depth camera's field of view.
-    size : int
-        Pixels per side of the view.
-    pixel_m : float
-        The view's pixel, m, on the plane of the nearest depth.
 
     Returns
     -------
-    (b, 6, size, size) float32 ndarray
-        The channels of the module's docstring.
+    (b, 6, VIEW_SIZE, VIEW_SIZE) float32 ndarray
+        The channels of the module's docstring (pixels of ``VIEW_PIXEL_M`` on the plane of
+        the nearest depth).
     """
     z = np.asarray(depth_mm, dtype=np.float32) / 1000.0
     b, h = len(z), z.shape[-1]
@@ -102,7 +97,8 @@ def hand_view(
     hit = z > 0
     near = np.where(hit, z, np.inf).reshape(b, -1).min(axis=1) if b else np.zeros(0)
     near = np.where(np.isfinite(near), near, 1.0).astype(np.float32)
-    grid = (np.arange(size) + 0.5 - size / 2.0) * pixel_m
+    size = VIEW_SIZE
+    grid = (np.arange(size) + 0.5 - size / 2.0) * VIEW_PIXEL_M
     src = grid[None, :] / (near[:, None] * k) + centre  # (b, size) source index
     inside = (src >= -0.5) & (src <= h - 0.5)
     idx = np.clip(np.rint(src), 0, h - 1).astype(np.intp)

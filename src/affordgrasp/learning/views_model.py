@@ -36,7 +36,7 @@ import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import InputError
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
 from .plan import FUSED_VIEWS, OFFSET_RANGE, fuse_candidate_views
 from .plan import VIEWS as ARCH
 from .targets import Target, make_target
@@ -303,7 +303,7 @@ class FusedViews:
         return rows
 
     def _in_workers(self, dataset, jobs: list) -> list[np.ndarray]:
-        from ..dataset.engines import process_pool, stop_pool
+        from ..runtime.engines import process_pool, stop_pool
 
         pool = process_pool(min(self.workers, len(jobs)))
         try:
@@ -498,12 +498,14 @@ def fit_views_config(
     dict
         The model file's contents (:func:`write_views_config`).
     """
+    from ..dataset.handle import Dataset
     from .data import read_rows
     from .evaluation import best_f1_threshold, expected_calibration_error
 
     views = FUSED_VIEWS if views is None else int(views)
     if views < 1 or copies < 1:
         raise InputError(f"views and copies must be >= 1, got {views} and {copies}")
+    dataset = Dataset.open(dataset)
     samples, _ = read_rows(dataset, CLASSIFIER_TARGET, objects=list(objects))
     if len(samples) == 0:
         raise InputError(f"none of the objects {list(objects)} has rows in {str(dataset)!r}")

@@ -29,28 +29,22 @@ from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUFFIXES, METRIC_COLUMNS,
 from .cones import contact_wrenches, edges_per_contact, friction_cone_edges, tangent_frames
 from .contacts import ContactSet
 from .discharge import discharge
+from .edges import EDGE_RADIUS_M, use_edge, use_edge_angle
 from .effort import GRAVITY_DIRECTIONS, hold_effort, impact_effort
 from .epsilon import EpsilonResult, epsilon, gws_volume
-from .inertia import rotational_inertia
-from .lp import LPResult, LPStatus, solve_standard_lp
-from .phi import compute_phi, compute_phi_batch
-from .transmission import use_force
-from .use_geometry import (
-    EDGE_RADIUS_M,
-    WedgeShape,
+from .hand_placement import (
     contact_reach,
     contact_thickness,
     contact_width,
     long_axis,
     use_clearance,
-    use_edge,
-    use_edge_angle,
-    use_edge_span,
-    use_edge_thickness,
-    use_lever_ratio,
-    use_wedge_angle,
-    use_wedge_shape,
 )
+from .inertia import rotational_inertia
+from .lp import LPResult, LPStatus, solve_standard_lp
+from .phi import compute_phi, compute_phi_batch
+from .striking import use_lever_ratio
+from .transmission import use_force
+from .wedge import WedgeShape, use_edge_span, use_edge_thickness, use_wedge_angle, use_wedge_shape
 
 __all__ = [
     "EDGE_RADIUS_M",

@@ -24,6 +24,9 @@ Wrench layout: the wrench matrix is ``(6, k * E)`` with ``E`` edges per contact
 (8, or 10 when soft), contact-major: columns ``i*E .. i*E+E-1`` belong to contact ``i``.
 A column is ``(f, (p - c) x f * torque_scale)`` (plus ``±γ n * torque_scale`` in the
 torque rows of the torsional edges).
+
+:func:`plane_axes` gives unit normals a plain in-plane frame, for the fits, rings and chords
+that need one and not GraspIt!'s convention.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import InputError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from ..tolerances import CONE_AXIS_SWITCH
 
 # before the first @njit of the metrics: every kernel module imports this one first
@@ -178,6 +181,29 @@ def tangent_frames(inward_normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         t1[i] = a[:3]
         t2[i] = a[3:]
     return t1, t2
+
+
+def plane_axes(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal in-plane axes of unit normals: e1 = n × x̂ (n × ŷ when n is near x̂), e2 = n × e1.
+
+    Parameters
+    ----------
+    normals : (n, 3) float64 ndarray
+        Unit normals.
+
+    Returns
+    -------
+    e1, e2 : (n, 3) float64 ndarray
+        Unit; (e1, e2, n) is a right-handed frame.
+    """
+    helper = np.zeros_like(normals)
+    use_x = np.abs(normals[:, 0]) < 0.9
+    helper[use_x, 0] = 1.0
+    helper[~use_x, 1] = 1.0
+    e1 = np.cross(normals, helper)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    e2 = np.cross(normals, e1)
+    return e1, e2
 
 
 def friction_cone_edges(normals: np.ndarray, mu: np.ndarray | float) -> np.ndarray:

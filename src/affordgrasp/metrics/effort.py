@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import InternalError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .lp import INFEASIBLE, OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard
 from .validation import contact_arrays, point3, unit3

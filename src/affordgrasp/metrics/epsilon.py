@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .cones import contact_wrenches, wrench_matrix_kernel
 from .hull import (
     HULL_DEGENERATE,
@@ -283,26 +283,6 @@ def epsilon_volume_store(W, volume, store):
     if not volume:
         return CLOSURE, store.offset[f], np.nan, store
     return CLOSURE, store.offset[f], store_volume(P, store, nf, interior), store
-
-
-@njit(cache=True)
-def nearest_facet(offsets):
-    """Index of the facet with the smallest offset (the one that gives ε).
-
-    Parameters
-    ----------
-    offsets : (F,) float64 ndarray
-        Distances of the facets' hyperplanes from the origin.
-
-    Returns
-    -------
-    int
-    """
-    best = 0
-    for f in range(1, offsets.shape[0]):
-        if offsets[f] < offsets[best]:
-            best = f
-    return best
 
 
 @njit(cache=True)

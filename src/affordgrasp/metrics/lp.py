@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import InputError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

@@ -15,8 +15,8 @@ hold_effort_{px..nz}      N      E_h for gravity along ±x, ±y, ±z (:mod:`.eff
 impact_effort             N/N·m  E_i (:mod:`.effort`)
 discharge                 --     δ (:mod:`.discharge`)
 use_force                 N      U_τ (:mod:`.transmission`)
-use_edge                  m⁻²    U_g (:mod:`.use_geometry`)
-use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.use_geometry`)
+use_edge                  m⁻²    U_g (:mod:`.edges`)
+use_edge_angle            rad    sharpest convex dihedral angle near U (:mod:`.edges`)
 use_wedge_angle           rad    2π × the part of a 3 mm ball at U inside the solid
 use_wedge_angle_fine      rad    the same in a 2 mm ball (same rays)
 use_edge_span             --     λ2 of the inside directions' second moment (same rays)
@@ -45,9 +45,10 @@ from numba import njit
 
 from ..columns import HOLD_EFFORT_COLUMNS, METRIC_COLUMNS
 from ..errors import InputError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .discharge import discharge
+from .edges import EDGE_RADIUS_M, use_edge, use_edge_angle
 from .effort import (
     hold_effort,
     hold_effort_kernel,
@@ -57,23 +58,14 @@ from .effort import (
 )
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
 from .epsilon_hand import epsilon_hand
+from .hand_placement import contact_reach, contact_thickness_and_width, long_axis, use_clearance
 from .hull import hull_workspace
 from .inertia import rotational_inertia
 from .lp import OPTIMAL
-from .striking import use_depth, use_relief, use_swing_cosine
+from .striking import use_depth, use_lever_ratio, use_relief, use_swing_cosine
 from .transmission import use_force, use_force_kernel
-from .use_geometry import (
-    EDGE_RADIUS_M,
-    contact_reach,
-    contact_thickness_and_width,
-    long_axis,
-    use_clearance,
-    use_edge,
-    use_edge_angle,
-    use_lever_ratio,
-    use_wedge_shape,
-)
 from .validation import points_n3, stacked_contact_arrays, units_n3
+from .wedge import use_wedge_shape
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

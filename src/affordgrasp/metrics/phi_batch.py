@@ -8,16 +8,12 @@ row are scored by the same code.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from ..columns import USE_METRICS
+from ..grasp.policy import SimulationBatch
+from ..objects import GraspObject
 from .phi import compute_phi_batch
-
-if TYPE_CHECKING:
-    from ..grasp.policy import SimulationBatch
-    from ..objects import GraspObject
 
 __all__ = ["phi_of_batch"]
 

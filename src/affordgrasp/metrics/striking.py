@@ -1,4 +1,4 @@
-"""What makes a surface one to strike with, at a physical scale, without part labels.
+"""A blunt striking surface and the swing that strikes with it, without part labels (SPEC §2.10).
 
 A hammer's striking face (an axe's poll) is the flat end of a long, massive head: behind it,
 along the inward normal, lies the head's whole length (60-170 mm), and around it the surface
@@ -17,6 +17,8 @@ face with a scanner's noise).
 
 * ``use_swing_cosine``: per grasp, the cosine between U's outward normal and the velocity
   a swing about the wrist axis gives U: 1 when the face meets its target square.
+* ``use_lever_ratio``: per grasp, whether that swing strikes with the massive end: U's
+  distance from the wrist axis over the centre of mass's, projected on U's side.
 
 The first two depend on the solid, not on its triangles (rays on a closed mesh), so a scan-like
 variant reads what its crisp family does (tests/metrics/test_striking.py: a box's faces, a
@@ -28,8 +30,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from .use_geometry import _first_exit
-from .validation import points_n3, use_normals_n3
+from ..rays.mesh import mesh_caster
+from .cones import plane_axes
+from .validation import points_n3, positive_length, use_normals_n3
 
 RELIEF_RADIUS_M = 0.005  # ring radius of use_relief
 RELIEF_RAYS = 8  # rays on the ring
@@ -39,10 +42,7 @@ _DEPTH_START_M = 2e-5  # the depth ray starts this far inside U, along -n
 
 def _first_hits(mesh, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """Distance to the first hit of each ray ((n,) float64, +inf for a miss), m."""
-    caster = mesh.ray
-    if hasattr(caster, "cast"):  # objects.rays backends
-        return np.asarray(caster.cast(origins, directions).distance, dtype=np.float64)
-    return _first_exit(mesh, origins, directions)
+    return mesh_caster(mesh).cast(origins, directions).distance
 
 
 def _checked(use_point, use_normal) -> tuple[np.ndarray, np.ndarray]:
@@ -56,7 +56,7 @@ def use_depth(mesh, use_point, use_normal) -> float | np.ndarray:
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m, closed (anything with a ``ray`` caster).
+        The object, m, closed (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -89,7 +89,7 @@ def use_relief(
     Parameters
     ----------
     mesh : trimesh.Trimesh or MeshData
-        The object, m (anything with a ``ray`` caster).
+        The object, m (its rays: :func:`affordgrasp.rays.mesh.mesh_caster`).
     use_point : (3,) or (n, 3) float
         Use points on the surface, m.
     use_normal : (3,) or (n, 3) float
@@ -109,19 +109,14 @@ def use_relief(
     """
     single = np.ndim(use_point) == 1
     P, N = _checked(use_point, use_normal)
-    radius = float(radius)
-    if not (np.isfinite(radius) and radius > 0):
-        raise InputError(f"radius must be a positive length in metres, got {radius}")
+    radius = positive_length(radius, "radius")
     k = int(rays)
     if k < 3:
         raise InputError(f"rays must be an integer >= 3, got {rays}")
     n = len(P)
     if n == 0:
         return np.zeros(0)
-    helper = np.where(np.abs(N[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-    e1 = np.cross(N, helper)
-    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
-    e2 = np.cross(N, e1)
+    e1, e2 = plane_axes(N)
     angle = 2.0 * np.pi * np.arange(k) / k
     ring = (
         np.cos(angle)[None, :, None] * e1[:, None, :]
@@ -180,11 +175,53 @@ def use_swing_cosine(use_point, use_normal, wrist_point, wrist_axis) -> float | 
     W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
     A = np.asarray(wrist_axis, dtype=np.float64).reshape(-1, 3)
     A = A / np.linalg.norm(A, axis=1, keepdims=True)
-    d = U - W
-    r = d - np.einsum("ij,ij->i", d, A)[:, None] * A
-    v = np.cross(A, r)
+    v = np.cross(A, _off_axis(U, W, A))
     speed = np.linalg.norm(v, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         cosine = np.einsum("ij,ij->i", N, v) / speed
     cosine = np.where(speed > 1e-12, cosine, np.where(np.isnan(speed), np.nan, 0.0))
     return np.clip(cosine, -1.0, 1.0)
+
+
+def _off_axis(P: np.ndarray, W: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """(n, 3) offsets of the points P from the axes through W along A, square to A."""
+    d = P - W
+    return d - np.einsum("ij,ij->i", d, A)[:, None] * A
+
+
+def use_lever_ratio(use_point, center_of_mass, wrist_point, wrist_axis) -> np.ndarray:
+    """How far U is from the wrist axis, relative to the centre of mass (``use_lever_ratio``).
+
+    With r_U and r_C the offsets of U and of the centre of mass from the wrist axis (the line
+    through the palm centre along the approach direction; the parts perpendicular to it), the
+    ratio is |r_U|² / (r_C · r_U): U's lever over the centre of mass's lever projected on U's
+    side. A swing about that axis strikes with its massive end when the ratio is at least 1
+    (the mass lies between the axis and U) and small (the mass near U: at most 2 puts it in
+    the outer half of the lever). A hammer held by its handle, whose steel head holds the
+    centre of mass, strikes with the head (ratio a little over 1); striking with the handle's
+    end beyond the hand puts the mass on the other side of the axis (negative), and holding
+    the head to strike with the handle puts the mass near the axis (large).
+
+    Parameters
+    ----------
+    use_point, wrist_point, wrist_axis
+        As for :func:`use_swing_cosine`.
+    center_of_mass : (3,) float
+        m.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        Dimensionless; -inf when the centre of mass is on the axis or on the other side of it
+        from U (r_C · r_U <= 0); NaN where U is NaN (no use point).
+    """
+    U = np.asarray(use_point, dtype=np.float64).reshape(-1, 3)
+    W = np.asarray(wrist_point, dtype=np.float64).reshape(-1, 3)
+    A = np.asarray(wrist_axis, dtype=np.float64).reshape(-1, 3)
+    c = np.asarray(center_of_mass, dtype=np.float64).reshape(1, 3)
+    r_u = _off_axis(U, W, A)
+    r_c = _off_axis(np.broadcast_to(c, U.shape), W, A)
+    along = np.einsum("ij,ij->i", r_c, r_u)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.einsum("ij,ij->i", r_u, r_u) / along
+    return np.where(along > 0, ratio, np.where(np.isnan(along), np.nan, -np.inf))

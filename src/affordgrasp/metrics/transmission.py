@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import InternalError
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .effort import use_wrench
 from .lp import OPTIMAL, HighsStandardLP, LPStatus, check_backend, simplex_standard

@@ -2,9 +2,7 @@
 
 The entry point is :func:`load_object`, which turns ``"knife"``, ``"knife:7"`` or a
 mesh path into a :class:`GraspObject`. The procedural families (:func:`make_family`,
-``FAMILIES``) are imported on first use. Rays are cast through one interface,
-:class:`RayCaster` (``cast(origins, directions)`` → :class:`RayHits`), whose Embree
-backend is :class:`~affordgrasp.objects.rays.EmbreeScene` (:mod:`affordgrasp.objects.rays`).
+``FAMILIES``) are imported on first use. Rays are cast by :mod:`affordgrasp.rays`.
 """
 
 from __future__ import annotations
@@ -14,7 +12,6 @@ from typing import Any
 from affordgrasp.objects.loading import load_mesh, prepare_mesh
 from affordgrasp.objects.mass import MassProperties, mass_properties, mass_properties_parts
 from affordgrasp.objects.off import read_off
-from affordgrasp.objects.rays import RayCaster, RayHits
 from affordgrasp.objects.resolve import (
     GraspObject,
     list_families,
@@ -27,8 +24,6 @@ __all__ = [
     "FAMILIES",
     "GraspObject",
     "MassProperties",
-    "RayCaster",
-    "RayHits",
     "list_families",
     "load_object",
     "load_mesh",

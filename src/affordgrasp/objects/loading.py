@@ -8,15 +8,21 @@ what the rest of the pipeline assumes: a closed, outward-oriented volume in metr
 Repair order, cheapest and least invasive first:
 
 1. merge duplicate vertices, drop faces that repeat a vertex and duplicate faces;
-2. a closed mesh made of several bodies: overlapping bodies are unioned (manifold3d) so
+2. an open mesh: weld the vertices of its open edges that lie closer than
+   ``WELD_RELATIVE`` of its size (a seam written with its two sides apart), before anything
+   is capped;
+3. a closed mesh made of several bodies: overlapping bodies are unioned (manifold3d) so
    that no volume is counted twice, bodies turned inside out are flipped, a body inside
-   another and facing inwards is kept as a cavity;
-3. an open mesh: fix the winding, cap each hole with a polygon triangulated in its plane
+   another and facing inwards is kept as a cavity; bodies apart from each other are kept
+   as one rigid object, with a warning that names them (and one for floating specks);
+4. still open: fix the winding, cap each hole with a polygon triangulated in its plane
    (a rim that passes one vertex twice is capped as two holes; a jagged rim whose planar
    triangulation would reuse an edge of the mesh, as a scan cut open at its base has, is
    capped with a fan from its centroid), and close each connected part separately (parts
-   touching along an edge are a soup of closed parts: step 2 then unions them);
-4. still open: let manifold3d merge nearly coincident vertices along open edges.
+   touching along an edge are a soup of closed parts: step 3 then unions them);
+5. still open: let manifold3d merge nearly coincident vertices along open edges.
+
+Sizes in warnings are in the mesh's own unit (``units``), else in metres or millimetres.
 
 Whatever is still not a closed volume, or encloses no volume, is refused with a
 :class:`~affordgrasp.errors.MeshError` that says what to do.
@@ -58,6 +64,12 @@ log = logging.getLogger(__name__)
 # A disjoint body under this share of the largest body's volume is a speck: kept, with a
 # warning (a scan's floating noise widens the extent that places the pregrasps).
 SPECK_RELATIVE_VOLUME = 1e-3
+# Vertices of open edges closer than this share of the mesh's longest extent are one vertex
+# written twice (a UV sphere's seam): welded before any hole is capped.
+WELD_RELATIVE = 1e-6
+# Bodies further apart than this share of the largest body's extent are separate (named in
+# a warning); closer, they are parts of one object that touch.
+SEPARATE_RELATIVE_GAP = 1e-3
 
 # The warnings of the load in progress, when someone records them (see recording_warnings).
 _RECORDED: ContextVar[list[str] | None] = ContextVar("_RECORDED", default=None)
@@ -154,7 +166,6 @@ def prepare_mesh(
     source: str = "mesh",
     check_size: bool = False,
     simplify_above: int | None = LARGE_MESH_FACES,
-    tolerance_m: float = SIMPLIFY_TOLERANCE_M,
 ) -> trimesh.Trimesh:
     """Clean, repair, orient and scale a mesh into a closed solid in metres.
 
@@ -177,14 +188,11 @@ def prepare_mesh(
         a hand can grasp), with a message naming the likely unit. Without it such a mesh
         only logs a warning. :func:`load_mesh` checks.
     simplify_above : int or None
-        A mesh with more triangles is first decimated to ``tolerance_m``
+        A mesh with more triangles is first decimated to ``SIMPLIFY_TOLERANCE_M``
         (:func:`~affordgrasp.objects.simplify.simplify_to_tolerance`); a warning gives the
         triangle counts and the measured distance. Quadric decimation can open a closed
         surface (edges collapsed across a thin wall): when the decimated mesh is not closed
         and the original is, the original is kept, with a warning. None: never.
-    tolerance_m : float
-        The simplification's geometric tolerance, metres (one-sided distance from the
-        original's vertices to the simplified surface).
 
     Returns
     -------
@@ -220,11 +228,23 @@ def prepare_mesh(
         if scale_kind == "size_m":
             used = vertices[_used_vertices(len(vertices), faces)]
             factor = scale_value / float(np.ptp(used, axis=0).max())
-        v, f = _simplified(vertices, faces, tolerance_m / factor, factor, source)
+        v, f = _simplified(vertices, faces, SIMPLIFY_TOLERANCE_M / factor, factor, source)
         if len(f) != len(faces):
             original, (vertices, faces) = (vertices, faces), (v, f)
     simplified = original is not None
     repairs: list[str] = []
+    if scale_kind == "units":
+        unit = str(units).strip().lower()
+
+        def length(value: float) -> str:
+            return f"{value:.3g} {unit}"
+    else:
+        used = vertices[_used_vertices(len(vertices), faces)]
+        to_m = 1.0 if scale_kind is None else scale_value / float(np.ptp(used, axis=0).max())
+
+        def length(value: float) -> str:
+            return _length(value * to_m)
+
     # A decimated mesh is indexed already (_simplified shares a soup's vertices first), and
     # decimation can leave two vertices at one position where it pinched a surface: merging
     # them by position would make faces that repeat a vertex and edges of more than two
@@ -245,7 +265,7 @@ def prepare_mesh(
                 len(whole.faces),
             )
             work, repairs = whole, kept
-    work = _closed_volume(work, source, repairs)
+    work = _closed_volume(work, source, repairs, length)
     if repairs:
         # One line that says what was done, so that the user can judge the result.
         _warn("%s was repaired: %s", source, "; ".join(repairs))
@@ -490,16 +510,21 @@ def _is_closed(mesh: trimesh.Trimesh) -> bool:
     return bool(mesh.is_watertight and mesh.is_winding_consistent)
 
 
-def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> trimesh.Trimesh:
+def _closed_volume(
+    mesh: trimesh.Trimesh, source: str, repairs: list[str], length
+) -> trimesh.Trimesh:
     """Return a closed, outward-oriented mesh equal to ``mesh`` where it was already one.
 
-    Appends to ``repairs`` a phrase for every change (what was done, to how much).
+    Appends to ``repairs`` a phrase for every change (what was done, to how much), sizes
+    written by ``length`` (a length in the mesh's coordinates -> text in the user's unit).
     """
+    if not _is_closed(mesh):
+        mesh = _welded_seams(mesh, repairs, length)
     if _is_closed(mesh):
         if mesh.body_count == 1:
             return _oriented(mesh, repairs)
         bodies = mesh.split(only_watertight=False, repair=False)
-        return _combine_bodies(bodies, mesh, source, repairs)
+        return _combine_bodies(bodies, mesh, source, repairs, length)
 
     work = mesh.copy()
     zero_area = len(work.faces)
@@ -540,9 +565,9 @@ def _closed_volume(mesh: trimesh.Trimesh, source: str, repairs: list[str]) -> tr
             edges = sum(len(h) for h in holes)
             repairs.append(
                 f"capped {_count(len(holes), 'hole')} ({edges} boundary edges, the widest "
-                f"{_length(widest)} across) with flat faces"
+                f"{length(widest)} across) with flat faces"
             )
-        return _combine_bodies(bodies, None, source, repairs, quiet_flat=fins)
+        return _combine_bodies(bodies, None, source, repairs, length, quiet_flat=fins)
 
     open_edges = _boundary_edge_count(work)
     raise MeshError(
@@ -676,6 +701,7 @@ def _combine_bodies(
     whole: trimesh.Trimesh | None,
     source: str,
     repairs: list[str],
+    length,
     quiet_flat: int = 0,
 ) -> trimesh.Trimesh:
     """One solid from closed bodies: union overlaps, flip inverted bodies, keep cavities.
@@ -737,7 +763,7 @@ def _combine_bodies(
         return _oriented(trimesh.util.concatenate([*outer, *cavities]))
     if abs(solid.volume() - expected) <= UNION_RTOL * abs(expected):
         # Disjoint bodies: keep the input's own vertices and faces.
-        _warn_specks(outer, source)
+        _warn_apart(outer, source, length)
         if whole is not None and not flipped:
             return _oriented(whole)
         return _oriented(trimesh.util.concatenate([*outer, *cavities]))
@@ -745,28 +771,99 @@ def _combine_bodies(
     return _oriented(_from_manifold(solid), repairs)
 
 
-def _warn_specks(bodies: list[trimesh.Trimesh], source: str) -> None:
-    """Say so when disjoint bodies include specks (a scan's floating noise): they are kept,
-    and they widen the extent that places the pregrasps."""
+def _warn_apart(bodies: list[trimesh.Trimesh], source: str, length) -> None:
+    """Say so when disjoint bodies are kept as one rigid object: specks (a scan's floating
+    noise) widen the extent that places the pregrasps; bodies of some size apart from the
+    others are graded as if joined to them."""
     volumes = np.array([abs(_signed_volume(b)) for b in bodies])
     largest = int(np.argmax(volumes))
-    specks = int((volumes < SPECK_RELATIVE_VOLUME * volumes[largest]).sum())
-    if not specks:
-        return
-    low = np.min([b.bounds[0] for b in bodies], axis=0)
-    high = np.max([b.bounds[1] for b in bodies], axis=0)
-    _warn(
-        "%s: %d of its %d disjoint bodies hold%s under %.2g %% of the largest one's volume "
-        "(floating specks of a scan?); kept, they widen the object's extent from %s to %s, "
-        "which moves where grasps are aimed: remove them in a mesh editor if they are noise",
-        source,
-        specks,
-        len(bodies),
-        "s" if specks == 1 else "",
-        SPECK_RELATIVE_VOLUME * 100,
-        _length(float(np.ptp(bodies[largest].bounds, axis=0).max())),
-        _length(float(np.ptp(np.stack([low, high]), axis=0).max())),
+    is_speck = volumes < SPECK_RELATIVE_VOLUME * volumes[largest]
+    specks = int(is_speck.sum())
+    if specks:
+        low = np.min([b.bounds[0] for b in bodies], axis=0)
+        high = np.max([b.bounds[1] for b in bodies], axis=0)
+        _warn(
+            "%s: %d of its %d disjoint bodies hold%s under %.2g %% of the largest one's volume "
+            "(floating specks of a scan?); kept, they widen the object's extent from %s to %s, "
+            "which moves where grasps are aimed: remove them in a mesh editor if they are noise",
+            source,
+            specks,
+            len(bodies),
+            "s" if specks == 1 else "",
+            SPECK_RELATIVE_VOLUME * 100,
+            length(float(np.ptp(bodies[largest].bounds, axis=0).max())),
+            length(float(np.ptp(np.stack([low, high]), axis=0).max())),
+        )
+    parts = [b for b, speck in zip(bodies, is_speck, strict=True) if not speck]
+    labels, gap = _contact_groups(parts)
+    if labels.max() > 0:
+        bounds = np.array([p.bounds for p in parts])  # (n, 2, 3)
+        sizes = [
+            float(np.ptp(bounds[labels == g].reshape(-1, 3), axis=0).max())
+            for g in range(labels.max() + 1)
+        ]
+        _warn(
+            "%s holds %d separate bodies (%s long), the closest %s apart: they are graded as "
+            "ONE rigid object, as if joined; if they are separate objects, give each its own "
+            "mesh file (or join them in a mesh editor)",
+            source,
+            len(sizes),
+            ", ".join(length(x) for x in sorted(sizes, reverse=True)),
+            length(gap),
+        )
+
+
+def _contact_groups(bodies: list[trimesh.Trimesh]) -> tuple[np.ndarray, float]:
+    """The group of each body, bodies closer than ``SEPARATE_RELATIVE_GAP`` of the largest
+    extent sharing one, and the smallest gap between two groups (0 for one group)."""
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(bodies)
+    scale = max(float(np.ptp(b.bounds, axis=0).max()) for b in bodies)
+    solids = [_to_manifold(b) for b in bodies]
+    gaps = np.full((n, n), np.inf)
+    for i in range(n):
+        for j in range(i + 1, n):
+            gaps[i, j] = solids[i].min_gap(solids[j], scale)
+    _, labels = connected_components(gaps <= SEPARATE_RELATIVE_GAP * scale, directed=False)
+    apart = gaps[(labels[:, None] != labels[None, :]) & np.isfinite(gaps)]
+    return labels, float(apart.min(initial=scale))
+
+
+def _welded_seams(mesh: trimesh.Trimesh, repairs: list[str], length) -> trimesh.Trimesh:
+    """``mesh`` with the vertices of its open edges closer than ``WELD_RELATIVE`` of its
+    longest extent welded into one (a seam written twice); ``mesh`` itself when none are."""
+    import trimesh
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    n = len(mesh.vertices)
+    edges = mesh.edges_sorted
+    _, inverse, counts = np.unique(_edge_keys(edges, n), return_inverse=True, return_counts=True)
+    rim = np.unique(edges[counts[inverse.ravel()] == 1])
+    tolerance = WELD_RELATIVE * float(np.ptp(mesh.vertices, axis=0).max())
+    pairs = cKDTree(mesh.vertices[rim]).query_pairs(tolerance, output_type="ndarray")
+    if len(pairs) == 0:
+        return mesh
+    a, b = rim[pairs[:, 0]], rim[pairs[:, 1]]
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    first = np.full(labels.max() + 1, n)
+    np.minimum.at(first, labels, np.arange(n))
+    faces = first[labels][mesh.faces]
+    keep = (
+        (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     )
+    welded = trimesh.Trimesh(mesh.vertices, faces[keep], process=False)
+    welded.update_faces(welded.unique_faces())
+    welded.remove_unreferenced_vertices()
+    gap = float(np.linalg.norm(mesh.vertices[a] - mesh.vertices[b], axis=1).max())
+    repairs.append(
+        f"welded {n - len(welded.vertices)} vertices of its open edges onto others at most "
+        f"{length(gap)} away (a seam written with its two sides apart)"
+    )
+    return welded
 
 
 def _fill_holes(mesh: trimesh.Trimesh, *, careful: bool = False) -> list[np.ndarray]:
@@ -805,11 +902,16 @@ def _fill_holes(mesh: trimesh.Trimesh, *, careful: bool = False) -> list[np.ndar
     caps, centres = [], []
     for loop in loops:
         cap = loop[triangulate_polygon(mesh.vertices[loop])]
-        if careful and (len(cap) < len(loop) - 2 or _reuses_an_edge(cap, loop, existing, n)):
+        if careful and (
+            len(cap) < len(loop) - 2
+            or _reuses_an_edge(cap, loop, existing, n)
+            or not _wound_with_rim(cap, loop, n)
+        ):
             # A jagged rim (a scan cut open at its base) where the planar triangulation
-            # drops an ear or draws a diagonal that is already an edge of the mesh (a
-            # triangle with two rim edges): a fan from a new vertex at the rim's centroid
-            # uses no edge but the rim's.
+            # drops an ear, draws a diagonal that is already an edge of the mesh (a
+            # triangle with two rim edges) or folds over (a noisy rim whose projection
+            # crosses itself): a fan from a new vertex at the rim's centroid uses no edge
+            # but the rim's, each once, and is wound with it.
             centre = n + len(centres)
             centres.append(mesh.vertices[loop].mean(axis=0))
             cap = np.stack([loop, np.roll(loop, -1), np.full(len(loop), centre)], axis=1)
@@ -852,6 +954,15 @@ def _reuses_an_edge(cap: np.ndarray, loop: np.ndarray, existing: np.ndarray, n: 
     rim = _edge_keys(np.stack([loop, np.roll(loop, -1)], axis=1), n)
     keys = _edge_keys(cap[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), n)
     return bool(np.any(np.isin(keys, existing) & ~np.isin(keys, rim)))
+
+
+def _wound_with_rim(cap: np.ndarray, loop: np.ndarray, n: int) -> bool:
+    """Whether a cap and the rim's edges as the mesh runs them (against ``loop``) form a
+    consistently wound closed surface: every edge run once each way."""
+    rim = np.stack([np.roll(loop, -1), loop], axis=1)
+    edges = np.vstack([cap[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), rim])
+    keys, back = edges @ np.array([n, 1]), edges[:, ::-1] @ np.array([n, 1])
+    return len(np.unique(keys)) == len(keys) and bool(np.isin(back, keys).all())
 
 
 def _boundary_edge_count(mesh: trimesh.Trimesh) -> int:

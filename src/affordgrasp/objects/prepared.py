@@ -18,7 +18,7 @@ Three kinds of entries live under ``cache_dir()/objects`` (:func:`affordgrasp.ca
   with the same vertices and faces shares it.
 
 Every key also holds a **stamp**: a format number, a hash of the sources that compute the
-entries (``affordgrasp/objects``, ``grasp/policy.py``) and a
+entries (``affordgrasp/objects``, ``rays``, ``grasp/policy.py``) and a
 fingerprint of the installed numpy, trimesh, scipy and manifold3d. An entry written under
 another key, that fails its checksum or that cannot be read is rebuilt and overwritten,
 never trusted (:func:`affordgrasp.caching.read_arrays`); a loaded family's vertices and
@@ -39,11 +39,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import numpy as np
 
 from ..caching import IdentityCache, cache_dir, read_arrays, write_arrays
+from .mass import MassProperties
+from .surface import SurfaceSample, sample_surface
 
 # The ``source`` of an object made in memory for one use (a surface fused from camera
 # views): its derived geometry is not written to the disk cache.
@@ -52,14 +54,38 @@ TRANSIENT_SOURCE = "transient"
 if TYPE_CHECKING:
     import trimesh
 
-    from .mass import MassProperties
-    from .resolve import GraspObject
-    from .surface import SurfaceSample
+
+class _ResolvedObject(Protocol):
+    """What the cache reads of a GraspObject, described: objects.resolve builds on this module."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def category(self) -> str: ...
+    @property
+    def mesh(self) -> trimesh.Trimesh: ...
+    @property
+    def mass(self) -> MassProperties: ...
+    @property
+    def mesh_hash(self) -> str: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def face_parts(self) -> np.ndarray | None: ...
+    @property
+    def part_names(self) -> tuple[str, ...]: ...
+    @property
+    def materials(self) -> bool: ...
+    @property
+    def vertices(self) -> np.ndarray: ...
+    @property
+    def faces(self) -> np.ndarray: ...
+
 
 FORMAT = 1
 _T = TypeVar("_T")
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]  # affordgrasp/
-_STAMPED_SOURCES = ("objects", "grasp/policy.py")
+_STAMPED_SOURCES = ("objects", "rays", "grasp/policy.py")
 _STAMPED_PACKAGES = ("numpy", "trimesh", "scipy", "manifold3d", "fast_simplification")
 
 
@@ -119,7 +145,8 @@ class MeshData:
     """A triangle mesh as arrays, with what trimesh derives from it, without trimesh.
 
     Duck-types the part of ``trimesh.Trimesh`` the pipeline uses (``vertices``, ``faces``,
-    ``face_normals``, ``triangles``, ``face_adjacency*``, ``ray``, ``hash()``).
+    ``face_normals``, ``triangles``, ``face_adjacency*``, ``hash()``); its rays are cast by
+    :func:`affordgrasp.rays.mesh.mesh_caster` (Embree, without trimesh).
 
     Attributes
     ----------
@@ -156,18 +183,6 @@ class MeshData:
     def triangles(self) -> np.ndarray:
         """(f, 3, 3) float64 ndarray: the vertices of each face, m."""
         return self.vertices[self.faces]
-
-    @property
-    def ray(self):
-        """Ray queries (:class:`~affordgrasp.objects.rays.EmbreeRays`, else trimesh's)."""
-        return _RAYS.get(self, self._make_rays)
-
-    def _make_rays(self):
-        from .rays import EmbreeRays, embree_available
-
-        if embree_available() and self.face_normals is not None and self.scale is not None:
-            return EmbreeRays(self.vertices, self.faces, self.face_normals, self.scale)
-        return self.to_trimesh().ray
 
     def to_trimesh(self) -> trimesh.Trimesh:
         """The mesh as a ``trimesh.Trimesh`` (same vertices and faces, not processed).
@@ -206,8 +221,6 @@ class MeshData:
             face_adjacency_convex=np.asarray(mesh.face_adjacency_convex, dtype=bool),
         )
 
-
-_RAYS: IdentityCache[Any] = IdentityCache()
 
 _MESH_FIELDS = (
     "face_normals",
@@ -270,7 +283,7 @@ def _entry_path(name: str) -> Path:
     return cache_dir() / "objects" / f"{name}.npz"
 
 
-def derived_geometry(obj: GraspObject) -> DerivedGeometry:
+def derived_geometry(obj: _ResolvedObject) -> DerivedGeometry:
     """The derived geometry of an object's mesh: from memory, from disk, or computed.
 
     Parameters
@@ -284,7 +297,7 @@ def derived_geometry(obj: GraspObject) -> DerivedGeometry:
     return _DERIVED.get(obj, lambda: _load_or_build_derived(obj))
 
 
-def _load_or_build_derived(obj: GraspObject) -> DerivedGeometry:
+def _load_or_build_derived(obj: _ResolvedObject) -> DerivedGeometry:
     if obj.source == TRANSIENT_SOURCE:
         return _build_derived(obj)  # made for one use: the disk cache would only grow
     vertices, faces = obj.vertices, obj.faces
@@ -317,10 +330,8 @@ def centred_frame_origin(vertices: np.ndarray) -> np.ndarray:
     return 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
 
 
-def _build_derived(obj: GraspObject) -> DerivedGeometry:
+def _build_derived(obj: _ResolvedObject) -> DerivedGeometry:
     import trimesh
-
-    from .surface import sample_surface
 
     mesh = obj.mesh
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
@@ -373,8 +384,6 @@ def _derived_to_arrays(d: DerivedGeometry) -> dict[str, np.ndarray]:
 def _derived_from_arrays(
     vertices: np.ndarray, faces: np.ndarray, content_hash: str, a: dict[str, np.ndarray]
 ) -> DerivedGeometry:
-    from .surface import SurfaceSample
-
     origin = a["origin"]
     n_faces = len(faces)
     if a["mesh_face_normals"].shape != (n_faces, 3) or origin.shape != (3,):
@@ -489,7 +498,7 @@ def _load_object(
         return None
 
 
-def store_family(key: dict[str, Any], obj: GraspObject) -> None:
+def store_family(key: dict[str, Any], obj: _ResolvedObject) -> None:
     """Store a freshly resolved family under ``key`` (see :func:`load_family`).
 
     Parameters
@@ -650,7 +659,7 @@ def load_mesh_file(key: dict[str, Any], name: str, source: str) -> dict[str, Any
     return found[0]
 
 
-def store_mesh_file(key: dict[str, Any], obj: GraspObject, warnings: list[str]) -> None:
+def store_mesh_file(key: dict[str, Any], obj: _ResolvedObject, warnings: list[str]) -> None:
     """Store a freshly resolved mesh file under ``key`` (see :func:`load_mesh_file`).
 
     Parameters
@@ -666,7 +675,7 @@ def store_mesh_file(key: dict[str, Any], obj: GraspObject, warnings: list[str]) 
     write_arrays(_file_path(key), key, arrays)
 
 
-def _mesh_to_arrays(obj: GraspObject) -> dict[str, np.ndarray]:
+def _mesh_to_arrays(obj: _ResolvedObject) -> dict[str, np.ndarray]:
     arrays: dict[str, np.ndarray] = {
         "vertices": np.asarray(obj.vertices, dtype=np.float64),
         "faces": np.asarray(obj.faces, dtype=np.int64),
@@ -680,25 +689,15 @@ def _mesh_to_arrays(obj: GraspObject) -> dict[str, np.ndarray]:
 
 def _mesh_from_arrays(a: dict[str, np.ndarray]) -> MeshData | None:
     """The stored mesh, or None when its vertices and faces do not hash to its hash."""
-    vertices = a["vertices"]
-    faces = a["faces"]
-    digest = str(a["mesh_hash"])
-    if vertices.ndim != 2 or faces.ndim != 2 or mesh_hash(_Arrays(vertices, faces)) != digest:
+    mesh = MeshData(a["vertices"], a["faces"], str(a["mesh_hash"]))
+    if mesh.vertices.ndim != 2 or mesh.faces.ndim != 2 or mesh_hash(mesh) != mesh.content_hash:
         return None
-    return MeshData(vertices, faces, digest)
+    return mesh
 
 
 def _mass_from_arrays(a: dict[str, np.ndarray]) -> MassProperties:
-    from .mass import MassProperties
-
     arrays = {}
     for k in _MASS_ARRAYS:
         arrays[k] = np.array(a[f"mass_{k}"], dtype=np.float64)
         arrays[k].setflags(write=False)
     return MassProperties(**{k: float(a[f"mass_{k}"]) for k in _MASS_FLOATS}, **arrays)
-
-
-@dataclass(frozen=True)
-class _Arrays:
-    vertices: np.ndarray
-    faces: np.ndarray

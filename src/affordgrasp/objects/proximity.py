@@ -13,14 +13,12 @@ sharp edges, vertices and off the surface.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..caching import IdentityCache
-
-if TYPE_CHECKING:
-    from .prepared import MeshData
+from .prepared import MeshData
 
 __all__ = ["closest_faces"]
 

@@ -29,6 +29,7 @@ import numpy as np
 from affordgrasp.errors import InputError, did_you_mean
 from affordgrasp.objects import family_names
 from affordgrasp.objects.loading import (
+    SUPPORTED_EXTENSIONS,
     _scale_request,
     load_mesh,
     prepare_mesh,
@@ -41,14 +42,13 @@ from affordgrasp.objects.mass import (
     plane_regions,
     regions_on_mesh,
 )
-from affordgrasp.objects.prepared import TRANSIENT_SOURCE, mesh_hash
+from affordgrasp.objects.prepared import TRANSIENT_SOURCE, MeshData, mesh_hash
 from affordgrasp.objects.scan import SCAN_SUFFIX, scan_like, split_scan_spec
 from affordgrasp.objects.simplify import LARGE_MESH_FACES
+from affordgrasp.rays.mesh import mesh_caster
 
 if TYPE_CHECKING:
     import trimesh
-
-    from affordgrasp.objects.prepared import MeshData
 
 __all__ = [
     "GraspObject",
@@ -181,10 +181,10 @@ class GraspObject:
         out[ok] = names[self.face_parts[faces[ok]]]
         return out
 
-    def faces_at(self, points, normals, offset_m: float = 5e-4) -> np.ndarray:
+    def faces_at(self, points, normals) -> np.ndarray:
         """Face under each surface point.
 
-        The first face hit by a ray that starts ``offset_m`` outside the point along its outward
+        The first face hit by a ray that starts 0.5 mm outside the point along its outward
         normal and looks back at it. A ray that misses (a contact on a sharp edge, whose normal
         is the edge's) takes the closest face instead.
 
@@ -194,8 +194,6 @@ class GraspObject:
             Surface points, m, in the object frame.
         normals : (n, 3) array_like of float
             Outward unit normals there.
-        offset_m : float
-            Start of the rays outside the surface, m.
 
         Returns
         -------
@@ -208,7 +206,8 @@ class GraspObject:
             return np.zeros(0, dtype=np.int64)
         mesh = self.mesh_data
         faces = np.asarray(
-            mesh.ray.intersects_first(points + offset_m * normals, -normals), dtype=np.int64
+            mesh_caster(mesh).intersects_first(points + 5e-4 * normals, -normals),
+            dtype=np.int64,
         )
         missed = faces < 0
         if missed.any():
@@ -287,8 +286,11 @@ def load_object(
         raise InputError(
             "the object spec is empty; give a family name (e.g. 'knife', 'knife:7') or a mesh path"
         )
-    # an existing file is a file, whatever its name holds ("mug~scan_v2.ply")
-    scan = None if Path(text).expanduser().exists() else split_scan_spec(text)
+    # an existing file is a file, whatever its name holds ("mug~scan_v2.ply"), and a name
+    # ending in a mesh format's extension names a file ("knife~scan.stl"), missing or not
+    path = Path(text).expanduser()
+    named_file = path.exists() or path.suffix.lower() in SUPPORTED_EXTENSIONS
+    scan = None if named_file else split_scan_spec(text)
     if scan is not None:
         return _resolve_scan(
             scan[0], scan[1], size_m=size_m, units=units, density=density, materials=materials
@@ -304,7 +306,6 @@ def load_object(
             )
         seed = _parse_seed(seed_text, family, text)
         return _resolve_family(family, seed, density, materials, size_m, units)
-    path = Path(text).expanduser()
     if path.exists():
         _refuse_materials_for_file(text, materials)
         return _resolve_file(path, size_m=size_m, units=units, density=density)

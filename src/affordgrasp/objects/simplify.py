@@ -172,7 +172,6 @@ def simplify_to_tolerance(
     *,
     max_faces: int | None = None,
     min_faces: int = MIN_FACES,
-    seed: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, Simplification]:
     """Decimate a mesh to the fewest triangles tried whose measured distance is within tolerance.
 
@@ -194,8 +193,6 @@ def simplify_to_tolerance(
         The most triangles kept; default ``MAX_FACES`` or half the mesh's, if fewer.
     min_faces : int
         No pass goes below this.
-    seed : int
-        Chooses the sampled vertices (same seed, same result).
 
     Returns
     -------
@@ -212,7 +209,7 @@ def simplify_to_tolerance(
     cap = int(max_faces or min(MAX_FACES, len(faces) // 2))
     if cap >= len(faces) or cap < 4:
         return vertices, faces, Simplification(len(faces), len(faces), float(tolerance), 0.0, 0)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(0)
     mask = np.zeros(len(vertices), dtype=bool)
     mask[faces.ravel()] = True  # np.unique would sort: seconds on a scan
     used = np.flatnonzero(mask)

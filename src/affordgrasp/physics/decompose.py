@@ -21,7 +21,8 @@ import numpy as np
 import trimesh
 
 from ..caching import cache_dir
-from ..writing import atomic_write
+from ..errors import InputError
+from ..runtime.writing import atomic_write
 from . import deps
 from .settings import PhysicsSettings
 
@@ -113,5 +114,5 @@ def _write_atomic(path: Path, parts: list) -> None:
             arrays[f"v{i}"] = v
             arrays[f"f{i}"] = f
         atomic_write(path, lambda fh: np.savez(fh, **arrays))
-    except OSError as exc:  # a read-only cache only costs time
+    except (OSError, InputError) as exc:  # a read-only or full cache only costs time
         log.warning("cannot cache the decomposition in %s: %s", path.parent, exc)

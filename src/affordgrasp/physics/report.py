@@ -34,6 +34,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..columns import HOLD_EFFORT_COLUMNS, hold_directions, hold_effort_sum
+from ..runtime.writing import atomic_write
 from ..stats import bootstrap_auc, roc_auc, roc_curve, spearman
 
 __all__ = ["HEADLINE", "physics_report", "roc_auc", "roc_curve", "spearman"]
@@ -141,10 +142,24 @@ def _family(name: str) -> str:
     return name.split(":", 1)[0]
 
 
+def _why_undefined(predictor: str, x: np.ndarray, outcome: str, y: np.ndarray) -> str:
+    """Why the AUC or ρ of predictor values ``x`` against outcomes ``y`` is NaN, in words."""
+    keep = ~(np.isnan(x) | np.isnan(y))
+    x, y = x[keep], y[keep]
+    if len(x) < 3:
+        return f"{len(x)} rows with both {predictor} and {outcome}"
+    if np.all(x == -np.inf):
+        return f"every {predictor} is -inf (no grasp passes the task)"
+    if np.all(x == x[0]):
+        return f"{predictor} is the same on every row"
+    return f"{outcome} is the same on every row"
+
+
 def _stats(preds, outs, mask) -> dict:
     rates: dict[str, float] = {}
     aucs: dict[str, dict[str, float]] = {}
     rhos: dict[str, dict[str, float]] = {}
+    undefined: dict[str, dict[str, str]] = {}  # outcome -> predictor -> why it is NaN
     result = {"n": int(mask.sum()), "auc": aucs, "spearman": rhos, "rates": rates}
     for o in BINARY_OUTCOMES:
         y = outs[o][mask]
@@ -153,6 +168,11 @@ def _stats(preds, outs, mask) -> dict:
         aucs[o] = {p: roc_auc(v[mask][valid], y[valid].astype(bool)) for p, v in preds.items()}
     for o in GRADED_OUTCOMES:
         rhos[o] = {p: spearman(v[mask], outs[o][mask]) for p, v in preds.items()}
+    for o, values in (*aucs.items(), *rhos.items()):
+        for p, value in values.items():
+            if math.isnan(value):
+                undefined.setdefault(o, {})[p] = _why_undefined(p, preds[p][mask], o, outs[o][mask])
+    result["undefined"] = undefined
     return result
 
 
@@ -234,10 +254,15 @@ def physics_report(
         directory.mkdir(parents=True, exist_ok=True)
         from ..jsonable import to_jsonable
 
-        (directory / "report.json").write_text(json.dumps(to_jsonable(report), indent=2))
-        (directory / "report.md").write_text(report_markdown(report))
+        atomic_write(directory / "report.json", json.dumps(to_jsonable(report), indent=2).encode())
+        atomic_write(directory / "report.md", report_markdown(report).encode())
         _plots(preds, outs, families, report, directory)
     return report
+
+
+def _save_png(fig, path: Path) -> None:
+    """Write a figure as a PNG (110 dpi), atomically."""
+    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
 
 
 def _headline(preds, outs, mask, n_boot: int, seed: int) -> dict:
@@ -487,7 +512,7 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
         ax.set_title(f"ROC, outcome {outcome} (n={int(valid.sum())})")
         ax.legend(loc="lower right", fontsize=8)
         fig.tight_layout()
-        fig.savefig(directory / f"roc_{outcome}.png", dpi=110)
+        _save_png(fig, directory / f"roc_{outcome}.png")
 
     fams = sorted(report["families"])
     names = ["epsilon", "neg_hold_effort_sum", "task_pick", "task_viable"]
@@ -504,7 +529,7 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
     ax.set_ylabel("ROC-AUC, hold test")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(directory / "auc_hold_by_family.png", dpi=110)
+    _save_png(fig, directory / "auc_hold_by_family.png")
 
     _why_plot(preds, outs, directory)
 
@@ -529,7 +554,7 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
         ax.set_title(f"Spearman ρ = {_f(rho)}")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(directory / "scatter.png", dpi=110)
+    _save_png(fig, directory / "scatter.png")
 
 
 def _headline_roc(preds, outs, families, report, directory: Path) -> None:
@@ -555,7 +580,7 @@ def _headline_roc(preds, outs, families, report, directory: Path) -> None:
     for ax in axes[len(fams) :]:
         ax.set_visible(False)
     fig.tight_layout()
-    fig.savefig(directory / "roc_hold_headline.png", dpi=110)
+    _save_png(fig, directory / "roc_hold_headline.png")
 
 
 def _why_plot(preds, outs, directory: Path) -> None:
@@ -581,4 +606,4 @@ def _why_plot(preds, outs, directory: Path) -> None:
     ax.set_title("Outcomes per ε bin: ties at ε = 0 cap the AUC")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(directory / "why_epsilon_bins.png", dpi=110)
+    _save_png(fig, directory / "why_epsilon_bins.png")

@@ -8,7 +8,7 @@ fsync, rename) by the calling process when its rows come back; a run skips every
 already there with the planned row count. ``_physics.json`` records the plan and the
 settings; a run against a directory with another plan refuses and says what differs.
 
-The shards run on the engines that generate uses (:mod:`affordgrasp.dataset.engines`: this
+The shards run on the engines that generate uses (:mod:`affordgrasp.runtime.engines`: this
 process, local worker processes or Ray, every core by default), with the same stopping
 behaviour: the caller resolves each object once (:meth:`~affordgrasp.dataset.handle.Dataset.object`)
 and decomposes it, and the workers get its mesh, mass properties and convex parts in the
@@ -30,13 +30,13 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from .. import __version__
+from .._version import __version__
 from ..columns import METRIC_COLUMNS
 from ..dataset.handle import Dataset
 from ..errors import DatasetError, InputError, bad_parameter
 from ..hands.model import Hand
 from ..robust import RobustSettings, robust_column_names, robust_settings
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
 from .settings import TRIALS, PhysicsSettings, TrialSettings
 
 log = logging.getLogger(__name__)
@@ -248,7 +248,7 @@ def _shard_done(path: Path, rows: int) -> bool:
 
 
 def run_physics(
-    dataset_dir: str | os.PathLike | Dataset,
+    dataset: str | os.PathLike | Dataset,
     out: str | os.PathLike,
     *,
     settings: PhysicsSettings | None = None,
@@ -269,7 +269,7 @@ def run_physics(
 
     Parameters
     ----------
-    dataset_dir : path or Dataset
+    dataset : path or Dataset
         A dataset written by ``affordgrasp generate``: its rows are replayed with its hand
         on its objects (:meth:`~affordgrasp.dataset.handle.Dataset.object`, mass properties
         included: a dataset made with ``--materials`` is replayed with them).
@@ -325,7 +325,7 @@ def run_physics(
     again resumes. Local workers are started with 'spawn': a script calling this with
     ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
     """
-    from ..dataset.engines import check_engine, default_workers
+    from ..runtime.engines import check_engine, default_workers
 
     settings = settings or PhysicsSettings()
     if shard_size <= 0:
@@ -338,7 +338,7 @@ def run_physics(
     trials = check_trials(trials)
     trial_settings = trial_settings or TrialSettings()
     out = Path(out)
-    dataset = Dataset.open(dataset_dir)
+    dataset = Dataset.open(dataset)
     rows = _plan_rows(dataset, statuses, objects, max_per_object)
     n = rows.num_rows
     if n == 0:
@@ -367,7 +367,7 @@ def run_physics(
     }
     # Resolve and decompose each object once, here: the workers get its mesh, mass
     # properties and convex parts (as generate's get its mesh), never its files or caches.
-    from ..dataset.engines import ObjectPayload
+    from ..dataset.jobs import ObjectPayload
 
     payloads, parts = {}, {}
     for name in [o for o in dataset.objects if o in needed]:
@@ -409,7 +409,8 @@ def run_physics(
 
 def _run_jobs(context, jobs, out: Path, summary, advance, engine, workers, address) -> None:
     """Run the shards' jobs on an engine; write each shard as its rows come back."""
-    from ..dataset.engines import make_engine, stop_on_signals
+    from ..runtime.engines import make_engine
+    from ..runtime.interrupts import stop_on_signals
 
     with (
         stop_on_signals(),
@@ -811,7 +812,7 @@ class _TaskRows:
 
     def _edge_frames(self, rows) -> None:
         """The edge's outward direction and direction at each row's U (one cast per object)."""
-        from ..metrics.use_geometry import use_edge_frame
+        from ..metrics.wedge import use_edge_frame
 
         names = np.asarray(self.names, dtype=object)
         up = np.array(

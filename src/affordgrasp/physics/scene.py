@@ -1,4 +1,8 @@
-"""A MuJoCo model of one hand and one object, built from our own data (no third-party meshes).
+"""A MuJoCo model of one hand and one object, built as a ``mujoco.MjSpec`` from our own data.
+
+No third-party meshes, no MJCF text: bodies, joints, geoms and actuators are spec objects,
+named (``link_{i}``, ``j_{i}``, ``object``, ``servo_{finger}``, ``anvil``, ``plate``...), and
+the scene looks their ids up by name in the compiled model.
 
 * The hand frame is the world frame: the palm is fixed at the origin, and the object, a free
   body, is placed at the inverse of the grasp's hand → object transform. With gravity off
@@ -148,20 +152,84 @@ def table_friction(settings: PhysicsSettings, mu_engine: np.ndarray) -> np.ndarr
     return np.tan(np.arctan(mu_engine) - np.radians(settings.friction_margin_deg))
 
 
-def _fmt(values) -> str:
-    return " ".join(f"{v:.9g}" for v in np.asarray(values, dtype=np.float64).ravel())
+def _written(values, digits: int = 9):
+    """``values`` to ``digits`` significant digits, as the model's numbers have always been.
+
+    The model was first written as MJCF text with 9 significant digits (6 for friction);
+    keeping that precision keeps every replay bit for bit what it was.
+    """
+    out = np.array([float(f"{v:.{digits}g}") for v in np.ravel(values)])
+    return float(out[0]) if np.ndim(values) == 0 else out
 
 
-def _quat(rotation: np.ndarray) -> np.ndarray:
+def rotation_quat(rotation: np.ndarray) -> np.ndarray:
+    """The unit quaternion of a rotation matrix.
+
+    Parameters
+    ----------
+    rotation : (3, 3) float ndarray
+
+    Returns
+    -------
+    (4,) float64 ndarray
+        (w, x, y, z), MuJoCo's order.
+    """
     mj = deps.mujoco()
     q = np.zeros(4)
     mj.mju_mat2Quat(q, np.ascontiguousarray(rotation, dtype=np.float64).ravel())
     return q
 
 
+@dataclass(frozen=True)
+class Coupling:
+    """A joint that follows its finger's driven joint: ``joint = a0 + gain · driven``.
+
+    Attributes
+    ----------
+    equality : int
+        MuJoCo id of the joint equality (a0 and gain are set per grasp).
+    joint : int
+        MuJoCo id of the following joint.
+    gain : float
+        Its motion per unit of the driven joint's (the closing speeds' and the joint
+        ratios' quotient: the Barrett distal's is 1/3).
+    """
+
+    equality: int
+    joint: int
+    gain: float
+
+
+@dataclass(frozen=True)
+class FingerDrive:
+    """A finger's position servo on its first closing joint, and the joints coupled to it.
+
+    Attributes
+    ----------
+    servo : int
+        MuJoCo id of the position actuator.
+    joint : int
+        MuJoCo id of the driven joint.
+    closing : float
+        +1 or -1: the direction the driven joint closes in.
+    couplings : tuple of Coupling
+    geoms : (k,) int ndarray
+        The hand geoms the driven joint moves.
+    """
+
+    servo: int
+    joint: int
+    closing: float
+    couplings: tuple[Coupling, ...]
+    geoms: np.ndarray
+
+
 @dataclass
 class Scene:
-    """A compiled model with the indices the trials need. Not thread-safe (one per process).
+    """A compiled model and the MuJoCo ids the trials need. Not thread-safe (one per process).
+
+    The tools are found by name: bodies ``anvil`` (mocap) and ``plate``, the plate's joint
+    ``plate_slide`` and actuator ``plate_push`` (``model.body("plate")``).
 
     Attributes
     ----------
@@ -180,25 +248,18 @@ class Scene:
     object_qpos, object_dof : int
         Addresses of the object's free joint: its 7 qpos (position, quaternion) and its 6
         dofs.
-    fixed_links : list of (int, int)
-        (body id, link index) of every link MuJoCo models without a joint (its DOF does
-        not close, e.g. the Barrett spread), placed per grasp by
+    rigid_links : dict of int to int
+        Hand link index → MuJoCo body id of every link MuJoCo models without a joint (its
+        DOF does not close, e.g. the Barrett spread), placed per grasp by
         :func:`~affordgrasp.physics.trials.set_grasp`.
-    fingers : list of tuple
-        (actuator id, joint id, closing direction ±1, [(equality id, follower joint id,
-        speed ratio), ...]) per finger: the servo on its first joint and the couplings.
-    closing_joints : list of (int, int, float)
-        (MuJoCo joint id, DOF index, ratio) of every closing joint.
+    closing_joints : dict of int to int
+        Hand link index → MuJoCo joint id of every closing joint.
+    fingers : list of FingerDrive
+        Per finger of the hand.
     joint_range : (njnt, 2) float64 ndarray
         The joint limits as built (the non-backdrivable ratchet moves the model's).
-    finger_geoms : list of (k,) int ndarray
-        Per finger (the order of ``fingers``): the hand geoms its driven joint moves.
     palm_geoms : (k,) int ndarray
         The hand geoms no finger moves (the palm and the rigidly placed links).
-    anvil_mocap : int
-        Mocap index of the anvil.
-    plate_body, plate_joint, plate_actuator : int
-        Body, slide joint and force actuator of the press plate.
     """
 
     model: Any  # mujoco.MjModel (the extra is optional: no import at type-check time)
@@ -209,23 +270,23 @@ class Scene:
     object_name: str
     n_parts: int
     object_body: int
-    object_qpos: int  # address of the free joint's 7 qpos
-    object_dof: int  # address of its 6 dofs
-    fixed_links: list  # (body id, link index) of every link MuJoCo models without a joint
-    fingers: list  # (actuator id, joint id, direction, [(eq id, joint id, ratio), ...])
-    closing_joints: list  # (MuJoCo joint id, DOF index, ratio) of every closing joint
-    joint_range: np.ndarray  # (njnt, 2) the model's joint limits as built (the ratchet moves them)
-    anvil_mocap: int
-    plate_body: int
-    plate_joint: int
-    plate_actuator: int
-    finger_geoms: list
+    object_qpos: int
+    object_dof: int
+    rigid_links: dict[int, int]
+    closing_joints: dict[int, int]
+    fingers: list[FingerDrive]
+    joint_range: np.ndarray
     palm_geoms: np.ndarray
 
     @property
     def object_mass(self) -> float:
         """The object's mass, kg."""
         return self.mass.mass
+
+    @property
+    def finger_geoms(self) -> list[np.ndarray]:
+        """Per finger (the order of ``fingers``): the hand geoms its driven joint moves."""
+        return [f.geoms for f in self.fingers]
 
 
 def build_scene(
@@ -267,6 +328,8 @@ def build_scene(
     hand = get_hand(hand)
     if parts is None:
         parts = convex_parts(obj.mesh, obj.mesh_hash, settings)
+    if not parts:
+        raise InputError(f"object {obj.name!r} has no convex parts to simulate")
     if getattr(obj, "materials", False) and settings.object_mass_kg <= 0:
         # Per-part materials (a dataset made with --materials, a region densities file): the
         # object's own mass, centre of mass and inertia, as its rows were scored with.
@@ -276,57 +339,52 @@ def build_scene(
         if settings.object_mass_kg > 0:
             # A fixed mass (the DexGraspBench protocol): the same density everywhere, scaled.
             mass = mass_properties(obj.mesh, density=settings.object_mass_kg / mass.volume)
-    xml, info = _mjcf(hand, obj.name, parts, mass, settings, object_material)
     try:
-        if extend is None:
-            model = mj.MjModel.from_xml_string(xml)
-        else:
-            spec = mj.MjSpec.from_string(xml)
+        spec = _model_spec(hand, parts, mass, settings, object_material)
+        if extend is not None:
             extend(spec)
-            model = spec.compile()
+        model = spec.compile()
     except ValueError as exc:  # pragma: no cover - a bug in the builder, not user input
-        raise InternalError(f"MuJoCo rejected the generated model: {exc}") from exc
-    data = mj.MjData(model)
-
-    def body(name):
-        return mj.mj_name2id(model, mj.mjtObj.mjOBJ_BODY, name)
-
-    def joint(name):
-        return mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, name)
-
-    obj_body = body("object")
-    obj_joint = model.body_jntadr[obj_body]
-    fixed = [(body(f"link_{li}"), li) for li in info["fixed"]]
+        raise InternalError(f"MuJoCo rejected the model: {exc}") from exc
+    links = _closing_links(hand)
+    drivers = [model.joint(f"j_{links[f.dofs[0]]}").id for f in hand.fingers]
+    obj_body = model.body("object").id
+    geoms, palm_geoms = _hand_geoms(model, drivers, obj_body)
     fingers = []
-    for act_name, jname, direction, followers in info["fingers"]:
-        act = mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, act_name)
-        fl = [
-            (mj.mj_name2id(model, mj.mjtObj.mjOBJ_EQUALITY, e), joint(j), r)
-            for e, j, r in followers
-        ]
-        fingers.append((act, joint(jname), direction, fl))
-    plate = body("plate")
-    finger_geoms, palm_geoms = _hand_geoms(model, [f[1] for f in fingers], obj_body)
+    for f, jid, finger_geoms in zip(hand.fingers, drivers, geoms, strict=True):
+        ratio = hand.links[links[f.dofs[0]]].joint.ratio
+        couplings = tuple(
+            Coupling(
+                model.equality(f"couple_{f.name}_{k}").id,
+                model.joint(f"j_{links[d]}").id,
+                hand.links[links[d]].joint.ratio * (f.speeds[k] / f.speeds[0]) / ratio,
+            )
+            for k, d in enumerate(f.dofs[1:], start=1)
+        )
+        servo = model.actuator(f"servo_{f.name}").id
+        closing = 1.0 if ratio > 0 else -1.0
+        fingers.append(FingerDrive(servo, jid, closing, couplings, finger_geoms))
+    free = model.joint("object_free")
+    jointed = [i for i, link in enumerate(hand.links) if link.joint is not None]
     return Scene(
         model=model,
-        data=data,
+        data=mj.MjData(model),
         hand=hand,
         settings=settings,
         mass=mass,
         object_name=obj.name,
         n_parts=len(parts),
         object_body=obj_body,
-        object_qpos=int(model.jnt_qposadr[obj_joint]),
-        object_dof=int(model.jnt_dofadr[obj_joint]),
-        fixed_links=fixed,
+        object_qpos=int(free.qposadr[0]),
+        object_dof=int(free.dofadr[0]),
+        rigid_links={
+            i: model.body(f"link_{i}").id for i in jointed if hand.links[i].joint.dof not in links
+        },
+        closing_joints={
+            i: model.joint(f"j_{i}").id for i in jointed if hand.links[i].joint.dof in links
+        },
         fingers=fingers,
-        closing_joints=[(joint(f"j_{li}"), di, r) for li, di, r in info["closing_links"]],
         joint_range=model.jnt_range.copy(),
-        anvil_mocap=int(model.body_mocapid[body("anvil")]),
-        plate_body=plate,
-        plate_joint=joint("plate_slide"),
-        plate_actuator=mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, "plate_push"),
-        finger_geoms=finger_geoms,
         palm_geoms=palm_geoms,
     )
 
@@ -352,166 +410,131 @@ def _hand_geoms(model, driver_joints: list[int], object_body: int):
     return fingers, palm
 
 
-def _mjcf(hand, name, parts, mass, settings, object_material):
-    """The model as MJCF text, and what the Scene needs to know about it."""
+def _closing_links(hand: Hand) -> dict[str, int]:
+    """Closing DOF → the index of the link whose joint it drives (the last one, if several)."""
+    closing = {d for f in hand.fingers for d in f.dofs}
+    return {
+        link.joint.dof: i
+        for i, link in enumerate(hand.links)
+        if link.joint is not None and link.joint.dof in closing
+    }
+
+
+def _model_spec(hand: Hand, parts, mass: MassProperties, settings, object_material: str):
+    """The model as a ``mujoco.MjSpec`` (see the module docstring), not yet compiled."""
+    mj = deps.mujoco()
     s = settings
-    assets: list[str] = []
-    finger_of_dof: dict[str, tuple] = {}
-    for f in hand.fingers:
-        for k, d in enumerate(f.dofs):
-            finger_of_dof[d] = (f, k)
-    closing_dofs = set(finger_of_dof)
-    info: dict[str, list] = {"fixed": [], "fingers": [], "closing_links": []}
-    children: dict[str, list[int]] = {}
-    for i, link in enumerate(hand.links):
-        if link.parent is not None:
-            children.setdefault(link.parent, []).append(i)
-    joint_name_of_dof: dict[str, tuple[str, float]] = {}
+    spec = mj.MjSpec()
+    spec.modelname = f"affordgrasp-{hand.name}"
+    spec.compiler.degree = False
+    spec.compiler.inertiafromgeom = mj.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE
+    spec.compiler.boundmass, spec.compiler.boundinertia = 1e-4, 1e-9
+    opt = spec.option
+    opt.timestep, opt.impratio = _written([s.timestep, s.impratio])
+    opt.gravity = [0.0, 0.0, _written(-G if s.gravity else 0.0)]
+    opt.integrator, opt.cone = mj.mjtIntegrator.mjINT_IMPLICITFAST, mj.mjtCone.mjCONE_ELLIPTIC
+    opt.noslip_iterations = int(s.noslip_iterations)
+    solref = [_written(s.contact_timeconst), 1.0]
+    solimp = [0.95, 0.99, 0.001, 0.5, 2.0]  # MuJoCo's defaults but the first
+    main = spec.default
+    main.joint.armature, main.joint.damping = 0.01, [0.05, 0.0, 0.0]
+    main.joint.solref_limit, main.joint.solimp_limit = solref, solimp
+    main.geom.solref = solref
+    main.geom.solimp = [_written(s.contact_solimp_low), *solimp[1:]]
+    main.geom.type, main.geom.condim = mj.mjtGeom.mjGEOM_MESH, s.condim
+    main.equality.solref, main.equality.solimp = solref, solimp
+    # Geom classes: the object touches the hand and the tools; the tools are frictionless
+    # cubes occupying +z of their frames (a local obstacle at U).
+    hand_class = spec.add_default("hand", main)
+    hand_class.geom.contype, hand_class.geom.conaffinity = _HAND_BITS
+    hand_class.geom.rgba = [0.6, 0.6, 0.65, 1.0]
+    object_class = spec.add_default("object", main)
+    part = object_class.geom
+    part.contype, part.conaffinity = _OBJECT_BITS
+    part.friction, part.mass, part.rgba = [0.0] * 3, 0.0, [0.8, 0.5, 0.2, 1.0]
+    tool_class = spec.add_default("tool", main)
+    tool = tool_class.geom
+    tool.contype, tool.conaffinity, tool.condim = *_TOOL_BITS, 3
+    tool.type, tool.size, tool.pos = mj.mjtGeom.mjGEOM_BOX, [TOOL_HALF] * 3, [0, 0, TOOL_HALF]
+    tool.friction = [0.0] * 3
     # MuJoCo takes the larger friction of a pair (object geoms carry 0): torsional friction
     # only with condim 4, rolling never.
-    tors = f"{s.torsional_friction:.6g} 0" if s.condim >= 4 else "0 0"
+    torsional = _written(s.torsional_friction, 6) if s.condim >= 4 else 0.0
+    links = _closing_links(hand)
+    children: dict[str, list[int]] = {}
+    for i, link in enumerate(hand.links[1:], start=1):
+        children.setdefault(link.parent, []).append(i)
 
-    def link_xml(i: int, indent: str) -> str:
-        link = hand.links[i]
-        mu = engine_friction(s, friction_coefficient(link.material, object_material))
-        lines = []
-        j = link.joint
-        attrs = ""
-        joint_xml = ""
+    def add_link(parent, i: int) -> None:
+        link, j = hand.links[i], hand.links[i].joint
+        body = parent.add_body(name=f"link_{i}")
         if j is not None:
-            r, t = j.origin[:3, :3], j.origin[:3, 3]
-            attrs = f' pos="{_fmt(t)}" quat="{_fmt(_quat(r))}"'
-            if j.dof in closing_dofs:
-                dof = hand.dofs[hand.dof_index(j.dof)]
-                lo, hi = sorted((j.ratio * dof.lower, j.ratio * dof.upper))
-                kind = "hinge" if j.kind == "revolute" else "slide"
-                joint_xml = (
-                    f'{indent}  <joint name="j_{i}" type="{kind}" axis="{_fmt(j.axis)}" '
-                    f'range="{lo:.9g} {hi:.9g}" limited="true"/>\n'
-                )
-                joint_name_of_dof[j.dof] = (f"j_{i}", j.ratio)
-                info["closing_links"].append((i, hand.dof_index(j.dof), j.ratio))
-            else:
-                info["fixed"].append(i)
-        lines.append(f'{indent}<body name="link_{i}"{attrs}>\n')
-        lines.append(joint_xml)
+            body.pos = _written(j.origin[:3, 3])
+            body.quat = _written(rotation_quat(j.origin[:3, :3]))
+        if j is not None and j.dof in links:
+            dof = hand.dofs[hand.dof_index(j.dof)]
+            body.add_joint(
+                name=f"j_{i}",
+                type=mj.mjtJoint.mjJNT_HINGE if j.kind == "revolute" else mj.mjtJoint.mjJNT_SLIDE,
+                axis=_written(j.axis),
+                range=_written(sorted((j.ratio * dof.lower, j.ratio * dof.upper))),
+                limited=mj.mjtLimited.mjLIMITED_TRUE,
+            )
+        mu = engine_friction(s, friction_coefficient(link.material, object_material))
         for k, shape in enumerate(link.shapes):
             pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
             pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]
-            mesh_name = f"hand_{i}_{k}"
-            assets.append(f'    <mesh name="{mesh_name}" vertex="{_fmt(pts)}"/>\n')
-            lines.append(
-                f'{indent}  <geom type="mesh" mesh="{mesh_name}" friction="{mu:.6g} {tors}" '
-                f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="{s.condim}" '
-                f'density="1000" rgba="0.6 0.6 0.65 1"/>\n'
-            )
+            spec.add_mesh(name=f"hand_{i}_{k}", uservert=_written(pts))
+            friction = [_written(mu, 6), torsional, 0.0]
+            body.add_geom(hand_class, meshname=f"hand_{i}_{k}", friction=friction)
         if not link.shapes and j is not None:
             # A massless joint carrier (the Barrett spread base): give it a small inertia.
-            lines.append(
-                f'{indent}  <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>\n'
-            )
+            body.explicitinertial, body.mass, body.inertia = True, 0.01, [1e-6] * 3
+            body.ipos = [0.0, 0.0, 0.0]
         for c in children.get(link.name, []):
-            lines.append(link_xml(c, indent + "  "))
-        lines.append(f"{indent}</body>\n")
-        return "".join(lines)
+            add_link(body, c)
 
-    palm_geoms = []
-    palm = hand.links[0]
-    mu_palm = engine_friction(s, friction_coefficient(palm.material, object_material))
-    for k, shape in enumerate(palm.shapes):
-        pts = rounded_shape_points(shape.kind, shape.half_extents, shape.radius)
-        pts = pts @ shape.pose[:3, :3].T + shape.pose[:3, 3]
-        assets.append(f'    <mesh name="palm_{k}" vertex="{_fmt(pts)}"/>\n')
-        palm_geoms.append(
-            f'      <geom type="mesh" mesh="palm_{k}" friction="{mu_palm:.6g} {tors}" '
-            f'contype="{_HAND_BITS[0]}" conaffinity="{_HAND_BITS[1]}" condim="{s.condim}"/>\n'
-        )
-    finger_xml = "".join(link_xml(c, "      ") for c in children.get(palm.name, []))
-
-    object_geoms = []
-    for k, (v, _f) in enumerate(parts):
-        assets.append(f'    <mesh name="part_{k}" vertex="{_fmt(v)}"/>\n')
-        object_geoms.append(
-            f'      <geom type="mesh" mesh="part_{k}" friction="0 0 0" condim="{s.condim}" '
-            f'contype="{_OBJECT_BITS[0]}" conaffinity="{_OBJECT_BITS[1]}" mass="0" '
-            'rgba="0.8 0.5 0.2 1"/>\n'
-        )
-    inertia = mass.inertia
-    full = [
-        inertia[0, 0],
-        inertia[1, 1],
-        inertia[2, 2],
-        inertia[0, 1],
-        inertia[0, 2],
-        inertia[1, 2],
-    ]
-
-    actuators, equalities = [], []
+    add_link(spec.worldbody, 0)
+    obj = spec.worldbody.add_body(name="object", pos=[0.0, 0.0, 0.5])
+    obj.add_freejoint(name="object_free")
+    obj.explicitinertial, obj.mass = True, _written(mass.mass)
+    obj.ipos = _written(mass.center_of_mass)
+    i = mass.inertia
+    obj.fullinertia = _written([i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]])
+    for k, (vertices, _faces) in enumerate(parts):
+        spec.add_mesh(name=f"part_{k}", uservert=_written(vertices))
+        obj.add_geom(object_class, meshname=f"part_{k}")
+    spec.worldbody.add_body(name="anvil", mocap=True, pos=[FAR] * 3).add_geom(tool_class)
+    plate = spec.worldbody.add_body(name="plate", pos=[-FAR] * 3)
+    plate.add_joint(
+        name="plate_slide",
+        type=mj.mjtJoint.mjJNT_SLIDE,
+        axis=[0.0, 0.0, 1.0],
+        armature=0.0,
+        damping=[0.0, 0.0, 0.0],
+        limited=mj.mjtLimited.mjLIMITED_FALSE,
+    )
+    plate.add_geom(tool_class, mass=0.02)
+    joint_trn = mj.mjtTrn.mjTRN_JOINT
     for f in hand.fingers:
-        first = f.dofs[0]
-        jname, ratio0 = joint_name_of_dof[first]
-        kind = hand.links[int(jname[2:])].joint.kind
-        effort = s.grip_torque if kind == "revolute" else s.grip_force
-        overshoot = s.overshoot_rad if kind == "revolute" else s.overshoot_m
+        driven = f"j_{links[f.dofs[0]]}"
+        revolute = hand.links[links[f.dofs[0]]].joint.kind == "revolute"
+        effort = s.grip_torque if revolute else s.grip_force
+        overshoot = s.overshoot_rad if revolute else s.overshoot_m
         # Gain: the servo saturates once the joint lags its target by a fifth of the overshoot.
-        kp = 5.0 * effort / overshoot
-        act = f"servo_{f.name}"
-        actuators.append(
-            f'    <position name="{act}" joint="{jname}" kp="{kp:.9g}" kv="{0.1 * kp:.9g}" '
-            f'forcerange="{-effort:.9g} {effort:.9g}" forcelimited="true"/>\n'
-        )
-        followers = []
+        kp = _written(5.0 * effort / overshoot)
+        servo = spec.add_actuator(name=f"servo_{f.name}", target=driven, trntype=joint_trn)
+        servo.forcerange, servo.forcelimited = _written([-effort, effort]), True
+        servo.set_to_position(kp=kp, kv=_written(0.1 * kp))
         for k, d in enumerate(f.dofs[1:], start=1):
-            fj, _ratio = joint_name_of_dof[d]
-            eq = f"couple_{f.name}_{k}"
-            # joint fj = a0 + a1 * joint jname; a0, a1 are set per grasp (Scene.set_grasp).
-            equalities.append(
-                f'    <joint name="{eq}" joint1="{fj}" joint2="{jname}" polycoef="0 1 0 0 0"/>\n'
+            # joint of d = a0 + a1 · driven joint; a0, a1 are set per grasp (set_grasp).
+            spec.add_equality(
+                name=f"couple_{f.name}_{k}",
+                type=mj.mjtEq.mjEQ_JOINT,
+                name1=f"j_{links[d]}",
+                name2=driven,
             )
-            followers.append((eq, fj, f.speeds[k] / f.speeds[0]))
-        direction = 1.0 if ratio0 > 0 else -1.0
-        info["fingers"].append((act, jname, direction, followers))
-
-    xml = f"""<mujoco model="affordgrasp-{hand.name}">
-  <compiler angle="radian" inertiafromgeom="true" boundmass="1e-4" boundinertia="1e-9"/>
-  <option timestep="{s.timestep:.9g}" gravity="0 0 {-G if s.gravity else 0.0:.9g}"
-          integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.9g}"
-          noslip_iterations="{int(s.noslip_iterations)}"/>
-  <default>
-    <joint armature="0.01" damping="0.05" solreflimit="{s.contact_timeconst:.9g} 1"
-           solimplimit="0.95 0.99 0.001"/>
-    <geom solref="{s.contact_timeconst:.9g} 1" solimp="{s.contact_solimp_low:.9g} 0.99 0.001"/>
-    <equality solref="{s.contact_timeconst:.9g} 1" solimp="0.95 0.99 0.001"/>
-  </default>
-  <asset>
-{"".join(assets)}  </asset>
-  <worldbody>
-    <body name="link_0">
-{"".join(palm_geoms)}{finger_xml}    </body>
-    <body name="object" pos="0 0 0.5">
-      <freejoint name="object_free"/>
-      <inertial pos="{_fmt(mass.center_of_mass)}" mass="{mass.mass:.9g}"
-                fullinertia="{_fmt(full)}"/>
-{"".join(object_geoms)}    </body>
-    <body name="anvil" mocap="true" pos="{FAR} {FAR} {FAR}">
-      <geom type="box" size="{TOOL_HALF} {TOOL_HALF} {TOOL_HALF}" pos="0 0 {TOOL_HALF}"
-            friction="0 0 0" condim="3" contype="{_TOOL_BITS[0]}" conaffinity="{_TOOL_BITS[1]}"/>
-    </body>
-    <body name="plate" pos="{-FAR} {-FAR} {-FAR}">
-      <joint name="plate_slide" type="slide" axis="0 0 1" armature="0" damping="0"
-             limited="false"/>
-      <geom type="box" size="{TOOL_HALF} {TOOL_HALF} {TOOL_HALF}" pos="0 0 {TOOL_HALF}"
-            friction="0 0 0" condim="3" mass="0.02"
-            contype="{_TOOL_BITS[0]}" conaffinity="{_TOOL_BITS[1]}"/>
-    </body>
-  </worldbody>
-  <actuator>
-{"".join(actuators)}    <motor name="plate_push" joint="plate_slide" gear="-1"/>
-  </actuator>
-  <equality>
-{"".join(equalities)}  </equality>
-</mujoco>
-"""
-    if not parts:
-        raise InputError(f"object {name!r} has no convex parts to simulate")
-    return xml, info
+    push = spec.add_actuator(name="plate_push", target="plate_slide", trntype=joint_trn)
+    push.gear[0] = -1.0
+    push.set_to_motor()
+    return spec

@@ -124,11 +124,11 @@ class StrokeOutcome:
     stroke_edge_thickness_m : float
         The tool's thickness where the edge at U bore (the point the edge line passes
         through), from the chords 1 and 3 mm behind it
-        (:func:`~affordgrasp.metrics.use_geometry.use_edge_thickness`): about 0 on an edge,
+        (:func:`~affordgrasp.metrics.wedge.use_edge_thickness`): about 0 on an edge,
         the plate's thickness on a spine; NaN when nothing bore.
     stroke_edge_angle_rad : float
         The tool's wedge angle there, in a 3 mm ball
-        (:func:`~affordgrasp.metrics.use_geometry.use_wedge_angle`): 7-51° on the families'
+        (:func:`~affordgrasp.metrics.wedge.use_wedge_angle`): 7-51° on the families'
         cutting edges, 90° at a spine's corner, 180° on a flat; NaN when nothing bore.
     stroke_force_n : float
         The press force reached before the tool first slipped or turned past the limits, N.
@@ -550,7 +550,7 @@ def stroke(
         U, object frame, m.
     outward, along : (3,) float ndarray
         The edge's outward direction and its direction at U, object frame, unit
-        (:func:`~affordgrasp.metrics.use_geometry.use_edge_frame`).
+        (:func:`~affordgrasp.metrics.wedge.use_edge_frame`).
     wrist_point : (3,) float ndarray
         The wrist point in the hand frame, m (the stroke pulls the tool towards it).
 
@@ -651,9 +651,9 @@ def _crest(points: np.ndarray, use_point: np.ndarray, along: np.ndarray, radius:
 
 def _bearing_wedge(ts: TaskScene, crest, outward: np.ndarray) -> tuple[float, float]:
     """The tool's thickness (m) and wedge angle (rad) where the edge at U bore (the crest
-    point, on the mesh): :func:`~affordgrasp.metrics.use_geometry.use_wedge_shape` with the
+    point, on the mesh): :func:`~affordgrasp.metrics.wedge.use_wedge_shape` with the
     workpiece's normal; NaN when nothing bore."""
-    from ..metrics.use_geometry import use_wedge_shape
+    from ..metrics.wedge import use_wedge_shape
 
     if crest is None:
         return math.nan, math.nan
@@ -697,7 +697,7 @@ def run_task_trials(
         The wrist point (the palm centre), object frame, m (the dataset's ``wrist_point``).
     edge_frame : tuple of two (3,) float ndarray, optional
         The edge's outward direction and direction at U, object frame
-        (:func:`~affordgrasp.metrics.use_geometry.use_edge_frame`); needed for cut.
+        (:func:`~affordgrasp.metrics.wedge.use_edge_frame`); needed for cut.
 
     Returns
     -------

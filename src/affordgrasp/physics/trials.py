@@ -15,7 +15,7 @@ import numpy as np
 
 from ..hands.kinematics import joint_poses, kinematic_tree
 from . import deps
-from .scene import FAR, Scene, table_friction
+from .scene import FAR, Scene, rotation_quat, table_friction
 from .settings import G
 
 __all__ = [
@@ -136,13 +136,6 @@ class GraspOutcome:
         return row
 
 
-def _rigid_to_qpos(t: np.ndarray) -> np.ndarray:
-    mj = deps.mujoco()
-    q = np.zeros(4)
-    mj.mju_mat2Quat(q, np.ascontiguousarray(t[:3, :3]).ravel())
-    return np.concatenate([t[:3, 3], q])
-
-
 def _frame_quat(z_axis: np.ndarray) -> np.ndarray:
     """A quaternion whose frame has ``z_axis`` as its z."""
     z = z_axis / np.linalg.norm(z_axis)
@@ -150,11 +143,7 @@ def _frame_quat(z_axis: np.ndarray) -> np.ndarray:
     x = np.cross(helper, z)
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
-    r = np.stack([x, y, z], axis=1)
-    mj = deps.mujoco()
-    q = np.zeros(4)
-    mj.mju_mat2Quat(q, np.ascontiguousarray(r).ravel())
-    return q
+    return rotation_quat(np.stack([x, y, z], axis=1))
 
 
 def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> StartState:
@@ -188,15 +177,15 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> StartS
     mj.mj_resetData(m, d)
     m.jnt_range[:] = scene.joint_range
     local = joint_poses(np.ascontiguousarray(joints), kinematic_tree(scene.hand))
-    for body, li in scene.fixed_links:
-        t = local[li]
-        m.body_pos[body] = t[:3, 3]
-        m.body_quat[body] = _rigid_to_qpos(t)[3:]
-    for jid, di, ratio in scene.closing_joints:
-        d.qpos[m.jnt_qposadr[jid]] = ratio * joints[di]
+    for li, body in scene.rigid_links.items():
+        m.body_pos[body] = local[li][:3, 3]
+        m.body_quat[body] = rotation_quat(local[li][:3, :3])
+    for li, jid in scene.closing_joints.items():
+        j = scene.hand.links[li].joint
+        d.qpos[m.jnt_qposadr[jid]] = j.ratio * joints[scene.hand.dof_index(j.dof)]
     obj_in_hand = np.linalg.inv(hand_pose)
     a = scene.object_qpos
-    d.qpos[a : a + 7] = _rigid_to_qpos(obj_in_hand)
+    d.qpos[a : a + 7] = [*obj_in_hand[:3, 3], *rotation_quat(obj_in_hand[:3, :3])]
     _park_tools(scene)
     initial = penetration_depth(scene)
     shift = opened = 0.0
@@ -204,15 +193,13 @@ def set_grasp(scene: Scene, hand_pose: np.ndarray, joints: np.ndarray) -> StartS
         shift, opened = back_off(scene)
     start = penetration_depth(scene)
     at_limit = 0
-    for act, jid, direction, followers in scene.fingers:
-        q0 = d.qpos[m.jnt_qposadr[jid]]
-        d.ctrl[act] = q0
-        ratio0 = next(r for j, _di, r in scene.closing_joints if j == jid)
-        for eq, fj, speed_ratio in followers:
-            ratio_f = next(r for j, _di, r in scene.closing_joints if j == fj)
-            a1 = ratio_f * speed_ratio / ratio0
-            m.eq_data[eq, :5] = [d.qpos[m.jnt_qposadr[fj]] - a1 * q0, a1, 0.0, 0.0, 0.0]
-            at_limit += _hold_follower_at_limit(m, d, eq, fj, direction * a1)
+    for f in scene.fingers:
+        q0 = d.qpos[m.jnt_qposadr[f.joint]]
+        d.ctrl[f.servo] = q0
+        for c in f.couplings:
+            a0 = d.qpos[m.jnt_qposadr[c.joint]] - c.gain * q0
+            m.eq_data[c.equality, :5] = [a0, c.gain, 0.0, 0.0, 0.0]
+            at_limit += _hold_follower_at_limit(m, d, c.equality, c.joint, f.closing * c.gain)
     mj.mj_forward(m, d)
     return StartState(initial, start, shift, opened, at_limit)
 
@@ -319,13 +306,11 @@ def back_off(scene: Scene) -> tuple[float, float]:
     for _ in range(_ROUNDS):
         _push_object_off(scene, rigid, tol)
         at_limit = []
-        for k, ((_a, jid, direction, _f), geoms) in enumerate(
-            zip(scene.fingers, scene.finger_geoms, strict=True)
-        ):
-            if penetration_depth(scene, geoms) > tol:
-                opened[k] += _open_finger(scene, jid, direction, geoms, tol)
-            if penetration_depth(scene, geoms) > tol:
-                at_limit.append(geoms)  # open as far as it goes: push the object instead
+        for k, f in enumerate(scene.fingers):
+            if penetration_depth(scene, f.geoms) > tol:
+                opened[k] += _open_finger(scene, f.joint, f.closing, f.geoms, tol)
+            if penetration_depth(scene, f.geoms) > tol:
+                at_limit.append(f.geoms)  # open as far as it goes: push the object instead
         if not at_limit and penetration_depth(scene) <= tol:
             break
         rigid = np.concatenate([scene.palm_geoms, *at_limit])
@@ -387,11 +372,11 @@ def _hold_follower_at_limit(m, d, eq: int, fj: int, closing: float) -> int:
 
 def _park_tools(scene: Scene) -> None:
     m, d = scene.model, scene.data
-    d.mocap_pos[scene.anvil_mocap] = [FAR, FAR, FAR]
-    m.body_pos[scene.plate_body] = [-FAR, -FAR, -FAR]
-    d.qpos[m.jnt_qposadr[scene.plate_joint]] = 0.0
-    d.qvel[m.jnt_dofadr[scene.plate_joint]] = 0.0
-    d.ctrl[scene.plate_actuator] = 0.0
+    d.mocap_pos[m.body("anvil").mocapid[0]] = [FAR, FAR, FAR]
+    m.body("plate").pos = [-FAR, -FAR, -FAR]
+    slide = d.joint("plate_slide")
+    slide.qpos, slide.qvel = 0.0, 0.0
+    d.actuator("plate_push").ctrl = 0.0
 
 
 class _Snapshot:
@@ -422,21 +407,17 @@ def _angle_between(q0: np.ndarray, q1: np.ndarray) -> float:
 def _squeeze(scene: Scene) -> int:
     mj = deps.mujoco()
     m, d, s = scene.model, scene.data, scene.settings
-    start = {act: d.ctrl[act] for act, *_ in scene.fingers}
+    start = {f.servo: d.ctrl[f.servo] for f in scene.fingers}
     n_ramp = max(1, round(s.squeeze_time / s.timestep))
     n_settle = round(s.settle_time / s.timestep)
-    drivers = [(jid, direction, m.jnt_qposadr[jid]) for _a, jid, direction, _f in scene.fingers]
-    couplings = [
-        (eq, fj, direction)
-        for _a, _j, direction, followers in scene.fingers
-        for eq, fj, _r in followers
-    ]
+    drivers = [(f.joint, f.closing, m.jnt_qposadr[f.joint]) for f in scene.fingers]
+    couplings = [(c.equality, c.joint, f.closing) for f in scene.fingers for c in f.couplings]
     for step in range(n_ramp + n_settle):
         frac = min(1.0, (step + 1) / n_ramp)
-        for act, jid, direction, _f in scene.fingers:
-            kind = m.jnt_type[jid]
+        for f in scene.fingers:
+            kind = m.jnt_type[f.joint]
             over = s.overshoot_rad if kind == mj.mjtJoint.mjJNT_HINGE else s.overshoot_m
-            d.ctrl[act] = start[act] + direction * over * frac
+            d.ctrl[f.servo] = start[f.servo] + f.closing * over * frac
         mj.mj_step(m, d)
         if not s.backdrivable:
             _ratchet(m, d, drivers)
@@ -519,9 +500,10 @@ def place_anvil(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> 
     """
     mj = deps.mujoco()
     u, n_u = _use_in_world(scene, use_point, use_normal)
-    scene.data.mocap_pos[scene.anvil_mocap] = u
+    anvil = scene.model.body("anvil").mocapid[0]
+    scene.data.mocap_pos[anvil] = u
     # The cube occupies +z of its frame: z along the outward normal puts it beyond U.
-    scene.data.mocap_quat[scene.anvil_mocap] = _frame_quat(n_u)
+    scene.data.mocap_quat[anvil] = _frame_quat(n_u)
     mj.mj_forward(scene.model, scene.data)
     return u
 
@@ -544,8 +526,8 @@ def place_plate(scene: Scene, use_point: np.ndarray, use_normal: np.ndarray) -> 
     """
     mj = deps.mujoco()
     u, n_u = _use_in_world(scene, use_point, use_normal)
-    scene.model.body_pos[scene.plate_body] = u + _TOOL_GAP * n_u
-    scene.model.body_quat[scene.plate_body] = _frame_quat(n_u)
+    plate = scene.model.body("plate")
+    plate.pos, plate.quat = u + _TOOL_GAP * n_u, _frame_quat(n_u)
     mj.mj_forward(scene.model, scene.data)
     return u
 
@@ -580,10 +562,11 @@ def _press(scene: Scene, snapshot: _Snapshot, use_point, use_normal) -> tuple[fl
     snapshot.restore(scene)
     u = place_plate(scene, use_point, use_normal)
     n = max(1, round(s.press_max_force / s.press_rate / s.timestep))
+    push = d.actuator("plate_push")
     force = 0.0
     for step in range(n):
         force = s.press_rate * (step + 1) * s.timestep
-        d.ctrl[scene.plate_actuator] = force
+        push.ctrl = force
         mj.mj_step(m, d)
         now, _ = _use_in_world(scene, use_point, use_normal)
         if np.linalg.norm(now - u) > s.press_slip_m:

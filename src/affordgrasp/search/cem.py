@@ -1,8 +1,8 @@
 """The cross-entropy method (CEM) over the (p0, d) box, with restarts and refinement.
 
-The one optimiser of the package: :func:`affordgrasp.optimize.optimize` (a task on the
-simulator, on an engine) and :func:`affordgrasp.pairs.optimize_pairs` (grasps with their best
-use point) both search with :func:`cem_search`.
+The one optimiser of the package: :func:`affordgrasp.search.optimize.optimize` (a task on
+the simulator, on an engine) and :func:`affordgrasp.search.pairs.optimize_pairs` (grasps with
+their best use point) both search with :func:`cem_search`.
 
 CEM searches the 8-D box x = (p0, d) ∈ [-1, 1]^5 × [0, 1] × [-1, 1]^2 for the largest value:
 

@@ -338,8 +338,8 @@ PAIR_GEOMETRY_COLUMNS = (
 
 
 def pair_geometry(obj, uses, use_index, grasp_index, wrist_point, wrist_axis, points, offsets):
-    """:func:`pair_columns` from the grasps' arrays (what :func:`affordgrasp.pairs.pair_scores`
-    holds already, block after block).
+    """:func:`pair_columns` from the grasps' arrays (what
+    :func:`affordgrasp.search.pairs.pair_scores` holds already, block after block).
 
     Parameters
     ----------
@@ -361,8 +361,8 @@ def pair_geometry(obj, uses, use_index, grasp_index, wrist_point, wrist_axis, po
         :data:`PAIR_GEOMETRY_COLUMNS`.
     """
     from ..metrics.discharge import discharge
-    from ..metrics.striking import use_swing_cosine
-    from ..metrics.use_geometry import contact_reach, long_axis, use_clearance, use_lever_ratio
+    from ..metrics.hand_placement import contact_reach, long_axis, use_clearance
+    from ..metrics.striking import use_lever_ratio, use_swing_cosine
 
     if not len(grasp_index):
         return {c: np.zeros(0) for c in PAIR_GEOMETRY_COLUMNS}

@@ -7,31 +7,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
+from . import thresholds
 from .task import Task, make_task
-from .thresholds import (
-    PAPER_VIABLE,
-    TAU_BLUNT_DEFAULT,
-    TAU_CLEARANCE_DEFAULT,
-    TAU_DELTA_DEFAULT,
-    TAU_DEPTH_DEFAULT,
-    TAU_EDGE_ANGLE_DEFAULT,
-    TAU_EDGE_THICKNESS_DEFAULT,
-    TAU_EPS_DEFAULT,
-    TAU_LEVER_DEFAULT,
-    TAU_LEVER_MAX_DEFAULT,
-    TAU_REACH_DEFAULT,
-    TAU_RELIEF_DEFAULT,
-    TAU_SPAN_DEFAULT,
-    TAU_SWING_DEFAULT,
-    TAU_THICKNESS_DEFAULT,
-    TAU_UG_DEFAULT,
-    TAU_WEDGE_DEFAULT,
-    TAU_WEDGE_FINE_DEFAULT,
-    TAU_WIDTH_DEFAULT,
-    VIABLE_EPS_MIN,
-    VIABLE_HOLD_MAX,
-    VIABLE_IMPACT_MAX,
-)
 
 
 def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
@@ -145,16 +122,16 @@ def builtin_tasks() -> list[Task]:
             "beat",
             _beat,
             thresholds={
-                "tau_eps": TAU_EPS_DEFAULT,
-                "tau_delta": TAU_DELTA_DEFAULT,
-                "tau_blunt": TAU_BLUNT_DEFAULT,
-                "tau_clear": TAU_CLEARANCE_DEFAULT,
-                "tau_thick": TAU_THICKNESS_DEFAULT,
-                "tau_lever": TAU_LEVER_DEFAULT,
-                "tau_lever_max": TAU_LEVER_MAX_DEFAULT,
-                "tau_depth": TAU_DEPTH_DEFAULT,
-                "tau_relief": TAU_RELIEF_DEFAULT,
-                "tau_swing": TAU_SWING_DEFAULT,
+                "tau_eps": thresholds.TAU_EPS_DEFAULT,
+                "tau_delta": thresholds.TAU_DELTA_DEFAULT,
+                "tau_blunt": thresholds.TAU_BLUNT_DEFAULT,
+                "tau_clear": thresholds.TAU_CLEARANCE_DEFAULT,
+                "tau_thick": thresholds.TAU_THICKNESS_DEFAULT,
+                "tau_lever": thresholds.TAU_LEVER_DEFAULT,
+                "tau_lever_max": thresholds.TAU_LEVER_MAX_DEFAULT,
+                "tau_depth": thresholds.TAU_DEPTH_DEFAULT,
+                "tau_relief": thresholds.TAU_RELIEF_DEFAULT,
+                "tau_swing": thresholds.TAU_SWING_DEFAULT,
             },
             description="beating by a wrist rotation: I / E_i if robust and discharging, "
             "on a flat, blunt use point at the end of a deep part, with the hand off it",
@@ -176,7 +153,10 @@ def builtin_tasks() -> list[Task]:
         make_task(
             "beat-paper",
             _beat_paper,
-            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_delta": TAU_DELTA_DEFAULT},
+            thresholds={
+                "tau_eps": thresholds.TAU_EPS_DEFAULT,
+                "tau_delta": thresholds.TAU_DELTA_DEFAULT,
+            },
             description="beating as in the paper: I / E_i if robust and discharging",
             requires=("epsilon", "discharge", *HOLD_EFFORT_COLUMNS, "inertia", "impact_effort"),
         ),
@@ -184,15 +164,15 @@ def builtin_tasks() -> list[Task]:
             "cut",
             _cut,
             thresholds={
-                "tau_eps": TAU_EPS_DEFAULT,
-                "tau_wedge": TAU_WEDGE_DEFAULT,
-                "tau_wedge_fine": TAU_WEDGE_FINE_DEFAULT,
-                "tau_span": TAU_SPAN_DEFAULT,
-                "tau_edge_thickness": TAU_EDGE_THICKNESS_DEFAULT,
-                "tau_clear": TAU_CLEARANCE_DEFAULT,
-                "tau_thick": TAU_THICKNESS_DEFAULT,
-                "tau_width": TAU_WIDTH_DEFAULT,
-                "tau_reach": TAU_REACH_DEFAULT,
+                "tau_eps": thresholds.TAU_EPS_DEFAULT,
+                "tau_wedge": thresholds.TAU_WEDGE_DEFAULT,
+                "tau_wedge_fine": thresholds.TAU_WEDGE_FINE_DEFAULT,
+                "tau_span": thresholds.TAU_SPAN_DEFAULT,
+                "tau_edge_thickness": thresholds.TAU_EDGE_THICKNESS_DEFAULT,
+                "tau_clear": thresholds.TAU_CLEARANCE_DEFAULT,
+                "tau_thick": thresholds.TAU_THICKNESS_DEFAULT,
+                "tau_width": thresholds.TAU_WIDTH_DEFAULT,
+                "tau_reach": thresholds.TAU_REACH_DEFAULT,
             },
             description="cutting: U_τ if robust, the use point on an edge (wedge angles at "
             "3 and 2 mm, edge span, edge thickness: not a thin flat, a tip, a corner or a "
@@ -215,11 +195,11 @@ def builtin_tasks() -> list[Task]:
             "cut-wedge",
             _cut_wedge,
             thresholds={
-                "tau_eps": TAU_EPS_DEFAULT,
-                "tau_wedge": TAU_WEDGE_DEFAULT,
-                "tau_clear": TAU_CLEARANCE_DEFAULT,
-                "tau_thick": TAU_THICKNESS_DEFAULT,
-                "tau_reach": TAU_REACH_DEFAULT,
+                "tau_eps": thresholds.TAU_EPS_DEFAULT,
+                "tau_wedge": thresholds.TAU_WEDGE_DEFAULT,
+                "tau_clear": thresholds.TAU_CLEARANCE_DEFAULT,
+                "tau_thick": thresholds.TAU_THICKNESS_DEFAULT,
+                "tau_reach": thresholds.TAU_REACH_DEFAULT,
             },
             description="cutting with the 3 mm wedge test alone: U_τ if robust, the use point "
             "on an edge (wedge angle at 3 mm) and the hand off it, behind the centre of mass",
@@ -235,14 +215,17 @@ def builtin_tasks() -> list[Task]:
         make_task(
             "cut-dihedral",
             _cut_dihedral,
-            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_angle": TAU_EDGE_ANGLE_DEFAULT},
+            thresholds={
+                "tau_eps": thresholds.TAU_EPS_DEFAULT,
+                "tau_angle": thresholds.TAU_EDGE_ANGLE_DEFAULT,
+            },
             description="cutting: U_τ if robust and a mesh edge near U is sharp (dihedral)",
             requires=("epsilon", "use_edge_angle", "use_force"),
         ),
         make_task(
             "cut-ug",
             _cut_ug,
-            thresholds={"tau_eps": TAU_EPS_DEFAULT, "tau_ug": TAU_UG_DEFAULT},
+            thresholds={"tau_eps": thresholds.TAU_EPS_DEFAULT, "tau_ug": thresholds.TAU_UG_DEFAULT},
             description="cutting as in the paper: U_τ if robust and U_g >= τ_Ug",
             requires=("epsilon", "use_edge", "use_force"),
         ),
@@ -257,11 +240,14 @@ def builtin_tasks() -> list[Task]:
             "viable",
             _viable,
             thresholds={
-                "eps_min": VIABLE_EPS_MIN,
-                "hold_max": VIABLE_HOLD_MAX,
-                "impact_max": VIABLE_IMPACT_MAX,
+                "eps_min": thresholds.VIABLE_EPS_MIN,
+                "hold_max": thresholds.VIABLE_HOLD_MAX,
+                "impact_max": thresholds.VIABLE_IMPACT_MAX,
             },
-            modes={"paper": PAPER_VIABLE, "paper-extra-robustness": PAPER_VIABLE},
+            modes={
+                "paper": thresholds.PAPER_VIABLE,
+                "paper-extra-robustness": thresholds.PAPER_VIABLE,
+            },
             description="viable grasp (learning ground truth): 1 or 0",
             requires=("epsilon", *HOLD_EFFORT_COLUMNS, "impact_effort"),
         ),

@@ -75,6 +75,23 @@ _CMPOPS = {
 }
 
 
+# A task expression is a formula over a few dozen names: these bounds keep the parser and
+# the recursive checker and evaluator far from Python's limits (a sum of n terms nests n
+# deep), whatever a task file holds.
+MAX_EXPRESSION_CHARS = 2000
+MAX_EXPRESSION_DEPTH = 100
+
+
+def _depth(tree: ast.AST) -> int:
+    """Nesting depth of a syntax tree, counted without recursion."""
+    deepest, stack = 0, [(tree, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
+    return deepest
+
+
 class Expression:
     """A parsed, checked task expression over metric and threshold names.
 
@@ -90,11 +107,22 @@ class Expression:
     def __init__(self, source: str, *, where: str = "expression"):
         if not isinstance(source, str) or not source.strip():
             raise TaskError(f"{where} must be a non-empty string, got {source!r}")
+        if len(source) > MAX_EXPRESSION_CHARS:
+            raise TaskError(
+                f"{where} is {len(source):,} characters long; a task expression may have at "
+                f"most {MAX_EXPRESSION_CHARS:,} (split it with thresholds or several tasks)"
+            )
         self.source = source
         try:
             tree = ast.parse(source.strip(), mode="eval")
-        except SyntaxError as exc:
-            raise TaskError(f"{where} {source!r} is not a valid expression: {exc.msg}") from None
+        except (SyntaxError, RecursionError, MemoryError) as exc:
+            why = getattr(exc, "msg", None) or "it nests too deep"
+            raise TaskError(f"{where} {source!r} is not a valid expression: {why}") from None
+        if _depth(tree) > MAX_EXPRESSION_DEPTH:
+            raise TaskError(
+                f"{where} nests {_depth(tree)} levels deep; a task expression may nest at most "
+                f"{MAX_EXPRESSION_DEPTH} (a sum of n terms nests n deep: use fewer terms)"
+            )
         self._tree = tree.body
         self.names: set[str] = set()
         self._check(self._tree, where)
@@ -210,10 +238,9 @@ class Expression:
 class _ExpressionTask:
     """A task function built from ``value`` and ``requires`` expressions."""
 
-    def __init__(self, value: Expression, requires: Expression | None, thresholds: set[str]):
+    def __init__(self, value: Expression, requires: Expression | None):
         self.value = value
         self.requires = requires
-        self.threshold_names = thresholds
 
     def __call__(self, metrics: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
         env = _Env(metrics, t)
@@ -279,7 +306,7 @@ def expression_task(
     req_expr = Expression(requires, where=f"task {name!r} requires") if requires else None
     names = set(value_expr.names) | (req_expr.names if req_expr else set())
     metric_names = sorted(names - set(thresholds))
-    func = _ExpressionTask(value_expr, req_expr, set(thresholds))
+    func = _ExpressionTask(value_expr, req_expr)
     return make_task(
         name,
         func,

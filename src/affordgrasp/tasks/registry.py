@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import TaskError, did_you_mean
+from ..registry import Registry
 from .builtins import builtin_tasks, viable_mask
 from .expressions import expression_task
 from .metric_columns import MetricColumns
@@ -27,8 +28,9 @@ log = logging.getLogger(__name__)
 ENV_VAR = "AFFORDGRASP_TASKS"
 
 
-class TaskRegistry:
-    """Tasks by name.
+class TaskRegistry(Registry[Task]):
+    """Tasks by name: ``register``, ``unregister``, ``get`` and ``names()`` (sorted) of
+    :class:`affordgrasp.registry.Registry`, and task files.
 
     Parameters
     ----------
@@ -39,12 +41,29 @@ class TaskRegistry:
     """
 
     def __init__(self, *, builtins: bool = True, environment: bool = True):
-        self._tasks: dict[str, Task] = {t.name: t for t in builtin_tasks()} if builtins else {}
+        super().__init__("task", Task, TaskError)
+        for task in builtin_tasks() if builtins else ():
+            self._put(task)
         self._environment_pending = environment
 
-    def _ensure_environment(self) -> None:
+    def _prepare(self) -> None:
         if self._environment_pending:
             self.load_environment()
+
+    def _unknown_message(self, name: object, *, lookup: bool) -> str:
+        return (
+            f"unknown task {name!r}{did_you_mean(name, self._factories)}; "
+            f"available{' tasks' if lookup else ''}: {', '.join(self.names())}"
+        )
+
+    def names(self) -> list[str]:
+        """Names of the registered tasks, sorted.
+
+        Returns
+        -------
+        list of str
+        """
+        return sorted(super().names())
 
     def load_environment(self) -> list[str]:
         """Register the tasks of every file in ``AFFORDGRASP_TASKS`` (``os.pathsep``-separated).
@@ -63,90 +82,6 @@ class TaskRegistry:
             if entry.strip():
                 names += self.load_file(entry.strip(), replace=True)
         return names
-
-    def register(self, task: Task, *, replace: bool = False) -> Task:
-        """Add a :class:`Task`.
-
-        Parameters
-        ----------
-        task : Task
-        replace : bool
-            Allow replacing a task of the same name.
-
-        Returns
-        -------
-        Task
-            ``task`` itself.
-
-        Raises
-        ------
-        TaskError
-            For something other than a Task, or a taken name without ``replace``.
-        """
-        if not isinstance(task, Task):
-            raise TaskError(f"expected a Task, got {type(task).__name__}")
-        self._ensure_environment()
-        if task.name in self._tasks and not replace:
-            raise TaskError(
-                f"task {task.name!r} is already registered (pass replace=True to replace it)"
-            )
-        self._tasks[task.name] = task
-        return task
-
-    def unregister(self, name: str) -> None:
-        """Remove a task (built-in ones included).
-
-        Parameters
-        ----------
-        name : str
-
-        Raises
-        ------
-        TaskError
-            When no task has that name.
-        """
-        self._ensure_environment()
-        if name not in self._tasks:
-            raise TaskError(
-                f"unknown task {name!r}{did_you_mean(name, self._tasks)}; available: "
-                f"{', '.join(sorted(self._tasks))}"
-            )
-        del self._tasks[name]
-
-    def get(self, name: str) -> Task:
-        """The task registered as ``name``.
-
-        Parameters
-        ----------
-        name : str
-
-        Returns
-        -------
-        Task
-
-        Raises
-        ------
-        TaskError
-            For an unknown name, listing the known ones (and a close match, if any).
-        """
-        self._ensure_environment()
-        try:
-            return self._tasks[name]
-        except (KeyError, TypeError):
-            raise TaskError(
-                f"unknown task {name!r}{did_you_mean(name, self._tasks)}; available tasks: "
-                f"{', '.join(sorted(self._tasks))}"
-            ) from None
-
-    def names(self) -> list[str]:
-        """Names of the registered tasks, sorted.
-
-        Returns
-        -------
-        list of str
-        """
-        self._ensure_environment()
-        return sorted(self._tasks)
 
     def load_file(self, path: str | os.PathLike, *, replace: bool = False) -> list[str]:
         """Register every task of a TOML task file (all or none: a bad task registers none).
@@ -170,29 +105,13 @@ class TaskRegistry:
             For a bad file or task, or a taken name without ``replace``.
         """
         found = read_task_file(path)
-        if not replace:
-            for task in found:
-                if task.name in self._tasks:
-                    raise TaskError(
-                        f"task {task.name!r} is already registered (pass replace=True to "
-                        "replace it)"
-                    )
         for task in found:
-            self._tasks[task.name] = task
+            self._check_free(task.name, replace)
+        for task in found:
+            self._put(task)
         names = [t.name for t in found]
         log.info("loaded tasks %s from %s", ", ".join(names), path)
         return names
-
-    def __contains__(self, name: object) -> bool:
-        self._ensure_environment()
-        return name in self._tasks
-
-    def __iter__(self):
-        return iter(self.names())
-
-    def __len__(self) -> int:
-        self._ensure_environment()
-        return len(self._tasks)
 
 
 TASKS = TaskRegistry()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -77,10 +78,7 @@ class Task:
                     f"task {self.name!r} has no threshold {key!r}; thresholds: "
                     f"{', '.join(values) or 'none'}"
                 )
-            try:
-                values[key] = float(value)
-            except (TypeError, ValueError) as exc:
-                raise TaskError(f"threshold {key!r} must be a number, got {value!r}") from exc
+            values[key] = _threshold(key, value)
         return values
 
     def thresholds_by_mode(self) -> dict[str, dict[str, float]]:
@@ -128,6 +126,19 @@ class Task:
     __call__ = evaluate
 
 
+def _threshold(name: str, value: Any) -> float:
+    """A threshold as a float: a number or ±inf (a test switched off), never NaN."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if math.isnan(number):  # every comparison with NaN is false: a test that passes nothing
+        raise TaskError(
+            f"threshold {name!r} must be a number (inf and -inf switch a test off), got {value!r}"
+        )
+    return number
+
+
 def make_task(
     name: str,
     func: TaskFunction,
@@ -165,12 +176,12 @@ def make_task(
         raise TaskError(f"a task name must be a non-empty string, got {name!r}")
     if not callable(func):
         raise TaskError(f"task {name!r}: func must be callable, got {type(func).__name__}")
-    thresholds = {str(k): float(v) for k, v in (thresholds or {}).items()}
+    thresholds = {str(k): _threshold(k, v) for k, v in (thresholds or {}).items()}
     merged = standard_modes(thresholds)
     for mode, over in (modes or {}).items():
         merged[str(mode)] = {
             **merged.get(str(mode), {}),
-            **{str(k): float(v) for k, v in over.items()},
+            **{str(k): _threshold(k, v) for k, v in over.items()},
         }
     for mode, over in merged.items():
         unknown = set(over) - set(thresholds)

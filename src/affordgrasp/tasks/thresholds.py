@@ -41,7 +41,7 @@ PAPER_TAU_EPS_EXTRA = 0.5  # paper, Table I, "extra robustness required", litera
 # handles have small triangles at their creases; (2) the height function fitted over one
 # flank of an acute wedge sees the other flank fold back under the same tangent plane, so
 # a sharp edge scores lower than a blunt crease (on one isotropic mesh a 20° edge gives a
-# third of a 60° one; tests/metrics/test_use_geometry.py). The threshold that maximises
+# third of a 60° one; tests/metrics/test_edges.py). The threshold that maximises
 # the balanced accuracy is kept for the paper's form of the task, "cut-ug" (3e4 m^-2,
 # balanced accuracy 0.50-0.51: about 7% of edge points pass, 94% of the others fail).
 TAU_UG_DEFAULT = 3.0e4

@@ -14,8 +14,8 @@ from .task import Task
 
 
 def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise TaskError(f"{where} must be a number, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, int | float) or value != value:
+        raise TaskError(f"{where} must be a number (inf and -inf switch a test off), got {value!r}")
     return float(value)
 
 

@@ -5,9 +5,9 @@ over several seeds (object instances), the top grasps of the default mode are fo
 
 * brute force: every one of ``grasps`` uniform grasps scored with every one of ``uses``
   uniform use points; the top ``top`` distinct grasps, each with its best use point
-  (:func:`affordgrasp.pairs.best_pairs` with ``per_grasp=True``);
+  (:func:`affordgrasp.search.pairs.best_pairs` with ``per_grasp=True``);
 * the optimiser: the cross-entropy method over p0, each grasp with its best use point of
-  ``uses`` (:func:`affordgrasp.pairs.optimize_pairs`), ``budget`` simulations shared by
+  ``uses`` (:func:`affordgrasp.search.pairs.optimize_pairs`), ``budget`` simulations shared by
   ``restarts`` independent runs; with ``refine`` f the share f of the budget then
   continues the best run around its best point.
 
@@ -41,9 +41,9 @@ import pyarrow.parquet as pq
 
 from ..errors import InputError, bad_parameter, did_you_mean
 from ..objects import load_object
-from ..pairs import PairSearch, best_pairs, optimize_pairs
 from ..pipeline import evaluate_samples
-from ..writing import atomic_write
+from ..runtime.writing import atomic_write
+from ..search.pairs import PairSearch, PairSearchSettings, best_pairs, optimize_pairs
 from .judges import TASK_FAMILIES, scored, working_end_box
 
 logger = logging.getLogger(__name__)
@@ -220,18 +220,10 @@ def brute_force(obj, task: str, table: pa.Table, uses: int, top: int) -> PairSea
     Returns
     -------
     PairSearch
-        As :func:`affordgrasp.pairs.best_pairs` with ``per_grasp=True``.
+        As :func:`affordgrasp.search.pairs.best_pairs` with ``per_grasp=True``.
     """
-    return best_pairs(
-        obj,
-        task,
-        grasps=table.num_rows,
-        uses=uses,
-        seed=0,
-        top=top,
-        grasp_table=table,
-        per_grasp=True,
-    )
+    settings = PairSearchSettings(task, uses=uses, seed=0, top=top, per_grasp=True)
+    return best_pairs(obj, settings, grasp_table=table)
 
 
 def validate_tasks(
@@ -352,16 +344,16 @@ def _judge_family(
                 entry[f"brute_force_at_{also}_labels"].append(first["labels"])
                 entry["top1"][f"brute_force_at_{also}"].append(first["top1"])
         if settings.optimizer:
-            opt = optimize_pairs(
-                obj,
+            search = PairSearchSettings(
                 task,
-                budget=settings.budget,
                 uses=settings.uses,
                 seed=seed,
                 top=settings.top,
+                budget=settings.budget,
                 restarts=settings.restarts,
                 refine=settings.refine,
             )
+            opt = optimize_pairs(obj, search)
             judged = scored(task, family, opt.table, com, box)
             entry["optimizer"].append(judged["hits"])
             entry["optimizer_labels"].append(judged["labels"])
@@ -424,15 +416,8 @@ def render_figures(
             table = grasp_table(cache, family, 0, settings.grasps, settings.materials)
             cells = []
             for mode in MODES:
-                found = best_pairs(
-                    obj,
-                    task,
-                    mode=mode,
-                    grasps=settings.grasps,
-                    uses=settings.uses,
-                    top=1,
-                    grasp_table=table,
-                )
+                search = PairSearchSettings(task, mode=mode, uses=settings.uses, top=1)
+                found = best_pairs(obj, search, grasp_table=table)
                 caption = ""
                 if found.table.num_rows:
                     r = found.table.slice(0, 1).to_pylist()[0]
@@ -455,15 +440,8 @@ def render_figures(
     for task in ("beat", "cut"):
         cells = []
         for mode in MODES:
-            found = best_pairs(
-                obj,
-                task,
-                mode=mode,
-                grasps=settings.grasps,
-                uses=settings.uses,
-                top=1,
-                grasp_table=table,
-            )
+            search = PairSearchSettings(task, mode=mode, uses=settings.uses, top=1)
+            found = best_pairs(obj, search, grasp_table=table)
             r = found.table.slice(0, 1).to_pylist()[0] if found.table.num_rows else None
             numbers[f"{task}/{mode}"] = (
                 None

@@ -4,10 +4,9 @@
   intrinsics (``DepthCamera``) and the camera pose of a pregrasp;
 * ``depth``: D(p0, O) (``DepthRenderer``), uint16-millimetre encoding, PNG views;
 * ``engines``: the engines that make the images, backends of the ray-casting interface
-  (:class:`affordgrasp.objects.rays.RayCaster`): ``RasterEngine``, ``PacketEngine``,
-  ``EmbreeEngine``;
+  (:class:`affordgrasp.rays.RayCaster`): ``RasterEngine``, ``PacketEngine`` (Embree rays in
+  16-ray packets), ``EmbreeEngine`` (the reference, one ray per call);
 * ``raster``: the default engine's kernel, z-buffer rasterisation of the triangles;
-* ``packets``: Embree rays in 16-ray packets (the reference ``embreex`` casts one per call);
 * ``points``: the equivalent fixed-size point clouds;
 * ``sensor``: a depth sensor's noise and lost returns (``SensorModel``), off by default.
 

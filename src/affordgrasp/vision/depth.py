@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..grasp.pregrasp import validate_pregrasps
+from ..runtime.writing import atomic_write
 from .camera import DepthCamera, ObjectFrame, camera_poses
 from .engines import EmbreeEngine, PacketEngine, RasterEngine
 
@@ -51,7 +52,7 @@ class DepthRenderer:
         How the image is made (:mod:`affordgrasp.vision.engines`): ``"raster"`` (z-buffered
         triangles, see :mod:`affordgrasp.vision.raster`; images it cannot make, from a
         camera almost touching the object, are ray cast), ``"packets"`` (Embree rays in
-        16-ray packets from a compiled loop, see :mod:`affordgrasp.vision.packets`),
+        16-ray packets from a compiled loop, see :mod:`affordgrasp.rays.packets`),
         ``"embreex"`` (one Embree ray per call, robust scene: the reference) or ``"auto"``
         (``"raster"``, the fastest on every built-in object).
     """
@@ -67,7 +68,7 @@ class DepthRenderer:
 
         def ray_engine():
             # Packets where the library loads (1-2 s, once), else one ray per call.
-            from . import packets
+            from ..rays import packets
 
             if packets.available():
                 return PacketEngine(triangles, centre, self.frame.vertices)
@@ -311,7 +312,7 @@ def save_depth_png(path, depth: np.ndarray, *, scale: int = 1) -> None:
     rgb = depth_to_rgb(depth)
     if scale > 1:
         rgb = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
-    mpimg.imsave(str(path), rgb)
+    atomic_write(path, lambda fh: mpimg.imsave(fh, rgb, format="png"))
 
 
 def depth_manifest(camera: DepthCamera | None = None) -> dict:

@@ -5,36 +5,36 @@ object's bounding-box centre at the origin, m: float32 keeps its precision there
 answers both
 
 * ``cast(origins, directions)``: the first hit of any rays, as every
-  :class:`~affordgrasp.objects.rays.RayCaster` does (:class:`~affordgrasp.objects.rays.RayHits`);
+  :class:`~affordgrasp.rays.RayCaster` does (:class:`~affordgrasp.rays.RayHits`);
 * ``render(poses, camera)``: depth images of a pinhole camera (conventions:
   :mod:`affordgrasp.vision.camera`), the fastest way each engine has.
 
 The engines:
 
 * :class:`EmbreeEngine`: Embree through ``embreex``, one ray per call
-  (:class:`~affordgrasp.objects.rays.EmbreeScene`): the reference;
+  (:class:`~affordgrasp.rays.embree.EmbreeScene`): the reference;
 * :class:`PacketEngine`: the Embree library that ``embreex`` ships, 16 rays per call
-  (:mod:`affordgrasp.vision.packets`): images from a compiled loop over 4 × 4 pixel tiles,
-  any rays from packets filled with numpy;
+  (:class:`~affordgrasp.rays.packets.PacketScene`): images from a compiled loop over 4 × 4
+  pixel tiles, any rays from packets filled with numpy;
 * :class:`RasterEngine`: z-buffered triangles (:mod:`affordgrasp.vision.raster`), the
   default for images. It answers a ray as a one-pixel image looking along it; a ray (or an
   image) from which a vertex lies nearer than ``near`` along the view, or behind it, is left
   to a ray engine, as projection cannot handle it.
 
-``tests/vision/test_engines.py`` checks that all of them give the same hits on the same rays
+``tests/rays/test_backends.py`` checks that all of them give the same hits on the same rays
 (a box and a sphere, analytic distances); ``tests/vision/test_depth.py`` and
 ``tests/vision/test_raster.py`` compare their images.
 """
 
 from __future__ import annotations
 
-import ctypes
 import functools
 
 import numpy as np
 
 from ..errors import InputError
-from ..objects.rays import EmbreeScene, RayHits, ray_hits, unit_face_normals
+from ..rays import RayHits, SceneFrame, ray_hits
+from ..rays.embree import EmbreeScene
 from .camera import DepthCamera
 
 _F32 = np.float32
@@ -58,8 +58,9 @@ def camera_rays(camera: DepthCamera) -> np.ndarray:
     return rays
 
 
-class EmbreeEngine:
-    """Embree through ``embreex``, one ray per call (the reference engine).
+class EmbreeEngine(EmbreeScene):
+    """Embree through ``embreex``, one ray per call (the reference engine): the object's
+    :class:`~affordgrasp.rays.embree.EmbreeScene`, which also makes depth images.
 
     Parameters
     ----------
@@ -73,21 +74,7 @@ class EmbreeEngine:
 
     def __init__(self, triangles: np.ndarray, centre: np.ndarray) -> None:
         self.centre = np.asarray(centre, dtype=np.float64)
-        self.scene = EmbreeScene(triangles, origin=self.centre)
-
-    def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
-        """First hits of rays (see :class:`~affordgrasp.objects.rays.RayCaster`).
-
-        Parameters
-        ----------
-        origins, directions : (n, 3) float array_like
-            Mesh frame, m; directions need not be unit.
-
-        Returns
-        -------
-        RayHits
-        """
-        return self.scene.cast(origins, directions)
+        super().__init__(triangles, origin=self.centre)
 
     def render(
         self, poses: np.ndarray, camera: DepthCamera, *, images_per_call: int = 64
@@ -119,7 +106,7 @@ class EmbreeEngine:
             # einsum is 20x slower here).
             dirs = np.matmul(rays_cam[None], rot.transpose(0, 2, 1).astype(_F32))
             origins = np.repeat(origin.astype(_F32), per_image, axis=0)
-            t = self.scene.distances_scene(origins, dirs.reshape(-1, 3))
+            t = self.distances_scene(origins, dirs.reshape(-1, 3))
             out[lo:hi] = t.reshape(hi - lo, size, size)
         return out
 
@@ -140,7 +127,8 @@ class PacketEngine:
     Raises
     ------
     InputError
-        When the Embree 4 library cannot be loaded (:func:`available` is False).
+        When the Embree 4 library cannot be loaded
+        (:func:`affordgrasp.rays.packets.available` is False).
     """
 
     name = "packets"
@@ -148,28 +136,13 @@ class PacketEngine:
     def __init__(
         self, triangles: np.ndarray, centre: np.ndarray, hull: np.ndarray | None = None
     ) -> None:
-        from . import packets
+        from ..rays.packets import PacketScene
 
-        self._embree = packets.engine()
-        if self._embree is None:
-            raise InputError(
-                "the packet depth engine needs the Embree 4 library of embreex; "
-                "use engine='embreex' or 'raster'"
-            )
         triangles = np.asarray(triangles, dtype=np.float64)
         self.centre = np.asarray(centre, dtype=np.float64)
-        self.normals = unit_face_normals(triangles)
-        self._handle: int | None = self._embree.scene(
-            np.ascontiguousarray(triangles - self.centre, dtype=_F32)
-        )
+        self.scene = PacketScene(triangles, origin=self.centre)
         points = triangles.reshape(-1, 3) if hull is None else np.asarray(hull, dtype=np.float64)
         self._hull = np.ascontiguousarray(points - self.centre)
-
-    def __del__(self) -> None:
-        handle = getattr(self, "_handle", None)
-        if handle is not None:
-            self._embree.release(handle)
-            self._handle = None
 
     def render(self, poses: np.ndarray, camera: DepthCamera, **_: object) -> np.ndarray:
         """Depth images, cast tile by tile from a compiled loop.
@@ -185,10 +158,12 @@ class PacketEngine:
         (n, size, size) float32 ndarray
             Depth along the optical axis, m; 0 = no return.
         """
+        from ..rays.packets import render_tiles
+
         size = camera.size
         out = np.zeros((len(poses), size, size), dtype=_F32)
-        self._embree.kernel(
-            self._handle,
+        render_tiles(
+            self.scene.handle,
             camera_rays(camera),
             np.ascontiguousarray(poses[:, :3, :3], dtype=_F32),
             np.ascontiguousarray(poses[:, :3, 3] - self.centre, dtype=_F32),
@@ -201,7 +176,7 @@ class PacketEngine:
         return out
 
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> RayHits:
-        """First hits of rays, 16 per Embree call (:class:`~affordgrasp.objects.rays.RayCaster`).
+        """First hits of rays, 16 per Embree call (:class:`~affordgrasp.rays.RayCaster`).
 
         Parameters
         ----------
@@ -212,57 +187,10 @@ class PacketEngine:
         -------
         RayHits
         """
-        from .packets import _FLOATS, _GEOM_ID, _INVALID, _TFAR, K
-
-        o = (np.asarray(origins, dtype=np.float64) - self.centre).astype(_F32).reshape(-1, 3)
-        d = np.asarray(directions).astype(_F32).reshape(-1, 3)
-        n = len(o)
-        packets = -(-n // K)
-        # One 64-byte aligned RTCRayHit16 per packet (2 KiB each) and one valid mask.
-        buf = _aligned((packets, _FLOATS), _F32)
-        valid = _aligned((packets, K), np.int32)
-        ints = buf.view(np.uint32)
-        lanes = np.zeros((packets * K, 3), _F32)
-        for field, values in ((0, o), (4, d)):
-            lanes[:n] = values
-            for axis in range(3):
-                buf[:, (field + axis) * K : (field + axis + 1) * K] = lanes[:, axis].reshape(-1, K)
-        buf[:, _TFAR : _TFAR + K] = np.inf
-        ints[:, 9 * K : 10 * K] = _INVALID  # mask: every geometry
-        ints[:, _GEOM_ID : _GEOM_ID + K] = _INVALID
-        valid.reshape(-1)[:n] = -1
-        intersect = self._intersect16()
-        buf_at, valid_at = buf.ctypes.data, valid.ctypes.data
-        stride, valid_stride = buf.strides[0], valid.strides[0]
-        # One call per 16 rays (Embree 4 has no stream call); the rays were laid out by numpy.
-        for i in range(packets):
-            intersect(valid_at + i * valid_stride, self._handle, buf_at + i * stride, None)
-        hit = ints[:, _GEOM_ID : _GEOM_ID + K].reshape(-1)[:n] != _INVALID
-        prim = ints[:, _GEOM_ID - K : _GEOM_ID].reshape(-1)[:n].astype(np.int64)
-        tfar = buf[:, _TFAR : _TFAR + K].reshape(-1)[:n]
-        u = buf[:, 15 * K : 16 * K].reshape(-1)[:n]
-        v = buf[:, 16 * K : 17 * K].reshape(-1)[:n]
-        return ray_hits(tfar, np.where(hit, prim, -1), self.normals, np.column_stack([u, v]))
-
-    def _intersect16(self):
-        fn = self._embree.lib.rtcIntersect16
-        if fn.restype is not None or not fn.argtypes:
-            p = ctypes.c_void_p
-            fn.argtypes = [p, p, p, p]
-            fn.restype = None
-        return fn
+        return self.scene.cast(origins, directions)
 
 
-def _aligned(shape: tuple[int, int], dtype) -> np.ndarray:
-    """A zeroed C-contiguous array starting on a 64-byte boundary (Embree's packets)."""
-    count = int(np.prod(shape))
-    itemsize = np.dtype(dtype).itemsize
-    raw = np.zeros(count + 64 // itemsize, dtype)
-    start = ((64 - raw.ctypes.data % 64) % 64) // itemsize
-    return raw[start : start + count].reshape(shape)
-
-
-class RasterEngine:
+class RasterEngine(SceneFrame):
     """Z-buffered triangles (:func:`affordgrasp.vision.raster.rasterise`).
 
     Parameters
@@ -293,23 +221,12 @@ class RasterEngine:
         fallback=None,
     ) -> None:
         self.centre = np.asarray(centre, dtype=np.float64)
-        self._mesh_vertices = np.asarray(vertices, dtype=np.float64)
-        self._vertices = np.ascontiguousarray(self._mesh_vertices - self.centre)
-        self._faces = np.ascontiguousarray(faces, dtype=np.int64)
+        super().__init__(vertices, np.ascontiguousarray(faces, dtype=np.int64), origin=centre)
+        self._centred = np.ascontiguousarray(self._vertices - self.centre)
         self.cull = bool(cull)
         self.near = float(near)
         self._fallback_factory = fallback
         self._fallback = None
-
-    @functools.cached_property
-    def triangles(self) -> np.ndarray:
-        """(t, 3, 3) float64 ndarray: the triangles, mesh frame, m (built when first cast)."""
-        return self._mesh_vertices[self._faces]
-
-    @functools.cached_property
-    def normals(self) -> np.ndarray:
-        """(t, 3) float64 ndarray: unit normal of every triangle, as wound."""
-        return unit_face_normals(self.triangles)
 
     def fallback(self):
         """The ray engine for the views the rasteriser leaves (built once).
@@ -353,7 +270,7 @@ class RasterEngine:
         out = np.zeros((n, size, size), dtype=_F32)
         done = np.ones(n, dtype=np.bool_)
         rasterise(
-            self._vertices,
+            self._centred,
             self._faces,
             np.ascontiguousarray(rot, dtype=np.float64),
             np.ascontiguousarray(np.asarray(origin, dtype=np.float64) - self.centre),

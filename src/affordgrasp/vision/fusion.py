@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import InputError, require
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 from .camera import DepthCamera
 
 install_package_stamp()  # before the first @njit (see kernel_cache)

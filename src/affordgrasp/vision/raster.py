@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..kernel_cache import install_package_stamp
+from ..runtime.kernel_cache import install_package_stamp
 
 install_package_stamp()  # before the first @njit (see kernel_cache)
 

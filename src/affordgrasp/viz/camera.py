@@ -190,34 +190,29 @@ def framed_camera(
     scene: GraspScene,
     view_dir: np.ndarray,
     *,
-    up: np.ndarray | None = None,
     fov_deg: float = 30.0,
     width: int = 512,
     height: int = 512,
-    margin: float = 0.06,
 ) -> Camera:
-    """A camera on the side ``view_dir`` that frames the object and the hand.
+    """A camera on the side ``view_dir`` that frames the object and the hand, 6 % of the image
+    left free on each side.
 
     Parameters
     ----------
     scene : GraspScene
     view_dir : (3,) float ndarray
         From the scene towards the eye.
-    up : (3,) float ndarray, optional
-        Image up; any perpendicular direction when None.
     fov_deg : float
         Vertical field of view, degrees.
     width, height : int
         Pixels.
-    margin : float
-        Fraction of the image left free on each side.
 
     Returns
     -------
     Camera
     """
     v = unit(np.asarray(view_dir, dtype=np.float64))
-    up = _image_up(scene) if up is None else np.asarray(up, dtype=np.float64)
+    up = _image_up(scene)
     if np.linalg.norm(np.cross(v, up)) < 1e-3:
         up = any_perpendicular(v)
     pts = scene_points(scene)
@@ -229,7 +224,7 @@ def framed_camera(
     # and D the eye's distance; the smallest D over lateral shifts of t has a closed form.
     q = pts - t0
     depth = q @ forward
-    ky = np.tan(np.deg2rad(fov_deg) / 2.0) * (1.0 - 2.0 * margin)
+    ky = np.tan(np.deg2rad(fov_deg) / 2.0) * (1.0 - 2.0 * 0.06)
     kx = ky * width / height
     shift = np.zeros(3)
     distance = 0.0

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..runtime.writing import atomic_write
+
 DPI = 100
 
 
@@ -35,15 +37,13 @@ def new_figure(width_px: int, height_px: int, *, axes: bool = True):
     return fig, ax
 
 
-def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
+def save_figure(fig, path: str | os.PathLike) -> Path:
     """Write a figure as PNG with no time stamp in it (the same inputs give the same bytes).
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
     path : path
-    tight : bool
-        Trim the white margins.
 
     Returns
     -------
@@ -54,9 +54,9 @@ def save_figure(fig, path: str | os.PathLike, *, tight: bool = False) -> Path:
     FigureCanvasAgg(fig)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    kwargs = {"bbox_inches": "tight", "pad_inches": 0.1} if tight else {}
-    fig.savefig(path, format="png", dpi=DPI, metadata={"Software": None}, **kwargs)
-    return path
+    return atomic_write(
+        path, lambda fh: fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": None})
+    )
 
 
 def figure_pixels(fig) -> np.ndarray:
@@ -100,8 +100,7 @@ def save_image(rgb: np.ndarray, path: str | os.PathLike, *, colors: int | None =
         image = image.quantize(
             colors=int(colors), method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
         )
-    image.save(path, format="PNG", optimize=True)
-    return path
+    return atomic_write(path, lambda fh: image.save(fh, format="PNG", optimize=True))
 
 
 def png_bytes(rgb: np.ndarray, *, max_px: int | None = None) -> bytes:

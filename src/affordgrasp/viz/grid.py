@@ -22,9 +22,8 @@ def grid_image(
     row_labels: Sequence[str] = (),
     col_labels: Sequence[str] = (),
     title: str = "",
-    legend: bool = True,
 ) -> np.ndarray:
-    """Assemble square cell images into one labelled image.
+    """Assemble square cell images into one labelled image, the legend of the overlays below.
 
     Parameters
     ----------
@@ -37,8 +36,6 @@ def grid_image(
         One per column, written on top.
     title : str
         Written above the grid.
-    legend : bool
-        Add the legend of the overlays below.
 
     Returns
     -------
@@ -59,7 +56,7 @@ def grid_image(
     width = left + n_cols * size
     legend_cols = max(1, min(_LEGEND_ENTRIES, width // 150))
     legend_rows = -(-_LEGEND_ENTRIES // legend_cols)
-    bottom = (LEGEND_PX + 16 * (legend_rows - 1)) if legend else 0
+    bottom = LEGEND_PX + 16 * (legend_rows - 1)
     height = top + n_rows * size + bottom
     fig = new_figure(width, height, axes=False)
 
@@ -114,8 +111,7 @@ def grid_image(
                 )
             # Thin separators keep neighbouring cells apart at thumbnail size.
             ax.add_patch(_frame(ax))
-    if legend:
-        _legend(fig, frac(0, height - bottom, width, bottom), legend_cols)
+    _legend(fig, frac(0, height - bottom, width, bottom), legend_cols)
     return figure_pixels(fig)
 
 
@@ -189,14 +185,13 @@ def save_grid(
     row_labels: Sequence[str] = (),
     col_labels: Sequence[str] = (),
     title: str = "",
-    legend: bool = True,
     colors: int | None = None,
 ) -> Path:
     """:func:`grid_image` written as PNG.
 
     Parameters
     ----------
-    cells, row_labels, col_labels, title, legend
+    cells, row_labels, col_labels, title
         As for :func:`grid_image`.
     path : path
         The PNG file.
@@ -210,7 +205,5 @@ def save_grid(
     """
     from .figure import save_image
 
-    image = grid_image(
-        cells, row_labels=row_labels, col_labels=col_labels, title=title, legend=legend
-    )
+    image = grid_image(cells, row_labels=row_labels, col_labels=col_labels, title=title)
     return save_image(image, path, colors=colors)

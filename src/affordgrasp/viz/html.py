@@ -25,9 +25,10 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .. import __version__
+from .._version import __version__
 from ..hands import Hand
 from ..hands.meshes import link_meshes
+from ..runtime.writing import atomic_write
 from .camera import Camera
 from .raycast import corner_normals
 from .scene import GraspScene
@@ -244,8 +245,7 @@ def write_viewer(
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(viewer_html(entries, title=title, subtitle=subtitle), encoding="utf-8")
-    return path
+    return atomic_write(path, viewer_html(entries, title=title, subtitle=subtitle).encode("utf-8"))
 
 
 def fmt_value(value) -> str:

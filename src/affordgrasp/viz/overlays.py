@@ -57,7 +57,6 @@ def draw_grasp(
     style: OverlayStyle = OverlayStyle(),
     width: int = 512,
     height: int = 512,
-    supersample: int = 2,
 ) -> Render:
     """Render ``scene`` into the matplotlib axes ``ax`` (image + overlays).
 
@@ -69,9 +68,7 @@ def draw_grasp(
         :func:`affordgrasp.viz.raycast.auto_camera` when None.
     style : OverlayStyle
     width, height : int
-        Pixels.
-    supersample : int
-        Rays per pixel side.
+        Pixels (rendered with 2 x 2 rays each).
 
     Returns
     -------
@@ -80,7 +77,7 @@ def draw_grasp(
     caster = caster_of(scene)
     if camera is None:
         camera = auto_camera(scene, width=width, height=height)
-    render = caster.render(camera, supersample=supersample)
+    render = caster.render(camera, supersample=2)
     ax.imshow(render.rgb, interpolation="antialiased")
     ax.set_xlim(0, camera.width)
     ax.set_ylim(camera.height, 0)

@@ -266,7 +266,8 @@ def summarize(
     -------
     DatasetSummary
     """
-    from .sources import numeric_columns
+    from ..robust import task_scores
+    from ..tasks import MetricColumns
 
     thresholds = thresholds or {}
     numeric = _numeric_fields(schema)
@@ -278,16 +279,9 @@ def summarize(
         out.affordances[t.name] = {}
 
     def scores_of(table):
-        m = numeric_columns(table)
-        if robust:
-            from ..robust import ranking_values
-
-            return {t.name: ranking_values(m, t.name) for t in tasks}
+        m = MetricColumns(table)
         return {
-            t.name: np.asarray(
-                t.evaluate(m, mode=mode, **thresholds.get(t.name, {})), dtype=np.float64
-            )
-            for t in tasks
+            t.name: task_scores(t, m, mode, thresholds.get(t.name), robust=robust) for t in tasks
         }
 
     def groups(table):
@@ -533,7 +527,7 @@ def plot_affordances(
 
 
 def save_plots(
-    summary: DatasetSummary, out_dir: str | os.PathLike, *, mode: str = "default", prefix: str = ""
+    summary: DatasetSummary, out_dir: str | os.PathLike, *, mode: str = "default"
 ) -> dict[str, Path]:
     """Write metrics.png, status.png and (with tasks) affordances.png.
 
@@ -543,8 +537,6 @@ def save_plots(
     out_dir : path
     mode : str
         Threshold mode (shown in the titles).
-    prefix : str
-        Prepended to the file names.
 
     Returns
     -------
@@ -553,11 +545,9 @@ def save_plots(
     """
     out_dir = Path(out_dir)
     files = {
-        "metrics": plot_metric_distributions(summary, out_dir / f"{prefix}metrics.png"),
-        "status": plot_status_counts(summary, out_dir / f"{prefix}status.png"),
+        "metrics": plot_metric_distributions(summary, out_dir / "metrics.png"),
+        "status": plot_status_counts(summary, out_dir / "status.png"),
     }
     if summary.affordances:
-        files["affordances"] = plot_affordances(
-            summary, out_dir / f"{prefix}affordances.png", mode=mode
-        )
+        files["affordances"] = plot_affordances(summary, out_dir / "affordances.png", mode=mode)
     return files

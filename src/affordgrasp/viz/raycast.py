@@ -1,7 +1,7 @@
 """Ray casting a grasp scene: shaded colours, depth, parts.
 
 The object and the posed hand are cast in one scene (the package's ray-casting
-interface, :class:`affordgrasp.objects.rays.RayCaster`, with its Embree backend); each
+interface, :class:`affordgrasp.rays.RayCaster`, with its Embree backend); each
 pixel is shaded by its normal (Lambert, two lights fixed to the camera, a flat colour per
 part: the object grey, the palm and fingers blue) and silhouettes are outlined so the
 picture reads at thumbnail size. The result depends only on the inputs (no randomness, no
@@ -19,7 +19,8 @@ import numpy as np
 import trimesh
 
 from ..caching import IdentityCache
-from ..objects.rays import EmbreeScene, RayHits
+from ..rays import RayHits
+from ..rays.embree import EmbreeScene
 from .camera import Camera, _fibonacci_sphere, _image_up, framed_camera, unit
 from .scene import GraspScene, scene_bounds
 
@@ -84,13 +85,8 @@ class SceneCaster:
     face_color: np.ndarray  # (f, 3)
     face_part: np.ndarray  # (f,) int8
 
-    @property
-    def origin(self) -> np.ndarray:
-        """(3,) float64 ndarray: the centre the rays are cast relative to, m."""
-        return self.rays.scene_frame[0]
-
     def cast(self, origins: np.ndarray, dirs: np.ndarray) -> RayHits:
-        """First hits of rays (the :class:`~affordgrasp.objects.rays.RayCaster` interface).
+        """First hits of rays (the :class:`~affordgrasp.rays.RayCaster` interface).
 
         Parameters
         ----------
@@ -104,20 +100,6 @@ class SceneCaster:
         RayHits
         """
         return self.rays.cast(origins, dirs)
-
-    @classmethod
-    def of_scene(cls, scene: GraspScene) -> SceneCaster:
-        """A new caster of a grasp scene (use :func:`caster_of`: it is built once per scene).
-
-        Parameters
-        ----------
-        scene : GraspScene
-
-        Returns
-        -------
-        SceneCaster
-        """
-        return _build_caster(scene)
 
     def render(self, camera: Camera, *, supersample: int = 2) -> Render:
         """Shaded colours, depth and part per pixel, seen by ``camera``.
@@ -135,17 +117,15 @@ class SceneCaster:
         return _render(self, camera, supersample=supersample)
 
 
-def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -> np.ndarray:
+def corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
     """Shading normals at each face corner.
 
     The area-weighted mean of the normals of the faces around the corner's vertex that are
-    within ``angle_deg`` of the face.
+    within ``SMOOTH_ANGLE_DEG`` of the face.
 
     Parameters
     ----------
     mesh : trimesh.Trimesh
-    angle_deg : float
-        Smoothing angle, degrees.
 
     Returns
     -------
@@ -158,7 +138,7 @@ def corner_normals(mesh: trimesh.Trimesh, angle_deg: float = SMOOTH_ANGLE_DEG) -
     around = vf[faces]  # (f, 3, d)
     valid = around >= 0
     idx = np.where(valid, around, 0)
-    near = np.einsum("fk,fcdk->fcd", fn, fn[idx]) >= np.cos(np.deg2rad(angle_deg))
+    near = np.einsum("fk,fcdk->fcd", fn, fn[idx]) >= np.cos(np.deg2rad(SMOOTH_ANGLE_DEG))
     w = np.where((valid & near)[..., None], weighted[idx], 0.0)
     n = w.sum(axis=2)
     norm = np.linalg.norm(n, axis=2, keepdims=True)
@@ -182,7 +162,7 @@ def caster_of(scene: GraspScene) -> SceneCaster:
     SceneCaster
         The same one for every call with this scene (held as long as the scene).
     """
-    return _CASTERS.get(scene, lambda: SceneCaster.of_scene(scene))
+    return _CASTERS.get(scene, lambda: _build_caster(scene))
 
 
 def _object_corner_normals(mesh: trimesh.Trimesh) -> np.ndarray:
@@ -292,10 +272,8 @@ def _outline(depth: np.ndarray, part: np.ndarray, tol: float) -> np.ndarray:
     return edge
 
 
-def visible(
-    caster: SceneCaster, camera: Camera, points: np.ndarray, tol: float = 2e-3
-) -> np.ndarray:
-    """Whether each point is seen by the camera (nothing nearer along its ray).
+def visible(caster: SceneCaster, camera: Camera, points: np.ndarray) -> np.ndarray:
+    """Whether each point is seen by the camera (nothing nearer along its ray, 2 mm slack).
 
     Parameters
     ----------
@@ -303,15 +281,13 @@ def visible(
     camera : Camera
     points : (n, 3) float ndarray
         m.
-    tol : float
-        m.
 
     Returns
     -------
     (n,) bool ndarray
     """
     points = np.asarray(points, dtype=np.float64)
-    return visible_from(caster, np.broadcast_to(camera.eye, points.shape), points, tol)
+    return visible_from(caster, np.broadcast_to(camera.eye, points.shape), points, 2e-3)
 
 
 def visible_from(
@@ -395,7 +371,3 @@ def auto_camera(
     score = score + 1e-3 * (dirs @ _image_up(scene))
     best = dirs[int(np.argmax(score))]
     return framed_camera(scene, best, fov_deg=fov_deg, width=width, height=height)
-
-
-# The name this class had before the ray-casting interface took ``RayCaster``.
-RayCaster = SceneCaster

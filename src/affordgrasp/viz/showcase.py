@@ -1,7 +1,7 @@
 """The best grasps of tasks, drawn: a PNG grid, one PNG per grasp, an interactive HTML page.
 
 This is the library side of ``affordgrasp show``: :func:`draw_best` takes rankings (see
-:func:`affordgrasp.viz.sources.top_grasps`) and the objects they refer to, renders every
+:func:`affordgrasp.search.best.top_grasps`) and the objects they refer to, renders every
 grasp once, and writes the files.
 
 Grid layout: with one grasp per task (``top == 1``) the rows are the objects and the columns
@@ -21,12 +21,12 @@ import numpy as np
 
 from ..columns import hold_effort_sum
 from ..hands.model import Hand
+from ..search.best import RankedGrasp, TaskRanking
 from .figure import png_bytes, save_image
 from .grid import save_grid
 from .html import ViewerEntry, fmt_value, write_viewer
 from .overlays import OverlayStyle, grasp_image
 from .scene import grasp_scene
-from .sources import RankedGrasp, TaskRanking
 
 # Facts listed beside each grasp in the viewer: (label, column).
 METRIC_FACTS = (
@@ -165,7 +165,6 @@ def draw_best(
     cones: bool = False,
     name: str = "best_grasps",
     title: str = "",
-    palette: int | None = 256,
     progress: Callable[[int], None] | None = None,
     hands: Mapping[str, Hand] | None = None,
 ) -> ShowResult:
@@ -199,8 +198,6 @@ def draw_best(
         Base name of the files.
     title : str
         Heading (default: from the tasks and mode).
-    palette : int or None
-        Reduce the grid PNG to this many colours (None keeps full colour).
     progress : callable, optional
         Called with 1 after each grasp drawn.
     hands : mapping of str to Hand, optional
@@ -292,7 +289,7 @@ def draw_best(
         row_labels=rows,
         col_labels=cols,
         title=title,
-        colors=palette,
+        colors=256,
     )
     if html and entries:
         result.html = write_viewer(

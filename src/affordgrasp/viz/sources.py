@@ -1,10 +1,10 @@
 """Where the grasps to show come from: a dataset directory or an in-memory table.
 
-A dataset directory is read by :func:`affordgrasp.dataset.reading.open_dataset` (its shards,
+A dataset directory is read by :func:`affordgrasp.dataset.handle.open_dataset` (its shards,
 or every ``*.parquet`` file under a directory without a manifest), streamed in batches so
-that datasets larger than memory can be ranked and plotted. :func:`top_grasps` keeps the
-best ``k`` rows per object and task with one pass over the scalar columns (ranked by
-:class:`affordgrasp.search.ranking.TopRows`), then reads back only those rows in full.
+that datasets larger than memory can be ranked and plotted:
+:func:`affordgrasp.search.best.top_grasps` keeps the best ``k`` rows per object and task
+with one pass over the scalar columns, then fetches only those rows in full.
 """
 
 from __future__ import annotations
@@ -14,17 +14,13 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
-from ..dataset.best import numeric_columns, task_values
-from ..dataset.handle import Dataset
-from ..dataset.reading import open_dataset, read_errors
-from ..errors import DatasetError, bad_parameter
+from ..dataset.handle import Dataset, open_dataset, read_errors
+from ..errors import DatasetError
 from ..hands.model import Hand
-from ..search.ranking import TopRows
 
 BATCH_ROWS = 65536
 
@@ -202,132 +198,6 @@ class DatasetSource(GraspSource):
         with read_errors(self.directory):
             table = self._dataset.to_table(filter=flt)
         return _order_rows(table.to_pylist(), keys)
-
-
-@dataclass(frozen=True)
-class RankedGrasp:
-    """One of the best grasps of an object for a task (rank 1 is the best).
-
-    Attributes
-    ----------
-    object, task : str
-    rank : int
-    score : float
-        F_T.
-    seed, sample : int
-        The row's key.
-    row : dict
-        The full sample row.
-    """
-
-    object: str
-    task: str
-    rank: int
-    score: float
-    seed: int
-    sample: int
-    row: dict
-
-
-@dataclass
-class TaskRanking:
-    """The best grasps of one object for one task, and how many rows were scored.
-
-    Attributes
-    ----------
-    object, task : str
-    scored : int
-        Rows scored.
-    accepted : int
-        Rows with a score above -inf.
-    best : list of RankedGrasp
-        Best first.
-    """
-
-    object: str
-    task: str
-    scored: int = 0
-    accepted: int = 0  # rows with a score above -inf
-    best: list[RankedGrasp] = field(default_factory=list)
-
-
-def top_grasps(
-    source: GraspSource,
-    tasks: Sequence,
-    *,
-    mode: str = "default",
-    top: int = 4,
-    thresholds: dict[str, dict[str, float]] | None = None,
-    progress=None,
-    robust: bool = False,
-) -> dict[tuple[str, str], TaskRanking]:
-    """The ``top`` best rows per (object, task) by the tasks' scores.
-
-    Higher is better; -inf and NaN never count.
-
-    Parameters
-    ----------
-    source : GraspSource
-    tasks : sequence of Task
-        Task objects (:func:`affordgrasp.get_task`).
-    mode : str
-        Threshold mode.
-    top : int
-        Rows kept per (object, task).
-    thresholds : dict of str to dict, optional
-        Task name -> threshold overrides.
-    progress : callable, optional
-        Called with the number of rows after each batch.
-    robust : bool
-        Rank by the rows' robust scores (:func:`affordgrasp.robust.ranking_column`).
-
-    Returns
-    -------
-    dict of (str, str) to TaskRanking
-        Keyed by (object, task).
-    """
-    if top < 1:
-        raise bad_parameter("top", f"must be at least 1, got {top}")
-    thresholds = thresholds or {}
-    columns = source.scalar_columns()
-    kept: dict[tuple[str, str], TopRows] = {}  # ties by (seed, sample)
-    counts: dict[tuple[str, str], list[int]] = {}
-    for table in source.scan(columns):
-        objects = table.column("object").combine_chunks().dictionary_encode()
-        names = objects.dictionary.to_pylist()
-        codes = objects.indices.to_numpy(zero_copy_only=False)
-        seeds = table.column("seed").to_numpy().astype(np.int64)
-        samples = table.column("sample").to_numpy().astype(np.int64)
-        numeric = numeric_columns(table)
-        # Rows grouped by object once per batch (a batch may hold many objects).
-        order = np.argsort(codes, kind="stable")
-        bounds = np.concatenate([[0], np.cumsum(np.bincount(codes, minlength=len(names)))])
-        for task in tasks:
-            scores = task_values(task, numeric, mode, thresholds.get(task.name), robust=robust)
-            for code, name in enumerate(names):
-                rows = order[bounds[code] : bounds[code + 1]]
-                key = (name, task.name)
-                c = counts.setdefault(key, [0, 0])
-                c[0] += len(rows)
-                ranking = kept.setdefault(key, TopRows(top, 2))
-                c[1] += ranking.add(scores[rows], seeds[rows], samples[rows])
-        if progress is not None:
-            progress(table.num_rows)
-    out: dict[tuple[str, str], TaskRanking] = {}
-    for key, (scored, accepted) in counts.items():
-        ranking = TaskRanking(key[0], key[1], scored, accepted)
-        if key in kept and len(kept[key].values):
-            scores, (seeds, samples) = kept[key].values, kept[key].keys
-            keys = [(int(a), int(b)) for a, b in zip(seeds, samples, strict=True)]
-            rows = source.fetch(key[0], keys)
-            by_key = {(int(r["seed"]), int(r["sample"])): r for r in rows}
-            for rank, (s, k) in enumerate(zip(scores, keys, strict=True), start=1):
-                if k in by_key:
-                    ranking.best.append(
-                        RankedGrasp(key[0], key[1], rank, float(s), k[0], k[1], by_key[k])
-                    )
-        out[key] = ranking
-    return out
 
 
 def is_dataset_path(spec: str | os.PathLike) -> bool:

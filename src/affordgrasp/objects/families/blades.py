@@ -86,9 +86,8 @@ def double_edge_blade(
     half_width: np.ndarray,
     flat_fraction: float,
     edge_angle: float,
-    pointed: bool = True,
 ) -> manifold3d.Manifold:
-    """Double-edged blade, symmetric about y = 0 and z = 0, swept along x.
+    """Double-edged blade, symmetric about y = 0 and z = 0, swept along x, closed in a point.
 
     Section: a flattened hexagon whose edge bevels run from the flat to the edges, so the
     thickness follows from the edge angle.
@@ -101,8 +100,6 @@ def double_edge_blade(
         Half-width of the central flat (ridge) over the blade's half-width.
     edge_angle : float
         Inclusive angle of the edges, rad.
-    pointed : bool
-        Close the last station in a point.
 
     Returns
     -------
@@ -129,8 +126,7 @@ def double_edge_blade(
     rings = np.empty((n, 6, 3))
     rings[..., 0] = xs[:, None]
     rings[..., 1:] = sec
-    if pointed:
-        rings[-1] = np.array([xs[-1], 0.0, 0.0])
+    rings[-1] = np.array([xs[-1], 0.0, 0.0])
     return sweep(rings)
 
 

@@ -31,6 +31,8 @@ __all__ = [
     "union",
 ]
 
+_ARC_SEGMENTS = 32  # segments per full turn on the rounded corners of an offset section
+
 
 def superellipse(
     half_u: float,
@@ -121,13 +123,12 @@ def rounded_stations(
     radius0: float,
     radius1: float,
     middle: int = 16,
-    arc: int = 7,
-    min_factor: float = 0.3,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Stations along [x0, x1] for a bar whose ends are rounded like a dome.
 
-    The factor follows a quarter circle from ``min_factor`` at the tips to 1 in the middle, so
-    a handle gets a domed butt with a small flat cap instead of a pinched apex.
+    The factor follows a quarter circle from 0.3 at the tips to 1 in the middle (7 stations
+    in each rounded zone), so a handle gets a domed butt with a small flat cap instead of a
+    pinched apex.
 
     Parameters
     ----------
@@ -137,10 +138,6 @@ def rounded_stations(
         Length of the rounded zone at each end, m (0 for a square end).
     middle : int
         Stations in the straight middle part.
-    arc : int
-        Stations in each rounded zone.
-    min_factor : float
-        Section scale at the tips, in (0, 1].
 
     Returns
     -------
@@ -149,7 +146,7 @@ def rounded_stations(
     factor : (k,) float64 ndarray
         Scale the section by ``factor`` at ``xs``.
     """
-    phi_min = np.arcsin(min_factor)
+    arc, phi_min = 7, np.arcsin(0.3)
     xs_parts, f_parts = [], []
     if radius0 > 0:
         phi = np.linspace(phi_min, np.pi / 2, arc, endpoint=False)
@@ -325,7 +322,6 @@ def cavity_section(
     cavity_from: manifold3d.CrossSection,
     wall: float,
     floor_z: float | None = None,
-    arc_segments: int = 32,
 ) -> manifold3d.CrossSection:
     """The (r, z) cavity of :func:`hollow_lathe`.
 
@@ -337,15 +333,13 @@ def cavity_section(
         Inward offset, m (the wall thickness).
     floor_z : float, optional
         Cut the cavity below this height, m (a thick base).
-    arc_segments : int
-        Segments per full turn on the rounded corners of the offset.
 
     Returns
     -------
     manifold3d.CrossSection
         ``cavity_from`` offset inwards by ``wall``, cut at ``floor_z`` if given.
     """
-    cavity = cavity_from.offset(-wall, manifold3d.JoinType.Round, 2.0, arc_segments)
+    cavity = cavity_from.offset(-wall, manifold3d.JoinType.Round, 2.0, _ARC_SEGMENTS)
     if floor_z is not None:
         big = 10.0
         above = manifold3d.CrossSection.square((2 * big, big)).translate((-big, floor_z))
@@ -360,7 +354,6 @@ def hollow_lathe(
     floor_z: float | None = None,
     lip_round: float | None = None,
     segments: int = 64,
-    arc_segments: int = 32,
 ) -> manifold3d.Manifold:
     """Container wall of revolution about +z, open at the top.
 
@@ -381,20 +374,18 @@ def hollow_lathe(
         Radius with which convex corners of the wall section are rounded, m.
     segments : int
         Segments around the axis.
-    arc_segments : int
-        Segments per full turn on the rounded corners of the section.
 
     Returns
     -------
     manifold3d.Manifold
     """
-    cavity = cavity_section(cavity_from, wall, floor_z, arc_segments)
+    cavity = cavity_section(cavity_from, wall, floor_z)
     wall_section = outer - cavity
     if lip_round:
         # A morphological opening rounds the rim and the foot like a finished part.
         wall_section = wall_section.offset(
-            -lip_round, manifold3d.JoinType.Round, 2.0, arc_segments
-        ).offset(lip_round, manifold3d.JoinType.Round, 2.0, arc_segments)
+            -lip_round, manifold3d.JoinType.Round, 2.0, _ARC_SEGMENTS
+        ).offset(lip_round, manifold3d.JoinType.Round, 2.0, _ARC_SEGMENTS)
     # Offsets leave many near-collinear vertices; 20 um is far below any feature here.
     return _clear_axis(wall_section.simplify(2e-5)).revolve(circular_segments=segments)
 

@@ -28,10 +28,9 @@ def straight_grip(
     y_center: float = 0.0,
     butt_round: float | None = None,
     front_round: float = 0.0,
-    points: int = 40,
-    middle: int = 18,
 ) -> manifold3d.Manifold:
-    """A grip from x0 (butt) to x1 (front) with a superellipse section.
+    """A grip from x0 (butt) to x1 (front) with a superellipse section (40 vertices) at 18
+    stations between the end zones.
 
     Parameters
     ----------
@@ -51,10 +50,6 @@ def straight_grip(
         Offset of the grip's axis along y, m.
     butt_round, front_round : float
         Length of the domed end zones, m (butt_round None: 60 % of the smaller semi-axis).
-    points : int
-        Vertices per section.
-    middle : int
-        Stations between the end zones.
 
     Returns
     -------
@@ -63,14 +58,14 @@ def straight_grip(
     """
     if butt_round is None:
         butt_round = 0.6 * min(half_y, half_z)
-    xs, dome = rounded_stations(x0, x1, butt_round, front_round, middle=middle)
+    xs, dome = rounded_stations(x0, x1, butt_round, front_round, middle=18)
     u = (xs - x0) / (x1 - x0)
     swell = 1.0 + bulge * np.sin(np.pi * np.clip(u, 0.0, 1.0)) ** 2
     flare = np.maximum(0.0, 1.0 - u / 0.2) ** 2
     sy = half_y * swell * (1.0 + butt_flare * flare) * dome
     sz = half_z * swell * (1.0 + 0.5 * butt_flare * flare) * dome
     yc = y_center - butt_drop * np.maximum(0.0, 1.0 - u / 0.35) ** 2
-    unit = superellipse(1.0, 1.0, exponent, points, half_step=True)
+    unit = superellipse(1.0, 1.0, exponent, 40, half_step=True)
     sections = unit[None, :, :] * np.stack([sy, sz], axis=1)[:, None, :]
     return sweep_along_x(xs, sections, y_center=yc)
 

@@ -25,6 +25,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from ...errors import InternalError
+from ...rays.mesh import mesh_caster
 
 __all__ = ["PART_NAMES", "part_index", "tag", "recording", "face_parts_of", "refine_parts"]
 
@@ -177,13 +178,13 @@ def face_parts_of(solid: manifold3d.Manifold, recorder: Mapping[int, str]) -> np
 # --------------------------------------------------------------------------------------
 
 
-def sharp_edge_faces(mesh: trimesh.Trimesh, band_m: float = EDGE_BAND_M) -> np.ndarray:
+def sharp_edge_faces(mesh: trimesh.Trimesh) -> np.ndarray:
     """The band of faces along the sharp edges (the edge's flanks).
 
     The faces that border a convex edge sharper than 45° are the flanks' first row; the
     band grows from them across smooth edges (dihedral below 3°, so along a flank's plane
     and a gently curved bevel, never over the shoulder onto the blade's flat or round an
-    end cap) to the faces whose vertices all lie within ``band_m`` of the sharp edge
+    end cap) to the faces whose vertices all lie within ``EDGE_BAND_M`` of the sharp edge
     segments or that touch the edge line: the whole bevel, also where it is meshed in
     several rows or in long slivers.
 
@@ -191,8 +192,6 @@ def sharp_edge_faces(mesh: trimesh.Trimesh, band_m: float = EDGE_BAND_M) -> np.n
     ----------
     mesh : trimesh.Trimesh
         The object's mesh, m.
-    band_m : float
-        Widest band, m.
 
     Returns
     -------
@@ -214,12 +213,12 @@ def sharp_edge_faces(mesh: trimesh.Trimesh, band_m: float = EDGE_BAND_M) -> np.n
     owner = np.repeat(np.arange(len(seg)), n_s)
     t = (np.arange(owner.size) - np.repeat(np.cumsum(n_s) - n_s, n_s)) / (n_s[owner] - 1)
     tree = cKDTree(a[owner] + t[:, None] * ab[owner])
-    near, _ = tree.query(V, distance_upper_bound=band_m + 1e-3)
+    near, _ = tree.query(V, distance_upper_bound=EDGE_BAND_M + 1e-3)
     on_line = np.zeros(len(V), dtype=bool)
     on_line[np.asarray(mesh.face_adjacency_edges)[sharp].ravel()] = True
     # a face of the flank plane that reaches the edge line is on the bevel however far its
     # other corners lie (a long sliver across a double-edged blade's flank)
-    inside = (near <= band_m + 2.5e-4)[faces].all(axis=1) | on_line[faces].any(axis=1)
+    inside = (near <= EDGE_BAND_M + 2.5e-4)[faces].all(axis=1) | on_line[faces].any(axis=1)
     band[adjacency[sharp].ravel()] = True
     smooth = (angles < np.radians(3.0)) & ~sharp
     pairs = adjacency[smooth]
@@ -318,7 +317,7 @@ def _container(mesh, labels, params, zones: Callable | None = None):
     # Inner wall faces look towards the axis; the cavity floor looks up from inside it:
     # both see the object again along their outward normal.
     origins = centers + 1e-5 * normals
-    hits = mesh.ray.intersects_any(origins, normals)
+    hits = mesh_caster(mesh).intersects_any(origins, normals)
     inward = (n_radial < -0.2) | (normals[:, 2] > 0.6)
     _set(labels, body & hits & inward, "inside")
     if zones is not None:
