@@ -1,4 +1,4 @@
-"""A dataset's shard checksums, ``DIR/_checksums.jsonl``: one line per shard (SPEC §2.6).
+"""A dataset's shard checksums, ``DIR/_checksums.jsonl``: one line per shard.
 
 A shard's size and BLAKE2b checksum are appended (and synced) before the shard is renamed
 into place, so a shard on disk always has one; a shard changed afterwards (overwritten,

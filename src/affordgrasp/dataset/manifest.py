@@ -1,4 +1,4 @@
-"""A dataset's manifest: the plan a run writes first and a resume must match (SPEC §2.6).
+"""A dataset's manifest: the plan a run writes first and a resume must match.
 
 ``DIR/_manifest.json`` records what the command asked for (conventions: Datasets): the objects
 with their mesh hashes, the seed, the samples and shard size, the hand, the metrics. It is

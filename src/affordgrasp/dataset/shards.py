@@ -1,4 +1,4 @@
-"""A dataset's shards: planned, written atomically, checked against the plan (SPEC §2.6).
+"""A dataset's shards: planned, written atomically, checked against the plan.
 
 A dataset directory holds::
 

@@ -1,4 +1,4 @@
-"""Edges at U on the mesh's triangles: U_g and the sharpest-edge angle (SPEC §2.4, U_g).
+"""Edges at U on the mesh's triangles: U_g and the sharpest-edge angle.
 
 **U_g** (the paper's definition). Take the triangle hit at U and every triangle that
 shares at least one vertex with it; express all their vertices in a frame whose origin is

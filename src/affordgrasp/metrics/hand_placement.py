@@ -1,4 +1,4 @@
-"""Where the hand holds relative to the working part: off it, on a handle (SPEC §2.10).
+"""Where the hand holds relative to the working part: off it, on a handle, for real tools.
 
 The tasks keep the hand off the part that does the work (a blade, a hammer's head): every
 contact far from the use point U (:func:`use_clearance`), none reaching past the centre of

@@ -1,4 +1,4 @@
-"""A blunt striking surface and the swing that strikes with it, without part labels (SPEC §2.10).
+"""A blunt striking surface and the swing that strikes with it, without part labels, for real tools.
 
 A hammer's striking face (an axe's poll) is the flat end of a long, massive head: behind it,
 along the inward normal, lies the head's whole length (60-170 mm), and around it the surface

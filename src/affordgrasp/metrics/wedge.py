@@ -1,4 +1,4 @@
-"""The solid in a ball at U, from rays: wedge angle, edge span, edge thickness (SPEC §2.10).
+"""The solid in a ball at U, from rays: wedge angle, edge span, edge thickness, for real tools.
 
 The measures a cutting edge is told by, at a physical scale and independent of the
 triangles (conventions: Metrics): rays from U over a sphere of directions give the part of

@@ -1,4 +1,4 @@
-"""Task trials: the grasp does the task in MuJoCo (SPEC §2.11), beat and cut; pick is the hold test.
+"""Task trials in MuJoCo (the paper's future work): beat and cut; pick is the hold test.
 
 Both trials run on the task scene (:mod:`.task_scene`), each from the grasp squeezed for
 the hold test (copied from the grasp scene, :func:`~.task_scene.load_state`; the palm held
