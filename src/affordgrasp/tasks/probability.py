@@ -1,0 +1,228 @@
+"""Task probabilities p_T: calibrated models of the task trials' success (SPEC §2.11).
+
+A model maps a row's metric columns (Φ, the task's geometry columns and, in its robust
+variant, the ``robust_*`` columns) to the probability that the grasp succeeds in the task's
+physical trial (:mod:`affordgrasp.physics.task_trials`): a boosted forest of binary trees or
+a linear score, then a monotone calibration map (isotonic, stored as knots). Models are
+fitted by ``tools/fit_task_probabilities.py`` on procedural families with whole families and
+scan-like variants held out, and shipped as JSON package data with their card (objects,
+protocol, held-out numbers). Evaluating one is plain numpy (no fitting library at run time):
+each tree is walked for every row at once, one level per step.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from ..errors import TaskError
+
+__all__ = [
+    "MODEL_FORMAT",
+    "PROBABILITY_COLUMNS",
+    "TaskModel",
+    "task_model",
+    "task_probability",
+]
+
+MODEL_FORMAT = "affordgrasp-task-probability"
+PROBABILITY_COLUMNS = {"beat": "p_beat", "cut": "p_cut", "pick": "p_pick"}
+_BIG = 1e30  # ±inf (an infeasible effort) as a finite number the trees can split on
+_TRANSFORMS = ("raw", "inv1p")
+
+
+def transform_column(values: np.ndarray, transform: str) -> np.ndarray:
+    """A metric column as the model reads it.
+
+    Parameters
+    ----------
+    values : (n,) float ndarray
+    transform : str
+        ``"raw"``: ±inf become ±1e30, NaN stays (missing); ``"inv1p"``: 1 / (1 + max(x, 0)),
+        so an effort of +inf reads 0 and no effort reads 1.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+    """
+    x = np.asarray(values, dtype=np.float64)
+    if transform == "raw":
+        return np.clip(x, -_BIG, _BIG)
+    if transform == "inv1p":
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(np.isnan(x), np.nan, 1.0 / (1.0 + np.maximum(x, 0.0)))
+    raise TaskError(f"unknown feature transform {transform!r}; known: {', '.join(_TRANSFORMS)}")
+
+
+@dataclass(frozen=True)
+class TaskModel:
+    """A fitted task probability model (see the module docstring).
+
+    Attributes
+    ----------
+    task : str
+        ``beat``, ``cut`` or ``pick``.
+    robust : bool
+        Reads the ``robust_*`` columns too.
+    columns : tuple of str
+        The metric columns read, in the model's feature order.
+    transforms : tuple of str
+        Per column, how it is read (:func:`transform_column`).
+    kind : str
+        ``"trees"`` or ``"linear"``.
+    arrays : mapping of str to ndarray
+        trees: ``feature``, ``threshold``, ``left``, ``right``, ``nan_left``, ``value`` per
+        node (a leaf has feature -1) and ``roots``; linear: ``weights``, ``mean``, ``scale``.
+    bias : float
+        Added to the raw score.
+    knots_x, knots_y : (k,) float64 ndarray
+        The calibration map from raw score to probability (increasing; flat outside).
+    card : mapping
+        What the model was fitted on and how it did on held-out objects.
+    """
+
+    task: str
+    robust: bool
+    columns: tuple[str, ...]
+    transforms: tuple[str, ...]
+    kind: str
+    arrays: Mapping[str, np.ndarray]
+    bias: float
+    knots_x: np.ndarray
+    knots_y: np.ndarray
+    card: Mapping[str, Any] = field(default_factory=dict)
+
+    def features(self, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
+        """(n, f) float64: the model's columns of ``metrics``, transformed."""
+        missing = [c for c in self.columns if c not in metrics]
+        if missing:
+            raise TaskError(
+                f"p_{self.task} needs the metric columns {', '.join(missing)}; evaluate the "
+                "rows again with this version (or with --robust for the robust columns)"
+            )
+        return np.stack(
+            [transform_column(metrics[c], t) for c, t in zip(self.columns, self.transforms)],
+            axis=1,
+        )
+
+    def raw_score(self, x: np.ndarray) -> np.ndarray:
+        """(n,) float64: the uncalibrated score of feature rows ``x`` (n, f)."""
+        a = self.arrays
+        if self.kind == "linear":
+            z = (x - a["mean"]) / a["scale"]
+            return np.nan_to_num(z, nan=0.0) @ a["weights"] + self.bias
+        n = len(x)
+        total = np.full(n, self.bias)
+        rows = np.arange(n)
+        feature, threshold = a["feature"], a["threshold"]
+        left, right, nan_left, value = a["left"], a["right"], a["nan_left"], a["value"]
+        for root in a["roots"]:
+            node = np.full(n, root, dtype=np.int64)
+            while True:
+                f = feature[node]
+                inner = f >= 0
+                if not inner.any():
+                    break
+                v = x[rows[inner], f[inner]]
+                at = node[inner]
+                go_left = np.where(np.isnan(v), nan_left[at], v <= threshold[at])
+                node[inner] = np.where(go_left, left[at], right[at])
+            total += value[node]
+        return total
+
+    def predict(self, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
+        """(n,) float64 in [0, 1]: P(task trial succeeds) of each row of ``metrics``."""
+        return np.interp(self.raw_score(self.features(metrics)), self.knots_x, self.knots_y)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The model as JSON-ready data (the package-data file's content)."""
+        return {
+            "format": MODEL_FORMAT,
+            "version": 1,
+            "task": self.task,
+            "robust": self.robust,
+            "columns": list(self.columns),
+            "transforms": list(self.transforms),
+            "kind": self.kind,
+            "arrays": {k: np.asarray(v).tolist() for k, v in self.arrays.items()},
+            "bias": float(self.bias),
+            "knots_x": np.asarray(self.knots_x).tolist(),
+            "knots_y": np.asarray(self.knots_y).tolist(),
+            "card": dict(self.card),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> TaskModel:
+        """Read a model written by :meth:`to_dict` (a bad file raises TaskError)."""
+        if data.get("format") != MODEL_FORMAT:
+            raise TaskError(f"not a task probability model (format {data.get('format')!r})")
+        ints = {"feature", "left", "right", "roots"}
+        arrays = {
+            k: np.asarray(v, dtype=np.int64 if k in ints else bool if k == "nan_left" else float)
+            for k, v in data["arrays"].items()
+        }
+        return cls(
+            task=str(data["task"]),
+            robust=bool(data["robust"]),
+            columns=tuple(data["columns"]),
+            transforms=tuple(data["transforms"]),
+            kind=str(data["kind"]),
+            arrays=arrays,
+            bias=float(data["bias"]),
+            knots_x=np.asarray(data["knots_x"], dtype=np.float64),
+            knots_y=np.asarray(data["knots_y"], dtype=np.float64),
+            card=data.get("card", {}),
+        )
+
+
+def _model_file(task: str, robust: bool) -> str:
+    return f"{task}{'-robust' if robust else ''}.json"
+
+
+@cache
+def task_model(task: str, robust: bool = False) -> TaskModel:
+    """The shipped model of ``task`` (``beat``, ``cut`` or ``pick``), plain or robust.
+
+    Raises
+    ------
+    TaskError
+        No model ships for that task and variant.
+    """
+    if task not in PROBABILITY_COLUMNS:
+        raise TaskError(
+            f"no task probability for {task!r}; models ship for {', '.join(PROBABILITY_COLUMNS)}"
+        )
+    path = resources.files("affordgrasp.tasks").joinpath("probabilities", _model_file(task, robust))
+    if not path.is_file():
+        raise TaskError(f"the {'robust ' if robust else ''}model of p_{task} is not installed")
+    return TaskModel.from_dict(json.loads(path.read_text(encoding="utf-8")))
+
+
+def task_probability(task: str, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
+    """p_T of every row: the robust model when ``metrics`` has its columns, else the plain one.
+
+    Parameters
+    ----------
+    task : str
+        ``beat``, ``cut`` or ``pick``.
+    metrics : mapping of str to (n,) array
+        A :class:`~affordgrasp.tasks.metric_columns.MetricColumns` or any mapping of columns.
+
+    Returns
+    -------
+    (n,) float64 ndarray in [0, 1]
+    """
+    plain = task_model(task, False)
+    try:
+        robust = task_model(task, True)
+    except TaskError:
+        return plain.predict(metrics)
+    if all(c in metrics for c in robust.columns):
+        return robust.predict(metrics)
+    return plain.predict(metrics)
