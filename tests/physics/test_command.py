@@ -174,7 +174,7 @@ def test_physics_trials_write_their_columns_cards_and_resume(tiny_dataset, tmp_p
     assert table.loc[~has_use, "beat_ok"].isna().all()
     cards = json.loads((out / "_physics.json").read_text())["trials"]
     assert {c["version"] for c in cards.values()} == {1}
-    assert cards["beat"]["settings"]["nail_force_n"] == 300.0
+    assert cards["beat"]["settings"]["nail_force_n"] == 150.0
     # resumed with the same trials: nothing to do; with others: refused, naming them
     code, stdout, _ = _run(capsys, *args, "--trials", "beat,cut,pick")
     assert code == 0 and json.loads(stdout)["summary"]["shards_written"] == 0

@@ -393,7 +393,7 @@ class TrialSettings:
     strike_time: float = 0.02
     miss_rad: float = 0.3
     relax_s: float = 0.002
-    nail_force_n: float = 300.0
+    nail_force_n: float = 150.0
     nail_mass_kg: float = 0.005
     nail_head_radius_m: float = 0.0035
     nail_head_height_m: float = 0.002
