@@ -86,7 +86,7 @@ def test_zero_perturbation_gives_the_plain_metrics_exactly(hammer, hammer_batch)
     np.testing.assert_array_equal(r["robust_viable"], is_viable(phi).astype(float))
     np.testing.assert_array_equal(r["robust_hold_dirs"], hold_dirs(phi))
     np.testing.assert_array_equal(r["hold_dirs"], hold_dirs(phi))
-    for task in ("beat", "cut", "cut-ug", "pick"):
+    for task in ("beat-rules", "cut-rules", "cut-ug", "pick"):
         plain = evaluate_task(task, phi)
         plain = np.where(np.isnan(plain), -np.inf, plain)
         np.testing.assert_array_equal(r[f"robust_{task}"], plain)
@@ -133,7 +133,7 @@ def test_graded_hold_orders_by_directions_then_effort(hammer, hammer_batch):
     # lexicographic: more directions first, then the lower effort
     order = np.lexsort((finite_sum, -dirs))
     assert np.all(np.diff(r["robust_hold"][order]) <= 0)
-    assert ranking_column("pick") == "robust_hold" and ranking_column("cut") == "robust_cut"
+    assert ranking_column("pick") == "robust_hold" and ranking_column("cut-rules") == "robust_cut-rules"
 
 
 def test_perturbed_copies_change_the_scores_and_quantile_is_an_order_statistic(
@@ -238,7 +238,7 @@ def test_rigid_motion_of_object_and_grasp_keeps_the_robust_columns(quarter_turns
 def test_ranking_values_read_the_robust_score(hammer):
     t = evaluate_samples(hammer, 5, seed=0, robust=3).table
     np.testing.assert_array_equal(ranking_values(t, "pick"), t.column("robust_hold").to_numpy())
-    np.testing.assert_array_equal(ranking_values(t, "cut"), t.column("robust_cut").to_numpy())
+    np.testing.assert_array_equal(ranking_values(t, "cut-rules"), t.column("robust_cut-rules").to_numpy())
     result = evaluate_samples(hammer, 5, seed=0, robust=3)
     np.testing.assert_array_equal(result.scores("pick", robust=True), ranking_values(t, "pick"))
     with pytest.raises(InputError, match="--robust K"):

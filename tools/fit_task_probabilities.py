@@ -29,25 +29,24 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from affordgrasp.columns import METRIC_COLUMNS
 from affordgrasp.stats import bootstrap_auc, expected_calibration_error, roc_auc
 from affordgrasp.tasks.metric_columns import MetricColumns
-from affordgrasp.tasks.probability import TaskModel, transform_column
-
-# Φ and the geometry columns (not the on-request volume, not the text reason), read by every
-# task's model: the model finds what matters to its task.
-PHI = tuple(c for c in METRIC_COLUMNS if c not in ("gws_volume", "epsilon_reason")) + (
-    "hold_effort_sum",
-    "hold_dirs",
+from affordgrasp.tasks.probability import (
+    MODEL_COLUMNS,
+    ROBUST_COLUMNS,
+    TaskModel,
+    transform_column,
 )
-ROBUST = ("robust_fc", "robust_epsilon", "robust_hold_dirs", "robust_hold")
-EFFORTS = {c for c in PHI if c.startswith("hold_effort") or c == "impact_effort"}
+
+EFFORTS = {c for c in MODEL_COLUMNS if c.startswith("hold_effort") or c == "impact_effort"}
 # +1: more of it never makes the trial less likely to succeed (efforts read as 1/(1+E)).
-INCREASING = {"epsilon", "epsilon_hand", "hold_dirs", *EFFORTS, *ROBUST}
+INCREASING = {"epsilon", "epsilon_hand", "hold_dirs", *EFFORTS, *ROBUST_COLUMNS}
+# and per task: the force the grasp can transmit to the edge
+INCREASING_FOR = {"cut": {"use_force"}}
 
 
 def columns_of(task: str, robust: bool) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    cols = PHI + ((*ROBUST, f"robust_p_{task}") if robust else ())
+    cols = MODEL_COLUMNS + (ROBUST_COLUMNS if robust else ())
     transforms = tuple("inv1p" if c in EFFORTS else "raw" for c in cols)
     return cols, transforms
 
@@ -55,7 +54,7 @@ def columns_of(task: str, robust: bool) -> tuple[tuple[str, ...], tuple[str, ...
 def read_trials(paths: list[str]) -> pa.Table:
     tables = []
     for p in paths:
-        files = sorted(Path(p).glob("part-*.parquet")) if Path(p).is_dir() else [Path(p)]
+        files = sorted(Path(p).glob("*.parquet")) if Path(p).is_dir() else [Path(p)]
         tables += [pq.read_table(f) for f in files]
     return pa.concat_tables(tables, promote_options="permissive")
 
@@ -200,7 +199,11 @@ def fit_task(table: pa.Table, task: str, robust: bool, held_out: np.ndarray, see
     fit = known & ~held_out
     test = known & held_out
     x, y, groups = x_all[fit], y_all[fit], objects[fit]
-    monotone = [1 if c in INCREASING else 0 for c in cols]
+    if len(np.unique(groups)) < 2 or y.min() == y.max():
+        print(f"  {task}: too few objects or outcomes to fit ({len(np.unique(groups))} objects)")
+        return None
+    up = INCREASING | INCREASING_FOR.get(task, set())
+    monotone = [1 if c in up else 0 for c in cols]
     results = {}
     for kind, make in candidates(monotone).items():
         t0 = time.process_time()

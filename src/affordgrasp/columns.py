@@ -47,6 +47,10 @@ GRASP_METRICS: tuple[str, ...] = (
     "epsilon_hand",
 )
 
+# The task probabilities (affordgrasp.tasks.probability), after the metric columns (and the
+# robust ones): P(the task's physical trial succeeds | the row's metrics).
+PROBABILITY_COLUMNS: tuple[str, ...] = ("p_beat", "p_cut", "p_pick")
+
 METRIC_COLUMNS: tuple[str, ...] = (
     "epsilon",
     "gws_volume",

@@ -24,7 +24,9 @@ from .hands import Hand, get_hand
 from .metrics.phi_batch import phi_of_batch
 from .objects import GraspObject, load_object
 from .robust import RobustSettings, robust_columns, robust_settings, task_scores
-from .schema import append_float_columns, batch_to_table, robust_fields
+from .schema import PROBABILITY_FIELDS, append_float_columns, batch_to_table, robust_fields
+from .tasks.metric_columns import MetricColumns
+from .tasks.probability import probability_columns
 
 STAGES = ("simulate", "metrics", "table")  # and "robust" with robust evaluation
 
@@ -193,6 +195,9 @@ def _evaluate_batch(
     )
     if extra is not None and settings is not None:
         table = append_float_columns(table, robust_fields(settings.tasks), extra)
+    if phi is not None:
+        probabilities = probability_columns(MetricColumns(table))
+        table = append_float_columns(table, PROBABILITY_FIELDS, probabilities)
     timings = {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t3}
     if extra is not None:
         timings["robust"] = t3 - t2

@@ -92,9 +92,10 @@ __all__ = [
     "task_scores",
 ]
 
-# Tasks summarised by default (the built-in affordance functions; ``viable`` has its own
-# ``robust_viable``).
-DEFAULT_TASKS: tuple[str, ...] = ("beat", "cut", "cut-ug", "pick")
+# Tasks summarised by default: the built-in formula tasks (``viable`` has its own
+# ``robust_viable``; a task probability has a robust model of its own, which reads the
+# copies' robust_fc, robust_epsilon, robust_hold and robust_hold_dirs).
+DEFAULT_TASKS: tuple[str, ...] = ("beat-rules", "cut-rules", "cut-ug", "pick-paper")
 HOLD_SCALE_N = 1.0  # N: the effort at which the graded hold's second term is half its range
 FRICTION_TRUNCATION = 2.0  # σ: the friction draw is a normal truncated to ±2σ
 
@@ -380,7 +381,7 @@ def ranking_column(task: str) -> str:
     str
         ``robust_hold`` for pick (graded hold), else ``robust_<task>``.
     """
-    return "robust_hold" if task == "pick" else f"robust_{task}"
+    return "robust_hold" if task == "pick-paper" else f"robust_{task}"
 
 
 def _backoff(
@@ -796,9 +797,10 @@ def task_scores(
     (n,) float64 ndarray
         −∞ where a requirement fails; NaN never ranks.
     """
-    if robust:
-        return ranking_values(columns, task if isinstance(task, str) else task.name)
     from .tasks import get_task
 
+    if robust and not (get_task(task) if isinstance(task, str) else task).probability:
+        return ranking_values(columns, task if isinstance(task, str) else task.name)
+    # a task probability reads the robust columns itself (its robust model) when present
     task = get_task(task) if isinstance(task, str) else task
     return np.asarray(task.evaluate(columns, mode, **dict(thresholds or {})), dtype=np.float64)

@@ -12,7 +12,7 @@ import numpy as np
 import pyarrow as pa
 
 from ._version import __version__
-from .columns import METRIC_COLUMNS
+from .columns import METRIC_COLUMNS, PROBABILITY_COLUMNS
 
 _f64 = pa.float64()
 _vec3 = pa.list_(_f64, 3)
@@ -45,6 +45,8 @@ SAMPLE_FIELDS = [
 METRIC_FIELDS = [
     pa.field(name, pa.string() if name == "epsilon_reason" else _f64) for name in METRIC_COLUMNS
 ]
+# p_beat, p_cut, p_pick: after the metric columns, or after the robust columns when present
+PROBABILITY_FIELDS = [pa.field(name, _f64) for name in PROBABILITY_COLUMNS]
 SCHEMA = pa.schema(SAMPLE_FIELDS + METRIC_FIELDS, metadata={"affordgrasp_version": __version__})
 SIMULATION_SCHEMA = pa.schema(SAMPLE_FIELDS, metadata={"affordgrasp_version": __version__})
 
@@ -107,11 +109,15 @@ def dataset_schema(metrics: bool = True, depth: bool = False, robust=None) -> pa
     Returns
     -------
     pyarrow.Schema
-        Key, grasp state and (optionally) metric, robust and depth fields, in shard order.
+        Key, grasp state and (optionally) metric, robust, task probability and depth
+        fields, in shard order.
     """
     schema = SCHEMA if metrics else SIMULATION_SCHEMA
     if metrics and robust is not None and robust.enabled:
         for f in robust_fields(robust.tasks):
+            schema = schema.append(f)
+    if metrics:
+        for f in PROBABILITY_FIELDS:
             schema = schema.append(f)
     return schema.append(DEPTH_FIELD) if depth else schema
 

@@ -27,7 +27,7 @@ def _uses(points, normals, depth=0.09, relief=1e-4, wedge=np.pi):
 
 
 def test_a_swing_that_meets_a_striking_face_square_scores_one():
-    beat = tasks.get_task("beat")
+    beat = tasks.get_task("beat-rules")
     # a face at x = 0.3 m looking along +y; the hand at the origin
     uses = _uses([[0.3, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     wrist = np.zeros((3, 3))
@@ -40,14 +40,14 @@ def test_a_swing_that_meets_a_striking_face_square_scores_one():
 
 
 def test_only_candidates_of_the_task_count_and_tasks_without_delta_score_zero():
-    beat = tasks.get_task("beat")
+    beat = tasks.get_task("beat-rules")
     wrist, axis = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
     side_face = _uses([[0.3, 0.0, 0.0]], [[0.0, 1.0, 0.0]], depth=0.025)  # too shallow
     assert swing_alignment(beat, "default", {}, side_face, wrist, axis)[0] == 0.0
     relaxed = swing_alignment(beat, "default", {"tau_depth": 0.0}, side_face, wrist, axis)
     assert relaxed[0] == 1.0
     face = _uses([[0.3, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-    assert swing_alignment(tasks.get_task("cut"), "default", {}, face, wrist, axis)[0] == 0.0
+    assert swing_alignment(tasks.get_task("cut-rules"), "default", {}, face, wrist, axis)[0] == 0.0
     assert (
         swing_alignment(tasks.get_task("beat-paper"), "default", {}, side_face, wrist, axis)[0]
         == 1.0
@@ -57,7 +57,7 @@ def test_only_candidates_of_the_task_count_and_tasks_without_delta_score_zero():
 def test_task_tests_read_the_task_thresholds_and_leave_out_infinite_ones():
     from affordgrasp.search.guidance import task_tests
 
-    cut = tasks.get_task("cut")
+    cut = tasks.get_task("cut-rules")
     got = {t.threshold: (t.column, t.sense) for t in task_tests(cut)}
     assert got["tau_eps"] == ("epsilon_hand", 1)  # the ε cut gates on
     assert got["tau_wedge"] == ("use_wedge_angle", -1)
@@ -65,7 +65,7 @@ def test_task_tests_read_the_task_thresholds_and_leave_out_infinite_ones():
     assert set(got) == set(cut.thresholds)
     loose = task_tests(cut, "no-robustness")
     assert "tau_eps" not in {t.threshold for t in loose}  # τ_ε = -inf: always passes
-    assert task_tests(tasks.get_task("cut"), overrides={"tau_wedge": 0.5})[1].tau == 0.5
+    assert task_tests(tasks.get_task("cut-rules"), overrides={"tau_wedge": 0.5})[1].tau == 0.5
     assert task_tests(tasks.get_task("pick")) == []
 
 
@@ -99,7 +99,7 @@ def test_threshold_guidance_ranks_a_grasp_closer_to_passing_higher(hammer_rows):
     from affordgrasp.search.guidance import threshold_guidance
 
     obj = load_object("hammer")
-    cut = tasks.get_task("cut")
+    cut = tasks.get_task("cut-rules")
     tau = cut.thresholds_for("default")
     touched = np.flatnonzero(hammer_rows.column("n_contacts").to_numpy() > 0)
     untouched = np.flatnonzero(hammer_rows.column("n_contacts").to_numpy() == 0)
@@ -131,7 +131,7 @@ def test_threshold_guidance_ranks_a_grasp_closer_to_passing_higher(hammer_rows):
 def test_use_only_passes_keeps_the_edge_points_of_cut():
     from affordgrasp.search.guidance import use_only_passes
 
-    cut = tasks.get_task("cut")
+    cut = tasks.get_task("cut-rules")
     edge = _uses([[0.1, 0.0, 0.0]], [[0.0, 1.0, 0.0]], wedge=0.5)
     flat = _uses([[0.1, 0.0, 0.0]], [[0.0, 1.0, 0.0]], wedge=np.pi)
     assert use_only_passes(cut, "default", {}, edge).tolist() == [True]

@@ -87,7 +87,7 @@ def test_optimize_cli_json(wrist_inertia_task, box_mesh, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["budget"] == 64 and doc["cem"]["value"] >= doc["random"]["value"]
     assert len(doc["cem"]["p0"]) == 6 and len(doc["cem"]["use_dir"]) == 2
-    assert main(["optimize", str(box_mesh), "--task", "cut", "--budget", "0"]) == 2
+    assert main(["optimize", str(box_mesh), "--task", "cut-rules", "--budget", "0"]) == 2
 
 
 def test_optimize_uses_the_hand_object_it_is_given(wrist_inertia_task, box_mesh):
@@ -205,7 +205,7 @@ def test_passing_use_points_pass_the_use_only_tests_and_repeat_per_seed():
     from affordgrasp.search.guidance import use_only_passes
     from affordgrasp.search.use_points import UsePoints, passing_use_points
 
-    cut = tasks.get_task("cut")
+    cut = tasks.get_task("cut-rules")
     uses, sampling = passing_use_points("knife", cut, 12, seed=5, max_draws=600)
     assert not sampling.fallback and sampling.tested
     assert len(uses.triangle) == sampling.kept == min(12, sampling.passing) > 0
@@ -226,7 +226,7 @@ def test_passing_use_points_pass_the_use_only_tests_and_repeat_per_seed():
 def test_passing_use_points_fall_back_to_the_plain_sample_and_say_so():
     from affordgrasp.search.use_points import UsePoints, passing_use_points
 
-    cut = tasks.get_task("cut")
+    cut = tasks.get_task("cut-rules")
     # no point of a knife is a 0.01 rad wedge: nothing passes
     uses, sampling = passing_use_points(
         "knife", cut, 10, seed=2, thresholds={"tau_wedge": 0.01}, max_draws=30

@@ -54,7 +54,7 @@ def registry():
 
 
 def test_builtin_tasks_are_listed():
-    names = {"beat", "beat-paper", "cut", "cut-wedge", "cut-dihedral", "cut-ug", "pick", "viable"}
+    names = {"beat-rules", "beat-paper", "cut-rules", "cut-wedge", "cut-dihedral", "cut-ug", "pick", "viable"}
     assert names <= set(tasks.list_tasks())
     with pytest.raises(TaskError, match="available tasks: .*beat"):
         tasks.get_task("juggle")
@@ -79,7 +79,7 @@ def test_beat_paper_follows_the_paper():
 
 
 def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
-    beat, paper = tasks.get_task("beat"), tasks.get_task("beat-paper")
+    beat, paper = tasks.get_task("beat-rules"), tasks.get_task("beat-paper")
     blunt = table(use_wedge_angle=np.full(5, math.pi))
     np.testing.assert_array_equal(beat.evaluate(blunt), paper.evaluate(blunt))
     sharp = table(use_wedge_angle=[math.pi, math.radians(60), math.pi, math.pi, math.pi])
@@ -99,7 +99,7 @@ def test_beat_is_the_papers_on_a_blunt_point_with_the_hand_off_it():
 
 
 def test_beat_strikes_with_a_deep_flat_surface():
-    beat, paper = tasks.get_task("beat"), tasks.get_task("beat-paper")
+    beat, paper = tasks.get_task("beat-rules"), tasks.get_task("beat-paper")
     blunt = dict(use_wedge_angle=np.full(5, math.pi))
     # a side face of the head (25 mm behind it), a claw, a ball peen (1 mm off its plane at
     # 5 mm), a ring that leaves the part (inf), and a face
@@ -126,11 +126,11 @@ def test_beat_and_cut_gate_epsilon_at_the_hand_length_the_paper_variants_epsilon
         epsilon_hand=[0.01, 0.02, 0.02, 0.02, 0.02],
         use_wedge_angle=np.full(5, math.pi),
     )
-    beat = tasks.get_task("beat").evaluate(long)
+    beat = tasks.get_task("beat-rules").evaluate(long)
     assert beat[0] == -INF and np.isfinite(beat[1:]).all()
     assert np.all(tasks.get_task("beat-paper").evaluate(long) == -INF)
     edge = dict(long, use_wedge_angle=np.full(5, 0.3))
-    cut = tasks.get_task("cut").evaluate(edge)
+    cut = tasks.get_task("cut-rules").evaluate(edge)
     assert cut[0] == -INF and np.isfinite(cut[1:]).all()
     assert np.all(tasks.get_task("cut-dihedral").evaluate(edge) == -INF)
     assert np.all(tasks.get_task("cut-ug").evaluate(edge) == -INF)
@@ -138,14 +138,14 @@ def test_beat_and_cut_gate_epsilon_at_the_hand_length_the_paper_variants_epsilon
     weak = dict(edge, epsilon=np.full(5, 0.005))
     assert np.all(tasks.get_task("viable").evaluate(weak) == 0.0)
     # the modes set τ_ε of the same column
-    assert np.all(tasks.get_task("beat").evaluate(long, mode="extra-robustness") == -INF)
+    assert np.all(tasks.get_task("beat-rules").evaluate(long, mode="extra-robustness") == -INF)
     # rows written before the column existed are gated on ε itself
     old = {k: v for k, v in long.items() if k != "epsilon_hand"}
-    assert np.all(tasks.get_task("beat").evaluate(old) == -INF)
+    assert np.all(tasks.get_task("beat-rules").evaluate(old) == -INF)
 
 
 def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
-    cut = tasks.get_task("cut")
+    cut = tasks.get_task("cut-rules")
     np.testing.assert_allclose(cut.evaluate(table()), table()["use_force"])
     blunt = table(use_wedge_angle=[math.pi, 0.3, 0.3, 0.3, 0.3], use_edge_angle=np.full(5, 0.1))
     assert cut.evaluate(blunt)[0] == -INF and cut.evaluate(blunt)[1] == 1.0
@@ -171,7 +171,7 @@ def test_cut_tests_the_wedge_angle_and_clearance_and_keeps_the_other_tests():
 
 
 def test_cut_rejects_thin_flats_tips_and_corners_and_cut_wedge_keeps_them():
-    cut, plain = tasks.get_task("cut"), tasks.get_task("cut-wedge")
+    cut, plain = tasks.get_task("cut-rules"), tasks.get_task("cut-wedge")
     fine = math.radians(100.0)  # a thin flat: an edge in the 3 mm ball, not in the 2 mm one
     corner = 0.12  # a blade's point or a cleaver's heel: the inside directions in a sector
     cols = table(
@@ -228,7 +228,7 @@ def test_pick_and_viable():
 
 
 def test_modes_and_overrides_are_checked():
-    beat = tasks.get_task("beat")
+    beat = tasks.get_task("beat-rules")
     assert beat.thresholds_for("no-robustness")["tau_eps"] == -INF
     assert beat.thresholds_for("extra-robustness")["tau_eps"] == tasks.TAU_EPS_EXTRA
     assert beat.thresholds_for("paper")["tau_eps"] == 0.3
@@ -249,11 +249,11 @@ def test_modes_and_overrides_are_checked():
 def test_arrow_and_pandas_inputs():
     pd = pytest.importorskip("pandas")
     cols = table()
-    expected = tasks.get_task("beat").evaluate(cols)
+    expected = tasks.get_task("beat-rules").evaluate(cols)
     arrow = pa.table({"object": ["knife:0"] * 5, **cols, "epsilon_reason": [""] * 5})
-    np.testing.assert_array_equal(tasks.get_task("beat").evaluate(arrow), expected)
+    np.testing.assert_array_equal(tasks.get_task("beat-rules").evaluate(arrow), expected)
     frame = pd.DataFrame({"object": ["knife:0"] * 5, **cols})
-    np.testing.assert_array_equal(tasks.evaluate_task("beat", frame), expected)
+    np.testing.assert_array_equal(tasks.evaluate_task("beat-rules", frame), expected)
     np.testing.assert_array_equal(
         tasks.get_task("pick").evaluate(arrow), -6 * cols["hold_effort_px"]
     )

@@ -269,13 +269,17 @@ def best_grasps(
     metric_cols = [c for c in METRIC_COLUMNS if c in arrow.schema.names]
     if robust:
         from ..robust import ranking_column
+        from ..tasks.probability import ROBUST_COLUMNS
 
         if ds.robust is None:
             raise DatasetError(
                 f"dataset {str(directory)!r} has no robust columns; generate it with "
                 "--robust K to rank by a robust score, or drop --robust"
             )
-        metric_cols.append(ranking_column(task_obj.name))
+        if task_obj.probability:  # its robust model reads the generic robust columns
+            metric_cols += [c for c in ROBUST_COLUMNS if c in arrow.schema.names]
+        else:
+            metric_cols.append(ranking_column(task_obj.name))
     scanner = arrow.scanner(
         columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
     )

@@ -66,6 +66,11 @@ _LATER_GRASP_COLUMNS = frozenset({"contact_thickness", "contact_width", "epsilon
 # most favourable values of the LP metrics, for the screen
 _SCREEN_FORCE = 1e12
 _SCREEN_IMPACT = 0.0
+# a probability task (never -inf): the LPs of each grasp's _SCREEN_TOP use points with the
+# largest screened value (a task probability's model rises with U_τ and 1 / E_i, so the
+# screen is its most favourable value; the best use point of a grasp is among them unless
+# the LPs reorder more than _SCREEN_TOP of its use points)
+_SCREEN_TOP = 8
 # pairs screened at a time (bounds the memory of a search over G × U)
 _BLOCK_PAIRS = 1 << 20
 
@@ -137,6 +142,18 @@ def _contacts(table: pa.Table, rows: np.ndarray):
     else:
         points, normals, mu = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
     return points, normals, mu, offsets
+
+
+def _top_per_grasp(values: np.ndarray, uses: int, k: int) -> np.ndarray:
+    """Mask of the ``k`` largest of each grasp's ``uses`` consecutive values (grasp-major)."""
+    v = np.nan_to_num(values.reshape(-1, uses), nan=-np.inf)
+    keep = np.zeros(v.shape, dtype=bool)
+    if uses <= k:
+        keep[:] = True
+    else:
+        top = np.argpartition(-v, k - 1, axis=1)[:, :k]
+        np.put_along_axis(keep, top, True, axis=1)
+    return keep.ravel()
 
 
 def pair_scores(
@@ -224,7 +241,11 @@ def pair_scores(
         if screen and len(gi):
             cols["use_force"] = np.full(len(gi), _SCREEN_FORCE)
             cols["impact_effort"] = np.full(len(gi), _SCREEN_IMPACT)
-            keep = t.evaluate(MetricColumns(cols), mode, **overrides) > -np.inf
+            screened = t.evaluate(MetricColumns(cols), mode, **overrides)
+            if t.probability:  # never -inf: each grasp's most promising use points
+                keep = _top_per_grasp(screened, len(use_rows), _SCREEN_TOP)
+            else:
+                keep = screened > -np.inf
             gi, ui = gi[keep], ui[keep]
             cols = {k: v[keep] for k, v in cols.items()}
         blocks.append((gi, ui, cols))

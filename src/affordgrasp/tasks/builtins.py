@@ -8,7 +8,29 @@ import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
 from . import thresholds
+from .probability import MODEL_COLUMNS, task_probability
 from .task import Task, make_task
+
+# A probability task's value: (1 - 10⁻⁶) p_T + 10⁻⁶ × the paper's value squashed into (0, 1), so
+# that grasps of equal p_T (a calibration map is flat between its knots) rank by the
+# paper's formula and p_T shown to six decimals is unchanged.
+_TIE = 1e-6
+
+
+def _squash(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=np.float64)
+    return np.where(np.isnan(x), 0.0, 0.5 + np.arctan(np.nan_to_num(x, nan=0.0)) / np.pi)
+
+
+def _probability_task(task: str, tie):
+    def func(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
+        p = task_probability(task, m)
+        if task != "pick":  # no use point, nothing to strike or cut with
+            p = np.where(np.isnan(m["use_depth"]), 0.0, p)
+        return (1.0 - _TIE) * p + _TIE * _squash(tie(m))
+
+    func.__name__ = f"p_{task}"
+    return func
 
 
 def _beat(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
@@ -109,8 +131,14 @@ def _viable(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
 
 
 def builtin_tasks() -> list[Task]:
-    """Fresh Task objects of the built-in tasks: beat, beat-paper, cut, cut-wedge, cut-dihedral,
-    cut-ug, pick, viable.
+    """Fresh Task objects of the built-in tasks: beat, beat-rules, beat-paper, cut, cut-rules,
+    cut-wedge, cut-dihedral, cut-ug, pick, pick-paper, viable.
+
+    ``beat``, ``cut`` and ``pick`` are the task probabilities p_T
+    (:mod:`~affordgrasp.tasks.probability`: learned from the physical trials), ties broken by
+    the paper's value (I / E_i, U_τ, −ΣE_h); ``beat-rules`` and ``cut-rules`` are the
+    threshold versions that ranked before them, ``beat-paper``, ``cut-ug`` and ``pick-paper``
+    the paper's formulas.
 
     Returns
     -------
@@ -120,6 +148,30 @@ def builtin_tasks() -> list[Task]:
     return [
         make_task(
             "beat",
+            _probability_task("beat", lambda m: m["inertia"] / m["impact_effort"]),
+            description="beating: p_beat, the probability that three wrist-swung strikes "
+            "drive a nail with the use point (physics trial), ties by the paper's I / E_i",
+            requires=MODEL_COLUMNS,
+            probability=True,
+        ),
+        make_task(
+            "cut",
+            _probability_task("cut", lambda m: m["use_force"]),
+            description="cutting: p_cut, the probability that a pressed 40 mm stroke bears "
+            "on the edge at the use point (physics trial), ties by the paper's U_τ",
+            requires=MODEL_COLUMNS,
+            probability=True,
+        ),
+        make_task(
+            "pick",
+            _probability_task("pick", lambda m: -m["hold_effort_sum"]),
+            description="picking: p_pick, the probability that the grasp holds the object "
+            "against its weight in every direction (physics trial), ties by the paper's -ΣE_h",
+            requires=MODEL_COLUMNS,
+            probability=True,
+        ),
+        make_task(
+            "beat-rules",
             _beat,
             thresholds={
                 "tau_eps": thresholds.TAU_EPS_DEFAULT,
@@ -161,7 +213,7 @@ def builtin_tasks() -> list[Task]:
             requires=("epsilon", "discharge", *HOLD_EFFORT_COLUMNS, "inertia", "impact_effort"),
         ),
         make_task(
-            "cut",
+            "cut-rules",
             _cut,
             thresholds={
                 "tau_eps": thresholds.TAU_EPS_DEFAULT,
@@ -230,7 +282,7 @@ def builtin_tasks() -> list[Task]:
             requires=("epsilon", "use_edge", "use_force"),
         ),
         make_task(
-            "pick",
+            "pick-paper",
             _pick,
             thresholds={},
             description="picking: minus the total hold effort",

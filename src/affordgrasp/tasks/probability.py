@@ -20,21 +20,56 @@ from importlib import resources
 from typing import Any
 
 import numpy as np
+from numba import njit
 
+from ..columns import HOLD_DIRS, HOLD_EFFORT_SUM, METRIC_COLUMNS, PROBABILITY_COLUMNS
 from ..errors import TaskError
 
 __all__ = [
+    "MODEL_COLUMNS",
     "MODEL_FORMAT",
-    "PROBABILITY_COLUMNS",
+    "ROBUST_COLUMNS",
+    "probability_columns",
     "TaskModel",
     "task_model",
     "task_probability",
 ]
 
 MODEL_FORMAT = "affordgrasp-task-probability"
-PROBABILITY_COLUMNS = {"beat": "p_beat", "cut": "p_cut", "pick": "p_pick"}
+# The columns every model reads: Φ and the use geometry (not the on-request GWS volume, not
+# the text reason); a model finds what matters to its task. A robust model reads ROBUST too.
+MODEL_COLUMNS = tuple(c for c in METRIC_COLUMNS if c not in ("gws_volume", "epsilon_reason")) + (
+    HOLD_EFFORT_SUM,
+    HOLD_DIRS,
+)
+ROBUST_COLUMNS = ("robust_fc", "robust_epsilon", "robust_hold_dirs", "robust_hold")
+PROBABILITY_TASKS = tuple(c.removeprefix("p_") for c in PROBABILITY_COLUMNS)
+_USE_TASKS = ("beat", "cut")  # no use point, no strike or stroke: p is 0
 _BIG = 1e30  # ±inf (an infeasible effort) as a finite number the trees can split on
 _TRANSFORMS = ("raw", "inv1p")
+
+
+@njit(cache=True)
+def _forest(x, feature, threshold, left, right, nan_left, value, roots, bias):
+    """Sum of the trees' leaf values for every row (compiled: a search scores millions of
+    grasp × use point pairs per generation, which a per-level numpy walk does in seconds)."""
+    n = x.shape[0]
+    out = np.full(n, bias)
+    for i in range(n):
+        total = 0.0
+        for r in range(roots.shape[0]):
+            node = roots[r]
+            while feature[node] >= 0:
+                v = x[i, feature[node]]
+                if np.isnan(v):
+                    node = left[node] if nan_left[node] else right[node]
+                elif v <= threshold[node]:
+                    node = left[node]
+                else:
+                    node = right[node]
+            total += value[node]
+        out[i] += total
+    return out
 
 
 def transform_column(values: np.ndarray, transform: str) -> np.ndarray:
@@ -115,26 +150,20 @@ class TaskModel:
         """(n,) float64: the uncalibrated score of feature rows ``x`` (n, f)."""
         a = self.arrays
         if self.kind == "linear":
-            z = (x - a["mean"]) / a["scale"]
-            return np.nan_to_num(z, nan=0.0) @ a["weights"] + self.bias
-        n = len(x)
-        total = np.full(n, self.bias)
-        rows = np.arange(n)
-        feature, threshold = a["feature"], a["threshold"]
-        left, right, nan_left, value = a["left"], a["right"], a["nan_left"], a["value"]
-        for root in a["roots"]:
-            node = np.full(n, root, dtype=np.int64)
-            while True:
-                f = feature[node]
-                inner = f >= 0
-                if not inner.any():
-                    break
-                v = x[rows[inner], f[inner]]
-                at = node[inner]
-                go_left = np.where(np.isnan(v), nan_left[at], v <= threshold[at])
-                node[inner] = np.where(go_left, left[at], right[at])
-            total += value[node]
-        return total
+            # a missing value reads 0, as in the fit (a linear score has no missing branch)
+            z = (np.nan_to_num(x, nan=0.0) - a["mean"]) / a["scale"]
+            return z @ a["weights"] + self.bias
+        return _forest(
+            np.ascontiguousarray(x, dtype=np.float64),
+            a["feature"],
+            a["threshold"],
+            a["left"],
+            a["right"],
+            a["nan_left"],
+            a["value"],
+            a["roots"],
+            float(self.bias),
+        )
 
     def predict(self, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
         """(n,) float64 in [0, 1]: P(task trial succeeds) of each row of ``metrics``."""
@@ -194,9 +223,9 @@ def task_model(task: str, robust: bool = False) -> TaskModel:
     TaskError
         No model ships for that task and variant.
     """
-    if task not in PROBABILITY_COLUMNS:
+    if task not in PROBABILITY_TASKS:
         raise TaskError(
-            f"no task probability for {task!r}; models ship for {', '.join(PROBABILITY_COLUMNS)}"
+            f"no task probability for {task!r}; models ship for {', '.join(PROBABILITY_TASKS)}"
         )
     path = resources.files("affordgrasp.tasks").joinpath("probabilities", _model_file(task, robust))
     if not path.is_file():
@@ -226,3 +255,26 @@ def task_probability(task: str, metrics: Mapping[str, np.ndarray]) -> np.ndarray
     if all(c in metrics for c in robust.columns):
         return robust.predict(metrics)
     return plain.predict(metrics)
+
+
+def probability_columns(metrics: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``p_beat``, ``p_cut``, ``p_pick`` of every row (:func:`task_probability`).
+
+    Parameters
+    ----------
+    metrics : mapping of str to (n,) array
+        The rows' metric columns (and robust columns when they have them).
+
+    Returns
+    -------
+    dict of str to (n,) float64 ndarray
+        In [0, 1]; ``p_beat`` and ``p_cut`` are 0 where the row has no use point (its use
+        ray missed the object: nothing to strike or cut with).
+    """
+    out = {}
+    for task, name in zip(PROBABILITY_TASKS, PROBABILITY_COLUMNS):
+        p = task_probability(task, metrics)
+        if task in _USE_TASKS:
+            p = np.where(np.isnan(np.asarray(metrics["use_depth"], dtype=np.float64)), 0.0, p)
+        out[name] = p
+    return out

@@ -14,6 +14,9 @@ from ..errors import TaskError, did_you_mean
 from .metric_columns import MetricColumns
 from .thresholds import standard_modes
 
+# A probability task's grasps are called likely to succeed from this value on.
+PROBABLE = 0.5
+
 TaskFunction = Callable[[Mapping[str, np.ndarray], Mapping[str, float]], np.ndarray]
 
 
@@ -36,6 +39,10 @@ class Task:
         One line for listings.
     requires : tuple of str
         Metric columns the function reads (checked before every evaluation).
+    probability : bool
+        The function's value is a probability of success (plus a tie-break below 10⁻⁶):
+        never −∞, so a search ranks every grasp and says when none reaches 0.5
+        (:data:`PROBABLE`).
     """
 
     name: str
@@ -44,6 +51,7 @@ class Task:
     modes: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     description: str = ""
     requires: tuple[str, ...] = ()
+    probability: bool = False
 
     def thresholds_for(self, mode: str = "default", **overrides: float) -> dict[str, float]:
         """Threshold values in ``mode`` with call-time ``overrides`` applied.
@@ -146,6 +154,7 @@ def make_task(
     modes: Mapping[str, Mapping[str, float]] | None = None,
     description: str = "",
     requires: Iterable[str] = (),
+    probability: bool = False,
 ) -> Task:
     """A checked :class:`Task`; the Table I modes are added to the task's own ``modes``.
 
@@ -166,6 +175,8 @@ def make_task(
         One line for listings.
     requires : iterable of str
         Metric columns ``func`` reads.
+    probability : bool
+        ``func`` returns probabilities (:attr:`Task.probability`).
 
     Returns
     -------
@@ -197,4 +208,5 @@ def make_task(
         modes=MappingProxyType({k: MappingProxyType(v) for k, v in merged.items()}),
         description=description,
         requires=tuple(requires),
+        probability=bool(probability),
     )
