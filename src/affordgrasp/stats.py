@@ -58,12 +58,7 @@ def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
 
 
 def bootstrap_auc(
-    score: np.ndarray,
-    label: np.ndarray,
-    *,
-    n_boot: int = 1000,
-    level: float = 0.95,
-    seed: int = 0,
+    score: np.ndarray, label: np.ndarray, *, n_boot: int = 1000, level: float = 0.95, seed: int = 0
 ) -> tuple[float, float, float]:
     """ROC-AUC and its percentile bootstrap interval (rows resampled with replacement).
 

@@ -379,13 +379,7 @@ def card_markdown(card: dict) -> str:
             f"× {r.get('workers')}, {r.get('samples_written', 0):,} samples in "
             f"{r.get('elapsed_s', 0):.1f} s{'' if r.get('complete') else ' (interrupted)'}"
         )
-    lines += [
-        "",
-        "## Columns",
-        "",
-        "See docs/dataset.md for meanings and units.",
-        "",
-    ]
+    lines += ["", "## Columns", "", "See docs/dataset.md for meanings and units.", ""]
     lines += [f"* `{c['name']}`: {c['type']}" for c in card["columns"]]
     return "\n".join(lines) + "\n"
 

@@ -50,13 +50,7 @@ from affordgrasp.rays.mesh import mesh_caster
 if TYPE_CHECKING:
     import trimesh
 
-__all__ = [
-    "GraspObject",
-    "is_family_spec",
-    "list_families",
-    "load_object",
-    "mesh_hash",
-]
+__all__ = ["GraspObject", "is_family_spec", "list_families", "load_object", "mesh_hash"]
 
 # Family objects are cached: building and repairing one can take a while, and the pipeline
 # asks for the same object again and again.
@@ -206,8 +200,7 @@ class GraspObject:
             return np.zeros(0, dtype=np.int64)
         mesh = self.mesh_data
         faces = np.asarray(
-            mesh_caster(mesh).intersects_first(points + 5e-4 * normals, -normals),
-            dtype=np.int64,
+            mesh_caster(mesh).intersects_first(points + 5e-4 * normals, -normals), dtype=np.int64
         )
         missed = faces < 0
         if missed.any():
@@ -493,12 +486,7 @@ def _resolve_file(
 
 @functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
 def _resolve_family(
-    family: str,
-    seed: int,
-    density: float,
-    materials: bool,
-    size_m: float | None,
-    units: str | None,
+    family: str, seed: int, density: float, materials: bool, size_m: float | None, units: str | None
 ) -> GraspObject:
     from affordgrasp.objects import prepared
 
@@ -515,12 +503,7 @@ def _resolve_family(
 
 
 def _build_family(
-    family: str,
-    seed: int,
-    density: float,
-    materials: bool,
-    size_m: float | None,
-    units: str | None,
+    family: str, seed: int, density: float, materials: bool, size_m: float | None, units: str | None
 ) -> GraspObject:
     families = _families()
     name = f"{family}:{seed}"

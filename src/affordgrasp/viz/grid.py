@@ -47,10 +47,7 @@ def grid_image(
     n_cols = max((len(r) for r in cells), default=0)
     if n_rows == 0 or n_cols == 0:
         raise ValueError("a grid needs at least one cell")
-    size = next(
-        (c.shape[0] for r in cells for c in r if isinstance(c, np.ndarray)),
-        256,
-    )
+    size = next((c.shape[0] for r in cells for c in r if isinstance(c, np.ndarray)), 256)
     left = LABEL_PX if row_labels else 0
     top = (TITLE_PX if title else 0) + (LABEL_PX if col_labels else 0)
     width = left + n_cols * size

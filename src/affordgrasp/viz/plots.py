@@ -420,11 +420,7 @@ def plot_status_counts(summary: DatasetSummary, path: str | os.PathLike) -> Path
     ax.set_xlabel("share of samples (%)", fontsize=9)
     ax.tick_params(labelsize=8)
     ax.legend(
-        loc="lower center",
-        bbox_to_anchor=(0.5, 1.0),
-        ncol=len(statuses),
-        fontsize=8,
-        frameon=False,
+        loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=len(statuses), fontsize=8, frameon=False
     )
     if has_reasons:
         ax2 = fig.add_axes((0.66, 45 / height, 0.32, box_top - 45 / height))
