@@ -18,7 +18,6 @@ Family names win over a file of the same name in the working directory; write
 from __future__ import annotations
 
 import functools
-import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ from affordgrasp.objects.loading import (
 )
 from affordgrasp.objects.mass import (
     MassProperties,
+    _check_density,
     mass_properties,
     material_mass_properties,
     plane_regions,
@@ -363,16 +363,6 @@ def is_family_spec(spec: object) -> bool:
     bool
     """
     return isinstance(spec, str) and _split_family(spec.strip())[0] is not None
-
-
-def _check_density(density: float) -> float:
-    try:
-        value = float(density)
-    except (TypeError, ValueError):
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"density must be a finite number > 0 (kg/m^3), got {density!r}")
-    return value
 
 
 def _check_materials(materials: object, density: float | None) -> bool:
