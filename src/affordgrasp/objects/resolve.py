@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import functools
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -555,18 +555,7 @@ def _with_region_densities(obj: GraspObject, path: Path) -> GraspObject:
             "[[region]] tables with name, density, plane_point and plane_normal"
         ) from None
     regions = plane_regions(obj.mesh, rest, planes)
-    return GraspObject(
-        name=obj.name,
-        category=obj.category,
-        mesh=obj.mesh,
-        mass=material_mass_properties(obj.mesh, regions),
-        mesh_hash=obj.mesh_hash,
-        source=obj.source,
-        face_parts=obj.face_parts,
-        part_names=obj.part_names,
-        materials=True,
-        load_warnings=obj.load_warnings,
-    )
+    return replace(obj, mass=material_mass_properties(obj.mesh, regions), materials=True)
 
 
 def _resolve_scan(
@@ -696,14 +685,4 @@ def _reuse(
         )
     if density is None or (not obj.materials and _check_density(density) == obj.mass.density):
         return obj
-    return GraspObject(
-        name=obj.name,
-        category=obj.category,
-        mesh=obj.mesh,
-        mass=mass_properties(obj.mesh, density=density),
-        mesh_hash=obj.mesh_hash,
-        source=obj.source,
-        face_parts=obj.face_parts,
-        part_names=obj.part_names,
-        load_warnings=obj.load_warnings,
-    )
+    return replace(obj, mass=mass_properties(obj.mesh, density=density), materials=False)
