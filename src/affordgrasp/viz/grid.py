@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -123,46 +124,13 @@ def _legend(fig, box, ncol: int) -> None:
 
     ax = fig.add_axes(box)
     ax.set_axis_off()
+    line = partial(Line2D, [], [], marker="o", ms=6)
     handles = [
-        Line2D(
-            [],
-            [],
-            ls="-",
-            color=CONTACT_COLOR,
-            marker="o",
-            mec="black",
-            ms=6,
-            lw=1.6,
-            label="contact + normal",
-        ),
-        Line2D(
-            [],
-            [],
-            ls="none",
-            marker="o",
-            mfc="none",
-            mec=CONTACT_COLOR,
-            ms=6,
-            mew=1.5,
-            label="hidden contact",
-        ),
-        Line2D(
-            [],
-            [],
-            ls="-",
-            color=USE_COLOR,
-            marker="o",
-            mec="black",
-            ms=7,
-            lw=1.6,
-            label="use point + normal",
-        ),
-        Line2D(
-            [], [], ls=(0, (4, 2)), color=WRIST_COLOR, marker="s", ms=5, lw=1.6, label="wrist axis"
-        ),
-        Line2D(
-            [], [], ls="none", marker="P", mfc="white", mec=COM_COLOR, ms=7, label="centre of mass"
-        ),
+        line(ls="-", color=CONTACT_COLOR, mec="black", lw=1.6, label="contact + normal"),
+        line(ls="none", mfc="none", mec=CONTACT_COLOR, mew=1.5, label="hidden contact"),
+        line(ls="-", color=USE_COLOR, mec="black", ms=7, lw=1.6, label="use point + normal"),
+        line(ls=(0, (4, 2)), color=WRIST_COLOR, marker="s", ms=5, lw=1.6, label="wrist axis"),
+        line(ls="none", marker="P", mfc="white", mec=COM_COLOR, ms=7, label="centre of mass"),
     ]
     ax.legend(
         handles=handles,
