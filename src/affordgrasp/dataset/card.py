@@ -101,20 +101,15 @@ def simulation_settings() -> dict:
     """
     from ..grasp import policy
     from ..materials import DEFAULT_OBJECT_MATERIAL
+    from ..metrics.cones import N_EDGES
 
-    settings = {
+    return {
         "hit_eps_m": policy.HIT_EPS,
         "contact_tol_m": policy.CONTACT_TOL,
         "merge_radius_m": policy.MERGE_RADIUS,
         "object_material": DEFAULT_OBJECT_MATERIAL,
+        "friction_cone_edges": N_EDGES,
     }
-    try:
-        from ..metrics.cones import N_EDGES
-
-        settings["friction_cone_edges"] = N_EDGES
-    except ImportError:  # pragma: no cover - metrics stage missing
-        pass
-    return settings
 
 
 def task_thresholds() -> dict:
@@ -352,12 +347,9 @@ def card_markdown(card: dict) -> str:
 
 
 def _statuses(card: dict) -> list[str]:
-    try:
-        from ..grasp.policy import STATUSES
+    from ..grasp.policy import STATUSES
 
-        known = list(STATUSES)
-    except ImportError:  # pragma: no cover
-        known = []
+    known = list(STATUSES)
     seen = sorted({s for c in card["status_counts_per_object"].values() for s in c})
     return known + [s for s in seen if s not in known]
 
