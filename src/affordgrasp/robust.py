@@ -398,10 +398,7 @@ def _backoff(
 
 
 def _perturbed_starts(
-    starts: np.ndarray,
-    pivot_depth: np.ndarray,
-    draws: Perturbations,
-    backoff: np.ndarray,
+    starts: np.ndarray, pivot_depth: np.ndarray, draws: Perturbations, backoff: np.ndarray
 ) -> np.ndarray:
     """Start poses of every copy, (n K, 4, 4), grasp-major (row i K + k); ``backoff``
     (n, K), m."""
@@ -669,8 +666,7 @@ def _copy_metrics(obj, batch, phi, flat, shift, mu, k_count, soft) -> dict[str, 
         "use_depth": np.repeat(phi["use_depth"], k_count),
         "use_relief": np.repeat(phi["use_relief"], k_count),
         "use_swing_cosine": np.asarray(
-            use_swing_cosine(shifted_use, use_normal, wrist_point - shift, wrist_axis),
-            dtype=float,
+            use_swing_cosine(shifted_use, use_normal, wrist_point - shift, wrist_axis), dtype=float
         ).reshape(m),
         # distances between the copy's contacts, its wrist and U: the shift moves all alike
         "use_clearance": use_clearance(points, flat.offsets, shifted_use),

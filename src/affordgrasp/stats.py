@@ -31,6 +31,14 @@ __all__ = [
 ]
 
 
+def _scored(score, label) -> tuple[np.ndarray, np.ndarray]:
+    """float64 scores and bool labels of the rows whose score is not NaN."""
+    score = np.asarray(score, dtype=np.float64)
+    label = np.asarray(label, dtype=bool)
+    keep = ~np.isnan(score)
+    return score[keep], label[keep]
+
+
 def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
     """ROC-AUC of ``score`` for binary ``label`` (ties count 1/2); NaN if one class is empty.
 
@@ -46,10 +54,7 @@ def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
     -------
     float
     """
-    score = np.asarray(score, dtype=np.float64)
-    label = np.asarray(label, dtype=bool)
-    keep = ~np.isnan(score)
-    score, label = score[keep], label[keep]
+    score, label = _scored(score, label)
     n_pos, n_neg = int(label.sum()), int((~label).sum())
     if n_pos == 0 or n_neg == 0:
         return math.nan
@@ -58,12 +63,7 @@ def roc_auc(score: np.ndarray, label: np.ndarray) -> float:
 
 
 def bootstrap_auc(
-    score: np.ndarray,
-    label: np.ndarray,
-    *,
-    n_boot: int = 1000,
-    level: float = 0.95,
-    seed: int = 0,
+    score: np.ndarray, label: np.ndarray, *, n_boot: int = 1000, level: float = 0.95, seed: int = 0
 ) -> tuple[float, float, float]:
     """ROC-AUC and its percentile bootstrap interval (rows resampled with replacement).
 
@@ -88,10 +88,7 @@ def bootstrap_auc(
         raise InputError(f"level must be in (0, 1), got {level!r}")
     if n_boot <= 0:
         raise InputError(f"n_boot must be a positive integer, got {n_boot!r}")
-    score = np.asarray(score, dtype=np.float64)
-    label = np.asarray(label, dtype=bool)
-    keep = ~np.isnan(score)
-    score, label = score[keep], label[keep]
+    score, label = _scored(score, label)
     auc = roc_auc(score, label)
     if math.isnan(auc):
         return math.nan, math.nan, math.nan
@@ -126,10 +123,7 @@ def roc_curve(score: np.ndarray, label: np.ndarray) -> tuple[np.ndarray, np.ndar
     fpr, tpr : float64 ndarray
         False and true positive rates.
     """
-    score = np.asarray(score, dtype=np.float64)
-    label = np.asarray(label, dtype=bool)
-    keep = ~np.isnan(score)
-    score, label = score[keep], label[keep]
+    score, label = _scored(score, label)
     order = np.argsort(-score, kind="stable")
     s, y = score[order], label[order]
     # The last index of every run of equal scores (±inf compare equal to themselves).

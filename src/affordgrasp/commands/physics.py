@@ -90,10 +90,7 @@ def add_arguments(p) -> None:
         help=f"finger joint torque, N·m (default {d.grip_torque})",
     )
     p.add_argument(
-        "--grip-force",
-        type=float,
-        default=None,
-        help=f"jaw force, N (default {d.grip_force})",
+        "--grip-force", type=float, default=None, help=f"jaw force, N (default {d.grip_force})"
     )
     p.add_argument(
         "--friction-margin",

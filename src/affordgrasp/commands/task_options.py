@@ -137,11 +137,7 @@ def add_task_arguments(
         p.add_argument(
             "--task", required=required, help=help or "task name (see 'affordgrasp tasks')"
         )
-    p.add_argument(
-        "--mode",
-        default="default",
-        help=MODE_HELP,
-    )
+    p.add_argument("--mode", default="default", help=MODE_HELP)
     if thresholds:
         p.add_argument(
             "--threshold",

@@ -211,11 +211,7 @@ def run(args, out) -> None:
     )
     test = config.get("test", {})
     if test:
-        out.table(
-            "Held-out test objects",
-            ["metric", "model", "baseline"],
-            _test_rows(test),
-        )
+        out.table("Held-out test objects", ["metric", "model", "baseline"], _test_rows(test))
     out.result({"model": args.out, "config": config})
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .._version import __version__
+from ..jsonable import to_jsonable
 from ..runtime.writing import atomic_write
 from .manifest import (
     CARD_JSON_NAME,
@@ -100,20 +101,15 @@ def simulation_settings() -> dict:
     """
     from ..grasp import policy
     from ..materials import DEFAULT_OBJECT_MATERIAL
+    from ..metrics.cones import N_EDGES
 
-    settings = {
+    return {
         "hit_eps_m": policy.HIT_EPS,
         "contact_tol_m": policy.CONTACT_TOL,
         "merge_radius_m": policy.MERGE_RADIUS,
         "object_material": DEFAULT_OBJECT_MATERIAL,
+        "friction_cone_edges": N_EDGES,
     }
-    try:
-        from ..metrics.cones import N_EDGES
-
-        settings["friction_cone_edges"] = N_EDGES
-    except ImportError:  # pragma: no cover - metrics stage missing
-        pass
-    return settings
 
 
 def task_thresholds() -> dict:
@@ -125,53 +121,19 @@ def task_thresholds() -> dict:
         Task name → mode → threshold name → value (in the unit of the metric it bounds);
         a task that cannot say is left out.
     """
-    try:
-        from .. import tasks
-    except ImportError:
-        return {}
-    out = {}
+    from .. import tasks
+
     try:
         names = tasks.list_tasks()
     except Exception:  # noqa: BLE001 - a card must not fail because of a task plug-in
         return {}
-    for entry in names:
-        name = getattr(entry, "name", entry)
+    out = {}
+    for name in names:
         try:
-            task = tasks.get_task(name)
-            out[str(name)] = _task_thresholds(task)
+            out[name] = to_jsonable(tasks.get_task(name).thresholds_by_mode())
         except Exception:  # noqa: BLE001
             log.debug("no thresholds for task %r", name, exc_info=True)
     return out
-
-
-def _task_thresholds(task) -> dict:
-    for attr in ("thresholds_by_mode", "modes"):
-        value = getattr(task, attr, None)
-        if callable(value):
-            value = value()
-        if isinstance(value, dict):
-            return {str(k): _plain(v) for k, v in value.items()}
-    thresholds = getattr(task, "thresholds", None)
-    if callable(thresholds):
-        thresholds = thresholds()
-    return _plain(thresholds) if thresholds is not None else {}
-
-
-def _plain(value):
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        if np.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return None if np.isnan(v) else v
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if hasattr(value, "__dict__") and not isinstance(value, type):
-        return _plain(dict(vars(value)))
-    return value
 
 
 def schema_description(metrics: bool, depth: bool = False, robust=None) -> list[dict]:
@@ -379,24 +341,15 @@ def card_markdown(card: dict) -> str:
             f"× {r.get('workers')}, {r.get('samples_written', 0):,} samples in "
             f"{r.get('elapsed_s', 0):.1f} s{'' if r.get('complete') else ' (interrupted)'}"
         )
-    lines += [
-        "",
-        "## Columns",
-        "",
-        "See docs/dataset.md for meanings and units.",
-        "",
-    ]
+    lines += ["", "## Columns", "", "See docs/dataset.md for meanings and units.", ""]
     lines += [f"* `{c['name']}`: {c['type']}" for c in card["columns"]]
     return "\n".join(lines) + "\n"
 
 
 def _statuses(card: dict) -> list[str]:
-    try:
-        from ..grasp.policy import STATUSES
+    from ..grasp.policy import STATUSES
 
-        known = list(STATUSES)
-    except ImportError:  # pragma: no cover
-        known = []
+    known = list(STATUSES)
     seen = sorted({s for c in card["status_counts_per_object"].values() for s in c})
     return known + [s for s in seen if s not in known]
 

@@ -46,8 +46,7 @@ def record_checksum(directory: Path, name: str, data: bytes) -> None:
         The shard's bytes.
     """
     line = json.dumps(
-        {"name": name, "bytes": len(data), CHECKSUM_ALGORITHM: file_checksum(data)},
-        sort_keys=True,
+        {"name": name, "bytes": len(data), CHECKSUM_ALGORITHM: file_checksum(data)}, sort_keys=True
     )
     with open(directory / CHECKSUMS_NAME, "ab") as f:
         f.write(line.encode() + b"\n")

@@ -207,11 +207,7 @@ class Dataset:
         return {name: e.get("category") or name.split(":")[0] for name, e in self.entries.items()}
 
     def split(
-        self,
-        kind: str = "object",
-        *,
-        seed: int = 0,
-        test_families: Sequence[str] | None = None,
+        self, kind: str = "object", *, seed: int = 0, test_families: Sequence[str] | None = None
     ) -> Split:
         """Its objects split for learning (:mod:`affordgrasp.dataset.splits`).
 

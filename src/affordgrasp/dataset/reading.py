@@ -19,13 +19,7 @@ import pyarrow as pa
 from ..hands.model import Hand
 from .handle import Dataset, DatasetLike
 
-__all__ = [
-    "dataset_hand",
-    "dataset_volume",
-    "iter_batches",
-    "read_dataset",
-    "select_objects",
-]
+__all__ = ["dataset_hand", "dataset_volume", "iter_batches", "read_dataset", "select_objects"]
 
 
 def dataset_volume(dataset: DatasetLike) -> bool:

@@ -85,10 +85,7 @@ def within_object(objects, truth, scores, *, kind: str, lower_is_better: bool = 
     keys = (
         ("comparison_accuracy", "expected_gms", "random_expected_gms")
         if kind == "regression"
-        else (
-            "average_precision",
-            "positive_rate",
-        )
+        else ("average_precision", "positive_rate")
     )
     out: dict[str, Any] = {"per_object": per, "objects": len(per)}
     for k in keys:

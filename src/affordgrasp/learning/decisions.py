@@ -260,10 +260,7 @@ def robust_first(
 
 
 def random_measures(
-    true_score: np.ndarray,
-    viable: np.ndarray,
-    *,
-    robust_viable: np.ndarray | None = None,
+    true_score: np.ndarray, viable: np.ndarray, *, robust_viable: np.ndarray | None = None
 ) -> dict:
     """The expected measures of a uniformly random choice (exact, no draws).
 

@@ -78,11 +78,7 @@ SENSOR_VOTES = 3
 # The perturbations of plan's robust check (grasp.pregrasp.PLAN_ROBUST_CHECK): half the
 # robust labels' hand-pose and centre-of-mass scales, K = 12 (docs/learning.md).
 ROBUST_CHECK_SETTINGS = RobustSettings(
-    copies=12,
-    translation_m=0.0025,
-    rotation_rad=math.radians(1.5),
-    com_m=0.00125,
-    tasks=(),
+    copies=12, translation_m=0.0025, rotation_rad=math.radians(1.5), com_m=0.00125, tasks=()
 )
 # The robust check ranks the candidates it re-simulates by this quantile of their copies'
 # ε (the ε three copies in four reach): on validation objects it chose a viable grasp more

@@ -67,12 +67,7 @@ def finger_planes(spread: np.ndarray) -> list[tuple[np.ndarray, ...]]:
     ]
 
 
-def hand_view(
-    depth_mm: np.ndarray,
-    spread: np.ndarray,
-    *,
-    fov_deg: float = 60.0,
-) -> np.ndarray:
+def hand_view(depth_mm: np.ndarray, spread: np.ndarray, *, fov_deg: float = 60.0) -> np.ndarray:
     """The hand views of camera-in-hand depth images.
 
     Parameters

@@ -49,13 +49,7 @@ from ..runtime.kernel_cache import install_package_stamp
 from .cones import wrench_matrix_kernel
 from .discharge import discharge
 from .edges import EDGE_RADIUS_M, use_edge, use_edge_angle
-from .effort import (
-    hold_effort,
-    hold_effort_kernel,
-    impact_effort,
-    impact_effort_kernel,
-    use_wrench,
-)
+from .effort import hold_effort, hold_effort_kernel, impact_effort, impact_effort_kernel, use_wrench
 from .epsilon import HULL_FALLBACK, LP_FALLBACK, REASONS, epsilon, epsilon_volume_store
 from .epsilon_hand import epsilon_hand
 from .hand_placement import contact_reach, contact_thickness_and_width, long_axis, use_clearance
@@ -211,6 +205,11 @@ def compute_phi_batch(
     ):
         if arr.shape[0] != n:
             raise InputError(f"{name} has {arr.shape[0]} rows, expected one per grasp ({n})")
+    if n == 0:
+        return {
+            name: np.zeros(0, object if name == "epsilon_reason" else None)
+            for name in METRIC_COLUMNS
+        }
     # A copy: the cached object's arrays are read-only, a worker's unpickled ones are not,
     # and numba compiles a kernel once per read-only flag (a worker would compile
     # the metric kernels on a first run that loads the shipped ones in process).
@@ -251,50 +250,34 @@ def compute_phi_batch(
         "epsilon": eps,
         "gws_volume": vol,
         "epsilon_reason": reason,
-        "inertia": np.asarray(rotational_inertia(mass, wrist_point, wrist_axis), dtype=float)
-        if n
-        else np.zeros(0),
+        "inertia": np.asarray(rotational_inertia(mass, wrist_point, wrist_axis), dtype=float),
     }
     for j, name in enumerate(HOLD_EFFORT_COLUMNS):
         out[name] = np.ascontiguousarray(hold[:, j])
     out["impact_effort"] = impact
-    out["discharge"] = (
-        np.asarray(discharge(use_point, use_normal, wrist_point, wrist_axis), dtype=float)
-        if n
-        else np.zeros(0)
+    out["discharge"] = np.asarray(
+        discharge(use_point, use_normal, wrist_point, wrist_axis), dtype=float
     )
     out["use_force"] = force
-    out["use_edge"] = (
-        np.asarray(use_edge(mesh, use_triangle, use_point), dtype=float) if n else np.zeros(0)
+    out["use_edge"] = np.asarray(use_edge(mesh, use_triangle, use_point), dtype=float)
+    out["use_edge_angle"] = np.asarray(
+        use_edge_angle(mesh, use_point, radius=edge_radius, use_normal=use_normal), dtype=float
     )
-    out["use_edge_angle"] = (
-        np.asarray(
-            use_edge_angle(mesh, use_point, radius=edge_radius, use_normal=use_normal), dtype=float
-        )
-        if n
-        else np.zeros(0)
-    )
-    wedge = use_wedge_shape(mesh, use_point, use_normal) if n else None
-    out["use_wedge_angle"] = wedge.angle if wedge is not None else np.zeros(0)
-    out["use_wedge_angle_fine"] = wedge.inner_angle if wedge is not None else np.zeros(0)
-    out["use_edge_span"] = wedge.span if wedge is not None else np.zeros(0)
-    out["use_edge_thickness"] = wedge.edge_thickness if wedge is not None else np.zeros(0)
-    out["use_clearance"] = use_clearance(points, offsets, use_point) if n else np.zeros(0)
+    wedge = use_wedge_shape(mesh, use_point, use_normal)
+    out["use_wedge_angle"] = wedge.angle
+    out["use_wedge_angle_fine"] = wedge.inner_angle
+    out["use_edge_span"] = wedge.span
+    out["use_edge_thickness"] = wedge.edge_thickness
+    out["use_clearance"] = use_clearance(points, offsets, use_point)
     out["use_depth"] = np.asarray(use_depth(mesh, use_point, use_normal), dtype=float)
     out["use_relief"] = np.asarray(use_relief(mesh, use_point, use_normal), dtype=float)
     out["use_swing_cosine"] = use_swing_cosine(use_point, use_normal, wrist_point, wrist_axis)
-    out["use_lever_ratio"] = (
-        use_lever_ratio(use_point, center, wrist_point, wrist_axis) if n else np.zeros(0)
+    out["use_lever_ratio"] = use_lever_ratio(use_point, center, wrist_point, wrist_axis)
+    out["contact_reach"] = contact_reach(
+        points, offsets, use_point, center, long_axis(mass.inertia)
     )
-    out["contact_reach"] = (
-        contact_reach(points, offsets, use_point, center, long_axis(mass.inertia))
-        if n
-        else np.zeros(0)
-    )
-    out["contact_thickness"], out["contact_width"] = (
-        contact_thickness_and_width(mesh, points, normals, offsets)
-        if n
-        else (np.zeros(0), np.zeros(0))
+    out["contact_thickness"], out["contact_width"] = contact_thickness_and_width(
+        mesh, points, normals, offsets
     )
     out["epsilon_hand"] = epsilon_hand(
         points, normals, mu, offsets, center, r_max, eps, soft=bool(soft)

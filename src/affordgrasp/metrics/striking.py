@@ -77,12 +77,7 @@ def use_depth(mesh, use_point, use_normal) -> float | np.ndarray:
 
 
 def use_relief(
-    mesh,
-    use_point,
-    use_normal,
-    *,
-    radius: float = RELIEF_RADIUS_M,
-    rays: int = RELIEF_RAYS,
+    mesh, use_point, use_normal, *, radius: float = RELIEF_RADIUS_M, rays: int = RELIEF_RAYS
 ) -> float | np.ndarray:
     """How far U and the surface around it leave their best-fit plane (``use_relief``), m.
 

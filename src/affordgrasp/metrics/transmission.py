@@ -102,13 +102,7 @@ def use_force_kernel(W, w_use, n_contacts):
 
 
 def use_force(
-    contacts,
-    center,
-    use_point,
-    use_normal,
-    *,
-    soft: bool = False,
-    backend: str = "simplex",
+    contacts, center, use_point, use_normal, *, soft: bool = False, backend: str = "simplex"
 ) -> float:
     """Force transmitted to use U_τ (conventions: Metrics), N.
 

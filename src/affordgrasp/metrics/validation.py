@@ -8,6 +8,11 @@ from ..errors import InputError
 from ..grasp.contacts import check_contact_arrays  # its home: the stage that makes contacts
 from ..tolerances import UNIT_NORMAL, ZERO_LENGTH
 
+_NOT_A_CONTACT_SET = (
+    "contacts must be a ContactSet (build one from raw arrays with "
+    "ContactSet.from_arrays(points, normals, mu))"
+)
+
 
 def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Contiguous float64 arrays of a ContactSet.
@@ -30,10 +35,7 @@ def contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         normals = np.ascontiguousarray(contacts.normals, dtype=np.float64).reshape(-1, 3)
         mu = np.ascontiguousarray(contacts.mu, dtype=np.float64).reshape(-1)
     except AttributeError as exc:
-        raise InputError(
-            "contacts must be a ContactSet (build one from raw arrays with "
-            "ContactSet.from_arrays(points, normals, mu))"
-        ) from exc
+        raise InputError(_NOT_A_CONTACT_SET) from exc
     return check_contact_arrays(points, normals, mu)
 
 
@@ -62,10 +64,7 @@ def stacked_contact_arrays(contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray
     try:
         raw = [(c.points, c.normals, c.mu) for c in contacts]
     except AttributeError as exc:
-        raise InputError(
-            "contacts must be a ContactSet (build one from raw arrays with "
-            "ContactSet.from_arrays(points, normals, mu))"
-        ) from exc
+        raise InputError(_NOT_A_CONTACT_SET) from exc
     parts = [
         (
             np.asarray(p, dtype=np.float64).reshape(-1, 3),

@@ -114,10 +114,7 @@ PLAUSIBLE_SIZE_M: tuple[float, float] = (0.005, 3.0)
 
 
 def load_mesh(
-    path: str | os.PathLike,
-    *,
-    size_m: float | None = None,
-    units: str | None = None,
+    path: str | os.PathLike, *, size_m: float | None = None, units: str | None = None
 ) -> trimesh.Trimesh:
     """Read a mesh file and return it as a closed, outward-oriented solid in metres.
 
@@ -466,12 +463,7 @@ def _simplified(
 
 
 def _clean(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    source: str,
-    repairs: list[str],
-    *,
-    merge: bool = True,
+    vertices: np.ndarray, faces: np.ndarray, source: str, repairs: list[str], *, merge: bool = True
 ) -> trimesh.Trimesh:
     """Merge duplicate vertices (unless ``merge`` is False), drop faces repeating a vertex
     and duplicate faces."""

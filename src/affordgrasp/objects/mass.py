@@ -81,7 +81,7 @@ def mass_properties(mesh: trimesh.Trimesh, density: float = 1.0) -> MassProperti
         Inertia about the centre of mass in the mesh axes, products of inertia with their
         sign (I_xy = -∫ x y dm); arrays are read-only.
     """
-    density = _check_density(density, "density")
+    density = _check_density(density)
     volume, com, inertia_per_density = _unit_density_integrals(mesh, "mesh")
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     return _make(
@@ -193,7 +193,7 @@ def material_mass_properties(
     )
 
 
-def _check_density(density: float, name: str) -> float:
+def _check_density(density: float, name: str = "density") -> float:
     try:
         value = float(density)
     except (TypeError, ValueError):
@@ -353,5 +353,5 @@ def plane_regions(
         if piece.volume() > 0:
             out.append((str(name), rho, _from_manifold(piece)))
     if rest.volume() > 0:
-        out.append(("rest", _check_density(density, "density"), _from_manifold(rest)))
+        out.append(("rest", _check_density(density), _from_manifold(rest)))
     return out

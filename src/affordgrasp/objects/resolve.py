@@ -18,9 +18,8 @@ Family names win over a file of the same name in the working directory; write
 from __future__ import annotations
 
 import functools
-import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +36,7 @@ from affordgrasp.objects.loading import (
 )
 from affordgrasp.objects.mass import (
     MassProperties,
+    _check_density,
     mass_properties,
     material_mass_properties,
     plane_regions,
@@ -50,13 +50,7 @@ from affordgrasp.rays.mesh import mesh_caster
 if TYPE_CHECKING:
     import trimesh
 
-__all__ = [
-    "GraspObject",
-    "is_family_spec",
-    "list_families",
-    "load_object",
-    "mesh_hash",
-]
+__all__ = ["GraspObject", "is_family_spec", "list_families", "load_object", "mesh_hash"]
 
 # Family objects are cached: building and repairing one can take a while, and the pipeline
 # asks for the same object again and again.
@@ -206,8 +200,7 @@ class GraspObject:
             return np.zeros(0, dtype=np.int64)
         mesh = self.mesh_data
         faces = np.asarray(
-            mesh_caster(mesh).intersects_first(points + 5e-4 * normals, -normals),
-            dtype=np.int64,
+            mesh_caster(mesh).intersects_first(points + 5e-4 * normals, -normals), dtype=np.int64
         )
         missed = faces < 0
         if missed.any():
@@ -372,16 +365,6 @@ def is_family_spec(spec: object) -> bool:
     return isinstance(spec, str) and _split_family(spec.strip())[0] is not None
 
 
-def _check_density(density: float) -> float:
-    try:
-        value = float(density)
-    except (TypeError, ValueError):
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"density must be a finite number > 0 (kg/m^3), got {density!r}")
-    return value
-
-
 def _check_materials(materials: object, density: float | None) -> bool:
     if not isinstance(materials, (bool, np.bool_)):
         raise InputError(f"materials must be True or False, got {materials!r}")
@@ -493,12 +476,7 @@ def _resolve_file(
 
 @functools.lru_cache(maxsize=_FAMILY_CACHE_SIZE)
 def _resolve_family(
-    family: str,
-    seed: int,
-    density: float,
-    materials: bool,
-    size_m: float | None,
-    units: str | None,
+    family: str, seed: int, density: float, materials: bool, size_m: float | None, units: str | None
 ) -> GraspObject:
     from affordgrasp.objects import prepared
 
@@ -515,12 +493,7 @@ def _resolve_family(
 
 
 def _build_family(
-    family: str,
-    seed: int,
-    density: float,
-    materials: bool,
-    size_m: float | None,
-    units: str | None,
+    family: str, seed: int, density: float, materials: bool, size_m: float | None, units: str | None
 ) -> GraspObject:
     families = _families()
     name = f"{family}:{seed}"
@@ -582,18 +555,7 @@ def _with_region_densities(obj: GraspObject, path: Path) -> GraspObject:
             "[[region]] tables with name, density, plane_point and plane_normal"
         ) from None
     regions = plane_regions(obj.mesh, rest, planes)
-    return GraspObject(
-        name=obj.name,
-        category=obj.category,
-        mesh=obj.mesh,
-        mass=material_mass_properties(obj.mesh, regions),
-        mesh_hash=obj.mesh_hash,
-        source=obj.source,
-        face_parts=obj.face_parts,
-        part_names=obj.part_names,
-        materials=True,
-        load_warnings=obj.load_warnings,
-    )
+    return replace(obj, mass=material_mass_properties(obj.mesh, regions), materials=True)
 
 
 def _resolve_scan(
@@ -723,14 +685,4 @@ def _reuse(
         )
     if density is None or (not obj.materials and _check_density(density) == obj.mass.density):
         return obj
-    return GraspObject(
-        name=obj.name,
-        category=obj.category,
-        mesh=obj.mesh,
-        mass=mass_properties(obj.mesh, density=density),
-        mesh_hash=obj.mesh_hash,
-        source=obj.source,
-        face_parts=obj.face_parts,
-        part_names=obj.part_names,
-        load_warnings=obj.load_warnings,
-    )
+    return replace(obj, mass=mass_properties(obj.mesh, density=density), materials=False)

@@ -16,6 +16,8 @@ use). See docs/physics.md.
 
 from __future__ import annotations
 
+import importlib
+
 from .settings import PhysicsSettings, TrialSettings
 
 __all__ = [
@@ -32,29 +34,20 @@ __all__ = [
 ]
 
 
+# Served from their modules on first access: MuJoCo and CoACD are imported only when needed.
+_EXPORTS = {
+    "build_scene": "scene",
+    "build_task_scene": "task_scene",
+    "run_task_trials": "task_trials",
+    "validate_grasp": "trials",
+    "GraspOutcome": "trials",
+    "run_physics": "run",
+    "read_outcomes": "run",
+    "physics_report": "report",
+}
+
+
 def __getattr__(name: str):
-    if name in ("build_scene",):
-        from .scene import build_scene
-
-        return build_scene
-    if name == "build_task_scene":
-        from .task_scene import build_task_scene
-
-        return build_task_scene
-    if name == "run_task_trials":
-        from .task_trials import run_task_trials
-
-        return run_task_trials
-    if name in ("validate_grasp", "GraspOutcome"):
-        from . import trials
-
-        return getattr(trials, name)
-    if name in ("run_physics", "read_outcomes"):
-        from . import run
-
-        return getattr(run, name)
-    if name == "physics_report":
-        from .report import physics_report
-
-        return physics_report
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)

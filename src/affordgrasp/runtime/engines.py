@@ -515,11 +515,7 @@ def check_engine(engine: str, workers: int | None, address: str | None) -> None:
 
 
 def make_engine(
-    context,
-    *,
-    engine: str = "local",
-    workers: int | None = None,
-    address: str | None = None,
+    context, *, engine: str = "local", workers: int | None = None, address: str | None = None
 ) -> Engine:
     """The engine asked for: ``local`` (``workers`` processes; 1: this process) or ``ray``.
 

@@ -128,10 +128,7 @@ def temporary_name(path: str | os.PathLike) -> Path:
 
 
 def write_file(
-    path: str | os.PathLike,
-    content: bytes | Callable[[BinaryIO], object],
-    *,
-    fsync: bool = True,
+    path: str | os.PathLike, content: bytes | Callable[[BinaryIO], object], *, fsync: bool = True
 ) -> None:
     """Write a file in place (the one place the package's files are opened for writing).
 

@@ -386,14 +386,7 @@ def optimize(
         use_points = sampling = None
         if uses and settings is None:
             use_points, sampling = draw_use_points(
-                resolved,
-                task_obj,
-                uses,
-                seed + 1,
-                mode,
-                dict(thresholds or {}),
-                None,
-                passing_uses,
+                resolved, task_obj, uses, seed + 1, mode, dict(thresholds or {}), None, passing_uses
             )
         sim = _Simulator(
             eng,

@@ -108,10 +108,7 @@ def surface_cosines(depth: np.ndarray, camera: DepthCamera | None = None) -> np.
 
 
 def apply_sensor(
-    depth: np.ndarray,
-    model: SensorModel,
-    keys=None,
-    camera: DepthCamera | None = None,
+    depth: np.ndarray, model: SensorModel, keys=None, camera: DepthCamera | None = None
 ) -> np.ndarray:
     """Depth images as the sensor model would return them.
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -47,10 +48,7 @@ def grid_image(
     n_cols = max((len(r) for r in cells), default=0)
     if n_rows == 0 or n_cols == 0:
         raise ValueError("a grid needs at least one cell")
-    size = next(
-        (c.shape[0] for r in cells for c in r if isinstance(c, np.ndarray)),
-        256,
-    )
+    size = next((c.shape[0] for r in cells for c in r if isinstance(c, np.ndarray)), 256)
     left = LABEL_PX if row_labels else 0
     top = (TITLE_PX if title else 0) + (LABEL_PX if col_labels else 0)
     width = left + n_cols * size
@@ -126,46 +124,13 @@ def _legend(fig, box, ncol: int) -> None:
 
     ax = fig.add_axes(box)
     ax.set_axis_off()
+    line = partial(Line2D, [], [], marker="o", ms=6)
     handles = [
-        Line2D(
-            [],
-            [],
-            ls="-",
-            color=CONTACT_COLOR,
-            marker="o",
-            mec="black",
-            ms=6,
-            lw=1.6,
-            label="contact + normal",
-        ),
-        Line2D(
-            [],
-            [],
-            ls="none",
-            marker="o",
-            mfc="none",
-            mec=CONTACT_COLOR,
-            ms=6,
-            mew=1.5,
-            label="hidden contact",
-        ),
-        Line2D(
-            [],
-            [],
-            ls="-",
-            color=USE_COLOR,
-            marker="o",
-            mec="black",
-            ms=7,
-            lw=1.6,
-            label="use point + normal",
-        ),
-        Line2D(
-            [], [], ls=(0, (4, 2)), color=WRIST_COLOR, marker="s", ms=5, lw=1.6, label="wrist axis"
-        ),
-        Line2D(
-            [], [], ls="none", marker="P", mfc="white", mec=COM_COLOR, ms=7, label="centre of mass"
-        ),
+        line(ls="-", color=CONTACT_COLOR, mec="black", lw=1.6, label="contact + normal"),
+        line(ls="none", mfc="none", mec=CONTACT_COLOR, mew=1.5, label="hidden contact"),
+        line(ls="-", color=USE_COLOR, mec="black", ms=7, lw=1.6, label="use point + normal"),
+        line(ls=(0, (4, 2)), color=WRIST_COLOR, marker="s", ms=5, lw=1.6, label="wrist axis"),
+        line(ls="none", marker="P", mfc="white", mec=COM_COLOR, ms=7, label="centre of mass"),
     ]
     ax.legend(
         handles=handles,

@@ -182,18 +182,14 @@ def _column(table: pa.Table, name: str) -> np.ndarray:
     return table.column(name).to_numpy().astype(np.float64)
 
 
+def _say_empty(ax, text: str) -> None:
+    style = {"ha": "center", "va": "center", "color": "#777777", "fontsize": 9}
+    ax.text(0.5, 0.5, text, transform=ax.transAxes, **style)
+
+
 def _draw_hist(ax, s: Summary, color: str = "#4c72b0") -> None:
     if s.edges is None or s.counts is None or s.counts.sum() == 0:
-        ax.text(
-            0.5,
-            0.5,
-            "no finite value",
-            ha="center",
-            va="center",
-            transform=ax.transAxes,
-            color="#777777",
-            fontsize=9,
-        )
+        _say_empty(ax, "no finite value")
         ax.set_yticks([])
         return
     widths = np.diff(s.edges)
@@ -420,11 +416,7 @@ def plot_status_counts(summary: DatasetSummary, path: str | os.PathLike) -> Path
     ax.set_xlabel("share of samples (%)", fontsize=9)
     ax.tick_params(labelsize=8)
     ax.legend(
-        loc="lower center",
-        bbox_to_anchor=(0.5, 1.0),
-        ncol=len(statuses),
-        fontsize=8,
-        frameon=False,
+        loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=len(statuses), fontsize=8, frameon=False
     )
     if has_reasons:
         ax2 = fig.add_axes((0.66, 45 / height, 0.32, box_top - 45 / height))
@@ -496,16 +488,7 @@ def plot_affordances(
         if shared.edges is not None:
             ax.set_xlim(shared.edges[0], shared.edges[-1])
         else:
-            ax.text(
-                0.5,
-                0.5,
-                "no sample has a finite score",
-                ha="center",
-                va="center",
-                transform=ax.transAxes,
-                color="#777777",
-                fontsize=9,
-            )
+            _say_empty(ax, "no sample has a finite score")
         ax.set_ylim(len(objects) - 0.5, -0.5)
         ax.set_yticks(np.arange(len(objects)), objects, fontsize=8)
         ax.tick_params(labelsize=8)

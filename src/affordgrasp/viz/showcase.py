@@ -284,12 +284,7 @@ def draw_best(
             title = title or f"best grasps for {task_names[0]} ({mode})"
     title = title or f"best grasps ({mode})"
     result.grid = save_grid(
-        cells,
-        out_dir / f"{name}.png",
-        row_labels=rows,
-        col_labels=cols,
-        title=title,
-        colors=256,
+        cells, out_dir / f"{name}.png", row_labels=rows, col_labels=cols, title=title, colors=256
     )
     if html and entries:
         result.html = write_viewer(

@@ -48,14 +48,7 @@ import trimesh
 
 from affordgrasp.errors import InputError
 from affordgrasp.objects import family_names
-from affordgrasp.objects.families import (
-    blades,
-    containers,
-    handtools,
-    materials,
-    parts,
-    striking,
-)
+from affordgrasp.objects.families import blades, containers, handtools, materials, parts, striking
 from affordgrasp.objects.families.geometry import to_trimesh
 from affordgrasp.objects.families.parameters import ParameterDraw
 
@@ -109,11 +102,7 @@ _BUILDERS: dict[str, tuple[str, str, Callable[[ParameterDraw], manifold3d.Manifo
         "meat cleaver, 0.27-0.35 m long, blade 75-110 mm tall, 3-5 mm spine",
         blades.meat_cleaver,
     ),
-    "axe": (
-        "axe",
-        "hatchet to camp axe, 0.36-0.70 m long, bearded head 0.11-0.16 m",
-        striking.axe,
-    ),
+    "axe": ("axe", "hatchet to camp axe, 0.36-0.70 m long, bearded head 0.11-0.16 m", striking.axe),
     "screwdriver": (
         "screwdriver",
         "slotted or Phillips screwdriver, 0.15-0.30 m long, fluted handle",
@@ -124,16 +113,8 @@ _BUILDERS: dict[str, tuple[str, str, Callable[[ParameterDraw], manifold3d.Manifo
         "slotted kitchen turner, 0.25-0.35 m long, blade 64-88 mm wide",
         handtools.spatula,
     ),
-    "sword": (
-        "sword",
-        "double-edged arming sword, 0.70-1.00 m long",
-        blades.sword,
-    ),
-    "dagger": (
-        "knife",
-        "double-edged dagger, 0.22-0.35 m long",
-        blades.dagger,
-    ),
+    "sword": ("sword", "double-edged arming sword, 0.70-1.00 m long", blades.sword),
+    "dagger": ("knife", "double-edged dagger, 0.22-0.35 m long", blades.dagger),
     "bottle": (
         "container",
         "glass bottle with punt, 0.20-0.32 m tall, 60-84 mm across",

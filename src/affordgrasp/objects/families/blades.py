@@ -82,10 +82,7 @@ def single_edge_blade(
 
 
 def double_edge_blade(
-    xs: np.ndarray,
-    half_width: np.ndarray,
-    flat_fraction: float,
-    edge_angle: float,
+    xs: np.ndarray, half_width: np.ndarray, flat_fraction: float, edge_angle: float
 ) -> manifold3d.Manifold:
     """Double-edged blade, symmetric about y = 0 and z = 0, swept along x, closed in a point.
 

@@ -35,11 +35,7 @@ _ARC_SEGMENTS = 32  # segments per full turn on the rounded corners of an offset
 
 
 def superellipse(
-    half_u: float,
-    half_v: float,
-    exponent: float = 2.0,
-    points: int = 32,
-    half_step: bool = False,
+    half_u: float, half_v: float, exponent: float = 2.0, points: int = 32, half_step: bool = False
 ) -> np.ndarray:
     """Closed superellipse |u/a|^n + |v/b|^n = 1, counter-clockwise from +u.
 
@@ -118,11 +114,7 @@ def planar_frames(path: np.ndarray, plane_normal: np.ndarray) -> tuple[np.ndarra
 
 
 def rounded_stations(
-    x0: float,
-    x1: float,
-    radius0: float,
-    radius1: float,
-    middle: int = 16,
+    x0: float, x1: float, radius0: float, radius1: float, middle: int = 16
 ) -> tuple[np.ndarray, np.ndarray]:
     """Stations along [x0, x1] for a bar whose ends are rounded like a dome.
 
@@ -319,9 +311,7 @@ def silhouette(radius: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 
 def cavity_section(
-    cavity_from: manifold3d.CrossSection,
-    wall: float,
-    floor_z: float | None = None,
+    cavity_from: manifold3d.CrossSection, wall: float, floor_z: float | None = None
 ) -> manifold3d.CrossSection:
     """The (r, z) cavity of :func:`hollow_lathe`.
 

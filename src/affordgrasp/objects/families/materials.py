@@ -43,6 +43,13 @@ DENSITY_KG_M3: dict[str, float] = {
 _MIN_VOLUME_M3 = 1e-10  # 0.1 mm³: smaller regions are boolean round-off, not parts
 
 _STEEL_TOOL = {"blade": "steel", "head": "steel", "claw": "steel", "peen": "steel"}
+_HILTED_BLADE = {
+    "blade": "steel",
+    "guard": "steel",
+    "pommel": "steel",
+    "handle": "wood",
+    "*": "steel",
+}
 
 # family -> {tagged piece: material}; "*" is the material of everything else
 FAMILY_MATERIALS: dict[str, Mapping[str, str]] = {
@@ -50,20 +57,8 @@ FAMILY_MATERIALS: dict[str, Mapping[str, str]] = {
     "axe": {**_STEEL_TOOL, "handle": "wood", "*": "steel"},
     "knife": {"blade": "steel", "handle": "plastic", "*": "steel"},
     "meat_cleaver": {"blade": "steel", "handle": "wood", "*": "steel"},
-    "sword": {
-        "blade": "steel",
-        "guard": "steel",
-        "pommel": "steel",
-        "handle": "wood",
-        "*": "steel",
-    },
-    "dagger": {
-        "blade": "steel",
-        "guard": "steel",
-        "pommel": "steel",
-        "handle": "wood",
-        "*": "steel",
-    },
+    "sword": _HILTED_BLADE,
+    "dagger": _HILTED_BLADE,
     "screwdriver": {"shaft": "steel", "handle": "plastic", "*": "steel"},
     "spatula": {"blade": "steel", "shaft": "steel", "handle": "plastic", "*": "steel"},
     "bottle": {"*": "glass"},

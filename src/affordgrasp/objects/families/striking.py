@@ -12,12 +12,7 @@ from __future__ import annotations
 import manifold3d
 import numpy as np
 
-from affordgrasp.objects.families.geometry import (
-    rounded_stations,
-    superellipse,
-    sweep,
-    union,
-)
+from affordgrasp.objects.families.geometry import rounded_stations, superellipse, sweep, union
 from affordgrasp.objects.families.handles import curved_bar, straight_grip
 from affordgrasp.objects.families.parameters import ParameterDraw
 from affordgrasp.objects.families.parts import tag
@@ -180,12 +175,7 @@ def axe(p: ParameterDraw) -> manifold3d.Manifold:
     x_top = length
     x_bot = x_top - edge_len
     x_eye = x_top - eye_h
-    xs = np.concatenate(
-        [
-            np.linspace(x_bot, x_eye - 0.0015, 18),
-            np.linspace(x_eye, x_top, 10),
-        ]
-    )
+    xs = np.concatenate([np.linspace(x_bot, x_eye - 0.0015, 18), np.linspace(x_eye, x_top, 10)])
     xm = 0.5 * (x_bot + x_top)
     y_edge = -bit_reach + edge_curve * (2.0 * (xs - xm) / edge_len) ** 2
     slope = np.gradient(y_edge, xs)
@@ -208,8 +198,7 @@ def axe(p: ParameterDraw) -> manifold3d.Manifold:
             ys[j] = y_crease[i]  # keep the crease where the cheek meets the eye
         d = (ys - y_edge[i]) * cos_t[i]
         half = 0.5 * np.minimum(
-            np.minimum(2.0 * tan_half * d, shoulder_t + 2.0 * cheek_slope * (d - bevel)),
-            thickness,
+            np.minimum(2.0 * tan_half * d, shoulder_t + 2.0 * cheek_slope * (d - bevel)), thickness
         )
         rings[i, 0] = (xs[i], y_edge[i], 0.0)
         rings[i, 1 : 1 + n_chain] = np.stack([np.full(n_chain, xs[i]), ys, half], axis=1)
