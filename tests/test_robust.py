@@ -86,7 +86,7 @@ def test_zero_perturbation_gives_the_plain_metrics_exactly(hammer, hammer_batch)
     np.testing.assert_array_equal(r["robust_viable"], is_viable(phi).astype(float))
     np.testing.assert_array_equal(r["robust_hold_dirs"], hold_dirs(phi))
     np.testing.assert_array_equal(r["hold_dirs"], hold_dirs(phi))
-    for task in ("beat-rules", "cut-rules", "cut-ug", "pick"):
+    for task in ("beat-rules", "cut-rules", "cut-ug", "pick-paper"):
         plain = evaluate_task(task, phi)
         plain = np.where(np.isnan(plain), -np.inf, plain)
         np.testing.assert_array_equal(r[f"robust_{task}"], plain)
@@ -94,7 +94,7 @@ def test_zero_perturbation_gives_the_plain_metrics_exactly(hammer, hammer_batch)
     # K identical copies: fractions and quantiles exact, means to rounding
     r3 = robust_columns(hammer, batch, RobustSettings(copies=3, **ZERO), hand="barrett", phi=phi)
     np.testing.assert_allclose(r3["robust_epsilon"], phi["epsilon"], rtol=1e-15, atol=1e-18)
-    for name in ("robust_fc", "robust_hold_dirs", "robust_pick", "robust_p_pick"):
+    for name in ("robust_fc", "robust_hold_dirs", "robust_pick-paper", "robust_p_pick-paper"):
         np.testing.assert_array_equal(r3[name], r[name])
 
 
@@ -133,7 +133,10 @@ def test_graded_hold_orders_by_directions_then_effort(hammer, hammer_batch):
     # lexicographic: more directions first, then the lower effort
     order = np.lexsort((finite_sum, -dirs))
     assert np.all(np.diff(r["robust_hold"][order]) <= 0)
-    assert ranking_column("pick") == "robust_hold" and ranking_column("cut-rules") == "robust_cut-rules"
+    assert (
+        ranking_column("pick-paper") == "robust_hold"
+        and ranking_column("cut-rules") == "robust_cut-rules"
+    )
 
 
 def test_perturbed_copies_change_the_scores_and_quantile_is_an_order_statistic(
@@ -143,13 +146,13 @@ def test_perturbed_copies_change_the_scores_and_quantile_is_an_order_statistic(
     s = RobustSettings(copies=8, seed=3)
     r = robust_columns(hammer, batch, s, hand="barrett", phi=phi)
     assert not np.array_equal(r["robust_hold_dirs"], hold_dirs(phi))
-    for name in ("robust_fc", "robust_viable", "robust_p_pick"):
+    for name in ("robust_fc", "robust_viable", "robust_p_pick-paper"):
         assert np.all((r[name] >= 0) & (r[name] <= 1))
         np.testing.assert_allclose(r[name] * 8, np.round(r[name] * 8), atol=1e-12)
     # q = 0.2 of 8 copies: the 2nd smallest (index ⌊0.2·7⌋ = 1), so it is -inf exactly
     # when two or more copies fail
-    fails = np.round((1 - r["robust_p_pick"]) * 8)
-    np.testing.assert_array_equal(r["robust_pick"] == -np.inf, fails >= 2)
+    fails = np.round((1 - r["robust_p_pick-paper"]) * 8)
+    np.testing.assert_array_equal(r["robust_pick-paper"] == -np.inf, fails >= 2)
 
 
 def test_copy_metrics_are_what_the_robust_columns_summarise(hammer, hammer_batch):
@@ -223,7 +226,7 @@ def test_rigid_motion_of_object_and_grasp_keeps_the_robust_columns(quarter_turns
     b = evaluate_inputs(moved, turned_p0, turned_d, robust=s).table
     assert (a.column("epsilon").to_numpy() > 0).sum() >= 2  # some force closure to compare
     continuous = ("robust_epsilon", "robust_hold") + tuple(
-        f"robust_{t}" for t in s.tasks if t != "pick"
+        f"robust_{t}" for t in s.tasks if t != "pick-paper"
     )
     for name in robust_column_names():
         x, y = a.column(name).to_numpy(), b.column(name).to_numpy()
@@ -237,12 +240,18 @@ def test_rigid_motion_of_object_and_grasp_keeps_the_robust_columns(quarter_turns
 
 def test_ranking_values_read_the_robust_score(hammer):
     t = evaluate_samples(hammer, 5, seed=0, robust=3).table
-    np.testing.assert_array_equal(ranking_values(t, "pick"), t.column("robust_hold").to_numpy())
-    np.testing.assert_array_equal(ranking_values(t, "cut-rules"), t.column("robust_cut-rules").to_numpy())
+    np.testing.assert_array_equal(
+        ranking_values(t, "pick-paper"), t.column("robust_hold").to_numpy()
+    )
+    np.testing.assert_array_equal(
+        ranking_values(t, "cut-rules"), t.column("robust_cut-rules").to_numpy()
+    )
     result = evaluate_samples(hammer, 5, seed=0, robust=3)
-    np.testing.assert_array_equal(result.scores("pick", robust=True), ranking_values(t, "pick"))
+    np.testing.assert_array_equal(
+        result.scores("pick-paper", robust=True), ranking_values(t, "pick-paper")
+    )
     with pytest.raises(InputError, match="--robust K"):
-        ranking_values(evaluate_samples(hammer, 2, seed=0).table, "pick")
+        ranking_values(evaluate_samples(hammer, 2, seed=0).table, "pick-paper")
 
 
 def test_robust_dataset_records_its_settings_and_resumes(tmp_path):
@@ -268,7 +277,7 @@ def test_robust_dataset_records_its_settings_and_resumes(tmp_path):
     # the dataset ranks by its robust score
     from affordgrasp.search.best import best_grasps
 
-    best = best_grasps(out, "pick", top=3, robust=True)
+    best = best_grasps(out, "pick-paper", top=3, robust=True)
     every = np.concatenate([t.column("robust_hold").to_numpy() for t in first.values()])
     assert best.table.column("affordance").to_numpy()[0] == every.max()
 
@@ -293,17 +302,19 @@ def test_cli_robust_options(capsys, tmp_path):
     from affordgrasp.cli import main
 
     code = main(
-        ["evaluate", "hammer", "--samples", "6", "--robust", "2", "--task", "pick", "--json"]
+        ["evaluate", "hammer", "--samples", "6", "--robust", "2", "--task", "pick-paper", "--json"]
     )
     doc = json.loads(capsys.readouterr().out)
     assert code == 0 and doc["robust"]["copies"] == 2
-    assert doc["best"]["pick"] is None or doc["best"]["pick"]["value"] <= 6.0  # robust_hold
+    assert (
+        doc["best"]["pick-paper"] is None or doc["best"]["pick-paper"]["value"] <= 6.0
+    )  # robust_hold
     assert main(["evaluate", "hammer", "--samples", "2", "--robust", "-1"]) == 2
     assert "--robust" in capsys.readouterr().err
     out = tmp_path / "plain"
     assert main(["generate", "hammer", "--samples", "4", "--out", str(out), "--workers", "1"]) == 0
     capsys.readouterr()
-    assert main(["best", str(out), "--task", "pick", "--robust", "3"]) == 2
+    assert main(["best", str(out), "--task", "pick-paper", "--robust", "3"]) == 2
     assert "no robust columns" in capsys.readouterr().err
 
 

@@ -80,15 +80,30 @@ def candidates(monotone: list[int]):
     from sklearn.preprocessing import StandardScaler
 
     return {
-        "logistic": lambda: make_pipeline(StandardScaler(), LogisticRegression(C=1.0, max_iter=2000)),
+        "logistic": lambda: make_pipeline(
+            StandardScaler(), LogisticRegression(C=1.0, max_iter=2000)
+        ),
         "hist_gradient_boosting": lambda: HistGradientBoostingClassifier(
-            max_iter=200, learning_rate=0.05, max_leaf_nodes=15, monotonic_cst=monotone,
-            l2_regularization=1.0, random_state=0,
+            max_iter=200,
+            learning_rate=0.05,
+            max_leaf_nodes=15,
+            monotonic_cst=monotone,
+            l2_regularization=1.0,
+            random_state=0,
         ),
         "lightgbm": lambda: LGBMClassifier(
-            n_estimators=200, learning_rate=0.05, num_leaves=15, min_child_samples=20,
-            subsample=0.8, subsample_freq=1, colsample_bytree=0.8, reg_lambda=1.0,
-            monotone_constraints=monotone, random_state=0, verbose=-1, n_jobs=1,
+            n_estimators=200,
+            learning_rate=0.05,
+            num_leaves=15,
+            min_child_samples=20,
+            subsample=0.8,
+            subsample_freq=1,
+            colsample_bytree=0.8,
+            reg_lambda=1.0,
+            monotone_constraints=monotone,
+            random_state=0,
+            verbose=-1,
+            n_jobs=1,
         ),
     }
 
@@ -135,9 +150,12 @@ def export(model, kind: str, task: str, robust: bool, cols, transforms, knots, c
             "mean": scaler.mean_.astype(float),
             "scale": scaler.scale_.astype(float),
         }
-        return TaskModel(task, robust, cols, transforms, "linear", arrays,
-                         float(lr.intercept_[0]), *knots, card)
-    nodes: dict[str, list] = {k: [] for k in ("feature", "threshold", "left", "right", "nan_left", "value")}
+        return TaskModel(
+            task, robust, cols, transforms, "linear", arrays, float(lr.intercept_[0]), *knots, card
+        )
+    nodes: dict[str, list] = {
+        k: [] for k in ("feature", "threshold", "left", "right", "nan_left", "value")
+    }
     roots = []
     if kind == "lightgbm":
         dump = model.booster_.dump_model()
@@ -166,7 +184,9 @@ def _add_lgbm(node: dict, out: dict) -> int:
     out["threshold"][i] = float(node["threshold"])
     # LightGBM sends NaN with default_left when its missing type is NaN; otherwise NaN is 0
     missing = node.get("missing_type", "None")
-    out["nan_left"][i] = bool(node["default_left"]) if missing == "NaN" else 0.0 <= out["threshold"][i]
+    out["nan_left"][i] = (
+        bool(node["default_left"]) if missing == "NaN" else 0.0 <= out["threshold"][i]
+    )
     out["left"][i] = _add_lgbm(node["left_child"], out)
     out["right"][i] = _add_lgbm(node["right_child"], out)
     return i
@@ -193,7 +213,9 @@ def fit_task(table: pa.Table, task: str, robust: bool, held_out: np.ndarray, see
     metrics = MetricColumns(table)
     if not all(c in metrics for c in cols):
         return None
-    x_all = np.stack([transform_column(metrics[c], t) for c, t in zip(cols, transforms)], axis=1)
+    x_all = np.stack(
+        [transform_column(metrics[c], t) for c, t in zip(cols, transforms, strict=True)], axis=1
+    )
     y_all = np.where(known, y_all, False).astype(float)
     objects = np.asarray(table.column("object").to_pylist())
     fit = known & ~held_out
@@ -216,8 +238,10 @@ def fit_task(table: pa.Table, task: str, robust: bool, held_out: np.ndarray, see
             "cpu_s": time.process_time() - t0,
             "oof": oof,
         }
-        print(f"  {task}{' robust' if robust else ''} {kind}: out-of-fold log-loss "
-              f"{results[kind]['oof_log_loss']:.4f} AUC {results[kind]['oof_auc']:.4f}")
+        print(
+            f"  {task}{' robust' if robust else ''} {kind}: out-of-fold log-loss "
+            f"{results[kind]['oof_log_loss']:.4f} AUC {results[kind]['oof_auc']:.4f}"
+        )
     best = min(results, key=lambda k: results[k]["oof_log_loss"])
     model = candidates(monotone)[best]().fit(_features_for(best, x), y)
     knots = isotonic_knots(results[best]["oof"], y)
@@ -226,8 +250,9 @@ def fit_task(table: pa.Table, task: str, robust: bool, held_out: np.ndarray, see
         "label": label,
         "robust": robust,
         "model_class": best,
-        "candidates": {k: {kk: round(vv, 4) for kk, vv in v.items() if kk != "oof"}
-                       for k, v in results.items()},
+        "candidates": {
+            k: {kk: round(vv, 4) for kk, vv in v.items() if kk != "oof"} for k, v in results.items()
+        },
         "fit_objects": sorted(set(objects[fit].tolist())),
         "fit_rows": int(fit.sum()),
         "fit_positive_rate": float(y.mean()),
@@ -236,12 +261,17 @@ def fit_task(table: pa.Table, task: str, robust: bool, held_out: np.ndarray, see
     if test.any():
         p_test = shipped.predict(MetricColumns(table.filter(pa.array(test))))
         y_test = y_all[test].astype(bool)
-        auc, lo, hi = bootstrap_auc(p_test, y_test, seed=seed) if y_test.any() and not y_test.all() else (float("nan"),) * 3
+        auc, lo, hi = (
+            bootstrap_auc(p_test, y_test, seed=seed)
+            if y_test.any() and not y_test.all()
+            else (float("nan"),) * 3
+        )
         card["held_out"] = {
             "objects": sorted(set(objects[test].tolist())),
             "rows": int(test.sum()),
             "positive_rate": float(y_test.mean()),
-            "auc": auc, "auc_95": [lo, hi],
+            "auc": auc,
+            "auc_95": [lo, hi],
             "ece": expected_calibration_error(y_test, p_test),
         }
     # the exported model must reproduce the fitted one

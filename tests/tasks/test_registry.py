@@ -54,7 +54,19 @@ def registry():
 
 
 def test_builtin_tasks_are_listed():
-    names = {"beat-rules", "beat-paper", "cut-rules", "cut-wedge", "cut-dihedral", "cut-ug", "pick", "viable"}
+    names = {
+        "beat-rules",
+        "beat-paper",
+        "cut-rules",
+        "cut-wedge",
+        "cut-dihedral",
+        "cut-ug",
+        "pick",
+        "pick-paper",
+        "viable",
+        "beat",
+        "cut",
+    }
     assert names <= set(tasks.list_tasks())
     with pytest.raises(TaskError, match="available tasks: .*beat"):
         tasks.get_task("juggle")
@@ -211,7 +223,9 @@ def test_cut_rejects_thin_flats_tips_and_corners_and_cut_wedge_keeps_them():
 
 
 def test_pick_and_viable():
-    np.testing.assert_allclose(tasks.get_task("pick").evaluate(table()), [-6, -12, -18, -24, -30])
+    np.testing.assert_allclose(
+        tasks.get_task("pick-paper").evaluate(table()), [-6, -12, -18, -24, -30]
+    )
     cols = table(epsilon=[0.005, 0.2, 0.2, 0.2, 0.2], impact_effort=[10, 2e5, 10, 10, 10])
     cols["hold_effort_px"] = np.array([1.0, 1.0, 300.0, 1.0, 1.0])
     np.testing.assert_array_equal(tasks.get_task("viable").evaluate(cols), [0, 0, 0, 1, 1])
@@ -255,7 +269,7 @@ def test_arrow_and_pandas_inputs():
     frame = pd.DataFrame({"object": ["knife:0"] * 5, **cols})
     np.testing.assert_array_equal(tasks.evaluate_task("beat-rules", frame), expected)
     np.testing.assert_array_equal(
-        tasks.get_task("pick").evaluate(arrow), -6 * cols["hold_effort_px"]
+        tasks.get_task("pick-paper").evaluate(arrow), -6 * cols["hold_effort_px"]
     )
 
 

@@ -6,7 +6,12 @@ import math
 
 from ..columns import column_heading
 from .limits import ROBUST
-from .task_options import add_robust_argument, add_task_arguments, parse_thresholds
+from .task_options import (
+    add_robust_argument,
+    add_task_arguments,
+    parse_thresholds,
+    probability_note,
+)
 
 # Of the numeric options: see limits.check_limits.
 LIMITS = {"top": (None, 100_000, "the top rows are held and printed"), "robust": ROBUST}
@@ -185,6 +190,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..search.best import best_grasps, write_best
+    from ..tasks import get_task
 
     if args.out:
         from .output_files import check_output_file
@@ -215,6 +221,10 @@ def run(args, out) -> None:
         f"scanned {result.rows_scanned:,} samples of {', '.join(result.objects)}; "
         f"{result.finite:,} have a finite F_T"
     )
+    best = float(result.table.column("affordance")[0].as_py()) if rows else None
+    note = probability_note(get_task(result.task), best, str(args.directory))
+    if note:
+        out.text(note)
     if result.finite == 0:
         out.text(
             f"no sample passes the task's thresholds; try {loosen_hint(args.mode)}, or "

@@ -17,7 +17,13 @@ from .batches import (
 )
 from .limits import ROBUST
 from .output_files import check_output_file, write_table
-from .task_options import add_robust_argument, add_task_arguments, robust_option, task_names
+from .task_options import (
+    add_robust_argument,
+    add_task_arguments,
+    probability_note,
+    robust_option,
+    task_names,
+)
 
 SHOWN_METRICS = (
     "epsilon",
@@ -80,7 +86,8 @@ def best_rows(
     from ..robust import task_scores
     from ..schema import metric_arrays
     from ..search.ranking import best_index
-    from ..tasks import MetricColumns
+    from ..tasks import MetricColumns, get_task
+    from ..tasks.task import PROBABLE
 
     metrics = MetricColumns(metric_arrays(table))
     rows, doc = [], {}
@@ -98,6 +105,7 @@ def best_rows(
         doc[name] = {
             "sample": int(table.column("sample")[i].as_py()),
             "value": float(values[i]),
+            "probable": bool(values[i] >= PROBABLE) if get_task(name).probability else None,
             "feasible": int(finite.sum()),
             "p0": table.column("p0")[i].as_py(),
             "use_dir": table.column("use_dir")[i].as_py(),
@@ -126,11 +134,13 @@ def run(args, out) -> None:
         load_task_file(args.tasks_file)
     robust = robust_option(args)
     names = task_names(args.task) or [
-        t for t in list_tasks() if t != "viable" and (robust is None or t in robust.tasks)
+        t
+        for t in list_tasks()
+        if t != "viable" and (robust is None or t in robust.tasks or get_task(t).probability)
     ]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
-        if robust is not None and name not in robust.tasks:
+        if robust is not None and name not in robust.tasks and not get_task(name).probability:
             raise InputError(
                 f"task {name!r} has no robust score; --robust ranks the built-in tasks "
                 f"({', '.join(robust.tasks)}): drop --robust or choose among them"
@@ -170,10 +180,15 @@ def run(args, out) -> None:
     out.table(
         f"best grasp per task (mode {args.mode}"
         + (f", robust score over K = {robust.copies} copies" if robust is not None else "")
-        + "; '-' when no sample passes the thresholds)",
+        + "; value: p_T for beat, cut, pick; '-' when no sample passes the thresholds)",
         ["quantity", *[r[0] for r in best]],
         [[label, *[r[k + 1] for r in best]] for k, label in enumerate(labels)],
     )
+    for name in names:
+        found = best_doc[name]
+        note = probability_note(get_task(name), found and found["value"], obj.name)
+        if note:
+            out.text(note)
     write_table(table, args.out, out)
     out.result(
         {

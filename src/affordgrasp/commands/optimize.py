@@ -5,7 +5,13 @@ from __future__ import annotations
 from .best import loosen_hint, metric_cells, metric_headings, shown_metrics
 from .limits import OWN_CHECK, ROBUST, SEED, SIZE_M, USES, WORKERS
 from .object_options import HAND_HELP, add_scale_arguments, load_objects
-from .task_options import add_robust_argument, add_task_arguments, parse_thresholds, robust_option
+from .task_options import (
+    add_robust_argument,
+    add_task_arguments,
+    parse_thresholds,
+    probability_note,
+    robust_option,
+)
 
 # Of the numeric options: see limits.check_limits.
 LIMITS = {
@@ -97,6 +103,7 @@ def run(args, out) -> None:
         Where results go (text or ``--json``).
     """
     from ..search.optimize import optimize
+    from ..tasks import get_task
 
     (obj,) = load_objects([args.object], args)
     result = optimize(
@@ -160,7 +167,11 @@ def run(args, out) -> None:
         )
         share = result.random_fraction_at_least_cem
         out.text(f"{100 * share:.3g}% of the random samples are as good as the cross-entropy best")
-    elif result.cem is None:
+    best = max((f.value for f in (result.cem, result.random) if f is not None), default=None)
+    note = probability_note(get_task(args.task), best, result.object)
+    if note:
+        out.text(note)
+    if result.cem is None and result.random is None:
         out.text(
             "no simulation passed the task's thresholds (every F_T = -inf); try "
             f"{loosen_hint(args.mode)} or a larger --budget"

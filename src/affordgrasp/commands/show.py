@@ -21,7 +21,13 @@ from .object_options import (
     scale_options,
 )
 from .output_files import check_output_dir
-from .task_options import add_robust_argument, add_task_arguments, parse_tasks, robust_option
+from .task_options import (
+    add_robust_argument,
+    add_task_arguments,
+    parse_tasks,
+    probability_note,
+    robust_option,
+)
 
 DEFAULT_SAMPLES = 1000
 EVALUATION_BATCH = 250
@@ -485,6 +491,15 @@ def run(args, out) -> None:
             for b in result.best
         ],
     )
+    by_task = {t.name: t for t in tasks}
+    for r in rankings:
+        best = max(
+            (b["score"] for b in result.best if b["object"] == r.object and b["task"] == r.task),
+            default=None,
+        )
+        note = probability_note(by_task[r.task], best, r.object)
+        if note:
+            out.text(note)
     empty = [r for r in rankings if not r.best]
     for r in empty:
         more = "more --samples"

@@ -290,3 +290,33 @@ def robust_option(args):
         raise InputError(f"--robust must be an integer >= 0 (copies per grasp), got {k}")
     mode = getattr(args, "mode", None) or "default"
     return RobustSettings(copies=k, mode=mode) if k > 0 else None
+
+
+def probability_note(task, best: float | None, where: str = "") -> str | None:
+    """What to say when a task probability's best grasp is not likely to succeed.
+
+    Parameters
+    ----------
+    task : Task
+        The task ranked by.
+    best : float or None
+        Its best value (p_T up to the tie-break), None when nothing was scored.
+    where : str
+        The object or dataset, for the message.
+
+    Returns
+    -------
+    str or None
+        None for a formula task or a best grasp with p_T ≥ 0.5.
+    """
+    from ..tasks.task import PROBABLE
+
+    if not task.probability or (best is not None and best >= PROBABLE):
+        return None
+    at = f"{where}: " if where else ""
+    best_text = "nothing was scored" if best is None else f"the best is p = {best:.3f}"
+    return (
+        f"{at}no grasp reaches p_{task.name} ≥ {PROBABLE} ({best_text}): the grasps shown are "
+        "the most likely ones, not likely to succeed; a larger search (--samples, --budget) "
+        "may find better ones, or the object may not afford the task"
+    )

@@ -41,12 +41,13 @@ __all__ = ["HEADLINE", "physics_report", "roc_auc", "roc_curve", "spearman"]
 
 # The predictors of the headline table, larger = better, with what each is.
 HEADLINE = {
-    "task_pick": "plain pick (−ΣE_h)",
+    "task_pick-paper": "plain pick (−ΣE_h)",
+    "task_pick": "p_pick, the learned probability of the pick trial",
     "epsilon": "plain ε",
     "hold_dirs": "graded: load directions with finite E_h",
     "graded_pick": "graded pick: hold_dirs, then −ΣE_h of the finite ones",
     "robust_hold": "robust pick score: graded hold over the perturbed copies",
-    "robust_pick": "robust: q-quantile of pick over the perturbed copies",
+    "robust_pick-paper": "robust: q-quantile of pick (−ΣE_h) over the perturbed copies",
     "robust_hold_dirs": "robust: mean hold_dirs over the perturbed copies",
     "robust_fc": "robust: fraction in force closure",
     "robust_epsilon": "robust: mean ε",
@@ -63,12 +64,19 @@ GRADED_OUTCOMES = ("hold_directions_ok", "impact_steadiness", "press_force_n")
 DESIGNED_FOR = {
     "epsilon": "hold_ok",
     "neg_hold_effort_sum": "hold_ok",
-    "task_pick": "hold_ok",
+    "task_pick-paper": "hold_ok",
     "task_viable": "hold_ok",
     "neg_impact_effort": "impact_ok",
-    "task_beat": "impact_ok",
+    "task_beat-paper": "impact_ok",
     "use_force": "press_force_n",
-    "task_cut": "press_force_n",
+    "task_cut-ug": "press_force_n",
+}
+# The task trials (docs/physics.md): per task, its outcome and the scores judged against it:
+# the learned probability, the threshold task that ranked before it, the paper's formula.
+TASK_TRIALS = {
+    "beat": ("beat_ok", ("beat", "beat-rules", "beat-paper")),
+    "cut": ("cut_ok", ("cut", "cut-rules", "cut-ug")),
+    "pick": ("pick_ok", ("pick", "pick-paper")),
 }
 
 
@@ -99,7 +107,12 @@ def _predictors(table: pa.Table) -> dict[str, np.ndarray]:
         kind = table.schema.field(name).type
         if name.startswith("robust_") and (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
             preds[name] = col(name)
-    columns = {name: col(name) for name in table.column_names if _is_metric(table, name)}
+    # the metrics, and the robust columns that a task probability's robust model reads
+    columns = {
+        name: col(name)
+        for name in table.column_names
+        if _is_metric(table, name) or name in preds and name.startswith("robust_")
+    }
     for task in list_tasks():
         # The default mode, and the mode without the robustness threshold (τ_ε = -inf): the
         # default thresholds may leave no grasp of a run with a finite score.
@@ -249,6 +262,9 @@ def physics_report(
     }
     if "initial_penetration_m" in names:
         report["start"] = _start_report(outcomes, outs, fc)
+    trials = _task_trials(outcomes, preds, families, n_boot, seed)
+    if trials:
+        report["task_trials"] = trials
     if directory is not None:
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
@@ -257,7 +273,90 @@ def physics_report(
         atomic_write(directory / "report.json", json.dumps(to_jsonable(report), indent=2).encode())
         atomic_write(directory / "report.md", report_markdown(report).encode())
         _plots(preds, outs, families, report, directory)
+        if trials:
+            _calibration_plot(outcomes, preds, directory)
     return report
+
+
+def _trial_outcome(table: pa.Table, name: str) -> np.ndarray:
+    return np.array([math.nan if v is None else float(v) for v in table.column(name).to_pylist()])
+
+
+def _task_trials(table: pa.Table, preds, families, n_boot: int, seed: int) -> dict:
+    """Per task trial run, overall and per family: the rate, and the AUC [bootstrap 95 %] of
+    p_T, of the threshold task and of the paper's formula against T_ok; p_T's ECE."""
+    from ..stats import expected_calibration_error
+
+    out = {}
+    for task, (label, scores) in TASK_TRIALS.items():
+        if label not in table.column_names:
+            continue
+        y = _trial_outcome(table, label)
+        tried = ~np.isnan(y)
+        if not tried.any():
+            continue
+        groups = {"all": tried} | {f: tried & (families == f) for f in sorted(set(families[tried]))}
+        section = {}
+        for group, mask in groups.items():
+            yy = y[mask].astype(bool)
+            entry = {"n": int(mask.sum()), "rate": float(yy.mean()), "auc": {}}
+            for name in scores:
+                x = preds.get(f"task_{name}")
+                if x is not None:
+                    entry["auc"][name] = list(bootstrap_auc(x[mask], yy, n_boot=n_boot, seed=seed))
+            p = preds.get(f"task_{task}")
+            if p is not None:
+                entry["ece"] = expected_calibration_error(yy, np.clip(p[mask], 0.0, 1.0))
+            section[group] = entry
+        out[task] = {"outcome": label, "scores": list(scores), "groups": section}
+    return out
+
+
+def _task_trials_markdown(trials: dict) -> list[str]:
+    lines = []
+    for task, t in trials.items():
+        scores = t["scores"]
+        lines += [
+            f"## Task trial `{t['outcome']}`: ROC-AUC [bootstrap 95 % interval]",
+            "",
+            "| rows | n | success rate | "
+            + " | ".join(f"`{s}`" for s in scores)
+            + f" | ECE of p_{task} |",
+            "|---|---:|---:|" + "---|" * len(scores) + "---:|",
+        ]
+        for group, g in t["groups"].items():
+            cells = [_ci(g["auc"][s]) if s in g["auc"] else "—" for s in scores]
+            ece = _f(g["ece"]) if "ece" in g else "—"
+            lines.append(
+                f"| {group} | {g['n']} | {g['rate']:.3f} | " + " | ".join(cells) + f" | {ece} |"
+            )
+        lines.append("")
+    return lines
+
+
+def _calibration_plot(table: pa.Table, preds, directory: Path) -> None:
+    """Observed success rate against p_T (ten bins) for each task trial run."""
+    from ..stats import reliability_bins
+
+    fig = _figure(figsize=(5, 4.5))
+    ax = fig.subplots()
+    ax.plot([0, 1], [0, 1], color="0.6", linewidth=1, linestyle="--", label="perfect")
+    for task, (label, _) in TASK_TRIALS.items():
+        p = preds.get(f"task_{task}")
+        if label not in table.column_names or p is None:
+            continue
+        y = _trial_outcome(table, label)
+        tried = ~np.isnan(y)
+        if not tried.any():
+            continue
+        b = reliability_bins(y[tried], np.clip(p[tried], 0.0, 1.0))
+        ok = b["count"] > 0
+        ax.plot(b["mean_probability"][ok], b["positive_rate"][ok], marker="o", label=f"p_{task}")
+    ax.set_xlabel("predicted probability")
+    ax.set_ylabel("observed success rate")
+    ax.set_title("Calibration of the task probabilities")
+    ax.legend(loc="upper left")
+    _save_png(fig, directory / "calibration_tasks.png")
 
 
 def _save_png(fig, path: Path) -> None:
@@ -355,6 +454,8 @@ def report_markdown(report: dict) -> str:
         lines += _runs_markdown(report["by_run"], report["headline"]["predictors"])
     if "headline" in report:
         lines += _headline_markdown(report["headline"])
+    if "task_trials" in report:
+        lines += _task_trials_markdown(report["task_trials"])
     if "start" in report:
         lines += _start_markdown(report["start"])
     lines += _markdown_block(report, "")
@@ -493,8 +594,8 @@ def _plots(preds, outs, families, report, directory: Path) -> None:
 
     for outcome, names in (
         ("hold_ok", ["epsilon", "neg_hold_effort_sum", "task_pick", "task_viable"]),
-        ("impact_ok", ["neg_impact_effort", "task_beat", "discharge", "epsilon"]),
-        ("press_held", ["use_force", "task_cut", "epsilon"]),
+        ("impact_ok", ["neg_impact_effort", "task_beat-paper", "discharge", "epsilon"]),
+        ("press_held", ["use_force", "task_cut-ug", "epsilon"]),
     ):
         y = outs[outcome]
         valid = ~np.isnan(y)

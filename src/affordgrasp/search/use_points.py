@@ -289,7 +289,7 @@ def passing_use_points(
         raise bad_parameter("max_draws", f"must be at least uses ({n}), got {max_draws!r}")
     columns = set(t.requires) & USE_ONLY
     center = obj.mass.center_of_mass
-    tested = bool(columns)
+    tested = bool(columns) and not t.probability  # a probability has no use point tests
     kept, first, drawn, passing = [], None, 0, 0
     k = 0
     while drawn < limit:
@@ -347,5 +347,5 @@ def draw_use_points(obj, task, n: int, seed: int, mode: str, overrides, max_draw
         )
     use = UsePoints.sample(obj, n, seed)
     passing_count = int(use_only_passes(task, mode, overrides, use).sum())
-    tested = bool(set(task.requires) & USE_ONLY)
+    tested = bool(set(task.requires) & USE_ONLY) and not task.probability
     return use, UseSampling(n, passing_count, n, False, tested=tested, only_passing=False)

@@ -142,7 +142,10 @@ class TaskModel:
                 "rows again with this version (or with --robust for the robust columns)"
             )
         return np.stack(
-            [transform_column(metrics[c], t) for c, t in zip(self.columns, self.transforms)],
+            [
+                transform_column(metrics[c], t)
+                for c, t in zip(self.columns, self.transforms, strict=True)
+            ],
             axis=1,
         )
 
@@ -272,7 +275,7 @@ def probability_columns(metrics: Mapping[str, np.ndarray]) -> dict[str, np.ndarr
         ray missed the object: nothing to strike or cut with).
     """
     out = {}
-    for task, name in zip(PROBABILITY_TASKS, PROBABILITY_COLUMNS):
+    for task, name in zip(PROBABILITY_TASKS, PROBABILITY_COLUMNS, strict=True):
         p = task_probability(task, metrics)
         if task in _USE_TASKS:
             p = np.where(np.isnan(np.asarray(metrics["use_depth"], dtype=np.float64)), 0.0, p)
