@@ -95,7 +95,7 @@ def test_same_seed_same_rows(tmp_path):
 def test_tasks_lists_thresholds(capsys):
     code, doc = run_json(capsys, "tasks")
     assert code == 0
-    beat = doc["tasks"]["beat"]["thresholds"]
+    beat = doc["tasks"]["beat-rules"]["thresholds"]
     assert beat["default"]["tau_eps"] == 0.014 and beat["extra-robustness"]["tau_eps"] == 0.024
     assert beat["paper"]["tau_eps"] == 0.3 and beat["paper-extra-robustness"]["tau_eps"] == 0.5
 

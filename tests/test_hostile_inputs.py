@@ -692,7 +692,7 @@ def small_dataset(tmp_path_factory) -> Path:
 
 
 def test_nothing_found_suggests_only_what_would_change(small_dataset, capsys):
-    never = ["--task", "cut", "--threshold", "tau_eps=1e9"]  # no grasp passes
+    never = ["--task", "cut-rules", "--threshold", "tau_eps=1e9"]  # no grasp passes
     for mode, suggested in (("default", True), ("no-robustness", False)):
         assert main(["best", str(small_dataset), *never, "--mode", mode]) == 0
         out = capsys.readouterr().out

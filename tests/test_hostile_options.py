@@ -53,7 +53,7 @@ CASES = [
     (["evaluate", "", "--samples", "3"], "the object spec is empty; give a family name (e.g"),
     (
         ["evaluate", "knife", "--samples", "3", "--task", "nosuch"],
-        "available tasks: beat, beat-paper, cut, cut-dihedral, cut-ug",
+        "available tasks: beat, beat-paper, beat-rules, cut, cut-dihedral, cut-rules, cut-ug",
     ),
     (["evaluate", "knife", "--samples", "3", "--tasks-file", "{d}/missing.toml"], "does not exist"),
     (
@@ -177,7 +177,7 @@ CASES = [
     (["best", "{txt}", "--task", "pick"], "does not exist; create one with"),
     (
         ["best", "{ds}", "--task", "nosuch"],
-        "available tasks: beat, beat-paper, cut, cut-dihedral, cut-ug",
+        "available tasks: beat, beat-paper, beat-rules, cut, cut-dihedral, cut-rules, cut-ug",
     ),
     (["best", "{ds}", "--task", "pick", "--top", "0"], "--top must be a positive integer, got 0"),
     (["best", "{ds}", "--task", "pick", "--top", "-2"], "--top must be a positive integer, got -2"),
@@ -206,7 +206,7 @@ CASES = [
     ),
     (
         ["optimize", "knife", "--task", "nosuch", "--budget", "20"],
-        "available tasks: beat, beat-paper, cut, cut-dihedral, cut-ug",
+        "available tasks: beat, beat-paper, beat-rules, cut, cut-dihedral, cut-rules, cut-ug",
     ),
     (
         ["optimize", "knife", "--task", "pick", "--budget", "20", "--restarts", "0"],
@@ -222,7 +222,7 @@ CASES = [
     ),
     (
         ["show", "{ds}", "--task", "nosuch", "-o", "{d}/s2"],
-        "available tasks: beat, beat-paper, cut, cut-dihedral, cut-ug",
+        "available tasks: beat, beat-paper, beat-rules, cut, cut-dihedral, cut-rules, cut-ug",
     ),
     (
         ["show", "{ds}", "--task", "pick", "-o", "{txt}"],
@@ -360,7 +360,7 @@ CASES = [
     ),
     (
         ["plan", "knife", "--task", "nosuch"],
-        "available tasks: beat, beat-paper, cut, cut-dihedral, cut-ug",
+        "available tasks: beat, beat-paper, beat-rules, cut, cut-dihedral, cut-rules, cut-ug",
     ),
     (["plan", "knife", "--threshold", "2"], "threshold must be a probability in [0, 1], got 2.0"),
     (["plan", "knfie"], "?): it is not a built-in family and no file exists at that p"),

@@ -33,6 +33,7 @@ from affordgrasp.stats import bootstrap_auc, expected_calibration_error, roc_auc
 from affordgrasp.tasks.metric_columns import MetricColumns
 from affordgrasp.tasks.probability import (
     MODEL_COLUMNS,
+    PICK_COLUMNS,
     ROBUST_COLUMNS,
     TaskModel,
     transform_column,
@@ -46,7 +47,7 @@ INCREASING_FOR = {"cut": {"use_force"}}
 
 
 def columns_of(task: str, robust: bool) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    cols = MODEL_COLUMNS + (ROBUST_COLUMNS if robust else ())
+    cols = (PICK_COLUMNS if task == "pick" else MODEL_COLUMNS) + (ROBUST_COLUMNS if robust else ())
     transforms = tuple("inv1p" if c in EFFORTS else "raw" for c in cols)
     return cols, transforms
 

@@ -26,6 +26,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from affordgrasp.pipeline import evaluate_inputs
+
 SERVES = {
     "hammer": ("beat",),
     "axe": ("beat",),
@@ -54,7 +56,6 @@ def object_rows(spec: str, args) -> pa.Table:
     import affordgrasp as ag
     from affordgrasp.physics.run import validate_rows
     from affordgrasp.physics.settings import PhysicsSettings
-    from affordgrasp.pipeline import evaluate_inputs
     from affordgrasp.robust import RobustSettings
     from affordgrasp.search.use_points import UsePoints, passing_use_points
 
@@ -110,6 +111,34 @@ def object_rows(spec: str, args) -> pa.Table:
     return out.append_column("family", pa.array([family] * out.num_rows))
 
 
+def search_rows(spec: str, args) -> pa.Table:
+    """The top ``--grasps`` distinct grasps of the search for the family's task (the shipped
+    task probabilities rank them), tried: the rows a search proposes, where a model fitted
+    on sampled rows alone is most often wrong (it is maximised over them)."""
+    import affordgrasp as ag
+    from affordgrasp.physics.run import validate_rows
+    from affordgrasp.physics.settings import PhysicsSettings
+    from affordgrasp.robust import RobustSettings
+    from affordgrasp.search.pairs import PairSearchSettings, best_pairs
+
+    family = spec.split(":")[0].split("~")[0]
+    (task,) = SERVES[family]
+    obj = ag.load_object(spec, materials=True)
+    settings = PairSearchSettings(
+        task, grasps=args.samples, uses=1000, top=args.grasps, per_grasp=True, seed=args.seed
+    )
+    found = best_pairs(obj, settings).table.drop_columns(["value"])
+    p0 = np.asarray(found.column("p0").to_pylist(), dtype=float)
+    d = np.asarray(found.column("use_dir").to_pylist(), dtype=float)
+    robust = RobustSettings(copies=args.robust) if args.robust else None
+    table = evaluate_inputs(obj, p0, d, seed=args.seed, robust=robust).table
+    out = validate_rows(table, "barrett", {obj.name: obj}, PhysicsSettings(), trials=(task, "pick"))
+    for c in ("use_point", "use_normal", "wrist_point", "hand_pose", "joints", "p0", "use_dir"):
+        if c not in out.column_names:
+            out = out.append_column(c, table.column(c))
+    return out.append_column("family", pa.array([family] * out.num_rows))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", required=True)
@@ -121,6 +150,12 @@ def main() -> None:
     p.add_argument("--robust", type=int, default=25)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--no-scan", action="store_true")
+    p.add_argument(
+        "--from-search",
+        action="store_true",
+        help="the top --grasps grasps of the pair search ranked by the shipped models "
+        "(--samples grasps × 1000 use points) instead of sampled pairs",
+    )
     args = p.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -135,7 +170,7 @@ def main() -> None:
         if path.exists():
             continue
         t0 = time.process_time()
-        table = object_rows(spec, args)
+        table = search_rows(spec, args) if args.from_search else object_rows(spec, args)
         tmp = path.with_suffix(".tmp")
         pq.write_table(table, tmp)
         tmp.replace(path)

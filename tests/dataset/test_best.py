@@ -26,10 +26,10 @@ def pandas_values(df: pd.DataFrame, task: str, mode: str) -> np.ndarray:
         "extra-robustness": tasks.TAU_EPS_EXTRA,
     }[mode]
     hold = df[HOLD].sum(axis=1)
-    if task == "pick":
+    if task == "pick-paper":
         return -hold.to_numpy()
-    if task == "cut":
-        t = tasks.get_task("cut").thresholds
+    if task == "cut-rules":
+        t = tasks.get_task("cut-rules").thresholds
         ok = (
             (df.epsilon_hand >= tau_eps)
             & (df.use_wedge_angle <= t["tau_wedge"])
@@ -75,8 +75,8 @@ def reach_task():
 @pytest.mark.parametrize(
     "task, mode, objects",
     [
-        ("pick", "default", None),
-        ("cut", "no-robustness", None),
+        ("pick-paper", "default", None),
+        ("cut-rules", "no-robustness", None),
         ("reach", "default", None),
         ("reach", "default", ["box.stl"]),
     ],

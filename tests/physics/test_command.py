@@ -173,7 +173,7 @@ def test_physics_trials_write_their_columns_cards_and_resume(tiny_dataset, tmp_p
     assert table.loc[has_use, "beat_ok"].notna().all()
     assert table.loc[~has_use, "beat_ok"].isna().all()
     cards = json.loads((out / "_physics.json").read_text())["trials"]
-    assert {c["version"] for c in cards.values()} == {1}
+    assert {k: c["version"] for k, c in cards.items()} == {"beat": 2, "cut": 1, "pick": 1}
     assert cards["beat"]["settings"]["nail_force_n"] == 150.0
     # resumed with the same trials: nothing to do; with others: refused, naming them
     code, stdout, _ = _run(capsys, *args, "--trials", "beat,cut,pick")
@@ -182,3 +182,13 @@ def test_physics_trials_write_their_columns_cards_and_resume(tiny_dataset, tmp_p
     assert code == 2 and "trials" in stderr
     code, _, stderr = _run(capsys, *args, "--trials", "chop")
     assert code == 2 and "chop" in stderr
+    # the report judges p_T, the threshold task and the paper's formula against each trial
+    report = tmp_path / "report"
+    code, _, _ = _run(capsys, *args, "--trials", "beat,cut,pick", "--report", report)
+    assert code == 0
+    trials = json.loads((report / "report.json").read_text())["task_trials"]
+    assert set(trials) == {"beat", "cut", "pick"}
+    assert set(trials["beat"]["groups"]["all"]["auc"]) == {"beat", "beat-rules", "beat-paper"}
+    assert trials["pick"]["groups"]["all"]["n"] == len(table)
+    assert "Task trial `cut_ok`" in (report / "report.md").read_text()
+    assert (report / "calibration_tasks.png").stat().st_size > 0

@@ -65,7 +65,11 @@ def test_default_mode_finds_the_task_grasps(obj, task, seed):
     # striking face is a smaller spot than this search reaches (no candidate on the hammer
     # in 12 seeds), so its three striking-surface tests are off here (tests/tasks checks
     # them); every other default threshold applies.
-    off = {"tau_depth": 0.0, "tau_relief": np.inf, "tau_swing": -np.inf} if task == "beat-rules" else {}
+    off = (
+        {"tau_depth": 0.0, "tau_relief": np.inf, "tau_swing": -np.inf}
+        if task == "beat-rules"
+        else {}
+    )
     settings = PairSearchSettings(task, thresholds=off, grasps=400, uses=3000, seed=seed, top=3)
     result = best_pairs(obj, settings)
     values = result.table.column("value").to_numpy()
@@ -156,7 +160,16 @@ def test_optimize_command_finds_a_default_mode_cut_with_use_points(capsys):
 
     from affordgrasp.cli import main
 
-    argv = ["optimize", "meat_cleaver", "--task", "cut-rules", "--budget", "100", "--population", "50"]
+    argv = [
+        "optimize",
+        "meat_cleaver",
+        "--task",
+        "cut-rules",
+        "--budget",
+        "100",
+        "--population",
+        "50",
+    ]
     argv += ["--threshold", "tau_thick=0", "--threshold", "tau_width=0"]
     argv += ["--threshold", "tau_reach=inf"]  # a 100-sample
     # search rarely holds the handle only

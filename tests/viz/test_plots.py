@@ -65,10 +65,12 @@ def test_summarize_streams_batches_and_scores_tasks():
         }
     )
     batches = [table.slice(0, 17), table.slice(17)]
-    s = summarize(lambda cols: (b.select(cols) for b in batches), table.schema, [get_task("pick")])
+    s = summarize(
+        lambda cols: (b.select(cols) for b in batches), table.schema, [get_task("pick-paper")]
+    )
     assert s.rows == 40
     assert s.status == {"a": {"grasped": 25, "missed": 5}, "b": {"missed": 10}}
-    pick = s.affordances["pick"]
+    pick = s.affordances["pick-paper"]
     assert pick["a"].n == 30 and pick["a"].neg_inf == 5 and pick["b"].finite == 10
     assert pick["a"].counts.sum() == 25
     assert pick["a"].hi == pytest.approx(-np.min(sum(eff.values())[:30]))
@@ -77,7 +79,7 @@ def test_summarize_streams_batches_and_scores_tasks():
 def test_plots_command_writes_three_pngs(tmp_path, capsys, box_object):
     data = write_dataset(tmp_path / "data", [box_object], rows_per_object=9)
     out = tmp_path / "plots"
-    rc = main(["plots", str(data), "--task", "beat,pick", "-o", str(out), "--json"])
+    rc = main(["plots", str(data), "--task", "beat-rules,pick-paper", "-o", str(out), "--json"])
     captured = capsys.readouterr()
     assert rc == 0, captured.err
     doc = json.loads(captured.out)
@@ -88,5 +90,5 @@ def test_plots_command_writes_three_pngs(tmp_path, capsys, box_object):
         assert (image < 200).any(axis=2).mean() > 0.01  # axes, bars and text were drawn
     assert doc["rows"] == 9
     assert doc["status"] == {"bar.stl": {"grasped": 6, "touched": 3}}
-    assert doc["tasks"]["pick"]["bar.stl"] == {"rows": 9, "accepted": 6}
+    assert doc["tasks"]["pick-paper"]["bar.stl"] == {"rows": 9, "accepted": 6}
     assert doc["metrics"]["impact_effort"]["pos_inf"] == 3

@@ -37,7 +37,7 @@ def test_show_writes_grid_page_and_best_rows(tmp_path, capsys, dataset, block_ob
             "show",
             str(dataset),
             "--task",
-            "beat,pick",
+            "beat-rules,pick-paper",
             "--top",
             "2",
             "--cell",
@@ -52,7 +52,7 @@ def test_show_writes_grid_page_and_best_rows(tmp_path, capsys, dataset, block_ob
     doc = json.loads(stdout)
     assert doc["files"]["grid"] == str(out / "best_grasps.png")
     assert doc["files"]["html"] == str(out / "best_grasps.html")
-    assert doc["tasks"] == ["beat", "pick"]
+    assert doc["tasks"] == ["beat-rules", "pick-paper"]
     assert len(doc["best"]) == 2 * 2 * 2  # objects x tasks x top
     # The best pick is the row with the least total hold effort, found independently.
     shards = [str(p) for p in sorted(dataset.glob("*.parquet"))]
@@ -64,11 +64,15 @@ def test_show_writes_grid_page_and_best_rows(tmp_path, capsys, dataset, block_ob
         ]
         best = rows[int(np.argmin(effort))]
         got = [
-            b for b in doc["best"] if b["object"] == name and b["task"] == "pick" and b["rank"] == 1
+            b
+            for b in doc["best"]
+            if b["object"] == name and b["task"] == "pick-paper" and b["rank"] == 1
         ]
         assert got[0]["sample"] == best["sample"]
         assert got[0]["score"] == pytest.approx(-min(effort))
-        ranks = [b["score"] for b in doc["best"] if b["object"] == name and b["task"] == "pick"]
+        ranks = [
+            b["score"] for b in doc["best"] if b["object"] == name and b["task"] == "pick-paper"
+        ]
         assert ranks == sorted(ranks, reverse=True)
     # Grid: one row per (object, task), one column per rank.
     image = Image.open(out / "best_grasps.png")

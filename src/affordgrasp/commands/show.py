@@ -284,7 +284,7 @@ def with_best_pairs(obj, table, tasks, thresholds, args, out=None):
             extra.append(found.drop_columns(["value"]))
     if not extra:
         return table
-    rows = pa.concat_tables(extra).cast(table.schema)
+    rows = pa.concat_tables(extra).select(table.schema.names).cast(table.schema)
     start = table.num_rows
     number = pa.array(range(start, start + rows.num_rows), pa.int64())
     rows = rows.set_column(rows.schema.get_field_index("sample"), "sample", number)

@@ -5,7 +5,7 @@ the hold test (copied from the grasp scene, :func:`~.task_scene.load_state`; the
 still). The protocols, with their numbers (:class:`~.settings.TrialSettings`),
 are the cards of :func:`protocol_cards`; docs/physics.md gives the reasons.
 
-**beat** (version 1). The arm swings the hand about the wrist point w (the row's
+**beat** (version 2). The arm swings the hand about the wrist point w (the row's
 ``wrist_point``, the palm centre), about the axis through it that drives U straight onto the
 nail: a = (U - w) × n, so U moves along its outward normal n (the face leads) as far as its
 lever allows (its speed along n is ω |(U - w) × n|: a point near the hand strikes slowly).
@@ -68,7 +68,7 @@ __all__ = [
     "trial_columns",
 ]
 
-BEAT_VERSION = 1
+BEAT_VERSION = 2  # 2: the nail resists with 150 N (1: 300 N)
 CUT_VERSION = 1
 PICK_VERSION = 1
 _HOLD_ARMATURE = 1e6  # kg, kg·m²: the palm held still (its dofs' inertia dwarfs the hand's)

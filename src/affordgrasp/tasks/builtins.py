@@ -8,7 +8,7 @@ import numpy as np
 
 from ..columns import HOLD_EFFORT_COLUMNS
 from . import thresholds
-from .probability import MODEL_COLUMNS, task_probability
+from .probability import MODEL_COLUMNS, PICK_COLUMNS, task_probability
 from .task import Task, make_task
 
 # A probability task's value: (1 - 10⁻⁶) p_T + 10⁻⁶ × the paper's value squashed into (0, 1), so
@@ -167,7 +167,7 @@ def builtin_tasks() -> list[Task]:
             _probability_task("pick", lambda m: -m["hold_effort_sum"]),
             description="picking: p_pick, the probability that the grasp holds the object "
             "against its weight in every direction (physics trial), ties by the paper's -ΣE_h",
-            requires=MODEL_COLUMNS,
+            requires=PICK_COLUMNS,
             probability=True,
         ),
         make_task(

@@ -1,4 +1,4 @@
-"""Task probabilities p_T: calibrated models of the task trials' success (SPEC §2.11).
+"""Task probabilities p_T: calibrated models of the task trials' success (docs/physics.md).
 
 A model maps a row's metric columns (Φ, the task's geometry columns and, in its robust
 variant, the ``robust_*`` columns) to the probability that the grasp succeeds in the task's
@@ -22,12 +22,19 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from ..columns import HOLD_DIRS, HOLD_EFFORT_SUM, METRIC_COLUMNS, PROBABILITY_COLUMNS
+from ..columns import (
+    HOLD_DIRS,
+    HOLD_EFFORT_SUM,
+    METRIC_COLUMNS,
+    PROBABILITY_COLUMNS,
+    USE_METRICS,
+)
 from ..errors import TaskError
 
 __all__ = [
     "MODEL_COLUMNS",
     "MODEL_FORMAT",
+    "PICK_COLUMNS",
     "ROBUST_COLUMNS",
     "probability_columns",
     "TaskModel",
@@ -36,12 +43,19 @@ __all__ = [
 ]
 
 MODEL_FORMAT = "affordgrasp-task-probability"
-# The columns every model reads: Φ and the use geometry (not the on-request GWS volume, not
-# the text reason); a model finds what matters to its task. A robust model reads ROBUST too.
-MODEL_COLUMNS = tuple(c for c in METRIC_COLUMNS if c not in ("gws_volume", "epsilon_reason")) + (
+# The columns every model reads: Φ and the use geometry; a model finds what matters to its
+# task. Not the on-request GWS volume, not the text reason, and not the inertia I, the one
+# metric in units of mass: it differs 2,500-fold between the paper's unit density and a
+# tool's materials (the efforts are per unit weight), so a model that read it would not carry
+# from the objects it was fitted on (materials) to a mesh file at any uniform density.
+# A robust model reads ROBUST_COLUMNS too.
+_NOT_READ = ("gws_volume", "epsilon_reason", "inertia")
+MODEL_COLUMNS = tuple(c for c in METRIC_COLUMNS if c not in _NOT_READ) + (
     HOLD_EFFORT_SUM,
     HOLD_DIRS,
 )
+# A pick does not use a use point: its model reads the grasp's columns only.
+PICK_COLUMNS = tuple(c for c in MODEL_COLUMNS if c not in USE_METRICS)
 ROBUST_COLUMNS = ("robust_fc", "robust_epsilon", "robust_hold_dirs", "robust_hold")
 PROBABILITY_TASKS = tuple(c.removeprefix("p_") for c in PROBABILITY_COLUMNS)
 _USE_TASKS = ("beat", "cut")  # no use point, no strike or stroke: p is 0
@@ -134,7 +148,17 @@ class TaskModel:
     card: Mapping[str, Any] = field(default_factory=dict)
 
     def features(self, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
-        """(n, f) float64: the model's columns of ``metrics``, transformed."""
+        """The model's columns of ``metrics``, transformed.
+
+        Parameters
+        ----------
+        metrics : mapping of str to (n,) array
+            Metric columns (a MetricColumns derives ΣE_h and hold_dirs).
+
+        Returns
+        -------
+        (n, f) float64 ndarray
+        """
         missing = [c for c in self.columns if c not in metrics]
         if missing:
             raise TaskError(
@@ -150,7 +174,17 @@ class TaskModel:
         )
 
     def raw_score(self, x: np.ndarray) -> np.ndarray:
-        """(n,) float64: the uncalibrated score of feature rows ``x`` (n, f)."""
+        """The uncalibrated score of feature rows.
+
+        Parameters
+        ----------
+        x : (n, f) float64 ndarray
+            Rows of :meth:`features`.
+
+        Returns
+        -------
+        (n,) float64 ndarray
+        """
         a = self.arrays
         if self.kind == "linear":
             # a missing value reads 0, as in the fit (a linear score has no missing branch)
@@ -169,11 +203,27 @@ class TaskModel:
         )
 
     def predict(self, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
-        """(n,) float64 in [0, 1]: P(task trial succeeds) of each row of ``metrics``."""
+        """P(the task trial succeeds) of each row.
+
+        Parameters
+        ----------
+        metrics : mapping of str to (n,) array
+            The rows' metric columns.
+
+        Returns
+        -------
+        (n,) float64 ndarray in [0, 1]
+        """
         return np.interp(self.raw_score(self.features(metrics)), self.knots_x, self.knots_y)
 
     def to_dict(self) -> dict[str, Any]:
-        """The model as JSON-ready data (the package-data file's content)."""
+        """The model as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The package-data file's content.
+        """
         return {
             "format": MODEL_FORMAT,
             "version": 1,
@@ -191,7 +241,22 @@ class TaskModel:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> TaskModel:
-        """Read a model written by :meth:`to_dict` (a bad file raises TaskError)."""
+        """Read a model written by :meth:`to_dict`.
+
+        Parameters
+        ----------
+        data : mapping
+            The file's content.
+
+        Returns
+        -------
+        TaskModel
+
+        Raises
+        ------
+        TaskError
+            Not a task probability model.
+        """
         if data.get("format") != MODEL_FORMAT:
             raise TaskError(f"not a task probability model (format {data.get('format')!r})")
         ints = {"feature", "left", "right", "roots"}
@@ -220,6 +285,17 @@ def _model_file(task: str, robust: bool) -> str:
 @cache
 def task_model(task: str, robust: bool = False) -> TaskModel:
     """The shipped model of ``task`` (``beat``, ``cut`` or ``pick``), plain or robust.
+
+    Parameters
+    ----------
+    task : str
+        ``beat``, ``cut`` or ``pick``.
+    robust : bool
+        The model that reads the robust columns too.
+
+    Returns
+    -------
+    TaskModel
 
     Raises
     ------
