@@ -26,6 +26,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from affordgrasp.errors import MeshError
 from affordgrasp.pipeline import evaluate_inputs
 
 SERVES = {
@@ -170,7 +171,11 @@ def main() -> None:
         if path.exists():
             continue
         t0 = time.process_time()
-        table = search_rows(spec, args) if args.from_search else object_rows(spec, args)
+        try:
+            table = search_rows(spec, args) if args.from_search else object_rows(spec, args)
+        except MeshError as exc:  # a variant that cannot be built is skipped, and said
+            print(f"{spec}: skipped ({exc})", flush=True)
+            continue
         tmp = path.with_suffix(".tmp")
         pq.write_table(table, tmp)
         tmp.replace(path)

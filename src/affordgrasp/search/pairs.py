@@ -50,6 +50,7 @@ from ..metrics.transmission import use_force, use_force_kernel
 from ..objects import GraspObject, load_object
 from ..pipeline import evaluate_inputs, evaluate_samples
 from ..tasks import MetricColumns, get_task
+from ..tasks.probability import task_probability
 from .cem import cem_search, plan_runs
 from .guidance import USE_ONLY, guidance, pair_geometry, swing_alignment, threshold_guidance
 from .ranking import TopRows, top_indices
@@ -71,6 +72,9 @@ _SCREEN_IMPACT = 0.0
 # screen is its most favourable value; the best use point of a grasp is among them unless
 # the LPs reorder more than _SCREEN_TOP of its use points)
 _SCREEN_TOP = 8
+# a probability task that reads the use point scores the pairs of this many grasps per call:
+# those most likely to hold the tool (p_pick)
+_PAIR_GRASPS = 512
 # pairs screened at a time (bounds the memory of a search over G × U)
 _BLOCK_PAIRS = 1 << 20
 
@@ -227,6 +231,12 @@ def pair_scores(
         )
     if "contact_width" not in col:
         col["contact_width"] = contact_width(obj.mesh_data, all_points, all_normals, all_offsets)
+    if t.probability and USE_COLUMNS & set(t.requires) and len(with_contacts) > _PAIR_GRASPS:
+        # a grasp that does not hold the tool strikes or cuts with nothing: the pairs of the
+        # _PAIR_GRASPS grasps most likely to hold it (p_pick), in their original order
+        p_pick = task_probability("pick", MetricColumns({c: col[c] for c in GRASP_COLUMNS}))
+        best = np.argsort(-p_pick[with_contacts], kind="stable")[:_PAIR_GRASPS]
+        with_contacts = np.sort(with_contacts[best])
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []
     for first in range(0, len(with_contacts), step):
