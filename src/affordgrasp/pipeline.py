@@ -196,7 +196,8 @@ def _evaluate_batch(
     if extra is not None and settings is not None:
         table = append_float_columns(table, robust_fields(settings.tasks), extra)
     if phi is not None:
-        probabilities = probability_columns(MetricColumns(table))
+        # from the arrays themselves (a table's columns would import pandas to convert)
+        probabilities = probability_columns(MetricColumns({**phi, **(extra or {})}))
         table = append_float_columns(table, PROBABILITY_FIELDS, probabilities)
     timings = {"simulate": t1 - t0, "metrics": t2 - t1, "table": time.perf_counter() - t3}
     if extra is not None:

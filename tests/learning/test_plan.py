@@ -18,7 +18,7 @@ def test_plan_chooses_by_the_rule_and_reports_the_truth(box_mesh):
     from affordgrasp.learning.decisions import decision_threshold
     from affordgrasp.learning.io import read_config
 
-    p = ag.plan(str(box_mesh), "pick", candidates=6, seed=3, models="default")
+    p = ag.plan(str(box_mesh), "pick-paper", candidates=6, seed=3, models="default")
     assert isinstance(p, ag.Plan)
     assert p.chosen == p.order[0] and sorted(p.order.tolist()) == list(range(6))
     # the order is the rule's on the predictions, at the shipped classifier's stored threshold
@@ -39,7 +39,7 @@ def test_plan_chooses_by_the_rule_and_reports_the_truth(box_mesh):
     assert doc["chosen"]["index"] == p.chosen and doc["candidates"] == 6
     json.dumps(doc)  # JSON-ready
     # same seed, same candidates and choice
-    q = ag.plan(str(box_mesh), "pick", candidates=6, seed=3, models="default")
+    q = ag.plan(str(box_mesh), "pick-paper", candidates=6, seed=3, models="default")
     assert q.chosen == p.chosen and np.array_equal(q.p0, p.p0)
 
 

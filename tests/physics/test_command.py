@@ -123,7 +123,7 @@ def test_physics_robust_computes_the_columns_a_robust_dataset_holds(tiny_dataset
     assert json.loads(stdout)["summary"]["robust"] == {"copies": 2, "source": "dataset"}
     computed, read = pq.read_table(tmp_path / "computed"), pq.read_table(tmp_path / "read")
     names = [c for c in read.column_names if c.startswith("robust_")]
-    assert {"robust_hold", "robust_fc", "robust_pick"} <= set(names)
+    assert {"robust_hold", "robust_fc", "robust_pick-paper"} <= set(names)
     for c in names:
         a = np.asarray(computed.column(c).to_pylist(), dtype=float)
         b = np.asarray(read.column(c).to_pylist(), dtype=float)

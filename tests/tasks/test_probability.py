@@ -75,6 +75,7 @@ def _rows(n: int = 300, seed: int = 0) -> dict:
     cols["epsilon"] = cols["epsilon_hand"] = rng.uniform(0.0, 0.1, n)
     cols["use_wedge_angle"] = rng.uniform(0.3, 3.1, n)
     cols["hold_dirs"] = rng.integers(0, 7, n).astype(float)
+    cols["inertia"] = rng.uniform(1e-4, 1e-2, n)  # read by the tie-break of beat only
     return cols
 
 

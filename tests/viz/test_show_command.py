@@ -158,7 +158,7 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
             "show",
             box_object.source,
             "--task",
-            "pick",
+            "pick-paper",
             "--top",
             "3",
             "--samples",
@@ -175,7 +175,9 @@ def test_an_object_source_is_evaluated_then_shown(tmp_path, capsys, monkeypatch,
     assert calls == [("bar.stl", 6, 4, 0, "barrett")]
     doc = json.loads(stdout)
     assert [b["rank"] for b in doc["best"]] == [1, 2, 3]
-    assert doc["rankings"] == [{"object": "bar.stl", "task": "pick", "scored": 6, "accepted": 4}]
+    assert doc["rankings"] == [
+        {"object": "bar.stl", "task": "pick-paper", "scored": 6, "accepted": 4}
+    ]
 
 
 def test_show_falls_back_when_its_brute_force_finds_no_pair(monkeypatch):
