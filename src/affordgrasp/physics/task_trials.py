@@ -20,7 +20,8 @@ less elsewhere, little near the hand. The nail resists with a constant force. Me
 strike: where the first contact with the rig landed (tool or hand, object frame), how far
 the nail went, the impulse on the tool, and the tool's motion in the hand during the blow.
 The swing from ``fine_s`` before the touch runs at ``strike_timestep``, the rest at the
-physics settings' step.
+physics settings' step. Once the nail is driven home (its head on the board) no blow
+follows: the trial is judged on the blows struck.
 
 **cut** (version 1). A workpiece (a slab) is laid against the edge at U (its face square to
 the edge's outward direction, from the geometry in a ``edge_radius_m`` ball: the bisector
@@ -68,7 +69,7 @@ __all__ = [
     "trial_columns",
 ]
 
-BEAT_VERSION = 2  # 2: the nail resists with 150 N (1: 300 N)
+BEAT_VERSION = 2  # 2: the nail resists with 150 N, no blow after it is driven home (1: 300 N)
 CUT_VERSION = 1
 PICK_VERSION = 1
 _HOLD_ARMATURE = 1e6  # kg, kg·m²: the palm held still (its dofs' inertia dwarfs the hand's)
@@ -511,6 +512,8 @@ def strike(
             if first is not None:
                 now_turn, now_slip = in_hand.motion()
                 turn, slip = turn + now_turn, slip + now_slip
+            if d.qpos[ts.nail_qpos] >= t.nail_out_m - t.nail_head_height_m:
+                break  # driven home: the head is on the board, the next blow meets the board
     finally:
         m.opt.timestep = coarse
         _hold_palm(ts, True)
