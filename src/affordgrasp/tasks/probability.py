@@ -30,6 +30,7 @@ from ..columns import (
     USE_METRICS,
 )
 from ..errors import TaskError
+from ..runtime.kernel_cache import install_package_stamp
 
 __all__ = [
     "MODEL_COLUMNS",
@@ -61,6 +62,9 @@ PROBABILITY_TASKS = tuple(c.removeprefix("p_") for c in PROBABILITY_COLUMNS)
 _USE_TASKS = ("beat", "cut")  # no use point, no strike or stroke: p is 0
 _BIG = 1e30  # ±inf (an infeasible effort) as a finite number the trees can split on
 _TRANSFORMS = ("raw", "inv1p")
+
+
+install_package_stamp()  # the cache of _forest is valid by content, shippable in a wheel
 
 
 @njit(cache=True)
