@@ -37,6 +37,7 @@ SERVES = {
     "dagger": ("cut",),
     "sword": ("cut",),
 }
+STATE = ("use_point", "use_normal", "wrist_point", "hand_pose", "joints", "p0", "use_dir")
 HILT = {"handle", "guard", "pommel"}
 WORKING = ["striking_face", "poll", "cutting_edge"]
 FAMILIES = (
@@ -101,12 +102,7 @@ def object_rows(spec: str, args) -> pa.Table:
     ).table
     trials = (*tasks, "pick")
     out = validate_rows(table, "barrett", {obj.name: obj}, PhysicsSettings(), trials=trials)
-    state = [
-        c
-        for c in ("use_point", "use_normal", "wrist_point", "hand_pose", "joints", "p0", "use_dir")
-        if c in table.column_names
-    ]
-    for c in state:  # keep the state: a later protocol can be run on the same rows
+    for c in STATE:  # keep the state: a later protocol can be run on the same rows
         if c not in out.column_names:
             out = out.append_column(c, table.column(c))
     return out.append_column("family", pa.array([family] * out.num_rows))
@@ -134,10 +130,33 @@ def search_rows(spec: str, args) -> pa.Table:
     robust = RobustSettings(copies=args.robust) if args.robust else None
     table = evaluate_inputs(obj, p0, d, seed=args.seed, robust=robust).table
     out = validate_rows(table, "barrett", {obj.name: obj}, PhysicsSettings(), trials=(task, "pick"))
-    for c in ("use_point", "use_normal", "wrist_point", "hand_pose", "joints", "p0", "use_dir"):
+    for c in STATE:
         if c not in out.column_names:
             out = out.append_column(c, table.column(c))
     return out.append_column("family", pa.array([family] * out.num_rows))
+
+
+def other_rows(table: pa.Table, args) -> pa.Table:
+    """Up to ``--other-trials`` of an object's rows tried in the trials of the tasks its
+    family does not serve (a hammer's cut, a blade's beat, both on the other families):
+    the negatives, and the surprises, that a model fitted on a task's own tools never sees."""
+    import affordgrasp as ag
+    from affordgrasp.physics.run import validate_rows
+    from affordgrasp.physics.settings import PhysicsSettings
+
+    family = table.column("family")[0].as_py()
+    trials = tuple(t for t in ("beat", "cut") if t not in SERVES.get(family, ()))
+    spec = table.column("object")[0].as_py()
+    rng = np.random.default_rng(zlib.crc32(f"other {spec}".encode()))
+    rows = table.take(np.sort(rng.permutation(table.num_rows)[: args.other_trials]))
+    obj = ag.load_object(spec, materials=True)
+    base = rows.select(rows.column_names[: rows.column_names.index("contacts")] + list(STATE))
+    out = validate_rows(
+        base, "barrett", {obj.name: obj}, PhysicsSettings(), trials=(*trials, "pick")
+    )
+    for c in (*STATE, "family"):
+        out = out.append_column(c, rows.column(c))
+    return out
 
 
 def main() -> None:
@@ -156,6 +175,14 @@ def main() -> None:
         action="store_true",
         help="the top --grasps grasps of the pair search ranked by the shipped models "
         "(--samples grasps × 1000 use points) instead of sampled pairs",
+    )
+    p.add_argument(
+        "--other-trials",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also try N of each object's rows in the trials of the tasks its family does "
+        "not serve, written to OUT/other/",
     )
     args = p.parse_args()
     out = Path(args.out)
@@ -176,6 +203,11 @@ def main() -> None:
         except MeshError as exc:  # a variant that cannot be built is skipped, and said
             print(f"{spec}: skipped ({exc})", flush=True)
             continue
+        if args.other_trials and not args.from_search:
+            other = out / "other" / path.name
+            other.parent.mkdir(exist_ok=True)
+            pq.write_table(other_rows(table, args), other.with_suffix(".tmp"))
+            other.with_suffix(".tmp").replace(other)
         tmp = path.with_suffix(".tmp")
         pq.write_table(table, tmp)
         tmp.replace(path)
