@@ -123,3 +123,25 @@ def test_evaluate_shows_the_probability_and_says_when_none_is_likely(capsys):
     assert main(["evaluate", "hammer", "--samples", "30", "--task", "beat"]) == 0
     text = capsys.readouterr().out
     assert (best["value"] >= 0.5) or "no grasp reaches p_beat ≥ 0.5" in text
+
+
+def test_the_screen_keeps_each_grasps_most_promising_use_points():
+    from affordgrasp.search.pairs import _top_per_grasp
+
+    values = np.array([0.1, 0.9, 0.5, np.nan, 0.3, 0.2, 0.8, 0.7])  # two grasps × four uses
+    keep = _top_per_grasp(values, 4, 2)
+    assert keep.tolist() == [False, True, True, False, False, False, True, True]
+    assert _top_per_grasp(values, 4, 8).all()  # fewer uses than k: all kept
+
+
+def test_a_probability_search_is_never_empty_and_scores_its_rows_as_the_task_does():
+    from affordgrasp.search.pairs import PairSearchSettings, best_pairs
+
+    settings = PairSearchSettings("cut", grasps=120, uses=60, top=3, per_grasp=True, seed=1)
+    found = best_pairs("knife", settings)
+    assert found.table.num_rows == 3
+    value = found.table.column("value").to_numpy()
+    assert np.all((value >= 0) & (value <= 1)) and np.all(np.diff(value) <= 1e-12)
+    again = get_task("cut").evaluate(found.table)
+    np.testing.assert_allclose(again, value, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(found.table.column("p_cut").to_numpy(), value, atol=1e-6)
