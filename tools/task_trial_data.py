@@ -54,11 +54,31 @@ def seeds_of(text: str) -> list[int]:
     return out
 
 
-def object_rows(spec: str, args) -> pa.Table:
-    import affordgrasp as ag
+def tried(obj, family: str, p0, use_dir, trials, args) -> pa.Table:
+    """The pairs (p0, d) evaluated with the robust columns and tried in ``trials`` (and pick),
+    with their state (a later protocol can be run on the same rows) and their family."""
     from affordgrasp.physics.run import validate_rows
     from affordgrasp.physics.settings import PhysicsSettings
     from affordgrasp.robust import RobustSettings
+
+    robust = RobustSettings(copies=args.robust) if args.robust else None
+    table = evaluate_inputs(
+        obj,
+        np.asarray(p0, dtype=float),
+        np.asarray(use_dir, dtype=float),
+        seed=args.seed,
+        robust=robust,
+    ).table
+    settings = PhysicsSettings()
+    out = validate_rows(table, "barrett", {obj.name: obj}, settings, trials=(*trials, "pick"))
+    for c in STATE:
+        if c not in out.column_names:
+            out = out.append_column(c, table.column(c))
+    return out.append_column("family", pa.array([family] * out.num_rows))
+
+
+def object_rows(spec: str, args) -> pa.Table:
+    import affordgrasp as ag
     from affordgrasp.search.use_points import UsePoints, passing_use_points
 
     family = spec.split(":")[0].split("~")[0]
@@ -96,16 +116,7 @@ def object_rows(spec: str, args) -> pa.Table:
                 pairs_d.append(src[rng.integers(len(src))])
     if not tasks:
         pairs_p0, pairs_d = list(p0), list(uniform.use_dir[: len(keep)])
-    robust = RobustSettings(copies=args.robust) if args.robust else None
-    table = evaluate_inputs(
-        obj, np.array(pairs_p0), np.array(pairs_d), seed=args.seed, robust=robust
-    ).table
-    trials = (*tasks, "pick")
-    out = validate_rows(table, "barrett", {obj.name: obj}, PhysicsSettings(), trials=trials)
-    for c in STATE:  # keep the state: a later protocol can be run on the same rows
-        if c not in out.column_names:
-            out = out.append_column(c, table.column(c))
-    return out.append_column("family", pa.array([family] * out.num_rows))
+    return tried(obj, family, pairs_p0, pairs_d, tasks, args)
 
 
 def search_rows(spec: str, args) -> pa.Table:
@@ -113,9 +124,6 @@ def search_rows(spec: str, args) -> pa.Table:
     task probabilities rank them), tried: the rows a search proposes, where a model fitted
     on sampled rows alone is most often wrong (it is maximised over them)."""
     import affordgrasp as ag
-    from affordgrasp.physics.run import validate_rows
-    from affordgrasp.physics.settings import PhysicsSettings
-    from affordgrasp.robust import RobustSettings
     from affordgrasp.search.pairs import PairSearchSettings, best_pairs
 
     family = spec.split(":")[0].split("~")[0]
@@ -124,16 +132,9 @@ def search_rows(spec: str, args) -> pa.Table:
     settings = PairSearchSettings(
         task, grasps=args.samples, uses=1000, top=args.grasps, per_grasp=True, seed=args.seed
     )
-    found = best_pairs(obj, settings).table.drop_columns(["value"])
-    p0 = np.asarray(found.column("p0").to_pylist(), dtype=float)
-    d = np.asarray(found.column("use_dir").to_pylist(), dtype=float)
-    robust = RobustSettings(copies=args.robust) if args.robust else None
-    table = evaluate_inputs(obj, p0, d, seed=args.seed, robust=robust).table
-    out = validate_rows(table, "barrett", {obj.name: obj}, PhysicsSettings(), trials=(task, "pick"))
-    for c in STATE:
-        if c not in out.column_names:
-            out = out.append_column(c, table.column(c))
-    return out.append_column("family", pa.array([family] * out.num_rows))
+    found = best_pairs(obj, settings).table
+    p0, d = found.column("p0").to_pylist(), found.column("use_dir").to_pylist()
+    return tried(obj, family, p0, d, (task,), args)
 
 
 def other_rows(table: pa.Table, args) -> pa.Table:
@@ -141,22 +142,14 @@ def other_rows(table: pa.Table, args) -> pa.Table:
     family does not serve (a hammer's cut, a blade's beat, both on the other families):
     the negatives, and the surprises, that a model fitted on a task's own tools never sees."""
     import affordgrasp as ag
-    from affordgrasp.physics.run import validate_rows
-    from affordgrasp.physics.settings import PhysicsSettings
 
     family = table.column("family")[0].as_py()
     trials = tuple(t for t in ("beat", "cut") if t not in SERVES.get(family, ()))
     spec = table.column("object")[0].as_py()
     rng = np.random.default_rng(zlib.crc32(f"other {spec}".encode()))
     rows = table.take(np.sort(rng.permutation(table.num_rows)[: args.other_trials]))
-    obj = ag.load_object(spec, materials=True)
-    base = rows.select(rows.column_names[: rows.column_names.index("contacts")] + list(STATE))
-    out = validate_rows(
-        base, "barrett", {obj.name: obj}, PhysicsSettings(), trials=(*trials, "pick")
-    )
-    for c in (*STATE, "family"):
-        out = out.append_column(c, rows.column(c))
-    return out
+    p0, d = rows.column("p0").to_pylist(), rows.column("use_dir").to_pylist()
+    return tried(ag.load_object(spec, materials=True), family, p0, d, trials, args)
 
 
 def main() -> None:

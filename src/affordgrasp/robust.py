@@ -161,6 +161,20 @@ class RobustSettings:
             raise InputError(f"robust seed must be an integer >= 0, got {self.seed!r}")
         object.__setattr__(self, "tasks", tuple(str(t) for t in self.tasks))
 
+    def scores(self, task) -> bool:
+        """Whether robust evaluation gives ``task`` a robust score: its copies summarise
+        the task (``tasks``), or the task is a probability with a robust model of its own.
+
+        Parameters
+        ----------
+        task : Task
+
+        Returns
+        -------
+        bool
+        """
+        return task.probability or task.name in self.tasks
+
     @property
     def enabled(self) -> bool:
         """True when K > 0.
@@ -379,7 +393,7 @@ def ranking_column(task: str) -> str:
     Returns
     -------
     str
-        ``robust_hold`` for pick (graded hold), else ``robust_<task>``.
+        ``robust_hold`` for pick-paper (graded hold), else ``robust_<task>``.
     """
     return "robust_hold" if task == "pick-paper" else f"robust_{task}"
 
@@ -795,8 +809,8 @@ def task_scores(
     """
     from .tasks import get_task
 
-    if robust and not (get_task(task) if isinstance(task, str) else task).probability:
-        return ranking_values(columns, task if isinstance(task, str) else task.name)
-    # a task probability reads the robust columns itself (its robust model) when present
     task = get_task(task) if isinstance(task, str) else task
+    # a task probability reads the robust columns itself (its robust model) when present
+    if robust and not task.probability:
+        return ranking_values(columns, task.name)
     return np.asarray(task.evaluate(columns, mode, **dict(thresholds or {})), dtype=np.float64)

@@ -134,13 +134,11 @@ def run(args, out) -> None:
         load_task_file(args.tasks_file)
     robust = robust_option(args)
     names = task_names(args.task) or [
-        t
-        for t in list_tasks()
-        if t != "viable" and (robust is None or t in robust.tasks or get_task(t).probability)
+        t for t in list_tasks() if t != "viable" and (robust is None or robust.scores(get_task(t)))
     ]
     for name in names:
         get_task(name).thresholds_for(args.mode)  # unknown task or mode: fail before the work
-        if robust is not None and name not in robust.tasks and not get_task(name).probability:
+        if robust is not None and not robust.scores(get_task(name)):
             raise InputError(
                 f"task {name!r} has no robust score; --robust ranks the built-in tasks "
                 f"({', '.join(robust.tasks)}): drop --robust or choose among them"

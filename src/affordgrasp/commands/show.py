@@ -493,11 +493,7 @@ def run(args, out) -> None:
     )
     by_task = {t.name: t for t in tasks}
     for r in rankings:
-        best = max(
-            (b["score"] for b in result.best if b["object"] == r.object and b["task"] == r.task),
-            default=None,
-        )
-        note = probability_note(by_task[r.task], best, r.object)
+        note = probability_note(by_task[r.task], r.best[0].score if r.best else None, r.object)
         if note:
             out.text(note)
     empty = [r for r in rankings if not r.best]

@@ -133,18 +133,14 @@ def _is_metric(table: pa.Table, name: str) -> bool:
 
 
 def _outcomes(table: pa.Table) -> dict[str, np.ndarray]:
-    def opt_bool(name):
-        values = table.column(name).to_pylist()
-        return np.array([math.nan if v is None else float(v) for v in values])
-
     def col(name):
         return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=np.float64)
 
     return {
-        "hold_ok": opt_bool("hold_ok"),
-        "settled": opt_bool("settled"),
-        "impact_ok": opt_bool("impact_ok"),
-        "press_held": opt_bool("press_held"),
+        "hold_ok": _trial_outcome(table, "hold_ok"),
+        "settled": _trial_outcome(table, "settled"),
+        "impact_ok": _trial_outcome(table, "impact_ok"),
+        "press_held": _trial_outcome(table, "press_held"),
         "hold_directions_ok": col("hold_directions_ok"),
         "impact_steadiness": -col("impact_angle_rad"),
         "press_force_n": col("press_force_n"),
@@ -279,6 +275,7 @@ def physics_report(
 
 
 def _trial_outcome(table: pa.Table, name: str) -> np.ndarray:
+    """A nullable boolean outcome column as 1.0 / 0.0, NaN where null (not tried)."""
     return np.array([math.nan if v is None else float(v) for v in table.column(name).to_pylist()])
 
 

@@ -365,7 +365,7 @@ def optimize(
     resolved = load_object(obj)
     hand_model = get_hand(hand)
     settings = robust_settings(robust)
-    if settings is not None and task_obj.name not in settings.tasks and not task_obj.probability:
+    if settings is not None and not settings.scores(task_obj):
         raise bad_parameter(
             "robust",
             f"has no score for task {task_obj.name!r}; robust tasks: {', '.join(settings.tasks)}",

@@ -24,10 +24,7 @@ def _squash(x: np.ndarray) -> np.ndarray:
 
 def _probability_task(task: str, tie):
     def func(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
-        p = task_probability(task, m)
-        if task != "pick":  # no use point, nothing to strike or cut with
-            p = np.where(np.isnan(m["use_depth"]), 0.0, p)
-        return (1.0 - _TIE) * p + _TIE * _squash(tie(m))
+        return (1.0 - _TIE) * task_probability(task, m) + _TIE * _squash(tie(m))
 
     func.__name__ = f"p_{task}"
     return func

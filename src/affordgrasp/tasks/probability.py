@@ -329,15 +329,18 @@ def task_probability(task: str, metrics: Mapping[str, np.ndarray]) -> np.ndarray
     Returns
     -------
     (n,) float64 ndarray in [0, 1]
+        0 for beat and cut where the row has no use point (nothing to strike or cut with).
     """
     plain = task_model(task, False)
     try:
         robust = task_model(task, True)
     except TaskError:
-        return plain.predict(metrics)
-    if all(c in metrics for c in robust.columns):
-        return robust.predict(metrics)
-    return plain.predict(metrics)
+        robust = None
+    use = robust if robust is not None and all(c in metrics for c in robust.columns) else plain
+    p = use.predict(metrics)
+    if task in _USE_TASKS:
+        p = np.where(np.isnan(np.asarray(metrics["use_depth"], dtype=np.float64)), 0.0, p)
+    return p
 
 
 def probability_columns(metrics: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -354,10 +357,7 @@ def probability_columns(metrics: Mapping[str, np.ndarray]) -> dict[str, np.ndarr
         In [0, 1]; ``p_beat`` and ``p_cut`` are 0 where the row has no use point (its use
         ray missed the object: nothing to strike or cut with).
     """
-    out = {}
-    for task, name in zip(PROBABILITY_TASKS, PROBABILITY_COLUMNS, strict=True):
-        p = task_probability(task, metrics)
-        if task in _USE_TASKS:
-            p = np.where(np.isnan(np.asarray(metrics["use_depth"], dtype=np.float64)), 0.0, p)
-        out[name] = p
-    return out
+    return {
+        name: task_probability(task, metrics)
+        for task, name in zip(PROBABILITY_TASKS, PROBABILITY_COLUMNS, strict=True)
+    }
