@@ -324,7 +324,30 @@ def surface_use_directions(
     a, b = np.where(flip, 1 - a, a), np.where(flip, 1 - b, b)
     T = tri[face]
     P = T[:, 0] + a[:, None] * (T[:, 1] - T[:, 0]) + b[:, None] * (T[:, 2] - T[:, 0])
-    d = P - np.asarray(center, dtype=np.float64).reshape(3)
+    return directions_towards(center, P)
+
+
+def directions_towards(center, points) -> np.ndarray:
+    """The use directions d whose use rays from ``center`` pass through ``points``.
+
+    DM(d, O) is then the point or the surface's last hit farther along the same line (the
+    inverse of :func:`spherical_direction`).
+
+    Parameters
+    ----------
+    center : (3,) array_like of float
+        Centre of mass, m.
+    points : (n, 3) array_like of float
+        m.
+
+    Returns
+    -------
+    (n, 2) float64 ndarray
+        Use directions in [-1, 1]^2.
+    """
+    d = np.asarray(points, dtype=np.float64).reshape(-1, 3) - np.asarray(
+        center, dtype=np.float64
+    ).reshape(3)
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
     return np.stack([np.arctan2(d[:, 1], d[:, 0]) / np.pi, np.clip(d[:, 2], -1, 1)], axis=1)
 

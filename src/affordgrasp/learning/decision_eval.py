@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .decisions import decision_measures, decision_order, oracle_order, random_measures
+from .decisions import (
+    decision_measures,
+    decision_order,
+    oracle_good,
+    oracle_order,
+    random_measures,
+    task_feasible,
+)
 from .evaluation import average_precision, comparison_accuracy, gms_distribution
 
 MEASURES = ("top1_viable", "top1_feasible", "top1_percentile", "topk_precision")
@@ -256,14 +263,18 @@ def evaluate_decisions(
             s, v = true_score[i], viable[i]
             rv = None if robust is None else robust[i]
             order = _draw_order(classifier, regressor, prob, pred, i, threshold)
-            rows["model"].append(decision_measures(order, s, v, robust_viable=rv))
+            f = task_feasible(task_obj, s)
+            rows["model"].append(decision_measures(order, s, v, robust_viable=rv, feasible=f))
             if first_choice is None:
                 first_choice = int(used[i[order[0]]])
-            rows["random"].append(random_measures(s, v, robust_viable=rv))
-            rows["oracle"].append(decision_measures(oracle_order(s, v), s, v, robust_viable=rv))
+            rows["random"].append(random_measures(s, v, robust_viable=rv, feasible=f))
+            best = oracle_order(s, oracle_good(task_obj, s, v))
+            rows["oracle"].append(decision_measures(best, s, v, robust_viable=rv, feasible=f))
             if base:
                 border = _draw_order(*base, bprob, bpred, i, None)
-                rows["baseline"].append(decision_measures(border, s, v, robust_viable=rv))
+                rows["baseline"].append(
+                    decision_measures(border, s, v, robust_viable=rv, feasible=f)
+                )
         entry = {"rows": n, "draws": len(sets), "candidates": min(n, candidates)}
         for key, rs in rows.items():
             entry[key] = _mean(rs)

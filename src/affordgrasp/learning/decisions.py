@@ -127,6 +127,7 @@ def decision_measures(
     k: int = 5,
     robust_viable: np.ndarray | None = None,
     among: int | None = None,
+    feasible: np.ndarray | None = None,
 ) -> dict:
     """How good a ranking's choices truly are.
 
@@ -146,6 +147,8 @@ def decision_measures(
     among : int, optional
         Place the chosen grasp among the first ``among`` candidates' true scores only
         (``plan``'s drawn candidates, before the refined ones); None: among all.
+    feasible : (n,) array_like of bool, optional
+        Which candidates are task-feasible (:func:`task_feasible`); None: a finite score.
 
     Returns
     -------
@@ -164,7 +167,7 @@ def decision_measures(
     out = {
         "chosen": c,
         "top1_viable": float(ok[c]),
-        "top1_feasible": float(np.isfinite(s[c])),
+        "top1_feasible": float(_feasible(s, feasible)[c]),
         "top1_percentile": float(percentile_among(s[[c]], s[:among])[0]),
         "top1_score": float(s[c]),
         "topk_precision": float(ok[order[:k]].mean()),
@@ -174,21 +177,71 @@ def decision_measures(
     return out
 
 
-def oracle_order(true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:
-    """The candidates by their true score (best first), viable ones first among ties.
+def oracle_order(true_score: np.ndarray, good: np.ndarray) -> np.ndarray:
+    """The best a decider could do: the good candidates first, each group by its true score.
 
     Parameters
     ----------
+    true_score : (n,) array_like of float
+    good : (n,) array_like of bool
+        What a choice must be (:func:`oracle_good`: viable for a task without a use point,
+        task-feasible for one with).
+
+    Returns
+    -------
+    (n,) int64 ndarray
+        Best first; ties keep the candidates' order.
+    """
+    s = np.asarray(true_score, dtype=np.float64).ravel()
+    s = np.where(np.isnan(s), -np.inf, s)
+    return np.lexsort((-s, ~np.asarray(good, dtype=bool).ravel()))
+
+
+# a task probability's decision is task-feasible when its success is at least as likely as not
+PROBABLE = 0.5
+
+
+def task_feasible(task, true_score: np.ndarray) -> np.ndarray:
+    """Which candidates can serve a task: p_T >= :data:`PROBABLE` for a task probability, a
+    finite score for a task of tests.
+
+    Parameters
+    ----------
+    task : Task
+    true_score : (n,) array_like of float
+        The task's values.
+
+    Returns
+    -------
+    (n,) bool ndarray
+    """
+    s = np.nan_to_num(np.asarray(true_score, dtype=np.float64).ravel(), nan=-np.inf)
+    return s >= PROBABLE if task.probability else np.isfinite(s)
+
+
+def oracle_good(task, true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:
+    """What the oracle's choice must be: viable for a task that reads no use point (pick),
+    task-feasible (:func:`task_feasible`) for one that does.
+
+    Parameters
+    ----------
+    task : Task
     true_score : (n,) array_like of float
     viable : (n,) array_like of bool
 
     Returns
     -------
-    (n,) int64 ndarray
+    (n,) bool ndarray
     """
-    s = np.asarray(true_score, dtype=np.float64).ravel()
-    s = np.where(np.isnan(s), -np.inf, s)
-    return np.lexsort((~np.asarray(viable, dtype=bool).ravel(), -s))
+    from ..columns import USE_METRICS
+
+    if set(USE_METRICS) & set(task.requires):
+        return task_feasible(task, true_score)
+    return np.asarray(viable, dtype=bool).ravel()
+
+
+def _feasible(score: np.ndarray, feasible: np.ndarray | None) -> np.ndarray:
+    return np.isfinite(score) if feasible is None else np.asarray(feasible, dtype=bool).ravel()
 
 
 def margin_order(viable: np.ndarray, score: np.ndarray, epsilon: np.ndarray) -> np.ndarray:
@@ -260,7 +313,11 @@ def robust_first(
 
 
 def random_measures(
-    true_score: np.ndarray, viable: np.ndarray, *, robust_viable: np.ndarray | None = None
+    true_score: np.ndarray,
+    viable: np.ndarray,
+    *,
+    robust_viable: np.ndarray | None = None,
+    feasible: np.ndarray | None = None,
 ) -> dict:
     """The expected measures of a uniformly random choice (exact, no draws).
 
@@ -269,6 +326,8 @@ def random_measures(
     true_score : (n,) array_like of float
     viable : (n,) array_like of bool
     robust_viable : (n,) array_like of float, optional
+        As for :func:`decision_measures`.
+    feasible : (n,) array_like of bool, optional
         As for :func:`decision_measures`.
 
     Returns
@@ -282,7 +341,7 @@ def random_measures(
     ok = np.asarray(viable, dtype=bool).ravel()
     out = {
         "top1_viable": float(ok.mean()),
-        "top1_feasible": float(np.isfinite(s).mean()),
+        "top1_feasible": float(_feasible(s, feasible).mean()),
         "top1_percentile": float(true_percentiles(s).mean()),
         "topk_precision": float(ok.mean()),
     }

@@ -53,14 +53,17 @@ from ..grasp.pregrasp import (
     PLAN_ROBUST_CHECK,
 )
 from ..robust import RobustSettings
+from ..vision.camera import POSE_ERROR_DEG, POSE_ERROR_M
 from .decisions import (
     decision_measures,
     decision_order,
     decision_threshold,
     margin_order,
+    oracle_good,
     oracle_order,
     random_measures,
     robust_first,
+    task_feasible,
 )
 
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
@@ -77,9 +80,23 @@ SENSOR_UNKNOWN_PX = 6
 SENSOR_VOTES = 3
 # The perturbations of plan's robust check (grasp.pregrasp.PLAN_ROBUST_CHECK): half the
 # robust labels' hand-pose and centre-of-mass scales, K = 12 (docs/learning.md).
+# A predictor's perturbed copies draw from a stream of their own: the robust labels' copies
+# (seed 0) are not the predictor's, or the labels would judge draws they share.
+PERTURBATION_SEED = 0x51DE
 ROBUST_CHECK_SETTINGS = RobustSettings(
-    copies=12, translation_m=0.0025, rotation_rad=math.radians(1.5), com_m=0.00125, tasks=()
+    copies=12,
+    translation_m=0.0025,
+    rotation_rad=math.radians(1.5),
+    com_m=0.00125,
+    tasks=(),
+    seed=PERTURBATION_SEED,
 )
+# A task probability's robust check: its robust model reads copies at the robust labels'
+# scales (the ones it was fitted on), 12 of them
+TASK_CHECK_SETTINGS = RobustSettings(copies=12, tasks=(), seed=PERTURBATION_SEED)
+# A task that reads the use point pairs every candidate's grasp with this many use points
+# drawn by area on the fused surface and keeps its best (search.pairs)
+PLAN_USES = 1000
 # The robust check ranks the candidates it re-simulates by this quantile of their copies'
 # ε (the ε three copies in four reach): on validation objects it chose a viable grasp more
 # often than the share of copies viable or the median (docs/learning.md).
@@ -151,6 +168,21 @@ class Plan:
     drawn : int or None
         How many of the candidates were drawn (the first ones); the rest were drawn near
         the best of them (``refine``). None: all were drawn.
+    feasible : (n,) bool ndarray or None
+        Simulated task feasibility of every candidate
+        (:func:`~affordgrasp.learning.decisions.task_feasible`); None: a finite score.
+    use_point : (n, 3) float64 ndarray or None
+        With ``models="views"`` and a task that reads the use point: each candidate's use
+        point on the fused surface (the best of the use points paired with its grasp
+        there); the true check uses the true surface's point on the same line from the true
+        centre of mass. Else None.
+    fused_robust_score : (n,) float64 ndarray or None
+        With a task probability that reads the use point and ``robust_check``: the task's
+        robust probability on the fused surface of the candidates re-simulated (NaN for the
+        others); else None.
+    pose_error : tuple of float or None
+        The pose estimate's error the views were aimed with (m, degrees); None: aimed from
+        the true object.
     """
 
     object: str
@@ -176,6 +208,10 @@ class Plan:
     fused_robust_viable: np.ndarray | None = None
     fused_robust_epsilon: np.ndarray | None = None
     drawn: int | None = None
+    feasible: np.ndarray | None = None
+    use_point: np.ndarray | None = None
+    fused_robust_score: np.ndarray | None = None
+    pose_error: tuple[float, float] | None = None
 
     def summary(self) -> dict:
         """The plan as JSON-ready data (without the per-candidate arrays).
@@ -219,17 +255,42 @@ class Plan:
                     or not np.isfinite(self.fused_robust_epsilon[c])
                     else float(self.fused_robust_epsilon[c])
                 ),
+                "fused_robust_score": (
+                    None
+                    if self.fused_robust_score is None
+                    or not np.isfinite(self.fused_robust_score[c])
+                    else float(self.fused_robust_score[c])
+                ),
+                "fused_use_point": (None if self.use_point is None else self.use_point[c].tolist()),
                 "true_score": float(self.true_score[c]),
                 "viable": bool(self.viable[c]),
-                "feasible": bool(np.isfinite(self.true_score[c])),
+                "feasible": bool(self._feasible()[c]),
                 "percentile": self.percentile,
+                **self._parts(c),
             },
+            "pose_error": None if self.pose_error is None else list(self.pose_error),
             "candidates_viable": int(self.viable.sum()),
-            "candidates_feasible": int(np.isfinite(self.true_score).sum()),
+            "candidates_feasible": int(self._feasible().sum()),
             "measures": self.measures,
             "physics": self.physics,
             "timings": dict(self.timings),
         }
+
+    def _feasible(self) -> np.ndarray:
+        if self.feasible is None:
+            return np.isfinite(self.true_score)
+        return self.feasible
+
+    def _parts(self, c: int) -> dict:
+        # where the chosen grasp truly touches and uses the object (labelled objects only)
+        out = {}
+        names = self.table.column_names
+        for column in ("use_part", "contact_parts"):
+            if column in names:
+                out[column] = self.table.column(column)[c].as_py()
+        if "use_point" in names:
+            out["use_point"] = self.table.column("use_point")[c].as_py()
+        return out
 
 
 def split_models(models: Sequence[tuple[Any, dict]]):
@@ -336,6 +397,8 @@ def plan(
     offset_range: float = OFFSET_RANGE,
     robust_check: int = PLAN_ROBUST_CHECK,
     refine: int = PLAN_REFINE,
+    pose_error: tuple[float, float] | None = (POSE_ERROR_M, POSE_ERROR_DEG),
+    uses: int = PLAN_USES,
     progress: Callable[[str], Any] | None = None,
 ) -> Plan:
     """Choose a grasp of an object from camera-in-hand views, and check the choice.
@@ -397,6 +460,18 @@ def plan(
         every coordinate of p0, the use direction kept), simulated there and ranked with
         the others before the robust check; they are appended to the candidates
         (``Plan.drawn`` says where). 0: none. Default ``grasp.pregrasp.PLAN_REFINE``.
+    pose_error : (float, float) or None
+        The error of the robot's estimate of the object's pose, (metres, degrees): the
+        views are aimed from the object moved by that much (a translation of that length
+        and a rotation of that angle about the box centre, in directions drawn from
+        ``seed``, :func:`affordgrasp.vision.camera.pose_error_transform`). Default 1 cm
+        and 5°; None or (0, 0): aimed from the true object. With ``models="views"`` the
+        candidates are placed on the fused surface's hull either way, and nothing of the
+        decision reads the object but through the images; learned models' candidates are
+        placed from the believed object.
+    uses : int
+        With ``models="views"`` and a task that reads the use point: use points drawn on the
+        fused surface and paired with every grasp (default :data:`PLAN_USES`).
     progress : callable, optional
         Called with the name of each step as it starts.
 
@@ -415,14 +490,11 @@ def plan(
     included (its percentile, the oracle); the random choice's expectation is over the
     drawn candidates alone, the uniform draw a planner without a decider would choose from.
     """
-    from ..grasp.policy import simulate
-    from ..grasp.pregrasp import sample_inputs
+    from ..grasp.pregrasp import directions_towards, sample_inputs, use_points
     from ..objects import load_object
     from ..pipeline import evaluate_inputs
-    from ..robust import copy_metrics
-    from ..search.cem import nearby_inputs
     from ..tasks import get_task, is_viable
-    from ..tasks.metric_columns import MetricColumns
+    from ..vision.camera import camera_poses, pose_error_transform
     from ..vision.depth import depth_to_mm, renderer_for
     from .data import Samples
 
@@ -444,6 +516,9 @@ def plan(
         raise InputError(f"robust_check must be an integer >= 0, got {robust_check}")
     if isinstance(refine, bool) or not isinstance(refine, int | np.integer) or refine < 0:
         raise InputError(f"refine must be an integer >= 0, got {refine!r}")
+    if isinstance(uses, bool) or not isinstance(uses, int | np.integer) or uses < 1:
+        raise InputError(f"uses must be an integer >= 1, got {uses!r}")
+    pose_error = _pose_error(pose_error)
     task_obj = get_task(task)
     task_obj.thresholds_for(mode)  # an unknown mode fails before any work
     step = progress or (lambda name: None)
@@ -466,8 +541,17 @@ def plan(
     step("render")
     t0 = time.perf_counter()
     renderer = renderer_for(obj)
+    # The views are aimed from where the robot believes the object is: the true object
+    # moved by the pose error (its images are still of the true object)
+    error = (
+        None
+        if pose_error is None
+        else pose_error_transform(renderer.frame.centre, *pose_error, seed)
+    )
+    aim = renderer.frame if error is None else renderer.frame.moved(error)
     k = min(n, FUSED_VIEWS) if views else n  # the views fusion reads: the first ones only
-    depth = renderer.render(p0[:k])
+    poses = camera_poses(aim, p0[:k])
+    depth = renderer.render_poses(poses)
     if sensor is not None:
         from ..vision.sensor import apply_sensor
 
@@ -475,78 +559,35 @@ def plan(
     depth_mm = depth_to_mm(depth)
     timings["render"] = time.perf_counter() - t0
 
-    probability = predicted = fused_score = fused_viable = fused_epsilon = None
-    fused_robust_viable = fused_robust_epsilon = None
+    probability = predicted = None
+    fused = None
     if views:
         step("fuse")
         t0 = time.perf_counter()
         fused = fuse_candidate_views(
-            depth_mm, renderer.poses(p0[:k]), renderer.camera, obj.name, sensed=sensor is not None
+            depth_mm, poses, renderer.camera, obj.name, sensed=sensor is not None
         )
         timings["fuse"] = time.perf_counter() - t0
         step("predict")
         t0 = time.perf_counter()
-
-        def on_fused(q0, q_dir):
-            # the task score, viability and ε of pregrasps simulated on the fused surface
-            t = evaluate_inputs(
-                fused, q0, q_dir, hand=hand, seed=seed, volume=False, frame=obj
-            ).table
-            eps = t.column("epsilon").to_numpy(zero_copy_only=False)
-            return task_obj.evaluate(t, mode), is_viable(t), eps
-
-        fused_score, fused_viable, fused_epsilon = on_fused(p0, use_dir)
-        order = margin_order(fused_viable, fused_score, fused_epsilon)
-        rule = (
-            f"on the surface fused from {k} view{'' if k == 1 else 's'}: viable, then "
-            f"{task_obj.name}-feasible, "
-            "then the widest epsilon"
+        decided = decide_on_fused(
+            fused,
+            task_obj,
+            p0,
+            use_dir,
+            mode=mode,
+            hand=hand,
+            seed=seed,
+            refine=refine,
+            robust_check=robust_check,
+            uses=uses,
+            views=k,
         )
-        r = min(int(refine), n)
-        if r > 0:
-            # the pregrasp moves, the use direction stays
-            drawn_near = nearby_inputs(
-                np.concatenate([p0[order[:r]], use_dir[order[:r]]], axis=1),
-                np.r_[np.full(6, PLAN_REFINE_SIGMA), 0.0, 0.0],
-                PLAN_REFINE_NEIGHBOURS,
-                np.random.default_rng(np.random.SeedSequence([int(seed), REFINE_STREAM])),
-            )
-            near_p0, near_dir = (
-                drawn_near[:, :6],
-                use_dir[np.repeat(order[:r], PLAN_REFINE_NEIGHBOURS)],
-            )
-            near_score, near_viable, near_epsilon = on_fused(near_p0, near_dir)
-            p0 = np.concatenate([p0, near_p0])
-            use_dir = np.concatenate([use_dir, near_dir])
-            fused_score = np.concatenate([fused_score, near_score])
-            fused_viable = np.concatenate([fused_viable, near_viable])
-            fused_epsilon = np.concatenate([fused_epsilon, near_epsilon])
-            order = margin_order(fused_viable, fused_score, fused_epsilon)
-            rule += (
-                f"; {PLAN_REFINE_NEIGHBOURS} candidates drawn near each of the first {r} "
-                "and ranked with them"
-            )
-        m = min(int(robust_check), len(p0))
-        if m > 0:
-            top = order[:m]
-            settings = ROBUST_CHECK_SETTINGS
-            batch = simulate(fused, p0[top], use_dir[top], hand=hand, frame=obj)
-            cols = MetricColumns(copy_metrics(fused, batch, settings, hand=hand, frame=obj))
-            copies_eps = np.nan_to_num(
-                np.asarray(cols["epsilon"], dtype=np.float64).reshape(m, settings.copies)
-            )
-            copies_viable = np.asarray(is_viable(cols), dtype=bool).reshape(m, settings.copies)
-            fused_robust_viable = np.full(len(p0), np.nan)
-            fused_robust_viable[top] = copies_viable.mean(axis=1)
-            fused_robust_epsilon = np.full(len(p0), np.nan)
-            fused_robust_epsilon[top] = np.quantile(copies_eps, ROBUST_CHECK_QUANTILE, axis=1)
-            order = robust_first(order, fused_viable, fused_robust_epsilon[top], m)
-            rule += (
-                f"; of the first {m}, the widest epsilon that three in four of "
-                f"{settings.copies} perturbations there reach"
-            )
+        p0, use_dir, order, rule = decided.p0, decided.use_dir, decided.order, decided.rule
         timings["predict"] = time.perf_counter() - t0
+        frame = fused  # the candidates were placed on the fused surface
     else:
+        decided = None
         step("predict")
         t0 = time.perf_counter()
         names = np.full(n, obj.name, dtype=object)
@@ -558,27 +599,38 @@ def plan(
         )
         timings["predict"] = time.perf_counter() - t0
         rule = rule_of(classifier, regressor, threshold)
+        frame = None if error is None else _believed_object(obj, error)
 
     step("simulate")
     t0 = time.perf_counter()
-    table = evaluate_inputs(obj, p0, use_dir, hand=hand, seed=seed, volume=False).table
+    true_dir = use_dir
+    fused_point = None
+    if decided is not None and decided.pairs:
+        # the robot uses the point it chose on the fused surface: on the true object, the
+        # use point on the same line from the true centre of mass
+        fused_point, _, hit = use_points(fused.mesh, fused.mass.center_of_mass, use_dir)
+        true_dir = use_dir.copy()
+        true_dir[hit >= 0] = directions_towards(obj.mass.center_of_mass, fused_point[hit >= 0])
+    table = evaluate_inputs(obj, p0, true_dir, hand=hand, seed=seed, volume=False, frame=frame)
+    table = table.table
     true_score = task_obj.evaluate(table, mode)
     viable = is_viable(table)
+    feasible = task_feasible(task_obj, true_score)
     timings["simulate"] = time.perf_counter() - t0
 
     # percentiles and the random choice among the drawn candidates (all, without refining)
-    best = oracle_order(true_score, viable)
+    best = oracle_order(true_score, oracle_good(task_obj, true_score, viable))
     measures = {
-        "model": decision_measures(order, true_score, viable, among=n),
-        "random": random_measures(true_score[:n], viable[:n]),
-        "oracle": decision_measures(best, true_score, viable, among=n),
+        "model": decision_measures(order, true_score, viable, among=n, feasible=feasible),
+        "random": random_measures(true_score[:n], viable[:n], feasible=feasible[:n]),
+        "oracle": decision_measures(best, true_score, viable, among=n, feasible=feasible),
     }
     chosen = int(order[0])
     outcome = None
     if physics:
         step("physics")
         t0 = time.perf_counter()
-        outcome = replay(obj, hand, table.slice(chosen, 1))
+        outcome = replay(obj, hand, table.slice(chosen, 1), trials=trial_names(task_obj.name))
         timings["physics"] = time.perf_counter() - t0
     return Plan(
         object=obj.name,
@@ -598,12 +650,264 @@ def plan(
         physics=outcome,
         timings=timings,
         offset_range=offset_range,
-        fused_score=fused_score,
-        fused_viable=fused_viable,
-        fused_epsilon=fused_epsilon,
-        fused_robust_viable=fused_robust_viable,
-        fused_robust_epsilon=fused_robust_epsilon,
+        fused_score=None if decided is None else decided.score,
+        fused_viable=None if decided is None else decided.viable,
+        fused_epsilon=None if decided is None else decided.epsilon,
+        fused_robust_viable=None if decided is None else decided.robust_viable,
+        fused_robust_epsilon=None if decided is None else decided.robust_epsilon,
         drawn=n if len(p0) > n else None,
+        feasible=feasible,
+        use_point=fused_point,
+        fused_robust_score=None if decided is None else decided.robust_score,
+        pose_error=pose_error,
+    )
+
+
+def _pose_error(value) -> tuple[float, float] | None:
+    """``plan``'s pose error as (m, degrees), or None for none."""
+    if value is None:
+        return None
+    try:
+        m, deg = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise InputError(f"pose_error must be (metres, degrees) or None, got {value!r}") from None
+    if not (math.isfinite(m) and math.isfinite(deg)) or m < 0 or deg < 0:
+        raise InputError(f"pose_error must be a distance >= 0 and an angle >= 0, got {value!r}")
+    return None if m == 0 and deg == 0 else (m, deg)
+
+
+def _believed_object(obj, error: np.ndarray):
+    """The object where the robot believes it is (it places a learned model's candidates)."""
+    from ..objects import object_from_mesh
+
+    mesh = obj.mesh.copy()
+    mesh.apply_transform(error)
+    return object_from_mesh(mesh, f"{obj.name} (believed)", simplify_above=None)
+
+
+def trial_names(task: str) -> tuple[str, ...]:
+    """The task trials that judge a task's decision in physics (beside the hold test).
+
+    Parameters
+    ----------
+    task : str
+        A task's name (``beat``, ``beat-rules``, ``cut-ug``, ...).
+
+    Returns
+    -------
+    tuple of str
+        ``("beat",)`` or ``("cut",)`` for the tasks of a hammer or a knife, else ``()``.
+    """
+    base = task.split("-")[0]
+    return (base,) if base in ("beat", "cut") else ()
+
+
+@dataclass(frozen=True)
+class FusedDecision:
+    """``plan``'s decision on a fused surface (:func:`decide_on_fused`).
+
+    Attributes
+    ----------
+    p0 : (n, 6) float64 ndarray
+        The candidates, refined ones appended.
+    use_dir : (n, 2) float64 ndarray
+        Their use directions (with ``pairs``: each grasp's best use point on the surface).
+    order : (n,) int64 ndarray
+        Best first.
+    rule : str
+        The decision rule in words.
+    score, viable, epsilon : (n,) ndarray
+        The task's value, viability and ε simulated on the fused surface.
+    robust_viable, robust_epsilon, robust_score : (n,) float64 ndarray or None
+        The robust check's share of copies viable, ε quantile and (task probabilities) the
+        robust probability, NaN for the candidates not checked; None without a check.
+    pairs : bool
+        Whether the grasps were paired with use points on the surface.
+    """
+
+    p0: np.ndarray
+    use_dir: np.ndarray
+    order: np.ndarray
+    rule: str
+    score: np.ndarray
+    viable: np.ndarray
+    epsilon: np.ndarray
+    robust_viable: np.ndarray | None
+    robust_epsilon: np.ndarray | None
+    robust_score: np.ndarray | None
+    pairs: bool
+
+
+def decide_on_fused(
+    fused,
+    task,
+    p0: np.ndarray,
+    use_dir: np.ndarray,
+    *,
+    mode: str = "default",
+    hand="barrett",
+    seed: int = 0,
+    refine: int = PLAN_REFINE,
+    robust_check: int = PLAN_ROBUST_CHECK,
+    uses: int = PLAN_USES,
+    views: int = FUSED_VIEWS,
+) -> FusedDecision:
+    """Rank candidates on a surface fused from views: what ``plan`` decides with.
+
+    It reads the fused surface and the candidates, never the object: the candidates are
+    placed on the surface's own hull. For a task that reads the use point, every grasp is
+    paired with ``uses`` use points drawn by area on the surface and takes its best one
+    (:func:`affordgrasp.search.pairs.pair_scores`); a task probability then ranks by its
+    value (ε breaks ties), a task of tests by :func:`margin_order`. The first ``refine``
+    get neighbours; the first ``robust_check`` are simulated again under perturbations.
+
+    Parameters
+    ----------
+    fused : GraspObject
+        The fused surface.
+    task : Task
+    p0 : (n, 6) float ndarray
+    use_dir : (n, 2) float ndarray
+    mode : str
+    hand : Hand or str
+    seed : int
+        The plan's seed (the refined candidates' and the use points' draws).
+    refine, robust_check, uses : int
+        As for :func:`plan`.
+    views : int
+        Views fused (for the rule's words).
+
+    Returns
+    -------
+    FusedDecision
+    """
+    from ..columns import USE_METRICS
+    from ..grasp.policy import simulate
+    from ..pipeline import evaluate_inputs
+    from ..robust import copy_metrics
+    from ..search.cem import nearby_inputs
+    from ..search.pairs import best_use_per_grasp, pair_scores
+    from ..search.use_points import draw_use_points
+    from ..tasks import is_viable
+    from ..tasks.metric_columns import MetricColumns
+
+    pairs = bool(set(USE_METRICS) & set(task.requires))
+    by_value = pairs and task.probability
+    points = None
+    if pairs:
+        points, _ = draw_use_points(fused, task, int(uses), seed + 1, mode, {}, None, False)
+
+    def on_fused(q0, q_dir):
+        # the task's value, viability and ε of pregrasps simulated on the fused surface,
+        # each grasp with its best use point there
+        t = evaluate_inputs(fused, q0, q_dir, hand=hand, seed=seed, volume=False, frame=fused)
+        t = t.table
+        eps = t.column("epsilon").to_numpy(zero_copy_only=False)
+        score = task.evaluate(t, mode)
+        if pairs:
+            best, best_use = best_use_per_grasp(
+                pair_scores(fused, t, points, task.name, mode), len(q0)
+            )
+            has = best_use >= 0
+            q_dir = q_dir.copy()
+            q_dir[has] = points.use_dir[best_use[has]]
+            score = np.where(has, best, score)
+        return score, is_viable(t), eps, q_dir
+
+    def ranked(viable, score, eps):
+        if by_value:  # the most probable first, the widest ε among ties
+            e = np.nan_to_num(np.asarray(eps, dtype=np.float64), nan=0.0)
+            return np.lexsort((-e, -np.nan_to_num(score, nan=-np.inf)))
+        return margin_order(viable, score, eps)
+
+    score, viable, epsilon, use_dir = on_fused(p0, use_dir)
+    order = ranked(viable, score, epsilon)
+    plural = "" if views == 1 else "s"
+    if by_value:
+        rule = (
+            f"on the surface fused from {views} view{plural}, each grasp with its best of "
+            f"{len(points.triangle)} use points there: the highest {task.name} probability"
+        )
+    else:
+        rule = (
+            f"on the surface fused from {views} view{plural}"
+            + (f", each grasp with its best of {len(points.triangle)} use points" if pairs else "")
+            + f": viable, then {task.name}-feasible, then the widest epsilon"
+        )
+    n = len(p0)
+    r = min(int(refine), n)
+    if r > 0:
+        # the pregrasp moves, the use direction stays
+        drawn_near = nearby_inputs(
+            np.concatenate([p0[order[:r]], use_dir[order[:r]]], axis=1),
+            np.r_[np.full(6, PLAN_REFINE_SIGMA), 0.0, 0.0],
+            PLAN_REFINE_NEIGHBOURS,
+            np.random.default_rng(np.random.SeedSequence([int(seed), REFINE_STREAM])),
+        )
+        near_p0 = drawn_near[:, :6]
+        near_dir = use_dir[np.repeat(order[:r], PLAN_REFINE_NEIGHBOURS)]
+        near_score, near_viable, near_epsilon, near_dir = on_fused(near_p0, near_dir)
+        p0 = np.concatenate([p0, near_p0])
+        use_dir = np.concatenate([use_dir, near_dir])
+        score = np.concatenate([score, near_score])
+        viable = np.concatenate([viable, near_viable])
+        epsilon = np.concatenate([epsilon, near_epsilon])
+        order = ranked(viable, score, epsilon)
+        rule += (
+            f"; {PLAN_REFINE_NEIGHBOURS} candidates drawn near each of the first {r} "
+            "and ranked with them"
+        )
+    robust_viable = robust_epsilon = robust_score = None
+    m = min(int(robust_check), len(p0))
+    if m > 0 and by_value:
+        top = order[:m]
+        t = evaluate_inputs(
+            fused,
+            p0[top],
+            use_dir[top],
+            hand=hand,
+            seed=seed,
+            volume=False,
+            robust=TASK_CHECK_SETTINGS,
+            frame=fused,
+        ).table
+        robust_score = np.full(len(p0), np.nan)
+        robust_score[top] = task.evaluate(t, mode)  # the task's robust model
+        order = robust_first(order, viable, robust_score[top], m)
+        rule += (
+            f"; of the first {m}, the highest robust {task.name} probability over "
+            f"{TASK_CHECK_SETTINGS.copies} perturbations there"
+        )
+    elif m > 0:
+        top = order[:m]
+        settings = ROBUST_CHECK_SETTINGS
+        batch = simulate(fused, p0[top], use_dir[top], hand=hand, frame=fused)
+        cols = MetricColumns(copy_metrics(fused, batch, settings, hand=hand, frame=fused))
+        copies_eps = np.nan_to_num(
+            np.asarray(cols["epsilon"], dtype=np.float64).reshape(m, settings.copies)
+        )
+        copies_viable = np.asarray(is_viable(cols), dtype=bool).reshape(m, settings.copies)
+        robust_viable = np.full(len(p0), np.nan)
+        robust_viable[top] = copies_viable.mean(axis=1)
+        robust_epsilon = np.full(len(p0), np.nan)
+        robust_epsilon[top] = np.quantile(copies_eps, ROBUST_CHECK_QUANTILE, axis=1)
+        order = robust_first(order, viable, robust_epsilon[top], m)
+        rule += (
+            f"; of the first {m}, the widest epsilon that three in four of "
+            f"{settings.copies} perturbations there reach"
+        )
+    return FusedDecision(
+        p0,
+        use_dir,
+        order,
+        rule,
+        score,
+        viable,
+        epsilon,
+        robust_viable,
+        robust_epsilon,
+        robust_score,
+        pairs,
     )
 
 
@@ -693,7 +997,7 @@ def load_models(models) -> list[tuple[Any, dict]]:
     return loaded
 
 
-def replay(obj, hand, row: pa.Table) -> dict:
+def replay(obj, hand, row: pa.Table, trials: Sequence[str] = ()) -> dict:
     """The physics replay of one simulated grasp (the physics extra).
 
     Parameters
@@ -703,6 +1007,10 @@ def replay(obj, hand, row: pa.Table) -> dict:
     row : pyarrow.Table
         One row of an evaluation table (its ``hand_pose``, ``joints``, ``use_point`` and
         ``use_normal``).
+    trials : sequence of str
+        Task trials to run as well (``"beat"``, ``"cut"``;
+        :mod:`affordgrasp.physics.task_trials`): their ``beat_ok`` / ``cut_ok`` and
+        measured quantities join the outcome.
 
     Returns
     -------
@@ -717,6 +1025,12 @@ def replay(obj, hand, row: pa.Table) -> dict:
     joints = row.column("joints")[0].as_py()
     if pose is None or joints is None:
         return {"hold_ok": False, "settled": False, "status": "no grasp to replay"}
+    if trials:
+        from ..physics.run import validate_rows
+        from ..physics.settings import PhysicsSettings
+
+        out = validate_rows(row, hand, {obj.name: obj}, PhysicsSettings(), trials=tuple(trials))
+        return {k: v[0] for k, v in out.to_pydict().items()}
     up = row.column("use_point")[0].as_py()
     un = row.column("use_normal")[0].as_py()
     scene = build_scene(hand, obj)

@@ -37,7 +37,7 @@ import numpy as np
 from ..columns import HOLD_EFFORT_COLUMNS
 from ..errors import InputError
 from ..runtime.writing import atomic_write
-from .plan import FUSED_VIEWS, OFFSET_RANGE, fuse_candidate_views
+from .plan import FUSED_VIEWS, OFFSET_RANGE, PERTURBATION_SEED, fuse_candidate_views
 from .plan import VIEWS as ARCH
 from .targets import Target, make_target
 
@@ -111,8 +111,8 @@ def read_views_config(path: str | os.PathLike | None = None) -> dict:
             f"{config['format_version']}; this affordgrasp reads up to {FORMAT_VERSION}: "
             "upgrade affordgrasp"
         )
-    for key, least in (("views", 1), ("copies", 1), ("seed", 0)):
-        value = config.get(key)
+    for key, least in (("views", 1), ("copies", 1), ("seed", 0), ("perturbation_seed", 0)):
+        value = config.get(key, 0 if key == "perturbation_seed" else None)
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise InputError(f"{str(path)!r}: {key!r} must be an integer >= {least}, got {value!r}")
     calibration = config.get("calibration") or {}
@@ -179,6 +179,24 @@ def views_candidates(views: int, seed: int = 0) -> np.ndarray:
     return p0
 
 
+def perturbation_seed(config: dict) -> int:
+    """The seed of a views model's perturbed copies (its card's ``perturbation_seed``).
+
+    Parameters
+    ----------
+    config : dict
+        A views model file's contents.
+
+    Returns
+    -------
+    int
+        :data:`~affordgrasp.learning.plan.PERTURBATION_SEED` for files written before the
+        card stated it (they drew the labels' own perturbations, seed 0, which a prediction
+        must not share).
+    """
+    return int(config.get("perturbation_seed", PERTURBATION_SEED))
+
+
 def fused_surface(obj, *, views: int, seed: int = 0):
     """The surface ``plan`` (seed ``seed``) fuses from an object's first ``views`` views.
 
@@ -201,7 +219,9 @@ def fused_surface(obj, *, views: int, seed: int = 0):
     )
 
 
-def simulate_on_fused(surface, obj, hand, p0, use_dir, copies: int) -> np.ndarray:
+def simulate_on_fused(
+    surface, obj, hand, p0, use_dir, copies: int, perturbation_seed: int = PERTURBATION_SEED
+) -> np.ndarray:
     """Rows simulated on a fused surface from the poses they have on the object.
 
     Parameters
@@ -215,6 +235,10 @@ def simulate_on_fused(surface, obj, hand, p0, use_dir, copies: int) -> np.ndarra
     use_dir : (n, 2) float ndarray
     copies : int
         K perturbed copies per row.
+    perturbation_seed : int
+        Seed of their perturbations (:class:`affordgrasp.robust.RobustSettings`); default
+        :data:`~affordgrasp.learning.plan.PERTURBATION_SEED`, a stream of its own: the
+        robust labels' copies (seed 0) are not the predictor's.
 
     Returns
     -------
@@ -223,8 +247,10 @@ def simulate_on_fused(surface, obj, hand, p0, use_dir, copies: int) -> np.ndarra
     """
     from ..columns import hold_effort_sum
     from ..pipeline import evaluate_inputs
+    from ..robust import RobustSettings
 
-    table = evaluate_inputs(surface, p0, use_dir, hand=hand, robust=copies, frame=obj).table
+    settings = RobustSettings(copies=int(copies), seed=int(perturbation_seed))
+    table = evaluate_inputs(surface, p0, use_dir, hand=hand, robust=settings, frame=obj).table
     cols = [
         np.nan_to_num(table.column(c).to_numpy(zero_copy_only=False).astype(np.float64))
         for c in ("robust_viable", "epsilon", "robust_hold")
@@ -247,7 +273,9 @@ def _object_rows(directory: str, name: str, config: dict, p0, use_dir) -> tuple:
     dataset = Dataset.open(directory)
     obj = dataset.object(name)
     surface = fused_surface(obj, views=int(config["views"]), seed=int(config["seed"]))
-    rows = simulate_on_fused(surface, obj, dataset.hand, p0, use_dir, int(config["copies"]))
+    rows = simulate_on_fused(
+        surface, obj, dataset.hand, p0, use_dir, int(config["copies"]), perturbation_seed(config)
+    )
     return rows, time.process_time() - t0
 
 
@@ -297,7 +325,13 @@ class FusedViews:
                 obj, views=int(self.config["views"]), seed=int(self.config["seed"])
             )
         rows = simulate_on_fused(
-            self._surfaces[key], obj, dataset.hand, p0, use_dir, int(self.config["copies"])
+            self._surfaces[key],
+            obj,
+            dataset.hand,
+            p0,
+            use_dir,
+            int(self.config["copies"]),
+            perturbation_seed(self.config),
         )
         self._said(name, len(rows), time.process_time() - t0)
         return rows
@@ -516,6 +550,7 @@ def fit_views_config(
         "views": views,
         "seed": int(seed),
         "copies": int(copies),
+        "perturbation_seed": PERTURBATION_SEED,
     }
     raw = FusedViews(config, log=log, workers=workers).raw(samples)
     score = share_score(raw[:, 0], raw[:, 1])

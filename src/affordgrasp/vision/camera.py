@@ -265,9 +265,40 @@ class ObjectFrame:
         ObjectFrame
             From the vertices of its convex hull.
         """
-        vertices = np.asarray(mesh.convex_hull.vertices, dtype=np.float64)
+        return cls.from_vertices(mesh.convex_hull.vertices)
+
+    @classmethod
+    def from_vertices(cls, vertices) -> ObjectFrame:
+        """The frame of some points (an object's hull vertices).
+
+        Parameters
+        ----------
+        vertices : (v, 3) array_like of float
+            m.
+
+        Returns
+        -------
+        ObjectFrame
+        """
+        vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
         lo, hi = vertices.min(axis=0), vertices.max(axis=0)
         return cls(vertices=vertices, centre=(lo + hi) / 2.0, length=float(np.max(hi - lo)))
+
+    def moved(self, transform) -> ObjectFrame:
+        """The frame of the same object moved by a rigid transform.
+
+        Parameters
+        ----------
+        transform : (4, 4) array_like of float
+            Rigid transform, m.
+
+        Returns
+        -------
+        ObjectFrame
+            Of the moved vertices (the box is recomputed, the length too).
+        """
+        t = np.asarray(transform, dtype=np.float64)
+        return ObjectFrame.from_vertices(self.vertices @ t[:3, :3].T + t[:3, 3])
 
 
 def camera_poses(frame: ObjectFrame, p0) -> np.ndarray:
@@ -303,3 +334,52 @@ def camera_poses(frame: ObjectFrame, p0) -> np.ndarray:
     poses[:, :3, 3] = origin
     poses[:, 3, 3] = 1.0
     return poses
+
+
+# plan's default pose error (docs/learning.md): the robot believes the object is 1 cm and 5°
+# away from where it is, a typical estimate from a fixed camera or a registration
+POSE_ERROR_M = 0.01
+POSE_ERROR_DEG = 5.0
+POSE_STREAM = 0x9E5E  # the pose error's draws: SeedSequence([seed, POSE_STREAM])
+
+
+def pose_error_transform(centre, error_m: float, error_deg: float, seed: int) -> np.ndarray:
+    """A rigid error of a pose estimate: the believed object = this transform of the true one.
+
+    A rotation by exactly ``error_deg`` about an axis drawn uniformly on the sphere, through
+    ``centre``, then a translation of exactly ``error_m`` along a direction drawn
+    uniformly: the sizes are fixed, the directions drawn (keyed by ``seed``).
+
+    Parameters
+    ----------
+    centre : (3,) array_like of float
+        The point the rotation turns about (the object's box centre), m.
+    error_m : float
+        Translation error, m (>= 0).
+    error_deg : float
+        Rotation error, degrees (>= 0).
+    seed : int
+        Same seed, same error.
+
+    Returns
+    -------
+    (4, 4) float64 ndarray
+        True object frame → believed object frame.
+    """
+    if not (np.isfinite(error_m) and np.isfinite(error_deg)) or error_m < 0 or error_deg < 0:
+        raise InputError(
+            f"a pose error is a distance >= 0 (m) and an angle >= 0 (degrees), got "
+            f"{error_m!r} and {error_deg!r}"
+        )
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), POSE_STREAM]))
+    axis, direction = rng.normal(size=(2, 3))
+    axis /= np.linalg.norm(axis)
+    direction /= np.linalg.norm(direction)
+    a = math.radians(float(error_deg))
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    rot = np.eye(3) + math.sin(a) * k + (1.0 - math.cos(a)) * (k @ k)  # Rodrigues
+    c = np.asarray(centre, dtype=np.float64).reshape(3)
+    out = np.eye(4)
+    out[:3, :3] = rot
+    out[:3, 3] = c - rot @ c + float(error_m) * direction
+    return out
