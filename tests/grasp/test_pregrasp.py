@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from affordgrasp.errors import InputError
@@ -151,3 +151,20 @@ def test_bad_pregrasps_are_refused():
         validate_pregrasps(np.full((1, 6), 2.0))
     with pytest.raises(InputError, match="nan"):
         validate_pregrasps(np.full((1, 6), np.nan))
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    st.lists(st.floats(-1, 1), min_size=3, max_size=3),
+    st.lists(st.floats(-1, 1), min_size=3, max_size=3),
+)
+def test_directions_towards_points_invert_the_use_directions(center, point):
+    from affordgrasp.grasp.pregrasp import directions_towards, spherical_direction
+
+    c, p = np.array(center), np.array(point)
+    assume(np.linalg.norm(p - c) > 1e-3)
+    d = directions_towards(c, p[None])
+    assert np.all(np.abs(d) <= 1)
+    np.testing.assert_allclose(
+        spherical_direction(d[:, 0], d[:, 1])[0], (p - c) / np.linalg.norm(p - c), atol=1e-9
+    )

@@ -62,7 +62,11 @@ def test_measures_random_and_oracle():
     assert m["chosen"] == 2 and m["top1_viable"] == 1.0 and m["top1_feasible"] == 1.0
     assert m["top1_percentile"] == pytest.approx(50 * (4 + 5) / 6)
     assert m["topk_precision"] == 0.5
+    # the oracle's choice is good first (here viable: the best viable, not the best score)
     oracle = decision_measures(oracle_order(score, viable), score, viable)
+    assert oracle["chosen"] == 2 and oracle["top1_viable"] == 1.0
+    feasible = np.isfinite(score)
+    oracle = decision_measures(oracle_order(score, feasible), score, viable)
     assert oracle["chosen"] == 3 and oracle["top1_percentile"] == pytest.approx(100 * 11 / 12)
     r = random_measures(score, viable)
     assert r["top1_viable"] == pytest.approx(0.5) and r["top1_feasible"] == pytest.approx(4 / 6)
@@ -166,3 +170,24 @@ def test_percentile_among_places_scores_among_a_reference():
     np.testing.assert_array_equal(percentile_among(ref, ref), true_percentiles(ref))
     with pytest.raises(InputError, match="reference"):
         percentile_among([1.0], [])
+
+
+def test_task_feasibility_and_the_oracles_good_choices():
+    from affordgrasp.learning.decisions import PROBABLE, oracle_good, task_feasible
+    from affordgrasp.tasks import get_task
+
+    p = np.array([0.2, 0.7, np.nan, PROBABLE, 0.9])
+    viable = np.array([True, False, True, True, False])
+    beat, rules, pick = get_task("beat"), get_task("beat-rules"), get_task("pick")
+    # a task probability: p_T >= 0.5; a task of tests: a finite value
+    assert task_feasible(beat, p).tolist() == [False, True, False, True, True]
+    assert task_feasible(rules, np.array([-np.inf, 1.0, np.nan])).tolist() == [False, True, False]
+    # the oracle must choose a task-feasible row for a task with a use point, viable for pick
+    assert oracle_good(beat, p, viable).tolist() == task_feasible(beat, p).tolist()
+    assert oracle_good(pick, p, viable).tolist() == viable.tolist()
+    assert oracle_order(p, oracle_good(pick, p, viable))[0] == 3  # the most probable viable
+    # the feasible mask replaces the finite test in the measures
+    f = task_feasible(beat, p)
+    m = decision_measures(np.array([0, 1, 2, 3, 4]), p, viable, feasible=f)
+    assert m["top1_feasible"] == 0.0
+    assert random_measures(p, viable, feasible=f)["top1_feasible"] == pytest.approx(3 / 5)

@@ -159,7 +159,8 @@ def test_plan_with_the_views_fuses_what_a_sensor_returns(box_mesh, monkeypatch):
     assert options[0]["subpixel"] and options[0]["keep_seen"] and options[0]["unknown_px"] == 0
     assert not options[1]["subpixel"] and not options[1]["keep_seen"]
     assert options[1]["unknown_px"] == SENSOR_UNKNOWN_PX and options[1]["votes"] == SENSOR_VOTES
-    np.testing.assert_array_equal(exact.true_score, sensed.true_score)  # the same candidates
+    # the same candidates, each placed on the hull of the surface its views fused into
+    np.testing.assert_array_equal(exact.p0, sensed.p0)
     assert sensed.fused_score.shape == (8,)
     # the fused surfaces differ, so their simulations do
     assert not np.array_equal(exact.fused_epsilon, sensed.fused_epsilon)
@@ -240,7 +241,9 @@ def test_plan_with_the_views_refines_its_first_candidates(box_mesh, capsys):
     # drawn ones, a random choice among the drawn ones
     assert p.order.tolist() == margin_order(p.fused_viable, p.fused_score, p.fused_epsilon).tolist()
     assert p.percentile == percentile_among(p.true_score[[p.chosen]], p.true_score[:12])[0]
-    assert p.measures["random"] == random_measures(p.true_score[:12], p.viable[:12])
+    assert p.measures["random"] == random_measures(
+        p.true_score[:12], p.viable[:12], feasible=p.feasible[:12]
+    )
     assert p.measures["model"]["top1_percentile"] == p.percentile
     assert "drawn near each of the first 3" in p.rule
     doc = p.summary()
@@ -273,3 +276,78 @@ def test_plan_says_when_no_candidate_is_viable_on_the_fused_surface(box_mesh, ca
         assert main(["plan", str(box_mesh), "--candidates", "1", "--seed", str(seed)]) == 0
         err = capsys.readouterr().err
         assert ("no candidate is viable on the fused surface" in err) is warned
+
+
+def test_the_true_object_never_reaches_the_decision(monkeypatch):
+    """Everything the decision simulates is the fused surface, placed on its own hull; the
+    true object is simulated only by the check that follows (step "simulate")."""
+    import affordgrasp.grasp.policy as policy
+    import affordgrasp.pipeline as pipeline
+
+    obj = ag.load_object("hammer:3")
+    step = {"now": None}
+    seen = []
+    for module, name in ((pipeline, "evaluate_inputs"), (policy, "simulate")):
+        real = getattr(module, name)
+
+        def spy(o, *a, _real=real, **k):
+            seen.append((step["now"], o is obj or k.get("frame") is obj))
+            return _real(o, *a, **k)
+
+        monkeypatch.setattr(module, name, spy)
+    p = ag.plan(
+        obj,
+        "beat",
+        candidates=16,
+        seed=1,
+        refine=1,
+        robust_check=2,
+        uses=60,
+        progress=lambda s: step.update(now=s),
+    )
+    assert {s for s, _ in seen} >= {"predict", "simulate"}
+    assert not [s for s, true in seen if true and s != "simulate"]
+    assert [s for s, true in seen if true] == ["simulate"]
+    # a task that reads the use point: each grasp took its best use point on the surface
+    assert p.use_point is not None and np.isfinite(p.use_point).all()
+    assert "each grasp with its best of" in p.rule and "beat probability" in p.rule
+    # ranked by the task probability on the surface, the robust check moved one of the
+    # first two to the front
+    ranked = np.lexsort((-np.nan_to_num(p.fused_epsilon), -p.fused_score))
+    assert set(p.order[:2]) == set(ranked[:2])
+    assert p.order[2:].tolist() == [i for i in ranked if i not in p.order[:2]]
+    assert np.isfinite(p.fused_robust_score[p.order[:2]]).all()
+    # the truth: the task probability on the true object, feasible when p >= 0.5
+    np.testing.assert_array_equal(p.feasible, p.true_score >= 0.5)
+    doc = p.summary()
+    json.dumps(doc)
+    assert doc["pose_error"] == [0.01, 5.0]
+    assert doc["chosen"]["use_part"] is not None and doc["chosen"]["contact_parts"] is not None
+    assert doc["chosen"]["feasible"] == bool(p.true_score[p.chosen] >= 0.5)
+    # the true use point: the true surface's closest to the fused one (a few mm away)
+    true_u = np.asarray(doc["chosen"]["use_point"])
+    assert np.linalg.norm(true_u - p.use_point[p.chosen]) < 0.01
+
+
+def test_plan_aims_its_views_from_a_pose_estimate(box_mesh):
+    from affordgrasp.vision.camera import pose_error_transform
+
+    exact = ag.plan(str(box_mesh), "pick", candidates=6, seed=5, pose_error=None, refine=0)
+    off = ag.plan(str(box_mesh), "pick", candidates=6, seed=5, refine=0)
+    assert exact.pose_error is None and off.pose_error == (0.01, 5.0)
+    assert exact.summary()["pose_error"] is None
+    np.testing.assert_array_equal(exact.p0, off.p0)  # the same candidates, other views
+    assert not np.array_equal(exact.fused_epsilon, off.fused_epsilon)
+    for bad in ((-0.01, 5.0), (0.01,), "near", (float("nan"), 1.0)):
+        with pytest.raises(InputError, match="pose_error"):
+            ag.plan(str(box_mesh), "pick", candidates=2, pose_error=bad)
+    # the error's sizes are exact, its directions drawn from the seed
+    c = np.array([0.1, -0.2, 0.3])
+    t = pose_error_transform(c, 0.01, 5.0, seed=7)
+    angle = np.degrees(np.arccos((np.trace(t[:3, :3]) - 1) / 2))
+    assert angle == pytest.approx(5.0)
+    np.testing.assert_allclose(t[:3, :3] @ t[:3, :3].T, np.eye(3), atol=1e-12)
+    assert np.linalg.norm(t[:3, :3] @ c + t[:3, 3] - c) == pytest.approx(0.01)
+    np.testing.assert_array_equal(t, pose_error_transform(c, 0.01, 5.0, seed=7))
+    assert not np.allclose(t, pose_error_transform(c, 0.01, 5.0, seed=8))
+    np.testing.assert_allclose(pose_error_transform(c, 0.0, 0.0, seed=7), np.eye(4), atol=1e-15)

@@ -109,8 +109,9 @@ def small_views(tmp_path_factory):
 def test_predictions_are_the_simulation_on_the_fused_surface(robust_dataset, small_views):
     from affordgrasp.dataset.handle import Dataset
     from affordgrasp.learning.data import read_rows
-    from affordgrasp.learning.views_model import fused_surface
+    from affordgrasp.learning.views_model import fused_surface, perturbation_seed
     from affordgrasp.pipeline import evaluate_inputs
+    from affordgrasp.robust import RobustSettings
 
     lines = []
     (views, c1), (_, c2) = load_views_models(small_views, log=lines.append)
@@ -126,7 +127,8 @@ def test_predictions_are_the_simulation_on_the_fused_surface(robust_dataset, sma
         fused_surface(obj, views=8),
         samples.p0[knife],
         samples.use_dir[knife],
-        robust=2,
+        # the predictor's own perturbations, not the labels' (seed 0)
+        robust=RobustSettings(copies=2, seed=perturbation_seed(c1)),
         frame=obj,
     ).table
     share = table.column("robust_viable").to_numpy(zero_copy_only=False)

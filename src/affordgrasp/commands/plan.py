@@ -13,6 +13,9 @@ from ..grasp.pregrasp import (
     PLAN_REFINE,
     PLAN_REFINE_NEIGHBOURS,
     PLAN_ROBUST_CHECK,
+    PLAN_USES,
+    POSE_ERROR_DEG,
+    POSE_ERROR_M,
 )
 from .limits import OWN_CHECK, SEED_BITS, SIZE_M
 
@@ -21,6 +24,7 @@ LIMITS = {
     **dict.fromkeys(("candidates", "threshold", "offset_range"), OWN_CHECK),
     "seed": SEED_BITS,
     "robust_check": (None, 1000, "each is re-simulated under perturbations"),
+    "uses": (1, 100_000, "every grasp is paired with each"),
     "refine": (None, 1000, f"{PLAN_REFINE_NEIGHBOURS} more candidates are drawn near each"),
     "size_m": SIZE_M,
 }
@@ -102,7 +106,54 @@ def add_arguments(p) -> None:
         help="the models see the images a depth sensor would return (noise, lost returns; "
         "seeded by --seed); default: exact images",
     )
+    p.add_argument(
+        "--pose-error",
+        default=f"{POSE_ERROR_M * 100:g},{POSE_ERROR_DEG:g}",
+        metavar="CM,DEG",
+        help="the error of the robot's estimate of the object's pose: the views are aimed "
+        "from the object moved by CM centimetres and turned by DEG degrees (directions "
+        f"drawn from --seed; default {POSE_ERROR_M * 100:g},{POSE_ERROR_DEG:g}; 0: aimed "
+        "from the true object)",
+    )
+    p.add_argument(
+        "--uses",
+        type=int,
+        default=PLAN_USES,
+        help="with --model views and a task that reads the use point (beat, cut): use "
+        f"points drawn on the fused surface and paired with every grasp (default {PLAN_USES})",
+    )
     add_scale_arguments(p)
+
+
+def pose_error_option(text: str) -> tuple[float, float] | None:
+    """``--pose-error CM,DEG`` as (metres, degrees); ``0`` or ``0,0``: None.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    (float, float) or None
+
+    Raises
+    ------
+    InputError
+        For anything but one or two numbers >= 0.
+    """
+    parts = [t.strip() for t in str(text).split(",")]
+    try:
+        values = [float(t) for t in parts]
+    except ValueError:
+        values = []
+    if len(values) not in (1, 2) or not all(v >= 0 and v < float("inf") for v in values):
+        raise InputError(
+            f"--pose-error takes CM,DEG (two numbers >= 0, e.g. 1,5) or 0, got {text!r}"
+        )
+    cm, deg = (values[0], values[0]) if len(values) == 1 else values
+    if len(values) == 1 and cm != 0:
+        raise InputError(f"--pose-error takes CM,DEG (e.g. 1,5) or 0, got {text!r}")
+    return None if cm == 0 and deg == 0 else (cm / 100.0, deg)
 
 
 def run(args, out) -> None:
@@ -121,10 +172,11 @@ def run(args, out) -> None:
 
     if args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
+    pose_error = pose_error_option(args.pose_error)
     check_fits_in_memory("--candidates", args.candidates, CANDIDATE_BYTES)
     models = args.model.split(",") if "," in args.model else args.model
     try:
-        from ..learning.plan import VIEWS, plan
+        from ..learning.plan import VIEWS, plan, trial_names
         from ..learning.torch_support import require_safetensors, require_torch
 
         for value, option in ((args.robust_check, "--robust-check"), (args.refine, "--refine")):
@@ -167,6 +219,8 @@ def run(args, out) -> None:
         **({} if args.offset_range is None else {"offset_range": args.offset_range}),
         **({} if args.robust_check is None else {"robust_check": args.robust_check}),
         **({} if args.refine is None else {"refine": args.refine}),
+        pose_error=pose_error,
+        uses=args.uses,
         progress=progress,
     )
     doc = result.summary()
@@ -218,12 +272,20 @@ def run(args, out) -> None:
             "viable either; draw more candidates (--candidates) or another seed (--seed)",
             file=sys.stderr,
         )
+    if c.get("use_part") is not None or c.get("contact_parts"):
+        touched = ", ".join(sorted(set(c.get("contact_parts") or []))) or "nothing"
+        out.text(f"on the true object: use point on {c.get('use_part')}, contacts on {touched}")
     if doc["physics"] is not None:
         ph = doc["physics"]
-        out.text(
+        line = (
             f"physics replay: hold {'held' if ph.get('hold_ok') else 'failed'} "
             f"({ph.get('hold_directions_ok', 0)}/6 directions), settled {ph.get('settled')}"
         )
+        for trial in trial_names(doc["task"]):
+            ok = ph.get(f"{trial}_ok")
+            said = "succeeded" if ok else "failed" if ok is not None else "not run"
+            line += f"; {trial} trial {said}"
+        out.text(line)
     out.text("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in doc["timings"].items()))
     out.result(doc)
 

@@ -384,6 +384,14 @@ PLAN_ROBUST_CHECK = 8
 PLAN_REFINE = 8
 PLAN_REFINE_NEIGHBOURS = 16
 PLAN_REFINE_SIGMA = 0.04
+# A task that reads the use point: ``plan`` pairs every candidate's grasp with PLAN_USES use
+# points drawn by area on the fused surface and keeps its best (search.pairs).
+PLAN_USES = 1000
+# ``plan`` aims its views from a pose estimate this far off (vision.camera.pose_error_transform):
+# the robot believes the object is 1 cm and 5° away from where it is, a typical estimate from
+# a fixed camera or a model registration (docs/learning.md).
+POSE_ERROR_M = 0.01
+POSE_ERROR_DEG = 5.0
 
 SAMPLE_BLOCK = 1024
 

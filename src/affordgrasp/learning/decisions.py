@@ -215,8 +215,8 @@ def task_feasible(task, true_score: np.ndarray) -> np.ndarray:
     -------
     (n,) bool ndarray
     """
-    s = np.nan_to_num(np.asarray(true_score, dtype=np.float64).ravel(), nan=-np.inf)
-    return s >= PROBABLE if task.probability else np.isfinite(s)
+    s = np.asarray(true_score, dtype=np.float64).ravel()
+    return np.nan_to_num(s, nan=-1.0) >= PROBABLE if task.probability else np.isfinite(s)
 
 
 def oracle_good(task, true_score: np.ndarray, viable: np.ndarray) -> np.ndarray:

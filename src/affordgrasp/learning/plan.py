@@ -51,9 +51,11 @@ from ..grasp.pregrasp import (
     PLAN_REFINE_NEIGHBOURS,
     PLAN_REFINE_SIGMA,
     PLAN_ROBUST_CHECK,
+    PLAN_USES,
+    POSE_ERROR_DEG,
+    POSE_ERROR_M,
 )
 from ..robust import RobustSettings
-from ..vision.camera import POSE_ERROR_DEG, POSE_ERROR_M
 from .decisions import (
     decision_measures,
     decision_order,
@@ -94,9 +96,7 @@ ROBUST_CHECK_SETTINGS = RobustSettings(
 # A task probability's robust check: its robust model reads copies at the robust labels'
 # scales (the ones it was fitted on), 12 of them
 TASK_CHECK_SETTINGS = RobustSettings(copies=12, tasks=(), seed=PERTURBATION_SEED)
-# A task that reads the use point pairs every candidate's grasp with this many use points
-# drawn by area on the fused surface and keeps its best (search.pairs)
-PLAN_USES = 1000
+
 # The robust check ranks the candidates it re-simulates by this quantile of their copies'
 # ε (the ε three copies in four reach): on validation objects it chose a viable grasp more
 # often than the share of copies viable or the median (docs/learning.md).
@@ -174,8 +174,7 @@ class Plan:
     use_point : (n, 3) float64 ndarray or None
         With ``models="views"`` and a task that reads the use point: each candidate's use
         point on the fused surface (the best of the use points paired with its grasp
-        there); the true check uses the true surface's point on the same line from the true
-        centre of mass. Else None.
+        there); the true check uses the true surface's point closest to it. Else None.
     fused_robust_score : (n,) float64 ndarray or None
         With a task probability that reads the use point and ``robust_check``: the task's
         robust probability on the fused surface of the candidates re-simulated (NaN for the
@@ -607,10 +606,16 @@ def plan(
     fused_point = None
     if decided is not None and decided.pairs:
         # the robot uses the point it chose on the fused surface: on the true object, the
-        # use point on the same line from the true centre of mass
+        # true surface's point closest to it (the use ray from the true centre of mass
+        # through that point; the object's own centre of mass may lie centimetres from the
+        # fused surface's, a hammer's steel head)
+        import trimesh
+
         fused_point, _, hit = use_points(fused.mesh, fused.mass.center_of_mass, use_dir)
         true_dir = use_dir.copy()
-        true_dir[hit >= 0] = directions_towards(obj.mass.center_of_mass, fused_point[hit >= 0])
+        if np.any(hit >= 0):
+            closest, _, _ = trimesh.proximity.closest_point(obj.mesh, fused_point[hit >= 0])
+            true_dir[hit >= 0] = directions_towards(obj.mass.center_of_mass, closest)
     table = evaluate_inputs(obj, p0, true_dir, hand=hand, seed=seed, volume=False, frame=frame)
     table = table.table
     true_score = task_obj.evaluate(table, mode)

@@ -336,10 +336,6 @@ def camera_poses(frame: ObjectFrame, p0) -> np.ndarray:
     return poses
 
 
-# plan's default pose error (docs/learning.md): the robot believes the object is 1 cm and 5°
-# away from where it is, a typical estimate from a fixed camera or a registration
-POSE_ERROR_M = 0.01
-POSE_ERROR_DEG = 5.0
 POSE_STREAM = 0x9E5E  # the pose error's draws: SeedSequence([seed, POSE_STREAM])
 
 
