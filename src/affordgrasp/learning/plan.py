@@ -604,7 +604,7 @@ def plan(
     t0 = time.perf_counter()
     true_dir = use_dir
     fused_point = None
-    if decided is not None and decided.pairs:
+    if decided is not None and decided.pairs and fused is not None:
         # the robot uses the point it chose on the fused surface: on the true object, the
         # true surface's point closest to it (the use ray from the true centre of mass
         # through that point; the object's own centre of mass may lie centimetres from the
@@ -798,9 +798,12 @@ def decide_on_fused(
 
     pairs = bool(set(USE_METRICS) & set(task.requires))
     by_value = pairs and task.probability
-    points = None
-    if pairs:
-        points, _ = draw_use_points(fused, task, int(uses), seed + 1, mode, {}, None, False)
+    points = (
+        draw_use_points(fused, task, int(uses), seed + 1, mode, {}, None, False)[0]
+        if pairs
+        else None
+    )
+    n_uses = 0 if points is None else len(points.triangle)
 
     def on_fused(q0, q_dir):
         # the task's value, viability and ε of pregrasps simulated on the fused surface,
@@ -809,7 +812,7 @@ def decide_on_fused(
         t = t.table
         eps = t.column("epsilon").to_numpy(zero_copy_only=False)
         score = task.evaluate(t, mode)
-        if pairs:
+        if points is not None:
             best, best_use = best_use_per_grasp(
                 pair_scores(fused, t, points, task.name, mode), len(q0)
             )
@@ -831,12 +834,12 @@ def decide_on_fused(
     if by_value:
         rule = (
             f"on the surface fused from {views} view{plural}, each grasp with its best of "
-            f"{len(points.triangle)} use points there: the highest {task.name} probability"
+            f"{n_uses} use points there: the highest {task.name} probability"
         )
     else:
         rule = (
             f"on the surface fused from {views} view{plural}"
-            + (f", each grasp with its best of {len(points.triangle)} use points" if pairs else "")
+            + (f", each grasp with its best of {n_uses} use points" if pairs else "")
             + f": viable, then {task.name}-feasible, then the widest epsilon"
         )
     n = len(p0)
