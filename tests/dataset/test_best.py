@@ -128,3 +128,45 @@ def test_best_rejects_bad_input(reference_dataset, tmp_path, box_mesh, capsys):
     generate([str(box_mesh)], 4, tmp_path / "sim", workers=1, metrics=False)
     with pytest.raises(DatasetError, match="no-metrics"):
         best_grasps(tmp_path / "sim", "pick")
+
+
+@pytest.mark.parametrize("task", ["pick", "cut", "beat"])
+def test_best_reads_the_stored_probabilities_of_the_models_in_use(
+    reference_dataset, task, tmp_path, monkeypatch
+):
+    """A dataset records the digests of the task models it stored p_T with: while they are
+    the models in use, best reads the p_T columns instead of walking the trees, and ranks
+    exactly as the computed values do."""
+    import shutil
+
+    from affordgrasp.dataset.handle import Dataset
+    from affordgrasp.search import best as best_module
+    from affordgrasp.tasks.probability import model_digests
+
+    ds = Dataset.open(reference_dataset)
+    assert ds.manifest["probability_models"] == model_digests()
+    assert best_module.stored_probabilities(ds, [tasks.get_task(task)], False) == [task]
+    assert best_module.stored_probabilities(ds, [tasks.get_task("pick-paper")], False) == []
+    stored = best_grasps(reference_dataset, task, top=9, batch_size=10)
+    # the same ranking computed from the metric columns (a dataset of other models)
+    other = tmp_path / "ds"
+    shutil.copytree(reference_dataset, other)
+    manifest = json.loads((other / "_manifest.json").read_text())
+    manifest["probability_models"] = {k: "0" * 16 for k in manifest["probability_models"]}
+    (other / "_manifest.json").write_text(json.dumps(manifest))
+    assert (
+        best_module.stored_probabilities(Dataset.open(other), [tasks.get_task(task)], False) == []
+    )
+    computed = best_grasps(other, task, top=9, batch_size=10)
+    assert stored.table["sample"].to_pylist() == computed.table["sample"].to_pylist()
+    assert stored.table["object"].to_pylist() == computed.table["object"].to_pylist()
+    np.testing.assert_allclose(
+        stored.table["affordance"].to_numpy(), computed.table["affordance"].to_numpy(), rtol=1e-12
+    )
+    # a resume with other models is refused in words
+    from affordgrasp.dataset.manifest import manifest_differences
+
+    diffs = manifest_differences(manifest, ds.manifest)
+    assert any("task probability models" in d for d in diffs)
+    older = {k: v for k, v in ds.manifest.items() if k != "probability_models"}
+    assert manifest_differences(older, ds.manifest) == []

@@ -221,6 +221,10 @@ def build_manifest(
         manifest["depth"] = depth_manifest()
     if robust is not None and robust.enabled:  # absent for plain runs: earlier ones resume
         manifest["robust"] = robust.to_dict()
+    if metrics:  # the models of the stored p_T columns (search.best reads them when current)
+        from ..tasks.probability import model_digests
+
+        manifest["probability_models"] = model_digests()
     return manifest
 
 

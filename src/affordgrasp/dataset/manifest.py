@@ -40,6 +40,7 @@ PLAN_KEYS = (
     "materials",
     "sample_streams",
     "objects",
+    "probability_models",
 )
 # Yes/no plan keys: what they say, and what each value means (an absent "materials", in a
 # manifest written before it was recorded, is unit density).
@@ -209,6 +210,13 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
             a, b = manifest_streams(existing), manifest_streams(requested)
             if a != b:
                 diffs.append(f"samples drawn with {a} streams there vs {b} here (--streams)")
+        elif key == "probability_models":
+            # recorded since the task probabilities: a dataset written before resumes as is
+            if a is not None and a != b:
+                diffs.append(
+                    "task probability models (p_beat, p_cut, p_pick) of another version "
+                    "there; resume it with that version, or generate a new dataset"
+                )
         elif key in ("depth", "robust") and a != b:  # tables of settings: in words
             diffs.append(f"{_plan_text(key, a)} there vs {_plan_text(key, b)} here")
         elif a != b:

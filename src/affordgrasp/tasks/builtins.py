@@ -22,9 +22,37 @@ def _squash(x: np.ndarray) -> np.ndarray:
     return np.where(np.isnan(x), 0.0, 0.5 + np.arctan(np.nan_to_num(x, nan=0.0)) / np.pi)
 
 
-def _probability_task(task: str, tie):
+# The paper's value of each task probability's task: its ties' order
+_TIES = {
+    "beat": lambda m: m["inertia"] / m["impact_effort"],
+    "cut": lambda m: m["use_force"],
+    "pick": lambda m: -m["hold_effort_sum"],
+}
+
+
+def probability_value(task: str, p: np.ndarray, metrics: Mapping[str, np.ndarray]) -> np.ndarray:
+    """A task probability's value from p_T: ties broken by the paper's formula.
+
+    Parameters
+    ----------
+    task : str
+        ``beat``, ``cut`` or ``pick``.
+    p : (n,) array_like of float
+        p_T of the rows (computed, or a dataset's stored column of the same models).
+    metrics : mapping of str to (n,) array
+        The rows' metric columns (the paper's formula reads them).
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        (1 − 10⁻⁶) p_T + 10⁻⁶ × the paper's value squashed into (0, 1).
+    """
+    return (1.0 - _TIE) * np.asarray(p, dtype=np.float64) + _TIE * _squash(_TIES[task](metrics))
+
+
+def _probability_task(task: str):
     def func(m: Mapping[str, np.ndarray], t: Mapping[str, float]) -> np.ndarray:
-        return (1.0 - _TIE) * task_probability(task, m) + _TIE * _squash(tie(m))
+        return probability_value(task, task_probability(task, m), m)
 
     func.__name__ = f"p_{task}"
     return func
@@ -145,7 +173,7 @@ def builtin_tasks() -> list[Task]:
     return [
         make_task(
             "beat",
-            _probability_task("beat", lambda m: m["inertia"] / m["impact_effort"]),
+            _probability_task("beat"),
             description="beating: p_beat, the probability that three wrist-swung strikes "
             "drive a nail with the use point (physics trial), ties by the paper's I / E_i",
             requires=MODEL_COLUMNS,
@@ -153,7 +181,7 @@ def builtin_tasks() -> list[Task]:
         ),
         make_task(
             "cut",
-            _probability_task("cut", lambda m: m["use_force"]),
+            _probability_task("cut"),
             description="cutting: p_cut, the probability that a pressed 40 mm stroke bears "
             "on the edge at the use point (physics trial), ties by the paper's U_τ",
             requires=MODEL_COLUMNS,
@@ -161,7 +189,7 @@ def builtin_tasks() -> list[Task]:
         ),
         make_task(
             "pick",
-            _probability_task("pick", lambda m: -m["hold_effort_sum"]),
+            _probability_task("pick"),
             description="picking: p_pick, the probability that the grasp holds the object "
             "against its weight in every direction (physics trial), ties by the paper's -ΣE_h",
             requires=PICK_COLUMNS,

@@ -287,6 +287,31 @@ def _model_file(task: str, robust: bool) -> str:
 
 
 @cache
+def model_digests() -> dict[str, str]:
+    """The content digest of every shipped task model (a dataset records them: its stored
+    p_T columns are the current models' only while these agree).
+
+    Returns
+    -------
+    dict of str to str
+        ``beat``, ``beat-robust``, ... → the first 16 hex digits of the SHA-256 of the
+        model file.
+    """
+    import hashlib
+
+    out = {}
+    for task in PROBABILITY_TASKS:
+        for robust in (False, True):
+            path = resources.files("affordgrasp.tasks").joinpath(
+                "probabilities", _model_file(task, robust)
+            )
+            if path.is_file():
+                name = _model_file(task, robust).removesuffix(".json")
+                out[name] = hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+    return out
+
+
+@cache
 def task_model(task: str, robust: bool = False) -> TaskModel:
     """The shipped model of ``task`` (``beat``, ``cut`` or ``pick``), plain or robust.
 
