@@ -92,3 +92,45 @@ def test_plots_command_writes_three_pngs(tmp_path, capsys, box_object):
     assert doc["status"] == {"bar.stl": {"grasped": 6, "touched": 3}}
     assert doc["tasks"]["pick-paper"]["bar.stl"] == {"rows": 9, "accepted": 6}
     assert doc["metrics"]["impact_effort"]["pos_inf"] == 3
+
+
+def test_a_task_probability_accepts_its_probable_rows_and_reads_stored_columns(monkeypatch):
+    """p_T is never -inf: the rows a task probability accepts are those with p_T >= 0.5;
+    with ``stored`` the p_T column is read (the models are not run) and gives the same."""
+    import affordgrasp.tasks.probability as probability
+    from affordgrasp.tasks import get_task
+
+    rng = np.random.default_rng(2)
+    n = 30
+    eff = {f"hold_effort_{s}": rng.uniform(1, 10, n) for s in ("px", "nx", "py", "ny", "pz", "nz")}
+    cols = {"object": ["a"] * 20 + ["b"] * 10, "status": ["grasped"] * n, **eff}
+    for c in probability.task_model("pick").columns:
+        cols.setdefault(c, rng.uniform(0, 1, n))
+    table = pa.table(cols)
+    p = probability.task_probability("pick", table_metrics(table))
+    table = table.append_column("p_pick", pa.array(p))
+    pick = get_task("pick")
+
+    def run(stored):
+        return summarize(lambda c: [table.select(c)], table.schema, [pick], stored=stored)
+
+    computed = run(())
+    assert computed.probable["pick"] == {
+        "a": int((p[:20] >= 0.5).sum()),
+        "b": int((p[20:] >= 0.5).sum()),
+    }
+    assert computed.accepted("pick", "a") == computed.probable["pick"]["a"]
+    import affordgrasp.tasks.builtins as builtins
+
+    monkeypatch.setattr(builtins, "task_probability", lambda *a: 1 / 0)  # not run
+    with pytest.raises(ZeroDivisionError):
+        run(())
+    stored = run(["pick"])
+    assert stored.probable == computed.probable
+    assert stored.affordances["pick"]["a"].hi == computed.affordances["pick"]["a"].hi
+
+
+def table_metrics(table):
+    from affordgrasp.tasks import MetricColumns
+
+    return MetricColumns(table)

@@ -94,6 +94,7 @@ def run(args, out) -> None:
         thresholds=thresholds,
         bins=args.bins,
         robust=bool(args.robust),
+        stored=_stored(sources, tasks, bool(args.robust)),
     )
     if summary.rows == 0:
         raise InputError("the sources hold no rows; nothing to plot")
@@ -104,13 +105,12 @@ def run(args, out) -> None:
         total = sum(counts.values())
         row = [obj, total] + [counts.get(s, 0) for s in ("grasped", "touched", "missed")]
         for t in tasks:
-            s = summary.affordances[t.name].get(obj)
-            accepted = 0 if s is None else s.finite + s.pos_inf
-            row.append(f"{100.0 * accepted / max(total, 1):.1f}%")
+            row.append(f"{100.0 * summary.accepted(t.name, obj) / max(total, 1):.1f}%")
         rows.append(row)
     out.table(
         f"samples per object ({summary.rows:,} rows)",
-        ["object", "rows", "grasped", "touched", "missed"] + [f"{t.name} ok" for t in tasks],
+        ["object", "rows", "grasped", "touched", "missed"]
+        + [f"{t.name} {'p>=0.5' if t.probability else 'ok'}" for t in tasks],
         rows,
     )
     for path in files.values():
@@ -123,7 +123,7 @@ def run(args, out) -> None:
             "status": summary.status,
             "tasks": {
                 t.name: {
-                    obj: {"rows": s.n, "accepted": s.finite + s.pos_inf}
+                    obj: {"rows": s.n, "accepted": summary.accepted(t.name, obj)}
                     for obj, s in summary.affordances[t.name].items()
                 }
                 for t in tasks
@@ -142,6 +142,23 @@ def run(args, out) -> None:
             },
         }
     )
+
+
+def _stored(sources, tasks, robust: bool) -> list[str]:
+    """The task probabilities every source carries from the models in use: a dataset's
+    recorded ones (search.best.stored_probabilities), or rows just evaluated."""
+    from ..search.best import stored_probabilities
+    from ..viz.sources import DatasetSource
+
+    names = {t.name for t in tasks if t.probability}
+    for s in sources:
+        if isinstance(s, DatasetSource):
+            if s.dataset is None:  # loose Parquet files: nothing says which models wrote them
+                return []
+            names &= set(stored_probabilities(s.dataset, tasks, robust))
+        elif not all(f"p_{t}" in s.schema().names for t in names):
+            return []
+    return sorted(names)
 
 
 def _has_metrics(schema) -> bool:

@@ -23,6 +23,7 @@ import pyarrow as pa
 from .figure import new_figure, save_figure
 
 BINS = 40
+PROBABLE = 0.5  # a task probability accepts a row with p_T >= PROBABLE
 STATUS_COLORS = {"grasped": "#2ca02c", "touched": "#ff7f0e", "missed": "#9e9e9e"}
 NOT_METRICS = ("sample", "seed", "use_triangle", "n_contacts")
 
@@ -227,6 +228,26 @@ class DatasetSummary:
     reasons: dict[str, int] = field(default_factory=dict)  # epsilon_reason -> n
     affordances: dict[str, dict[str, Summary]] = field(default_factory=dict)  # task -> object -> s
     task_ranges: dict[str, Summary] = field(default_factory=dict)
+    # task probability -> object -> rows with p_T >= 0.5 (a probability is never -inf: its
+    # rows "accepted" are the probable ones)
+    probable: dict[str, dict[str, int]] = field(default_factory=dict)
+
+    def accepted(self, task: str, obj: str) -> int:
+        """Rows of an object a task accepts: a finite (or +inf) score, or for a task
+        probability p_T >= 0.5.
+
+        Parameters
+        ----------
+        task, obj : str
+
+        Returns
+        -------
+        int
+        """
+        if task in self.probable:
+            return self.probable[task].get(obj, 0)
+        s = self.affordances.get(task, {}).get(obj)
+        return 0 if s is None else s.finite + s.pos_inf
 
 
 def summarize(
@@ -238,6 +259,7 @@ def summarize(
     thresholds: dict[str, dict[str, float]] | None = None,
     bins: int = BINS,
     robust: bool = False,
+    stored: Sequence[str] = (),
 ) -> DatasetSummary:
     """Two passes over ``scan(columns)`` (an iterable of tables) for :func:`save_plots`.
 
@@ -257,13 +279,19 @@ def summarize(
         Histogram bins.
     robust : bool
         Plot the tasks' robust scores (:func:`affordgrasp.robust.ranking_column`) instead.
+    stored : sequence of str
+        Task probabilities whose ``p_T`` column the rows carry from the models in use
+        (:func:`affordgrasp.search.best.stored_probabilities`): read, not computed again.
 
     Returns
     -------
     DatasetSummary
     """
+    import pyarrow.compute as pc
+
     from ..robust import task_scores
     from ..tasks import MetricColumns
+    from ..tasks.builtins import probability_value
 
     thresholds = thresholds or {}
     numeric = _numeric_fields(schema)
@@ -273,12 +301,28 @@ def summarize(
     for t in tasks:
         out.task_ranges[t.name] = Summary()
         out.affordances[t.name] = {}
+        if t.probability:
+            out.probable[t.name] = {}
+    columns += [f"p_{t}" for t in stored if f"p_{t}" in schema.names and f"p_{t}" not in columns]
 
     def scores_of(table):
         m = MetricColumns(table)
         return {
-            t.name: task_scores(t, m, mode, thresholds.get(t.name), robust=robust) for t in tasks
+            t.name: (
+                probability_value(
+                    t.name, table.column(f"p_{t.name}").to_numpy(zero_copy_only=False), m
+                )
+                if t.name in stored
+                else task_scores(t, m, mode, thresholds.get(t.name), robust=robust)
+            )
+            for t in tasks
         }
+
+    def counted(table, column):
+        # (group, value) -> rows, by pyarrow (no Python object per row)
+        keys = [c for c in ("object", column) if c in table.column_names]
+        counts = table.select(keys).group_by(keys).aggregate([([], "count_all")])
+        return counts.to_pylist()
 
     def groups(table):
         if "object" not in table.column_names:
@@ -293,22 +337,22 @@ def summarize(
             out.metrics[name].see(_column(table, name))
         grp = groups(table)
         if "status" in table.column_names:
-            status = np.asarray(table.column("status").to_pylist(), dtype=object)
-            for obj, sel in grp:
-                counts = out.status.setdefault(obj, {})
-                values, k = np.unique(status[sel].astype(str), return_counts=True)
-                for v, c in zip(values, k, strict=True):
-                    counts[v] = counts.get(v, 0) + int(c)
+            for row in counted(table, "status"):
+                counts = out.status.setdefault(row.get("object", "all"), {})
+                v = str(row["status"])
+                counts[v] = counts.get(v, 0) + int(row["count_all"])
         if "epsilon_reason" in table.column_names:
-            reasons = np.asarray(table.column("epsilon_reason").to_pylist(), dtype=object)
-            values, k = np.unique(reasons.astype(str), return_counts=True)
-            for v, c in zip(values, k, strict=True):
+            for row in pc.value_counts(table.column("epsilon_reason")).to_pylist():
+                v = row["values"]
                 if v:
-                    out.reasons[v] = out.reasons.get(v, 0) + int(c)
+                    out.reasons[str(v)] = out.reasons.get(str(v), 0) + int(row["counts"])
         for task, scores in scores_of(table).items():
             out.task_ranges[task].see(scores)
             for obj, sel in grp:
                 out.affordances[task].setdefault(obj, Summary()).see(scores[sel])
+                if task in out.probable:
+                    n = int(np.count_nonzero(scores[sel] >= PROBABLE))
+                    out.probable[task][obj] = out.probable[task].get(obj, 0) + n
     for s in out.metrics.values():
         s.fix_bins(bins)
     for task, per_object in out.affordances.items():
@@ -498,9 +542,10 @@ def plot_affordances(
             s = summary.affordances[task].get(obj)
             if s is None:
                 continue
-            ok = s.finite + s.pos_inf
+            ok = summary.accepted(task, obj)
+            said = "with p >= 0.5" if task in summary.probable else "accepted"
             ax.annotate(
-                f"{ok:,}/{s.n:,} accepted ({100.0 * ok / max(s.n, 1):.1f}%)",
+                f"{ok:,}/{s.n:,} {said} ({100.0 * ok / max(s.n, 1):.1f}%)",
                 xy=(1.01, j),
                 xycoords=("axes fraction", "data"),
                 va="center",
