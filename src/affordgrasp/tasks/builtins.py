@@ -22,7 +22,12 @@ def _squash(x: np.ndarray) -> np.ndarray:
     return np.where(np.isnan(x), 0.0, 0.5 + np.arctan(np.nan_to_num(x, nan=0.0)) / np.pi)
 
 
-# The paper's value of each task probability's task: its ties' order
+# The paper's value of each task probability's task: its ties' order, and what it reads
+TIE_COLUMNS = {
+    "beat": ("inertia", "impact_effort"),
+    "cut": ("use_force",),
+    "pick": tuple(HOLD_EFFORT_COLUMNS),
+}
 _TIES = {
     "beat": lambda m: m["inertia"] / m["impact_effort"],
     "cut": lambda m: m["use_force"],
