@@ -109,7 +109,7 @@ def main() -> None:
     if args.out.exists():
         raise SystemExit(f"{args.out} exists: give a new directory (the run measures a start)")
     objects = [f"{f}:{v}" for f in FAMILIES for v in range(args.variants)]
-    samples = args.rows // len(objects)
+    samples = -(-args.rows // len(objects))  # at least --rows in all
     total = samples * len(objects)
     # the console script of this interpreter's environment
     script = Path(sys.executable).with_name("affordgrasp")
