@@ -7,7 +7,8 @@ local processes, into ``--out``. The benchmark
 1. runs it as a fresh process and, once about ``--kill-at`` of the shards are written,
    kills the whole process group with SIGKILL (a power cut, not a Ctrl-C);
 2. runs the same command again: it resumes from the shards on disk;
-3. checks the result: every (object, sample) exactly once, the shard checksums, and the
+3. checks the result: every (object, sample) exactly once, every shard against its recorded
+   checksum (``_checksums.jsonl``), and the
    rows of the object that was being written at the kill equal to a fresh, uninterrupted
    generation of that object alone (same seed; samples depend only on (object, seed, i));
 4. times ``affordgrasp best DIR --task pick --top 10``, ``affordgrasp plots DIR`` and the
@@ -120,7 +121,8 @@ def main() -> None:
     print(f"{len(objects)} objects x {samples} samples = {total} rows", flush=True)
 
     # 1. the run, killed at about --kill-at of its shards
-    shard_size = 4096
+    from affordgrasp.dataset.shards import DEFAULT_SHARD_SIZE as shard_size
+
     expected = sum(-(-samples // shard_size) for _ in objects)
     t0 = time.perf_counter()
     cpu0, _ = children_usage()
@@ -155,7 +157,9 @@ def main() -> None:
             ).fetchall()
         )
         partial = [o for o in objects if 0 < counts.get(o, 0) < samples]
-        report["first_run"]["interrupted"] = (partial or [o for o in objects if o not in counts])[0]
+        # none partial (the kill fell between objects): the first one not written yet
+        unwritten = [o for o in objects if o not in counts]
+        report["first_run"]["interrupted"] = (partial or unwritten or objects[-1:])[0]
         report["first_run"]["rows_on_disk"] = sum(counts.values())
     print(f"first run: {report['first_run']}", flush=True)
 
@@ -186,8 +190,21 @@ def main() -> None:
     dup = duckdb.sql(
         f"SELECT count(*) AS n, count(DISTINCT (object, sample)) AS distinct_rows FROM '{glob}'"
     ).fetchall()[0]
-    report["rows_check"] = {"rows": dup[0], "distinct": dup[1], "expected": total}
+    from affordgrasp.dataset.checksums import read_checksums, shard_damage
+
+    records = read_checksums(args.out)
+    shards = sorted(args.out.glob("*.parquet"))
+    damaged = [f.name for f in shards if shard_damage(f, records.get(f.name)) is not None]
+    report["rows_check"] = {
+        "rows": dup[0],
+        "distinct": dup[1],
+        "expected": total,
+        "shards": len(shards),
+        "shards_damaged": damaged,
+    }
     print(f"rows: {report['rows_check']}", flush=True)
+    problems = [] if dup[0] == dup[1] == total else ["rows missing or repeated"]
+    problems += ["damaged shards"] if damaged else []
     card = json.loads((args.out / "_card.json").read_text())
     report["card"] = {k: card[k] for k in list(card)[:12] if not isinstance(card[k], dict | list)}
     if killed is not None:
@@ -200,11 +217,12 @@ def main() -> None:
         mine = f"(SELECT * FROM '{glob}' WHERE object = '{name}')"
         theirs = f"(SELECT * FROM '{ref}/*.parquet')"
         differing = duckdb.sql(
-            f"SELECT count(*) FROM ({mine} EXCEPT ALL {theirs} UNION ALL "
-            f"{theirs} EXCEPT ALL {mine})"
+            f"SELECT count(*) FROM (({mine} EXCEPT ALL {theirs}) UNION ALL "
+            f"({theirs} EXCEPT ALL {mine}))"
         ).fetchall()[0][0]
         report["resume_exact"] = {"object": name, "rows_differing": differing}
         print(f"resume exact: {report['resume_exact']}", flush=True)
+        problems += ["the resumed rows differ from a fresh run's"] if differing else []
 
     # 4. reading it
     best = peak_of([*ag, "best", str(args.out), "--task", "pick", "--top", "10"])
@@ -240,8 +258,12 @@ def main() -> None:
         ).fetchall()[0][0]
         report["ray"] = {"objects": part, "wall_s": r["wall_s"], "rows_differing": diff}
         print(f"ray: {report['ray']}", flush=True)
+        problems += ["the Ray rows differ from the local run's"] if diff else []
+    report["problems"] = problems
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=1, default=str))
+    if problems:
+        raise SystemExit("FAILED: " + "; ".join(problems))
 
 
 if __name__ == "__main__":

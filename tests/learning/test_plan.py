@@ -313,7 +313,7 @@ def test_the_true_object_never_reaches_the_decision(monkeypatch):
     assert "each grasp with its best of" in p.rule and "beat probability" in p.rule
     # ranked by the task probability on the surface, the robust check moved one of the
     # first two to the front
-    ranked = np.lexsort((-np.nan_to_num(p.fused_epsilon), -p.fused_score))
+    ranked = np.lexsort((-np.nan_to_num(p.fused_epsilon), -p.fused_score, ~p.fused_viable))
     assert set(p.order[:2]) == set(ranked[:2])
     assert p.order[2:].tolist() == [i for i in ranked if i not in p.order[:2]]
     assert np.isfinite(p.fused_robust_score[p.order[:2]]).all()
@@ -338,7 +338,7 @@ def test_plan_aims_its_views_from_a_pose_estimate(box_mesh):
     assert exact.summary()["pose_error"] is None
     np.testing.assert_array_equal(exact.p0, off.p0)  # the same candidates, other views
     assert not np.array_equal(exact.fused_epsilon, off.fused_epsilon)
-    for bad in ((-0.01, 5.0), (0.01,), "near", (float("nan"), 1.0)):
+    for bad in ((-0.01, 5.0), (0.01,), "near", "15", 3, (float("nan"), 1.0)):
         with pytest.raises(InputError, match="pose_error"):
             ag.plan(str(box_mesh), "pick", candidates=2, pose_error=bad)
     # the error's sizes are exact, its directions drawn from the seed

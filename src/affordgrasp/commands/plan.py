@@ -118,7 +118,7 @@ def add_arguments(p) -> None:
     p.add_argument(
         "--uses",
         type=int,
-        default=PLAN_USES,
+        default=None,
         help="with --model views and a task that reads the use point (beat, cut): use "
         f"points drawn on the fused surface and paired with every grasp (default {PLAN_USES})",
     )
@@ -179,7 +179,12 @@ def run(args, out) -> None:
         from ..learning.plan import VIEWS, plan, trial_names
         from ..learning.torch_support import require_safetensors, require_torch
 
-        for value, option in ((args.robust_check, "--robust-check"), (args.refine, "--refine")):
+        options = (
+            (args.robust_check, "--robust-check"),
+            (args.refine, "--refine"),
+            (args.uses, "--uses"),
+        )
+        for value, option in options:
             if value is not None and models != VIEWS:
                 raise InputError(
                     f"{option} simulates candidates on the fused views' surface: it needs "
@@ -220,7 +225,7 @@ def run(args, out) -> None:
         **({} if args.robust_check is None else {"robust_check": args.robust_check}),
         **({} if args.refine is None else {"refine": args.refine}),
         pose_error=pose_error,
-        uses=args.uses,
+        **({} if args.uses is None else {"uses": args.uses}),
         progress=progress,
     )
     doc = result.summary()

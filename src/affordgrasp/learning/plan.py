@@ -12,14 +12,17 @@ then says how good the decision truly was:
    candidate's for learned models; the first :data:`FUSED_VIEWS`, those it fuses, for
    ``models="views"``);
 3. by default (``models="views"``) fuse the first :data:`FUSED_VIEWS` images into a
-   surface (:mod:`affordgrasp.vision.fusion`) and simulate every candidate on it; or
-   predict with learned models in one batch;
-4. choose: on the fused surface's simulation by
-   :func:`~affordgrasp.learning.decisions.margin_order` (viable, then task-feasible, then
-   the widest ε); more candidates drawn near its first ``refine`` ones, simulated there
-   and ranked with them; the first ``robust_check`` of all simulated there again under
-   small perturbations and the one whose copies keep the widest ε first
-   (:func:`~affordgrasp.learning.decisions.robust_first`); with models by
+   surface (:mod:`affordgrasp.vision.fusion`) and simulate every candidate on it, placed
+   on the surface's own hull (for a task that reads the use point, each grasp with its
+   best use point there); or predict with learned models in one batch;
+4. choose (:func:`decide_on_fused`): on the fused surface's simulation, viable there
+   first, then by the task probability (beat, cut) or, for other tasks,
+   :func:`~affordgrasp.learning.decisions.margin_order` (task-feasible, then the widest
+   ε); more candidates drawn near its first ``refine`` ones, simulated there and ranked
+   with them; the first ``robust_check`` of all simulated there again under
+   perturbations and the one that fares best under them first (the robust task
+   probability, or the widest ε the copies keep;
+   :func:`~affordgrasp.learning.decisions.robust_first`); with models by
    :func:`~affordgrasp.learning.decisions.decision_order` (a classifier alone: the most
    probably viable; with a regressor as well, the classifier's decision threshold, then
    least predicted effort);
@@ -28,7 +31,8 @@ then says how good the decision truly was:
    ``physics=True`` replay the chosen grasp in MuJoCo (the physics extra).
 
 The simulation of step 5 is the check, not part of the decision: the deciders see only the
-depth images and the poses (the fused surface is made from the images alone).
+depth images and the poses (the fused surface is made from the images alone), and the
+views are aimed from a believed pose of the object (``pose_error``).
 """
 
 from __future__ import annotations
@@ -174,7 +178,10 @@ class Plan:
     use_point : (n, 3) float64 ndarray or None
         With ``models="views"`` and a task that reads the use point: each candidate's use
         point on the fused surface (the best of the use points paired with its grasp
-        there); the true check uses the true surface's point closest to it. Else None.
+        there; NaN where its use ray missed the surface); the true check uses the use ray
+        from the true centre of mass through the true surface's point closest to it (its
+        last hit: that point, unless the ray meets the surface again beyond it). Else
+        None.
     fused_robust_score : (n,) float64 ndarray or None
         With a task probability that reads the use point and ``robust_check``: the task's
         robust probability on the fused surface of the candidates re-simulated (NaN for the
@@ -260,7 +267,11 @@ class Plan:
                     or not np.isfinite(self.fused_robust_score[c])
                     else float(self.fused_robust_score[c])
                 ),
-                "fused_use_point": (None if self.use_point is None else self.use_point[c].tolist()),
+                "fused_use_point": (
+                    None
+                    if self.use_point is None or not np.isfinite(self.use_point[c]).all()
+                    else self.use_point[c].tolist()
+                ),
                 "true_score": float(self.true_score[c]),
                 "viable": bool(self.viable[c]),
                 "feasible": bool(self._feasible()[c]),
@@ -415,9 +426,9 @@ def plan(
         ``"views"`` (the default; no learned model): the first :data:`FUSED_VIEWS`
         candidates' depth images are fused into a surface
         (:func:`affordgrasp.vision.fusion.fused_object`), every candidate is simulated on
-        it from the pose it has on the object, and the candidates are ranked by
-        :func:`~affordgrasp.learning.decisions.margin_order` on that simulation: viable
-        there first, then task-feasible, by decreasing ε; the first ``refine`` of them get
+        it, placed on its hull, and the candidates are ranked on that simulation
+        (:func:`decide_on_fused`: viable there first, then the task probability or
+        task-feasible by decreasing ε); the first ``refine`` of them get
         neighbours, simulated there as well, and the first ``robust_check`` of all are
         checked under perturbation (needs scikit-image, the ``learn`` extra; the chosen
         grasp's viability on unseen objects: docs/learning.md; the shipped classifier's:
@@ -487,7 +498,10 @@ def plan(
     -----
     The measures judge the chosen grasp among every candidate simulated, refined ones
     included (its percentile, the oracle); the random choice's expectation is over the
-    drawn candidates alone, the uniform draw a planner without a decider would choose from.
+    drawn candidates alone, the uniform draw a planner without a decider would choose
+    from (for a task that reads the use point, each with the use point the pairing on the
+    fused surface gave it). A task probability's candidate is task-feasible when its value
+    reaches 0.5 (p_T to six decimals).
     """
     from ..grasp.pregrasp import directions_towards, sample_inputs, use_points
     from ..objects import load_object
@@ -670,8 +684,12 @@ def plan(
 
 def _pose_error(value) -> tuple[float, float] | None:
     """``plan``'s pose error as (m, degrees), or None for none."""
-    if value is None:
+    if value is None or (
+        isinstance(value, int | float) and not isinstance(value, bool) and value == 0
+    ):
         return None
+    if isinstance(value, str | bytes) or not hasattr(value, "__iter__"):
+        raise InputError(f"pose_error must be (metres, degrees) or None, got {value!r}")
     try:
         m, deg = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -791,7 +809,7 @@ def decide_on_fused(
     from ..pipeline import evaluate_inputs
     from ..robust import copy_metrics
     from ..search.cem import nearby_inputs
-    from ..search.pairs import best_use_per_grasp, pair_scores
+    from ..search.pairs import PAIR_GRASPS, best_use_per_grasp, pair_scores
     from ..search.use_points import draw_use_points
     from ..tasks import is_viable
     from ..tasks.metric_columns import MetricColumns
@@ -813,9 +831,16 @@ def decide_on_fused(
         eps = t.column("epsilon").to_numpy(zero_copy_only=False)
         score = task.evaluate(t, mode)
         if points is not None:
-            best, best_use = best_use_per_grasp(
-                pair_scores(fused, t, points, task.name, mode), len(q0)
-            )
+            # pair_scores pairs at most PAIR_GRASPS grasps of a call: every grasp here
+            best = np.full(len(q0), -np.inf)
+            best_use = np.full(len(q0), -1, dtype=np.int64)
+            for first in range(0, len(q0), PAIR_GRASPS):
+                part = t.slice(first, PAIR_GRASPS)
+                b, u = best_use_per_grasp(
+                    pair_scores(fused, part, points, task.name, mode), part.num_rows
+                )
+                best[first : first + part.num_rows] = b
+                best_use[first : first + part.num_rows] = u
             has = best_use >= 0
             q_dir = q_dir.copy()
             q_dir[has] = points.use_dir[best_use[has]]
@@ -823,9 +848,10 @@ def decide_on_fused(
         return score, is_viable(t), eps, q_dir
 
     def ranked(viable, score, eps):
-        if by_value:  # the most probable first, the widest ε among ties
+        if by_value:  # viable first, the most probable first, the widest ε among ties
             e = np.nan_to_num(np.asarray(eps, dtype=np.float64), nan=0.0)
-            return np.lexsort((-e, -np.nan_to_num(score, nan=-np.inf)))
+            v = np.asarray(viable, dtype=bool)
+            return np.lexsort((-e, -np.nan_to_num(score, nan=-np.inf), ~v))
         return margin_order(viable, score, eps)
 
     score, viable, epsilon, use_dir = on_fused(p0, use_dir)
@@ -834,7 +860,7 @@ def decide_on_fused(
     if by_value:
         rule = (
             f"on the surface fused from {views} view{plural}, each grasp with its best of "
-            f"{n_uses} use points there: the highest {task.name} probability"
+            f"{n_uses} use points there: viable, then the highest {task.name} probability"
         )
     else:
         rule = (
@@ -1038,7 +1064,8 @@ def replay(obj, hand, row: pa.Table, trials: Sequence[str] = ()) -> dict:
         from ..physics.settings import PhysicsSettings
 
         out = validate_rows(row, hand, {obj.name: obj}, PhysicsSettings(), trials=tuple(trials))
-        return {k: v[0] for k, v in out.to_pydict().items()}
+        # the outcome and the trials' columns (not the row's own metrics again)
+        return {k: v[0] for k, v in out.to_pydict().items() if k not in row.column_names}
     up = row.column("use_point")[0].as_py()
     un = row.column("use_normal")[0].as_py()
     scene = build_scene(hand, obj)

@@ -346,18 +346,21 @@ def stored_probabilities(ds: Dataset, tasks: Sequence[Task], robust: bool) -> li
     """
     from ..tasks.probability import model_digests
 
-    recorded = ds.manifest.get("probability_models") or {}
+    recorded = dict(ds.manifest.get("probability_models") or {})
+    if recorded:  # recorded before the code's version was: version 1
+        recorded.setdefault("code", "1")
     names = set(ds.arrow().schema.names)
     if bool(robust) != (ds.robust is not None):
         return []
     current = model_digests()
+
+    def of(digests: dict, task: str) -> dict:  # the task's models and the code's version
+        return {k: v for k, v in digests.items() if k == "code" or k.split("-")[0] == task}
+
     return [
         t.name
         for t in tasks
-        if t.probability
-        and f"p_{t.name}" in names
-        and all(recorded.get(k) == v for k, v in current.items() if k.split("-")[0] == t.name)
-        and any(k.split("-")[0] == t.name for k in recorded)
+        if t.probability and f"p_{t.name}" in names and of(recorded, t.name) == of(current, t.name)
     ]
 
 

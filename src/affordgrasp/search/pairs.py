@@ -74,7 +74,7 @@ _SCREEN_IMPACT = 0.0
 _SCREEN_TOP = 8
 # a probability task that reads the use point scores the pairs of this many grasps per call:
 # those most likely to hold the tool (p_pick)
-_PAIR_GRASPS = 512
+PAIR_GRASPS = 512
 # pairs screened at a time (bounds the memory of a search over G × U)
 _BLOCK_PAIRS = 1 << 20
 
@@ -231,11 +231,11 @@ def pair_scores(
         )
     if "contact_width" not in col:
         col["contact_width"] = contact_width(obj.mesh_data, all_points, all_normals, all_offsets)
-    if t.probability and USE_COLUMNS & set(t.requires) and len(with_contacts) > _PAIR_GRASPS:
+    if t.probability and USE_COLUMNS & set(t.requires) and len(with_contacts) > PAIR_GRASPS:
         # a grasp that does not hold the tool strikes or cuts with nothing: the pairs of the
-        # _PAIR_GRASPS grasps most likely to hold it (p_pick), in their original order
+        # PAIR_GRASPS grasps most likely to hold it (p_pick), in their original order
         p_pick = task_probability("pick", MetricColumns({c: col[c] for c in GRASP_COLUMNS}))
-        best = np.argsort(-p_pick[with_contacts], kind="stable")[:_PAIR_GRASPS]
+        best = np.argsort(-p_pick[with_contacts], kind="stable")[:PAIR_GRASPS]
         with_contacts = np.sort(with_contacts[best])
     step = max(1, _BLOCK_PAIRS // max(len(use_rows), 1))
     blocks = []

@@ -286,6 +286,9 @@ def _model_file(task: str, robust: bool) -> str:
     return f"{task}{'-robust' if robust else ''}.json"
 
 
+PROBABILITY_CODE_VERSION = "1"
+
+
 @cache
 def model_digests() -> dict[str, str]:
     """The content digest of every shipped task model (a dataset records them: its stored
@@ -295,11 +298,13 @@ def model_digests() -> dict[str, str]:
     -------
     dict of str to str
         ``beat``, ``beat-robust``, ... → the first 16 hex digits of the SHA-256 of the
-        model file.
+        model file, and ``code`` → :data:`PROBABILITY_CODE_VERSION`.
     """
     import hashlib
 
-    out = {}
+    # the code that turns columns into p_T (features, transforms, the tree walk, the rule
+    # for a missing use point): bump it when that code changes what it computes
+    out = {"code": PROBABILITY_CODE_VERSION}
     for task in PROBABILITY_TASKS:
         for robust in (False, True):
             path = resources.files("affordgrasp.tasks").joinpath(
