@@ -170,3 +170,6 @@ def test_best_reads_the_stored_probabilities_of_the_models_in_use(
     assert any("task probability models" in d for d in diffs)
     older = {k: v for k, v in ds.manifest.items() if k != "probability_models"}
     assert manifest_differences(older, ds.manifest) == []
+    # recorded before the code's version was: version 1, the same models
+    models = {k: v for k, v in ds.manifest["probability_models"].items() if k != "code"}
+    assert manifest_differences({**ds.manifest, "probability_models": models}, ds.manifest) == []

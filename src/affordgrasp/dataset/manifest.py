@@ -212,7 +212,9 @@ def manifest_differences(existing: dict, requested: dict) -> list[str]:
                 diffs.append(f"samples drawn with {a} streams there vs {b} here (--streams)")
         elif key == "probability_models":
             # recorded since the task probabilities: a dataset written before resumes as is
-            if a is not None and a != b:
+            from ..tasks.probability import recorded_digests
+
+            if a is not None and recorded_digests(a) != recorded_digests(b):
                 diffs.append(
                     "task probability models (p_beat, p_cut, p_pick) of another version "
                     "there; resume it with that version, or generate a new dataset"

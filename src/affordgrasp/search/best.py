@@ -344,11 +344,9 @@ def stored_probabilities(ds: Dataset, tasks: Sequence[Task], robust: bool) -> li
     list of str
         Task names.
     """
-    from ..tasks.probability import model_digests
+    from ..tasks.probability import model_digests, recorded_digests
 
-    recorded = dict(ds.manifest.get("probability_models") or {})
-    if recorded:  # recorded before the code's version was: version 1
-        recorded.setdefault("code", "1")
+    recorded = recorded_digests(ds.manifest.get("probability_models"))
     names = set(ds.arrow().schema.names)
     if bool(robust) != (ds.robust is not None):
         return []

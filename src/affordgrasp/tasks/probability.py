@@ -289,6 +289,26 @@ def _model_file(task: str, robust: bool) -> str:
 PROBABILITY_CODE_VERSION = "1"
 
 
+def recorded_digests(value: Mapping[str, str] | None) -> dict[str, str]:
+    """A manifest's ``probability_models`` as :func:`model_digests` would write it now.
+
+    Parameters
+    ----------
+    value : mapping or None
+        The manifest's record (None: the dataset recorded none).
+
+    Returns
+    -------
+    dict of str to str
+        Empty when none was recorded; a record written before the code's version was
+        recorded is version ``"1"``.
+    """
+    out = dict(value or {})
+    if out:
+        out.setdefault("code", "1")
+    return out
+
+
 @cache
 def model_digests() -> dict[str, str]:
     """The content digest of every shipped task model (a dataset records them: its stored
