@@ -365,3 +365,50 @@ def test_a_dataset_of_the_previous_release_still_opens(box_mesh, tmp_path, caplo
     shard_paths(old)[1].unlink()  # the card says the run completed: a lost shard
     with pytest.raises(DatasetError, match="lost the shard part-00000-000000000008"):
         read_dataset(old)
+
+
+def test_a_shard_checked_before_is_not_read_again_until_it_changes(dataset, monkeypatch):
+    """Between processes, a shard whose size, modification time, inode and checksum are
+    those it had when it was checked is trusted; one written since is checked again."""
+    from affordgrasp.dataset import checksums, shards
+
+    read_dataset(dataset)  # checks every shard and records them (the user cache)
+    # a new process: nothing verified in memory
+    monkeypatch.setattr(checksums, "_VERIFIED", set())
+    monkeypatch.setattr(shards, "_AS_PLANNED", set())
+    calls = []
+    real = shards.shard_damage
+    monkeypatch.setattr(shards, "shard_damage", lambda p, r: calls.append(p) or real(p, r))
+    read_dataset(dataset)
+    assert calls == []
+    damaged = shard_paths(dataset)[1]
+    _overwrite_mid_file(damaged)  # same size, a new modification time
+    with pytest.raises(DatasetError, match=rf"{damaged.name}: its content differs"):
+        read_dataset(dataset)
+    assert calls == [damaged]
+
+
+def test_scanning_file_by_file_reads_the_rows_the_dataset_holds(dataset):
+    """scan_files: the dataset's rows in its file order, a filter applied, a column a file
+    lacks read as null (as the dataset reads it)."""
+    import pyarrow as pa
+    import pyarrow.dataset as pads
+
+    from affordgrasp.dataset.handle import Dataset, scan_files
+
+    arrow = Dataset.open(dataset).arrow()
+    whole = arrow.to_table(columns=["sample", "epsilon"])
+    got = pa.Table.from_batches(list(scan_files(arrow, ["sample", "epsilon"], batch_size=5)))
+    assert got.equals(whole)
+    assert max(b.num_rows for b in scan_files(arrow, ["sample"], batch_size=5)) == 5
+    flt = pads.field("sample") >= 20
+    kept = pa.Table.from_batches(list(scan_files(arrow, ["sample"], flt)))
+    assert kept.column("sample").to_pylist() == list(range(20, SAMPLES))
+    # a loose file without a column the dataset schema has
+    loose = dataset.parent / "loose"
+    loose.mkdir()
+    first = shard_paths(dataset)[0]
+    pq.write_table(pq.read_table(first).drop_columns(["epsilon"]), loose / "a.parquet")
+    ds = pads.dataset([str(loose / "a.parquet")], schema=arrow.schema, format="parquet")
+    t = pa.Table.from_batches(list(scan_files(ds, ["sample", "epsilon"])))
+    assert t.column("epsilon").null_count == t.num_rows == SHARD

@@ -218,7 +218,13 @@ def run(args, out) -> None:
         rows,
     )
     out.text(
-        f"scanned {result.rows_scanned:,} samples of {', '.join(result.objects)}; "
+        f"scanned {result.rows_scanned:,} samples of "
+        + (
+            ", ".join(result.objects)
+            if len(result.objects) <= 8
+            else f"{len(result.objects)} objects ({', '.join(result.objects[:3])}, ...)"
+        )
+        + "; "
         f"{result.finite:,} have a finite F_T"
     )
     best = float(result.table.column("affordance")[0].as_py()) if rows else None

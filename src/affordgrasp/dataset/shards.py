@@ -37,7 +37,7 @@ import pyarrow.parquet as pq
 from ..columns import METRIC_COLUMNS
 from ..errors import DatasetError, InternalError
 from ..runtime import writing
-from .checksums import read_checksums, record_checksum, shard_damage
+from .checksums import CHECKSUM_ALGORITHM, read_checksums, record_checksum, shard_damage
 from .manifest import CARD_JSON_NAME, MANIFEST_NAME
 
 log = logging.getLogger(__name__)
@@ -371,17 +371,87 @@ def check_shards(
             "dataset %s predates shard checksums: damaged shards cannot be detected", directory
         )
     bad = []
-    for path in paths:
+    record = _checked_record(directory, manifest, schema)
+    checked = _read_checked(record)
+    passed = set()
+
+    def check(path: Path) -> tuple[str | None, str | None]:
+        key = _checked_key(path, records.get(path.name))
+        if key is not None and key in checked:
+            return key, None
         why = shard_damage(path, records.get(path.name)) if checksums else None
-        why = why or shard_foreign(path, plan[path.name], manifest, schema)
-        if why is not None:
-            bad.append(f"{path.name}: {why}")
+        return key, why or shard_foreign(path, plan[path.name], manifest, schema)
+
+    # threads: the hashing and the Parquet reads release the GIL (a 10⁷-row dataset's first
+    # check, 5.5 GB, takes half the time on two cores)
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=min(4, os.cpu_count() or 1)) as pool:
+        for path, (key, why) in zip(paths, pool.map(check, paths), strict=True):
+            if why is not None:
+                bad.append(f"{path.name}: {why}")
+            elif key is not None:
+                passed.add(key)
+    if passed != checked:
+        _write_checked(record, passed)
     if bad:
         raise refuse(
             "has a damaged or foreign shard,",
             bad,
             f"run the command that made it again to rewrite it: {rerun}",
         )
+
+
+# What this machine found as written and as planned, between processes: a shard whose name,
+# size, modification time, inode and recorded checksum are those it had when checked is not
+# read again (a 10⁷-row dataset: 2,500 shards, 5.5 GB, about 8 s to read, hash and check).
+# One file per dataset under the user cache, for this code, manifest and schema.
+CHECKED_VERSION = 1
+
+
+def _checked_record(directory: Path, manifest: dict, schema: pa.Schema) -> Path:
+    import hashlib
+
+    from .. import __version__
+    from ..caching import cache_dir
+
+    key = json.dumps(
+        [
+            CHECKED_VERSION,
+            __version__,
+            str(Path(directory).resolve()),
+            manifest,
+            schema.to_string(show_schema_metadata=False),
+        ],
+        sort_keys=True,
+        default=str,
+    )
+    return cache_dir() / "checked" / f"{hashlib.sha256(key.encode()).hexdigest()[:32]}.json"
+
+
+def _checked_key(path: Path, record: dict | None) -> str | None:
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    checksum = None if record is None else record.get(CHECKSUM_ALGORITHM)
+    return f"{path.name}:{st.st_size}:{st.st_mtime_ns}:{st.st_ino}:{checksum}"
+
+
+def _read_checked(record: Path) -> set[str]:
+    try:
+        keys = json.loads(record.read_text())
+    except (OSError, ValueError):
+        return set()
+    return set(keys) if isinstance(keys, list) else set()
+
+
+def _write_checked(record: Path, keys: set[str]) -> None:
+    try:
+        record.parent.mkdir(parents=True, exist_ok=True)
+        writing.atomic_write(record, json.dumps(sorted(keys)).encode())
+    except OSError as exc:  # a cache that cannot be written: the next reader checks again
+        log.debug("could not record the checked shards in %s: %s", record, exc)
 
 
 def _footer_facts(meta: pq.FileMetaData) -> dict | None:

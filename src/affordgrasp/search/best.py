@@ -30,7 +30,7 @@ import pyarrow.dataset as pads
 import pyarrow.parquet as pq
 
 from ..columns import HOLD_EFFORT_COLUMNS, HOLD_EFFORT_SUM, METRIC_COLUMNS, hold_effort_sum
-from ..dataset.handle import Dataset, DatasetLike, read_errors
+from ..dataset.handle import Dataset, DatasetLike, read_errors, scan_files
 from ..errors import DatasetError, bad_parameter
 from ..robust import task_scores
 from ..runtime.writing import atomic_write
@@ -292,12 +292,10 @@ def best_grasps(
     stored = stored_probabilities(ds, [task_obj], robust)
     if stored:  # p_T and the columns of its ties only: a tenth of the bytes to read
         metric_cols = [f"p_{task_obj.name}", *TIE_COLUMNS[task_obj.name]]
-    scanner = arrow.scanner(
-        columns=["object", "sample", *metric_cols], filter=flt, batch_size=batch_size
-    )
+    batches = scan_files(arrow, ["object", "sample", *metric_cols], flt, batch_size)
     with read_errors(directory):
         _, kept = scan_top(
-            (pa.Table.from_batches([batch]) for batch in scanner.to_batches()),
+            (pa.Table.from_batches([batch]) for batch in batches),
             [task_obj],
             top,
             mode=mode,
@@ -308,8 +306,18 @@ def best_grasps(
         )
     found = kept.get((None, task_obj.name), TopScan(TopRows(top, 3)))
     best_v, (best_o, best_s, _) = found.best.values, found.best.keys
+    # the winners' shards, from the plan (an object's sample s lies in the shard starting at
+    # s rounded down to the shard size): the fetch opens those files only
+    index = {o["name"]: int(o["index"]) for o in ds.manifest["objects"]}
+    size = ds.shard_size
+    files = sorted(
+        {
+            str(directory / f"part-{index[names[o]]:05d}-{(int(s) // size) * size:012d}.parquet")
+            for o, s in zip(best_o.tolist(), best_s.tolist(), strict=True)
+        }
+    )
     with read_errors(directory):
-        rows = _fetch_rows(arrow, names, best_o, best_s)
+        rows = _fetch_rows(arrow, names, best_o, best_s, files)
     rows = rows.append_column(RANK_COLUMN, pa.array(np.arange(1, len(best_v) + 1), pa.int64()))
     rows = rows.append_column(AFFORDANCE_COLUMN, pa.array(best_v, pa.float64()))
     return BestGrasps(
@@ -363,7 +371,11 @@ def stored_probabilities(ds: Dataset, tasks: Sequence[Task], robust: bool) -> li
 
 
 def _fetch_rows(
-    dataset: pads.Dataset, names: list[str], obj: np.ndarray, sample: np.ndarray
+    dataset: pads.Dataset,
+    names: list[str],
+    obj: np.ndarray,
+    sample: np.ndarray,
+    files: Sequence[str] | None = None,
 ) -> pa.Table:
     """The full rows of (object, sample) pairs, in the order given."""
     if len(obj) == 0:
@@ -373,7 +385,9 @@ def _fetch_rows(
         term = (pads.field("object") == names[o]) & (pads.field("sample") == s)
         flt = term if flt is None else flt | term
     # One scan; row-group statistics on (object, sample) skip the shards without a winner.
-    found = dataset.to_table(filter=flt)
+    if files is not None:  # the files that hold them
+        dataset = pads.dataset(list(files), schema=dataset.schema, format="parquet")
+    found = pa.Table.from_batches(list(scan_files(dataset, None, flt)), schema=dataset.schema)
     where = {
         (a, b): i
         for i, (a, b) in enumerate(

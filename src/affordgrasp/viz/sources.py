@@ -18,7 +18,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.dataset as pads
 
-from ..dataset.handle import Dataset, open_dataset, read_errors
+from ..dataset.handle import Dataset, open_dataset, read_errors, scan_files
 from ..errors import DatasetError
 from ..hands.model import Hand
 
@@ -186,9 +186,8 @@ class DatasetSource(GraspSource):
         return self._dataset.schema
 
     def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
-        scanner = self._dataset.scanner(columns=list(columns), batch_size=BATCH_ROWS)
         with read_errors(self.directory):
-            for batch in scanner.to_batches():
+            for batch in scan_files(self._dataset, list(columns), batch_size=BATCH_ROWS):
                 if batch.num_rows:
                     yield pa.Table.from_batches([batch])
 
