@@ -412,7 +412,7 @@ CHECKED_VERSION = 1
 def _checked_record(directory: Path, manifest: dict, schema: pa.Schema) -> Path:
     import hashlib
 
-    from .. import __version__
+    from .._version import __version__
     from ..caching import cache_dir
 
     key = json.dumps(
