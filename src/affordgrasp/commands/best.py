@@ -198,15 +198,20 @@ def run(args, out) -> None:
         check_output_file(args.out, "--out", suffix=".parquet")
 
     robust = check_dataset_robust(args.directory, args.robust)
-    result = best_grasps(
-        args.directory,
-        args.task,
-        mode=args.mode,
-        objects=args.object,
-        top=args.top,
-        thresholds=parse_thresholds(args.threshold),
-        robust=robust,
-    )
+    from ..dataset.handle import Dataset
+
+    ds = Dataset.open(args.directory)
+    with out.progress(f"best {args.task}", total=ds.count_rows(args.object)) as advance:
+        result = best_grasps(
+            ds,
+            args.task,
+            mode=args.mode,
+            objects=args.object,
+            top=args.top,
+            thresholds=parse_thresholds(args.threshold),
+            robust=robust,
+            progress=advance,
+        )
     shown = shown_metrics(args.task)
     rows = [
         [r["rank"], r["object"], r["sample"], r["affordance"], r["status"], *metric_cells(r, shown)]

@@ -86,16 +86,18 @@ def run(args, out) -> None:
     if tasks and not _has_metrics(schema):
         out.text("the sources hold no metric columns: skipping the affordance plot")
         tasks = []
-    summary = summarize(
-        scan,
-        schema,
-        tasks,
-        mode=args.mode,
-        thresholds=thresholds,
-        bins=args.bins,
-        robust=bool(args.robust),
-        stored=_stored(sources, tasks, bool(args.robust)),
-    )
+    with out.progress("plots (two passes)", total=2 * _rows(sources)) as advance:
+        summary = summarize(
+            scan,
+            schema,
+            tasks,
+            mode=args.mode,
+            thresholds=thresholds,
+            bins=args.bins,
+            robust=bool(args.robust),
+            stored=_stored(sources, tasks, bool(args.robust)),
+            progress=advance,
+        )
     if summary.rows == 0:
         raise InputError("the sources hold no rows; nothing to plot")
     files = save_plots(summary, args.out, mode=args.mode)
@@ -142,6 +144,11 @@ def run(args, out) -> None:
             },
         }
     )
+
+
+def _rows(sources) -> int:
+    """Rows of the sources, for the progress bar."""
+    return sum(s.count_rows() for s in sources)
 
 
 def _stored(sources, tasks, robust: bool) -> list[str]:

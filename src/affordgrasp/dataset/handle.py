@@ -476,7 +476,18 @@ class Dataset:
         -------
         int
         """
-        return self.arrow().count_rows(filter=object_filter(self.select(objects)))
+        from .shards import plan_shards
+
+        self.arrow()  # the shards on disk are the plan's (checked), so the plan counts them
+        chosen = self.select(objects)
+        names = [o["name"] for o in self.manifest["objects"]]
+        planned = {s.name: s for s in plan_shards(len(names), self.samples, self.shard_size)}
+        return sum(
+            planned[p.name].rows
+            for p in self.shards()
+            if p.name in planned
+            and (chosen is None or names[planned[p.name].object_index] in chosen)
+        )
 
 
 DatasetLike = str | os.PathLike | Dataset

@@ -227,6 +227,7 @@ def best_grasps(
     thresholds: Mapping[str, float] | None = None,
     batch_size: int = 65536,
     robust: bool = False,
+    progress: Callable[[int], object] | None = None,
 ) -> BestGrasps:
     """The ``top`` rows of a dataset by the affordance F_T of ``task`` (paper §IV-C).
 
@@ -249,6 +250,8 @@ def best_grasps(
     robust : bool
         Rank by the robust score (a dataset generated with ``--robust K``;
         :func:`affordgrasp.robust.ranking_column`).
+    progress : callable, optional
+        Called with the number of rows after each batch scanned.
 
     Returns
     -------
@@ -303,6 +306,7 @@ def best_grasps(
             robust=robust,
             objects=names,
             stored=stored,
+            progress=progress,
         )
     found = kept.get((None, task_obj.name), TopScan(TopRows(top, 3)))
     best_v, (best_o, best_s, _) = found.best.values, found.best.keys

@@ -260,6 +260,7 @@ def summarize(
     bins: int = BINS,
     robust: bool = False,
     stored: Sequence[str] = (),
+    progress: Callable[[int], object] | None = None,
 ) -> DatasetSummary:
     """Two passes over ``scan(columns)`` (an iterable of tables) for :func:`save_plots`.
 
@@ -282,6 +283,8 @@ def summarize(
     stored : sequence of str
         Task probabilities whose ``p_T`` column the rows carry from the models in use
         (:func:`affordgrasp.search.best.stored_probabilities`): read, not computed again.
+    progress : callable, optional
+        Called with the number of rows after each batch of either pass.
 
     Returns
     -------
@@ -347,6 +350,8 @@ def summarize(
 
     for table in scan(columns):  # pass 1: counts and ranges
         out.rows += table.num_rows
+        if progress is not None:
+            progress(table.num_rows)
         for name in numeric:
             out.metrics[name].see(_column(table, name))
         grp = groups(table)
@@ -377,6 +382,8 @@ def summarize(
             s.counts = None if shared.edges is None else np.zeros(bins, dtype=np.int64)
     if tasks or numeric:
         for table in scan(columns):  # pass 2: histograms
+            if progress is not None:
+                progress(table.num_rows)
             for name in numeric:
                 out.metrics[name].add(_column(table, name))
             if tasks:

@@ -49,6 +49,15 @@ class GraspSource:
         """
         raise NotImplementedError
 
+    def count_rows(self) -> int:
+        """How many rows :meth:`scan` yields.
+
+        Returns
+        -------
+        int
+        """
+        raise NotImplementedError
+
     def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
         """The rows in batches, some columns only.
 
@@ -124,6 +133,15 @@ class TableSource(GraspSource):
     def schema(self) -> pa.Schema:
         return self.table.schema
 
+    def count_rows(self) -> int:
+        """Rows held.
+
+        Returns
+        -------
+        int
+        """
+        return self.table.num_rows
+
     def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
         t = self.table.select(list(columns))
         for start in range(0, max(t.num_rows, 1), BATCH_ROWS):
@@ -184,6 +202,18 @@ class DatasetSource(GraspSource):
 
     def schema(self) -> pa.Schema:
         return self._dataset.schema
+
+    def count_rows(self) -> int:
+        """Rows in the files (a dataset's from its plan, loose files' from their footers).
+
+        Returns
+        -------
+        int
+        """
+        if self.dataset is not None:
+            return self.dataset.count_rows()
+        with read_errors(self.directory):
+            return self._dataset.count_rows()
 
     def scan(self, columns: Sequence[str]) -> Iterator[pa.Table]:
         with read_errors(self.directory):
