@@ -115,6 +115,10 @@ def main() -> None:
                         "top5": p.measures["model"]["topk_precision"],
                         "hold": None if p.physics is None else bool(p.physics.get("hold_ok")),
                         "cpu_s": seconds,
+                        "decide_s": sum(
+                            p.timings.get(k, 0.0) for k in ("render", "fuse", "predict")
+                        ),
+                        "predict_s": p.timings.get("predict", 0.0),
                     }
                 )
                 print(json.dumps(rows[-1]), flush=True)
@@ -135,6 +139,11 @@ def main() -> None:
     if args.physics:
         print(f"  holds    {per_object('hold'):.3f}")
     print(f"  CPU s per decision: median {np.median([r['cpu_s'] for r in rows]):.2f}")
+    print(
+        f"  wall s of the decision (render, fuse, predict): median "
+        f"{np.median([r['decide_s'] for r in rows]):.2f}, of which predict "
+        f"{np.median([r['predict_s'] for r in rows]):.3f}"
+    )
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ from ..grasp.pregrasp import (
     PLAN_REFINE_NEIGHBOURS,
     PLAN_ROBUST_CHECK,
     PLAN_USES,
+    PLAN_VERIFY,
     POSE_ERROR_DEG,
     POSE_ERROR_M,
 )
@@ -26,6 +27,7 @@ LIMITS = {
     "robust_check": (None, 1000, "each is re-simulated under perturbations"),
     "uses": (1, 100_000, "every grasp is paired with each"),
     "refine": (None, 1000, f"{PLAN_REFINE_NEIGHBOURS} more candidates are drawn near each"),
+    "verify": (None, 100_000, "each is simulated on the fused surface"),
     "size_m": SIZE_M,
 }
 
@@ -56,6 +58,9 @@ def add_arguments(p) -> None:
         "into a surface, every candidate simulated on it, more drawn near the best ones, of "
         "the viable ones with the widest epsilon there the one that keeps it best under small "
         "perturbations chosen; needs scikit-image), "
+        "learned (the same fused surface read as a cloud by the shipped scorer network: "
+        "the most probably viable candidate, in milliseconds; pick and other tasks without "
+        "a use point), "
         "classifier (the shipped classifier "
         "alone: the most probably viable candidate), default (shipped classifier + "
         "regressor: the classifier's threshold, then least predicted effort), regressor, "
@@ -93,6 +98,15 @@ def add_arguments(p) -> None:
         help=f"with --model views: draw {PLAN_REFINE_NEIGHBOURS} more candidates near each of "
         "the first N on the fused surface and rank them with the others (default "
         f"{PLAN_REFINE}; 0: none)",
+    )
+    p.add_argument(
+        "--verify",
+        type=int,
+        default=None,
+        metavar="N",
+        help="with --model learned: simulate the scorer's first N candidates on the fused "
+        f"surface and take the viable one with the widest epsilon there (default "
+        f"{PLAN_VERIFY}; 0: the scorer's first)",
     )
     p.add_argument("--hand", default="barrett", help=HAND_HELP)
     p.add_argument(
@@ -176,7 +190,7 @@ def run(args, out) -> None:
     check_fits_in_memory("--candidates", args.candidates, CANDIDATE_BYTES)
     models = args.model.split(",") if "," in args.model else args.model
     try:
-        from ..learning.plan import VIEWS, plan, trial_names
+        from ..learning.plan import LEARNED, VIEWS, plan, trial_names
         from ..learning.torch_support import require_safetensors, require_torch
 
         options = (
@@ -190,11 +204,14 @@ def run(args, out) -> None:
                     f"{option} simulates candidates on the fused views' surface: it needs "
                     "--model views (the default)"
                 )
-        if models == VIEWS:
+        if args.verify is not None and models != LEARNED:
+            raise InputError("--verify checks the learned scorer's first candidates: it needs "
+                             "--model learned")  # fmt: skip
+        if models in (VIEWS, LEARNED):
             from ..vision.fusion import require_marching_cubes
 
             require_marching_cubes()
-        else:
+        if models not in (VIEWS, LEARNED):
             require_torch()
             require_safetensors()
         if args.physics:
@@ -226,6 +243,7 @@ def run(args, out) -> None:
         **({} if args.refine is None else {"refine": args.refine}),
         pose_error=pose_error,
         **({} if args.uses is None else {"uses": args.uses}),
+        **({} if args.verify is None else {"verify": args.verify}),
         progress=progress,
     )
     doc = result.summary()

@@ -387,6 +387,10 @@ PLAN_REFINE_SIGMA = 0.04
 # A task that reads the use point: ``plan`` pairs every candidate's grasp with PLAN_USES use
 # points drawn by area on the fused surface and keeps its best (search.pairs).
 PLAN_USES = 1000
+# With the learned scorer (``plan --model learned``), its first PLAN_VERIFY candidates are
+# simulated on the fused surface and the viable one with the widest ε there goes first:
+# chosen on validation objects among 0, 4, 8 and 16 (docs/learning.md).
+PLAN_VERIFY = 16
 # ``plan`` aims its views from a pose estimate this far off (vision.camera.pose_error_transform):
 # the robot believes the object is 1 cm and 5° away from where it is, a typical estimate from
 # a fixed camera or a model registration (docs/learning.md).

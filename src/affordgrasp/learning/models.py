@@ -102,6 +102,7 @@ def build_model(config: dict):
         ``canonical`` (two-channel depth and the nearest depth as an extra pose feature),
         ``view`` (``"hand"``: the CNN reads the hand view's channels,
         :func:`~affordgrasp.learning.views.hand_view`),
+        ``n_pose`` (the number of fused features, default the 14 pose features),
         ``members`` (1; more gives an ensemble: that many networks of the same
         architecture, trained with different seeds, whose outputs are averaged).
 
@@ -142,13 +143,14 @@ def build_model(config: dict):
     dropout = float(config.get("dropout", 0.3))
     width = int(config.get("width", 16))
     extra = 1 if config.get("canonical") and arch != "pose" else 0
+    n_pose = int(config.get("n_pose", N_POSE))  # another input's own features (scorer)
 
     class Head(nn.Module):
         """Late fusion: encoder features ++ pose features → FC → one output."""
 
         def __init__(self, n_features: int):
             super().__init__()
-            self.pose = nn.Sequential(nn.Linear(N_POSE + extra, 64), nn.ReLU())
+            self.pose = nn.Sequential(nn.Linear(n_pose + extra, 64), nn.ReLU())
             self.fc = nn.Sequential(
                 nn.Linear(n_features + 64, 128),
                 nn.ReLU(),

@@ -8,13 +8,15 @@ then says how good the decision truly was:
    (seed, i), as in a generated dataset), uniform but for the approach line's offsets
    (u4, u5), drawn in [-r, r]² with r = ``offset_range`` (default :data:`OFFSET_RANGE`:
    a planner aims near the object; 1 is the dataset's uniform draw);
-2. render the candidates' camera-in-hand depth images D(p0, O) in one batch (every
-   candidate's for learned models; the first :data:`FUSED_VIEWS`, those it fuses, for
-   ``models="views"``);
+2. render the candidates' camera-in-hand depth images D(p0, O) in one batch
+   (:func:`candidate_views`; every candidate's for the networks; the first
+   :data:`FUSED_VIEWS`, those it fuses, for ``models="views"`` and ``"learned"``);
 3. by default (``models="views"``) fuse the first :data:`FUSED_VIEWS` images into a
    surface (:mod:`affordgrasp.vision.fusion`) and simulate every candidate on it, placed
    on the surface's own hull (for a task that reads the use point, each grasp with its
-   best use point there); or predict with learned models in one batch;
+   best use point there); with ``models="learned"`` score every candidate on that
+   surface's cloud (:mod:`affordgrasp.learning.scorer`) and simulate its first ``verify``
+   there; or predict with networks in one batch;
 4. choose (:func:`decide_on_fused`): on the fused surface's simulation, viable there
    first, then by the task probability (beat, cut) or, for other tasks,
    :func:`~affordgrasp.learning.decisions.margin_order` (task-feasible, then the widest
@@ -56,6 +58,7 @@ from ..grasp.pregrasp import (
     PLAN_REFINE_SIGMA,
     PLAN_ROBUST_CHECK,
     PLAN_USES,
+    PLAN_VERIFY,
     POSE_ERROR_DEG,
     POSE_ERROR_M,
 )
@@ -74,6 +77,7 @@ from .decisions import (
 
 OFFSET_RANGE = PLAN_OFFSET_RANGE  # the candidates' offsets (u4, u5) lie in [-R, R]² (pregrasp)
 VIEWS = "views"  # the decider that fuses the candidates' views and simulates on the surface
+LEARNED = "learned"  # the learned scorer of candidates on the fused cloud (learning.scorer)
 # Views fused at most (the first candidates'). 128 was tried with the robust check (256
 # candidates): validation 0.949 viable choices against 0.923, test (nine seeds) 0.880
 # against 0.897; the two disagree, so 64 stays (docs/learning.md).
@@ -409,6 +413,7 @@ def plan(
     refine: int = PLAN_REFINE,
     pose_error: tuple[float, float] | None = (POSE_ERROR_M, POSE_ERROR_DEG),
     uses: int = PLAN_USES,
+    verify: int = PLAN_VERIFY,
     progress: Callable[[str], Any] | None = None,
 ) -> Plan:
     """Choose a grasp of an object from camera-in-hand views, and check the choice.
@@ -433,6 +438,9 @@ def plan(
         checked under perturbation (needs scikit-image, the ``learn`` extra; the chosen
         grasp's viability on unseen objects: docs/learning.md; the shipped classifier's:
         0.37).
+        ``"learned"``: the same fused surface read as a cloud by the shipped scorer
+        (:mod:`affordgrasp.learning.scorer`), the most probably viable candidate first
+        (tasks that read no use point).
         ``"classifier"``: the shipped classifier alone, the most probably viable candidate
         first. ``"default"``: the shipped classifier and regressor, the classifier's
         threshold, then least predicted effort. ``"regressor"``, a model file, or a
@@ -482,6 +490,10 @@ def plan(
     uses : int
         With ``models="views"`` and a task that reads the use point: use points drawn on the
         fused surface and paired with every grasp (default :data:`PLAN_USES`).
+    verify : int
+        With ``models="learned"``: how many of the scorer's first candidates are simulated
+        on the fused surface, the viable one with the widest ε there first (0: the scorer's
+        order as it is; default ``grasp.pregrasp.PLAN_VERIFY``).
     progress : callable, optional
         Called with the name of each step as it starts.
 
@@ -507,8 +519,6 @@ def plan(
     from ..objects import load_object
     from ..pipeline import evaluate_inputs
     from ..tasks import get_task, is_viable
-    from ..vision.camera import camera_poses, pose_error_transform
-    from ..vision.depth import depth_to_mm, renderer_for
     from .data import Samples
 
     if isinstance(candidates, bool) or not isinstance(candidates, int | np.integer):
@@ -531,21 +541,38 @@ def plan(
         raise InputError(f"refine must be an integer >= 0, got {refine!r}")
     if isinstance(uses, bool) or not isinstance(uses, int | np.integer) or uses < 1:
         raise InputError(f"uses must be an integer >= 1, got {uses!r}")
+    if isinstance(verify, bool) or not isinstance(verify, int | np.integer) or verify < 0:
+        raise InputError(f"verify must be an integer >= 0, got {verify!r}")
     pose_error = _pose_error(pose_error)
     task_obj = get_task(task)
     task_obj.thresholds_for(mode)  # an unknown mode fails before any work
     step = progress or (lambda name: None)
     timings: dict[str, float] = {}
     views = isinstance(models, str) and models == VIEWS
+    learned = isinstance(models, str) and models == LEARNED
+    on_fused = views or learned  # deciders that read the surface fused from the views
     if not views and is_views_spec(models):
         raise InputError(
             f"plan decides on the fused views with models='views' (its own rule: margin "
             f"order, refined candidates, the robust check); {str(models)!r} is for "
             "model-eval and predict, which judge the views row by row"
         )
-    if views and threshold is not None:
-        raise InputError("threshold is a classifier's decision threshold; models='views' has none")
-    classifier, regressor = (None, None) if views else split_models(load_models(models))
+    if on_fused and threshold is not None:
+        raise InputError(
+            f"threshold is a learned classifier's decision threshold; models={models!r} has none"
+        )
+    classifier, regressor = (None, None) if on_fused else split_models(load_models(models))
+    scorer = None
+    if learned:
+        from ..columns import USE_METRICS
+        from .scorer import load_scorer
+
+        if set(USE_METRICS) & set(task_obj.requires):
+            raise InputError(
+                f"the learned scorer predicts whether the grip is viable; {task_obj.name} "
+                "also needs a use point: decide it on the views (--model views)"
+            )
+        scorer = load_scorer()
     obj = load_object(obj)
     n = int(candidates)
     p0, use_dir = sample_inputs(seed, 0, n)
@@ -553,34 +580,19 @@ def plan(
 
     step("render")
     t0 = time.perf_counter()
-    renderer = renderer_for(obj)
-    # The views are aimed from where the robot believes the object is: the true object
-    # moved by the pose error (its images are still of the true object)
-    error = (
-        None
-        if pose_error is None
-        else pose_error_transform(renderer.frame.centre, *pose_error, seed)
-    )
-    aim = renderer.frame if error is None else renderer.frame.moved(error)
-    k = min(n, FUSED_VIEWS) if views else n  # the views fusion reads: the first ones only
-    poses = camera_poses(aim, p0[:k])
-    depth = renderer.render_poses(poses)
-    if sensor is not None:
-        from ..vision.sensor import apply_sensor
-
-        depth = apply_sensor(depth, sensor, np.arange(k))
-    depth_mm = depth_to_mm(depth)
+    k = min(n, FUSED_VIEWS) if on_fused else n  # the fusion reads the first ones only
+    seen = candidate_views(obj, p0[:k], seed=seed, pose_error=pose_error, sensor=sensor)
+    depth_mm, error = seen.depth_mm, seen.error
     timings["render"] = time.perf_counter() - t0
 
     probability = predicted = None
     fused = None
-    if views:
+    if on_fused:
         step("fuse")
         t0 = time.perf_counter()
-        fused = fuse_candidate_views(
-            depth_mm, poses, renderer.camera, obj.name, sensed=sensor is not None
-        )
+        fused = seen.fuse()
         timings["fuse"] = time.perf_counter() - t0
+    if views:
         step("predict")
         t0 = time.perf_counter()
         decided = decide_on_fused(
@@ -599,6 +611,29 @@ def plan(
         p0, use_dir, order, rule = decided.p0, decided.use_dir, decided.order, decided.rule
         timings["predict"] = time.perf_counter() - t0
         frame = fused  # the candidates were placed on the fused surface
+    elif scorer is not None and fused is not None:  # fused: on_fused
+        from .scorer import score_candidates
+
+        decided = None
+        step("predict")
+        t0 = time.perf_counter()
+        probability = score_candidates(scorer, fused, p0, hand)
+        order = np.lexsort((np.arange(n), -probability))  # the most probably viable first
+        rule = (
+            f"the learned scorer on the cloud fused from {k} view{'' if k == 1 else 's'}: "
+            "the most probably viable"
+        )
+        m = min(int(verify), n)
+        if m > 0:
+            # its first m simulated on the fused surface: viable there, then the widest ε
+            top = order[:m]
+            t = evaluate_inputs(fused, p0[top], use_dir[top], hand=hand, seed=seed,
+                                volume=False, frame=fused).table  # fmt: skip
+            eps = np.nan_to_num(t.column("epsilon").to_numpy(zero_copy_only=False))
+            order[:m] = top[np.lexsort((-eps, ~np.asarray(is_viable(t), dtype=bool)))]
+            rule += f"; of its first {m}, viable on the fused surface, then the widest epsilon"
+        timings["predict"] = time.perf_counter() - t0
+        frame = fused
     else:
         decided = None
         step("predict")
@@ -942,6 +977,92 @@ def decide_on_fused(
         robust_epsilon,
         robust_score,
         pairs,
+    )
+
+
+@dataclass
+class CandidateViews:
+    """The candidates' camera-in-hand views of an object, aimed from a believed pose.
+
+    Attributes
+    ----------
+    depth_mm : (k, size, size) uint16 ndarray
+        The images in millimetres.
+    poses : (k, 4, 4) float ndarray
+        Their camera → object transforms (the believed object's), m.
+    camera : DepthCamera
+    error : (4, 4) float ndarray or None
+        The pose error: believed pose = ``error`` applied to the true one.
+    name : str
+        The object's name.
+    sensed : bool
+        Whether the images went through a sensor model.
+    """
+
+    depth_mm: np.ndarray
+    poses: np.ndarray
+    camera: Any
+    error: np.ndarray | None
+    name: str
+    sensed: bool
+
+    def fuse(self):
+        """The surface fused from the views (:func:`fuse_candidate_views`).
+
+        Returns
+        -------
+        GraspObject
+        """
+        return fuse_candidate_views(
+            self.depth_mm, self.poses, self.camera, self.name, sensed=self.sensed
+        )
+
+
+def candidate_views(
+    obj,
+    p0: np.ndarray,
+    *,
+    seed: int = 0,
+    pose_error: tuple[float, float] | None = None,
+    sensor=None,
+) -> CandidateViews:
+    """Render the candidates' views as a robot would: aimed from where it believes the
+    object is (the true object moved by the pose error; the images are of the true one).
+
+    Parameters
+    ----------
+    obj : GraspObject
+    p0 : (k, 6) float ndarray
+        The pregrasps whose views are rendered.
+    seed : int
+        Draws the pose error's directions.
+    pose_error : (float, float) or None
+        (metres, degrees), as for :func:`plan`.
+    sensor : SensorModel, optional
+        Image i's noise keyed by i; None: exact images.
+
+    Returns
+    -------
+    CandidateViews
+    """
+    from ..vision.camera import camera_poses, pose_error_transform
+    from ..vision.depth import depth_to_mm, renderer_for
+
+    renderer = renderer_for(obj)
+    error = (
+        None
+        if pose_error is None
+        else pose_error_transform(renderer.frame.centre, *pose_error, seed)
+    )
+    aim = renderer.frame if error is None else renderer.frame.moved(error)
+    poses = camera_poses(aim, p0)
+    depth = renderer.render_poses(poses)
+    if sensor is not None:
+        from ..vision.sensor import apply_sensor
+
+        depth = apply_sensor(depth, sensor, np.arange(len(p0)))
+    return CandidateViews(
+        depth_to_mm(depth), poses, renderer.camera, error, obj.name, sensor is not None
     )
 
 
