@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 import zlib
 from concurrent.futures import ProcessPoolExecutor
@@ -26,19 +27,8 @@ import numpy as np
 
 from affordgrasp.runtime.writing import atomic_write
 
-FAMILIES = (
-    "hammer axe knife meat_cleaver dagger sword screwdriver spatula bottle wine_glass tumbler "
-    "mug ice_cream_cone"
-).split()
-
-
-def seeds_of(text: str) -> list[int]:
-    """Seeds from ``"100-139"`` or ``"1,3,5-7"``."""
-    out: list[int] = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b or a) + 1))
-    return out
+sys.path.insert(0, str(Path(__file__).parent))
+from task_trial_data import FAMILIES, seeds_of  # noqa: E402
 
 
 def object_seed(spec: str) -> int:

@@ -90,9 +90,8 @@ def candidate_starts(fused, p0: np.ndarray, hand="barrett") -> np.ndarray:
     from ..grasp.policy import hand_arrays, object_geometry, pregrasp_starts
     from ..hands import get_hand
 
-    hand = get_hand(hand) if isinstance(hand, str) else hand
     starts, _ = pregrasp_starts(
-        hand_arrays(hand), object_geometry(fused), np.asarray(p0, dtype=np.float64)
+        hand_arrays(get_hand(hand)), object_geometry(fused), np.asarray(p0, dtype=np.float64)
     )
     return starts
 
@@ -150,7 +149,7 @@ def hand_frame_inputs(
     iz = np.clip((depth * (gz / DEPTH_M)).astype(np.int64), 0, gz - 1)
     cell = ((np.arange(n)[:, None] * gx + ix) * gy + iy) * gz + iz
     grid = np.bincount(cell[inside], minlength=n * gx * gy * gz).reshape(n, -1) / max(m, 1)
-    palm_share = (inside & (radial <= PALM_M**2)).sum(axis=1) / np.maximum(count, 1)
+    palm_share = (inside & palm).sum(axis=1) / np.maximum(count, 1)
     features = np.stack(
         [
             np.asarray(spread, dtype=np.float64),
